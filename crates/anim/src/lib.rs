@@ -1,0 +1,203 @@
+//! # faceanim-anim: clips of blendshape weights
+//!
+//! A [`Clip`] is the common currency of faceanim: one row of weights per frame for a list of
+//! named blendshapes, at a frame rate, with an optional head rotation per frame. Sketches bake
+//! into clips, capture produces them, metrics compare them and exporters write them.
+//!
+//! The JSON form (DESIGN.md, "Baked clip") is
+//! `{"fps": 30, "blendshapes": [names], "frames": [[w, ...], ...], "head": [[yaw, pitch, roll], ...]}`.
+//! [`Clip::from_json`] reports *every* problem with its path (`frames[3][7]`), not just the first.
+//!
+//! ```
+//! let clip = faceanim_anim::Clip::from_json(br#"{"fps": 30, "blendshapes": ["jawOpen"], "frames": [[0.0], [0.5], [1.0]]}"#)?;
+//! assert_eq!(clip.duration_seconds(), 2.0 / 30.0);
+//! # Ok::<(), faceanim_anim::ClipError>(())
+//! ```
+#![deny(missing_docs)]
+
+use faceanim_rig::Character;
+use faceanim_rig::export::MorphAnimation;
+use serde::{Deserialize, Serialize};
+
+/// Baked blendshape weights over time. See the crate docs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Clip {
+    /// Frames per second (positive).
+    pub fps: f32,
+    /// Blendshape names, one per column of `frames`.
+    pub blendshapes: Vec<String>,
+    /// One row of weights per frame.
+    pub frames: Vec<Vec<f32>>,
+    /// Head rotation per frame in degrees: yaw, pitch, roll.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub head: Option<Vec<[f32; 3]>>,
+}
+
+/// Problems with a clip, each with the JSON path it concerns.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ClipError {
+    /// The text is not a clip at all (JSON syntax, missing or unknown fields, wrong types).
+    #[error("not a clip: {0}")]
+    Syntax(String),
+    /// The clip parses but its values are inconsistent.
+    #[error("invalid clip: {}", .0.join("; "))]
+    Invalid(Vec<String>),
+    /// The clip names no blendshape of the character it is applied to.
+    #[error("none of the clip's blendshapes exist on character '{character}' (clip has: {clip})")]
+    NothingInCommon {
+        /// The character's name.
+        character: String,
+        /// The first few clip names.
+        clip: String,
+    },
+}
+
+/// How a clip's columns landed on a character.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Retarget {
+    /// The animation, one weight per character blendshape per frame.
+    pub animation: MorphAnimation,
+    /// Clip columns that match no blendshape of the character (their weights are dropped).
+    pub unmatched: Vec<String>,
+}
+
+impl Clip {
+    /// Parses and validates clip JSON.
+    ///
+    /// # Errors
+    /// [`ClipError::Syntax`] for malformed JSON, [`ClipError::Invalid`] listing every bad value.
+    pub fn from_json(bytes: &[u8]) -> Result<Clip, ClipError> {
+        let clip: Clip = serde_json::from_slice(bytes).map_err(|e| ClipError::Syntax(e.to_string()))?;
+        clip.validate()?;
+        Ok(clip)
+    }
+
+    /// The clip as pretty JSON.
+    #[must_use]
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Checks frame rate, row lengths, finiteness and head rows; lists every problem.
+    ///
+    /// # Errors
+    /// [`ClipError::Invalid`] with one entry per problem (at most 20, then a count).
+    pub fn validate(&self) -> Result<(), ClipError> {
+        let mut problems = Vec::new();
+        if !(self.fps.is_finite() && self.fps > 0.0) {
+            problems.push(format!("fps: must be a positive number, found {}", self.fps));
+        }
+        if self.frames.is_empty() {
+            problems.push("frames: the clip has no frames".to_owned());
+        }
+        let width = self.blendshapes.len();
+        let mut seen = std::collections::HashSet::new();
+        for (i, name) in self.blendshapes.iter().enumerate() {
+            if !seen.insert(name) {
+                problems.push(format!("blendshapes[{i}]: '{name}' appears twice"));
+            }
+        }
+        for (f, row) in self.frames.iter().enumerate() {
+            if row.len() != width {
+                problems.push(format!("frames[{f}]: {} weights for {width} blendshapes", row.len()));
+            }
+            for (k, w) in row.iter().enumerate() {
+                if !w.is_finite() {
+                    problems.push(format!("frames[{f}][{k}]: not a finite number"));
+                }
+            }
+        }
+        if let Some(head) = &self.head {
+            if head.len() != self.frames.len() {
+                problems.push(format!("head: {} rows for {} frames", head.len(), self.frames.len()));
+            }
+            for (f, row) in head.iter().enumerate() {
+                if row.iter().any(|x| !x.is_finite()) {
+                    problems.push(format!("head[{f}]: not a finite number"));
+                }
+            }
+        }
+        if problems.is_empty() {
+            return Ok(());
+        }
+        let extra = problems.len().saturating_sub(20);
+        problems.truncate(20);
+        if extra > 0 {
+            problems.push(format!("and {extra} more"));
+        }
+        Err(ClipError::Invalid(problems))
+    }
+
+    /// Length in seconds from the first frame to the last.
+    #[must_use]
+    pub fn duration_seconds(&self) -> f32 {
+        self.frames.len().saturating_sub(1) as f32 / self.fps
+    }
+
+    /// Maps the clip onto `character`'s blendshapes by name (exact, else the same ARKit shape
+    /// under another spelling), one key per frame. Character blendshapes the clip does not
+    /// mention stay at 0.
+    ///
+    /// # Errors
+    /// [`ClipError::NothingInCommon`] when no name matches.
+    pub fn retarget(&self, character: &Character, name: &str) -> Result<Retarget, ClipError> {
+        let columns: Vec<Option<usize>> = self.blendshapes.iter().map(|n| character.find_blendshape(n).map(|id| id.index())).collect();
+        if columns.iter().all(Option::is_none) && !self.blendshapes.is_empty() {
+            return Err(ClipError::NothingInCommon {
+                character: character.name().to_owned(),
+                clip: self.blendshapes.iter().take(5).cloned().collect::<Vec<_>>().join(", "),
+            });
+        }
+        let unmatched = self.blendshapes.iter().zip(&columns).filter(|(_, c)| c.is_none()).map(|(n, _)| n.clone()).collect();
+        let count = character.blendshapes().len();
+        let weights = self
+            .frames
+            .iter()
+            .map(|row| {
+                let mut w = vec![0.0; count];
+                for (value, column) in row.iter().zip(&columns) {
+                    if let Some(c) = column {
+                        w[*c] = *value;
+                    }
+                }
+                w
+            })
+            .collect();
+        let times = (0..self.frames.len()).map(|f| f as f32 / self.fps).collect();
+        Ok(Retarget { animation: MorphAnimation { name: name.to_owned(), times, weights }, unmatched })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_problem_is_listed_with_its_path() {
+        let json = br#"{"fps": 0, "blendshapes": ["a", "a"], "frames": [[0.1, 0.2], [0.3]], "head": [[0, 0, 0]]}"#;
+        let Err(ClipError::Invalid(problems)) = Clip::from_json(json) else { panic!("accepted a bad clip") };
+        assert_eq!(
+            problems,
+            vec![
+                "fps: must be a positive number, found 0",
+                "blendshapes[1]: 'a' appears twice",
+                "frames[1]: 1 weights for 2 blendshapes",
+                "head: 1 rows for 2 frames",
+            ]
+        );
+    }
+
+    #[test]
+    fn unknown_fields_are_refused() {
+        let json = br#"{"fps": 30, "blendshapes": [], "frames": [[]], "weights": []}"#;
+        assert!(matches!(Clip::from_json(json), Err(ClipError::Syntax(m)) if m.contains("unknown field `weights`")));
+    }
+
+    #[test]
+    fn round_trips_through_json() {
+        let clip = Clip { fps: 24.0, blendshapes: vec!["jawOpen".into()], frames: vec![vec![0.0], vec![1.0]], head: Some(vec![[1.0, 2.0, 3.0]; 2]) };
+        assert_eq!(Clip::from_json(clip.to_json().as_bytes()), Ok(clip));
+    }
+}

@@ -1,0 +1,126 @@
+//! The `faceanim` command line: one binary, one subcommand per job.
+//!
+//! Errors are mapped once, here: every failure prints `error: ` followed by its cause chain
+//! (which names the file and the problem) and exits with status 1; usage errors exit with 2.
+
+mod info;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use clap::{Parser, Subcommand};
+
+/// faceanim animates the face of any blendshape character.
+///
+/// A character is a glTF 2.0 file (.glb or .gltf) with morph targets, or a folder of OBJ files
+/// (neutral.obj plus one OBJ per blendshape, in the same vertex order).
+#[derive(Debug, Parser)]
+#[command(name = "faceanim", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    /// More log output (-v: debug, -vv: trace). `RUST_LOG` works too.
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Describe a character: vertices, triangles, blendshapes, symmetry pairs, ARKit coverage.
+    ///
+    /// Example: faceanim info head.glb --json
+    Info {
+        /// The character: .glb, .gltf, or a folder of OBJ files.
+        character: PathBuf,
+        /// Print machine-readable JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Write a character as a binary glTF (.glb), optionally with an animation from a clip.
+    ///
+    /// Converts OBJ folders and .gltf files to a single .glb that Blender, Unity, Unreal and
+    /// three.js open directly. Example: faceanim export ict-obj/ -o ict.glb --clip take.json
+    Export {
+        /// The character: .glb, .gltf, or a folder of OBJ files.
+        character: PathBuf,
+        /// Where to write the .glb.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// A clip JSON (DESIGN.md "Baked clip") to add as a morph-weight animation; its
+        /// blendshape names are matched to the character's (ARKit spellings understood).
+        #[arg(long)]
+        clip: Option<PathBuf>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let filter = match cli.verbose {
+        0 => "warn",
+        1 => "debug",
+        _ => "trace",
+    };
+    tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| filter.into()))
+        .with_writer(std::io::stderr)
+        .without_time()
+        .init();
+    match run(cli.command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error}");
+            for cause in error.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(command: Command) -> anyhow::Result<()> {
+    match command {
+        Command::Info { character, json } => {
+            let imported = load(&character)?;
+            let report = info::Report::of(&imported.character);
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.text(&imported.character));
+            }
+            Ok(())
+        }
+        Command::Export { character, output, clip } => {
+            let imported = load(&character)?;
+            let character = imported.character;
+            let mut animations = Vec::new();
+            if let Some(clip_path) = clip {
+                let clip = faceanim_files::load_clip(&clip_path)?;
+                let name = clip_path.file_stem().map_or_else(|| "clip".to_owned(), |s| s.to_string_lossy().into_owned());
+                let retarget = clip.retarget(&character, &name).with_context(|| format!("applying {}", clip_path.display()))?;
+                if !retarget.unmatched.is_empty() {
+                    tracing::warn!("{}: no blendshape for {}", clip_path.display(), retarget.unmatched.join(", "));
+                }
+                animations.push(retarget.animation);
+            }
+            let glb = faceanim_rig::export::export_glb(&character, &animations)?;
+            faceanim_files::write_atomic(&output, &glb)?;
+            eprintln!(
+                "wrote {} ({} vertices, {} blendshapes{})",
+                output.display(),
+                character.vertex_count(),
+                character.blendshapes().len(),
+                if animations.is_empty() { String::new() } else { format!(", {} animation", animations.len()) }
+            );
+            Ok(())
+        }
+    }
+}
+
+fn load(path: &std::path::Path) -> anyhow::Result<faceanim_rig::import::Imported> {
+    let imported = faceanim_files::load_character(path)?;
+    for warning in &imported.warnings {
+        tracing::warn!("{}: {warning}", path.display());
+    }
+    Ok(imported)
+}

@@ -1,0 +1,233 @@
+//! # faceanim-files: the file-system edge
+//!
+//! The pure crates parse bytes; this crate turns paths into bytes and back. It loads characters
+//! (`.glb`, `.gltf` with its external buffers and images, or a folder of OBJ files), loads
+//! clips, and writes every output atomically (a temporary file in the target folder, synced,
+//! then renamed), so a crash or a full disk never leaves a half-written file behind. Every
+//! error carries the path it concerns.
+#![deny(missing_docs)]
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use faceanim_anim::{Clip, ClipError};
+use faceanim_rig::import::{ImportError, Imported, ObjSource, Resources, import_gltf, import_obj_set};
+
+/// Files larger than this are refused before reading (a face rig is tens of MB).
+pub const MAX_FILE_BYTES: u64 = 2 << 30;
+
+/// Why a file could not be read or written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FileError {
+    /// The operating system refused.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The file is larger than [`MAX_FILE_BYTES`].
+    #[error("{}: {size} bytes is larger than the {MAX_FILE_BYTES}-byte limit", path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size.
+        size: u64,
+    },
+    /// The path does not name something faceanim can read as a character.
+    #[error("{}: {reason}", path.display())]
+    NotACharacter {
+        /// The path.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// The importer rejected the contents (its message names the file).
+    #[error(transparent)]
+    Import(#[from] ImportError),
+    /// A clip file is malformed.
+    #[error("{}: {source}", path.display())]
+    Clip {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        source: ClipError,
+    },
+}
+
+/// Reads a whole file, refusing ones over [`MAX_FILE_BYTES`].
+///
+/// # Errors
+/// [`FileError::Io`] or [`FileError::TooLarge`], with the path.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FileError> {
+    let io = |source| FileError::Io { path: path.to_owned(), source };
+    let size = std::fs::metadata(path).map_err(io)?.len();
+    if size > MAX_FILE_BYTES {
+        return Err(FileError::TooLarge { path: path.to_owned(), size });
+    }
+    std::fs::read(path).map_err(io)
+}
+
+/// Loads a character from a `.glb`/`.gltf` file or a folder of OBJ files.
+///
+/// A folder must hold `neutral.obj` (or exactly one OBJ whose name contains `neutral`) and one
+/// OBJ per blendshape, named after it. Files are recognised by content, not only extension.
+///
+/// # Errors
+/// A [`FileError`] naming the path and the problem.
+pub fn load_character(path: &Path) -> Result<Imported, FileError> {
+    if path.is_dir() {
+        return load_obj_folder(path);
+    }
+    let bytes = read_bytes(path)?;
+    let name = path.display().to_string();
+    let is_obj = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if is_obj {
+        return Err(FileError::NotACharacter {
+            path: path.to_owned(),
+            reason: "a single OBJ has no blendshapes: give the folder holding the neutral OBJ and one OBJ per blendshape".into(),
+        });
+    }
+    let dir = path.parent().map_or_else(|| PathBuf::from("."), Path::to_owned);
+    Ok(import_gltf(&bytes, &name, &FolderResources { dir })?)
+}
+
+/// Resolves a glTF file's relative URIs inside its own folder (or below it).
+struct FolderResources {
+    dir: PathBuf,
+}
+
+impl Resources for FolderResources {
+    fn load(&self, uri: &str) -> Result<Vec<u8>, String> {
+        let relative = Path::new(uri);
+        if relative.is_absolute() {
+            return Err("absolute paths are not allowed in glTF URIs".into());
+        }
+        let path = self.dir.join(relative);
+        read_bytes(&path).map_err(|e| match e {
+            FileError::Io { source, .. } => format!("{}: {source}", path.display()),
+            other => other.to_string(),
+        })
+    }
+}
+
+fn load_obj_folder(dir: &Path) -> Result<Imported, FileError> {
+    let io = |source| FileError::Io { path: dir.to_owned(), source };
+    let mut objs: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")))
+        .collect();
+    objs.sort();
+    let stem = |p: &Path| p.file_stem().map(|s| s.to_string_lossy().to_lowercase()).unwrap_or_default();
+    let neutral_candidates: Vec<&PathBuf> = match objs.iter().find(|p| stem(p) == "neutral") {
+        Some(exact) => vec![exact],
+        None => objs.iter().filter(|p| stem(p).contains("neutral")).collect(),
+    };
+    let neutral = match neutral_candidates.as_slice() {
+        [one] => (*one).clone(),
+        [] => {
+            return Err(FileError::NotACharacter {
+                path: dir.to_owned(),
+                reason: format!("no neutral OBJ: name it neutral.obj ({} OBJ files found)", objs.len()),
+            });
+        }
+        several => {
+            return Err(FileError::NotACharacter {
+                path: dir.to_owned(),
+                reason: format!(
+                    "{} OBJ files could be the neutral ({}); rename one to neutral.obj",
+                    several.len(),
+                    several.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+                ),
+            });
+        }
+    };
+    let read_text = |p: &Path| read_bytes(p).map(|b| String::from_utf8_lossy(&b).into_owned());
+    let neutral_text = read_text(&neutral)?;
+    let shape_paths: Vec<&PathBuf> = objs.iter().filter(|p| **p != neutral).collect();
+    let shape_texts: Vec<(String, String)> = shape_paths
+        .iter()
+        .map(|p| Ok((p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(), read_text(p)?)))
+        .collect::<Result<_, FileError>>()?;
+    let shapes: Vec<ObjSource<'_>> = shape_texts.iter().map(|(name, text)| ObjSource { name, text }).collect();
+    let neutral_name = neutral.display().to_string();
+    let character_name = dir.file_name().map_or_else(|| "character".to_owned(), |n| n.to_string_lossy().into_owned());
+    Ok(import_obj_set(&character_name, ObjSource { name: &neutral_name, text: &neutral_text }, &shapes)?)
+}
+
+/// Loads and validates a clip JSON file.
+///
+/// # Errors
+/// [`FileError::Io`] or [`FileError::Clip`], with the path.
+pub fn load_clip(path: &Path) -> Result<Clip, FileError> {
+    let bytes = read_bytes(path)?;
+    Clip::from_json(&bytes).map_err(|source| FileError::Clip { path: path.to_owned(), source })
+}
+
+/// Writes `bytes` to `path` atomically: readers see the old file or the new one, never a part.
+///
+/// # Errors
+/// [`FileError::Io`] with the path.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    let io = |source| FileError::Io { path: path.to_owned(), source };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
+        _ => PathBuf::from("."),
+    };
+    let mut temp = tempfile::NamedTempFile::new_in(&dir).map_err(io)?;
+    // Temporary files are private (0600); the result should be as readable as the file it
+    // replaces, or as an ordinary new file.
+    let permissions = match std::fs::metadata(path) {
+        Ok(existing) => Some(existing.permissions()),
+        Err(_) => new_file_permissions(),
+    };
+    if let Some(permissions) = permissions {
+        temp.as_file().set_permissions(permissions).map_err(io)?;
+    }
+    temp.write_all(bytes).map_err(io)?;
+    temp.as_file().sync_all().map_err(io)?;
+    temp.persist(path).map_err(|e| io(e.error))?;
+    Ok(())
+}
+
+/// Mode of a newly created output: rw-r--r--, like `touch` under the usual umask.
+#[cfg(unix)]
+fn new_file_permissions() -> Option<std::fs::Permissions> {
+    use std::os::unix::fs::PermissionsExt as _;
+    Some(std::fs::Permissions::from_mode(0o644))
+}
+
+/// Elsewhere temporary files are not private, so their permissions need no change.
+#[cfg(not(unix))]
+fn new_file_permissions() -> Option<std::fs::Permissions> {
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_whole_files() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let path = dir.path().join("out.json");
+        write_atomic(&path, b"first").unwrap_or_else(|e| panic!("{e}"));
+        write_atomic(&path, b"second").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(std::fs::read(&path).ok().as_deref(), Some(&b"second"[..]));
+        // Nothing but the file itself is left in the folder.
+        assert_eq!(std::fs::read_dir(dir.path()).map(|d| d.count()).ok(), Some(1));
+    }
+
+    #[test]
+    fn errors_name_the_path() {
+        let e = load_character(Path::new("/nonexistent/face.glb")).err().map(|e| e.to_string());
+        assert_eq!(e.as_deref(), Some("/nonexistent/face.glb: No such file or directory (os error 2)"));
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let e = load_character(dir.path()).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("no neutral OBJ"), "{e}");
+    }
+}

@@ -1,0 +1,625 @@
+//! The validated blendshape character: neutral mesh, sparse blendshapes, materials, and the
+//! structures derived from them once (bounds, edge graph, symmetry).
+//!
+//! A [`Character`] only exists validated: [`Character::new`] checks every index, count and value
+//! and derives the rest, so the sketch engine, the capture adapter and the exporters never
+//! re-check.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::graph::EdgeGraph;
+use crate::names;
+use crate::normals::{self, NormalDeltas};
+use crate::symmetry::Symmetry;
+
+/// Index of a blendshape within its [`Character`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BlendshapeId(pub u32);
+
+impl BlendshapeId {
+    /// The index as `usize`, for slices of per-blendshape values (weights).
+    #[must_use]
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// Index of a material within its [`Character`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MaterialId(pub u32);
+
+/// Deltas whose length is below this fraction of the bounding-box diagonal are not stored.
+///
+/// 1e-6 of the size is about 16 f32 ulps of a coordinate of that size: below it a "delta" is
+/// rounding noise from the tool that wrote the file, not a deformation. For a 0.35 m head the
+/// threshold is 0.35 µm, so a round trip through faceanim changes no delta by more than that.
+pub const SPARSE_DELTA_THRESHOLD: f32 = 1e-6;
+
+/// One blendshape: the displacement of each moved vertex at weight 1, stored sparsely.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Blendshape {
+    name: String,
+    /// Moved vertices, strictly increasing.
+    indices: Vec<u32>,
+    /// Displacement of `indices[k]` at weight 1.
+    deltas: Vec<Vec3>,
+}
+
+impl Blendshape {
+    /// A blendshape from dense per-vertex deltas, keeping the vertices that move by more than
+    /// `threshold` (an absolute length, see [`SPARSE_DELTA_THRESHOLD`]).
+    #[must_use]
+    pub fn from_dense(name: impl Into<String>, dense: &[Vec3], threshold: f32) -> Blendshape {
+        let mut indices = Vec::new();
+        let mut deltas = Vec::new();
+        let threshold_sq = threshold * threshold;
+        for (index, delta) in dense.iter().enumerate() {
+            if delta.length_squared() > threshold_sq {
+                indices.push(index as u32);
+                deltas.push(*delta);
+            }
+        }
+        Blendshape { name: name.into(), indices, deltas }
+    }
+
+    /// A blendshape from sparse parts. `indices` must be strictly increasing and as long as
+    /// `deltas`; [`Character::new`] checks this against the vertex count.
+    #[must_use]
+    pub fn from_sparse(name: impl Into<String>, indices: Vec<u32>, deltas: Vec<Vec3>) -> Blendshape {
+        Blendshape { name: name.into(), indices, deltas }
+    }
+
+    /// The blendshape's name as the file gave it.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Moved vertices, strictly increasing.
+    #[must_use]
+    pub fn indices(&self) -> &[u32] {
+        &self.indices
+    }
+
+    /// Displacements at weight 1, parallel to [`Blendshape::indices`].
+    #[must_use]
+    pub fn deltas(&self) -> &[Vec3] {
+        &self.deltas
+    }
+
+    /// Number of moved vertices.
+    #[must_use]
+    pub fn moved(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// The largest displacement of any vertex at weight 1.
+    #[must_use]
+    pub fn max_displacement(&self) -> f32 {
+        self.deltas.iter().map(|d| d.length()).fold(0.0, f32::max)
+    }
+
+    /// The displacement of `vertex` at weight 1 (zero where it does not move).
+    #[must_use]
+    pub fn delta_of(&self, vertex: u32) -> Vec3 {
+        match self.indices.binary_search(&vertex) {
+            Ok(k) => self.deltas[k],
+            Err(_) => Vec3::ZERO,
+        }
+    }
+
+    /// Writes the deltas into a dense buffer (zero elsewhere); `out` must have one entry per vertex.
+    pub fn write_dense(&self, out: &mut [Vec3]) {
+        out.fill(Vec3::ZERO);
+        for (&i, &d) in self.indices.iter().zip(&self.deltas) {
+            if let Some(slot) = out.get_mut(i as usize) {
+                *slot = d;
+            }
+        }
+    }
+
+    pub(crate) fn renamed(&self, name: String) -> Blendshape {
+        Blendshape { name, indices: self.indices.clone(), deltas: self.deltas.clone() }
+    }
+}
+
+/// Encoded image bytes (PNG or JPEG) kept as they came, for rendering and re-export.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Texture {
+    /// `image/png` or `image/jpeg`.
+    pub mime_type: String,
+    /// The encoded file.
+    pub bytes: Arc<[u8]>,
+}
+
+/// How a part of the mesh looks: the glTF metallic-roughness subset animators' tools agree on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// The material's name (may be empty).
+    pub name: String,
+    /// Linear RGBA multiplier of the base colour.
+    pub base_color: [f32; 4],
+    /// Optional base-colour texture, sampled with the mesh's UVs.
+    pub base_color_texture: Option<Texture>,
+    /// 0 = dielectric, 1 = metal.
+    pub metallic: f32,
+    /// 0 = mirror, 1 = fully rough.
+    pub roughness: f32,
+    /// Render back faces too.
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: String::new(),
+            base_color: [1.0, 1.0, 1.0, 1.0],
+            base_color_texture: None,
+            metallic: 0.0,
+            roughness: 0.7,
+            double_sided: false,
+        }
+    }
+}
+
+/// A run of triangles drawn with one material (one glTF primitive on export).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Part {
+    /// The part's name (the glTF mesh name it came from, or the OBJ group).
+    pub name: String,
+    /// Its material.
+    pub material: MaterialId,
+    /// Its triangles, as a range of [`Character::triangles`].
+    pub triangles: std::ops::Range<usize>,
+}
+
+/// Axis-aligned bounding box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Smallest corner.
+    pub min: Vec3,
+    /// Largest corner.
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The box around `points`, or a zero box at the origin when there are none.
+    #[must_use]
+    pub fn around(points: &[Vec3]) -> Aabb {
+        let mut iter = points.iter();
+        let Some(first) = iter.next() else {
+            return Aabb { min: Vec3::ZERO, max: Vec3::ZERO };
+        };
+        let (min, max) = iter.fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        Aabb { min, max }
+    }
+
+    /// Length of the diagonal: the character's size `D` that default distances scale with.
+    #[must_use]
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+
+    /// Centre of the box.
+    #[must_use]
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+}
+
+/// Everything needed to build a [`Character`]; [`Character::new`] validates it.
+#[derive(Debug, Clone, Default)]
+pub struct CharacterParts {
+    /// Display name.
+    pub name: String,
+    /// Neutral vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex normals; computed from the triangles when `None`.
+    pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates.
+    pub uvs: Option<Vec<[f32; 2]>>,
+    /// Per-vertex linear RGBA colours.
+    pub colors: Option<Vec<[f32; 4]>>,
+    /// Triangles, counter-clockwise when seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// Materials referenced by `parts`.
+    pub materials: Vec<Material>,
+    /// Material runs over `triangles`; one default part covering all when empty.
+    pub parts: Vec<Part>,
+    /// Blendshapes (names need not be unique; duplicates get `.001` suffixes).
+    pub blendshapes: Vec<Blendshape>,
+    /// Normal deltas per blendshape, when the source file carried them; computed otherwise.
+    pub normal_deltas: Option<Vec<NormalDeltas>>,
+}
+
+/// Why a set of [`CharacterParts`] is not a valid character.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// No vertices at all.
+    #[error("the mesh has no vertices")]
+    NoVertices,
+    /// No triangles at all.
+    #[error("the mesh has no triangles")]
+    NoTriangles,
+    /// A per-vertex attribute has the wrong length.
+    #[error("{attribute} has {found} entries but there are {expected} vertices")]
+    AttributeCount {
+        /// Which attribute.
+        attribute: &'static str,
+        /// Its length.
+        found: usize,
+        /// The vertex count.
+        expected: usize,
+    },
+    /// A value is NaN or infinite.
+    #[error("{what} [{index}] is not a finite number")]
+    NonFinite {
+        /// Which array.
+        what: String,
+        /// Where in it.
+        index: usize,
+    },
+    /// A triangle names a vertex that does not exist.
+    #[error("triangle {triangle} refers to vertex {vertex}, but there are only {vertices} vertices")]
+    VertexOutOfRange {
+        /// The triangle.
+        triangle: usize,
+        /// The bad index.
+        vertex: u32,
+        /// The vertex count.
+        vertices: usize,
+    },
+    /// A blendshape's sparse data is inconsistent.
+    #[error("blendshape '{name}': {problem}")]
+    BadBlendshape {
+        /// The blendshape.
+        name: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// A part refers to a missing material or runs past the triangles.
+    #[error("part '{name}': {problem}")]
+    BadPart {
+        /// The part.
+        name: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+/// A validated blendshape character. See the module docs.
+#[derive(Debug, Clone)]
+pub struct Character {
+    name: String,
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    uvs: Option<Vec<[f32; 2]>>,
+    colors: Option<Vec<[f32; 4]>>,
+    triangles: Vec<[u32; 3]>,
+    materials: Vec<Material>,
+    parts: Vec<Part>,
+    blendshapes: Vec<Blendshape>,
+    normal_deltas: Vec<NormalDeltas>,
+    bounds: Aabb,
+    graph: EdgeGraph,
+    symmetry: Symmetry,
+}
+
+impl Character {
+    /// Validates `parts` and derives normals (when missing), normal deltas, bounds, the edge
+    /// graph and the symmetry (plane, mirrored vertices, left/right blendshape pairs).
+    ///
+    /// # Errors
+    /// Any inconsistency, as a [`ModelError`] naming the attribute, index or blendshape.
+    pub fn new(parts: CharacterParts) -> Result<Character, ModelError> {
+        let CharacterParts {
+            name,
+            positions,
+            normals,
+            uvs,
+            colors,
+            triangles,
+            mut materials,
+            parts,
+            blendshapes,
+            normal_deltas,
+        } = parts;
+        let vertex_count = positions.len();
+        if vertex_count == 0 {
+            return Err(ModelError::NoVertices);
+        }
+        if triangles.is_empty() {
+            return Err(ModelError::NoTriangles);
+        }
+        check_finite_vec3("positions", &positions)?;
+        for (t, tri) in triangles.iter().enumerate() {
+            for &v in tri {
+                if v as usize >= vertex_count {
+                    return Err(ModelError::VertexOutOfRange { triangle: t, vertex: v, vertices: vertex_count });
+                }
+            }
+        }
+        check_count("normals", normals.as_ref().map(Vec::len), vertex_count)?;
+        check_count("uvs", uvs.as_ref().map(Vec::len), vertex_count)?;
+        check_count("colors", colors.as_ref().map(Vec::len), vertex_count)?;
+        if let Some(normals) = &normals {
+            check_finite_vec3("normals", normals)?;
+        }
+        if let Some(uvs) = &uvs {
+            if let Some(index) = uvs.iter().position(|uv| !uv.iter().all(|c| c.is_finite())) {
+                return Err(ModelError::NonFinite { what: "uvs".into(), index });
+            }
+        }
+        if let Some(colors) = &colors {
+            if let Some(index) = colors.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
+                return Err(ModelError::NonFinite { what: "colors".into(), index });
+            }
+        }
+
+        let blendshapes = unique_names(blendshapes);
+        for shape in &blendshapes {
+            check_blendshape(shape, vertex_count)?;
+        }
+
+        if materials.is_empty() {
+            materials.push(Material::default());
+        }
+        let parts = if parts.is_empty() {
+            vec![Part { name: name.clone(), material: MaterialId(0), triangles: 0..triangles.len() }]
+        } else {
+            parts
+        };
+        for part in &parts {
+            if part.material.0 as usize >= materials.len() {
+                return Err(ModelError::BadPart {
+                    name: part.name.clone(),
+                    problem: format!("material {} does not exist ({} materials)", part.material.0, materials.len()),
+                });
+            }
+            if part.triangles.start > part.triangles.end || part.triangles.end > triangles.len() {
+                return Err(ModelError::BadPart {
+                    name: part.name.clone(),
+                    problem: format!("triangles {:?} run past the {} triangles", part.triangles, triangles.len()),
+                });
+            }
+        }
+
+        let bounds = Aabb::around(&positions);
+        let graph = EdgeGraph::build(&positions, &triangles);
+        let normals = match normals {
+            Some(n) => n,
+            None => normals::vertex_normals(&positions, &triangles, &graph),
+        };
+        let normal_deltas = match normal_deltas {
+            Some(given) if given.len() == blendshapes.len() => {
+                for (shape, deltas) in blendshapes.iter().zip(&given) {
+                    deltas.check(vertex_count).map_err(|problem| ModelError::BadBlendshape {
+                        name: shape.name().to_owned(),
+                        problem,
+                    })?;
+                }
+                given
+            }
+            _ => blendshapes
+                .iter()
+                .map(|shape| normals::blendshape_normal_deltas(&positions, &triangles, &graph, shape))
+                .collect(),
+        };
+        let symmetry = Symmetry::detect(&positions, &bounds, &blendshapes);
+
+        Ok(Character {
+            name,
+            positions,
+            normals,
+            uvs,
+            colors,
+            triangles,
+            materials,
+            parts,
+            blendshapes,
+            normal_deltas,
+            bounds,
+            graph,
+            symmetry,
+        })
+    }
+
+    /// Display name.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Number of vertices.
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Neutral positions.
+    #[must_use]
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// Neutral per-vertex normals (unit length).
+    #[must_use]
+    pub fn normals(&self) -> &[Vec3] {
+        &self.normals
+    }
+
+    /// Texture coordinates, if the source had them.
+    #[must_use]
+    pub fn uvs(&self) -> Option<&[[f32; 2]]> {
+        self.uvs.as_deref()
+    }
+
+    /// Linear RGBA vertex colours, if the source had them.
+    #[must_use]
+    pub fn colors(&self) -> Option<&[[f32; 4]]> {
+        self.colors.as_deref()
+    }
+
+    /// Triangles (indices into the vertices).
+    #[must_use]
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// Materials (at least one).
+    #[must_use]
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// Material runs over the triangles (at least one).
+    #[must_use]
+    pub fn parts(&self) -> &[Part] {
+        &self.parts
+    }
+
+    /// The blendshapes, in file order.
+    #[must_use]
+    pub fn blendshapes(&self) -> &[Blendshape] {
+        &self.blendshapes
+    }
+
+    /// The blendshape `id`.
+    #[must_use]
+    pub fn blendshape(&self, id: BlendshapeId) -> Option<&Blendshape> {
+        self.blendshapes.get(id.index())
+    }
+
+    /// Iterates over blendshape ids in order.
+    pub fn blendshape_ids(&self) -> impl ExactSizeIterator<Item = BlendshapeId> + use<> {
+        (0..self.blendshapes.len() as u32).map(BlendshapeId)
+    }
+
+    /// The blendshape called exactly `name`, or else the one whose name means the same ARKit
+    /// shape (`eyeBlink_L` finds `eyeBlinkLeft`).
+    #[must_use]
+    pub fn find_blendshape(&self, name: &str) -> Option<BlendshapeId> {
+        if let Some(i) = self.blendshapes.iter().position(|b| b.name() == name) {
+            return Some(BlendshapeId(i as u32));
+        }
+        let wanted = names::arkit_name(name)?;
+        self.blendshapes
+            .iter()
+            .position(|b| names::arkit_name(b.name()) == Some(wanted))
+            .map(|i| BlendshapeId(i as u32))
+    }
+
+    /// Normal deltas of each blendshape, parallel to [`Character::blendshapes`].
+    #[must_use]
+    pub fn normal_deltas(&self) -> &[NormalDeltas] {
+        &self.normal_deltas
+    }
+
+    /// Bounding box of the neutral mesh.
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The character's size `D`: the diagonal of its bounding box.
+    #[must_use]
+    pub fn size(&self) -> f32 {
+        self.bounds.diagonal()
+    }
+
+    /// Vertex adjacency, with coincident vertices (UV seams) joined.
+    #[must_use]
+    pub fn graph(&self) -> &EdgeGraph {
+        &self.graph
+    }
+
+    /// Symmetry plane, mirrored vertices and left/right blendshape pairs.
+    #[must_use]
+    pub fn symmetry(&self) -> &Symmetry {
+        &self.symmetry
+    }
+
+    /// The blendshapes whose names are ARKit names, with the canonical name each one spells.
+    #[must_use]
+    pub fn arkit_coverage(&self) -> Vec<(BlendshapeId, &'static str)> {
+        self.blendshape_ids()
+            .filter_map(|id| names::arkit_name(self.blendshapes[id.index()].name()).map(|n| (id, n)))
+            .collect()
+    }
+
+    /// The parts needed to rebuild this character with changes (for example extra blendshapes).
+    #[must_use]
+    pub fn to_parts(&self) -> CharacterParts {
+        CharacterParts {
+            name: self.name.clone(),
+            positions: self.positions.clone(),
+            normals: Some(self.normals.clone()),
+            uvs: self.uvs.clone(),
+            colors: self.colors.clone(),
+            triangles: self.triangles.clone(),
+            materials: self.materials.clone(),
+            parts: self.parts.clone(),
+            blendshapes: self.blendshapes.clone(),
+            normal_deltas: Some(self.normal_deltas.clone()),
+        }
+    }
+}
+
+fn check_count(attribute: &'static str, found: Option<usize>, expected: usize) -> Result<(), ModelError> {
+    match found {
+        Some(found) if found != expected => Err(ModelError::AttributeCount { attribute, found, expected }),
+        _ => Ok(()),
+    }
+}
+
+fn check_finite_vec3(what: &str, values: &[Vec3]) -> Result<(), ModelError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(ModelError::NonFinite { what: what.to_owned(), index }),
+        None => Ok(()),
+    }
+}
+
+fn check_blendshape(shape: &Blendshape, vertex_count: usize) -> Result<(), ModelError> {
+    let bad = |problem: String| ModelError::BadBlendshape { name: shape.name().to_owned(), problem };
+    if shape.indices.len() != shape.deltas.len() {
+        return Err(bad(format!("{} indices but {} deltas", shape.indices.len(), shape.deltas.len())));
+    }
+    if let Some(w) = shape.indices.windows(2).position(|w| w[0] >= w[1]) {
+        return Err(bad(format!("vertex indices are not strictly increasing at entry {}", w + 1)));
+    }
+    if let Some(&last) = shape.indices.last() {
+        if last as usize >= vertex_count {
+            return Err(bad(format!("moves vertex {last}, but there are only {vertex_count} vertices")));
+        }
+    }
+    if let Some(k) = shape.deltas.iter().position(|d| !d.is_finite()) {
+        return Err(bad(format!("delta of vertex {} is not a finite number", shape.indices[k])));
+    }
+    Ok(())
+}
+
+/// Gives repeated names Blender-style suffixes (`smile`, `smile.001`), so names stay keys.
+fn unique_names(shapes: Vec<Blendshape>) -> Vec<Blendshape> {
+    let mut seen = std::collections::HashSet::new();
+    shapes
+        .into_iter()
+        .map(|shape| {
+            if seen.insert(shape.name().to_owned()) {
+                return shape;
+            }
+            let mut n = 1;
+            let name = loop {
+                let candidate = format!("{}.{n:03}", shape.name());
+                if !seen.contains(&candidate) {
+                    break candidate;
+                }
+                n += 1;
+            };
+            seen.insert(name.clone());
+            shape.renamed(name)
+        })
+        .collect()
+}

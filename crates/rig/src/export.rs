@@ -1,0 +1,319 @@
+//! Writing a character (and optional morph-weight animations) as a binary glTF 2.0 file.
+//!
+//! Layout choices, each for interchange with Blender, Unity, Unreal and three.js:
+//! - one node, one mesh, one primitive per material part; all primitives share the same vertex
+//!   accessors, so vertex order and count survive a round trip exactly;
+//! - morph targets as *sparse* accessors holding only moved vertices (compact, and read by all
+//!   four), with `mesh.extras.targetNames` naming them;
+//! - animations as `weights` channels with LINEAR interpolation, one key per clip frame.
+
+use glam::Vec3;
+use serde_json::{Value, json};
+
+use crate::character::Character;
+
+/// A morph-weight animation: at `times[k]` seconds the weights are `weights[k]` (one per
+/// blendshape of the exported character, in its order).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MorphAnimation {
+    /// Animation name shown in DCC tools (an action in Blender).
+    pub name: String,
+    /// Key times in seconds, strictly increasing.
+    pub times: Vec<f32>,
+    /// One weight vector per key.
+    pub weights: Vec<Vec<f32>>,
+}
+
+/// Why an export could not be written.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExportError {
+    /// An animation's data does not fit the character.
+    #[error("animation '{name}': {problem}")]
+    BadAnimation {
+        /// The animation.
+        name: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// The binary chunk would exceed the 4 GiB a GLB can address.
+    #[error("the file would exceed 4 GiB")]
+    TooLarge,
+}
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const FLOAT: u32 = 5126;
+const UNSIGNED_SHORT: u32 = 5123;
+const UNSIGNED_INT: u32 = 5125;
+
+/// The binary chunk and the buffer views and accessors that describe it.
+#[derive(Default)]
+struct Bin {
+    bytes: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Bin {
+    fn view(&mut self, data: &[u8], target: Option<u32>) -> usize {
+        while self.bytes.len() % 4 != 0 {
+            self.bytes.push(0);
+        }
+        let mut view = json!({ "buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len() });
+        if let Some(target) = target {
+            view["target"] = json!(target);
+        }
+        self.bytes.extend_from_slice(data);
+        self.views.push(view);
+        self.views.len() - 1
+    }
+
+    fn accessor(&mut self, accessor: Value) -> usize {
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    fn floats(&mut self, values: &[f32], kind: &str, target: Option<u32>, bounds: Option<(Vec<f32>, Vec<f32>)>) -> usize {
+        let components = match kind {
+            "SCALAR" => 1,
+            "VEC2" => 2,
+            "VEC3" => 3,
+            _ => 4,
+        };
+        let view = self.view(&f32_bytes(values), target);
+        let mut accessor = json!({ "bufferView": view, "componentType": FLOAT, "count": values.len() / components, "type": kind });
+        if let Some((min, max)) = bounds {
+            accessor["min"] = exact(&min);
+            accessor["max"] = exact(&max);
+        }
+        self.accessor(accessor)
+    }
+
+    /// A VEC3 accessor of `count` elements, zero except at `indices`; min/max when asked.
+    fn sparse_vec3(&mut self, count: usize, indices: &[u32], values: &[Vec3], with_bounds: bool) -> usize {
+        let mut accessor = json!({ "componentType": FLOAT, "count": count, "type": "VEC3" });
+        if with_bounds {
+            let (mut min, mut max) = if indices.len() < count { (Vec3::ZERO, Vec3::ZERO) } else { (Vec3::INFINITY, Vec3::NEG_INFINITY) };
+            for v in values {
+                min = min.min(*v);
+                max = max.max(*v);
+            }
+            if values.is_empty() {
+                (min, max) = (Vec3::ZERO, Vec3::ZERO);
+            }
+            accessor["min"] = exact(&min.to_array());
+            accessor["max"] = exact(&max.to_array());
+        }
+        if !indices.is_empty() {
+            let index_view = self.view(&u32_bytes(indices), None);
+            let flat: Vec<f32> = values.iter().flat_map(|v| v.to_array()).collect();
+            let value_view = self.view(&f32_bytes(&flat), None);
+            accessor["sparse"] = json!({
+                "count": indices.len(),
+                "indices": { "bufferView": index_view, "componentType": UNSIGNED_INT },
+                "values": { "bufferView": value_view },
+            });
+        }
+        self.accessor(accessor)
+    }
+}
+
+/// Writes `character` and `animations` as a GLB.
+///
+/// # Errors
+/// An animation whose key count, weight count or times do not fit, or a file over 4 GiB.
+pub fn export_glb(character: &Character, animations: &[MorphAnimation]) -> Result<Vec<u8>, ExportError> {
+    let shape_count = character.blendshapes().len();
+    for animation in animations {
+        check_animation(animation, shape_count)?;
+    }
+    let n = character.vertex_count();
+    let mut bin = Bin::default();
+
+    let positions: Vec<f32> = character.positions().iter().flat_map(|p| p.to_array()).collect();
+    let bounds = character.bounds();
+    let position = bin.floats(&positions, "VEC3", Some(ARRAY_BUFFER), Some((bounds.min.to_array().to_vec(), bounds.max.to_array().to_vec())));
+    let normals: Vec<f32> = character.normals().iter().flat_map(|p| p.to_array()).collect();
+    let normal = bin.floats(&normals, "VEC3", Some(ARRAY_BUFFER), None);
+    let mut attributes = json!({ "POSITION": position, "NORMAL": normal });
+    if let Some(uvs) = character.uvs() {
+        let flat: Vec<f32> = uvs.iter().flatten().copied().collect();
+        attributes["TEXCOORD_0"] = json!(bin.floats(&flat, "VEC2", Some(ARRAY_BUFFER), None));
+    }
+    if let Some(colors) = character.colors() {
+        let flat: Vec<f32> = colors.iter().flatten().copied().collect();
+        attributes["COLOR_0"] = json!(bin.floats(&flat, "VEC4", Some(ARRAY_BUFFER), None));
+    }
+
+    let targets: Vec<Value> = character
+        .blendshapes()
+        .iter()
+        .zip(character.normal_deltas())
+        .map(|(shape, normal_deltas)| {
+            let p = bin.sparse_vec3(n, shape.indices(), shape.deltas(), true);
+            let nd = bin.sparse_vec3(n, &normal_deltas.indices, &normal_deltas.deltas, false);
+            json!({ "POSITION": p, "NORMAL": nd })
+        })
+        .collect();
+
+    let (materials, images, textures) = materials_json(character, &mut bin);
+    let small_indices = n <= usize::from(u16::MAX);
+    let mut primitives = Vec::new();
+    for part in character.parts() {
+        let tris = &character.triangles()[part.triangles.clone()];
+        if tris.is_empty() {
+            continue;
+        }
+        let flat: Vec<u32> = tris.iter().flatten().copied().collect();
+        let (bytes, component) = if small_indices {
+            (flat.iter().flat_map(|&i| (i as u16).to_le_bytes()).collect(), UNSIGNED_SHORT)
+        } else {
+            (u32_bytes(&flat), UNSIGNED_INT)
+        };
+        let view = bin.view(&bytes, Some(ELEMENT_ARRAY_BUFFER));
+        let indices = bin.accessor(json!({ "bufferView": view, "componentType": component, "count": flat.len(), "type": "SCALAR" }));
+        let mut primitive = json!({ "attributes": attributes, "indices": indices, "material": part.material.0, "mode": 4 });
+        if !targets.is_empty() {
+            primitive["targets"] = json!(targets);
+        }
+        primitives.push(primitive);
+    }
+
+    let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
+    let mut mesh = json!({ "name": character.name(), "primitives": primitives });
+    if shape_count > 0 {
+        mesh["weights"] = json!(vec![0.0; shape_count]);
+        mesh["extras"] = json!({ "targetNames": names });
+    }
+
+    let animations_json: Vec<Value> = animations
+        .iter()
+        .map(|animation| {
+            let input = bin.floats(&animation.times, "SCALAR", None, Some((vec![animation.times[0]], vec![animation.times[animation.times.len() - 1]])));
+            let flat: Vec<f32> = animation.weights.iter().flatten().copied().collect();
+            let output = bin.floats(&flat, "SCALAR", None, None);
+            json!({
+                "name": animation.name,
+                "samplers": [{ "input": input, "output": output, "interpolation": "LINEAR" }],
+                "channels": [{ "sampler": 0, "target": { "node": 0, "path": "weights" } }],
+            })
+        })
+        .collect();
+
+    let mut root = json!({
+        "asset": { "version": "2.0", "generator": concat!("faceanim ", env!("CARGO_PKG_VERSION")) },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "name": character.name(), "mesh": 0 }],
+        "meshes": [mesh],
+        "materials": materials,
+        "accessors": bin.accessors,
+        "bufferViews": bin.views,
+        "buffers": [{ "byteLength": bin.bytes.len() }],
+    });
+    if !animations_json.is_empty() {
+        root["animations"] = json!(animations_json);
+    }
+    if !images.is_empty() {
+        root["images"] = json!(images);
+        root["textures"] = json!(textures);
+        root["samplers"] = json!([{ "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 }]);
+    }
+    glb(&root, bin.bytes)
+}
+
+fn check_animation(animation: &MorphAnimation, shape_count: usize) -> Result<(), ExportError> {
+    let bad = |problem: String| ExportError::BadAnimation { name: animation.name.clone(), problem };
+    if animation.times.is_empty() {
+        return Err(bad("it has no keys".into()));
+    }
+    if animation.times.len() != animation.weights.len() {
+        return Err(bad(format!("{} key times but {} weight vectors", animation.times.len(), animation.weights.len())));
+    }
+    if let Some(k) = animation.times.iter().position(|t| !t.is_finite()) {
+        return Err(bad(format!("key time {k} is not a finite number")));
+    }
+    if let Some(k) = animation.times.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(bad(format!("key times are not increasing at key {}", k + 1)));
+    }
+    for (k, w) in animation.weights.iter().enumerate() {
+        if w.len() != shape_count {
+            return Err(bad(format!("key {k} has {} weights but the character has {shape_count} blendshapes", w.len())));
+        }
+        if w.iter().any(|x| !x.is_finite()) {
+            return Err(bad(format!("key {k} has a weight that is not a finite number")));
+        }
+    }
+    Ok(())
+}
+
+fn materials_json(character: &Character, bin: &mut Bin) -> (Vec<Value>, Vec<Value>, Vec<Value>) {
+    let mut images = Vec::new();
+    let mut textures = Vec::new();
+    let materials = character
+        .materials()
+        .iter()
+        .map(|m| {
+            let mut pbr = json!({
+                "baseColorFactor": exact(&m.base_color),
+                "metallicFactor": f64::from(m.metallic.clamp(0.0, 1.0)),
+                "roughnessFactor": f64::from(m.roughness.clamp(0.0, 1.0)),
+            });
+            if let Some(texture) = &m.base_color_texture {
+                let view = bin.view(&texture.bytes, None);
+                images.push(json!({ "bufferView": view, "mimeType": texture.mime_type }));
+                textures.push(json!({ "source": images.len() - 1, "sampler": 0 }));
+                pbr["baseColorTexture"] = json!({ "index": textures.len() - 1 });
+            }
+            let mut material = json!({ "pbrMetallicRoughness": pbr });
+            if !m.name.is_empty() {
+                material["name"] = json!(m.name);
+            }
+            if m.double_sided {
+                material["doubleSided"] = json!(true);
+            }
+            if m.base_color[3] < 1.0 {
+                material["alphaMode"] = json!("BLEND");
+            }
+            material
+        })
+        .collect();
+    (materials, images, textures)
+}
+
+/// f32s written as the f64 of the same value, so min/max compare exactly with the data.
+fn exact(values: &[f32]) -> Value {
+    json!(values.iter().map(|&v| f64::from(v)).collect::<Vec<f64>>())
+}
+
+fn f32_bytes(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+fn u32_bytes(values: &[u32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
+    let mut json = serde_json::to_vec(root).map_err(|_| ExportError::TooLarge)?;
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let total32 = u32::try_from(total).map_err(|_| ExportError::TooLarge)?;
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&total32.to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
+    out.extend_from_slice(&bin);
+    Ok(out)
+}

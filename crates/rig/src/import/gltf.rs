@@ -1,0 +1,780 @@
+//! glTF 2.0 import: GLB or JSON, every mesh instance in the scene with its node transform (or
+//! rest-pose skinning), all primitives merged into one vertex array, morph targets merged across
+//! meshes by name.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use base64::Engine as _;
+use glam::{Mat3, Mat4, Vec3};
+use gltf::accessor::Dimensions;
+use gltf::mesh::Mode;
+
+use super::accessor::{Buffers, read_floats, read_indices};
+use super::{ImportError, ImportErrorKind, Imported, MAX_BLENDSHAPES, MAX_TRIANGLES, MAX_VERTICES, Resources};
+use crate::character::{Blendshape, Character, CharacterParts, Material, MaterialId, Part, SPARSE_DELTA_THRESHOLD, Texture};
+
+const GLB_MAGIC: &[u8; 4] = b"glTF";
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+
+/// Imports a `.glb` or `.gltf` from its bytes. `source_name` names the file in errors;
+/// `resources` loads external buffers and images.
+///
+/// # Errors
+/// An [`ImportError`] naming `source_name` and the problem.
+pub fn import_gltf(bytes: &[u8], source_name: &str, resources: &dyn Resources) -> Result<Imported, ImportError> {
+    import(bytes, source_name, resources).map_err(|kind| ImportError { source_name: source_name.to_owned(), kind })
+}
+
+fn import(bytes: &[u8], source_name: &str, resources: &dyn Resources) -> Result<Imported, ImportErrorKind> {
+    let (json, bin) = split_container(bytes)?;
+    let root = gltf::json::Root::from_slice(json).map_err(|e| ImportErrorKind::InvalidJson(e.to_string()))?;
+    if !root.asset.version.starts_with("2.") {
+        return Err(ImportErrorKind::Unsupported(format!(
+            "glTF version {} (faceanim reads glTF 2.0)",
+            root.asset.version
+        )));
+    }
+    check_position_indices(&root)?;
+    let document = gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(problems) => ImportErrorKind::InvalidJson(
+            problems.iter().take(8).map(|(path, err)| format!("{path}: {err}")).collect::<Vec<_>>().join("; "),
+        ),
+        other => ImportErrorKind::InvalidJson(other.to_string()),
+    })?;
+    let buffers = load_buffers(&document, bin, resources)?;
+    let mut builder = Builder::new(source_name);
+    builder.read_scene(&document, &buffers, resources)?;
+    builder.finish()
+}
+
+/// gltf-json 1.4.1's validation reads `accessors[POSITION]` before checking that the index
+/// exists, and panics when it does not (found by `tests/fuzz_import.rs`); check it first.
+fn check_position_indices(root: &gltf::json::Root) -> Result<(), ImportErrorKind> {
+    use gltf::json::validation::Checked;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(index) = primitive.attributes.get(&Checked::Valid(gltf::json::mesh::Semantic::Positions)) {
+                if index.value() >= root.accessors.len() {
+                    return Err(ImportErrorKind::InvalidJson(format!(
+                        "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {} does not exist ({} accessors)",
+                        index.value(),
+                        root.accessors.len()
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Splits a GLB into its JSON and BIN chunks, or returns glTF JSON as it is.
+fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKind> {
+    if bytes.len() >= 4 && &bytes[..4] == GLB_MAGIC {
+        let word = |at: usize| -> Result<u32, ImportErrorKind> {
+            bytes
+                .get(at..at + 4)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .ok_or_else(|| ImportErrorKind::Truncated(format!("the GLB ends at byte {} inside its headers", bytes.len())))
+        };
+        let version = word(4)?;
+        if version != 2 {
+            return Err(ImportErrorKind::Unsupported(format!("GLB version {version} (faceanim reads version 2)")));
+        }
+        let declared = word(8)? as usize;
+        if declared > bytes.len() {
+            return Err(ImportErrorKind::Truncated(format!(
+                "the GLB header says {declared} bytes but there are {}",
+                bytes.len()
+            )));
+        }
+        let bytes = &bytes[..declared];
+        let json_len = word(12)? as usize;
+        if word(16)? != CHUNK_JSON {
+            return Err(ImportErrorKind::NotGltf("the first GLB chunk is not JSON".into()));
+        }
+        let json_end = 20usize.checked_add(json_len).filter(|&e| e <= bytes.len()).ok_or_else(|| {
+            ImportErrorKind::Truncated(format!("the JSON chunk claims {json_len} bytes but the GLB has {}", bytes.len()))
+        })?;
+        let json = &bytes[20..json_end];
+        let mut bin = None;
+        let mut at = json_end;
+        while at + 8 <= bytes.len() {
+            let len = word(at)? as usize;
+            let kind = word(at + 4)?;
+            let end = (at + 8).checked_add(len).filter(|&e| e <= bytes.len()).ok_or_else(|| {
+                ImportErrorKind::Truncated(format!("a chunk at byte {at} claims {len} bytes but the GLB has {}", bytes.len()))
+            })?;
+            if kind == CHUNK_BIN && bin.is_none() {
+                bin = Some(&bytes[at + 8..end]);
+            }
+            at = end;
+        }
+        return Ok((json, bin));
+    }
+    let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
+    if first == Some(&b'{') {
+        return Ok((bytes, None));
+    }
+    let shown: String = bytes.iter().take(8).map(|b| format!("{b:02x}")).collect::<Vec<_>>().join(" ");
+    Err(ImportErrorKind::NotGltf(format!(
+        "it starts with bytes [{shown}], neither the GLB magic 'glTF' nor a JSON object"
+    )))
+}
+
+fn load_buffers(document: &gltf::Document, bin: Option<&[u8]>, resources: &dyn Resources) -> Result<Buffers, ImportErrorKind> {
+    let mut out = Vec::new();
+    for buffer in document.buffers() {
+        let index = buffer.index();
+        let (data, uri) = match buffer.source() {
+            gltf::buffer::Source::Bin => {
+                let data = bin.ok_or_else(|| ImportErrorKind::MissingBuffer {
+                    index,
+                    uri: "GLB BIN chunk".into(),
+                    reason: "the file has no binary chunk".into(),
+                })?;
+                (data.to_vec(), "GLB BIN chunk".to_owned())
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                let data = load_uri(uri, resources)
+                    .map_err(|reason| ImportErrorKind::MissingBuffer { index, uri: shorten(uri), reason })?;
+                (data, shorten(uri))
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(ImportErrorKind::Truncated(format!(
+                "buffer {index} ('{uri}') has {} bytes but the file declares {}",
+                data.len(),
+                buffer.length()
+            )));
+        }
+        out.push(data);
+    }
+    Ok(Buffers(out))
+}
+
+fn shorten(uri: &str) -> String {
+    if uri.len() > 60 { format!("{}…", &uri[..uri.char_indices().nth(40).map_or(uri.len(), |(i, _)| i)]) } else { uri.to_owned() }
+}
+
+/// Loads a `data:` URI or, through `resources`, a relative one (percent-decoded).
+fn load_uri(uri: &str, resources: &dyn Resources) -> Result<Vec<u8>, String> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (_, payload) = rest.split_once(";base64,").ok_or("only base64 data URIs are supported")?;
+        return base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("bad base64: {e}"));
+    }
+    if uri.contains("://") {
+        return Err("faceanim never downloads; put the file next to the .gltf".into());
+    }
+    resources.load(&percent_decode(uri))
+}
+
+fn percent_decode(s: &str) -> String {
+    let hex = |b: u8| (b as char).to_digit(16);
+    let bytes = s.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' && i + 2 < bytes.len() {
+            if let (Some(hi), Some(lo)) = (hex(bytes[i + 1]), hex(bytes[i + 2])) {
+                out.push((hi * 16 + lo) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Per-vertex transform of one mesh instance: one matrix, or per-vertex skinning matrices.
+enum Placement {
+    Rigid(Mat4),
+    Skinned(Vec<Mat4>),
+}
+
+impl Placement {
+    fn matrix(&self, vertex: usize) -> Mat4 {
+        match self {
+            Placement::Rigid(m) => *m,
+            Placement::Skinned(per_vertex) => per_vertex.get(vertex).copied().unwrap_or(Mat4::IDENTITY),
+        }
+    }
+}
+
+/// Accumulates vertices, triangles, parts and blendshapes over all primitives.
+struct Builder {
+    name: String,
+    positions: Vec<Vec3>,
+    normals: Vec<Option<Vec3>>,
+    uvs: Vec<[f32; 2]>,
+    any_uv: bool,
+    colors: Vec<[f32; 4]>,
+    any_color: bool,
+    triangles: Vec<[u32; 3]>,
+    parts: Vec<Part>,
+    materials: Vec<Material>,
+    material_map: HashMap<Option<usize>, MaterialId>,
+    shape_names: Vec<String>,
+    shape_index: HashMap<String, usize>,
+    shape_indices: Vec<Vec<u32>>,
+    shape_deltas: Vec<Vec<Vec3>>,
+    threshold: f32,
+    warnings: Vec<String>,
+    saw_targets: bool,
+}
+
+impl Builder {
+    fn new(source_name: &str) -> Builder {
+        let stem = std::path::Path::new(source_name)
+            .file_stem()
+            .map_or_else(|| source_name.to_owned(), |s| s.to_string_lossy().into_owned());
+        Builder {
+            name: stem,
+            positions: Vec::new(),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            any_uv: false,
+            colors: Vec::new(),
+            any_color: false,
+            triangles: Vec::new(),
+            parts: Vec::new(),
+            materials: Vec::new(),
+            material_map: HashMap::new(),
+            shape_names: Vec::new(),
+            shape_index: HashMap::new(),
+            shape_indices: Vec::new(),
+            shape_deltas: Vec::new(),
+            threshold: 0.0,
+            warnings: Vec::new(),
+            saw_targets: false,
+        }
+    }
+
+    fn read_scene(&mut self, doc: &gltf::Document, buffers: &Buffers, resources: &dyn Resources) -> Result<(), ImportErrorKind> {
+        let world = world_matrices(doc)?;
+        let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+            Some(scene) => scene.nodes().map(|n| n.index()).collect(),
+            None => {
+                let mut has_parent = vec![false; doc.nodes().len()];
+                for node in doc.nodes() {
+                    for child in node.children() {
+                        has_parent[child.index()] = true;
+                    }
+                }
+                (0..has_parent.len()).filter(|&i| !has_parent[i]).collect()
+            }
+        };
+        // Depth-first over the scene, guarding against cycles the schema cannot rule out.
+        let nodes: Vec<gltf::Node<'_>> = doc.nodes().collect();
+        let mut visited = vec![false; nodes.len()];
+        let mut stack: Vec<usize> = roots.into_iter().rev().collect();
+        let mut instances: Vec<(gltf::Node<'_>, gltf::Mesh<'_>)> = Vec::new();
+        while let Some(i) = stack.pop() {
+            if std::mem::replace(&mut visited[i], true) {
+                continue;
+            }
+            let node = nodes[i].clone();
+            if let Some(mesh) = node.mesh() {
+                instances.push((node.clone(), mesh));
+            }
+            stack.extend(node.children().map(|c| c.index()).collect::<Vec<_>>().into_iter().rev());
+        }
+        if instances.is_empty() {
+            // Meshes that no node places: take them as they are.
+            for mesh in doc.meshes() {
+                self.read_mesh(&mesh, &Placement::Rigid(Mat4::IDENTITY), buffers, resources)?;
+            }
+        }
+        for (node, mesh) in instances {
+            let placement = match node.skin() {
+                Some(skin) => skin_placement(&skin, &node, &mesh, &world, buffers)?,
+                None => Placement::Rigid(world[node.index()]),
+            };
+            self.read_mesh(&mesh, &placement, buffers, resources)?;
+        }
+        Ok(())
+    }
+
+    fn read_mesh(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        placement: &Placement,
+        buffers: &Buffers,
+        resources: &dyn Resources,
+    ) -> Result<(), ImportErrorKind> {
+        let mesh_label = match mesh.name() {
+            Some(name) => format!("mesh {} '{name}'", mesh.index()),
+            None => format!("mesh {}", mesh.index()),
+        };
+        let target_count_hint = mesh.primitives().next().map_or(0, |p| p.morph_targets().count());
+        let target_names = self.resolved_target_names(mesh, &mesh_label, target_count_hint);
+        let mut target_count: Option<usize> = None;
+        // Primitives that share attribute accessors share vertices (faceanim's own exports do).
+        let mut shared: HashMap<Vec<usize>, u32> = HashMap::new();
+
+        for primitive in mesh.primitives() {
+            let label = format!("{mesh_label} primitive {}", primitive.index());
+            let targets: Vec<_> = primitive.morph_targets().collect();
+            match target_count {
+                None => target_count = Some(targets.len()),
+                Some(n) if n != targets.len() => {
+                    return Err(ImportErrorKind::CountMismatch(format!(
+                        "{label} has {} morph targets but the mesh's first primitive has {n}",
+                        targets.len()
+                    )));
+                }
+                Some(_) => {}
+            }
+            let mode = primitive.mode();
+            if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+                self.warnings.push(format!("{label}: skipped {mode:?} (only triangles are animated)"));
+                continue;
+            }
+            let Some(position_accessor) = primitive.get(&gltf::Semantic::Positions) else {
+                self.warnings.push(format!("{label}: skipped, it has no POSITION"));
+                continue;
+            };
+            let key: Vec<usize> = std::iter::once(position_accessor.index())
+                .chain([gltf::Semantic::Normals, gltf::Semantic::TexCoords(0), gltf::Semantic::Colors(0)].iter().map(
+                    |s| primitive.get(s).map_or(usize::MAX, |a| a.index()),
+                ))
+                .chain(targets.iter().map(|t| t.positions().map_or(usize::MAX, |a| a.index())))
+                .collect();
+            let base = match shared.get(&key) {
+                Some(&base) => base,
+                None => {
+                    let base = self.read_vertices(&primitive, &label, &targets, &target_names, placement, buffers)?;
+                    shared.insert(key, base);
+                    base
+                }
+            };
+            let local_count = position_accessor.count();
+            self.read_triangles(&primitive, &label, base, local_count, placement, buffers)?;
+            let first_triangle = self.parts.last().map_or(0, |p| p.triangles.end);
+            let material = self.material(&primitive.material(), resources, buffers);
+            self.parts.push(Part {
+                name: mesh.name().unwrap_or("mesh").to_owned(),
+                material,
+                triangles: first_triangle..self.triangles.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Appends a primitive's vertices and morph-target deltas; returns the first vertex index.
+    fn read_vertices(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        label: &str,
+        targets: &[gltf::mesh::MorphTarget<'_>],
+        target_names: &[String],
+        placement: &Placement,
+        buffers: &Buffers,
+    ) -> Result<u32, ImportErrorKind> {
+        let role = |what: &str| format!("{what} of {label}");
+        let with_role = |what: String| move |e: ImportErrorKind| match e {
+            ImportErrorKind::BadAccessor { accessor, problem, .. } => ImportErrorKind::BadAccessor { accessor, role: what.clone(), problem },
+            other => other,
+        };
+        let position_accessor = primitive.get(&gltf::Semantic::Positions).ok_or(ImportErrorKind::NoMeshes)?;
+        let count = position_accessor.count();
+        let base = self.positions.len();
+        if count > MAX_VERTICES || base + count > MAX_VERTICES {
+            return Err(ImportErrorKind::TooLarge(format!(
+                "{label} declares {count} vertices ({base} before it; at most {MAX_VERTICES} in all)"
+            )));
+        }
+        let raw = read_floats(buffers, &position_accessor, Some(Dimensions::Vec3)).map_err(with_role(role("POSITION")))?;
+        check_finite(&raw, 3, &role("POSITION"))?;
+        let local: Vec<Vec3> = raw.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        for (i, p) in local.iter().enumerate() {
+            self.positions.push(placement.matrix(i).transform_point3(*p));
+        }
+
+        let normals = match primitive.get(&gltf::Semantic::Normals) {
+            Some(acc) => {
+                check_count(&acc, count, &role("NORMAL"))?;
+                let raw = read_floats(buffers, &acc, Some(Dimensions::Vec3)).map_err(with_role(role("NORMAL")))?;
+                check_finite(&raw, 3, &role("NORMAL"))?;
+                Some(raw)
+            }
+            None => None,
+        };
+        for i in 0..count {
+            let n = normals.as_ref().map(|raw| {
+                let n = Vec3::new(raw[3 * i], raw[3 * i + 1], raw[3 * i + 2]);
+                let m = Mat3::from_mat4(placement.matrix(i)).inverse().transpose();
+                let t = m * n;
+                crate::normals::unit_or_up(if t.is_finite() { t } else { n })
+            });
+            self.normals.push(n);
+        }
+
+        match primitive.get(&gltf::Semantic::TexCoords(0)) {
+            Some(acc) => {
+                check_count(&acc, count, &role("TEXCOORD_0"))?;
+                let raw = read_floats(buffers, &acc, Some(Dimensions::Vec2)).map_err(with_role(role("TEXCOORD_0")))?;
+                check_finite(&raw, 2, &role("TEXCOORD_0"))?;
+                self.any_uv = true;
+                self.uvs.extend(raw.chunks_exact(2).map(|c| [c[0], c[1]]));
+            }
+            None => self.uvs.extend(std::iter::repeat_n([0.0, 0.0], count)),
+        }
+
+        match primitive.get(&gltf::Semantic::Colors(0)) {
+            Some(acc) => {
+                check_count(&acc, count, &role("COLOR_0"))?;
+                let dims = acc.dimensions();
+                let raw = read_floats(buffers, &acc, None).map_err(with_role(role("COLOR_0")))?;
+                check_finite(&raw, 1, &role("COLOR_0"))?;
+                self.any_color = true;
+                match dims {
+                    Dimensions::Vec3 => self.colors.extend(raw.chunks_exact(3).map(|c| [c[0], c[1], c[2], 1.0])),
+                    Dimensions::Vec4 => self.colors.extend(raw.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]])),
+                    other => {
+                        return Err(ImportErrorKind::BadAccessor {
+                            accessor: acc.index(),
+                            role: role("COLOR_0"),
+                            problem: format!("type is {other:?}, expected Vec3 or Vec4"),
+                        });
+                    }
+                }
+            }
+            None => self.colors.extend(std::iter::repeat_n([1.0, 1.0, 1.0, 1.0], count)),
+        }
+
+        for (t, target) in targets.iter().enumerate() {
+            self.saw_targets = true;
+            let name = target_names.get(t).cloned().unwrap_or_else(|| format!("target_{t}"));
+            let shape = self.shape_slot(&name)?;
+            let Some(acc) = target.positions() else { continue };
+            let what = format!("morph target {t} ('{name}') POSITION of {label}");
+            check_count(&acc, count, &what)?;
+            let raw = read_floats(buffers, &acc, Some(Dimensions::Vec3)).map_err(with_role(what.clone()))?;
+            check_finite(&raw, 3, &what)?;
+            for (i, c) in raw.chunks_exact(3).enumerate() {
+                let d = Mat3::from_mat4(placement.matrix(i)) * Vec3::new(c[0], c[1], c[2]);
+                self.push_delta(shape, (base + i) as u32, d);
+            }
+        }
+        Ok(base as u32)
+    }
+
+    fn read_triangles(
+        &mut self,
+        primitive: &gltf::Primitive<'_>,
+        label: &str,
+        base: u32,
+        local_count: usize,
+        placement: &Placement,
+        buffers: &Buffers,
+    ) -> Result<(), ImportErrorKind> {
+        let indices: Vec<u32> = match primitive.indices() {
+            Some(acc) => read_indices(buffers, &acc).map_err(|e| match e {
+                ImportErrorKind::BadAccessor { accessor, problem, .. } => {
+                    ImportErrorKind::BadAccessor { accessor, role: format!("indices of {label}"), problem }
+                }
+                other => other,
+            })?,
+            None => (0..local_count as u32).collect(),
+        };
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= local_count) {
+            return Err(ImportErrorKind::CountMismatch(format!(
+                "{label} uses vertex {bad} but has only {local_count} vertices"
+            )));
+        }
+        let mut local: Vec<[u32; 3]> = Vec::with_capacity(indices.len() / 3);
+        match primitive.mode() {
+            Mode::TriangleStrip => {
+                for i in 0..indices.len().saturating_sub(2) {
+                    let (a, b, c) = (indices[i], indices[i + 1], indices[i + 2]);
+                    local.push(if i % 2 == 0 { [a, b, c] } else { [b, a, c] });
+                }
+            }
+            Mode::TriangleFan => {
+                for i in 1..indices.len().saturating_sub(1) {
+                    local.push([indices[0], indices[i], indices[i + 1]]);
+                }
+            }
+            _ => local.extend(indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]])),
+        }
+        if self.triangles.len() + local.len() > MAX_TRIANGLES {
+            return Err(ImportErrorKind::TooLarge(format!("more than {MAX_TRIANGLES} triangles in all")));
+        }
+        for [a, b, c] in local {
+            if a == b || b == c || a == c {
+                continue;
+            }
+            // A mirroring transform turns the winding inside out; keep faces facing outwards.
+            let flip = Mat3::from_mat4(placement.matrix(a as usize)).determinant() < 0.0;
+            let tri = if flip { [c, b, a] } else { [a, b, c] };
+            self.triangles.push(tri.map(|v| v + base));
+        }
+        Ok(())
+    }
+
+    /// The mesh's target names (`target_N` where missing), unique within the mesh: a repeated
+    /// name gets a `.001` suffix so that two targets never merge into one blendshape.
+    fn resolved_target_names(&mut self, mesh: &gltf::Mesh<'_>, label: &str, count: usize) -> Vec<String> {
+        let given = target_names(mesh);
+        if !given.is_empty() && given.len() != count {
+            self.warnings.push(format!("{label}: {} targetNames for {count} morph targets", given.len()));
+        }
+        let mut seen = std::collections::HashSet::new();
+        (0..count)
+            .map(|t| {
+                let name = given.get(t).cloned().flatten().unwrap_or_else(|| format!("target_{t}"));
+                if seen.insert(name.clone()) {
+                    return name;
+                }
+                let unique = (1..).map(|n| format!("{name}.{n:03}")).find(|c| !seen.contains(c)).unwrap_or_default();
+                self.warnings.push(format!("{label}: morph target {t} repeats the name '{name}'; renamed '{unique}'"));
+                seen.insert(unique.clone());
+                unique
+            })
+            .collect()
+    }
+
+    fn shape_slot(&mut self, name: &str) -> Result<usize, ImportErrorKind> {
+        if let Some(&i) = self.shape_index.get(name) {
+            return Ok(i);
+        }
+        if self.shape_names.len() >= MAX_BLENDSHAPES {
+            return Err(ImportErrorKind::TooLarge(format!("more than {MAX_BLENDSHAPES} morph targets")));
+        }
+        let i = self.shape_names.len();
+        self.shape_names.push(name.to_owned());
+        self.shape_index.insert(name.to_owned(), i);
+        self.shape_indices.push(Vec::new());
+        self.shape_deltas.push(Vec::new());
+        Ok(i)
+    }
+
+    /// Records a delta; the threshold is applied once the size is known, in `finish`.
+    fn push_delta(&mut self, shape: usize, vertex: u32, delta: Vec3) {
+        if delta != Vec3::ZERO {
+            self.shape_indices[shape].push(vertex);
+            self.shape_deltas[shape].push(delta);
+        }
+    }
+
+    fn material(&mut self, material: &gltf::Material<'_>, resources: &dyn Resources, buffers: &Buffers) -> MaterialId {
+        let key = material.index();
+        if let Some(&id) = self.material_map.get(&key) {
+            return id;
+        }
+        let pbr = material.pbr_metallic_roughness();
+        let base_color_texture = pbr.base_color_texture().and_then(|info| {
+            let image = info.texture().source();
+            match load_image(&image, resources, buffers) {
+                Ok(texture) => Some(texture),
+                Err(reason) => {
+                    self.warnings.push(format!("base-colour texture of material {key:?} dropped: {reason}"));
+                    None
+                }
+            }
+        });
+        let id = MaterialId(self.materials.len() as u32);
+        self.materials.push(Material {
+            name: material.name().unwrap_or_default().to_owned(),
+            base_color: pbr.base_color_factor(),
+            base_color_texture,
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+            double_sided: material.double_sided(),
+        });
+        self.material_map.insert(key, id);
+        id
+    }
+
+    fn finish(mut self) -> Result<Imported, ImportErrorKind> {
+        if self.positions.is_empty() || self.triangles.is_empty() {
+            return Err(ImportErrorKind::NoMeshes);
+        }
+        if !self.saw_targets {
+            return Err(ImportErrorKind::NoMorphTargets);
+        }
+        // Parts are recorded per primitive; their triangle ranges are contiguous by construction.
+        let size = crate::character::Aabb::around(&self.positions).diagonal();
+        self.threshold = SPARSE_DELTA_THRESHOLD * size;
+        let blendshapes = self
+            .shape_names
+            .iter()
+            .zip(self.shape_indices.into_iter().zip(self.shape_deltas))
+            .map(|(name, (indices, deltas))| {
+                let (indices, deltas): (Vec<u32>, Vec<Vec3>) =
+                    indices.into_iter().zip(deltas).filter(|(_, d)| d.length() > self.threshold).unzip();
+                Blendshape::from_sparse(name.clone(), indices, deltas)
+            })
+            .collect();
+        let normals = if self.normals.iter().all(Option::is_some) {
+            Some(self.normals.into_iter().flatten().collect())
+        } else {
+            None
+        };
+        let character = Character::new(CharacterParts {
+            name: self.name,
+            positions: self.positions,
+            normals,
+            uvs: self.any_uv.then_some(self.uvs),
+            colors: self.any_color.then_some(self.colors),
+            triangles: self.triangles,
+            materials: self.materials,
+            parts: self.parts,
+            blendshapes,
+            normal_deltas: None,
+        })?;
+        Ok(Imported { character, warnings: self.warnings })
+    }
+}
+
+fn target_names(mesh: &gltf::Mesh<'_>) -> Vec<Option<String>> {
+    let Some(extras) = mesh.extras() else { return Vec::new() };
+    let Ok(value) = serde_json::from_str::<serde_json::Value>(extras.get()) else { return Vec::new() };
+    match value.get("targetNames").and_then(|v| v.as_array()) {
+        Some(names) => names.iter().map(|n| n.as_str().map(str::to_owned)).collect(),
+        None => Vec::new(),
+    }
+}
+
+fn check_count(accessor: &gltf::Accessor<'_>, expected: usize, what: &str) -> Result<(), ImportErrorKind> {
+    if accessor.count() == expected {
+        Ok(())
+    } else {
+        Err(ImportErrorKind::CountMismatch(format!(
+            "{what} (accessor {}) has {} elements but POSITION has {expected}",
+            accessor.index(),
+            accessor.count()
+        )))
+    }
+}
+
+fn check_finite(values: &[f32], components: usize, what: &str) -> Result<(), ImportErrorKind> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(ImportErrorKind::NonFinite { what: what.to_owned(), index: i / components }),
+        None => Ok(()),
+    }
+}
+
+/// World matrix of every node (parents first), rejecting cycles and non-finite transforms.
+fn world_matrices(doc: &gltf::Document) -> Result<Vec<Mat4>, ImportErrorKind> {
+    let count = doc.nodes().len();
+    let mut parent = vec![None; count];
+    for node in doc.nodes() {
+        for child in node.children() {
+            parent[child.index()] = Some(node.index());
+        }
+    }
+    let local: Vec<Mat4> = doc.nodes().map(|n| Mat4::from_cols_array_2d(&n.transform().matrix())).collect();
+    if let Some(i) = local.iter().position(|m| !m.is_finite()) {
+        return Err(ImportErrorKind::NonFinite { what: "node transform".into(), index: i });
+    }
+    let mut world = vec![None::<Mat4>; count];
+    for start in 0..count {
+        let mut chain = vec![start];
+        let mut at = start;
+        while let Some(p) = parent[at] {
+            if world[p].is_some() {
+                break;
+            }
+            if chain.len() > count {
+                return Err(ImportErrorKind::InvalidJson(format!("node {start} is its own ancestor")));
+            }
+            chain.push(p);
+            at = p;
+        }
+        for &n in chain.iter().rev() {
+            if world[n].is_none() {
+                let up = parent[n].and_then(|p| world[p]).unwrap_or(Mat4::IDENTITY);
+                world[n] = Some(up * local[n]);
+            }
+        }
+    }
+    Ok(world.into_iter().map(|m| m.unwrap_or(Mat4::IDENTITY)).collect())
+}
+
+/// Rest-pose skinning: each vertex placed by Σ wₖ · joint_worldₖ · inverse_bindₖ.
+fn skin_placement(
+    skin: &gltf::Skin<'_>,
+    node: &gltf::Node<'_>,
+    mesh: &gltf::Mesh<'_>,
+    world: &[Mat4],
+    buffers: &Buffers,
+) -> Result<Placement, ImportErrorKind> {
+    let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+    let inverse_bind: Vec<Mat4> = match skin.inverse_bind_matrices() {
+        Some(acc) => {
+            let raw = read_floats(buffers, &acc, Some(Dimensions::Mat4))?;
+            check_finite(&raw, 16, "inverseBindMatrices")?;
+            raw.chunks_exact(16).map(Mat4::from_cols_slice).collect()
+        }
+        None => vec![Mat4::IDENTITY; joints.len()],
+    };
+    let joint_matrices: Vec<Mat4> = joints
+        .iter()
+        .enumerate()
+        .map(|(k, &j)| world[j] * inverse_bind.get(k).copied().unwrap_or(Mat4::IDENTITY))
+        .collect();
+    // All primitives of a skinned mesh are placed by the first one's weights when they share
+    // vertices; otherwise each primitive has its own counts, so placement is per primitive.
+    let Some(primitive) = mesh.primitives().next() else { return Ok(Placement::Rigid(world[node.index()])) };
+    let (Some(j_acc), Some(w_acc)) = (primitive.get(&gltf::Semantic::Joints(0)), primitive.get(&gltf::Semantic::Weights(0))) else {
+        return Ok(Placement::Rigid(world[node.index()]));
+    };
+    if mesh.primitives().count() > 1 {
+        let first = primitive.get(&gltf::Semantic::Positions).map(|a| a.index());
+        if mesh.primitives().any(|p| p.get(&gltf::Semantic::Positions).map(|a| a.index()) != first) {
+            return Err(ImportErrorKind::Unsupported(format!(
+                "skinned mesh {} with primitives that do not share vertices",
+                mesh.index()
+            )));
+        }
+    }
+    let joint_index = read_indices(buffers, &j_acc)?;
+    let weights = read_floats(buffers, &w_acc, Some(Dimensions::Vec4))?;
+    check_finite(&weights, 4, "WEIGHTS_0")?;
+    let count = j_acc.count().min(w_acc.count());
+    let mut per_vertex = Vec::with_capacity(count);
+    for v in 0..count {
+        let mut m = Mat4::ZERO;
+        let mut total = 0.0;
+        for k in 0..4 {
+            let w = weights.get(4 * v + k).copied().unwrap_or(0.0);
+            if w == 0.0 {
+                continue;
+            }
+            let j = joint_index.get(4 * v + k).copied().unwrap_or(0) as usize;
+            let jm = joint_matrices.get(j).ok_or_else(|| {
+                ImportErrorKind::CountMismatch(format!("vertex {v} uses joint {j} but the skin has {}", joints.len()))
+            })?;
+            m += *jm * w;
+            total += w;
+        }
+        per_vertex.push(if total > 0.0 { m * (1.0 / total) } else { world[node.index()] });
+    }
+    Ok(Placement::Skinned(per_vertex))
+}
+
+/// Loads a glTF image's encoded bytes (from a buffer view, a data URI or an external file).
+fn load_image(image: &gltf::Image<'_>, resources: &dyn Resources, buffers: &Buffers) -> Result<Texture, String> {
+    let (bytes, declared) = match image.source() {
+        gltf::image::Source::View { view, mime_type } => {
+            let buffer = buffers.0.get(view.buffer().index()).ok_or("its buffer is missing")?;
+            let end = view.offset().checked_add(view.length()).filter(|&e| e <= buffer.len()).ok_or("its buffer view runs past the buffer")?;
+            (buffer[view.offset()..end].to_vec(), Some(mime_type.to_owned()))
+        }
+        gltf::image::Source::Uri { uri, mime_type } => (load_uri(uri, resources)?, mime_type.map(str::to_owned)),
+    };
+    let sniffed = if bytes.starts_with(b"\x89PNG") {
+        Some("image/png")
+    } else if bytes.starts_with(&[0xFF, 0xD8]) {
+        Some("image/jpeg")
+    } else {
+        None
+    };
+    let mime_type = sniffed.map(str::to_owned).or(declared).ok_or("not a PNG or JPEG image")?;
+    Ok(Texture { mime_type, bytes: Arc::from(bytes) })
+}

@@ -1,0 +1,151 @@
+//! Broken files get clear errors that name the file and the problem — never a panic.
+//!
+//! Each case here is also written to `tests/corpus/` (with FACEANIM_WRITE_CORPUS=1), the seed
+//! corpus that `fuzz_import.rs` replays and mutates.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod support;
+
+use faceanim_rig::import::{NoExternalResources, import_gltf};
+use serde_json::json;
+use support::{GltfBuilder, ict_bytes, tiny_face, tiny_face_gltf};
+
+fn error_of(name: &str, bytes: &[u8]) -> String {
+    // Only small cases go into the corpus; the truncated 17 MB head stays out of git.
+    if std::env::var_os("FACEANIM_WRITE_CORPUS").is_some() && bytes.len() < 64 * 1024 {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/corpus");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+    match import_gltf(bytes, name, &NoExternalResources) {
+        Ok(_) => panic!("{name} was accepted"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn tiny(edit: impl FnOnce(&mut serde_json::Value, &mut GltfBuilder)) -> Vec<u8> {
+    let mut b = GltfBuilder::default();
+    let mut root = tiny_face_gltf(&mut b, &tiny_face(), false);
+    edit(&mut root, &mut b);
+    b.glb(root)
+}
+
+#[test]
+fn not_gltf() {
+    assert_eq!(
+        error_of("photo.glb", b"\x89PNG\r\n\x1a\n0000"),
+        "photo.glb: not a glTF file: it starts with bytes [89 50 4e 47 0d 0a 1a 0a], neither the GLB magic 'glTF' nor a JSON object"
+    );
+    assert_eq!(error_of("empty.glb", b""), "empty.glb: not a glTF file: it starts with bytes [], neither the GLB magic 'glTF' nor a JSON object");
+    assert!(error_of("broken.gltf", b"{\"asset\": ").starts_with("broken.gltf: invalid glTF JSON: EOF while parsing"));
+}
+
+#[test]
+fn truncated() {
+    let ict = ict_bytes();
+    assert_eq!(
+        error_of("ict-head-only.glb", &ict[..10]),
+        "ict-head-only.glb: truncated: the GLB ends at byte 10 inside its headers"
+    );
+    assert_eq!(
+        error_of("ict-half.glb", &ict[..ict.len() / 2]),
+        format!("ict-half.glb: truncated: the GLB header says {} bytes but there are {}", ict.len(), ict.len() / 2)
+    );
+}
+
+#[test]
+fn no_morph_targets() {
+    let bytes = tiny(|root, _| {
+        root["meshes"][0]["primitives"][0].as_object_mut().unwrap().remove("targets");
+        root["meshes"][0].as_object_mut().unwrap().remove("extras");
+    });
+    assert_eq!(
+        error_of("static.glb", &bytes),
+        "static.glb: no morph targets (blendshapes): faceanim animates blendshape characters; export the mesh with its shape keys"
+    );
+}
+
+#[test]
+fn counts_that_disagree() {
+    let bytes = tiny(|root, b| {
+        let short = b.vec3(&[[0.0, 0.1, 0.0]; 5]);
+        root["meshes"][0]["primitives"][0]["targets"][1]["POSITION"] = json!(short);
+    });
+    assert_eq!(
+        error_of("short-target.glb", &bytes),
+        "short-target.glb: counts disagree: morph target 1 ('blink_R') POSITION of mesh 0 'face' primitive 0 (accessor 5) has 5 elements but POSITION has 81"
+    );
+    let bytes = tiny(|root, b| {
+        let idx = b.indices(&[0, 1, 200]);
+        root["meshes"][0]["primitives"][0]["indices"] = json!(idx);
+    });
+    assert_eq!(error_of("bad-index.glb", &bytes), "bad-index.glb: counts disagree: mesh 0 'face' primitive 0 uses vertex 200 but has only 81 vertices");
+}
+
+#[test]
+fn nan_and_infinity() {
+    let face = tiny_face();
+    let mut b = GltfBuilder::default();
+    let mut root = tiny_face_gltf(&mut b, &face, false);
+    let mut nan_positions = face.positions.clone();
+    nan_positions[7][1] = f32::NAN;
+    root["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(b.vec3(&nan_positions));
+    // min/max of a NaN column are not numbers either; keep the JSON valid.
+    let last = b.accessors.len() - 1;
+    b.accessors[last]["min"] = json!([-1.0, -1.0, 0.0]);
+    b.accessors[last]["max"] = json!([1.0, 1.0, 0.3]);
+    assert_eq!(error_of("nan.glb", &b.glb(root)), "nan.glb: POSITION of mesh 0 'face' primitive 0 [7] is not a finite number");
+
+    let bytes = tiny(|root, b| {
+        let mut d = vec![[0.0f32; 3]; 81];
+        d[3] = [f32::INFINITY, 0.0, 0.0];
+        let acc = b.vec3(&d);
+        let last = b.accessors.len() - 1;
+        b.accessors[last]["min"] = json!([0.0, 0.0, 0.0]);
+        b.accessors[last]["max"] = json!([1.0, 0.0, 0.0]);
+        root["meshes"][0]["primitives"][0]["targets"][2]["POSITION"] = json!(acc);
+    });
+    assert_eq!(error_of("inf.glb", &bytes), "inf.glb: morph target 2 ('open') POSITION of mesh 0 'face' primitive 0 [3] is not a finite number");
+}
+
+#[test]
+fn absurd_sizes_and_lying_layouts() {
+    let bytes = tiny(|_, b| {
+        b.accessors[0]["count"] = json!(4_000_000_000u64);
+    });
+    assert_eq!(error_of("huge-count.glb", &bytes), "huge-count.glb: too large: mesh 0 'face' primitive 0 declares 4000000000 vertices (0 before it; at most 16777216 in all)");
+
+    let bytes = tiny(|_, b| {
+        b.views[0]["byteLength"] = json!(100_000_000u64);
+    });
+    let e = error_of("long-view.glb", &bytes);
+    assert!(e.starts_with("long-view.glb: accessor 0 (POSITION of mesh 0 'face' primitive 0): buffer view 0 ends at byte 100000000, past the end of buffer 0"), "{e}");
+
+    let bytes = tiny(|_, b| {
+        b.accessors[0]["byteOffset"] = json!(960);
+    });
+    let e = error_of("offset.glb", &bytes);
+    assert!(e.contains("81 elements need 1932 bytes from offset 960, but buffer view 0 has 972"), "{e}");
+}
+
+#[test]
+fn schema_errors_and_cycles() {
+    let bytes = tiny(|root, _| root["meshes"][0]["primitives"][0]["indices"] = json!(99));
+    assert_eq!(error_of("dangling.glb", &bytes), "dangling.glb: invalid glTF JSON: meshes[0].primitives[0].indices: Index out of bounds");
+
+    let bytes = tiny(|root, _| {
+        root["nodes"] = json!([{"children": [1], "mesh": 0}, {"children": [0]}]);
+    });
+    let e = error_of("cycle.glb", &bytes);
+    assert!(e.starts_with("cycle.glb: invalid glTF JSON: node"), "{e}");
+
+    let mut b = GltfBuilder::default();
+    let root = tiny_face_gltf(&mut b, &tiny_face(), false);
+    let mut old: serde_json::Value = serde_json::from_slice(&b.gltf_data_uri(root)).unwrap();
+    old["asset"]["version"] = json!("1.0");
+    let bytes = serde_json::to_vec(&old).unwrap();
+    assert_eq!(error_of("gltf1.glb", &bytes), "gltf1.glb: unsupported: glTF version 1.0 (faceanim reads glTF 2.0)");
+    let mut v1 = ict_bytes()[..64].to_vec();
+    v1[4] = 1;
+    assert_eq!(error_of("v1.glb", &v1), "v1.glb: unsupported: GLB version 1 (faceanim reads version 2)");
+}

@@ -1,0 +1,40 @@
+# Imports a glTF/GLB into Blender (run headless: blender -b --factory-startup --python tools/blender_shape_keys.py -- FILE)
+# and prints one line "FACEANIM_REPORT {json}" describing every mesh object's shape keys:
+# name and largest displacement from the basis (in glTF metres; Blender's axis swap does not
+# change lengths), plus vertex count and the animation actions found.
+import json
+import sys
+
+import bpy
+import numpy
+
+# Debian bookworm pairs Blender 3.4 with NumPy 1.24, which removed the `numpy.bool` alias that
+# Blender 3.4's glTF importer still uses; restore it so the stock importer runs unchanged.
+if not hasattr(numpy, "bool"):
+    numpy.bool = bool
+
+path = sys.argv[sys.argv.index("--") + 1]
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.import_scene.gltf(filepath=path)
+
+report = {"blender": bpy.app.version_string, "objects": [], "actions": []}
+for obj in bpy.data.objects:
+    if obj.type != "MESH":
+        continue
+    mesh = obj.data
+    keys = []
+    if mesh.shape_keys:
+        basis = mesh.shape_keys.reference_key
+        for key in mesh.shape_keys.key_blocks:
+            if key == basis:
+                continue
+            largest = 0.0
+            for a, b in zip(basis.data, key.data):
+                d = (b.co - a.co).length
+                if d > largest:
+                    largest = d
+            keys.append({"name": key.name, "max_displacement": largest})
+    report["objects"].append({"name": obj.name, "vertices": len(mesh.vertices), "polygons": len(mesh.polygons), "shape_keys": keys})
+for action in bpy.data.actions:
+    report["actions"].append({"name": action.name, "fcurves": len(action.fcurves), "frame_range": list(action.frame_range)})
+print("FACEANIM_REPORT " + json.dumps(report))
