@@ -69,7 +69,8 @@ impl Clip {
     /// # Errors
     /// [`ClipError::Syntax`] for malformed JSON, [`ClipError::Invalid`] listing every bad value.
     pub fn from_json(bytes: &[u8]) -> Result<Clip, ClipError> {
-        let clip: Clip = serde_json::from_slice(bytes).map_err(|e| ClipError::Syntax(e.to_string()))?;
+        let clip: Clip =
+            serde_json::from_slice(bytes).map_err(|e| ClipError::Syntax(e.to_string()))?;
         clip.validate()?;
         Ok(clip)
     }
@@ -87,7 +88,10 @@ impl Clip {
     pub fn validate(&self) -> Result<(), ClipError> {
         let mut problems = Vec::new();
         if !(self.fps.is_finite() && self.fps > 0.0) {
-            problems.push(format!("fps: must be a positive number, found {}", self.fps));
+            problems.push(format!(
+                "fps: must be a positive number, found {}",
+                self.fps
+            ));
         }
         if self.frames.is_empty() {
             problems.push("frames: the clip has no frames".to_owned());
@@ -101,7 +105,10 @@ impl Clip {
         }
         for (f, row) in self.frames.iter().enumerate() {
             if row.len() != width {
-                problems.push(format!("frames[{f}]: {} weights for {width} blendshapes", row.len()));
+                problems.push(format!(
+                    "frames[{f}]: {} weights for {width} blendshapes",
+                    row.len()
+                ));
             }
             for (k, w) in row.iter().enumerate() {
                 if !w.is_finite() {
@@ -111,7 +118,11 @@ impl Clip {
         }
         if let Some(head) = &self.head {
             if head.len() != self.frames.len() {
-                problems.push(format!("head: {} rows for {} frames", head.len(), self.frames.len()));
+                problems.push(format!(
+                    "head: {} rows for {} frames",
+                    head.len(),
+                    self.frames.len()
+                ));
             }
             for (f, row) in head.iter().enumerate() {
                 if row.iter().any(|x| !x.is_finite()) {
@@ -143,14 +154,30 @@ impl Clip {
     /// # Errors
     /// [`ClipError::NothingInCommon`] when no name matches.
     pub fn retarget(&self, character: &Character, name: &str) -> Result<Retarget, ClipError> {
-        let columns: Vec<Option<usize>> = self.blendshapes.iter().map(|n| character.find_blendshape(n).map(|id| id.index())).collect();
+        let columns: Vec<Option<usize>> = self
+            .blendshapes
+            .iter()
+            .map(|n| character.find_blendshape(n).map(|id| id.index()))
+            .collect();
         if columns.iter().all(Option::is_none) && !self.blendshapes.is_empty() {
             return Err(ClipError::NothingInCommon {
                 character: character.name().to_owned(),
-                clip: self.blendshapes.iter().take(5).cloned().collect::<Vec<_>>().join(", "),
+                clip: self
+                    .blendshapes
+                    .iter()
+                    .take(5)
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", "),
             });
         }
-        let unmatched = self.blendshapes.iter().zip(&columns).filter(|(_, c)| c.is_none()).map(|(n, _)| n.clone()).collect();
+        let unmatched = self
+            .blendshapes
+            .iter()
+            .zip(&columns)
+            .filter(|(_, c)| c.is_none())
+            .map(|(n, _)| n.clone())
+            .collect();
         let count = character.blendshapes().len();
         let weights = self
             .frames
@@ -165,8 +192,17 @@ impl Clip {
                 w
             })
             .collect();
-        let times = (0..self.frames.len()).map(|f| f as f32 / self.fps).collect();
-        Ok(Retarget { animation: MorphAnimation { name: name.to_owned(), times, weights }, unmatched })
+        let times = (0..self.frames.len())
+            .map(|f| f as f32 / self.fps)
+            .collect();
+        Ok(Retarget {
+            animation: MorphAnimation {
+                name: name.to_owned(),
+                times,
+                weights,
+            },
+            unmatched,
+        })
     }
 }
 
@@ -177,7 +213,9 @@ mod tests {
     #[test]
     fn every_problem_is_listed_with_its_path() {
         let json = br#"{"fps": 0, "blendshapes": ["a", "a"], "frames": [[0.1, 0.2], [0.3]], "head": [[0, 0, 0]]}"#;
-        let Err(ClipError::Invalid(problems)) = Clip::from_json(json) else { panic!("accepted a bad clip") };
+        let Err(ClipError::Invalid(problems)) = Clip::from_json(json) else {
+            panic!("accepted a bad clip")
+        };
         assert_eq!(
             problems,
             vec![
@@ -192,12 +230,19 @@ mod tests {
     #[test]
     fn unknown_fields_are_refused() {
         let json = br#"{"fps": 30, "blendshapes": [], "frames": [[]], "weights": []}"#;
-        assert!(matches!(Clip::from_json(json), Err(ClipError::Syntax(m)) if m.contains("unknown field `weights`")));
+        assert!(
+            matches!(Clip::from_json(json), Err(ClipError::Syntax(m)) if m.contains("unknown field `weights`"))
+        );
     }
 
     #[test]
     fn round_trips_through_json() {
-        let clip = Clip { fps: 24.0, blendshapes: vec!["jawOpen".into()], frames: vec![vec![0.0], vec![1.0]], head: Some(vec![[1.0, 2.0, 3.0]; 2]) };
+        let clip = Clip {
+            fps: 24.0,
+            blendshapes: vec!["jawOpen".into()],
+            frames: vec![vec![0.0], vec![1.0]],
+            head: Some(vec![[1.0, 2.0, 3.0]; 2]),
+        };
         assert_eq!(Clip::from_json(clip.to_json().as_bytes()), Ok(clip));
     }
 }

@@ -39,7 +39,8 @@ struct PlaneReport {
 impl Report {
     /// Gathers the report for `character`.
     pub fn of(character: &Character) -> Report {
-        let names = |id: faceanim_rig::BlendshapeId| character.blendshapes()[id.index()].name().to_owned();
+        let names =
+            |id: faceanim_rig::BlendshapeId| character.blendshapes()[id.index()].name().to_owned();
         let symmetry = character.symmetry();
         Report {
             vertices: character.vertex_count(),
@@ -47,11 +48,26 @@ impl Report {
             blendshapes: character
                 .blendshapes()
                 .iter()
-                .map(|b| BlendshapeReport { name: b.name().to_owned(), moved: b.moved(), max_displacement: b.max_displacement() })
+                .map(|b| BlendshapeReport {
+                    name: b.name().to_owned(),
+                    moved: b.moved(),
+                    max_displacement: b.max_displacement(),
+                })
                 .collect(),
-            pairs: symmetry.pairs().iter().map(|p| [names(p.left), names(p.right)]).collect(),
-            arkit: character.arkit_coverage().into_iter().map(|(id, _)| names(id)).collect(),
-            bbox: BboxReport { min: character.bounds().min.to_array(), max: character.bounds().max.to_array() },
+            pairs: symmetry
+                .pairs()
+                .iter()
+                .map(|p| [names(p.left), names(p.right)])
+                .collect(),
+            arkit: character
+                .arkit_coverage()
+                .into_iter()
+                .map(|(id, _)| names(id))
+                .collect(),
+            bbox: BboxReport {
+                min: character.bounds().min.to_array(),
+                max: character.bounds().max.to_array(),
+            },
             size: character.size(),
             symmetry_plane: symmetry.plane().map(|p| PlaneReport {
                 axis: match p.axis {
@@ -75,11 +91,23 @@ impl Report {
         let _ = writeln!(
             out,
             "  bounding box [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}] (size {:.4})",
-            self.bbox.min[0], self.bbox.min[1], self.bbox.min[2], self.bbox.max[0], self.bbox.max[1], self.bbox.max[2], self.size
+            self.bbox.min[0],
+            self.bbox.min[1],
+            self.bbox.min[2],
+            self.bbox.max[0],
+            self.bbox.max[1],
+            self.bbox.max[2],
+            self.size
         );
         match &self.symmetry_plane {
             Some(p) => {
-                let _ = writeln!(out, "  symmetry     {} = {:.5} ({:.0}% of vertices mirrored)", p.axis, p.offset, 100.0 * p.mirrored_vertices);
+                let _ = writeln!(
+                    out,
+                    "  symmetry     {} = {:.5} ({:.0}% of vertices mirrored)",
+                    p.axis,
+                    p.offset,
+                    100.0 * p.mirrored_vertices
+                );
             }
             None => {
                 let _ = writeln!(out, "  symmetry     none found");
@@ -87,9 +115,18 @@ impl Report {
         }
         let _ = writeln!(out, "  ARKit names  {} of 52 recognised", self.arkit.len());
         let _ = writeln!(out, "  blendshapes  {}", self.blendshapes.len());
-        let width = self.blendshapes.iter().map(|b| b.name.len()).max().unwrap_or(0);
+        let width = self
+            .blendshapes
+            .iter()
+            .map(|b| b.name.len())
+            .max()
+            .unwrap_or(0);
         for b in &self.blendshapes {
-            let _ = writeln!(out, "    {:width$}  {:>6} vertices moved, up to {:.5}", b.name, b.moved, b.max_displacement);
+            let _ = writeln!(
+                out,
+                "    {:width$}  {:>6} vertices moved, up to {:.5}",
+                b.name, b.moved, b.max_displacement
+            );
         }
         let _ = writeln!(out, "  symmetric pairs  {}", self.pairs.len());
         for [l, r] in &self.pairs {

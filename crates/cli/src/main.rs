@@ -62,7 +62,9 @@ fn main() -> ExitCode {
         _ => "trace",
     };
     tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| filter.into()))
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| filter.into()),
+        )
         .with_writer(std::io::stderr)
         .without_time()
         .init();
@@ -90,16 +92,28 @@ fn run(command: Command) -> anyhow::Result<()> {
             }
             Ok(())
         }
-        Command::Export { character, output, clip } => {
+        Command::Export {
+            character,
+            output,
+            clip,
+        } => {
             let imported = load(&character)?;
             let character = imported.character;
             let mut animations = Vec::new();
             if let Some(clip_path) = clip {
                 let clip = faceanim_files::load_clip(&clip_path)?;
-                let name = clip_path.file_stem().map_or_else(|| "clip".to_owned(), |s| s.to_string_lossy().into_owned());
-                let retarget = clip.retarget(&character, &name).with_context(|| format!("applying {}", clip_path.display()))?;
+                let name = clip_path
+                    .file_stem()
+                    .map_or_else(|| "clip".to_owned(), |s| s.to_string_lossy().into_owned());
+                let retarget = clip
+                    .retarget(&character, &name)
+                    .with_context(|| format!("applying {}", clip_path.display()))?;
                 if !retarget.unmatched.is_empty() {
-                    tracing::warn!("{}: no blendshape for {}", clip_path.display(), retarget.unmatched.join(", "));
+                    tracing::warn!(
+                        "{}: no blendshape for {}",
+                        clip_path.display(),
+                        retarget.unmatched.join(", ")
+                    );
                 }
                 animations.push(retarget.animation);
             }
@@ -110,7 +124,11 @@ fn run(command: Command) -> anyhow::Result<()> {
                 output.display(),
                 character.vertex_count(),
                 character.blendshapes().len(),
-                if animations.is_empty() { String::new() } else { format!(", {} animation", animations.len()) }
+                if animations.is_empty() {
+                    String::new()
+                } else {
+                    format!(", {} animation", animations.len())
+                }
             );
             Ok(())
         }

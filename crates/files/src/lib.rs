@@ -11,7 +11,9 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use faceanim_anim::{Clip, ClipError};
-use faceanim_rig::import::{ImportError, Imported, ObjSource, Resources, import_gltf, import_obj_set};
+use faceanim_rig::import::{
+    ImportError, Imported, ObjSource, Resources, import_gltf, import_obj_set,
+};
 
 /// Files larger than this are refused before reading (a face rig is tens of MB).
 pub const MAX_FILE_BYTES: u64 = 2 << 30;
@@ -62,10 +64,16 @@ pub enum FileError {
 /// # Errors
 /// [`FileError::Io`] or [`FileError::TooLarge`], with the path.
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FileError> {
-    let io = |source| FileError::Io { path: path.to_owned(), source };
+    let io = |source| FileError::Io {
+        path: path.to_owned(),
+        source,
+    };
     let size = std::fs::metadata(path).map_err(io)?.len();
     if size > MAX_FILE_BYTES {
-        return Err(FileError::TooLarge { path: path.to_owned(), size });
+        return Err(FileError::TooLarge {
+            path: path.to_owned(),
+            size,
+        });
     }
     std::fs::read(path).map_err(io)
 }
@@ -83,14 +91,18 @@ pub fn load_character(path: &Path) -> Result<Imported, FileError> {
     }
     let bytes = read_bytes(path)?;
     let name = path.display().to_string();
-    let is_obj = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    let is_obj = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     if is_obj {
         return Err(FileError::NotACharacter {
             path: path.to_owned(),
             reason: "a single OBJ has no blendshapes: give the folder holding the neutral OBJ and one OBJ per blendshape".into(),
         });
     }
-    let dir = path.parent().map_or_else(|| PathBuf::from("."), Path::to_owned);
+    let dir = path
+        .parent()
+        .map_or_else(|| PathBuf::from("."), Path::to_owned);
     Ok(import_gltf(&bytes, &name, &FolderResources { dir })?)
 }
 
@@ -114,7 +126,10 @@ impl Resources for FolderResources {
 }
 
 fn load_obj_folder(dir: &Path) -> Result<Imported, FileError> {
-    let io = |source| FileError::Io { path: dir.to_owned(), source };
+    let io = |source| FileError::Io {
+        path: dir.to_owned(),
+        source,
+    };
     let mut objs: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(io)?
         .filter_map(Result::ok)
@@ -122,17 +137,27 @@ fn load_obj_folder(dir: &Path) -> Result<Imported, FileError> {
         .filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")))
         .collect();
     objs.sort();
-    let stem = |p: &Path| p.file_stem().map(|s| s.to_string_lossy().to_lowercase()).unwrap_or_default();
+    let stem = |p: &Path| {
+        p.file_stem()
+            .map(|s| s.to_string_lossy().to_lowercase())
+            .unwrap_or_default()
+    };
     let neutral_candidates: Vec<&PathBuf> = match objs.iter().find(|p| stem(p) == "neutral") {
         Some(exact) => vec![exact],
-        None => objs.iter().filter(|p| stem(p).contains("neutral")).collect(),
+        None => objs
+            .iter()
+            .filter(|p| stem(p).contains("neutral"))
+            .collect(),
     };
     let neutral = match neutral_candidates.as_slice() {
         [one] => (*one).clone(),
         [] => {
             return Err(FileError::NotACharacter {
                 path: dir.to_owned(),
-                reason: format!("no neutral OBJ: name it neutral.obj ({} OBJ files found)", objs.len()),
+                reason: format!(
+                    "no neutral OBJ: name it neutral.obj ({} OBJ files found)",
+                    objs.len()
+                ),
             });
         }
         several => {
@@ -141,7 +166,11 @@ fn load_obj_folder(dir: &Path) -> Result<Imported, FileError> {
                 reason: format!(
                     "{} OBJ files could be the neutral ({}); rename one to neutral.obj",
                     several.len(),
-                    several.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+                    several
+                        .iter()
+                        .map(|p| p.display().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
             });
         }
@@ -151,12 +180,32 @@ fn load_obj_folder(dir: &Path) -> Result<Imported, FileError> {
     let shape_paths: Vec<&PathBuf> = objs.iter().filter(|p| **p != neutral).collect();
     let shape_texts: Vec<(String, String)> = shape_paths
         .iter()
-        .map(|p| Ok((p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(), read_text(p)?)))
+        .map(|p| {
+            Ok((
+                p.file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default(),
+                read_text(p)?,
+            ))
+        })
         .collect::<Result<_, FileError>>()?;
-    let shapes: Vec<ObjSource<'_>> = shape_texts.iter().map(|(name, text)| ObjSource { name, text }).collect();
+    let shapes: Vec<ObjSource<'_>> = shape_texts
+        .iter()
+        .map(|(name, text)| ObjSource { name, text })
+        .collect();
     let neutral_name = neutral.display().to_string();
-    let character_name = dir.file_name().map_or_else(|| "character".to_owned(), |n| n.to_string_lossy().into_owned());
-    Ok(import_obj_set(&character_name, ObjSource { name: &neutral_name, text: &neutral_text }, &shapes)?)
+    let character_name = dir.file_name().map_or_else(
+        || "character".to_owned(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    Ok(import_obj_set(
+        &character_name,
+        ObjSource {
+            name: &neutral_name,
+            text: &neutral_text,
+        },
+        &shapes,
+    )?)
 }
 
 /// Loads and validates a clip JSON file.
@@ -165,7 +214,10 @@ fn load_obj_folder(dir: &Path) -> Result<Imported, FileError> {
 /// [`FileError::Io`] or [`FileError::Clip`], with the path.
 pub fn load_clip(path: &Path) -> Result<Clip, FileError> {
     let bytes = read_bytes(path)?;
-    Clip::from_json(&bytes).map_err(|source| FileError::Clip { path: path.to_owned(), source })
+    Clip::from_json(&bytes).map_err(|source| FileError::Clip {
+        path: path.to_owned(),
+        source,
+    })
 }
 
 /// Writes `bytes` to `path` atomically: readers see the old file or the new one, never a part.
@@ -173,7 +225,10 @@ pub fn load_clip(path: &Path) -> Result<Clip, FileError> {
 /// # Errors
 /// [`FileError::Io`] with the path.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
-    let io = |source| FileError::Io { path: path.to_owned(), source };
+    let io = |source| FileError::Io {
+        path: path.to_owned(),
+        source,
+    };
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => PathBuf::from("."),
@@ -219,15 +274,26 @@ mod tests {
         write_atomic(&path, b"second").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(std::fs::read(&path).ok().as_deref(), Some(&b"second"[..]));
         // Nothing but the file itself is left in the folder.
-        assert_eq!(std::fs::read_dir(dir.path()).map(|d| d.count()).ok(), Some(1));
+        assert_eq!(
+            std::fs::read_dir(dir.path()).map(|d| d.count()).ok(),
+            Some(1)
+        );
     }
 
     #[test]
     fn errors_name_the_path() {
-        let e = load_character(Path::new("/nonexistent/face.glb")).err().map(|e| e.to_string());
-        assert_eq!(e.as_deref(), Some("/nonexistent/face.glb: No such file or directory (os error 2)"));
+        let e = load_character(Path::new("/nonexistent/face.glb"))
+            .err()
+            .map(|e| e.to_string());
+        assert_eq!(
+            e.as_deref(),
+            Some("/nonexistent/face.glb: No such file or directory (os error 2)")
+        );
         let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
-        let e = load_character(dir.path()).err().map(|e| e.to_string()).unwrap_or_default();
+        let e = load_character(dir.path())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
         assert!(e.contains("no neutral OBJ"), "{e}");
     }
 }

@@ -12,6 +12,7 @@ use glam::Vec3;
 use crate::graph::EdgeGraph;
 use crate::names;
 use crate::normals::{self, NormalDeltas};
+use crate::pose::{EvaluationRuns, Runs};
 use crate::symmetry::Symmetry;
 
 /// Index of a blendshape within its [`Character`].
@@ -61,14 +62,26 @@ impl Blendshape {
                 deltas.push(*delta);
             }
         }
-        Blendshape { name: name.into(), indices, deltas }
+        Blendshape {
+            name: name.into(),
+            indices,
+            deltas,
+        }
     }
 
     /// A blendshape from sparse parts. `indices` must be strictly increasing and as long as
     /// `deltas`; [`Character::new`] checks this against the vertex count.
     #[must_use]
-    pub fn from_sparse(name: impl Into<String>, indices: Vec<u32>, deltas: Vec<Vec3>) -> Blendshape {
-        Blendshape { name: name.into(), indices, deltas }
+    pub fn from_sparse(
+        name: impl Into<String>,
+        indices: Vec<u32>,
+        deltas: Vec<Vec3>,
+    ) -> Blendshape {
+        Blendshape {
+            name: name.into(),
+            indices,
+            deltas,
+        }
     }
 
     /// The blendshape's name as the file gave it.
@@ -121,7 +134,11 @@ impl Blendshape {
     }
 
     pub(crate) fn renamed(&self, name: String) -> Blendshape {
-        Blendshape { name, indices: self.indices.clone(), deltas: self.deltas.clone() }
+        Blendshape {
+            name,
+            indices: self.indices.clone(),
+            deltas: self.deltas.clone(),
+        }
     }
 }
 
@@ -190,7 +207,10 @@ impl Aabb {
     pub fn around(points: &[Vec3]) -> Aabb {
         let mut iter = points.iter();
         let Some(first) = iter.next() else {
-            return Aabb { min: Vec3::ZERO, max: Vec3::ZERO };
+            return Aabb {
+                min: Vec3::ZERO,
+                max: Vec3::ZERO,
+            };
         };
         let (min, max) = iter.fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
         Aabb { min, max }
@@ -263,7 +283,9 @@ pub enum ModelError {
         index: usize,
     },
     /// A triangle names a vertex that does not exist.
-    #[error("triangle {triangle} refers to vertex {vertex}, but there are only {vertices} vertices")]
+    #[error(
+        "triangle {triangle} refers to vertex {vertex}, but there are only {vertices} vertices"
+    )]
     VertexOutOfRange {
         /// The triangle.
         triangle: usize,
@@ -306,6 +328,7 @@ pub struct Character {
     bounds: Aabb,
     graph: EdgeGraph,
     symmetry: Symmetry,
+    runs: EvaluationRuns,
 }
 
 impl Character {
@@ -338,7 +361,11 @@ impl Character {
         for (t, tri) in triangles.iter().enumerate() {
             for &v in tri {
                 if v as usize >= vertex_count {
-                    return Err(ModelError::VertexOutOfRange { triangle: t, vertex: v, vertices: vertex_count });
+                    return Err(ModelError::VertexOutOfRange {
+                        triangle: t,
+                        vertex: v,
+                        vertices: vertex_count,
+                    });
                 }
             }
         }
@@ -350,12 +377,18 @@ impl Character {
         }
         if let Some(uvs) = &uvs {
             if let Some(index) = uvs.iter().position(|uv| !uv.iter().all(|c| c.is_finite())) {
-                return Err(ModelError::NonFinite { what: "uvs".into(), index });
+                return Err(ModelError::NonFinite {
+                    what: "uvs".into(),
+                    index,
+                });
             }
         }
         if let Some(colors) = &colors {
             if let Some(index) = colors.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
-                return Err(ModelError::NonFinite { what: "colors".into(), index });
+                return Err(ModelError::NonFinite {
+                    what: "colors".into(),
+                    index,
+                });
             }
         }
 
@@ -368,7 +401,11 @@ impl Character {
             materials.push(Material::default());
         }
         let parts = if parts.is_empty() {
-            vec![Part { name: name.clone(), material: MaterialId(0), triangles: 0..triangles.len() }]
+            vec![Part {
+                name: name.clone(),
+                material: MaterialId(0),
+                triangles: 0..triangles.len(),
+            }]
         } else {
             parts
         };
@@ -376,13 +413,21 @@ impl Character {
             if part.material.0 as usize >= materials.len() {
                 return Err(ModelError::BadPart {
                     name: part.name.clone(),
-                    problem: format!("material {} does not exist ({} materials)", part.material.0, materials.len()),
+                    problem: format!(
+                        "material {} does not exist ({} materials)",
+                        part.material.0,
+                        materials.len()
+                    ),
                 });
             }
             if part.triangles.start > part.triangles.end || part.triangles.end > triangles.len() {
                 return Err(ModelError::BadPart {
                     name: part.name.clone(),
-                    problem: format!("triangles {:?} run past the {} triangles", part.triangles, triangles.len()),
+                    problem: format!(
+                        "triangles {:?} run past the {} triangles",
+                        part.triangles,
+                        triangles.len()
+                    ),
                 });
             }
         }
@@ -396,19 +441,28 @@ impl Character {
         let normal_deltas = match normal_deltas {
             Some(given) if given.len() == blendshapes.len() => {
                 for (shape, deltas) in blendshapes.iter().zip(&given) {
-                    deltas.check(vertex_count).map_err(|problem| ModelError::BadBlendshape {
-                        name: shape.name().to_owned(),
-                        problem,
-                    })?;
+                    deltas
+                        .check(vertex_count)
+                        .map_err(|problem| ModelError::BadBlendshape {
+                            name: shape.name().to_owned(),
+                            problem,
+                        })?;
                 }
                 given
             }
-            _ => blendshapes
-                .iter()
-                .map(|shape| normals::blendshape_normal_deltas(&positions, &triangles, &graph, shape))
-                .collect(),
+            _ => normals::blendshape_normal_deltas(&positions, &triangles, &graph, &blendshapes),
         };
         let symmetry = Symmetry::detect(&positions, &bounds, &blendshapes);
+        let runs = EvaluationRuns {
+            positions: blendshapes
+                .iter()
+                .map(|b| Runs::of(b.indices(), b.deltas()))
+                .collect(),
+            normals: normal_deltas
+                .iter()
+                .map(|n| Runs::of(&n.indices, &n.deltas))
+                .collect(),
+        };
 
         Ok(Character {
             name,
@@ -424,6 +478,7 @@ impl Character {
             bounds,
             graph,
             symmetry,
+            runs,
         })
     }
 
@@ -536,6 +591,10 @@ impl Character {
         &self.graph
     }
 
+    pub(crate) fn evaluation_runs(&self) -> &EvaluationRuns {
+        &self.runs
+    }
+
     /// Symmetry plane, mirrored vertices and left/right blendshape pairs.
     #[must_use]
     pub fn symmetry(&self) -> &Symmetry {
@@ -546,7 +605,9 @@ impl Character {
     #[must_use]
     pub fn arkit_coverage(&self) -> Vec<(BlendshapeId, &'static str)> {
         self.blendshape_ids()
-            .filter_map(|id| names::arkit_name(self.blendshapes[id.index()].name()).map(|n| (id, n)))
+            .filter_map(|id| {
+                names::arkit_name(self.blendshapes[id.index()].name()).map(|n| (id, n))
+            })
             .collect()
     }
 
@@ -568,35 +629,61 @@ impl Character {
     }
 }
 
-fn check_count(attribute: &'static str, found: Option<usize>, expected: usize) -> Result<(), ModelError> {
+fn check_count(
+    attribute: &'static str,
+    found: Option<usize>,
+    expected: usize,
+) -> Result<(), ModelError> {
     match found {
-        Some(found) if found != expected => Err(ModelError::AttributeCount { attribute, found, expected }),
+        Some(found) if found != expected => Err(ModelError::AttributeCount {
+            attribute,
+            found,
+            expected,
+        }),
         _ => Ok(()),
     }
 }
 
 fn check_finite_vec3(what: &str, values: &[Vec3]) -> Result<(), ModelError> {
     match values.iter().position(|v| !v.is_finite()) {
-        Some(index) => Err(ModelError::NonFinite { what: what.to_owned(), index }),
+        Some(index) => Err(ModelError::NonFinite {
+            what: what.to_owned(),
+            index,
+        }),
         None => Ok(()),
     }
 }
 
 fn check_blendshape(shape: &Blendshape, vertex_count: usize) -> Result<(), ModelError> {
-    let bad = |problem: String| ModelError::BadBlendshape { name: shape.name().to_owned(), problem };
+    let bad = |problem: String| ModelError::BadBlendshape {
+        name: shape.name().to_owned(),
+        problem,
+    };
     if shape.indices.len() != shape.deltas.len() {
-        return Err(bad(format!("{} indices but {} deltas", shape.indices.len(), shape.deltas.len())));
+        return Err(bad(format!(
+            "{} indices but {} deltas",
+            shape.indices.len(),
+            shape.deltas.len()
+        )));
     }
     if let Some(w) = shape.indices.windows(2).position(|w| w[0] >= w[1]) {
-        return Err(bad(format!("vertex indices are not strictly increasing at entry {}", w + 1)));
+        return Err(bad(format!(
+            "vertex indices are not strictly increasing at entry {}",
+            w + 1
+        )));
     }
     if let Some(&last) = shape.indices.last() {
         if last as usize >= vertex_count {
-            return Err(bad(format!("moves vertex {last}, but there are only {vertex_count} vertices")));
+            return Err(bad(format!(
+                "moves vertex {last}, but there are only {vertex_count} vertices"
+            )));
         }
     }
     if let Some(k) = shape.deltas.iter().position(|d| !d.is_finite()) {
-        return Err(bad(format!("delta of vertex {} is not a finite number", shape.indices[k])));
+        return Err(bad(format!(
+            "delta of vertex {} is not a finite number",
+            shape.indices[k]
+        )));
     }
     Ok(())
 }

@@ -60,7 +60,8 @@ impl Bin {
         while self.bytes.len() % 4 != 0 {
             self.bytes.push(0);
         }
-        let mut view = json!({ "buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len() });
+        let mut view =
+            json!({ "buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len() });
         if let Some(target) = target {
             view["target"] = json!(target);
         }
@@ -74,7 +75,13 @@ impl Bin {
         self.accessors.len() - 1
     }
 
-    fn floats(&mut self, values: &[f32], kind: &str, target: Option<u32>, bounds: Option<(Vec<f32>, Vec<f32>)>) -> usize {
+    fn floats(
+        &mut self,
+        values: &[f32],
+        kind: &str,
+        target: Option<u32>,
+        bounds: Option<(Vec<f32>, Vec<f32>)>,
+    ) -> usize {
         let components = match kind {
             "SCALAR" => 1,
             "VEC2" => 2,
@@ -91,10 +98,20 @@ impl Bin {
     }
 
     /// A VEC3 accessor of `count` elements, zero except at `indices`; min/max when asked.
-    fn sparse_vec3(&mut self, count: usize, indices: &[u32], values: &[Vec3], with_bounds: bool) -> usize {
+    fn sparse_vec3(
+        &mut self,
+        count: usize,
+        indices: &[u32],
+        values: &[Vec3],
+        with_bounds: bool,
+    ) -> usize {
         let mut accessor = json!({ "componentType": FLOAT, "count": count, "type": "VEC3" });
         if with_bounds {
-            let (mut min, mut max) = if indices.len() < count { (Vec3::ZERO, Vec3::ZERO) } else { (Vec3::INFINITY, Vec3::NEG_INFINITY) };
+            let (mut min, mut max) = if indices.len() < count {
+                (Vec3::ZERO, Vec3::ZERO)
+            } else {
+                (Vec3::INFINITY, Vec3::NEG_INFINITY)
+            };
             for v in values {
                 min = min.min(*v);
                 max = max.max(*v);
@@ -123,7 +140,10 @@ impl Bin {
 ///
 /// # Errors
 /// An animation whose key count, weight count or times do not fit, or a file over 4 GiB.
-pub fn export_glb(character: &Character, animations: &[MorphAnimation]) -> Result<Vec<u8>, ExportError> {
+pub fn export_glb(
+    character: &Character,
+    animations: &[MorphAnimation],
+) -> Result<Vec<u8>, ExportError> {
     let shape_count = character.blendshapes().len();
     for animation in animations {
         check_animation(animation, shape_count)?;
@@ -131,10 +151,26 @@ pub fn export_glb(character: &Character, animations: &[MorphAnimation]) -> Resul
     let n = character.vertex_count();
     let mut bin = Bin::default();
 
-    let positions: Vec<f32> = character.positions().iter().flat_map(|p| p.to_array()).collect();
+    let positions: Vec<f32> = character
+        .positions()
+        .iter()
+        .flat_map(|p| p.to_array())
+        .collect();
     let bounds = character.bounds();
-    let position = bin.floats(&positions, "VEC3", Some(ARRAY_BUFFER), Some((bounds.min.to_array().to_vec(), bounds.max.to_array().to_vec())));
-    let normals: Vec<f32> = character.normals().iter().flat_map(|p| p.to_array()).collect();
+    let position = bin.floats(
+        &positions,
+        "VEC3",
+        Some(ARRAY_BUFFER),
+        Some((
+            bounds.min.to_array().to_vec(),
+            bounds.max.to_array().to_vec(),
+        )),
+    );
+    let normals: Vec<f32> = character
+        .normals()
+        .iter()
+        .flat_map(|p| p.to_array())
+        .collect();
     let normal = bin.floats(&normals, "VEC3", Some(ARRAY_BUFFER), None);
     let mut attributes = json!({ "POSITION": position, "NORMAL": normal });
     if let Some(uvs) = character.uvs() {
@@ -167,7 +203,12 @@ pub fn export_glb(character: &Character, animations: &[MorphAnimation]) -> Resul
         }
         let flat: Vec<u32> = tris.iter().flatten().copied().collect();
         let (bytes, component) = if small_indices {
-            (flat.iter().flat_map(|&i| (i as u16).to_le_bytes()).collect(), UNSIGNED_SHORT)
+            (
+                flat.iter()
+                    .flat_map(|&i| (i as u16).to_le_bytes())
+                    .collect(),
+                UNSIGNED_SHORT,
+            )
         } else {
             (u32_bytes(&flat), UNSIGNED_INT)
         };
@@ -190,7 +231,15 @@ pub fn export_glb(character: &Character, animations: &[MorphAnimation]) -> Resul
     let animations_json: Vec<Value> = animations
         .iter()
         .map(|animation| {
-            let input = bin.floats(&animation.times, "SCALAR", None, Some((vec![animation.times[0]], vec![animation.times[animation.times.len() - 1]])));
+            let input = bin.floats(
+                &animation.times,
+                "SCALAR",
+                None,
+                Some((
+                    vec![animation.times[0]],
+                    vec![animation.times[animation.times.len() - 1]],
+                )),
+            );
             let flat: Vec<f32> = animation.weights.iter().flatten().copied().collect();
             let output = bin.floats(&flat, "SCALAR", None, None);
             json!({
@@ -218,31 +267,47 @@ pub fn export_glb(character: &Character, animations: &[MorphAnimation]) -> Resul
     if !images.is_empty() {
         root["images"] = json!(images);
         root["textures"] = json!(textures);
-        root["samplers"] = json!([{ "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 }]);
+        root["samplers"] =
+            json!([{ "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 }]);
     }
     glb(&root, bin.bytes)
 }
 
 fn check_animation(animation: &MorphAnimation, shape_count: usize) -> Result<(), ExportError> {
-    let bad = |problem: String| ExportError::BadAnimation { name: animation.name.clone(), problem };
+    let bad = |problem: String| ExportError::BadAnimation {
+        name: animation.name.clone(),
+        problem,
+    };
     if animation.times.is_empty() {
         return Err(bad("it has no keys".into()));
     }
     if animation.times.len() != animation.weights.len() {
-        return Err(bad(format!("{} key times but {} weight vectors", animation.times.len(), animation.weights.len())));
+        return Err(bad(format!(
+            "{} key times but {} weight vectors",
+            animation.times.len(),
+            animation.weights.len()
+        )));
     }
     if let Some(k) = animation.times.iter().position(|t| !t.is_finite()) {
         return Err(bad(format!("key time {k} is not a finite number")));
     }
     if let Some(k) = animation.times.windows(2).position(|w| w[1] <= w[0]) {
-        return Err(bad(format!("key times are not increasing at key {}", k + 1)));
+        return Err(bad(format!(
+            "key times are not increasing at key {}",
+            k + 1
+        )));
     }
     for (k, w) in animation.weights.iter().enumerate() {
         if w.len() != shape_count {
-            return Err(bad(format!("key {k} has {} weights but the character has {shape_count} blendshapes", w.len())));
+            return Err(bad(format!(
+                "key {k} has {} weights but the character has {shape_count} blendshapes",
+                w.len()
+            )));
         }
         if w.iter().any(|x| !x.is_finite()) {
-            return Err(bad(format!("key {k} has a weight that is not a finite number")));
+            return Err(bad(format!(
+                "key {k} has a weight that is not a finite number"
+            )));
         }
     }
     Ok(())

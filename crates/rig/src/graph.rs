@@ -45,7 +45,8 @@ impl EdgeGraph {
         }
         pairs.sort_unstable();
         pairs.dedup();
-        let (neighbour_start, neighbours) = compress(n, pairs.iter().map(|&p| ((p >> 32) as u32, p as u32)));
+        let (neighbour_start, neighbours) =
+            compress(n, pairs.iter().map(|&p| ((p >> 32) as u32, p as u32)));
 
         let mut incidence: Vec<(u32, u32)> = Vec::with_capacity(triangles.len() * 3);
         for (t, tri) in triangles.iter().enumerate() {
@@ -57,7 +58,13 @@ impl EdgeGraph {
         incidence.dedup();
         let (triangle_start, triangles) = compress(n, incidence.into_iter());
 
-        EdgeGraph { neighbour_start, neighbours, triangle_start, triangles, weld }
+        EdgeGraph {
+            neighbour_start,
+            neighbours,
+            triangle_start,
+            triangles,
+            weld,
+        }
     }
 
     /// Vertices sharing an edge with `vertex` (including coincident seam vertices).

@@ -44,8 +44,8 @@ mod pose;
 pub mod symmetry;
 
 pub use character::{
-    Aabb, Blendshape, BlendshapeId, Character, CharacterParts, Material, MaterialId, ModelError, Part, SPARSE_DELTA_THRESHOLD,
-    Texture,
+    Aabb, Blendshape, BlendshapeId, Character, CharacterParts, Material, MaterialId, ModelError,
+    Part, SPARSE_DELTA_THRESHOLD, Texture,
 };
 pub use graph::EdgeGraph;
 pub use pose::Pose;

@@ -97,7 +97,12 @@ pub struct SidedName {
 /// (`jawLeft`, `eyeLeft_blink`). Returns `None` for names without a side (`jawOpen`).
 #[must_use]
 pub fn sided(name: &str) -> Option<SidedName> {
-    let make = |stem: String, side| Some(SidedName { stem: stem.to_lowercase(), side });
+    let make = |stem: String, side| {
+        Some(SidedName {
+            stem: stem.to_lowercase(),
+            side,
+        })
+    };
     // Single-letter suffixes after a separator: `.L`, `_L`, `_l`, `-L`, ` L`.
     let bytes = name.as_bytes();
     if bytes.len() >= 3 {
@@ -137,11 +142,15 @@ pub fn sided(name: &str) -> Option<SidedName> {
             let end = start + word.len();
             let before_ok = start == 0 || {
                 let b = bytes[start - 1];
-                matches!(b, b'.' | b'_' | b'-' | b' ') || b.is_ascii_lowercase() || b.is_ascii_digit()
+                matches!(b, b'.' | b'_' | b'-' | b' ')
+                    || b.is_ascii_lowercase()
+                    || b.is_ascii_digit()
             };
             let after_ok = end == bytes.len() || {
                 let a = bytes[end];
-                matches!(a, b'.' | b'_' | b'-' | b' ') || a.is_ascii_uppercase() || a.is_ascii_digit()
+                matches!(a, b'.' | b'_' | b'-' | b' ')
+                    || a.is_ascii_uppercase()
+                    || a.is_ascii_digit()
             };
             // `Left` inside a camel-case name must itself be capitalised (`jawLeft`, not `cleft`).
             let capital_ok = start == 0
@@ -161,7 +170,10 @@ pub fn sided(name: &str) -> Option<SidedName> {
 #[must_use]
 pub fn arkit_name(name: &str) -> Option<&'static str> {
     let key = arkit_key(name);
-    ARKIT_52.iter().copied().find(|candidate| arkit_key(candidate) == key)
+    ARKIT_52
+        .iter()
+        .copied()
+        .find(|candidate| arkit_key(candidate) == key)
 }
 
 /// Reduces a name to lower-case letters and digits with its side spelled `left`/`right` at the end.
@@ -205,7 +217,16 @@ mod tests {
 
     #[test]
     fn names_without_sides() {
-        for name in ["jawOpen", "mouthClose", "cleft", "Lips", "R", "browInnerUp", "bereft_chin", "shape_12"] {
+        for name in [
+            "jawOpen",
+            "mouthClose",
+            "cleft",
+            "Lips",
+            "R",
+            "browInnerUp",
+            "bereft_chin",
+            "shape_12",
+        ] {
             assert_eq!(sided(name), None, "{name}");
         }
     }

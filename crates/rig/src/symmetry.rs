@@ -130,7 +130,11 @@ impl Symmetry {
             pairs.extend(pairs_by_geometry(positions, shapes, &pairs, plane, &mirror));
         }
         pairs.sort_by_key(|p| p.left.min(p.right));
-        Symmetry { plane, mirror, pairs }
+        Symmetry {
+            plane,
+            mirror,
+            pairs,
+        }
     }
 
     /// The mirror plane, if the mesh is symmetric.
@@ -177,13 +181,21 @@ impl Symmetry {
 
 /// Tries the three axis planes through the middle on a sample of vertices, refines the best
 /// plane's offset from the matched pairs, and keeps it if enough vertices mirror.
-fn find_plane(positions: &[Vec3], bounds: &Aabb, tree: &ImmutableKdTree<f32, 3>, tolerance: f32) -> Option<MirrorPlane> {
+fn find_plane(
+    positions: &[Vec3],
+    bounds: &Aabb,
+    tree: &ImmutableKdTree<f32, 3>,
+    tolerance: f32,
+) -> Option<MirrorPlane> {
     let step = (positions.len() / 2000).max(1);
     let sample: Vec<Vec3> = positions.iter().step_by(step).copied().collect();
     let center = bounds.center();
     let mut best: Option<(f32, MirrorPlane)> = None;
     for axis in [Axis::X, Axis::Y, Axis::Z] {
-        let mut plane = MirrorPlane { axis, offset: center[axis.index()] };
+        let mut plane = MirrorPlane {
+            axis,
+            offset: center[axis.index()],
+        };
         // Twice: the box centre can be off when one side carries an extra part.
         for _ in 0..2 {
             let mut midpoints = Vec::new();
@@ -206,10 +218,16 @@ fn find_plane(positions: &[Vec3], bounds: &Aabb, tree: &ImmutableKdTree<f32, 3>,
             }
         }
     }
-    best.filter(|(fraction, _)| *fraction >= MIN_MIRRORED_FRACTION).map(|(_, plane)| plane)
+    best.filter(|(fraction, _)| *fraction >= MIN_MIRRORED_FRACTION)
+        .map(|(_, plane)| plane)
 }
 
-fn mirror_map(positions: &[Vec3], tree: &ImmutableKdTree<f32, 3>, plane: MirrorPlane, tolerance: f32) -> Vec<Option<u32>> {
+fn mirror_map(
+    positions: &[Vec3],
+    tree: &ImmutableKdTree<f32, 3>,
+    plane: MirrorPlane,
+    tolerance: f32,
+) -> Vec<Option<u32>> {
     positions
         .iter()
         .map(|&p| {
@@ -229,12 +247,18 @@ fn pairs_by_name(shapes: &[Blendshape]) -> Vec<BlendshapePair> {
             continue;
         }
         let partner = sided.iter().enumerate().position(|(j, b)| {
-            !used[j] && b.as_ref().is_some_and(|b| b.side == Side::Right && b.stem == a.stem)
+            !used[j]
+                && b.as_ref()
+                    .is_some_and(|b| b.side == Side::Right && b.stem == a.stem)
         });
         if let Some(j) = partner {
             used[i] = true;
             used[j] = true;
-            pairs.push(BlendshapePair { left: BlendshapeId(i as u32), right: BlendshapeId(j as u32), source: PairSource::Names });
+            pairs.push(BlendshapePair {
+                left: BlendshapeId(i as u32),
+                right: BlendshapeId(j as u32),
+                source: PairSource::Names,
+            });
         }
     }
     pairs
@@ -247,7 +271,11 @@ fn pairs_by_geometry(
     plane: MirrorPlane,
     mirror: &[Option<u32>],
 ) -> Vec<BlendshapePair> {
-    let paired = |i: usize| named.iter().any(|p| p.left.index() == i || p.right.index() == i);
+    let paired = |i: usize| {
+        named
+            .iter()
+            .any(|p| p.left.index() == i || p.right.index() == i)
+    };
     // Only shapes without a partner by name, and not symmetric in themselves (jawOpen mirrors
     // onto itself and must not pair with a look-alike).
     let mut dense = vec![Vec3::ZERO; positions.len()];
@@ -278,8 +306,16 @@ fn pairs_by_geometry(
         if let Some((_, b)) = best {
             used[a] = true;
             used[b] = true;
-            let (left, right) = if motion_side(positions, &shapes[a], plane) >= 0.0 { (a, b) } else { (b, a) };
-            pairs.push(BlendshapePair { left: BlendshapeId(left as u32), right: BlendshapeId(right as u32), source: PairSource::Geometry });
+            let (left, right) = if motion_side(positions, &shapes[a], plane) >= 0.0 {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            pairs.push(BlendshapePair {
+                left: BlendshapeId(left as u32),
+                right: BlendshapeId(right as u32),
+                source: PairSource::Geometry,
+            });
         }
     }
     pairs

@@ -36,8 +36,14 @@ fn not_gltf() {
         error_of("photo.glb", b"\x89PNG\r\n\x1a\n0000"),
         "photo.glb: not a glTF file: it starts with bytes [89 50 4e 47 0d 0a 1a 0a], neither the GLB magic 'glTF' nor a JSON object"
     );
-    assert_eq!(error_of("empty.glb", b""), "empty.glb: not a glTF file: it starts with bytes [], neither the GLB magic 'glTF' nor a JSON object");
-    assert!(error_of("broken.gltf", b"{\"asset\": ").starts_with("broken.gltf: invalid glTF JSON: EOF while parsing"));
+    assert_eq!(
+        error_of("empty.glb", b""),
+        "empty.glb: not a glTF file: it starts with bytes [], neither the GLB magic 'glTF' nor a JSON object"
+    );
+    assert!(
+        error_of("broken.gltf", b"{\"asset\": ")
+            .starts_with("broken.gltf: invalid glTF JSON: EOF while parsing")
+    );
 }
 
 #[test]
@@ -49,14 +55,21 @@ fn truncated() {
     );
     assert_eq!(
         error_of("ict-half.glb", &ict[..ict.len() / 2]),
-        format!("ict-half.glb: truncated: the GLB header says {} bytes but there are {}", ict.len(), ict.len() / 2)
+        format!(
+            "ict-half.glb: truncated: the GLB header says {} bytes but there are {}",
+            ict.len(),
+            ict.len() / 2
+        )
     );
 }
 
 #[test]
 fn no_morph_targets() {
     let bytes = tiny(|root, _| {
-        root["meshes"][0]["primitives"][0].as_object_mut().unwrap().remove("targets");
+        root["meshes"][0]["primitives"][0]
+            .as_object_mut()
+            .unwrap()
+            .remove("targets");
         root["meshes"][0].as_object_mut().unwrap().remove("extras");
     });
     assert_eq!(
@@ -79,7 +92,10 @@ fn counts_that_disagree() {
         let idx = b.indices(&[0, 1, 200]);
         root["meshes"][0]["primitives"][0]["indices"] = json!(idx);
     });
-    assert_eq!(error_of("bad-index.glb", &bytes), "bad-index.glb: counts disagree: mesh 0 'face' primitive 0 uses vertex 200 but has only 81 vertices");
+    assert_eq!(
+        error_of("bad-index.glb", &bytes),
+        "bad-index.glb: counts disagree: mesh 0 'face' primitive 0 uses vertex 200 but has only 81 vertices"
+    );
 }
 
 #[test]
@@ -94,7 +110,10 @@ fn nan_and_infinity() {
     let last = b.accessors.len() - 1;
     b.accessors[last]["min"] = json!([-1.0, -1.0, 0.0]);
     b.accessors[last]["max"] = json!([1.0, 1.0, 0.3]);
-    assert_eq!(error_of("nan.glb", &b.glb(root)), "nan.glb: POSITION of mesh 0 'face' primitive 0 [7] is not a finite number");
+    assert_eq!(
+        error_of("nan.glb", &b.glb(root)),
+        "nan.glb: POSITION of mesh 0 'face' primitive 0 [7] is not a finite number"
+    );
 
     let bytes = tiny(|root, b| {
         let mut d = vec![[0.0f32; 3]; 81];
@@ -105,7 +124,10 @@ fn nan_and_infinity() {
         b.accessors[last]["max"] = json!([1.0, 0.0, 0.0]);
         root["meshes"][0]["primitives"][0]["targets"][2]["POSITION"] = json!(acc);
     });
-    assert_eq!(error_of("inf.glb", &bytes), "inf.glb: morph target 2 ('open') POSITION of mesh 0 'face' primitive 0 [3] is not a finite number");
+    assert_eq!(
+        error_of("inf.glb", &bytes),
+        "inf.glb: morph target 2 ('open') POSITION of mesh 0 'face' primitive 0 [3] is not a finite number"
+    );
 }
 
 #[test]
@@ -113,7 +135,10 @@ fn absurd_sizes_and_lying_layouts() {
     let bytes = tiny(|_, b| {
         b.accessors[0]["count"] = json!(4_000_000_000u64);
     });
-    assert_eq!(error_of("huge-count.glb", &bytes), "huge-count.glb: too large: mesh 0 'face' primitive 0 declares 4000000000 vertices (0 before it; at most 16777216 in all)");
+    assert_eq!(
+        error_of("huge-count.glb", &bytes),
+        "huge-count.glb: too large: mesh 0 'face' primitive 0 declares 4000000000 vertices (0 before it; at most 16777216 in all)"
+    );
 
     let bytes = tiny(|_, b| {
         b.views[0]["byteLength"] = json!(100_000_000u64);
@@ -125,13 +150,19 @@ fn absurd_sizes_and_lying_layouts() {
         b.accessors[0]["byteOffset"] = json!(960);
     });
     let e = error_of("offset.glb", &bytes);
-    assert!(e.contains("81 elements need 1932 bytes from offset 960, but buffer view 0 has 972"), "{e}");
+    assert!(
+        e.contains("81 elements need 1932 bytes from offset 960, but buffer view 0 has 972"),
+        "{e}"
+    );
 }
 
 #[test]
 fn schema_errors_and_cycles() {
     let bytes = tiny(|root, _| root["meshes"][0]["primitives"][0]["indices"] = json!(99));
-    assert_eq!(error_of("dangling.glb", &bytes), "dangling.glb: invalid glTF JSON: meshes[0].primitives[0].indices: Index out of bounds");
+    assert_eq!(
+        error_of("dangling.glb", &bytes),
+        "dangling.glb: invalid glTF JSON: meshes[0].primitives[0].indices: Index out of bounds"
+    );
 
     let bytes = tiny(|root, _| {
         root["nodes"] = json!([{"children": [1], "mesh": 0}, {"children": [0]}]);
@@ -144,8 +175,14 @@ fn schema_errors_and_cycles() {
     let mut old: serde_json::Value = serde_json::from_slice(&b.gltf_data_uri(root)).unwrap();
     old["asset"]["version"] = json!("1.0");
     let bytes = serde_json::to_vec(&old).unwrap();
-    assert_eq!(error_of("gltf1.glb", &bytes), "gltf1.glb: unsupported: glTF version 1.0 (faceanim reads glTF 2.0)");
+    assert_eq!(
+        error_of("gltf1.glb", &bytes),
+        "gltf1.glb: unsupported: glTF version 1.0 (faceanim reads glTF 2.0)"
+    );
     let mut v1 = ict_bytes()[..64].to_vec();
     v1[4] = 1;
-    assert_eq!(error_of("v1.glb", &v1), "v1.glb: unsupported: GLB version 1 (faceanim reads version 2)");
+    assert_eq!(
+        error_of("v1.glb", &v1),
+        "v1.glb: unsupported: GLB version 1 (faceanim reads version 2)"
+    );
 }

@@ -43,11 +43,18 @@ fn the_seed_corpus_imports_without_panicking() {
         let bytes = std::fs::read(&path).unwrap();
         let result = import_gltf(&bytes, &path.display().to_string(), &NoExternalResources);
         if let Err(e) = result {
-            assert!(e.to_string().starts_with(&path.display().to_string()), "{e}");
+            assert!(
+                e.to_string().starts_with(&path.display().to_string()),
+                "{e}"
+            );
         }
         count += 1;
     }
-    assert!(count >= 10, "the corpus in {} has only {count} files", dir.display());
+    assert!(
+        count >= 10,
+        "the corpus in {} has only {count} files",
+        dir.display()
+    );
 }
 
 const HOSTILE: [i64; 10] = [0, 1, 3, 4, 5121, 5126, -1, 65_535, 4_294_967_295, 1 << 40];

@@ -8,8 +8,8 @@ use gltf::accessor::{DataType, Dimensions};
 
 use super::{ImportErrorKind, MAX_VERTICES};
 
-/// Loaded buffers, indexed like the document's buffers.
-pub(crate) struct Buffers(pub Vec<Vec<u8>>);
+/// Loaded buffers, indexed like the document's buffers (a GLB's BIN chunk is borrowed).
+pub(crate) struct Buffers<'a>(pub Vec<std::borrow::Cow<'a, [u8]>>);
 
 fn component_size(t: DataType) -> usize {
     match t {
@@ -44,7 +44,11 @@ fn read_component(bytes: &[u8], t: DataType, normalized: bool) -> f32 {
         }
         DataType::I16 => {
             let v = f32::from(i16::from_le_bytes([bytes[0], bytes[1]]));
-            if normalized { (v / 32767.0).max(-1.0) } else { v }
+            if normalized {
+                (v / 32767.0).max(-1.0)
+            } else {
+                v
+            }
         }
         DataType::U8 => {
             let v = f32::from(bytes[0]);
@@ -59,7 +63,7 @@ fn read_component(bytes: &[u8], t: DataType, normalized: bool) -> f32 {
 
 /// The byte slice `[offset, offset + element_size + stride·(count−1))` of a buffer view, checked.
 fn view_slice<'a>(
-    buffers: &'a Buffers,
+    buffers: &'a Buffers<'_>,
     view: &gltf::buffer::View<'_>,
     offset: usize,
     count: usize,
@@ -67,10 +71,18 @@ fn view_slice<'a>(
 ) -> Result<(&'a [u8], usize), String> {
     let stride = view.stride().unwrap_or(element_size);
     if stride < element_size {
-        return Err(format!("byteStride {stride} is smaller than one element ({element_size} bytes)"));
+        return Err(format!(
+            "byteStride {stride} is smaller than one element ({element_size} bytes)"
+        ));
     }
-    let buffer = buffers.0.get(view.buffer().index()).ok_or("its buffer was not loaded")?;
-    let view_end = view.offset().checked_add(view.length()).ok_or("buffer view range overflows")?;
+    let buffer = buffers
+        .0
+        .get(view.buffer().index())
+        .ok_or("its buffer was not loaded")?;
+    let view_end = view
+        .offset()
+        .checked_add(view.length())
+        .ok_or("buffer view range overflows")?;
     if view_end > buffer.len() {
         return Err(format!(
             "buffer view {} ends at byte {view_end}, past the end of buffer {} ({} bytes)",
@@ -101,11 +113,15 @@ fn view_slice<'a>(
 /// Reads an accessor as `count × components` floats (normalised integers mapped to [0,1] or
 /// [−1,1]), applying sparse substitution. Checks that the element type is `expected` if given.
 pub(crate) fn read_floats(
-    buffers: &Buffers,
+    buffers: &Buffers<'_>,
     accessor: &gltf::Accessor<'_>,
     expected: Option<Dimensions>,
 ) -> Result<Vec<f32>, ImportErrorKind> {
-    let fail = |problem: String| ImportErrorKind::BadAccessor { accessor: accessor.index(), role: String::new(), problem };
+    let fail = |problem: String| ImportErrorKind::BadAccessor {
+        accessor: accessor.index(),
+        role: String::new(),
+        problem,
+    };
     let dims = accessor.dimensions();
     if let Some(expected) = expected {
         if dims != expected {
@@ -131,19 +147,30 @@ pub(crate) fn read_floats(
     let element_size = components * csize;
     let mut out = vec![0.0f32; count * components];
     if let Some(view) = accessor.view() {
-        let (bytes, stride) = view_slice(buffers, &view, accessor.offset(), count, element_size).map_err(fail)?;
-        for (i, chunk) in out.chunks_exact_mut(components).enumerate() {
-            let start = i * stride;
-            for (c, slot) in chunk.iter_mut().enumerate() {
-                let at = start + c * csize;
-                *slot = read_component(&bytes[at..at + csize], data_type, accessor.normalized());
+        let (bytes, stride) =
+            view_slice(buffers, &view, accessor.offset(), count, element_size).map_err(fail)?;
+        if data_type == DataType::F32 && stride == element_size {
+            // The common case (tightly packed floats) as one straight pass.
+            for (slot, b) in out.iter_mut().zip(bytes.chunks_exact(4)) {
+                *slot = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            }
+        } else {
+            for (i, chunk) in out.chunks_exact_mut(components).enumerate() {
+                let start = i * stride;
+                for (c, slot) in chunk.iter_mut().enumerate() {
+                    let at = start + c * csize;
+                    *slot =
+                        read_component(&bytes[at..at + csize], data_type, accessor.normalized());
+                }
             }
         }
     }
     if let Some(sparse) = accessor.sparse() {
         let n = sparse.count();
         if n > count {
-            return Err(fail(format!("sparse count {n} exceeds the accessor count {count}")));
+            return Err(fail(format!(
+                "sparse count {n} exceeds the accessor count {count}"
+            )));
         }
         let index_type = match sparse.indices().index_type() {
             gltf::accessor::sparse::IndexType::U8 => DataType::U8,
@@ -151,27 +178,48 @@ pub(crate) fn read_floats(
             gltf::accessor::sparse::IndexType::U32 => DataType::U32,
         };
         let isize = component_size(index_type);
-        let (index_bytes, _) = view_slice(buffers, &sparse.indices().view(), sparse.indices().offset(), n, isize)
-            .map_err(|p| fail(format!("sparse indices: {p}")))?;
+        let (index_bytes, _) = view_slice(
+            buffers,
+            &sparse.indices().view(),
+            sparse.indices().offset(),
+            n,
+            isize,
+        )
+        .map_err(|p| fail(format!("sparse indices: {p}")))?;
         // Sparse data is tightly packed regardless of any byteStride on the view.
-        let (value_bytes, _) = view_slice(buffers, &sparse.values().view(), sparse.values().offset(), n, element_size)
-            .map_err(|p| fail(format!("sparse values: {p}")))?;
+        let (value_bytes, _) = view_slice(
+            buffers,
+            &sparse.values().view(),
+            sparse.values().offset(),
+            n,
+            element_size,
+        )
+        .map_err(|p| fail(format!("sparse values: {p}")))?;
         if index_bytes.len() < n * isize || value_bytes.len() < n * element_size {
             return Err(fail("sparse data is shorter than its count".into()));
         }
         let mut previous: Option<usize> = None;
         for k in 0..n {
-            let index = read_component(&index_bytes[k * isize..(k + 1) * isize], index_type, false) as usize;
+            let index = read_component(&index_bytes[k * isize..(k + 1) * isize], index_type, false)
+                as usize;
             if index >= count {
-                return Err(fail(format!("sparse index {index} is past the accessor count {count}")));
+                return Err(fail(format!(
+                    "sparse index {index} is past the accessor count {count}"
+                )));
             }
             if previous.is_some_and(|p| index <= p) {
-                return Err(fail(format!("sparse indices are not strictly increasing at entry {k}")));
+                return Err(fail(format!(
+                    "sparse indices are not strictly increasing at entry {k}"
+                )));
             }
             previous = Some(index);
             for c in 0..components {
                 let at = k * element_size + c * csize;
-                out[index * components + c] = read_component(&value_bytes[at..at + csize], data_type, accessor.normalized());
+                out[index * components + c] = read_component(
+                    &value_bytes[at..at + csize],
+                    data_type,
+                    accessor.normalized(),
+                );
             }
         }
     }
@@ -179,18 +227,31 @@ pub(crate) fn read_floats(
 }
 
 /// Reads an index-like accessor (unsigned integers only) as u32s.
-pub(crate) fn read_indices(buffers: &Buffers, accessor: &gltf::Accessor<'_>) -> Result<Vec<u32>, ImportErrorKind> {
-    if !matches!(accessor.data_type(), DataType::U8 | DataType::U16 | DataType::U32) || accessor.normalized() {
+pub(crate) fn read_indices(
+    buffers: &Buffers<'_>,
+    accessor: &gltf::Accessor<'_>,
+) -> Result<Vec<u32>, ImportErrorKind> {
+    if !matches!(
+        accessor.data_type(),
+        DataType::U8 | DataType::U16 | DataType::U32
+    ) || accessor.normalized()
+    {
         return Err(ImportErrorKind::BadAccessor {
             accessor: accessor.index(),
             role: String::new(),
-            problem: format!("indices must be unsigned integers, found {:?}", accessor.data_type()),
+            problem: format!(
+                "indices must be unsigned integers, found {:?}",
+                accessor.data_type()
+            ),
         });
     }
     // u32 values above 2^24 are not exact in f32, so read integers directly.
     let count = accessor.count();
     if count > super::MAX_TRIANGLES * 3 {
-        return Err(ImportErrorKind::TooLarge(format!("accessor {} declares {count} indices", accessor.index())));
+        return Err(ImportErrorKind::TooLarge(format!(
+            "accessor {} declares {count} indices",
+            accessor.index()
+        )));
     }
     if accessor.sparse().is_some() || accessor.view().is_none() {
         let floats = read_floats(buffers, accessor, None)?;
@@ -199,10 +260,15 @@ pub(crate) fn read_indices(buffers: &Buffers, accessor: &gltf::Accessor<'_>) -> 
     let csize = component_size(accessor.data_type());
     let components = component_count(accessor.dimensions());
     let element_size = csize * components;
-    let Some(view) = accessor.view() else { return Ok(Vec::new()) };
-    let (bytes, stride) = view_slice(buffers, &view, accessor.offset(), count, element_size).map_err(|problem| {
-        ImportErrorKind::BadAccessor { accessor: accessor.index(), role: String::new(), problem }
-    })?;
+    let Some(view) = accessor.view() else {
+        return Ok(Vec::new());
+    };
+    let (bytes, stride) = view_slice(buffers, &view, accessor.offset(), count, element_size)
+        .map_err(|problem| ImportErrorKind::BadAccessor {
+            accessor: accessor.index(),
+            role: String::new(),
+            problem,
+        })?;
     let mut out = Vec::with_capacity(count * components);
     for i in 0..count {
         for c in 0..components {

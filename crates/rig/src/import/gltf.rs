@@ -11,8 +11,13 @@ use gltf::accessor::Dimensions;
 use gltf::mesh::Mode;
 
 use super::accessor::{Buffers, read_floats, read_indices};
-use super::{ImportError, ImportErrorKind, Imported, MAX_BLENDSHAPES, MAX_TRIANGLES, MAX_VERTICES, Resources};
-use crate::character::{Blendshape, Character, CharacterParts, Material, MaterialId, Part, SPARSE_DELTA_THRESHOLD, Texture};
+use super::{
+    ImportError, ImportErrorKind, Imported, MAX_BLENDSHAPES, MAX_TRIANGLES, MAX_VERTICES, Resources,
+};
+use crate::character::{
+    Blendshape, Character, CharacterParts, Material, MaterialId, Part, SPARSE_DELTA_THRESHOLD,
+    Texture,
+};
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;
@@ -23,13 +28,25 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 ///
 /// # Errors
 /// An [`ImportError`] naming `source_name` and the problem.
-pub fn import_gltf(bytes: &[u8], source_name: &str, resources: &dyn Resources) -> Result<Imported, ImportError> {
-    import(bytes, source_name, resources).map_err(|kind| ImportError { source_name: source_name.to_owned(), kind })
+pub fn import_gltf(
+    bytes: &[u8],
+    source_name: &str,
+    resources: &dyn Resources,
+) -> Result<Imported, ImportError> {
+    import(bytes, source_name, resources).map_err(|kind| ImportError {
+        source_name: source_name.to_owned(),
+        kind,
+    })
 }
 
-fn import(bytes: &[u8], source_name: &str, resources: &dyn Resources) -> Result<Imported, ImportErrorKind> {
+fn import(
+    bytes: &[u8],
+    source_name: &str,
+    resources: &dyn Resources,
+) -> Result<Imported, ImportErrorKind> {
     let (json, bin) = split_container(bytes)?;
-    let root = gltf::json::Root::from_slice(json).map_err(|e| ImportErrorKind::InvalidJson(e.to_string()))?;
+    let root = gltf::json::Root::from_slice(json)
+        .map_err(|e| ImportErrorKind::InvalidJson(e.to_string()))?;
     if !root.asset.version.starts_with("2.") {
         return Err(ImportErrorKind::Unsupported(format!(
             "glTF version {} (faceanim reads glTF 2.0)",
@@ -39,7 +56,12 @@ fn import(bytes: &[u8], source_name: &str, resources: &dyn Resources) -> Result<
     check_position_indices(&root)?;
     let document = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(problems) => ImportErrorKind::InvalidJson(
-            problems.iter().take(8).map(|(path, err)| format!("{path}: {err}")).collect::<Vec<_>>().join("; "),
+            problems
+                .iter()
+                .take(8)
+                .map(|(path, err)| format!("{path}: {err}"))
+                .collect::<Vec<_>>()
+                .join("; "),
         ),
         other => ImportErrorKind::InvalidJson(other.to_string()),
     })?;
@@ -55,7 +77,10 @@ fn check_position_indices(root: &gltf::json::Root) -> Result<(), ImportErrorKind
     use gltf::json::validation::Checked;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
-            if let Some(index) = primitive.attributes.get(&Checked::Valid(gltf::json::mesh::Semantic::Positions)) {
+            if let Some(index) = primitive
+                .attributes
+                .get(&Checked::Valid(gltf::json::mesh::Semantic::Positions))
+            {
                 if index.value() >= root.accessors.len() {
                     return Err(ImportErrorKind::InvalidJson(format!(
                         "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {} does not exist ({} accessors)",
@@ -76,11 +101,18 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKi
             bytes
                 .get(at..at + 4)
                 .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                .ok_or_else(|| ImportErrorKind::Truncated(format!("the GLB ends at byte {} inside its headers", bytes.len())))
+                .ok_or_else(|| {
+                    ImportErrorKind::Truncated(format!(
+                        "the GLB ends at byte {} inside its headers",
+                        bytes.len()
+                    ))
+                })
         };
         let version = word(4)?;
         if version != 2 {
-            return Err(ImportErrorKind::Unsupported(format!("GLB version {version} (faceanim reads version 2)")));
+            return Err(ImportErrorKind::Unsupported(format!(
+                "GLB version {version} (faceanim reads version 2)"
+            )));
         }
         let declared = word(8)? as usize;
         if declared > bytes.len() {
@@ -92,20 +124,34 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKi
         let bytes = &bytes[..declared];
         let json_len = word(12)? as usize;
         if word(16)? != CHUNK_JSON {
-            return Err(ImportErrorKind::NotGltf("the first GLB chunk is not JSON".into()));
+            return Err(ImportErrorKind::NotGltf(
+                "the first GLB chunk is not JSON".into(),
+            ));
         }
-        let json_end = 20usize.checked_add(json_len).filter(|&e| e <= bytes.len()).ok_or_else(|| {
-            ImportErrorKind::Truncated(format!("the JSON chunk claims {json_len} bytes but the GLB has {}", bytes.len()))
-        })?;
+        let json_end = 20usize
+            .checked_add(json_len)
+            .filter(|&e| e <= bytes.len())
+            .ok_or_else(|| {
+                ImportErrorKind::Truncated(format!(
+                    "the JSON chunk claims {json_len} bytes but the GLB has {}",
+                    bytes.len()
+                ))
+            })?;
         let json = &bytes[20..json_end];
         let mut bin = None;
         let mut at = json_end;
         while at + 8 <= bytes.len() {
             let len = word(at)? as usize;
             let kind = word(at + 4)?;
-            let end = (at + 8).checked_add(len).filter(|&e| e <= bytes.len()).ok_or_else(|| {
-                ImportErrorKind::Truncated(format!("a chunk at byte {at} claims {len} bytes but the GLB has {}", bytes.len()))
-            })?;
+            let end = (at + 8)
+                .checked_add(len)
+                .filter(|&e| e <= bytes.len())
+                .ok_or_else(|| {
+                    ImportErrorKind::Truncated(format!(
+                        "a chunk at byte {at} claims {len} bytes but the GLB has {}",
+                        bytes.len()
+                    ))
+                })?;
             if kind == CHUNK_BIN && bin.is_none() {
                 bin = Some(&bytes[at + 8..end]);
             }
@@ -117,13 +163,22 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKi
     if first == Some(&b'{') {
         return Ok((bytes, None));
     }
-    let shown: String = bytes.iter().take(8).map(|b| format!("{b:02x}")).collect::<Vec<_>>().join(" ");
+    let shown: String = bytes
+        .iter()
+        .take(8)
+        .map(|b| format!("{b:02x}"))
+        .collect::<Vec<_>>()
+        .join(" ");
     Err(ImportErrorKind::NotGltf(format!(
         "it starts with bytes [{shown}], neither the GLB magic 'glTF' nor a JSON object"
     )))
 }
 
-fn load_buffers(document: &gltf::Document, bin: Option<&[u8]>, resources: &dyn Resources) -> Result<Buffers, ImportErrorKind> {
+fn load_buffers<'a>(
+    document: &gltf::Document,
+    bin: Option<&'a [u8]>,
+    resources: &dyn Resources,
+) -> Result<Buffers<'a>, ImportErrorKind> {
     let mut out = Vec::new();
     for buffer in document.buffers() {
         let index = buffer.index();
@@ -134,12 +189,16 @@ fn load_buffers(document: &gltf::Document, bin: Option<&[u8]>, resources: &dyn R
                     uri: "GLB BIN chunk".into(),
                     reason: "the file has no binary chunk".into(),
                 })?;
-                (data.to_vec(), "GLB BIN chunk".to_owned())
+                (std::borrow::Cow::Borrowed(data), "GLB BIN chunk".to_owned())
             }
             gltf::buffer::Source::Uri(uri) => {
-                let data = load_uri(uri, resources)
-                    .map_err(|reason| ImportErrorKind::MissingBuffer { index, uri: shorten(uri), reason })?;
-                (data, shorten(uri))
+                let data =
+                    load_uri(uri, resources).map_err(|reason| ImportErrorKind::MissingBuffer {
+                        index,
+                        uri: shorten(uri),
+                        reason,
+                    })?;
+                (std::borrow::Cow::Owned(data), shorten(uri))
             }
         };
         if data.len() < buffer.length() {
@@ -155,14 +214,25 @@ fn load_buffers(document: &gltf::Document, bin: Option<&[u8]>, resources: &dyn R
 }
 
 fn shorten(uri: &str) -> String {
-    if uri.len() > 60 { format!("{}…", &uri[..uri.char_indices().nth(40).map_or(uri.len(), |(i, _)| i)]) } else { uri.to_owned() }
+    if uri.len() > 60 {
+        format!(
+            "{}…",
+            &uri[..uri.char_indices().nth(40).map_or(uri.len(), |(i, _)| i)]
+        )
+    } else {
+        uri.to_owned()
+    }
 }
 
 /// Loads a `data:` URI or, through `resources`, a relative one (percent-decoded).
 fn load_uri(uri: &str, resources: &dyn Resources) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
-        let (_, payload) = rest.split_once(";base64,").ok_or("only base64 data URIs are supported")?;
-        return base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("bad base64: {e}"));
+        let (_, payload) = rest
+            .split_once(";base64,")
+            .ok_or("only base64 data URIs are supported")?;
+        return base64::engine::general_purpose::STANDARD
+            .decode(payload)
+            .map_err(|e| format!("bad base64: {e}"));
     }
     if uri.contains("://") {
         return Err("faceanim never downloads; put the file next to the .gltf".into());
@@ -196,10 +266,17 @@ enum Placement {
 }
 
 impl Placement {
+    /// The linear part, for directions such as blendshape deltas.
+    fn linear(&self, vertex: usize) -> Mat3 {
+        Mat3::from_mat4(self.matrix(vertex))
+    }
+
     fn matrix(&self, vertex: usize) -> Mat4 {
         match self {
             Placement::Rigid(m) => *m,
-            Placement::Skinned(per_vertex) => per_vertex.get(vertex).copied().unwrap_or(Mat4::IDENTITY),
+            Placement::Skinned(per_vertex) => {
+                per_vertex.get(vertex).copied().unwrap_or(Mat4::IDENTITY)
+            }
         }
     }
 }
@@ -228,9 +305,10 @@ struct Builder {
 
 impl Builder {
     fn new(source_name: &str) -> Builder {
-        let stem = std::path::Path::new(source_name)
-            .file_stem()
-            .map_or_else(|| source_name.to_owned(), |s| s.to_string_lossy().into_owned());
+        let stem = std::path::Path::new(source_name).file_stem().map_or_else(
+            || source_name.to_owned(),
+            |s| s.to_string_lossy().into_owned(),
+        );
         Builder {
             name: stem,
             positions: Vec::new(),
@@ -253,7 +331,12 @@ impl Builder {
         }
     }
 
-    fn read_scene(&mut self, doc: &gltf::Document, buffers: &Buffers, resources: &dyn Resources) -> Result<(), ImportErrorKind> {
+    fn read_scene(
+        &mut self,
+        doc: &gltf::Document,
+        buffers: &Buffers<'_>,
+        resources: &dyn Resources,
+    ) -> Result<(), ImportErrorKind> {
         let world = world_matrices(doc)?;
         let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
             Some(scene) => scene.nodes().map(|n| n.index()).collect(),
@@ -280,7 +363,13 @@ impl Builder {
             if let Some(mesh) = node.mesh() {
                 instances.push((node.clone(), mesh));
             }
-            stack.extend(node.children().map(|c| c.index()).collect::<Vec<_>>().into_iter().rev());
+            stack.extend(
+                node.children()
+                    .map(|c| c.index())
+                    .collect::<Vec<_>>()
+                    .into_iter()
+                    .rev(),
+            );
         }
         if instances.is_empty() {
             // Meshes that no node places: take them as they are.
@@ -302,14 +391,17 @@ impl Builder {
         &mut self,
         mesh: &gltf::Mesh<'_>,
         placement: &Placement,
-        buffers: &Buffers,
+        buffers: &Buffers<'_>,
         resources: &dyn Resources,
     ) -> Result<(), ImportErrorKind> {
         let mesh_label = match mesh.name() {
             Some(name) => format!("mesh {} '{name}'", mesh.index()),
             None => format!("mesh {}", mesh.index()),
         };
-        let target_count_hint = mesh.primitives().next().map_or(0, |p| p.morph_targets().count());
+        let target_count_hint = mesh
+            .primitives()
+            .next()
+            .map_or(0, |p| p.morph_targets().count());
         let target_names = self.resolved_target_names(mesh, &mesh_label, target_count_hint);
         let mut target_count: Option<usize> = None;
         // Primitives that share attribute accessors share vertices (faceanim's own exports do).
@@ -329,24 +421,47 @@ impl Builder {
                 Some(_) => {}
             }
             let mode = primitive.mode();
-            if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
-                self.warnings.push(format!("{label}: skipped {mode:?} (only triangles are animated)"));
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                self.warnings.push(format!(
+                    "{label}: skipped {mode:?} (only triangles are animated)"
+                ));
                 continue;
             }
             let Some(position_accessor) = primitive.get(&gltf::Semantic::Positions) else {
-                self.warnings.push(format!("{label}: skipped, it has no POSITION"));
+                self.warnings
+                    .push(format!("{label}: skipped, it has no POSITION"));
                 continue;
             };
             let key: Vec<usize> = std::iter::once(position_accessor.index())
-                .chain([gltf::Semantic::Normals, gltf::Semantic::TexCoords(0), gltf::Semantic::Colors(0)].iter().map(
-                    |s| primitive.get(s).map_or(usize::MAX, |a| a.index()),
-                ))
-                .chain(targets.iter().map(|t| t.positions().map_or(usize::MAX, |a| a.index())))
+                .chain(
+                    [
+                        gltf::Semantic::Normals,
+                        gltf::Semantic::TexCoords(0),
+                        gltf::Semantic::Colors(0),
+                    ]
+                    .iter()
+                    .map(|s| primitive.get(s).map_or(usize::MAX, |a| a.index())),
+                )
+                .chain(
+                    targets
+                        .iter()
+                        .map(|t| t.positions().map_or(usize::MAX, |a| a.index())),
+                )
                 .collect();
             let base = match shared.get(&key) {
                 Some(&base) => base,
                 None => {
-                    let base = self.read_vertices(&primitive, &label, &targets, &target_names, placement, buffers)?;
+                    let base = self.read_vertices(
+                        &primitive,
+                        &label,
+                        &targets,
+                        &target_names,
+                        placement,
+                        buffers,
+                    )?;
                     shared.insert(key, base);
                     base
                 }
@@ -372,14 +487,24 @@ impl Builder {
         targets: &[gltf::mesh::MorphTarget<'_>],
         target_names: &[String],
         placement: &Placement,
-        buffers: &Buffers,
+        buffers: &Buffers<'_>,
     ) -> Result<u32, ImportErrorKind> {
         let role = |what: &str| format!("{what} of {label}");
-        let with_role = |what: String| move |e: ImportErrorKind| match e {
-            ImportErrorKind::BadAccessor { accessor, problem, .. } => ImportErrorKind::BadAccessor { accessor, role: what.clone(), problem },
-            other => other,
+        let with_role = |what: String| {
+            move |e: ImportErrorKind| match e {
+                ImportErrorKind::BadAccessor {
+                    accessor, problem, ..
+                } => ImportErrorKind::BadAccessor {
+                    accessor,
+                    role: what.clone(),
+                    problem,
+                },
+                other => other,
+            }
         };
-        let position_accessor = primitive.get(&gltf::Semantic::Positions).ok_or(ImportErrorKind::NoMeshes)?;
+        let position_accessor = primitive
+            .get(&gltf::Semantic::Positions)
+            .ok_or(ImportErrorKind::NoMeshes)?;
         let count = position_accessor.count();
         let base = self.positions.len();
         if count > MAX_VERTICES || base + count > MAX_VERTICES {
@@ -387,17 +512,23 @@ impl Builder {
                 "{label} declares {count} vertices ({base} before it; at most {MAX_VERTICES} in all)"
             )));
         }
-        let raw = read_floats(buffers, &position_accessor, Some(Dimensions::Vec3)).map_err(with_role(role("POSITION")))?;
+        let raw = read_floats(buffers, &position_accessor, Some(Dimensions::Vec3))
+            .map_err(with_role(role("POSITION")))?;
         check_finite(&raw, 3, &role("POSITION"))?;
-        let local: Vec<Vec3> = raw.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        let local: Vec<Vec3> = raw
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
         for (i, p) in local.iter().enumerate() {
-            self.positions.push(placement.matrix(i).transform_point3(*p));
+            self.positions
+                .push(placement.matrix(i).transform_point3(*p));
         }
 
         let normals = match primitive.get(&gltf::Semantic::Normals) {
             Some(acc) => {
                 check_count(&acc, count, &role("NORMAL"))?;
-                let raw = read_floats(buffers, &acc, Some(Dimensions::Vec3)).map_err(with_role(role("NORMAL")))?;
+                let raw = read_floats(buffers, &acc, Some(Dimensions::Vec3))
+                    .map_err(with_role(role("NORMAL")))?;
                 check_finite(&raw, 3, &role("NORMAL"))?;
                 Some(raw)
             }
@@ -416,7 +547,8 @@ impl Builder {
         match primitive.get(&gltf::Semantic::TexCoords(0)) {
             Some(acc) => {
                 check_count(&acc, count, &role("TEXCOORD_0"))?;
-                let raw = read_floats(buffers, &acc, Some(Dimensions::Vec2)).map_err(with_role(role("TEXCOORD_0")))?;
+                let raw = read_floats(buffers, &acc, Some(Dimensions::Vec2))
+                    .map_err(with_role(role("TEXCOORD_0")))?;
                 check_finite(&raw, 2, &role("TEXCOORD_0"))?;
                 self.any_uv = true;
                 self.uvs.extend(raw.chunks_exact(2).map(|c| [c[0], c[1]]));
@@ -432,8 +564,12 @@ impl Builder {
                 check_finite(&raw, 1, &role("COLOR_0"))?;
                 self.any_color = true;
                 match dims {
-                    Dimensions::Vec3 => self.colors.extend(raw.chunks_exact(3).map(|c| [c[0], c[1], c[2], 1.0])),
-                    Dimensions::Vec4 => self.colors.extend(raw.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]])),
+                    Dimensions::Vec3 => self
+                        .colors
+                        .extend(raw.chunks_exact(3).map(|c| [c[0], c[1], c[2], 1.0])),
+                    Dimensions::Vec4 => self
+                        .colors
+                        .extend(raw.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]])),
                     other => {
                         return Err(ImportErrorKind::BadAccessor {
                             accessor: acc.index(),
@@ -443,21 +579,31 @@ impl Builder {
                     }
                 }
             }
-            None => self.colors.extend(std::iter::repeat_n([1.0, 1.0, 1.0, 1.0], count)),
+            None => self
+                .colors
+                .extend(std::iter::repeat_n([1.0, 1.0, 1.0, 1.0], count)),
         }
 
         for (t, target) in targets.iter().enumerate() {
             self.saw_targets = true;
-            let name = target_names.get(t).cloned().unwrap_or_else(|| format!("target_{t}"));
+            let name = target_names
+                .get(t)
+                .cloned()
+                .unwrap_or_else(|| format!("target_{t}"));
             let shape = self.shape_slot(&name)?;
-            let Some(acc) = target.positions() else { continue };
+            let Some(acc) = target.positions() else {
+                continue;
+            };
             let what = format!("morph target {t} ('{name}') POSITION of {label}");
             check_count(&acc, count, &what)?;
-            let raw = read_floats(buffers, &acc, Some(Dimensions::Vec3)).map_err(with_role(what.clone()))?;
+            let raw = read_floats(buffers, &acc, Some(Dimensions::Vec3))
+                .map_err(with_role(what.clone()))?;
             check_finite(&raw, 3, &what)?;
             for (i, c) in raw.chunks_exact(3).enumerate() {
-                let d = Mat3::from_mat4(placement.matrix(i)) * Vec3::new(c[0], c[1], c[2]);
-                self.push_delta(shape, (base + i) as u32, d);
+                let d = Vec3::new(c[0], c[1], c[2]);
+                if d != Vec3::ZERO {
+                    self.push_delta(shape, (base + i) as u32, placement.linear(i) * d);
+                }
             }
         }
         Ok(base as u32)
@@ -470,13 +616,17 @@ impl Builder {
         base: u32,
         local_count: usize,
         placement: &Placement,
-        buffers: &Buffers,
+        buffers: &Buffers<'_>,
     ) -> Result<(), ImportErrorKind> {
         let indices: Vec<u32> = match primitive.indices() {
             Some(acc) => read_indices(buffers, &acc).map_err(|e| match e {
-                ImportErrorKind::BadAccessor { accessor, problem, .. } => {
-                    ImportErrorKind::BadAccessor { accessor, role: format!("indices of {label}"), problem }
-                }
+                ImportErrorKind::BadAccessor {
+                    accessor, problem, ..
+                } => ImportErrorKind::BadAccessor {
+                    accessor,
+                    role: format!("indices of {label}"),
+                    problem,
+                },
                 other => other,
             })?,
             None => (0..local_count as u32).collect(),
@@ -502,7 +652,9 @@ impl Builder {
             _ => local.extend(indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]])),
         }
         if self.triangles.len() + local.len() > MAX_TRIANGLES {
-            return Err(ImportErrorKind::TooLarge(format!("more than {MAX_TRIANGLES} triangles in all")));
+            return Err(ImportErrorKind::TooLarge(format!(
+                "more than {MAX_TRIANGLES} triangles in all"
+            )));
         }
         for [a, b, c] in local {
             if a == b || b == c || a == c {
@@ -518,20 +670,37 @@ impl Builder {
 
     /// The mesh's target names (`target_N` where missing), unique within the mesh: a repeated
     /// name gets a `.001` suffix so that two targets never merge into one blendshape.
-    fn resolved_target_names(&mut self, mesh: &gltf::Mesh<'_>, label: &str, count: usize) -> Vec<String> {
+    fn resolved_target_names(
+        &mut self,
+        mesh: &gltf::Mesh<'_>,
+        label: &str,
+        count: usize,
+    ) -> Vec<String> {
         let given = target_names(mesh);
         if !given.is_empty() && given.len() != count {
-            self.warnings.push(format!("{label}: {} targetNames for {count} morph targets", given.len()));
+            self.warnings.push(format!(
+                "{label}: {} targetNames for {count} morph targets",
+                given.len()
+            ));
         }
         let mut seen = std::collections::HashSet::new();
         (0..count)
             .map(|t| {
-                let name = given.get(t).cloned().flatten().unwrap_or_else(|| format!("target_{t}"));
+                let name = given
+                    .get(t)
+                    .cloned()
+                    .flatten()
+                    .unwrap_or_else(|| format!("target_{t}"));
                 if seen.insert(name.clone()) {
                     return name;
                 }
-                let unique = (1..).map(|n| format!("{name}.{n:03}")).find(|c| !seen.contains(c)).unwrap_or_default();
-                self.warnings.push(format!("{label}: morph target {t} repeats the name '{name}'; renamed '{unique}'"));
+                let unique = (1..)
+                    .map(|n| format!("{name}.{n:03}"))
+                    .find(|c| !seen.contains(c))
+                    .unwrap_or_default();
+                self.warnings.push(format!(
+                    "{label}: morph target {t} repeats the name '{name}'; renamed '{unique}'"
+                ));
                 seen.insert(unique.clone());
                 unique
             })
@@ -543,7 +712,9 @@ impl Builder {
             return Ok(i);
         }
         if self.shape_names.len() >= MAX_BLENDSHAPES {
-            return Err(ImportErrorKind::TooLarge(format!("more than {MAX_BLENDSHAPES} morph targets")));
+            return Err(ImportErrorKind::TooLarge(format!(
+                "more than {MAX_BLENDSHAPES} morph targets"
+            )));
         }
         let i = self.shape_names.len();
         self.shape_names.push(name.to_owned());
@@ -561,7 +732,12 @@ impl Builder {
         }
     }
 
-    fn material(&mut self, material: &gltf::Material<'_>, resources: &dyn Resources, buffers: &Buffers) -> MaterialId {
+    fn material(
+        &mut self,
+        material: &gltf::Material<'_>,
+        resources: &dyn Resources,
+        buffers: &Buffers<'_>,
+    ) -> MaterialId {
         let key = material.index();
         if let Some(&id) = self.material_map.get(&key) {
             return id;
@@ -572,7 +748,9 @@ impl Builder {
             match load_image(&image, resources, buffers) {
                 Ok(texture) => Some(texture),
                 Err(reason) => {
-                    self.warnings.push(format!("base-colour texture of material {key:?} dropped: {reason}"));
+                    self.warnings.push(format!(
+                        "base-colour texture of material {key:?} dropped: {reason}"
+                    ));
                     None
                 }
             }
@@ -605,8 +783,11 @@ impl Builder {
             .iter()
             .zip(self.shape_indices.into_iter().zip(self.shape_deltas))
             .map(|(name, (indices, deltas))| {
-                let (indices, deltas): (Vec<u32>, Vec<Vec3>) =
-                    indices.into_iter().zip(deltas).filter(|(_, d)| d.length() > self.threshold).unzip();
+                let (indices, deltas): (Vec<u32>, Vec<Vec3>) = indices
+                    .into_iter()
+                    .zip(deltas)
+                    .filter(|(_, d)| d.length() > self.threshold)
+                    .unzip();
                 Blendshape::from_sparse(name.clone(), indices, deltas)
             })
             .collect();
@@ -627,20 +808,34 @@ impl Builder {
             blendshapes,
             normal_deltas: None,
         })?;
-        Ok(Imported { character, warnings: self.warnings })
+        Ok(Imported {
+            character,
+            warnings: self.warnings,
+        })
     }
 }
 
 fn target_names(mesh: &gltf::Mesh<'_>) -> Vec<Option<String>> {
-    let Some(extras) = mesh.extras() else { return Vec::new() };
-    let Ok(value) = serde_json::from_str::<serde_json::Value>(extras.get()) else { return Vec::new() };
+    let Some(extras) = mesh.extras() else {
+        return Vec::new();
+    };
+    let Ok(value) = serde_json::from_str::<serde_json::Value>(extras.get()) else {
+        return Vec::new();
+    };
     match value.get("targetNames").and_then(|v| v.as_array()) {
-        Some(names) => names.iter().map(|n| n.as_str().map(str::to_owned)).collect(),
+        Some(names) => names
+            .iter()
+            .map(|n| n.as_str().map(str::to_owned))
+            .collect(),
         None => Vec::new(),
     }
 }
 
-fn check_count(accessor: &gltf::Accessor<'_>, expected: usize, what: &str) -> Result<(), ImportErrorKind> {
+fn check_count(
+    accessor: &gltf::Accessor<'_>,
+    expected: usize,
+    what: &str,
+) -> Result<(), ImportErrorKind> {
     if accessor.count() == expected {
         Ok(())
     } else {
@@ -654,7 +849,10 @@ fn check_count(accessor: &gltf::Accessor<'_>, expected: usize, what: &str) -> Re
 
 fn check_finite(values: &[f32], components: usize, what: &str) -> Result<(), ImportErrorKind> {
     match values.iter().position(|v| !v.is_finite()) {
-        Some(i) => Err(ImportErrorKind::NonFinite { what: what.to_owned(), index: i / components }),
+        Some(i) => Err(ImportErrorKind::NonFinite {
+            what: what.to_owned(),
+            index: i / components,
+        }),
         None => Ok(()),
     }
 }
@@ -668,9 +866,15 @@ fn world_matrices(doc: &gltf::Document) -> Result<Vec<Mat4>, ImportErrorKind> {
             parent[child.index()] = Some(node.index());
         }
     }
-    let local: Vec<Mat4> = doc.nodes().map(|n| Mat4::from_cols_array_2d(&n.transform().matrix())).collect();
+    let local: Vec<Mat4> = doc
+        .nodes()
+        .map(|n| Mat4::from_cols_array_2d(&n.transform().matrix()))
+        .collect();
     if let Some(i) = local.iter().position(|m| !m.is_finite()) {
-        return Err(ImportErrorKind::NonFinite { what: "node transform".into(), index: i });
+        return Err(ImportErrorKind::NonFinite {
+            what: "node transform".into(),
+            index: i,
+        });
     }
     let mut world = vec![None::<Mat4>; count];
     for start in 0..count {
@@ -681,7 +885,9 @@ fn world_matrices(doc: &gltf::Document) -> Result<Vec<Mat4>, ImportErrorKind> {
                 break;
             }
             if chain.len() > count {
-                return Err(ImportErrorKind::InvalidJson(format!("node {start} is its own ancestor")));
+                return Err(ImportErrorKind::InvalidJson(format!(
+                    "node {start} is its own ancestor"
+                )));
             }
             chain.push(p);
             at = p;
@@ -693,7 +899,10 @@ fn world_matrices(doc: &gltf::Document) -> Result<Vec<Mat4>, ImportErrorKind> {
             }
         }
     }
-    Ok(world.into_iter().map(|m| m.unwrap_or(Mat4::IDENTITY)).collect())
+    Ok(world
+        .into_iter()
+        .map(|m| m.unwrap_or(Mat4::IDENTITY))
+        .collect())
 }
 
 /// Rest-pose skinning: each vertex placed by Σ wₖ · joint_worldₖ · inverse_bindₖ.
@@ -702,7 +911,7 @@ fn skin_placement(
     node: &gltf::Node<'_>,
     mesh: &gltf::Mesh<'_>,
     world: &[Mat4],
-    buffers: &Buffers,
+    buffers: &Buffers<'_>,
 ) -> Result<Placement, ImportErrorKind> {
     let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
     let inverse_bind: Vec<Mat4> = match skin.inverse_bind_matrices() {
@@ -720,13 +929,21 @@ fn skin_placement(
         .collect();
     // All primitives of a skinned mesh are placed by the first one's weights when they share
     // vertices; otherwise each primitive has its own counts, so placement is per primitive.
-    let Some(primitive) = mesh.primitives().next() else { return Ok(Placement::Rigid(world[node.index()])) };
-    let (Some(j_acc), Some(w_acc)) = (primitive.get(&gltf::Semantic::Joints(0)), primitive.get(&gltf::Semantic::Weights(0))) else {
+    let Some(primitive) = mesh.primitives().next() else {
+        return Ok(Placement::Rigid(world[node.index()]));
+    };
+    let (Some(j_acc), Some(w_acc)) = (
+        primitive.get(&gltf::Semantic::Joints(0)),
+        primitive.get(&gltf::Semantic::Weights(0)),
+    ) else {
         return Ok(Placement::Rigid(world[node.index()]));
     };
     if mesh.primitives().count() > 1 {
         let first = primitive.get(&gltf::Semantic::Positions).map(|a| a.index());
-        if mesh.primitives().any(|p| p.get(&gltf::Semantic::Positions).map(|a| a.index()) != first) {
+        if mesh
+            .primitives()
+            .any(|p| p.get(&gltf::Semantic::Positions).map(|a| a.index()) != first)
+        {
             return Err(ImportErrorKind::Unsupported(format!(
                 "skinned mesh {} with primitives that do not share vertices",
                 mesh.index()
@@ -748,25 +965,48 @@ fn skin_placement(
             }
             let j = joint_index.get(4 * v + k).copied().unwrap_or(0) as usize;
             let jm = joint_matrices.get(j).ok_or_else(|| {
-                ImportErrorKind::CountMismatch(format!("vertex {v} uses joint {j} but the skin has {}", joints.len()))
+                ImportErrorKind::CountMismatch(format!(
+                    "vertex {v} uses joint {j} but the skin has {}",
+                    joints.len()
+                ))
             })?;
             m += *jm * w;
             total += w;
         }
-        per_vertex.push(if total > 0.0 { m * (1.0 / total) } else { world[node.index()] });
+        per_vertex.push(if total > 0.0 {
+            m * (1.0 / total)
+        } else {
+            world[node.index()]
+        });
     }
     Ok(Placement::Skinned(per_vertex))
 }
 
 /// Loads a glTF image's encoded bytes (from a buffer view, a data URI or an external file).
-fn load_image(image: &gltf::Image<'_>, resources: &dyn Resources, buffers: &Buffers) -> Result<Texture, String> {
+fn load_image(
+    image: &gltf::Image<'_>,
+    resources: &dyn Resources,
+    buffers: &Buffers<'_>,
+) -> Result<Texture, String> {
     let (bytes, declared) = match image.source() {
         gltf::image::Source::View { view, mime_type } => {
-            let buffer = buffers.0.get(view.buffer().index()).ok_or("its buffer is missing")?;
-            let end = view.offset().checked_add(view.length()).filter(|&e| e <= buffer.len()).ok_or("its buffer view runs past the buffer")?;
-            (buffer[view.offset()..end].to_vec(), Some(mime_type.to_owned()))
+            let buffer = buffers
+                .0
+                .get(view.buffer().index())
+                .ok_or("its buffer is missing")?;
+            let end = view
+                .offset()
+                .checked_add(view.length())
+                .filter(|&e| e <= buffer.len())
+                .ok_or("its buffer view runs past the buffer")?;
+            (
+                buffer[view.offset()..end].to_vec(),
+                Some(mime_type.to_owned()),
+            )
         }
-        gltf::image::Source::Uri { uri, mime_type } => (load_uri(uri, resources)?, mime_type.map(str::to_owned)),
+        gltf::image::Source::Uri { uri, mime_type } => {
+            (load_uri(uri, resources)?, mime_type.map(str::to_owned))
+        }
     };
     let sniffed = if bytes.starts_with(b"\x89PNG") {
         Some("image/png")
@@ -775,6 +1015,12 @@ fn load_image(image: &gltf::Image<'_>, resources: &dyn Resources, buffers: &Buff
     } else {
         None
     };
-    let mime_type = sniffed.map(str::to_owned).or(declared).ok_or("not a PNG or JPEG image")?;
-    Ok(Texture { mime_type, bytes: Arc::from(bytes) })
+    let mime_type = sniffed
+        .map(str::to_owned)
+        .or(declared)
+        .ok_or("not a PNG or JPEG image")?;
+    Ok(Texture {
+        mime_type,
+        bytes: Arc::from(bytes),
+    })
 }

@@ -37,7 +37,9 @@ pub struct NoExternalResources;
 
 impl Resources for NoExternalResources {
     fn load(&self, uri: &str) -> Result<Vec<u8>, String> {
-        Err(format!("external resource '{uri}' cannot be loaded from here (give the .gltf file's path)"))
+        Err(format!(
+            "external resource '{uri}' cannot be loaded from here (give the .gltf file's path)"
+        ))
     }
 }
 
@@ -94,7 +96,9 @@ pub enum ImportErrorKind {
         problem: String,
     },
     /// The file has geometry but no morph targets to animate.
-    #[error("no morph targets (blendshapes): faceanim animates blendshape characters; export the mesh with its shape keys")]
+    #[error(
+        "no morph targets (blendshapes): faceanim animates blendshape characters; export the mesh with its shape keys"
+    )]
     NoMorphTargets,
     /// The file has no triangle geometry.
     #[error("no triangle meshes found")]

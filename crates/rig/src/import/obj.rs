@@ -10,7 +10,9 @@ use std::collections::HashMap;
 use glam::Vec3;
 
 use super::{ImportError, ImportErrorKind, Imported, MAX_BLENDSHAPES, MAX_TRIANGLES, MAX_VERTICES};
-use crate::character::{Aabb, Blendshape, Character, CharacterParts, Material, MaterialId, Part, SPARSE_DELTA_THRESHOLD};
+use crate::character::{
+    Aabb, Blendshape, Character, CharacterParts, Material, MaterialId, Part, SPARSE_DELTA_THRESHOLD,
+};
 
 /// One OBJ file's name (for messages and the blendshape name) and text.
 #[derive(Debug, Clone, Copy)]
@@ -25,13 +27,26 @@ pub struct ObjSource<'a> {
 ///
 /// # Errors
 /// An [`ImportError`] naming the offending file (and line, for syntax errors).
-pub fn import_obj_set(character_name: &str, neutral: ObjSource<'_>, shapes: &[ObjSource<'_>]) -> Result<Imported, ImportError> {
-    let err = |source: &str, kind| ImportError { source_name: source.to_owned(), kind };
+pub fn import_obj_set(
+    character_name: &str,
+    neutral: ObjSource<'_>,
+    shapes: &[ObjSource<'_>],
+) -> Result<Imported, ImportError> {
+    let err = |source: &str, kind| ImportError {
+        source_name: source.to_owned(),
+        kind,
+    };
     if shapes.is_empty() {
         return Err(err(neutral.name, ImportErrorKind::NoMorphTargets));
     }
     if shapes.len() > MAX_BLENDSHAPES {
-        return Err(err(neutral.name, ImportErrorKind::TooLarge(format!("{} blendshape files (at most {MAX_BLENDSHAPES})", shapes.len()))));
+        return Err(err(
+            neutral.name,
+            ImportErrorKind::TooLarge(format!(
+                "{} blendshape files (at most {MAX_BLENDSHAPES})",
+                shapes.len()
+            )),
+        ));
     }
     let mesh = parse(neutral, true).map_err(|k| err(neutral.name, k))?;
     if mesh.faces.is_empty() {
@@ -64,12 +79,21 @@ pub fn import_obj_set(character_name: &str, neutral: ObjSource<'_>, shapes: &[Ob
             }
         };
         let corners: Vec<u32> = face.corners.iter().map(|&c| corner(c)).collect();
-        let material = *material_ids.entry(face.material.clone()).or_insert_with(|| {
-            materials.push(Material { name: face.material.clone(), ..Material::default() });
-            MaterialId((materials.len() - 1) as u32)
-        });
+        let material = *material_ids
+            .entry(face.material.clone())
+            .or_insert_with(|| {
+                materials.push(Material {
+                    name: face.material.clone(),
+                    ..Material::default()
+                });
+                MaterialId((materials.len() - 1) as u32)
+            });
         if parts.last().is_none_or(|p| p.material != material) {
-            parts.push(Part { name: face.material.clone(), material, triangles: triangles.len()..triangles.len() });
+            parts.push(Part {
+                name: face.material.clone(),
+                material,
+                triangles: triangles.len()..triangles.len(),
+            });
         }
         for k in 1..corners.len() - 1 {
             let tri = [corners[0], corners[k], corners[k + 1]];
@@ -81,18 +105,39 @@ pub fn import_obj_set(character_name: &str, neutral: ObjSource<'_>, shapes: &[Ob
             part.triangles.end = triangles.len();
         }
         if triangles.len() > MAX_TRIANGLES {
-            return Err(err(neutral.name, ImportErrorKind::TooLarge(format!("more than {MAX_TRIANGLES} triangles"))));
+            return Err(err(
+                neutral.name,
+                ImportErrorKind::TooLarge(format!("more than {MAX_TRIANGLES} triangles")),
+            ));
         }
     }
     if origin.len() > MAX_VERTICES {
-        return Err(err(neutral.name, ImportErrorKind::TooLarge(format!("more than {MAX_VERTICES} vertices"))));
+        return Err(err(
+            neutral.name,
+            ImportErrorKind::TooLarge(format!("more than {MAX_VERTICES} vertices")),
+        ));
     }
     let positions: Vec<Vec3> = origin.iter().map(|&o| mesh.positions[o as usize]).collect();
     let uvs = (!mesh.uvs.is_empty()).then(|| {
-        uv_of.iter().map(|t| t.and_then(|t| mesh.uvs.get(t as usize).copied()).unwrap_or([0.0, 0.0])).collect()
+        uv_of
+            .iter()
+            .map(|t| {
+                t.and_then(|t| mesh.uvs.get(t as usize).copied())
+                    .unwrap_or([0.0, 0.0])
+            })
+            .collect()
     });
-    let colors = (!mesh.colors.is_empty())
-        .then(|| origin.iter().map(|&o| mesh.colors.get(o as usize).copied().unwrap_or([1.0, 1.0, 1.0, 1.0])).collect());
+    let colors = (!mesh.colors.is_empty()).then(|| {
+        origin
+            .iter()
+            .map(|&o| {
+                mesh.colors
+                    .get(o as usize)
+                    .copied()
+                    .unwrap_or([1.0, 1.0, 1.0, 1.0])
+            })
+            .collect()
+    });
 
     let threshold = SPARSE_DELTA_THRESHOLD * Aabb::around(&positions).diagonal();
     let mut blendshapes = Vec::with_capacity(shapes.len());
@@ -102,13 +147,20 @@ pub fn import_obj_set(character_name: &str, neutral: ObjSource<'_>, shapes: &[Ob
         if parsed.positions.len() != n {
             return Err(err(
                 shape.name,
-                ImportErrorKind::CountMismatch(format!("it has {} vertices but the neutral '{}' has {n}", parsed.positions.len(), neutral.name)),
+                ImportErrorKind::CountMismatch(format!(
+                    "it has {} vertices but the neutral '{}' has {n}",
+                    parsed.positions.len(),
+                    neutral.name
+                )),
             ));
         }
         for (slot, &o) in dense.iter_mut().zip(&origin) {
             *slot = parsed.positions[o as usize] - mesh.positions[o as usize];
         }
-        let name = std::path::Path::new(shape.name).file_stem().map_or_else(|| shape.name.to_owned(), |s| s.to_string_lossy().into_owned());
+        let name = std::path::Path::new(shape.name).file_stem().map_or_else(
+            || shape.name.to_owned(),
+            |s| s.to_string_lossy().into_owned(),
+        );
         blendshapes.push(Blendshape::from_dense(name, &dense, threshold));
     }
 
@@ -125,7 +177,10 @@ pub fn import_obj_set(character_name: &str, neutral: ObjSource<'_>, shapes: &[Ob
         normal_deltas: None,
     })
     .map_err(|e| err(neutral.name, e.into()))?;
-    Ok(Imported { character, warnings: Vec::new() })
+    Ok(Imported {
+        character,
+        warnings: Vec::new(),
+    })
 }
 
 struct Face {
@@ -147,20 +202,33 @@ fn parse(source: ObjSource<'_>, full: bool) -> Result<ObjMesh, ImportErrorKind> 
     let mut material = String::from("default");
     let mut saw_anything = false;
     for (number, line) in source.text.lines().enumerate() {
-        let fail = |problem: String| ImportErrorKind::Obj { file: source.name.to_owned(), line: number + 1, problem };
+        let fail = |problem: String| ImportErrorKind::Obj {
+            file: source.name.to_owned(),
+            line: number + 1,
+            problem,
+        };
         let line = line.split('#').next().unwrap_or("").trim();
         let mut words = line.split_ascii_whitespace();
-        let Some(keyword) = words.next() else { continue };
+        let Some(keyword) = words.next() else {
+            continue;
+        };
         saw_anything = true;
         match keyword {
             "v" => {
-                let values: Vec<f32> = words.map(|w| parse_number(w).map_err(&fail)).collect::<Result<_, _>>()?;
+                let values: Vec<f32> = words
+                    .map(|w| parse_number(w).map_err(&fail))
+                    .collect::<Result<_, _>>()?;
                 if values.len() < 3 {
-                    return Err(fail(format!("a vertex needs 3 coordinates, found {}", values.len())));
+                    return Err(fail(format!(
+                        "a vertex needs 3 coordinates, found {}",
+                        values.len()
+                    )));
                 }
                 let p = Vec3::new(values[0], values[1], values[2]);
                 if mesh.positions.len() >= MAX_VERTICES {
-                    return Err(ImportErrorKind::TooLarge(format!("more than {MAX_VERTICES} vertices")));
+                    return Err(ImportErrorKind::TooLarge(format!(
+                        "more than {MAX_VERTICES} vertices"
+                    )));
                 }
                 mesh.positions.push(p);
                 if values.len() >= 6 {
@@ -168,49 +236,78 @@ fn parse(source: ObjSource<'_>, full: bool) -> Result<ObjMesh, ImportErrorKind> 
                 }
             }
             "vt" if full => {
-                let values: Vec<f32> = words.map(|w| parse_number(w).map_err(&fail)).collect::<Result<_, _>>()?;
+                let values: Vec<f32> = words
+                    .map(|w| parse_number(w).map_err(&fail))
+                    .collect::<Result<_, _>>()?;
                 if values.is_empty() {
                     return Err(fail("a texture coordinate needs at least 1 value".into()));
                 }
-                mesh.uvs.push([values[0], values.get(1).copied().unwrap_or(0.0)]);
+                mesh.uvs
+                    .push([values[0], values.get(1).copied().unwrap_or(0.0)]);
             }
             "f" if full => {
                 let mut corners = Vec::new();
                 for word in words {
                     let mut fields = word.split('/');
-                    let v = resolve(fields.next().unwrap_or(""), mesh.positions.len(), "vertex").map_err(&fail)?;
+                    let v = resolve(fields.next().unwrap_or(""), mesh.positions.len(), "vertex")
+                        .map_err(&fail)?;
                     let vt = match fields.next() {
-                        Some(t) if !t.is_empty() => Some(resolve(t, mesh.uvs.len(), "texture coordinate").map_err(&fail)?),
+                        Some(t) if !t.is_empty() => {
+                            Some(resolve(t, mesh.uvs.len(), "texture coordinate").map_err(&fail)?)
+                        }
                         _ => None,
                     };
                     corners.push((v, vt));
                 }
                 if corners.len() < 3 {
-                    return Err(fail(format!("a face needs at least 3 corners, found {}", corners.len())));
+                    return Err(fail(format!(
+                        "a face needs at least 3 corners, found {}",
+                        corners.len()
+                    )));
                 }
-                mesh.faces.push(Face { corners, material: material.clone() });
+                mesh.faces.push(Face {
+                    corners,
+                    material: material.clone(),
+                });
             }
             "usemtl" if full => material = words.next().unwrap_or("default").to_owned(),
             _ => {}
         }
     }
     if !saw_anything || mesh.positions.is_empty() {
-        return Err(ImportErrorKind::NotGltf(format!("'{}' has no OBJ vertices (no 'v' lines)", source.name)));
+        return Err(ImportErrorKind::NotGltf(format!(
+            "'{}' has no OBJ vertices (no 'v' lines)",
+            source.name
+        )));
     }
     Ok(mesh)
 }
 
 fn parse_number(word: &str) -> Result<f32, String> {
-    let value: f32 = word.parse().map_err(|_| format!("'{word}' is not a number"))?;
-    if value.is_finite() { Ok(value) } else { Err(format!("'{word}' is not a finite number")) }
+    let value: f32 = word
+        .parse()
+        .map_err(|_| format!("'{word}' is not a number"))?;
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(format!("'{word}' is not a finite number"))
+    }
 }
 
 /// Resolves a 1-based (or negative, relative) OBJ index against `count` items so far.
 fn resolve(word: &str, count: usize, what: &str) -> Result<u32, String> {
-    let index: i64 = word.parse().map_err(|_| format!("'{word}' is not a {what} index"))?;
-    let resolved = if index > 0 { index - 1 } else { count as i64 + index };
+    let index: i64 = word
+        .parse()
+        .map_err(|_| format!("'{word}' is not a {what} index"))?;
+    let resolved = if index > 0 {
+        index - 1
+    } else {
+        count as i64 + index
+    };
     if index == 0 || resolved < 0 || resolved >= count as i64 {
-        return Err(format!("{what} index {index} is out of range (there are {count} so far)"));
+        return Err(format!(
+            "{what} index {index} is out of range (there are {count} so far)"
+        ));
     }
     Ok(resolved as u32)
 }
@@ -219,15 +316,22 @@ fn resolve(word: &str, count: usize, what: &str) -> Result<u32, String> {
 mod tests {
     use super::*;
 
-    const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n";
+    const QUAD: &str =
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n";
 
     #[test]
     fn quad_with_one_shape() {
         let shape = "v 0 0 0\nv 1 0 0\nv 1 1 0.5\nv 0 1 0\n";
         let imported = import_obj_set(
             "quad",
-            ObjSource { name: "neutral.obj", text: QUAD },
-            &[ObjSource { name: "lift.obj", text: shape }],
+            ObjSource {
+                name: "neutral.obj",
+                text: QUAD,
+            },
+            &[ObjSource {
+                name: "lift.obj",
+                text: shape,
+            }],
         )
         .unwrap_or_else(|e| panic!("{e}"));
         let c = imported.character;
@@ -241,17 +345,56 @@ mod tests {
     #[test]
     fn errors_name_file_and_line() {
         let bad = "v 0 0 0\nv 1 0\n";
-        let e = import_obj_set("x", ObjSource { name: "neutral.obj", text: QUAD }, &[ObjSource { name: "s.obj", text: bad }])
-            .err()
-            .map(|e| e.to_string());
-        assert_eq!(e.as_deref(), Some("s.obj: line 2: a vertex needs 3 coordinates, found 2"));
-        let e = import_obj_set("x", ObjSource { name: "n.obj", text: "v 0 0 0\nf 1 2 3\n" }, &[ObjSource { name: "s.obj", text: "v 0 0 0\n" }])
-            .err()
-            .map(|e| e.to_string());
-        assert_eq!(e.as_deref(), Some("n.obj: line 2: vertex index 2 is out of range (there are 1 so far)"));
-        let e = import_obj_set("x", ObjSource { name: "n.obj", text: QUAD }, &[ObjSource { name: "s.obj", text: "v 0 0 0\n" }])
-            .err()
-            .map(|e| e.to_string());
-        assert_eq!(e.as_deref(), Some("s.obj: counts disagree: it has 1 vertices but the neutral 'n.obj' has 4"));
+        let e = import_obj_set(
+            "x",
+            ObjSource {
+                name: "neutral.obj",
+                text: QUAD,
+            },
+            &[ObjSource {
+                name: "s.obj",
+                text: bad,
+            }],
+        )
+        .err()
+        .map(|e| e.to_string());
+        assert_eq!(
+            e.as_deref(),
+            Some("s.obj: line 2: a vertex needs 3 coordinates, found 2")
+        );
+        let e = import_obj_set(
+            "x",
+            ObjSource {
+                name: "n.obj",
+                text: "v 0 0 0\nf 1 2 3\n",
+            },
+            &[ObjSource {
+                name: "s.obj",
+                text: "v 0 0 0\n",
+            }],
+        )
+        .err()
+        .map(|e| e.to_string());
+        assert_eq!(
+            e.as_deref(),
+            Some("n.obj: line 2: vertex index 2 is out of range (there are 1 so far)")
+        );
+        let e = import_obj_set(
+            "x",
+            ObjSource {
+                name: "n.obj",
+                text: QUAD,
+            },
+            &[ObjSource {
+                name: "s.obj",
+                text: "v 0 0 0\n",
+            }],
+        )
+        .err()
+        .map(|e| e.to_string());
+        assert_eq!(
+            e.as_deref(),
+            Some("s.obj: counts disagree: it has 1 vertices but the neutral 'n.obj' has 4")
+        );
     }
 }

@@ -15,7 +15,11 @@ pub fn shared(rel: &str) -> PathBuf {
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared"));
     let path = base.join(rel);
-    assert!(path.exists(), "test data {} is missing: the shared/ folder must sit beside the repository", path.display());
+    assert!(
+        path.exists(),
+        "test data {} is missing: the shared/ folder must sit beside the repository",
+        path.display()
+    );
     path
 }
 
@@ -26,7 +30,11 @@ pub fn ict_bytes() -> &'static [u8] {
 
 pub fn ict() -> &'static Character {
     static ICT: OnceLock<Character> = OnceLock::new();
-    ICT.get_or_init(|| import_gltf(ict_bytes(), "ict-face.glb", &NoExternalResources).unwrap().character)
+    ICT.get_or_init(|| {
+        import_gltf(ict_bytes(), "ict-face.glb", &NoExternalResources)
+            .unwrap()
+            .character
+    })
 }
 
 /// A 9×9 bumpy grid, symmetric about x = 0, with `blink_L`, `blink_R` (mirror images) and `open`.
@@ -57,12 +65,35 @@ pub fn tiny_face() -> TinyFace {
     let blink = |side: f32| -> Vec<[f32; 3]> {
         positions
             .iter()
-            .map(|p| if p[0] * side > 0.2 && p[1] > 0.3 { [0.02 * side, -0.1 * p[0].abs(), 0.01] } else { [0.0; 3] })
+            .map(|p| {
+                if p[0] * side > 0.2 && p[1] > 0.3 {
+                    [0.02 * side, -0.1 * p[0].abs(), 0.01]
+                } else {
+                    [0.0; 3]
+                }
+            })
             .collect()
     };
-    let open: Vec<[f32; 3]> = positions.iter().map(|p| if p[1] < -0.3 { [0.0, -0.2 * (-p[1]), -0.05] } else { [0.0; 3] }).collect();
-    let shapes = vec![("blink_L", blink(1.0)), ("blink_R", blink(-1.0)), ("open", open)];
-    TinyFace { positions, indices, shapes }
+    let open: Vec<[f32; 3]> = positions
+        .iter()
+        .map(|p| {
+            if p[1] < -0.3 {
+                [0.0, -0.2 * (-p[1]), -0.05]
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    let shapes = vec![
+        ("blink_L", blink(1.0)),
+        ("blink_R", blink(-1.0)),
+        ("open", open),
+    ];
+    TinyFace {
+        positions,
+        indices,
+        shapes,
+    }
 }
 
 /// Buffer views and accessors over one binary buffer.
@@ -78,13 +109,18 @@ impl GltfBuilder {
         while self.bin.len() % 4 != 0 {
             self.bin.push(0);
         }
-        self.views.push(json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()}));
+        self.views
+            .push(json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()}));
         self.bin.extend_from_slice(bytes);
         self.views.len() - 1
     }
 
     pub fn vec3(&mut self, data: &[[f32; 3]]) -> usize {
-        let bytes: Vec<u8> = data.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+        let bytes: Vec<u8> = data
+            .iter()
+            .flatten()
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
         let view = self.view(&bytes);
         let mut min = [f32::INFINITY; 3];
         let mut max = [f32::NEG_INFINITY; 3];
@@ -101,7 +137,9 @@ impl GltfBuilder {
 
     pub fn raw(&mut self, bytes: &[u8], component: u32, count: usize, kind: &str) -> usize {
         let view = self.view(bytes);
-        self.accessors.push(json!({"bufferView": view, "componentType": component, "count": count, "type": kind}));
+        self.accessors.push(
+            json!({"bufferView": view, "componentType": component, "count": count, "type": kind}),
+        );
         self.accessors.len() - 1
     }
 
@@ -112,9 +150,15 @@ impl GltfBuilder {
 
     /// A sparse VEC3 accessor with no base view: zero except at the non-zero entries of `dense`.
     pub fn sparse_vec3(&mut self, dense: &[[f32; 3]]) -> usize {
-        let idx: Vec<u32> = (0..dense.len() as u32).filter(|&i| dense[i as usize] != [0.0; 3]).collect();
+        let idx: Vec<u32> = (0..dense.len() as u32)
+            .filter(|&i| dense[i as usize] != [0.0; 3])
+            .collect();
         let ib: Vec<u8> = idx.iter().flat_map(|i| i.to_le_bytes()).collect();
-        let vb: Vec<u8> = idx.iter().flat_map(|&i| dense[i as usize]).flat_map(|f| f.to_le_bytes()).collect();
+        let vb: Vec<u8> = idx
+            .iter()
+            .flat_map(|&i| dense[i as usize])
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
         let iv = self.view(&ib);
         let vv = self.view(&vb);
         self.accessors.push(json!({
@@ -164,7 +208,10 @@ impl GltfBuilder {
     /// JSON with the buffer embedded as a base64 data URI.
     pub fn gltf_data_uri(self, mut root: Value) -> Vec<u8> {
         use base64::Engine as _;
-        let uri = format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&self.bin));
+        let uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&self.bin)
+        );
         self.attach(&mut root, json!({"byteLength": self.bin.len(), "uri": uri}));
         serde_json::to_vec(&root).unwrap()
     }
