@@ -71,9 +71,16 @@ fn main() -> ExitCode {
     match run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {error}");
+            // Library errors already spell out their source (with its path); print a cause
+            // only when it adds something.
+            let mut printed = error.to_string();
+            eprintln!("error: {printed}");
             for cause in error.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
+                let text = cause.to_string();
+                if !printed.contains(&text) {
+                    eprintln!("  caused by: {text}");
+                    printed.push_str(&text);
+                }
             }
             ExitCode::FAILURE
         }

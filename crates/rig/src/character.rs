@@ -375,21 +375,21 @@ impl Character {
         if let Some(normals) = &normals {
             check_finite_vec3("normals", normals)?;
         }
-        if let Some(uvs) = &uvs {
-            if let Some(index) = uvs.iter().position(|uv| !uv.iter().all(|c| c.is_finite())) {
-                return Err(ModelError::NonFinite {
-                    what: "uvs".into(),
-                    index,
-                });
-            }
+        if let Some(uvs) = &uvs
+            && let Some(index) = uvs.iter().position(|uv| !uv.iter().all(|c| c.is_finite()))
+        {
+            return Err(ModelError::NonFinite {
+                what: "uvs".into(),
+                index,
+            });
         }
-        if let Some(colors) = &colors {
-            if let Some(index) = colors.iter().position(|c| !c.iter().all(|x| x.is_finite())) {
-                return Err(ModelError::NonFinite {
-                    what: "colors".into(),
-                    index,
-                });
-            }
+        if let Some(colors) = &colors
+            && let Some(index) = colors.iter().position(|c| !c.iter().all(|x| x.is_finite()))
+        {
+            return Err(ModelError::NonFinite {
+                what: "colors".into(),
+                index,
+            });
         }
 
         let blendshapes = unique_names(blendshapes);
@@ -672,12 +672,12 @@ fn check_blendshape(shape: &Blendshape, vertex_count: usize) -> Result<(), Model
             w + 1
         )));
     }
-    if let Some(&last) = shape.indices.last() {
-        if last as usize >= vertex_count {
-            return Err(bad(format!(
-                "moves vertex {last}, but there are only {vertex_count} vertices"
-            )));
-        }
+    if let Some(&last) = shape.indices.last()
+        && last as usize >= vertex_count
+    {
+        return Err(bad(format!(
+            "moves vertex {last}, but there are only {vertex_count} vertices"
+        )));
     }
     if let Some(k) = shape.deltas.iter().position(|d| !d.is_finite()) {
         return Err(bad(format!(

@@ -57,7 +57,7 @@ struct Bin {
 
 impl Bin {
     fn view(&mut self, data: &[u8], target: Option<u32>) -> usize {
-        while self.bytes.len() % 4 != 0 {
+        while !self.bytes.len().is_multiple_of(4) {
             self.bytes.push(0);
         }
         let mut view =
@@ -107,6 +107,7 @@ impl Bin {
     ) -> usize {
         let mut accessor = json!({ "componentType": FLOAT, "count": count, "type": "VEC3" });
         if with_bounds {
+            // Unmoved vertices contribute zeros to the bounds.
             let (mut min, mut max) = if indices.len() < count {
                 (Vec3::ZERO, Vec3::ZERO)
             } else {
@@ -116,22 +117,24 @@ impl Bin {
                 min = min.min(*v);
                 max = max.max(*v);
             }
-            if values.is_empty() {
-                (min, max) = (Vec3::ZERO, Vec3::ZERO);
-            }
             accessor["min"] = exact(&min.to_array());
             accessor["max"] = exact(&max.to_array());
         }
-        if !indices.is_empty() {
-            let index_view = self.view(&u32_bytes(indices), None);
-            let flat: Vec<f32> = values.iter().flat_map(|v| v.to_array()).collect();
-            let value_view = self.view(&f32_bytes(&flat), None);
-            accessor["sparse"] = json!({
-                "count": indices.len(),
-                "indices": { "bufferView": index_view, "componentType": UNSIGNED_INT },
-                "values": { "bufferView": value_view },
-            });
-        }
+        // An all-zero target still gets one explicit (zero) entry: some readers reject an
+        // accessor with neither a buffer view nor sparse data, although the spec allows it.
+        let (indices, values) = if indices.is_empty() {
+            (&[0u32][..], &[Vec3::ZERO][..])
+        } else {
+            (indices, values)
+        };
+        let index_view = self.view(&u32_bytes(indices), None);
+        let flat: Vec<f32> = values.iter().flat_map(|v| v.to_array()).collect();
+        let value_view = self.view(&f32_bytes(&flat), None);
+        accessor["sparse"] = json!({
+            "count": indices.len(),
+            "indices": { "bufferView": index_view, "componentType": UNSIGNED_INT },
+            "values": { "bufferView": value_view },
+        });
         self.accessor(accessor)
     }
 }
@@ -365,7 +368,7 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
     while json.len() % 4 != 0 {
         json.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();

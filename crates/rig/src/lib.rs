@@ -47,5 +47,7 @@ pub use character::{
     Aabb, Blendshape, BlendshapeId, Character, CharacterParts, Material, MaterialId, ModelError,
     Part, SPARSE_DELTA_THRESHOLD, Texture,
 };
+/// The vector types of the public API, re-exported so users need not match versions.
+pub use glam;
 pub use graph::EdgeGraph;
 pub use pose::Pose;

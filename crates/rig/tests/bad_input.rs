@@ -2,7 +2,13 @@
 //!
 //! Each case here is also written to `tests/corpus/` (with FACEANIM_WRITE_CORPUS=1), the seed
 //! corpus that `fuzz_import.rs` replays and mutates.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
+)]
 
 mod support;
 

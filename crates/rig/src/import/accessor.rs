@@ -123,10 +123,10 @@ pub(crate) fn read_floats(
         problem,
     };
     let dims = accessor.dimensions();
-    if let Some(expected) = expected {
-        if dims != expected {
-            return Err(fail(format!("type is {dims:?}, expected {expected:?}")));
-        }
+    if let Some(expected) = expected
+        && dims != expected
+    {
+        return Err(fail(format!("type is {dims:?}, expected {expected:?}")));
     }
     let count = accessor.count();
     if count > MAX_VERTICES {

@@ -80,14 +80,13 @@ fn check_position_indices(root: &gltf::json::Root) -> Result<(), ImportErrorKind
             if let Some(index) = primitive
                 .attributes
                 .get(&Checked::Valid(gltf::json::mesh::Semantic::Positions))
+                && index.value() >= root.accessors.len()
             {
-                if index.value() >= root.accessors.len() {
-                    return Err(ImportErrorKind::InvalidJson(format!(
-                        "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {} does not exist ({} accessors)",
-                        index.value(),
-                        root.accessors.len()
-                    )));
-                }
+                return Err(ImportErrorKind::InvalidJson(format!(
+                    "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {} does not exist ({} accessors)",
+                    index.value(),
+                    root.accessors.len()
+                )));
             }
         }
     }
@@ -246,12 +245,13 @@ fn percent_decode(s: &str) -> String {
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
     while i < bytes.len() {
-        if bytes[i] == b'%' && i + 2 < bytes.len() {
-            if let (Some(hi), Some(lo)) = (hex(bytes[i + 1]), hex(bytes[i + 2])) {
-                out.push((hi * 16 + lo) as u8);
-                i += 3;
-                continue;
-            }
+        if bytes[i] == b'%'
+            && i + 2 < bytes.len()
+            && let (Some(hi), Some(lo)) = (hex(bytes[i + 1]), hex(bytes[i + 2]))
+        {
+            out.push((hi * 16 + lo) as u8);
+            i += 3;
+            continue;
         }
         out.push(bytes[i]);
         i += 1;

@@ -1,6 +1,13 @@
 //! Shared test fixtures: the ICT heads from `../shared`, a small synthetic face, and a minimal
 //! glTF writer for building the file layouts other tools produce.
-#![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+#![allow(
+    dead_code,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
+)]
 
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -106,7 +113,7 @@ pub struct GltfBuilder {
 
 impl GltfBuilder {
     pub fn view(&mut self, bytes: &[u8]) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         self.views
@@ -178,11 +185,11 @@ impl GltfBuilder {
     pub fn glb(self, mut root: Value) -> Vec<u8> {
         self.attach(&mut root, json!({"byteLength": self.bin.len()}));
         let mut json = serde_json::to_vec(&root).unwrap();
-        while json.len() % 4 != 0 {
+        while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }
         let mut bin = self.bin;
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let total = 28 + json.len() + bin.len();

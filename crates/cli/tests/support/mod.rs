@@ -1,0 +1,89 @@
+//! Running the `faceanim` binary and the external tools the tests check its files with.
+#![allow(
+    dead_code,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
+)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// `../shared/<rel>` beside the repository (override with FACEANIM_SHARED).
+pub fn shared(rel: &str) -> PathBuf {
+    let base = std::env::var_os("FACEANIM_SHARED")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo().join("../shared"));
+    let path = base.join(rel);
+    assert!(
+        path.exists(),
+        "test data {} is missing: the shared/ folder must sit beside the repository",
+        path.display()
+    );
+    path
+}
+
+/// Where tests leave files worth looking at (`test-output/` in the repository, git-ignored).
+pub fn output_dir(test: &str) -> PathBuf {
+    let dir = repo().join("test-output").join(test);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+pub fn faceanim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_faceanim"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+pub fn faceanim_ok(args: &[&str]) -> String {
+    let out = faceanim(args);
+    assert!(
+        out.status.success(),
+        "faceanim {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs the Khronos glTF-Validator (npm `gltf-validator`, installed by scripts/setup.sh) and
+/// returns its report.
+pub fn validate_gltf(file: &Path) -> serde_json::Value {
+    let script = repo().join("tools/validate-gltf.mjs");
+    assert!(
+        repo().join("tools/node_modules/gltf-validator").exists(),
+        "the glTF-Validator is not installed: run scripts/setup.sh (npm ci in tools/)"
+    );
+    let out = Command::new("node")
+        .arg(&script)
+        .arg(file)
+        .output()
+        .expect("node is needed to run the glTF-Validator");
+    assert!(
+        out.status.code().is_some_and(|c| c <= 1),
+        "validator crashed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// Asserts the validator reports no errors, printing the first messages if it does.
+pub fn assert_valid_gltf(file: &Path) -> serde_json::Value {
+    let report = validate_gltf(file);
+    let errors = report["issues"]["numErrors"].as_u64().unwrap();
+    assert_eq!(
+        errors,
+        0,
+        "{}: glTF-Validator errors: {:#}",
+        file.display(),
+        report["issues"]["messages"]
+    );
+    report
+}

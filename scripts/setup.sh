@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Installs what the test suite checks faceanim's files with, when it is missing:
+#   - Blender 3.4 and NumPy for its glTF importer (Debian packages), to open exports as users do;
+#   - Node.js and the Khronos glTF-Validator (npm, pinned in tools/package-lock.json).
+# Safe to run again: it installs only what is not there.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=()
+command -v blender >/dev/null 2>&1 || packages+=(blender)
+dpkg -s python3-numpy >/dev/null 2>&1 || packages+=(python3-numpy)
+command -v node >/dev/null 2>&1 || packages+=(nodejs)
+command -v npm >/dev/null 2>&1 || packages+=(npm)
+if ((${#packages[@]})); then
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  echo "setup: installing ${packages[*]} (apt-get)"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${packages[@]}" >/dev/null
+fi
+
+if [ ! -d tools/node_modules/gltf-validator ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
+  echo "setup: installing the glTF-Validator (npm ci in tools/)"
+  (cd tools && npm ci --no-audit --no-fund --loglevel=error)
+fi
