@@ -611,6 +611,38 @@ impl Character {
             .collect()
     }
 
+    /// This character with `extra` blendshapes appended (for example the corrective targets an
+    /// animation export bakes). Existing ids, symmetry pairs and derived data are kept; only
+    /// the new blendshapes are checked and get normal deltas.
+    ///
+    /// # Errors
+    /// A [`ModelError`] naming the first bad extra blendshape.
+    pub fn with_extra_blendshapes(&self, extra: Vec<Blendshape>) -> Result<Character, ModelError> {
+        for shape in &extra {
+            check_blendshape(shape, self.vertex_count())?;
+        }
+        let mut out = self.clone();
+        let normal_deltas = normals::blendshape_normal_deltas(
+            &self.positions,
+            &self.triangles,
+            &self.graph,
+            &extra,
+        );
+        for (shape, normals) in extra.iter().zip(&normal_deltas) {
+            out.runs
+                .positions
+                .push(Runs::of(shape.indices(), shape.deltas()));
+            out.runs
+                .normals
+                .push(Runs::of(&normals.indices, &normals.deltas));
+        }
+        let mut all = std::mem::take(&mut out.blendshapes);
+        all.extend(extra);
+        out.blendshapes = unique_names(all);
+        out.normal_deltas.extend(normal_deltas);
+        Ok(out)
+    }
+
     /// The parts needed to rebuild this character with changes (for example extra blendshapes).
     #[must_use]
     pub fn to_parts(&self) -> CharacterParts {
