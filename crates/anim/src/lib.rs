@@ -15,6 +15,8 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod metrics;
+
 use faceanim_rig::Character;
 use faceanim_rig::export::MorphAnimation;
 use serde::{Deserialize, Serialize};

@@ -380,12 +380,26 @@ mod tests {
     #[test]
     fn numbers_json_cannot_hold_are_syntax_errors() {
         let json = br#"{"version": 1, "strokes": [{"samples": [{"t": 0, "p": [0, 1e999, 0]}, {"t": 1, "p": [0, 0, 0]}]}]}"#;
-        assert!(matches!(Project::from_json(json), Err(ProjectError::Syntax(m)) if m.contains("number out of range")));
+        assert!(
+            matches!(Project::from_json(json), Err(ProjectError::Syntax(m)) if m.contains("number out of range"))
+        );
         // Values built in code (the studio's API) are checked too.
-        let samples = vec![Sample { t: 0.0, p: Vec3::NAN }, Sample { t: f32::NAN, p: Vec3::ZERO }];
+        let samples = vec![
+            Sample {
+                t: 0.0,
+                p: Vec3::NAN,
+            },
+            Sample {
+                t: f32::NAN,
+                p: Vec3::ZERO,
+            },
+        ];
         assert_eq!(
             Stroke::new(samples, "strokes[0]"),
-            Err(vec!["strokes[0].samples[0].p: not a finite position".to_owned(), "strokes[0].samples[1].t: not a finite number".to_owned()])
+            Err(vec![
+                "strokes[0].samples[0].p: not a finite position".to_owned(),
+                "strokes[0].samples[1].t: not a finite number".to_owned()
+            ])
         );
     }
 
