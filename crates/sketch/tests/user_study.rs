@@ -1,7 +1,13 @@
 //! The four tasks of the paper's user study (section 4.2) on the ICT head, with strokes drawn
 //! in code; each baked clip is compared with the intended reference animation by DTW, and arcs
 //! and timing are checked where the task is about them.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::float_cmp, reason = "tests")]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests"
+)]
 
 mod support;
 
@@ -13,7 +19,13 @@ use glam::Vec3;
 use support::{bow, draw, handle_vertex, ict, id, line, position, uniform};
 
 fn project(settings: Settings, strokes: Vec<faceanim_sketch::StrokeFile>) -> Project {
-    Project::from_file(ProjectFile { version: 1, fps: 30.0, settings, strokes }).unwrap()
+    Project::from_file(ProjectFile {
+        version: 1,
+        fps: 30.0,
+        settings,
+        strokes,
+    })
+    .unwrap()
 }
 
 fn sketch(project: &Project) -> Sketch<'static> {
@@ -24,7 +36,11 @@ fn sketch(project: &Project) -> Sketch<'static> {
 
 /// A reference clip over the character's blendshapes from per-name weight curves.
 fn reference(frames: usize, curves: &[(&str, &dyn Fn(f32) -> f32)]) -> Clip {
-    let names: Vec<String> = ict().blendshapes().iter().map(|b| b.name().to_owned()).collect();
+    let names: Vec<String> = ict()
+        .blendshapes()
+        .iter()
+        .map(|b| b.name().to_owned())
+        .collect();
     let frames = (0..frames)
         .map(|f| {
             let mut row = vec![0.0; names.len()];
@@ -34,7 +50,12 @@ fn reference(frames: usize, curves: &[(&str, &dyn Fn(f32) -> f32)]) -> Clip {
             row
         })
         .collect();
-    Clip { fps: 30.0, blendshapes: names, frames, head: None }
+    Clip {
+        fps: 30.0,
+        blendshapes: names,
+        frames,
+        head: None,
+    }
 }
 
 fn weight(clip: &Clip, frame: usize, name: &str) -> f32 {
@@ -56,40 +77,87 @@ fn task_1_left_eye_blink_with_two_strokes() {
     let sketch = sketch(&project(Settings::default(), vec![down, up]));
     let actions: Vec<_> = sketch.actions().collect();
     assert_eq!(actions.len(), 2);
-    assert_eq!(actions[0].1.sides[0].target, Target::Blendshape(id("eyeBlink_L")));
-    assert!(actions[0].1.sides[0].weight > 0.95, "{}", actions[0].1.sides[0].weight);
-    assert_eq!(actions[1].1.previous, Some(actions[0].0), "the second stroke continues the first");
+    assert_eq!(
+        actions[0].1.sides[0].target,
+        Target::Blendshape(id("eyeBlink_L"))
+    );
+    assert!(
+        actions[0].1.sides[0].weight > 0.95,
+        "{}",
+        actions[0].1.sides[0].weight
+    );
+    assert_eq!(
+        actions[1].1.previous,
+        Some(actions[0].0),
+        "the second stroke continues the first"
+    );
     assert_eq!(actions[1].1.sides[0].target, Target::Neutral);
-    assert_eq!(actions[1].1.start_frame, 9.0, "it starts when the first ends (0.3 s at 30 fps)");
+    assert_eq!(
+        actions[1].1.start_frame, 9.0,
+        "it starts when the first ends (0.3 s at 30 fps)"
+    );
 
     let clip = sketch.bake_clip();
     assert_eq!(clip.frames.len(), 22);
-    let expected = reference(22, &[("eyeBlink_L", &|f| if f <= 9.0 { f / 9.0 } else { (1.0 - (f - 9.0) / 12.0).max(0.0) })]);
+    let expected = reference(
+        22,
+        &[("eyeBlink_L", &|f| {
+            if f <= 9.0 {
+                f / 9.0
+            } else {
+                (1.0 - (f - 9.0) / 12.0).max(0.0)
+            }
+        })],
+    );
     let c = compare(&clip, &expected);
     assert!(c.dtw_per_frame < 0.1, "{c:?}");
     assert!(weight(&clip, 9, "eyeBlink_L") > 0.95);
     assert!(weight(&clip, 21, "eyeBlink_L") < 0.01);
-    assert!(weight(&clip, 9, "eyeBlink_R") == 0.0, "without symmetry the right eye stays open");
+    assert!(
+        weight(&clip, 9, "eyeBlink_R") == 0.0,
+        "without symmetry the right eye stays open"
+    );
 }
 
 #[test]
 fn task_2_smile_with_raised_brows_on_a_curved_path_with_symmetry() {
     let corner = handle_vertex("mouthSmile_L");
-    let smile_end = position(corner) + ict().blendshape(id("mouthSmile_L")).unwrap().delta_of(corner);
+    let smile_end = position(corner)
+        + ict()
+            .blendshape(id("mouthSmile_L"))
+            .unwrap()
+            .delta_of(corner);
     let brow = handle_vertex("browOuterUp_L");
-    let brow_end = position(brow) + ict().blendshape(id("browOuterUp_L")).unwrap().delta_of(brow);
+    let brow_end = position(brow)
+        + ict()
+            .blendshape(id("browOuterUp_L"))
+            .unwrap()
+            .delta_of(brow);
     // The corner sweeps outwards and up in a clear bow (5 mm off the chord).
     let chord = smile_end - position(corner);
     let bulge = chord.cross(Vec3::Z).normalize() * -0.005;
     let smile = draw(0.6, bow(near(corner), smile_end, bulge), uniform);
     let brows = draw(0.5, line(near(brow), brow_end), uniform);
-    let settings = Settings { symmetry: true, ..Settings::default() };
+    let settings = Settings {
+        symmetry: true,
+        ..Settings::default()
+    };
     let sketch = sketch(&project(settings, vec![smile, brows]));
     let actions: Vec<_> = sketch.actions().map(|(_, a)| a).collect();
     assert_eq!(actions.len(), 2);
     let targets: Vec<Target> = actions[0].sides.iter().map(|s| s.target).collect();
-    assert_eq!(targets, [Target::Blendshape(id("mouthSmile_L")), Target::Blendshape(id("mouthSmile_R"))], "mirrored");
-    assert_eq!(actions[1].sides[1].target, Target::Blendshape(id("browOuterUp_R")));
+    assert_eq!(
+        targets,
+        [
+            Target::Blendshape(id("mouthSmile_L")),
+            Target::Blendshape(id("mouthSmile_R"))
+        ],
+        "mirrored"
+    );
+    assert_eq!(
+        actions[1].sides[1].target,
+        Target::Blendshape(id("browOuterUp_R"))
+    );
 
     let clip = sketch.bake_clip();
     let frames = clip.frames.len();
@@ -98,26 +166,55 @@ fn task_2_smile_with_raised_brows_on_a_curved_path_with_symmetry() {
     let brow_ramp = ramp(15.0);
     let expected = reference(
         frames,
-        &[("mouthSmile_L", &smile_ramp), ("mouthSmile_R", &smile_ramp), ("browOuterUp_L", &brow_ramp), ("browOuterUp_R", &brow_ramp)],
+        &[
+            ("mouthSmile_L", &smile_ramp),
+            ("mouthSmile_R", &smile_ramp),
+            ("browOuterUp_L", &brow_ramp),
+            ("browOuterUp_R", &brow_ramp),
+        ],
     );
     let c = compare(&clip, &expected);
     assert!(c.dtw_per_frame < 0.25, "{c:?}");
     let last = frames - 1;
-    for name in ["mouthSmile_L", "mouthSmile_R", "browOuterUp_L", "browOuterUp_R"] {
-        assert!(weight(&clip, last, name) > 0.9, "{name}: {}", weight(&clip, last, name));
+    for name in [
+        "mouthSmile_L",
+        "mouthSmile_R",
+        "browOuterUp_L",
+        "browOuterUp_R",
+    ] {
+        assert!(
+            weight(&clip, last, name) > 0.9,
+            "{name}: {}",
+            weight(&clip, last, name)
+        );
     }
 
     // The arc: halfway through, the corner is on the circle through the stroke, not the chord.
     let action = actions[0];
     let arc = Sketch::arc(action, 0).expect("a bowed stroke makes an arc");
-    let half_frame = (0..=18).map(|f| f as f32).min_by(|a, b| (action.progress(*a) - 0.5).abs().total_cmp(&(action.progress(*b) - 0.5).abs())).unwrap();
+    let half_frame = (0..=18)
+        .map(|f| f as f32)
+        .min_by(|a, b| {
+            (action.progress(*a) - 0.5)
+                .abs()
+                .total_cmp(&(action.progress(*b) - 0.5).abs())
+        })
+        .unwrap();
     let s = action.progress(half_frame);
     let at = sketch.frame(half_frame).positions(ict())[corner as usize];
     let side = &action.sides[0];
     let on_chord = side.start_position.lerp(side.c, s);
     let on_arc = arc.point(s) + (side.start_position - side.a) * (1.0 - s);
-    assert!(at.distance(on_arc) < 2e-4, "{} m from the arc", at.distance(on_arc));
-    assert!(at.distance(on_chord) > 2e-3, "only {} m from the chord", at.distance(on_chord));
+    assert!(
+        at.distance(on_arc) < 2e-4,
+        "{} m from the arc",
+        at.distance(on_arc)
+    );
+    assert!(
+        at.distance(on_chord) > 2e-3,
+        "only {} m from the chord",
+        at.distance(on_chord)
+    );
     // The mirrored corner follows the mirrored arc.
     let mirror = ict().symmetry().mirror_vertex(corner).unwrap();
     let plane = ict().symmetry().plane().unwrap();
@@ -141,39 +238,71 @@ fn task_3_mouth_opening_that_starts_slowly_and_speeds_up() {
     assert!((mid - 0.25).abs() < 0.05, "{mid}");
     let early_step = weight(&clip, 5, "jawOpen") - weight(&clip, 4, "jawOpen");
     let late_step = weight(&clip, 29, "jawOpen") - weight(&clip, 28, "jawOpen");
-    assert!(late_step > 4.0 * early_step, "{early_step} then {late_step}");
+    assert!(
+        late_step > 4.0 * early_step,
+        "{early_step} then {late_step}"
+    );
     let expected = reference(31, &[("jawOpen", &|f: f32| (f / 30.0).powi(2))]);
     let c = compare(&clip, &expected);
     assert!(c.dtw_per_frame < 0.05 && c.mae.unwrap() < 0.01, "{c:?}");
     // Drawn at constant speed instead, the same stroke is linear: the drawing is the easing.
     let steady = draw(1.0, line(near(chin), open), uniform);
-    let linear = Sketch::from_project(ict(), &project(Settings::default(), vec![steady])).0.bake_clip();
+    let linear = Sketch::from_project(ict(), &project(Settings::default(), vec![steady]))
+        .0
+        .bake_clip();
     assert!((weight(&linear, 15, "jawOpen") - 0.5).abs() < 0.05);
 }
 
 #[test]
 fn task_4_chain_neutral_smile_sad() {
     let corner = handle_vertex("mouthSmile_L");
-    let smile_end = position(corner) + ict().blendshape(id("mouthSmile_L")).unwrap().delta_of(corner);
-    let frown_end = position(corner) + ict().blendshape(id("mouthFrown_L")).unwrap().delta_of(corner);
+    let smile_end = position(corner)
+        + ict()
+            .blendshape(id("mouthSmile_L"))
+            .unwrap()
+            .delta_of(corner);
+    let frown_end = position(corner)
+        + ict()
+            .blendshape(id("mouthFrown_L"))
+            .unwrap()
+            .delta_of(corner);
     let to_smile = draw(0.5, line(near(corner), smile_end), uniform);
     let to_frown = draw(0.5, line(smile_end, frown_end), uniform);
     let sketch = sketch(&project(Settings::default(), vec![to_smile, to_frown]));
     let actions: Vec<_> = sketch.actions().map(|(_, a)| a).collect();
-    assert_eq!(actions[0].sides[0].target, Target::Blendshape(id("mouthSmile_L")));
-    assert_eq!(actions[1].sides[0].target, Target::Blendshape(id("mouthFrown_L")));
-    assert_eq!(actions[1].sides[0].reference, actions[0].sides[0].reference, "the chain keeps its reference vertex");
+    assert_eq!(
+        actions[0].sides[0].target,
+        Target::Blendshape(id("mouthSmile_L"))
+    );
+    assert_eq!(
+        actions[1].sides[0].target,
+        Target::Blendshape(id("mouthFrown_L"))
+    );
+    assert_eq!(
+        actions[1].sides[0].reference, actions[0].sides[0].reference,
+        "the chain keeps its reference vertex"
+    );
     let clip = sketch.bake_clip();
     assert_eq!(clip.frames.len(), 31);
     // The smile fades out as the frown fades in.
     assert!(weight(&clip, 15, "mouthSmile_L") > 0.95);
-    assert!((weight(&clip, 22, "mouthSmile_L") + weight(&clip, 22, "mouthFrown_L") - 1.0).abs() < 0.05);
+    assert!(
+        (weight(&clip, 22, "mouthSmile_L") + weight(&clip, 22, "mouthFrown_L") - 1.0).abs() < 0.05
+    );
     assert!(weight(&clip, 30, "mouthSmile_L") < 0.01 && weight(&clip, 30, "mouthFrown_L") > 0.95);
     let expected = reference(
         31,
         &[
-            ("mouthSmile_L", &|f: f32| if f <= 15.0 { f / 15.0 } else { 1.0 - (f - 15.0) / 15.0 }),
-            ("mouthFrown_L", &|f: f32| if f <= 15.0 { 0.0 } else { (f - 15.0) / 15.0 }),
+            ("mouthSmile_L", &|f: f32| {
+                if f <= 15.0 {
+                    f / 15.0
+                } else {
+                    1.0 - (f - 15.0) / 15.0
+                }
+            }),
+            ("mouthFrown_L", &|f: f32| {
+                if f <= 15.0 { 0.0 } else { (f - 15.0) / 15.0 }
+            }),
         ],
     );
     let c = compare(&clip, &expected);
