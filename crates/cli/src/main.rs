@@ -52,6 +52,35 @@ enum Command {
         #[arg(long)]
         clip: Option<PathBuf>,
     },
+    /// Replay a strokes file (DESIGN.md format: samples, handle edits, settings) on a character
+    /// and write the animation: a GLB whose extra morph targets carry arcs and exaggerations,
+    /// and optionally the baked clip of blendshape weights.
+    ///
+    /// Example: faceanim sketch head.glb take.strokes.json -o take.glb --clip take.json
+    Sketch {
+        /// The character: .glb, .gltf, or a folder of OBJ files.
+        character: PathBuf,
+        /// The strokes file.
+        strokes: PathBuf,
+        /// Where to write the animated .glb.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also write the baked clip (one row of weights per frame) here.
+        #[arg(long)]
+        clip: Option<PathBuf>,
+    },
+    /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
+    ///
+    /// Example: faceanim eval take.json reference.json --json
+    Eval {
+        /// The clip to judge.
+        a: PathBuf,
+        /// The reference clip.
+        b: PathBuf,
+        /// Print machine-readable JSON.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -139,7 +168,75 @@ fn run(command: Command) -> anyhow::Result<()> {
             );
             Ok(())
         }
+        Command::Sketch {
+            character,
+            strokes,
+            output,
+            clip,
+        } => sketch(&character, &strokes, &output, clip.as_deref()),
+        Command::Eval { a, b, json } => {
+            let (clip_a, clip_b) = (
+                faceanim_files::load_clip(&a)?,
+                faceanim_files::load_clip(&b)?,
+            );
+            let result = faceanim_anim::metrics::compare(&clip_a, &clip_b);
+            if json {
+                println!("{}", serde_json::to_string(&result)?);
+            } else {
+                println!(
+                    "DTW distance        {:.4} ({:.4} per frame)",
+                    result.dtw, result.dtw_per_frame
+                );
+                println!(
+                    "jitter (RMS change) {:.4} vs {:.4} (difference {:+.4})",
+                    result.jitter_a, result.jitter_b, result.jitter_diff
+                );
+                match result.mae {
+                    Some(mae) => println!("MAE                 {mae:.4}"),
+                    None => {
+                        println!("MAE                 n/a (the clips differ in frames or names)")
+                    }
+                }
+            }
+            Ok(())
+        }
     }
+}
+
+fn sketch(
+    character: &std::path::Path,
+    strokes: &std::path::Path,
+    output: &std::path::Path,
+    clip: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
+    let character = load(character)?.character;
+    let bytes = faceanim_files::read_bytes(strokes)?;
+    let project = faceanim_sketch::Project::from_json(&bytes)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", strokes.display()))?;
+    let (sketch, warnings) = faceanim_sketch::Sketch::from_project(&character, &project);
+    for warning in &warnings {
+        eprintln!("warning: {}: {warning}", strokes.display());
+    }
+    let name = strokes
+        .file_stem()
+        .map_or_else(|| "sketch".to_owned(), |s| s.to_string_lossy().into_owned());
+    let baked = sketch.bake(&name)?;
+    let glb =
+        faceanim_rig::export::export_glb(&baked.character, std::slice::from_ref(&baked.animation))?;
+    faceanim_files::write_atomic(output, &glb)?;
+    let baked_clip = sketch.bake_clip();
+    if let Some(path) = clip {
+        faceanim_files::write_atomic(path, baked_clip.to_json().as_bytes())?;
+    }
+    eprintln!(
+        "wrote {} ({} actions, {} frames at {} fps, {} extra targets for arcs and exaggerations)",
+        output.display(),
+        sketch.actions().count(),
+        baked_clip.frames.len(),
+        sketch.fps(),
+        baked.character.blendshapes().len() - character.blendshapes().len()
+    );
+    Ok(())
 }
 
 fn load(path: &std::path::Path) -> anyhow::Result<faceanim_rig::import::Imported> {

@@ -116,7 +116,14 @@ impl Sketch<'_> {
                 let radius = u.length().max(f64::MIN_POSITIVE);
                 let theta = f64::from(arc.angle);
                 let basis = factor(&members, theta, &progress, tolerance / radius);
-                for (k, (frame_weights, coefficients)) in basis.into_iter().enumerate() {
+                for (
+                    k,
+                    ArcBasis {
+                        frame_weights,
+                        coefficients,
+                    },
+                ) in basis.into_iter().enumerate()
+                {
                     let mut weights = vec![0.0; frames];
                     for (&f, &c) in inside.iter().zip(&frame_weights) {
                         weights[f] = c as f32;
@@ -166,16 +173,18 @@ impl Sketch<'_> {
     }
 }
 
+/// One basis vector of a factored swing: its weight at each frame, and per member vertex the
+/// coefficients `(α, β)` of the shared vectors `u` and `v`.
+struct ArcBasis {
+    frame_weights: Vec<f64>,
+    coefficients: Vec<(f64, f64)>,
+}
+
 /// Factors the swing coefficients `f(θκ, s)`, `g(θκ, s)` of `members` over the frames'
 /// progress values: returns for each basis vector its per-frame weights and, per member,
 /// the `(α, β)` such that `f ≈ Σ α·c` and `g ≈ Σ β·c`, with error below `tolerance` (in units
 /// of the arc's radius; `f` and `g` errors each get half).
-fn factor(
-    members: &[(u32, f32)],
-    theta: f64,
-    progress: &[f64],
-    tolerance: f64,
-) -> Vec<(Vec<f64>, Vec<(f64, f64)>)> {
+fn factor(members: &[(u32, f32)], theta: f64, progress: &[f64], tolerance: f64) -> Vec<ArcBasis> {
     let frames = progress.len();
     // Columns depend on κ only; share them between vertices with (nearly) equal κ.
     let mut keys: Vec<u32> = members.iter().map(|&(_, k)| (k * 1e6) as u32).collect();
@@ -232,6 +241,9 @@ fn factor(
     basis
         .into_iter()
         .enumerate()
-        .map(|(k, c)| (c, coefficients.iter().map(|per| per[k]).collect()))
+        .map(|(k, c)| ArcBasis {
+            frame_weights: c,
+            coefficients: coefficients.iter().map(|per| per[k]).collect(),
+        })
         .collect()
 }

@@ -299,7 +299,6 @@ impl<'c> Sketch<'c> {
     }
 
     /// The action of each input, or why there is none.
-    #[must_use]
     pub fn results(&self) -> &[Result<Action, Rejected>] {
         &self.actions
     }
@@ -537,46 +536,44 @@ impl<'c> Sketch<'c> {
                 if symmetric
                     && let (Some(plane), Some(partner)) =
                         (self.character.symmetry().plane(), partner)
-                {
-                    if let Some(mirror_ref) = self
+                    && let Some(mirror_ref) = self
                         .character
                         .symmetry()
                         .mirror_vertex(found.reference)
                         .filter(|&m| m != found.reference)
-                    {
-                        let mirror_exaggeration = plane.reflect_vector(exaggeration);
-                        let mirror_target_position = match partner {
-                            Target::Blendshape(id) => {
-                                let delta = self
-                                    .character
-                                    .blendshape(id)
-                                    .map_or(Vec3::ZERO, |s| s.delta_of(mirror_ref));
-                                if to.weights.iter().all(|(b, _)| *b != id) {
-                                    to.weights.push((id, weight));
-                                }
-                                plane.reflect_point(found.base) + delta
+                {
+                    let mirror_exaggeration = plane.reflect_vector(exaggeration);
+                    let mirror_target_position = match partner {
+                        Target::Blendshape(id) => {
+                            let delta = self
+                                .character
+                                .blendshape(id)
+                                .map_or(Vec3::ZERO, |s| s.delta_of(mirror_ref));
+                            if to.weights.iter().all(|(b, _)| *b != id) {
+                                to.weights.push((id, weight));
                             }
-                            _ => plane.reflect_point(found.base),
-                        };
-                        self.spread(mirror_ref, mirror_exaggeration, &mut offsets);
-                        let (ma, mb, mc) = (
-                            plane.reflect_point(a),
-                            plane.reflect_point(b),
-                            plane.reflect_point(c),
-                        );
-                        sides.push(Side {
-                            reference: mirror_ref,
-                            target: partner,
-                            weight,
-                            target_position: mirror_target_position,
-                            exaggeration: mirror_exaggeration,
-                            a: ma,
-                            b: mb,
-                            c: mc,
-                            path: Path::through(ma, mb, mc, self.resolved.snap_distance),
-                            start_position: plane.reflect_point(start_position),
-                        });
-                    }
+                            plane.reflect_point(found.base) + delta
+                        }
+                        _ => plane.reflect_point(found.base),
+                    };
+                    self.spread(mirror_ref, mirror_exaggeration, &mut offsets);
+                    let (ma, mb, mc) = (
+                        plane.reflect_point(a),
+                        plane.reflect_point(b),
+                        plane.reflect_point(c),
+                    );
+                    sides.push(Side {
+                        reference: mirror_ref,
+                        target: partner,
+                        weight,
+                        target_position: mirror_target_position,
+                        exaggeration: mirror_exaggeration,
+                        a: ma,
+                        b: mb,
+                        c: mc,
+                        path: Path::through(ma, mb, mc, self.resolved.snap_distance),
+                        start_position: plane.reflect_point(start_position),
+                    });
                 }
             }
             StrokeMode::Multi => {

@@ -232,6 +232,7 @@ impl Resolved {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp, reason = "these values are exact by construction")]
 mod tests {
     use super::*;
 

@@ -76,6 +76,7 @@ impl Timing {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp, reason = "these values are exact by construction")]
 mod tests {
     use super::*;
     use crate::project::Sample;

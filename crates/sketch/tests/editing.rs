@@ -327,8 +327,7 @@ fn path_selection_prefers_the_candidate_whose_motion_the_stroke_follows() {
             ..Settings::default()
         };
         let sketch = Sketch::from_project(&character, &project(settings, strokes.clone())).0;
-        let target = sketch.actions().next().unwrap().1.sides[0].target;
-        target
+        sketch.actions().next().unwrap().1.sides[0].target
     };
     assert!(
         end.distance(start + Vec3::new(0.007, 0.007, 0.0))

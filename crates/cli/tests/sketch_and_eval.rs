@@ -1,0 +1,182 @@
+//! `faceanim sketch` and `faceanim eval` as a user runs them.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests"
+)]
+
+mod support;
+
+use faceanim_rig::glam::Vec3;
+use serde_json::{Value, json};
+use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir, shared};
+
+/// A stroke from the vertex a blendshape moves most to where it moves it, bowed, at 90 Hz.
+fn stroke_for(character: &faceanim_rig::Character, shape: &str, seconds: f32, bow: f32) -> Value {
+    let id = character.find_blendshape(shape).unwrap();
+    let b = character.blendshape(id).unwrap();
+    let k = (0..b.moved())
+        .max_by(|&x, &y| b.deltas()[x].length().total_cmp(&b.deltas()[y].length()))
+        .unwrap();
+    let v = b.indices()[k];
+    let start = character.positions()[v as usize];
+    let end = start + b.deltas()[k];
+    let side = (end - start).cross(Vec3::Z).normalize_or_zero() * bow;
+    let n = (seconds * 90.0) as usize;
+    let samples: Vec<Value> = (0..=n)
+        .map(|i| {
+            let s = i as f32 / n as f32;
+            let p = start.lerp(end, s) + side * 4.0 * s * (1.0 - s);
+            json!({"t": i as f32 / 90.0, "p": [p.x, p.y, p.z]})
+        })
+        .collect();
+    json!({ "samples": samples })
+}
+
+#[test]
+fn sketch_writes_a_valid_animated_glb_and_a_clip() {
+    let dir = output_dir("sketch-cli");
+    let ict_path = shared("characters/ict-face.glb");
+    let ict = faceanim_rig::import::import_gltf(
+        &std::fs::read(&ict_path).unwrap(),
+        "ict",
+        &faceanim_rig::import::NoExternalResources,
+    )
+    .unwrap()
+    .character;
+    let strokes = json!({
+        "version": 1, "fps": 30,
+        "settings": {"symmetry": true, "falloff": "smooth"},
+        "strokes": [
+            stroke_for(&ict, "mouthSmile_L", 0.6, 0.004),
+            stroke_for(&ict, "jawOpen", 0.8, 0.01),
+            {"samples": [{"t": 0.0, "p": [0.0, 0.0, 2.0]}, {"t": 0.1, "p": [0.0, 0.1, 2.0]}]}
+        ]
+    });
+    let strokes_path = dir.join("take.strokes.json");
+    std::fs::write(&strokes_path, serde_json::to_vec_pretty(&strokes).unwrap()).unwrap();
+    let glb = dir.join("take.glb");
+    let clip = dir.join("take.json");
+    let out = faceanim(&[
+        "sketch",
+        ict_path.to_str().unwrap(),
+        strokes_path.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+        "--clip",
+        clip.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // The stroke two metres from the face is skipped with a warning that names it.
+    assert!(
+        stderr.contains("strokes[2]: skipped, it starts"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("2 actions"), "{stderr}");
+
+    let report = assert_valid_gltf(&glb);
+    assert_eq!(report["info"]["animationCount"], 1);
+    let baked: Value = serde_json::from_slice(&std::fs::read(&clip).unwrap()).unwrap();
+    assert_eq!(baked["fps"], 30.0);
+    assert_eq!(baked["blendshapes"].as_array().unwrap().len(), 53);
+    let frames = baked["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 25, "0.8 s at 30 fps: frames 0..=24");
+    let smile_l = baked["blendshapes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n == "mouthSmile_L")
+        .unwrap();
+    let smile_r = baked["blendshapes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n == "mouthSmile_R")
+        .unwrap();
+    let last = frames.last().unwrap();
+    assert!(
+        last[smile_l].as_f64().unwrap() > 0.9 && last[smile_r].as_f64().unwrap() > 0.9,
+        "symmetry mirrored the smile"
+    );
+
+    // eval: a clip against itself, and against a delayed copy.
+    let same: Value = serde_json::from_str(&faceanim_ok(&[
+        "eval",
+        clip.to_str().unwrap(),
+        clip.to_str().unwrap(),
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(
+        same,
+        json!({"dtw": 0.0, "dtw_per_frame": 0.0, "jitter_a": same["jitter_a"], "jitter_b": same["jitter_a"], "jitter_diff": 0.0, "mae": 0.0})
+    );
+    let mut delayed = baked.clone();
+    let rows = delayed["frames"].as_array_mut().unwrap();
+    let first = rows[0].clone();
+    for _ in 0..10 {
+        rows.insert(0, first.clone());
+    }
+    let delayed_path = dir.join("delayed.json");
+    std::fs::write(&delayed_path, serde_json::to_vec(&delayed).unwrap()).unwrap();
+    let shifted: Value = serde_json::from_str(&faceanim_ok(&[
+        "eval",
+        delayed_path.to_str().unwrap(),
+        clip.to_str().unwrap(),
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(shifted["mae"], Value::Null, "different frame counts");
+    assert!(
+        shifted["dtw"].as_f64().unwrap() < 1e-6,
+        "DTW absorbs a pure delay: {shifted}"
+    );
+    assert!(shifted["jitter_a"].as_f64().unwrap() < same["jitter_a"].as_f64().unwrap());
+}
+
+#[test]
+fn malformed_strokes_files_name_the_file_and_field() {
+    let dir = output_dir("sketch-bad");
+    let ict_path = shared("characters/ict-face.glb");
+    let cases = [
+        (
+            "unknown.json",
+            r#"{"version": 1, "strokes": [{"samples": [], "pressure": 1}]}"#,
+            "unknown field `pressure`",
+        ),
+        (
+            "backwards.json",
+            r#"{"version": 1, "strokes": [{"samples": [{"t": 0.5, "p": [0,0,0]}, {"t": 0.1, "p": [0,0,0]}]}]}"#,
+            "strokes[0].samples[1].t: time must increase",
+        ),
+        (
+            "version.json",
+            r#"{"version": 7, "strokes": []}"#,
+            "version: faceanim reads version 1, found 7",
+        ),
+        ("notjson.json", "strokes: yes", "not a strokes file"),
+    ];
+    for (name, text, expected) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let out = faceanim(&[
+            "sketch",
+            ict_path.to_str().unwrap(),
+            path.to_str().unwrap(),
+            "-o",
+            dir.join("x.glb").to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+        assert!(
+            stderr.starts_with(&format!("error: {}: ", path.display())),
+            "{name}: {stderr}"
+        );
+        assert!(stderr.contains(expected), "{name}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    }
+    assert!(!dir.join("x.glb").exists());
+}
