@@ -14,7 +14,8 @@ use clap::{Parser, Subcommand};
 /// faceanim animates the face of any blendshape character.
 ///
 /// A character is a glTF 2.0 file (.glb or .gltf) with morph targets, or a folder of OBJ files
-/// (neutral.obj plus one OBJ per blendshape, in the same vertex order).
+/// (neutral.obj plus one OBJ per blendshape, in the same vertex order). Where a command's
+/// CHARACTER is left out, it uses the built-in default head (52 ARKit blendshapes).
 #[derive(Debug, Parser)]
 #[command(name = "faceanim", version, about, long_about = None, propagate_version = true)]
 struct Cli {
@@ -31,8 +32,8 @@ enum Command {
     ///
     /// Example: faceanim info head.glb --json
     Info {
-        /// The character: .glb, .gltf, or a folder of OBJ files.
-        character: PathBuf,
+        /// The character: .glb, .gltf, or a folder of OBJ files (default: the built-in head).
+        character: Option<PathBuf>,
         /// Print machine-readable JSON instead of text.
         #[arg(long)]
         json: bool,
@@ -58,16 +59,43 @@ enum Command {
     ///
     /// Example: faceanim sketch head.glb take.strokes.json -o take.glb --clip take.json
     Sketch {
-        /// The character: .glb, .gltf, or a folder of OBJ files.
-        character: PathBuf,
-        /// The strokes file.
-        strokes: PathBuf,
+        /// `[CHARACTER] STROKES`: the character (default: the built-in head) and the strokes file.
+        #[arg(num_args = 1..=2, required = true, value_names = ["CHARACTER", "STROKES"])]
+        inputs: Vec<PathBuf>,
         /// Where to write the animated .glb.
         #[arg(short, long)]
         output: PathBuf,
         /// Also write the baked clip (one row of weights per frame) here.
         #[arg(long)]
         clip: Option<PathBuf>,
+    },
+    /// Write the built-in default head (52 ARKit blendshapes) as a .glb.
+    ///
+    /// Example: faceanim export-default -o default.glb
+    ExportDefault {
+        /// Where to write the .glb.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Render a character to PNG: one pose, or a contact sheet of every blendshape at weight 1.
+    ///
+    /// Examples: faceanim render --sheet -o sheet.png;
+    /// faceanim render head.glb --weights jawOpen=0.6,mouthSmileLeft=1 -o smile.png
+    Render {
+        /// The character (default: the built-in head).
+        character: Option<PathBuf>,
+        /// Where to write the PNG.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Blendshape weights as NAME=VALUE pairs separated by commas (ARKit spellings match).
+        #[arg(long, value_delimiter = ',')]
+        weights: Vec<String>,
+        /// A labelled grid of the neutral face and each blendshape at weight 1 instead.
+        #[arg(long, conflicts_with = "weights")]
+        sheet: bool,
+        /// Image size in pixels (a sheet's cell size).
+        #[arg(long, default_value_t = 512)]
+        size: u32,
     },
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
@@ -119,7 +147,7 @@ fn main() -> ExitCode {
 fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Info { character, json } => {
-            let imported = load(&character)?;
+            let imported = load_or_default(character.as_deref())?;
             let report = info::Report::of(&imported.character);
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
@@ -169,11 +197,84 @@ fn run(command: Command) -> anyhow::Result<()> {
             Ok(())
         }
         Command::Sketch {
-            character,
-            strokes,
+            inputs,
             output,
             clip,
-        } => sketch(&character, &strokes, &output, clip.as_deref()),
+        } => {
+            let (character, strokes) = match inputs.as_slice() {
+                [strokes] => (None, strokes),
+                [character, strokes] => (Some(character.as_path()), strokes),
+                _ => anyhow::bail!("give [CHARACTER] STROKES"),
+            };
+            sketch(character, strokes, &output, clip.as_deref())
+        }
+        Command::ExportDefault { output } => {
+            let character = faceanim_head::default_character();
+            let glb = faceanim_rig::export::export_glb(&character, &[])?;
+            faceanim_files::write_atomic(&output, &glb)?;
+            eprintln!(
+                "wrote {} ({} vertices, {} blendshapes)",
+                output.display(),
+                character.vertex_count(),
+                character.blendshapes().len()
+            );
+            Ok(())
+        }
+        Command::Render {
+            character,
+            output,
+            weights,
+            sheet,
+            size,
+        } => {
+            let character = load_or_default(character.as_deref())?.character;
+            anyhow::ensure!(
+                (16..=4096).contains(&size),
+                "--size must be between 16 and 4096 pixels, got {size}"
+            );
+            let image = if sheet {
+                faceanim_render::contact_sheet(&character, size.min(512))
+            } else {
+                let mut w = vec![0.0; character.blendshapes().len()];
+                for pair in &weights {
+                    let (name, value) = pair
+                        .split_once('=')
+                        .ok_or_else(|| anyhow::anyhow!("--weights: '{pair}' is not NAME=VALUE"))?;
+                    let id = character.find_blendshape(name.trim()).ok_or_else(|| {
+                        anyhow::anyhow!(
+                            "--weights: '{name}' is not a blendshape of {}",
+                            character.name()
+                        )
+                    })?;
+                    let value: f32 = value
+                        .trim()
+                        .parse()
+                        .map_err(|_| anyhow::anyhow!("--weights: '{value}' is not a number"))?;
+                    anyhow::ensure!(
+                        value.is_finite(),
+                        "--weights: '{value}' is not a finite number"
+                    );
+                    w[id.index()] = value;
+                }
+                let pose = character.pose(&w);
+                let camera = faceanim_render::Camera::front(&character.bounds(), 0.75);
+                faceanim_render::render(
+                    &character,
+                    &pose,
+                    &camera,
+                    &faceanim_render::vertex_colours(&character),
+                    size,
+                )
+            };
+            faceanim_files::write_atomic(&output, &image.to_png()?)?;
+            eprintln!(
+                "wrote {} ({}×{})",
+                output.display(),
+                image.width,
+                image.height
+            );
+            Ok(())
+        }
         Command::Eval { a, b, json } => {
             let (clip_a, clip_b) = (
                 faceanim_files::load_clip(&a)?,
@@ -204,12 +305,12 @@ fn run(command: Command) -> anyhow::Result<()> {
 }
 
 fn sketch(
-    character: &std::path::Path,
+    character: Option<&std::path::Path>,
     strokes: &std::path::Path,
     output: &std::path::Path,
     clip: Option<&std::path::Path>,
 ) -> anyhow::Result<()> {
-    let character = load(character)?.character;
+    let character = load_or_default(character)?.character;
     let bytes = faceanim_files::read_bytes(strokes)?;
     let project = faceanim_sketch::Project::from_json(&bytes)
         .map_err(|e| anyhow::anyhow!("{}: {e}", strokes.display()))?;
@@ -237,6 +338,19 @@ fn sketch(
         baked.character.blendshapes().len() - character.blendshapes().len()
     );
     Ok(())
+}
+
+/// The character at `path`, or the built-in default head.
+fn load_or_default(
+    path: Option<&std::path::Path>,
+) -> anyhow::Result<faceanim_rig::import::Imported> {
+    match path {
+        Some(path) => load(path),
+        None => Ok(faceanim_rig::import::Imported {
+            character: faceanim_head::default_character(),
+            warnings: Vec::new(),
+        }),
+    }
 }
 
 fn load(path: &std::path::Path) -> anyhow::Result<faceanim_rig::import::Imported> {

@@ -1,0 +1,300 @@
+//! # faceanim-render: pictures of a character without a GPU
+//!
+//! A small deterministic software rasteriser: the character at given weights, seen by a front
+//! camera that frames its head, lit by a key, a fill and a rim light with Gouraud shading over
+//! vertex colours and material base colours, anti-aliased by supersampling. It runs on machines
+//! with no GPU and no display, and the same inputs give the same bytes. On top of it,
+//! [`contact_sheet`] lays out the neutral face and every blendshape at weight 1, labelled.
+#![deny(missing_docs)]
+
+use faceanim_rig::{Aabb, Character, Pose};
+use glam::{Mat4, Vec3, Vec4};
+
+/// An RGB image, rows top to bottom.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width × height × 3` bytes.
+    pub rgb: Vec<u8>,
+}
+
+/// Why an image could not be encoded.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RenderError {
+    /// The PNG encoder failed.
+    #[error("PNG encoding failed: {0}")]
+    Png(#[from] png::EncodingError),
+}
+
+impl Image {
+    /// A blank image of one colour.
+    #[must_use]
+    pub fn filled(width: u32, height: u32, colour: [u8; 3]) -> Image {
+        Image {
+            width,
+            height,
+            rgb: colour.repeat((width * height) as usize),
+        }
+    }
+
+    /// The image as PNG bytes.
+    ///
+    /// # Errors
+    /// [`RenderError::Png`] if encoding fails.
+    pub fn to_png(&self) -> Result<Vec<u8>, RenderError> {
+        let mut out = Vec::new();
+        let mut encoder = png::Encoder::new(&mut out, self.width, self.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&self.rgb)?;
+        writer.finish()?;
+        Ok(out)
+    }
+
+    /// Copies `other` into this image with its top-left corner at (`x`, `y`).
+    pub fn blit(&mut self, other: &Image, x: u32, y: u32) {
+        for row in 0..other.height {
+            let ty = y + row;
+            if ty >= self.height {
+                break;
+            }
+            for col in 0..other.width {
+                let tx = x + col;
+                if tx >= self.width {
+                    break;
+                }
+                let s = ((row * other.width + col) * 3) as usize;
+                let d = ((ty * self.width + tx) * 3) as usize;
+                self.rgb[d..d + 3].copy_from_slice(&other.rgb[s..s + 3]);
+            }
+        }
+    }
+
+    /// Writes `text` with an 8×8 pixel font scaled by `scale`, top-left at (`x`, `y`).
+    pub fn text(&mut self, text: &str, x: u32, y: u32, scale: u32, colour: [u8; 3]) {
+        use font8x8::UnicodeFonts as _;
+        for (k, ch) in text.chars().enumerate() {
+            let glyph = font8x8::BASIC_FONTS
+                .get(ch)
+                .or_else(|| font8x8::BASIC_FONTS.get('?'))
+                .unwrap_or([0; 8]);
+            let gx = x + k as u32 * 8 * scale;
+            for (row, bits) in glyph.iter().enumerate() {
+                for col in 0..8u32 {
+                    if bits & (1 << col) == 0 {
+                        continue;
+                    }
+                    for dy in 0..scale {
+                        for dx in 0..scale {
+                            let px = gx + col * scale + dx;
+                            let py = y + row as u32 * scale + dy;
+                            if px < self.width && py < self.height {
+                                let d = ((py * self.width + px) * 3) as usize;
+                                self.rgb[d..d + 3].copy_from_slice(&colour);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Where the camera looks from: the front, framing the character's bounds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// World to clip space.
+    pub view_projection: Mat4,
+    /// Camera position (for the rim light).
+    pub eye: Vec3,
+}
+
+impl Camera {
+    /// A camera in front of the character (+Z, glTF's facing direction) with a 30° vertical field
+    /// of view, looking at the upper part of its bounds (the face of a head-and-neck model) and
+    /// far enough to fit `framing` of the height.
+    #[must_use]
+    pub fn front(bounds: &Aabb, framing: f32) -> Camera {
+        let size = bounds.max - bounds.min;
+        let target = Vec3::new(
+            bounds.center().x,
+            bounds.min.y + 0.58 * size.y,
+            bounds.center().z,
+        );
+        let half_height = 0.5 * size.y.max(size.x) * framing;
+        let fov = 30f32.to_radians();
+        let distance = half_height / (0.5 * fov).tan() + 0.5 * size.z;
+        let eye = target + Vec3::new(0.0, 0.0, distance);
+        let view = Mat4::look_at_rh(eye, target, Vec3::Y);
+        let projection = Mat4::perspective_rh_gl(fov, 1.0, distance * 0.05, distance * 4.0);
+        Camera {
+            view_projection: projection * view,
+            eye,
+        }
+    }
+}
+
+/// Per-vertex linear RGB colours of a character: vertex colours times material base colours.
+#[must_use]
+pub fn vertex_colours(character: &Character) -> Vec<Vec3> {
+    let mut colours: Vec<Vec3> = match character.colors() {
+        Some(c) => c.iter().map(|c| Vec3::new(c[0], c[1], c[2])).collect(),
+        None => vec![Vec3::ONE; character.vertex_count()],
+    };
+    // A vertex takes the base colour of the first part that uses it.
+    let mut tinted = vec![false; character.vertex_count()];
+    for part in character.parts() {
+        let base = character
+            .materials()
+            .get(part.material.0 as usize)
+            .map_or(Vec3::ONE, |m| {
+                Vec3::new(m.base_color[0], m.base_color[1], m.base_color[2])
+            });
+        for tri in &character.triangles()[part.triangles.clone()] {
+            for &v in tri {
+                if !std::mem::replace(&mut tinted[v as usize], true) {
+                    colours[v as usize] *= base;
+                }
+            }
+        }
+    }
+    colours
+}
+
+/// Renders `pose` of `character` at `size`×`size` pixels.
+#[must_use]
+pub fn render(
+    character: &Character,
+    pose: &Pose,
+    camera: &Camera,
+    colours: &[Vec3],
+    size: u32,
+) -> Image {
+    const SUPERSAMPLE: u32 = 2;
+    let s = size * SUPERSAMPLE;
+    let background = Vec3::new(0.16, 0.17, 0.19);
+    let mut colour = vec![background; (s * s) as usize];
+    let mut depth = vec![f32::INFINITY; (s * s) as usize];
+
+    let key = Vec3::new(-0.4, 0.55, 0.75).normalize();
+    let fill = Vec3::new(0.6, 0.1, 0.5).normalize();
+    let shade: Vec<Vec3> = pose
+        .positions
+        .iter()
+        .zip(&pose.normals)
+        .zip(colours)
+        .map(|((p, n), c)| {
+            let view = (camera.eye - *p).normalize_or_zero();
+            let rim = (1.0 - n.dot(view).max(0.0)).powi(3) * 0.25;
+            let light = 0.22 + 0.75 * n.dot(key).max(0.0) + 0.25 * n.dot(fill).max(0.0) + rim;
+            // Linear to display: a gamma of 2.2 keeps skin tones natural.
+            (*c * light).powf(1.0 / 2.2)
+        })
+        .collect();
+    let screen: Vec<Vec4> = pose
+        .positions
+        .iter()
+        .map(|p| {
+            let clip = camera.view_projection * p.extend(1.0);
+            let ndc = clip / clip.w;
+            Vec4::new(
+                (ndc.x * 0.5 + 0.5) * s as f32,
+                (0.5 - ndc.y * 0.5) * s as f32,
+                ndc.z,
+                clip.w,
+            )
+        })
+        .collect();
+
+    for tri in character.triangles() {
+        let [a, b, c] = tri.map(|v| v as usize);
+        let (pa, pb, pc) = (screen[a], screen[b], screen[c]);
+        if pa.w <= 0.0 || pb.w <= 0.0 || pc.w <= 0.0 {
+            continue;
+        }
+        let area = (pb.x - pa.x) * (pc.y - pa.y) - (pb.y - pa.y) * (pc.x - pa.x);
+        // Counter-clockwise in the world is clockwise here (y points down): cull back faces.
+        if area >= 0.0 {
+            continue;
+        }
+        let min_x = pa.x.min(pb.x).min(pc.x).floor().max(0.0) as u32;
+        let max_x = pa.x.max(pb.x).max(pc.x).ceil().min(s as f32 - 1.0) as u32;
+        let min_y = pa.y.min(pb.y).min(pc.y).floor().max(0.0) as u32;
+        let max_y = pa.y.max(pb.y).max(pc.y).ceil().min(s as f32 - 1.0) as u32;
+        for y in min_y..=max_y {
+            for x in min_x..=max_x {
+                let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+                let w0 = ((pb.x - px) * (pc.y - py) - (pb.y - py) * (pc.x - px)) / area;
+                let w1 = ((pc.x - px) * (pa.y - py) - (pc.y - py) * (pa.x - px)) / area;
+                let w2 = 1.0 - w0 - w1;
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                let z = w0 * pa.z + w1 * pb.z + w2 * pc.z;
+                let i = (y * s + x) as usize;
+                if z < depth[i] {
+                    depth[i] = z;
+                    colour[i] = shade[a] * w0 + shade[b] * w1 + shade[c] * w2;
+                }
+            }
+        }
+    }
+
+    let mut rgb = Vec::with_capacity((size * size * 3) as usize);
+    for y in 0..size {
+        for x in 0..size {
+            let mut sum = Vec3::ZERO;
+            for dy in 0..SUPERSAMPLE {
+                for dx in 0..SUPERSAMPLE {
+                    sum += colour[((y * SUPERSAMPLE + dy) * s + x * SUPERSAMPLE + dx) as usize];
+                }
+            }
+            let c = (sum / (SUPERSAMPLE * SUPERSAMPLE) as f32).clamp(Vec3::ZERO, Vec3::ONE) * 255.0;
+            rgb.extend_from_slice(&[c.x.round() as u8, c.y.round() as u8, c.z.round() as u8]);
+        }
+    }
+    Image {
+        width: size,
+        height: size,
+        rgb,
+    }
+}
+
+/// The neutral face and every blendshape at weight 1, in a labelled grid.
+#[must_use]
+pub fn contact_sheet(character: &Character, cell: u32) -> Image {
+    let count = character.blendshapes().len() + 1;
+    let columns = (count as f32).sqrt().ceil() as u32;
+    let rows = (count as u32).div_ceil(columns);
+    let label_height = 20;
+    let mut sheet = Image::filled(columns * cell, rows * (cell + label_height), [24, 25, 28]);
+    let camera = Camera::front(&character.bounds(), 0.75);
+    let colours = vertex_colours(character);
+    let mut weights = vec![0.0; character.blendshapes().len()];
+    let mut pose = Pose::default();
+    for k in 0..count {
+        weights.iter_mut().for_each(|w| *w = 0.0);
+        let label = if k == 0 {
+            "neutral".to_owned()
+        } else {
+            weights[k - 1] = 1.0;
+            character.blendshapes()[k - 1].name().to_owned()
+        };
+        character.pose_into(&weights, &mut pose);
+        let image = render(character, &pose, &camera, &colours, cell);
+        let (x, y) = (
+            (k as u32 % columns) * cell,
+            (k as u32 / columns) * (cell + label_height),
+        );
+        sheet.blit(&image, x, y);
+        let max_chars = (cell / 8).max(1) as usize;
+        let shown: String = label.chars().take(max_chars).collect();
+        sheet.text(&shown, x + 2, y + cell + 6, 1, [230, 230, 230]);
+    }
+    sheet
+}
