@@ -58,8 +58,8 @@ impl Context<'_> {
                     } else if v.upper_lip_edge {
                         below = 0.0;
                     }
-                    let front = smoothstep(-0.035, 0.010, p.z);
-                    let neck = smoothstep(-0.165, -0.115, p.y);
+                    let front = smoothstep(-0.065, 0.030, p.z);
+                    let neck = smoothstep(-0.185, -0.100, p.y);
                     jaw[i] = below * front * neck;
                     let lips = bump(
                         p,
