@@ -93,7 +93,7 @@ enum Command {
         /// A labelled grid of the neutral face and each blendshape at weight 1 instead.
         #[arg(long, conflicts_with = "weights")]
         sheet: bool,
-        /// Image size in pixels (a sheet's cell size).
+        /// Image size in pixels (for a sheet, each cell's size, at most 512).
         #[arg(long, default_value_t = 512)]
         size: u32,
     },

@@ -12,8 +12,9 @@ mod support;
 
 use std::process::Command;
 
+use faceanim_testdata::shared;
 use serde_json::Value;
-use support::{faceanim_ok, output_dir, repo, shared};
+use support::{faceanim_ok, output_dir, repo};
 
 #[test]
 fn blender_opens_an_animated_export_with_all_shape_keys() {

@@ -12,8 +12,9 @@ mod support;
 
 use std::fmt::Write as _;
 
+use faceanim_testdata::shared;
 use serde_json::Value;
-use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir, shared};
+use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir};
 
 #[test]
 fn info_json_on_the_ict_head() {
@@ -184,14 +185,7 @@ fn an_obj_folder_like_ict_facekit_imports_and_exports() {
     // Write the ICT head the way ICT-FaceKit ships it: neutral.obj plus one OBJ per expression.
     let dir = output_dir("obj-folder").join("ict-obj");
     std::fs::create_dir_all(&dir).unwrap();
-    let ict_bytes = std::fs::read(shared("characters/ict-face.glb")).unwrap();
-    let ict = faceanim_rig::import::import_gltf(
-        &ict_bytes,
-        "ict",
-        &faceanim_rig::import::NoExternalResources,
-    )
-    .unwrap()
-    .character;
+    let ict = faceanim_testdata::ict();
     let write_obj = |name: &str, positions: &[faceanim_rig::glam::Vec3], faces: bool| {
         let mut text = String::with_capacity(positions.len() * 40);
         for p in positions {

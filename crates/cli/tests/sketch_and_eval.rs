@@ -10,8 +10,9 @@
 mod support;
 
 use faceanim_rig::glam::Vec3;
+use faceanim_testdata::shared;
 use serde_json::{Value, json};
-use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir, shared};
+use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir};
 
 /// A stroke from the vertex a blendshape moves most to where it moves it, bowed, at 90 Hz.
 fn stroke_for(character: &faceanim_rig::Character, shape: &str, seconds: f32, bow: f32) -> Value {
@@ -39,19 +40,13 @@ fn stroke_for(character: &faceanim_rig::Character, shape: &str, seconds: f32, bo
 fn sketch_writes_a_valid_animated_glb_and_a_clip() {
     let dir = output_dir("sketch-cli");
     let ict_path = shared("characters/ict-face.glb");
-    let ict = faceanim_rig::import::import_gltf(
-        &std::fs::read(&ict_path).unwrap(),
-        "ict",
-        &faceanim_rig::import::NoExternalResources,
-    )
-    .unwrap()
-    .character;
+    let ict = faceanim_testdata::ict();
     let strokes = json!({
         "version": 1, "fps": 30,
         "settings": {"symmetry": true, "falloff": "smooth"},
         "strokes": [
-            stroke_for(&ict, "mouthSmile_L", 0.6, 0.004),
-            stroke_for(&ict, "jawOpen", 0.8, 0.01),
+            stroke_for(ict, "mouthSmile_L", 0.6, 0.004),
+            stroke_for(ict, "jawOpen", 0.8, 0.01),
             {"samples": [{"t": 0.0, "p": [0.0, 0.0, 2.0]}, {"t": 0.1, "p": [0.0, 0.1, 2.0]}]}
         ]
     });

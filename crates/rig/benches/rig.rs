@@ -4,21 +4,13 @@
 #![allow(missing_docs, clippy::unwrap_used, clippy::expect_used)]
 
 use std::hint::black_box;
-use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use faceanim_rig::Pose;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 
-fn ict_path() -> PathBuf {
-    std::env::var_os("FACEANIM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared"))
-        .join("characters/ict-face.glb")
-}
-
 fn benches(c: &mut Criterion) {
-    let path = ict_path();
+    let path = faceanim_testdata::shared("characters/ict-face.glb");
     let mut group = c.benchmark_group("ict-face");
     group.sample_size(20);
     group.bench_function("import (read file + parse + derive)", |b| {

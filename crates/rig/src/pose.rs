@@ -40,7 +40,11 @@ impl Character {
         pose.positions.extend_from_slice(self.positions());
         pose.normals.clear();
         pose.normals.extend_from_slice(self.normals());
-        let split = if n >= PARALLEL_VERTICES { n / 2 } else { n };
+        if n < PARALLEL_VERTICES {
+            self.accumulate(weights, 0, &mut pose.positions, &mut pose.normals);
+            return;
+        }
+        let split = n / 2;
         let (positions_low, positions_high) = pose.positions.split_at_mut(split);
         let (normals_low, normals_high) = pose.normals.split_at_mut(split);
         rayon::join(

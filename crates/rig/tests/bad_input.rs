@@ -13,8 +13,9 @@
 mod support;
 
 use faceanim_rig::import::{NoExternalResources, import_gltf};
+use faceanim_testdata::ict_bytes;
 use serde_json::json;
-use support::{GltfBuilder, ict_bytes, tiny_face, tiny_face_gltf};
+use support::{GltfBuilder, tiny_face, tiny_face_gltf};
 
 fn error_of(name: &str, bytes: &[u8]) -> String {
     // Only small cases go into the corpus; the truncated 17 MB head stays out of git.

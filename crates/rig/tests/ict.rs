@@ -7,14 +7,12 @@
     reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
 )]
 
-mod support;
-
 use faceanim_rig::export::{MorphAnimation, export_glb};
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_rig::symmetry::PairSource;
 use faceanim_rig::{Blendshape, Character};
+use faceanim_testdata::{ict, ict_bytes, shared};
 use glam::Vec3;
-use support::{ict, ict_bytes, shared};
 
 #[test]
 fn both_heads_import_with_their_published_counts() {

@@ -4,30 +4,14 @@
 #![allow(missing_docs, clippy::unwrap_used, clippy::expect_used)]
 
 use std::hint::black_box;
-use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_rig::{Character, Pose};
 use faceanim_sketch::engine::Input;
 use faceanim_sketch::evaluate::FramePose;
 use faceanim_sketch::project::{Sample, Stroke};
 use faceanim_sketch::{ActionId, Settings, Sketch};
 use glam::Vec3;
-
-fn ict() -> Character {
-    let path = std::env::var_os("FACEANIM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared"))
-        .join("characters/ict-face.glb");
-    import_gltf(
-        &std::fs::read(path).unwrap(),
-        "ict-face.glb",
-        &NoExternalResources,
-    )
-    .unwrap()
-    .character
-}
 
 /// A bowed 90-sample stroke (1 s at 90 Hz) from the vertex `shape` moves most to its target.
 fn stroke(c: &Character, shape: &str, start_frame: f32) -> Input {
@@ -59,7 +43,7 @@ fn stroke(c: &Character, shape: &str, start_frame: f32) -> Input {
 }
 
 fn benches(c: &mut Criterion) {
-    let character = ict();
+    let character = faceanim_testdata::ict();
     let settings = Settings {
         symmetry: true,
         ..Settings::default()
@@ -67,9 +51,9 @@ fn benches(c: &mut Criterion) {
     let mut group = c.benchmark_group("sketch on ict-face");
 
     // A stroke becoming an action: selection, weight, exaggeration, per-vertex arcs, keyframes.
-    let mut sketch = Sketch::new(&character, settings.clone(), 30.0);
-    let (id, _) = sketch.add(stroke(&character, "mouthSmile_L", 0.0));
-    let smile = stroke(&character, "mouthSmile_L", 0.0);
+    let mut sketch = Sketch::new(character, settings.clone(), 30.0);
+    let (id, _) = sketch.add(stroke(character, "mouthSmile_L", 0.0));
+    let smile = stroke(character, "mouthSmile_L", 0.0);
     group.bench_function("stroke (90 samples) to action", |b| {
         b.iter(|| {
             sketch.edit(id, black_box(smile.clone()));
@@ -89,7 +73,7 @@ fn benches(c: &mut Criterion) {
     });
 
     // Ten actions: five strokes, mirrored by symmetry into both sides, staggered in time.
-    let mut ten = Sketch::new(&character, settings, 30.0);
+    let mut ten = Sketch::new(character, settings, 30.0);
     for (i, shape) in [
         "mouthSmile_L",
         "browOuterUp_L",
@@ -105,7 +89,7 @@ fn benches(c: &mut Criterion) {
     .iter()
     .enumerate()
     {
-        let _ = ten.add(stroke(&character, shape, i as f32 * 2.0));
+        let _ = ten.add(stroke(character, shape, i as f32 * 2.0));
     }
     let live = ten.actions().count();
     let reasons: Vec<String> = ten
@@ -122,7 +106,7 @@ fn benches(c: &mut Criterion) {
         b.iter(|| ten.edit(tenth, black_box(tenth_input.clone())));
     });
     let frame = 20.0;
-    let mut pose = FramePose::new(&character);
+    let mut pose = FramePose::new(character);
     group.bench_function("frame of 10 actions: weights and offsets", |b| {
         b.iter(|| ten.frame_into(black_box(frame), &mut pose));
     });
@@ -130,7 +114,7 @@ fn benches(c: &mut Criterion) {
     group.bench_function("frame of 10 actions: vertex positions and normals", |b| {
         b.iter(|| {
             ten.frame_into(black_box(frame), &mut pose);
-            pose.positions_into(&character, &mut positions);
+            pose.positions_into(character, &mut positions);
         });
     });
     group.finish();

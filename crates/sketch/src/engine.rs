@@ -18,7 +18,8 @@ use glam::Vec3;
 
 use crate::arc::{Arc, Path};
 use crate::layer::{Layer, Offsets};
-use crate::project::{Project, Stroke, StrokeSpec};
+pub use crate::project::Input;
+use crate::project::{Project, Stroke};
 use crate::settings::{Resolved, Selection, Settings, StrokeMode};
 use crate::surface::{Surface, edge_distances};
 use crate::timing::Timing;
@@ -60,39 +61,6 @@ pub struct Candidates {
     pub candidates: Vec<Candidate>,
     /// The chain this stroke would continue, if it starts at a chain's end.
     pub continues: Option<ActionId>,
-}
-
-/// A stroke plus every edit made to it since it was drawn.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Input {
-    /// The drawn stroke.
-    pub stroke: Stroke,
-    /// Timeline start (`None`: automatic).
-    pub start_frame: Option<f32>,
-    /// Timeline length in frames (`None`: as drawn).
-    pub duration: Option<f32>,
-    /// Moved end handle.
-    pub end: Option<Vec3>,
-    /// Moved middle handle.
-    pub mid: Option<Vec3>,
-    /// Easing handle α (0.5: as drawn).
-    pub ease: Option<f32>,
-    /// Symmetry override.
-    pub symmetry: Option<bool>,
-}
-
-impl From<&StrokeSpec> for Input {
-    fn from(s: &StrokeSpec) -> Input {
-        Input {
-            stroke: s.stroke.clone(),
-            start_frame: s.start_frame,
-            duration: s.duration,
-            end: s.end,
-            mid: s.mid,
-            ease: s.ease,
-            symmetry: s.symmetry,
-        }
-    }
 }
 
 /// One side of an action: the stroke's own, or its mirror image.
@@ -254,7 +222,7 @@ impl<'c> Sketch<'c> {
         let mut sketch = Sketch::new(character, project.settings.clone(), project.fps);
         let mut warnings = project.warnings.clone();
         for spec in project.strokes.iter().flatten() {
-            if let Err(why) = sketch.add(Input::from(spec)).1 {
+            if let Err(why) = sketch.add(spec.input.clone()).1 {
                 warnings.push(format!("strokes[{}]: skipped, {why}", spec.index));
             }
         }

@@ -60,6 +60,6 @@ pub mod solve;
 pub mod surface;
 pub mod timing;
 
-pub use engine::{Action, ActionId, Candidate, Candidates, Input, Rejected, Side, Sketch, Target};
-pub use project::{Project, ProjectError, ProjectFile, Stroke, StrokeFile};
+pub use engine::{Action, ActionId, Candidate, Candidates, Rejected, Side, Sketch, Target};
+pub use project::{Input, Project, ProjectError, ProjectFile, Stroke, StrokeFile, StrokeSpec};
 pub use settings::{Falloff, Settings};

@@ -223,14 +223,12 @@ pub struct Project {
     pub warnings: Vec<String>,
 }
 
-/// A stroke and its edits.
+/// A stroke plus every edit made to it since it was drawn: what an action is solved from.
 #[derive(Debug, Clone, PartialEq)]
-pub struct StrokeSpec {
-    /// Position in the file (`strokes[index]`), for messages.
-    pub index: usize,
-    /// The drawn samples.
+pub struct Input {
+    /// The drawn stroke.
     pub stroke: Stroke,
-    /// Timeline placement (`None`: automatic).
+    /// Timeline start (`None`: automatic).
     pub start_frame: Option<f32>,
     /// Timeline length in frames (`None`: as drawn).
     pub duration: Option<f32>,
@@ -238,10 +236,19 @@ pub struct StrokeSpec {
     pub end: Option<Vec3>,
     /// Moved middle handle.
     pub mid: Option<Vec3>,
-    /// Easing handle α.
+    /// Easing handle α (0.5: as drawn).
     pub ease: Option<f32>,
-    /// Per-stroke symmetry override.
+    /// Symmetry override (`None`: follow the settings).
     pub symmetry: Option<bool>,
+}
+
+/// A stroke of a file, with its position there (`strokes[index]`) for messages.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StrokeSpec {
+    /// Position in the file.
+    pub index: usize,
+    /// The stroke and its edits.
+    pub input: Input,
 }
 
 impl Project {
@@ -322,13 +329,15 @@ impl Project {
             match Stroke::new(samples, &path) {
                 Ok(stroke) if problems.len() == before => strokes.push(Some(StrokeSpec {
                     index,
-                    stroke,
-                    start_frame: s.start_frame,
-                    duration: s.duration,
-                    end: s.end.map(Vec3::from),
-                    mid: s.mid.map(Vec3::from),
-                    ease: s.ease,
-                    symmetry: s.symmetry,
+                    input: Input {
+                        stroke,
+                        start_frame: s.start_frame,
+                        duration: s.duration,
+                        end: s.end.map(Vec3::from),
+                        mid: s.mid.map(Vec3::from),
+                        ease: s.ease,
+                        symmetry: s.symmetry,
+                    },
                 })),
                 Ok(_) => strokes.push(None),
                 Err(mut p) => {

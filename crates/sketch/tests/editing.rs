@@ -14,29 +14,12 @@ use faceanim_rig::export::export_glb;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_sketch::bake::EXPORT_TOLERANCE;
 use faceanim_sketch::engine::Input;
-use faceanim_sketch::project::ProjectFile;
 use faceanim_sketch::settings::{Selection, StrokeMode};
-use faceanim_sketch::{Project, Settings, Sketch, Target};
+use faceanim_sketch::{Settings, Sketch, Target};
 use glam::Vec3;
-use support::{bow, draw, handle_vertex, ict, id, line, position, uniform};
-
-fn project(settings: Settings, strokes: Vec<faceanim_sketch::StrokeFile>) -> Project {
-    Project::from_file(ProjectFile {
-        version: 1,
-        fps: 30.0,
-        settings,
-        strokes,
-    })
-    .unwrap()
-}
-
-fn near(v: u32) -> Vec3 {
-    position(v) + ict().normals()[v as usize] * 0.001
-}
-
-fn target_of(name: &str, v: u32) -> Vec3 {
-    position(v) + ict().blendshape(id(name)).unwrap().delta_of(v)
-}
+use support::{
+    bow, draw, handle_vertex, ict, id, line, near, position, project, target_of, uniform,
+};
 
 fn input(sketch: &Sketch<'_>, k: usize) -> Input {
     sketch.inputs()[k].clone().unwrap()

@@ -13,20 +13,11 @@ mod support;
 
 use faceanim_anim::Clip;
 use faceanim_anim::metrics::compare;
-use faceanim_sketch::project::ProjectFile;
 use faceanim_sketch::{Project, Settings, Sketch, Target};
 use glam::Vec3;
-use support::{bow, draw, handle_vertex, ict, id, line, position, uniform};
-
-fn project(settings: Settings, strokes: Vec<faceanim_sketch::StrokeFile>) -> Project {
-    Project::from_file(ProjectFile {
-        version: 1,
-        fps: 30.0,
-        settings,
-        strokes,
-    })
-    .unwrap()
-}
+use support::{
+    bow, draw, handle_vertex, ict, id, line, near, position, project, target_of, uniform,
+};
 
 fn sketch(project: &Project) -> Sketch<'static> {
     let (sketch, warnings) = Sketch::from_project(ict(), project);
@@ -62,15 +53,10 @@ fn weight(clip: &Clip, frame: usize, name: &str) -> f32 {
     clip.frames[frame][id(name).index()]
 }
 
-/// Slightly off the surface, as a pen is when it touches the face.
-fn near(v: u32) -> Vec3 {
-    position(v) + ict().normals()[v as usize] * 0.001
-}
-
 #[test]
 fn task_1_left_eye_blink_with_two_strokes() {
     let lid = handle_vertex("eyeBlink_L");
-    let closed = position(lid) + ict().blendshape(id("eyeBlink_L")).unwrap().delta_of(lid);
+    let closed = target_of("eyeBlink_L", lid);
     // Down in 0.3 s, then back up from where the first stroke ended, in 0.4 s.
     let down = draw(0.3, line(near(lid), closed), uniform);
     let up = draw(0.4, line(closed, position(lid)), uniform);
@@ -122,17 +108,9 @@ fn task_1_left_eye_blink_with_two_strokes() {
 #[test]
 fn task_2_smile_with_raised_brows_on_a_curved_path_with_symmetry() {
     let corner = handle_vertex("mouthSmile_L");
-    let smile_end = position(corner)
-        + ict()
-            .blendshape(id("mouthSmile_L"))
-            .unwrap()
-            .delta_of(corner);
+    let smile_end = target_of("mouthSmile_L", corner);
     let brow = handle_vertex("browOuterUp_L");
-    let brow_end = position(brow)
-        + ict()
-            .blendshape(id("browOuterUp_L"))
-            .unwrap()
-            .delta_of(brow);
+    let brow_end = target_of("browOuterUp_L", brow);
     // The corner sweeps outwards and up in a clear bow (5 mm off the chord).
     let chord = smile_end - position(corner);
     let bulge = chord.cross(Vec3::Z).normalize() * -0.005;
@@ -225,7 +203,7 @@ fn task_2_smile_with_raised_brows_on_a_curved_path_with_symmetry() {
 #[test]
 fn task_3_mouth_opening_that_starts_slowly_and_speeds_up() {
     let chin = handle_vertex("jawOpen");
-    let open = position(chin) + ict().blendshape(id("jawOpen")).unwrap().delta_of(chin);
+    let open = target_of("jawOpen", chin);
     // Drawn accelerating: distance ∝ t², over a second.
     let stroke = draw(1.0, line(near(chin), open), |x| x * x);
     let sketch = sketch(&project(Settings::default(), vec![stroke]));
@@ -256,16 +234,8 @@ fn task_3_mouth_opening_that_starts_slowly_and_speeds_up() {
 #[test]
 fn task_4_chain_neutral_smile_sad() {
     let corner = handle_vertex("mouthSmile_L");
-    let smile_end = position(corner)
-        + ict()
-            .blendshape(id("mouthSmile_L"))
-            .unwrap()
-            .delta_of(corner);
-    let frown_end = position(corner)
-        + ict()
-            .blendshape(id("mouthFrown_L"))
-            .unwrap()
-            .delta_of(corner);
+    let smile_end = target_of("mouthSmile_L", corner);
+    let frown_end = target_of("mouthFrown_L", corner);
     let to_smile = draw(0.5, line(near(corner), smile_end), uniform);
     let to_frown = draw(0.5, line(smile_end, frown_end), uniform);
     let sketch = sketch(&project(Settings::default(), vec![to_smile, to_frown]));

@@ -15,20 +15,6 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// `../shared/<rel>` beside the repository (override with FACEANIM_SHARED).
-pub fn shared(rel: &str) -> PathBuf {
-    let base = std::env::var_os("FACEANIM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("../shared"));
-    let path = base.join(rel);
-    assert!(
-        path.exists(),
-        "test data {} is missing: the shared/ folder must sit beside the repository",
-        path.display()
-    );
-    path
-}
-
 /// Where tests leave files worth looking at (`test-output/` in the repository, git-ignored).
 pub fn output_dir(test: &str) -> PathBuf {
     let dir = repo().join("test-output").join(test);

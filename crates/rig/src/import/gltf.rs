@@ -127,30 +127,26 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKi
                 "the first GLB chunk is not JSON".into(),
             ));
         }
-        let json_end = 20usize
-            .checked_add(json_len)
-            .filter(|&e| e <= bytes.len())
-            .ok_or_else(|| {
-                ImportErrorKind::Truncated(format!(
-                    "the JSON chunk claims {json_len} bytes but the GLB has {}",
-                    bytes.len()
-                ))
-            })?;
+        // The end of a chunk's data starting at `start`, or why it does not fit.
+        let chunk_end = |start: usize, len: usize, what: &str| {
+            start
+                .checked_add(len)
+                .filter(|&e| e <= bytes.len())
+                .ok_or_else(|| {
+                    ImportErrorKind::Truncated(format!(
+                        "{what} claims {len} bytes but the GLB has {}",
+                        bytes.len()
+                    ))
+                })
+        };
+        let json_end = chunk_end(20, json_len, "the JSON chunk")?;
         let json = &bytes[20..json_end];
         let mut bin = None;
         let mut at = json_end;
         while at + 8 <= bytes.len() {
             let len = word(at)? as usize;
             let kind = word(at + 4)?;
-            let end = (at + 8)
-                .checked_add(len)
-                .filter(|&e| e <= bytes.len())
-                .ok_or_else(|| {
-                    ImportErrorKind::Truncated(format!(
-                        "a chunk at byte {at} claims {len} bytes but the GLB has {}",
-                        bytes.len()
-                    ))
-                })?;
+            let end = chunk_end(at + 8, len, &format!("a chunk at byte {at}"))?;
             if kind == CHUNK_BIN && bin.is_none() {
                 bin = Some(&bytes[at + 8..end]);
             }

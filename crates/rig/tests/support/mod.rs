@@ -9,40 +9,7 @@
     reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
 )]
 
-use std::path::PathBuf;
-use std::sync::OnceLock;
-
-use faceanim_rig::Character;
-use faceanim_rig::import::{NoExternalResources, import_gltf};
 use serde_json::{Value, json};
-
-/// `../shared/<rel>` beside the repository (override with FACEANIM_SHARED).
-pub fn shared(rel: &str) -> PathBuf {
-    let base = std::env::var_os("FACEANIM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared"));
-    let path = base.join(rel);
-    assert!(
-        path.exists(),
-        "test data {} is missing: the shared/ folder must sit beside the repository",
-        path.display()
-    );
-    path
-}
-
-pub fn ict_bytes() -> &'static [u8] {
-    static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
-    BYTES.get_or_init(|| std::fs::read(shared("characters/ict-face.glb")).unwrap())
-}
-
-pub fn ict() -> &'static Character {
-    static ICT: OnceLock<Character> = OnceLock::new();
-    ICT.get_or_init(|| {
-        import_gltf(ict_bytes(), "ict-face.glb", &NoExternalResources)
-            .unwrap()
-            .character
-    })
-}
 
 /// A 9×9 bumpy grid, symmetric about x = 0, with `blink_L`, `blink_R` (mirror images) and `open`.
 pub struct TinyFace {

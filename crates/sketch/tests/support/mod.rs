@@ -7,27 +7,11 @@
     reason = "test support"
 )]
 
-use std::path::PathBuf;
-use std::sync::OnceLock;
-
-use faceanim_rig::import::{NoExternalResources, import_gltf};
-use faceanim_rig::{BlendshapeId, Character};
+use faceanim_rig::BlendshapeId;
 use faceanim_sketch::project::{SampleFile, StrokeFile};
 use glam::Vec3;
 
-pub fn ict() -> &'static Character {
-    static ICT: OnceLock<Character> = OnceLock::new();
-    ICT.get_or_init(|| {
-        let base = std::env::var_os("FACEANIM_SHARED")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared"));
-        let bytes = std::fs::read(base.join("characters/ict-face.glb"))
-            .expect("../shared/characters/ict-face.glb is needed");
-        import_gltf(&bytes, "ict-face.glb", &NoExternalResources)
-            .unwrap()
-            .character
-    })
-}
+pub use faceanim_testdata::ict;
 
 pub fn id(name: &str) -> BlendshapeId {
     ict()
@@ -86,6 +70,30 @@ pub fn bow(a: Vec3, b: Vec3, bulge: Vec3) -> impl Fn(f32) -> Vec3 {
     let chord = (b - a).normalize_or_zero();
     let bulge = bulge - chord * bulge.dot(chord);
     move |s| a.lerp(b, s) + bulge * (4.0 * s * (1.0 - s))
+}
+
+/// Where `v` goes with blendshape `name` at weight 1.
+pub fn target_of(name: &str, v: u32) -> Vec3 {
+    position(v) + ict().blendshape(id(name)).unwrap().delta_of(v)
+}
+
+/// Slightly off the surface, as a pen is when it touches the face.
+pub fn near(v: u32) -> Vec3 {
+    position(v) + ict().normals()[v as usize] * 0.001
+}
+
+/// A strokes project at 30 fps.
+pub fn project(
+    settings: faceanim_sketch::Settings,
+    strokes: Vec<faceanim_sketch::StrokeFile>,
+) -> faceanim_sketch::Project {
+    faceanim_sketch::Project::from_file(faceanim_sketch::ProjectFile {
+        version: 1,
+        fps: 30.0,
+        settings,
+        strokes,
+    })
+    .unwrap()
 }
 
 pub fn uniform(x: f32) -> f32 {
