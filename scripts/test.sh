@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # Runs every test of faceanim: installs the external checkers if needed (scripts/setup.sh),
-# lints, then runs the unit, integration, fuzz, tool (glTF-Validator, Blender) and doc tests.
-# The ICT test heads are read from ../shared beside the repository (or $FACEANIM_SHARED).
+# lints, then runs the doc tests and the unit, integration, fuzz and tool (glTF-Validator,
+# Blender) tests. The ICT test heads are read from ../shared beside the repository (or
+# $FACEANIM_SHARED).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 scripts/setup.sh
 cargo clippy --workspace --all-targets --locked -- -D warnings
+cargo test --workspace --doc --locked
+# Last, so that the run ends on the summary of every test.
 if cargo nextest --version >/dev/null 2>&1; then
   cargo nextest run --workspace --locked --no-fail-fast
 else
   cargo test --workspace --locked --no-fail-fast
 fi
-cargo test --workspace --doc --locked
