@@ -626,11 +626,16 @@ impl<'c> Sketch<'c> {
         })
     }
 
-    /// Eq. 1 (nearest target to the end), or with [`Selection::Path`] also how far the drawn
-    /// path strays from each candidate's straight motion.
+    /// Eq. 1 (nearest target to the end); with [`Selection::Path`] also how far the drawn path
+    /// strays from each candidate's straight motion; with [`Selection::Segment`] the distance
+    /// from the end to each candidate's motion segment (ties broken by Eq. 1).
     fn select(&self, found: &Candidates, stroke: &Stroke, end: Vec3) -> Target {
         let start = found.reference_position;
         let cost = |candidate: &Candidate| {
+            if self.resolved.selection == Selection::Segment {
+                let to_line = distance_to_segment(end, found.base, candidate.position);
+                return to_line + 1e-3 * candidate.position.distance(end);
+            }
             let mut cost = candidate.position.distance(end);
             if self.resolved.selection == Selection::Path {
                 let samples = stroke.samples();

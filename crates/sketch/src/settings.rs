@@ -64,6 +64,10 @@ pub enum Selection {
     End,
     /// The end, plus how closely the whole drawn path follows each candidate's motion.
     Path,
+    /// The candidate whose motion (the segment from rest to full weight) passes nearest the
+    /// end, so a stroke stopped part-way selects that blendshape at a partial weight instead
+    /// of whichever smaller blendshape's full target happens to be nearer (Eq. 1's weakness).
+    Segment,
 }
 
 /// Sketching parameters as stored in a strokes file; `None` means "derived from the size".

@@ -257,6 +257,31 @@ fn multi_blendshape_strokes_solve_all_weights_at_once() {
 }
 
 #[test]
+fn segment_selection_gives_partial_weights_where_eq_1_picks_a_smaller_shape() {
+    // Half-way to the smile's sphere from the lip corner: Eq. 1 picks a smaller shape whose full
+    // target is nearer; segment selection picks the smile at half weight.
+    let corner = handle_vertex("mouthSmile_L");
+    let end = position(corner).lerp(target_of("mouthSmile_L", corner), 0.5);
+    let strokes = vec![draw(0.5, line(near(corner), end), uniform)];
+    let pick = |selection| {
+        let settings = Settings {
+            selection,
+            ..Settings::default()
+        };
+        let sketch = Sketch::from_project(ict(), &project(settings, strokes.clone())).0;
+        sketch.actions().next().unwrap().1.sides[0].clone()
+    };
+    assert_ne!(
+        pick(Selection::End).target,
+        Target::Blendshape(id("mouthSmile_L")),
+        "Eq. 1's known weakness"
+    );
+    let side = pick(Selection::Segment);
+    assert_eq!(side.target, Target::Blendshape(id("mouthSmile_L")));
+    assert!((side.weight - 0.5).abs() < 0.05, "{}", side.weight);
+}
+
+#[test]
 fn path_selection_prefers_the_candidate_whose_motion_the_stroke_follows() {
     use faceanim_rig::{Blendshape, Character, CharacterParts};
     // A small grid whose centre vertex can go up 10 mm ("up") or diagonally ("diag").
