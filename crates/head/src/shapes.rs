@@ -161,11 +161,11 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
         )
     });
     let eye_look_down =
-        field(&|i, _| c.gaze(i, Quat::from_rotation_x(0.40)) + c.lids(i, |_| -0.18, |_| -0.06));
-    let eye_look_in = field(&|i, _| c.gaze(i, Quat::from_rotation_y(-0.42)));
-    let eye_look_out = field(&|i, _| c.gaze(i, Quat::from_rotation_y(0.42)));
+        field(&|i, _| c.gaze(i, Quat::from_rotation_x(0.55)) + c.lids(i, |_| -0.30, |_| -0.08));
+    let eye_look_in = field(&|i, _| c.gaze(i, Quat::from_rotation_y(-0.55)));
+    let eye_look_out = field(&|i, _| c.gaze(i, Quat::from_rotation_y(0.55)));
     let eye_look_up =
-        field(&|i, _| c.gaze(i, Quat::from_rotation_x(-0.40)) + c.lids(i, |_| 0.15, |_| 0.06));
+        field(&|i, _| c.gaze(i, Quat::from_rotation_x(-0.55)) + c.lids(i, |_| 0.25, |_| 0.08));
     let eye_squint = field(&|i, p| {
         let cheek = skin(
             i,
@@ -178,12 +178,12 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
         );
         c.lids(
             i,
-            |u| 0.12 * (meet(u) - lid_lines(u).0),
-            |u| 0.55 * (meet(u) - lid_lines(u).1),
+            |u| 0.30 * (meet(u) - lid_lines(u).0),
+            |u| 0.80 * (meet(u) - lid_lines(u).1),
         ) + cheek
     });
-    let eye_wide = field(&|i, _| c.lids(i, |_| 0.22, |_| -0.06));
-    let jaw_left = field(&|i, _| Vec3::new(0.007, 0.0, 0.0) * c.jaw[i]);
+    let eye_wide = field(&|i, _| c.lids(i, |_| 0.35, |_| -0.10));
+    let jaw_left = field(&|i, _| Vec3::new(0.012, 0.0, 0.0) * c.jaw[i]);
     let corner = |p: Vec3, radii: Vec3| bump(p, c.corner, radii);
     let mouth_smile = field(&|i, p| {
         skin(
@@ -200,32 +200,32 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let mouth_frown = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.001, -0.006, -0.001) * corner(p, Vec3::new(0.020, 0.018, 0.025)),
+            Vec3::new(0.002, -0.010, -0.001) * corner(p, Vec3::new(0.020, 0.018, 0.025)),
         )
     });
     let mouth_dimple = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.003, -0.0005, -0.004) * corner(p, Vec3::new(0.018, 0.015, 0.022)),
+            Vec3::new(0.005, -0.001, -0.007) * corner(p, Vec3::new(0.018, 0.015, 0.022)),
         )
     });
     let mouth_stretch = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.006, -0.003, -0.002) * corner(p, Vec3::new(0.026, 0.022, 0.030))
+            Vec3::new(0.009, -0.005, -0.003) * corner(p, Vec3::new(0.026, 0.022, 0.030))
                 + Vec3::new(0.0, -0.0015, 0.0) * c.lower_lip[i] * side(p),
         )
     });
     let mouth_press = field(&|i, p| {
         let lips = (c.upper_lip[i] + c.lower_lip[i]) * side(p);
-        Vec3::new(0.0, -0.45 * (p.y - mouth_line(p.x.abs())), -0.0015) * lips
+        Vec3::new(0.0, -0.7 * (p.y - mouth_line(p.x.abs())), -0.0025) * lips
     });
-    let mouth_lower_down = field(&|i, p| Vec3::new(0.0, -0.005, 0.0005) * c.lower_lip[i] * side(p));
-    let mouth_upper_up = field(&|i, p| Vec3::new(0.0, 0.005, 0.0005) * c.upper_lip[i] * side(p));
+    let mouth_lower_down = field(&|i, p| Vec3::new(0.0, -0.008, 0.0008) * c.lower_lip[i] * side(p));
+    let mouth_upper_up = field(&|i, p| Vec3::new(0.0, 0.008, 0.0008) * c.upper_lip[i] * side(p));
     let mouth_left = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.008, 0.0, 0.0)
+            Vec3::new(0.012, 0.0, 0.0)
                 * bump(
                     p,
                     Vec3::new(0.0, MOUTH_Y, 0.088),
@@ -236,7 +236,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let brow_down = field(&|i, p| {
         skin(
             i,
-            Vec3::new(-0.0015, -0.006, 0.001)
+            Vec3::new(-0.002, -0.009, 0.001)
                 * bump(
                     p,
                     Vec3::new(0.028, 0.030, 0.080),
@@ -258,7 +258,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let cheek_squint = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.0, 0.004, 0.0015)
+            Vec3::new(0.0, 0.007, 0.002)
                 * bump(
                     p,
                     Vec3::new(0.040, -0.012, 0.068),
@@ -269,7 +269,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let nose_sneer = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.001, 0.004, 0.0005)
+            Vec3::new(0.0015, 0.007, 0.0008)
                 * bump(
                     p,
                     Vec3::new(0.013, -0.025, 0.088),
@@ -279,7 +279,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     });
 
     // Centred shapes (symmetrised below).
-    let jaw_forward = field(&|i, _| Vec3::new(0.0, 0.0, 0.008) * c.jaw[i]);
+    let jaw_forward = field(&|i, _| Vec3::new(0.0, 0.0, 0.013) * c.jaw[i]);
     let jaw_open = field(&|i, _| c.jaw_turn(i, JAW_ANGLE));
     let mouth_close = field(&|i, p| {
         let v = &mesh.vertices[i];
@@ -294,21 +294,21 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let mouth_funnel = field(&|i, p| {
         let lips = c.upper_lip[i] + c.lower_lip[i];
         Vec3::new(
-            -0.25 * p.x * lips,
-            0.003 * c.upper_lip[i] - 0.004 * c.lower_lip[i],
-            0.006 * lips,
+            -0.35 * p.x * lips,
+            0.005 * c.upper_lip[i] - 0.007 * c.lower_lip[i],
+            0.010 * lips,
         )
     });
     let mouth_pucker = field(&|i, p| {
         let lips = c.upper_lip[i] + c.lower_lip[i];
         Vec3::new(
-            -0.45 * p.x * lips,
+            -0.60 * p.x * lips,
             -0.0005 * c.upper_lip[i] + 0.0005 * c.lower_lip[i],
-            0.009 * lips,
+            0.013 * lips,
         )
     });
-    let mouth_roll_lower = field(&|i, _| Vec3::new(0.0, 0.0025, -0.005) * c.lower_lip[i]);
-    let mouth_roll_upper = field(&|i, _| Vec3::new(0.0, -0.002, -0.005) * c.upper_lip[i]);
+    let mouth_roll_lower = field(&|i, _| Vec3::new(0.0, 0.004, -0.008) * c.lower_lip[i]);
+    let mouth_roll_upper = field(&|i, _| Vec3::new(0.0, -0.0035, -0.008) * c.upper_lip[i]);
     let mouth_shrug_lower = field(&|i, p| {
         let chin = skin(
             i,
