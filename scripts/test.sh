@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 
 scripts/setup.sh
 cargo clippy --workspace --all-targets --locked -- -D warnings
+scripts/check-layers.sh
 cargo test --workspace --doc --locked
 # Last, so that the run ends on the summary of every test.
 if cargo nextest --version >/dev/null 2>&1; then
