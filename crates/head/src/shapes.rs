@@ -161,11 +161,11 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
         )
     });
     let eye_look_down =
-        field(&|i, _| c.gaze(i, Quat::from_rotation_x(0.55)) + c.lids(i, |_| -0.30, |_| -0.08));
-    let eye_look_in = field(&|i, _| c.gaze(i, Quat::from_rotation_y(-0.55)));
-    let eye_look_out = field(&|i, _| c.gaze(i, Quat::from_rotation_y(0.55)));
+        field(&|i, _| c.gaze(i, Quat::from_rotation_x(0.65)) + c.lids(i, |_| -0.36, |_| -0.10));
+    let eye_look_in = field(&|i, _| c.gaze(i, Quat::from_rotation_y(-0.62)));
+    let eye_look_out = field(&|i, _| c.gaze(i, Quat::from_rotation_y(0.62)));
     let eye_look_up =
-        field(&|i, _| c.gaze(i, Quat::from_rotation_x(-0.55)) + c.lids(i, |_| 0.25, |_| 0.08));
+        field(&|i, _| c.gaze(i, Quat::from_rotation_x(-0.62)) + c.lids(i, |_| 0.30, |_| 0.10));
     let eye_squint = field(&|i, p| {
         let cheek = skin(
             i,
@@ -200,7 +200,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let mouth_frown = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.002, -0.010, -0.001) * corner(p, Vec3::new(0.020, 0.018, 0.025)),
+            Vec3::new(0.002, -0.013, -0.001) * corner(p, Vec3::new(0.020, 0.018, 0.025)),
         )
     });
     let mouth_dimple = field(&|i, p| {
@@ -212,7 +212,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let mouth_stretch = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.009, -0.005, -0.003) * corner(p, Vec3::new(0.026, 0.022, 0.030))
+            Vec3::new(0.012, -0.006, -0.004) * corner(p, Vec3::new(0.026, 0.022, 0.030))
                 + Vec3::new(0.0, -0.0015, 0.0) * c.lower_lip[i] * side(p),
         )
     });
@@ -221,11 +221,11 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
         Vec3::new(0.0, -0.7 * (p.y - mouth_line(p.x.abs())), -0.0025) * lips
     });
     let mouth_lower_down = field(&|i, p| Vec3::new(0.0, -0.008, 0.0008) * c.lower_lip[i] * side(p));
-    let mouth_upper_up = field(&|i, p| Vec3::new(0.0, 0.008, 0.0008) * c.upper_lip[i] * side(p));
+    let mouth_upper_up = field(&|i, p| Vec3::new(0.0, 0.011, 0.001) * c.upper_lip[i] * side(p));
     let mouth_left = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.012, 0.0, 0.0)
+            Vec3::new(0.016, 0.0, 0.0)
                 * bump(
                     p,
                     Vec3::new(0.0, MOUTH_Y, 0.088),
@@ -247,7 +247,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let brow_outer_up = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.0, 0.008, 0.0)
+            Vec3::new(0.0, 0.011, 0.0)
                 * bump(
                     p,
                     Vec3::new(0.046, 0.034, 0.077),
@@ -321,7 +321,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
         );
         Vec3::new(0.0, 0.004, 0.003) * (c.lower_lip[i] + chin.x)
     });
-    let mouth_shrug_upper = field(&|i, _| Vec3::new(0.0, 0.003, 0.002) * c.upper_lip[i]);
+    let mouth_shrug_upper = field(&|i, _| Vec3::new(0.0, 0.005, 0.003) * c.upper_lip[i]);
     let brow_inner_up = field(&|i, p| {
         skin(
             i,

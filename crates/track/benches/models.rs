@@ -9,12 +9,20 @@ use faceanim_track::FaceModels;
 
 fn benches(c: &mut Criterion) {
     let models = FaceModels::load().unwrap();
-    let crop: Vec<f32> = (0..256 * 256 * 3).map(|i| (i % 251) as f32 / 251.0).collect();
-    let small: Vec<f32> = (0..128 * 128 * 3).map(|i| (i % 241) as f32 / 120.5 - 1.0).collect();
+    let crop: Vec<f32> = (0..256 * 256 * 3)
+        .map(|i| (i % 251) as f32 / 251.0)
+        .collect();
+    let small: Vec<f32> = (0..128 * 128 * 3)
+        .map(|i| (i % 241) as f32 / 120.5 - 1.0)
+        .collect();
     let landmarks = models.landmarks(&crop).unwrap();
     let mut group = c.benchmark_group("face models (tract, one thread)");
-    group.bench_function("detector 128x128", |b| b.iter(|| black_box(models.detect(black_box(&small)).unwrap())));
-    group.bench_function("landmarks 256x256", |b| b.iter(|| black_box(models.landmarks(black_box(&crop)).unwrap())));
+    group.bench_function("detector 128x128", |b| {
+        b.iter(|| black_box(models.detect(black_box(&small)).unwrap()))
+    });
+    group.bench_function("landmarks 256x256", |b| {
+        b.iter(|| black_box(models.landmarks(black_box(&crop)).unwrap()))
+    });
     group.bench_function("blendshapes from 478 landmarks", |b| {
         b.iter(|| black_box(models.expression(black_box(&landmarks.points)).unwrap()));
     });

@@ -7,7 +7,11 @@
 //! tested against the reference runtime (LiteRT) in `tests/reference.rs`.
 #![deny(missing_docs)]
 
+mod face;
+
 use std::io::Read as _;
+
+pub use face::{Face, Frame, Region};
 
 use tract_tflite::prelude::*;
 

@@ -1,0 +1,258 @@
+//! One still image to one face: detection, the face's rotated region, landmarks in image
+//! pixels, and the 52 expression scores — MediaPipe's Face Landmarker graph, step by step.
+//!
+//! - The image is letterboxed to a square and scaled to 128×128 for the detector.
+//! - The detector's 896 anchors (strides 8 and 16, two and six anchors per cell) decode to boxes
+//!   and six keypoints; scores pass a sigmoid; overlapping boxes (IoU > 0.3) are merged by a
+//!   score-weighted mean, as MediaPipe's weighted non-maximum suppression does.
+//! - The face region is the box, turned so the eyes (keypoints 0 and 1) are level and enlarged
+//!   1.5×; it is resampled (bilinear) into the 256×256 landmark crop, and the landmarks are
+//!   mapped back into image pixels.
+
+use crate::{FaceModels, ModelError};
+
+/// An RGB image, 8 bits per channel, rows top to bottom.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame<'a> {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `width × height × 3` bytes.
+    pub rgb: &'a [u8],
+}
+
+/// A face found in a frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Face {
+    /// Detector confidence, 0..1.
+    pub detection_score: f32,
+    /// Landmark network's face presence, 0..1.
+    pub presence: f32,
+    /// The 478 landmarks: x, y in image pixels, z in the same scale.
+    pub landmarks: Vec<[f32; 3]>,
+    /// The 52 scores with their names (`_neutral` first).
+    pub scores: Vec<(&'static str, f32)>,
+    /// Centre, size (side, pixels) and rotation (radians) of the region the landmarks came from.
+    pub region: Region,
+}
+
+/// A square region of the image, turned by `rotation` about its centre.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Region {
+    /// Centre x, in pixels.
+    pub cx: f32,
+    /// Centre y, in pixels.
+    pub cy: f32,
+    /// Side length, in pixels.
+    pub size: f32,
+    /// Rotation, radians (positive turns the region clockwise on screen).
+    pub rotation: f32,
+}
+
+const MIN_SCORE: f32 = 0.5;
+const MIN_SUPPRESSION_IOU: f32 = 0.3;
+const REGION_SCALE: f32 = 1.5;
+
+struct Detection {
+    score: f32,
+    /// xmin, ymin, xmax, ymax and six keypoints (x, y), all in [0, 1] of the letterboxed square.
+    values: [f32; 16],
+}
+
+/// Anchor centres of the short-range BlazeFace model, in [0, 1].
+fn anchors() -> Vec<(f32, f32)> {
+    let mut out = Vec::with_capacity(896);
+    for (grid, per_cell) in [(16usize, 2usize), (8, 6)] {
+        for y in 0..grid {
+            for x in 0..grid {
+                for _ in 0..per_cell {
+                    out.push((
+                        (x as f32 + 0.5) / grid as f32,
+                        (y as f32 + 0.5) / grid as f32,
+                    ));
+                }
+            }
+        }
+    }
+    out
+}
+
+fn iou(a: &[f32; 16], b: &[f32; 16]) -> f32 {
+    let w = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
+    let h = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
+    let inter = w * h;
+    let union = (a[2] - a[0]) * (a[3] - a[1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter;
+    if union > 0.0 { inter / union } else { 0.0 }
+}
+
+/// Bilinear sample of `frame` at (x, y) pixels; outside the image is black.
+fn sample(frame: &Frame<'_>, x: f32, y: f32) -> [f32; 3] {
+    let (x, y) = (x - 0.5, y - 0.5);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let mut out = [0.0; 3];
+    for (dx, dy, w) in [
+        (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
+        (1.0, 0.0, fx * (1.0 - fy)),
+        (0.0, 1.0, (1.0 - fx) * fy),
+        (1.0, 1.0, fx * fy),
+    ] {
+        let (px, py) = (x0 + dx, y0 + dy);
+        if px < 0.0 || py < 0.0 || px >= frame.width as f32 || py >= frame.height as f32 {
+            continue;
+        }
+        let i = (py as usize * frame.width + px as usize) * 3;
+        for (o, &v) in out.iter_mut().zip(&frame.rgb[i..i + 3]) {
+            *o += w * f32::from(v);
+        }
+    }
+    out
+}
+
+impl FaceModels {
+    /// The most confident face in `frame`, or `None` when there is none.
+    ///
+    /// # Errors
+    /// [`ModelError`] if the frame's size and bytes disagree or a model fails.
+    pub fn find_face(&self, frame: &Frame<'_>) -> Result<Option<Face>, ModelError> {
+        let bad = |message: String| ModelError::Runtime {
+            model: "frame",
+            message,
+        };
+        if frame.width == 0
+            || frame.height == 0
+            || frame.rgb.len() != frame.width * frame.height * 3
+        {
+            return Err(bad(format!(
+                "{}×{} frame with {} bytes",
+                frame.width,
+                frame.height,
+                frame.rgb.len()
+            )));
+        }
+        // Letterbox to a square, scale to 128×128, values in [−1, 1].
+        let side = frame.width.max(frame.height) as f32;
+        let (pad_x, pad_y) = (
+            (side - frame.width as f32) / 2.0,
+            (side - frame.height as f32) / 2.0,
+        );
+        let mut input = Vec::with_capacity(128 * 128 * 3);
+        for j in 0..128 {
+            for i in 0..128 {
+                let x = (i as f32 + 0.5) * side / 128.0 - pad_x;
+                let y = (j as f32 + 0.5) * side / 128.0 - pad_y;
+                input.extend(sample(frame, x, y).map(|v| v / 127.5 - 1.0));
+            }
+        }
+        let (regressors, logits) = self.detect(&input)?;
+        let mut detections: Vec<Detection> = anchors()
+            .iter()
+            .enumerate()
+            .filter_map(|(k, &(ax, ay))| {
+                let score = 1.0 / (1.0 + (-logits[k].clamp(-100.0, 100.0)).exp());
+                if score < MIN_SCORE {
+                    return None;
+                }
+                let r = &regressors[k * 16..k * 16 + 16];
+                let (cx, cy, w, h) = (
+                    r[0] / 128.0 + ax,
+                    r[1] / 128.0 + ay,
+                    r[2] / 128.0,
+                    r[3] / 128.0,
+                );
+                let mut values = [0.0; 16];
+                values[..4].copy_from_slice(&[
+                    cx - w / 2.0,
+                    cy - h / 2.0,
+                    cx + w / 2.0,
+                    cy + h / 2.0,
+                ]);
+                for p in 0..6 {
+                    values[4 + 2 * p] = r[4 + 2 * p] / 128.0 + ax;
+                    values[5 + 2 * p] = r[5 + 2 * p] / 128.0 + ay;
+                }
+                Some(Detection { score, values })
+            })
+            .collect();
+        detections.sort_by(|a, b| b.score.total_cmp(&a.score));
+        // Weighted non-maximum suppression: the best detection, averaged with those overlapping it.
+        let Some(best) = detections.first() else {
+            return Ok(None);
+        };
+        let cluster: Vec<&Detection> = detections
+            .iter()
+            .filter(|d| iou(&d.values, &best.values) > MIN_SUPPRESSION_IOU)
+            .collect();
+        let total: f32 = cluster.iter().map(|d| d.score).sum();
+        let mut merged = [0.0f32; 16];
+        for d in &cluster {
+            for (m, v) in merged.iter_mut().zip(d.values) {
+                *m += v * d.score / total;
+            }
+        }
+        let to_image = |u: f32, v: f32| (u * side - pad_x, v * side - pad_y);
+        let (x0, y0) = to_image(merged[0], merged[1]);
+        let (x1, y1) = to_image(merged[2], merged[3]);
+        let (ex0, ey0) = to_image(merged[4], merged[5]);
+        let (ex1, ey1) = to_image(merged[6], merged[7]);
+        let rotation = -(-(ey1 - ey0)).atan2(ex1 - ex0);
+        let region = Region {
+            cx: (x0 + x1) / 2.0,
+            cy: (y0 + y1) / 2.0,
+            size: (x1 - x0).max(y1 - y0) * REGION_SCALE,
+            rotation,
+        };
+        self.face_in_region(frame, region, best.score).map(Some)
+    }
+
+    /// Landmarks and scores of the face in `region` of `frame` (tracking reuses the previous
+    /// frame's region instead of detecting again).
+    ///
+    /// # Errors
+    /// [`ModelError`] if a model fails.
+    pub fn face_in_region(
+        &self,
+        frame: &Frame<'_>,
+        region: Region,
+        detection_score: f32,
+    ) -> Result<Face, ModelError> {
+        let (sin, cos) = region.rotation.sin_cos();
+        let to_image = |u: f32, v: f32| {
+            // (u, v) in crop pixels → image pixels.
+            let (dx, dy) = (
+                (u / 256.0 - 0.5) * region.size,
+                (v / 256.0 - 0.5) * region.size,
+            );
+            (
+                region.cx + dx * cos - dy * sin,
+                region.cy + dx * sin + dy * cos,
+            )
+        };
+        let mut crop = Vec::with_capacity(256 * 256 * 3);
+        for j in 0..256 {
+            for i in 0..256 {
+                let (x, y) = to_image(i as f32 + 0.5, j as f32 + 0.5);
+                crop.extend(sample(frame, x, y).map(|v| v / 255.0));
+            }
+        }
+        let out = self.landmarks(&crop)?;
+        let scale = region.size / 256.0;
+        let landmarks: Vec<[f32; 3]> = out
+            .points
+            .iter()
+            .map(|p| {
+                let (x, y) = to_image(p[0], p[1]);
+                [x, y, p[2] * scale]
+            })
+            .collect();
+        let scores = self.expression(&landmarks)?;
+        Ok(Face {
+            detection_score,
+            presence: out.presence,
+            landmarks,
+            scores,
+            region,
+        })
+    }
+}

@@ -1,0 +1,110 @@
+//! Still images through the whole per-frame pipeline (detector, region, landmarks, scores):
+//! the capture issue's thresholds.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    reason = "tests"
+)]
+
+use std::collections::HashMap;
+
+use faceanim_track::{FaceModels, Frame};
+
+fn decode(name: &str) -> (usize, usize, Vec<u8>) {
+    let path = faceanim_testdata::shared(&format!("images/{name}"));
+    let mut reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.color_type.samples();
+    let rgb = buf
+        .chunks(channels)
+        .take((info.width * info.height) as usize)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    (info.width as usize, info.height as usize, rgb)
+}
+
+fn scores(models: &FaceModels, name: &str) -> HashMap<&'static str, f32> {
+    let (width, height, rgb) = decode(name);
+    let face = models
+        .find_face(&Frame {
+            width,
+            height,
+            rgb: &rgb,
+        })
+        .unwrap()
+        .unwrap_or_else(|| panic!("{name}: no face"));
+    assert!(
+        face.presence > 0.9 && face.detection_score > 0.5,
+        "{name}: {} / {}",
+        face.presence,
+        face.detection_score
+    );
+    face.scores.into_iter().collect()
+}
+
+#[test]
+fn a_smiling_photograph_and_the_ict_renders() {
+    let models = FaceModels::load().unwrap();
+    let astronaut = scores(&models, "astronaut.png");
+    let open = scores(&models, "ict-face-jawopen.png");
+    let smile = scores(&models, "ict-face-smile.png");
+    let blink = scores(&models, "ict-face-blink.png");
+    let neutral = scores(&models, "ict-face-neutral.png");
+    eprintln!(
+        "astronaut smile {:.2}/{:.2}; ict jawOpen {:.2}, smile {:.2}/{:.2}, blink {:.2}/{:.2}; neutral {:.2} {:.2}/{:.2} {:.2}/{:.2}",
+        astronaut["mouthSmileLeft"],
+        astronaut["mouthSmileRight"],
+        open["jawOpen"],
+        smile["mouthSmileLeft"],
+        smile["mouthSmileRight"],
+        blink["eyeBlinkLeft"],
+        blink["eyeBlinkRight"],
+        neutral["jawOpen"],
+        neutral["mouthSmileLeft"],
+        neutral["mouthSmileRight"],
+        neutral["eyeBlinkLeft"],
+        neutral["eyeBlinkRight"]
+    );
+    assert!(astronaut["mouthSmileLeft"] > 0.6 && astronaut["mouthSmileRight"] > 0.6);
+    assert!(open["jawOpen"] > 0.5);
+    assert!(smile["mouthSmileLeft"] > 0.4 && smile["mouthSmileRight"] > 0.4);
+    assert!(blink["eyeBlinkLeft"] > 0.4 && blink["eyeBlinkRight"] > 0.4);
+    for name in [
+        "jawOpen",
+        "mouthSmileLeft",
+        "mouthSmileRight",
+        "eyeBlinkLeft",
+        "eyeBlinkRight",
+    ] {
+        assert!(neutral[name] < 0.15, "neutral {name} = {}", neutral[name]);
+    }
+}
+
+#[test]
+fn a_frame_without_a_face_is_none_and_a_wrong_size_is_an_error() {
+    let models = FaceModels::load().unwrap();
+    let grey = vec![128u8; 320 * 240 * 3];
+    assert!(
+        models
+            .find_face(&Frame {
+                width: 320,
+                height: 240,
+                rgb: &grey
+            })
+            .unwrap()
+            .is_none()
+    );
+    let err = models
+        .find_face(&Frame {
+            width: 320,
+            height: 240,
+            rgb: &grey[..100],
+        })
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "frame: 320×240 frame with 100 bytes");
+}
