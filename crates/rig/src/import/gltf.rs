@@ -294,7 +294,6 @@ struct Builder {
     shape_index: HashMap<String, usize>,
     shape_indices: Vec<Vec<u32>>,
     shape_deltas: Vec<Vec<Vec3>>,
-    threshold: f32,
     warnings: Vec<String>,
     saw_targets: bool,
 }
@@ -321,7 +320,6 @@ impl Builder {
             shape_index: HashMap::new(),
             shape_indices: Vec::new(),
             shape_deltas: Vec::new(),
-            threshold: 0.0,
             warnings: Vec::new(),
             saw_targets: false,
         }
@@ -764,7 +762,7 @@ impl Builder {
         id
     }
 
-    fn finish(mut self) -> Result<Imported, ImportErrorKind> {
+    fn finish(self) -> Result<Imported, ImportErrorKind> {
         if self.positions.is_empty() || self.triangles.is_empty() {
             return Err(ImportErrorKind::NoMeshes);
         }
@@ -773,7 +771,7 @@ impl Builder {
         }
         // Parts are recorded per primitive; their triangle ranges are contiguous by construction.
         let size = crate::character::Aabb::around(&self.positions).diagonal();
-        self.threshold = SPARSE_DELTA_THRESHOLD * size;
+        let threshold = SPARSE_DELTA_THRESHOLD * size;
         let blendshapes = self
             .shape_names
             .iter()
@@ -782,7 +780,7 @@ impl Builder {
                 let (indices, deltas): (Vec<u32>, Vec<Vec3>) = indices
                     .into_iter()
                     .zip(deltas)
-                    .filter(|(_, d)| d.length() > self.threshold)
+                    .filter(|(_, d)| d.length() > threshold)
                     .unzip();
                 Blendshape::from_sparse(name.clone(), indices, deltas)
             })
