@@ -36,14 +36,17 @@ fn smax(a: f32, b: f32, k: f32) -> f32 {
     -smin(-a, -b, k)
 }
 
-fn mirrored(p: Vec3) -> Vec3 {
+/// `p` mirrored onto the character's left (+X) side: everything is built for the left and
+/// mirrored, so the head is exactly symmetric.
+#[must_use]
+pub fn left(p: Vec3) -> Vec3 {
     Vec3::new(p.x.abs(), p.y, p.z)
 }
 
 /// Signed distance to the head (negative inside).
 #[must_use]
 pub fn head(p: Vec3) -> f32 {
-    let m = mirrored(p);
+    let m = left(p);
     let mut d = ellipsoid(
         p,
         Vec3::new(0.0, 0.025, -0.010),

@@ -8,7 +8,7 @@ use std::f32::consts::{FRAC_PI_2, PI};
 
 use glam::Vec3;
 
-use crate::field::{EYE_RADIUS, LEFT_EYE, LID_RADIUS, MOUTH_Y, bump, cast, smoothstep};
+use crate::field::{EYE_RADIUS, LEFT_EYE, LID_RADIUS, MOUTH_Y, bump, cast, left, smoothstep};
 
 /// Which part of the head a vertex belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -149,10 +149,6 @@ fn on_left(p: Vec3, f: impl Fn(Vec3) -> Vec3) -> Vec3 {
         let q = f(Vec3::new(-p.x, p.y, p.z));
         Vec3::new(-q.x, q.y, q.z)
     }
-}
-
-fn left(p: Vec3) -> Vec3 {
-    Vec3::new(p.x.abs(), p.y, p.z)
 }
 
 struct Builder {

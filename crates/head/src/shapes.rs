@@ -7,7 +7,7 @@
 
 use glam::{Quat, Vec3};
 
-use crate::field::{LEFT_EYE, MOUTH_Y, bump, smoothstep};
+use crate::field::{LEFT_EYE, MOUTH_Y, bump, left, smoothstep};
 use crate::mesh::{MOUTH_HALF_WIDTH, Mesh, Part, eye_angles, eye_point, lid_lines};
 
 /// Jaw hinge (an axis along X through this point).
@@ -23,10 +23,6 @@ struct Context<'a> {
     upper_lip: Vec<f32>,
     lower_lip: Vec<f32>,
     corner: Vec3,
-}
-
-fn left(p: Vec3) -> Vec3 {
-    Vec3::new(p.x.abs(), p.y, p.z)
 }
 
 fn reflect(d: Vec3) -> Vec3 {
