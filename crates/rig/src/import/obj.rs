@@ -342,58 +342,35 @@ mod tests {
         assert_eq!(c.uvs().map(|u| u[2]), Some([1.0, 1.0]));
     }
 
+    /// The error message of importing `neutral` with one blendshape file `shape`.
+    fn error_of(neutral: (&str, &str), shape: (&str, &str)) -> Option<String> {
+        import_obj_set(
+            "x",
+            ObjSource {
+                name: neutral.0,
+                text: neutral.1,
+            },
+            &[ObjSource {
+                name: shape.0,
+                text: shape.1,
+            }],
+        )
+        .err()
+        .map(|e| e.to_string())
+    }
+
     #[test]
     fn errors_name_file_and_line() {
-        let bad = "v 0 0 0\nv 1 0\n";
-        let e = import_obj_set(
-            "x",
-            ObjSource {
-                name: "neutral.obj",
-                text: QUAD,
-            },
-            &[ObjSource {
-                name: "s.obj",
-                text: bad,
-            }],
-        )
-        .err()
-        .map(|e| e.to_string());
         assert_eq!(
-            e.as_deref(),
+            error_of(("neutral.obj", QUAD), ("s.obj", "v 0 0 0\nv 1 0\n")).as_deref(),
             Some("s.obj: line 2: a vertex needs 3 coordinates, found 2")
         );
-        let e = import_obj_set(
-            "x",
-            ObjSource {
-                name: "n.obj",
-                text: "v 0 0 0\nf 1 2 3\n",
-            },
-            &[ObjSource {
-                name: "s.obj",
-                text: "v 0 0 0\n",
-            }],
-        )
-        .err()
-        .map(|e| e.to_string());
         assert_eq!(
-            e.as_deref(),
+            error_of(("n.obj", "v 0 0 0\nf 1 2 3\n"), ("s.obj", "v 0 0 0\n")).as_deref(),
             Some("n.obj: line 2: vertex index 2 is out of range (there are 1 so far)")
         );
-        let e = import_obj_set(
-            "x",
-            ObjSource {
-                name: "n.obj",
-                text: QUAD,
-            },
-            &[ObjSource {
-                name: "s.obj",
-                text: "v 0 0 0\n",
-            }],
-        )
-        .err()
-        .map(|e| e.to_string());
         assert_eq!(
-            e.as_deref(),
+            error_of(("n.obj", QUAD), ("s.obj", "v 0 0 0\n")).as_deref(),
             Some("s.obj: counts disagree: it has 1 vertices but the neutral 'n.obj' has 4")
         );
     }
