@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what the test suite checks faceanim's files with, when it is missing:
 #   - Blender 3.4 and NumPy for its glTF importer (Debian packages), to open exports as users do;
-#   - Node.js and the Khronos glTF-Validator (npm, pinned in tools/package-lock.json).
+#   - Node.js and the Khronos glTF-Validator (npm, pinned in tools/package-lock.json);
+#   - ffmpeg, which faceanim uses to read video and the tests use to make videos.
 # Safe to run again: it installs only what is not there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -11,6 +12,7 @@ command -v blender >/dev/null 2>&1 || packages+=(blender)
 dpkg -s python3-numpy >/dev/null 2>&1 || packages+=(python3-numpy)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
+command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
 if ((${#packages[@]})); then
   sudo=""
   [ "$(id -u)" -eq 0 ] || sudo="sudo"

@@ -5,7 +5,9 @@
 //! into clips, capture produces them, metrics compare them and exporters write them.
 //!
 //! The JSON form (DESIGN.md, "Baked clip") is
-//! `{"fps": 30, "blendshapes": [names], "frames": [[w, ...], ...], "head": [[yaw, pitch, roll], ...]}`.
+//! `{"fps": 30, "blendshapes": [names], "frames": [[w, ...], ...], "head": [[yaw, pitch, roll], ...]}`,
+//! and for clips from capture two more optional per-frame fields: `"head_position"` (metres
+//! from the camera) and `"presence"` (0..1; 0 marks a frame where no face was found).
 //! [`Clip::from_json`] reports *every* problem with its path (`frames[3][7]`), not just the first.
 //!
 //! ```
@@ -15,6 +17,9 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod filter;
+pub mod keyframes;
+pub mod livelink;
 pub mod metrics;
 
 use faceanim_rig::Character;
@@ -31,9 +36,30 @@ pub struct Clip {
     pub blendshapes: Vec<String>,
     /// One row of weights per frame.
     pub frames: Vec<Vec<f32>>,
-    /// Head rotation per frame in degrees: yaw, pitch, roll.
+    /// Head rotation per frame in degrees: yaw, pitch, roll (see [`head_rotation`] for the
+    /// convention).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub head: Option<Vec<[f32; 3]>>,
+    /// Head position per frame in metres, relative to the camera (x right, y up, z towards the
+    /// viewer), for clips from capture.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub head_position: Option<Vec<[f32; 3]>>,
+    /// Per frame, how sure capture was that a face was there (0..1; 0 where no face was found
+    /// and the weights were filled in from the neighbouring frames).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub presence: Option<Vec<f32>>,
+}
+
+/// The head rotation `[yaw, pitch, roll]` (degrees) as a unit quaternion `[x, y, z, w]` in a
+/// y-up, z-towards-the-viewer frame (glTF's, for a character facing the viewer):
+/// `R = Ry(yaw) · Rx(−pitch) · Rz(roll)`, so positive yaw turns the face towards the subject's
+/// own left, positive pitch lifts the chin, positive roll turns anticlockwise as the viewer sees it.
+#[must_use]
+pub fn head_rotation([yaw, pitch, roll]: [f32; 3]) -> [f32; 4] {
+    let q = glam::Quat::from_rotation_y(yaw.to_radians())
+        * glam::Quat::from_rotation_x(-pitch.to_radians())
+        * glam::Quat::from_rotation_z(roll.to_radians());
+    q.normalize().to_array()
 }
 
 /// Problems with a clip, each with the JSON path it concerns.
@@ -118,17 +144,32 @@ impl Clip {
                 }
             }
         }
-        if let Some(head) = &self.head {
-            if head.len() != self.frames.len() {
+        for (field, rows) in [("head", &self.head), ("head_position", &self.head_position)] {
+            let Some(rows) = rows else { continue };
+            if rows.len() != self.frames.len() {
                 problems.push(format!(
-                    "head: {} rows for {} frames",
-                    head.len(),
+                    "{field}: {} rows for {} frames",
+                    rows.len(),
                     self.frames.len()
                 ));
             }
-            for (f, row) in head.iter().enumerate() {
+            for (f, row) in rows.iter().enumerate() {
                 if row.iter().any(|x| !x.is_finite()) {
-                    problems.push(format!("head[{f}]: not a finite number"));
+                    problems.push(format!("{field}[{f}]: not a finite number"));
+                }
+            }
+        }
+        if let Some(presence) = &self.presence {
+            if presence.len() != self.frames.len() {
+                problems.push(format!(
+                    "presence: {} values for {} frames",
+                    presence.len(),
+                    self.frames.len()
+                ));
+            }
+            for (f, p) in presence.iter().enumerate() {
+                if !(0.0..=1.0).contains(p) {
+                    problems.push(format!("presence[{f}]: {p} is not in [0, 1]"));
                 }
             }
         }
@@ -151,7 +192,7 @@ impl Clip {
 
     /// Maps the clip onto `character`'s blendshapes by name (exact, else the same ARKit shape
     /// under another spelling), one key per frame. Character blendshapes the clip does not
-    /// mention stay at 0.
+    /// mention stay at 0. A head rotation, if the clip has one, turns the character's root.
     ///
     /// # Errors
     /// [`ClipError::NothingInCommon`] when no name matches.
@@ -202,6 +243,10 @@ impl Clip {
                 name: name.to_owned(),
                 times,
                 weights,
+                rotations: self
+                    .head
+                    .as_ref()
+                    .map(|head| head.iter().map(|&h| head_rotation(h)).collect()),
             },
             unmatched,
         })
@@ -244,6 +289,8 @@ mod tests {
             blendshapes: vec!["jawOpen".into()],
             frames: vec![vec![0.0], vec![1.0]],
             head: Some(vec![[1.0, 2.0, 3.0]; 2]),
+            head_position: Some(vec![[0.0, 0.1, -0.5]; 2]),
+            presence: Some(vec![1.0, 0.0]),
         };
         assert_eq!(Clip::from_json(clip.to_json().as_bytes()), Ok(clip));
     }

@@ -157,6 +157,8 @@ mod tests {
             blendshapes: names.iter().map(|s| (*s).to_owned()).collect(),
             frames,
             head: None,
+            head_position: None,
+            presence: None,
         }
     }
 

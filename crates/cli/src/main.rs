@@ -4,12 +4,14 @@
 //! (which names the file and the problem) and exits with status 1; usage errors exit with 2.
 
 mod info;
+mod track;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
 use clap::{Parser, Subcommand};
+use faceanim_anim::filter::OneEuro;
 
 /// faceanim animates the face of any blendshape character.
 ///
@@ -96,6 +98,50 @@ enum Command {
         /// Image size in pixels (for a sheet, each cell's size, at most 512).
         #[arg(long, default_value_t = 512)]
         size: u32,
+    },
+    /// Animate a character from a face photo, an image folder or a video: landmarks, ARKit
+    /// scores and head pose per frame (MediaPipe's face models, run on the CPU), mapped by name
+    /// onto the character's blendshapes.
+    ///
+    /// Outputs by extension (repeat -o for several): .json the clip (DESIGN.md), .glb the
+    /// character with the animation (head pose on its root), .csv Live Link Face. Prints a JSON
+    /// summary with the jitter of each filter so you can choose.
+    ///
+    /// Example: faceanim track take.mp4 --character ict.glb -o take.glb -o take.csv
+    Track {
+        /// A PNG or JPEG, a folder of them (an image sequence, in name order), or a video
+        /// (read with the ffmpeg program).
+        input: PathBuf,
+        /// The character (default: the built-in head).
+        #[arg(long)]
+        character: Option<PathBuf>,
+        /// Where to write: .json, .glb or .csv; repeatable.
+        #[arg(short, long)]
+        output: Vec<PathBuf>,
+        /// Also keep every frame's landmarks, scores and pose here (JSON).
+        #[arg(long)]
+        raw: Option<PathBuf>,
+        /// Clean-up of the per-frame estimates.
+        #[arg(long, value_enum, default_value_t = track::FilterChoice::Keyframes)]
+        filter: track::FilterChoice,
+        /// Keyframe spacing in frames (the seed's default is 5).
+        #[arg(long, default_value_t = faceanim_anim::keyframes::DEFAULT_EVERY)]
+        keyframe_every: usize,
+        /// One Euro cutoff at rest, Hz: lower is smoother.
+        #[arg(long, default_value_t = OneEuro::default().min_cutoff)]
+        min_cutoff: f32,
+        /// One Euro speed coefficient: higher follows fast motion more closely.
+        #[arg(long, default_value_t = OneEuro::default().beta)]
+        beta: f32,
+        /// Run the face detector on every frame instead of tracking from the previous one.
+        #[arg(long)]
+        detect_every_frame: bool,
+        /// Frame rate given to a still image or an image folder (videos carry their own).
+        #[arg(long, default_value_t = 30.0)]
+        fps: f32,
+        /// Threads for the face models.
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
     },
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
@@ -275,6 +321,34 @@ fn run(command: Command) -> anyhow::Result<()> {
             );
             Ok(())
         }
+        Command::Track {
+            input,
+            character,
+            output,
+            raw,
+            filter,
+            keyframe_every,
+            min_cutoff,
+            beta,
+            detect_every_frame,
+            fps,
+            threads,
+        } => track::run(track::TrackArgs {
+            input,
+            character,
+            outputs: output,
+            raw,
+            filter,
+            keyframe_every,
+            one_euro: OneEuro {
+                min_cutoff,
+                beta,
+                ..OneEuro::default()
+            },
+            detect_every_frame,
+            fps,
+            threads,
+        }),
         Command::Eval { a, b, json } => {
             let (clip_a, clip_b) = (
                 faceanim_files::load_clip(&a)?,
@@ -341,7 +415,7 @@ fn sketch(
 }
 
 /// The character at `path`, or the built-in default head.
-fn load_or_default(
+pub(crate) fn load_or_default(
     path: Option<&std::path::Path>,
 ) -> anyhow::Result<faceanim_rig::import::Imported> {
     match path {

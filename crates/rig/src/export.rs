@@ -5,7 +5,8 @@
 //!   accessors, so vertex order and count survive a round trip exactly;
 //! - morph targets as *sparse* accessors holding only moved vertices (compact, and read by all
 //!   four), with `mesh.extras.targetNames` naming them;
-//! - animations as `weights` channels with LINEAR interpolation, one key per clip frame.
+//! - animations as `weights` channels with LINEAR interpolation, one key per clip frame, and
+//!   optionally a `rotation` channel on the same node (a captured head pose).
 
 use glam::Vec3;
 use serde_json::{Value, json};
@@ -22,6 +23,9 @@ pub struct MorphAnimation {
     pub times: Vec<f32>,
     /// One weight vector per key.
     pub weights: Vec<Vec<f32>>,
+    /// Optional rotation of the character's node per key, as a unit quaternion `[x, y, z, w]`
+    /// (a head pose from capture); played with spherical interpolation.
+    pub rotations: Option<Vec<[f32; 4]>>,
 }
 
 /// Why an export could not be written.
@@ -245,11 +249,15 @@ pub fn export_glb(
             );
             let flat: Vec<f32> = animation.weights.iter().flatten().copied().collect();
             let output = bin.floats(&flat, "SCALAR", None, None);
-            json!({
-                "name": animation.name,
-                "samplers": [{ "input": input, "output": output, "interpolation": "LINEAR" }],
-                "channels": [{ "sampler": 0, "target": { "node": 0, "path": "weights" } }],
-            })
+            let mut samplers = vec![json!({ "input": input, "output": output, "interpolation": "LINEAR" })];
+            let mut channels = vec![json!({ "sampler": 0, "target": { "node": 0, "path": "weights" } })];
+            if let Some(rotations) = &animation.rotations {
+                let flat: Vec<f32> = rotations.iter().flatten().copied().collect();
+                let output = bin.floats(&flat, "VEC4", None, None);
+                samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
+                channels.push(json!({ "sampler": 1, "target": { "node": 0, "path": "rotation" } }));
+            }
+            json!({ "name": animation.name, "samplers": samplers, "channels": channels })
         })
         .collect();
 
@@ -311,6 +319,21 @@ fn check_animation(animation: &MorphAnimation, shape_count: usize) -> Result<(),
             return Err(bad(format!(
                 "key {k} has a weight that is not a finite number"
             )));
+        }
+    }
+    if let Some(rotations) = &animation.rotations {
+        if rotations.len() != animation.times.len() {
+            return Err(bad(format!(
+                "{} key times but {} rotations",
+                animation.times.len(),
+                rotations.len()
+            )));
+        }
+        if let Some(k) = rotations.iter().position(|q| {
+            let length = q.iter().map(|x| x * x).sum::<f32>().sqrt();
+            !length.is_finite() || (length - 1.0).abs() > 1e-3
+        }) {
+            return Err(bad(format!("rotation {k} is not a unit quaternion")));
         }
     }
     Ok(())

@@ -202,6 +202,7 @@ fn an_exported_animation_survives_import_of_the_character() {
         name: "test".into(),
         times: vec![0.0, 0.5, 1.0],
         weights: vec![vec![0.0; n], vec![1.0; n], vec![0.0; n]],
+        rotations: None,
     };
     let glb = export_glb(c, &[animation]).unwrap();
     let back = import_gltf(&glb, "animated.glb", &NoExternalResources).unwrap();
@@ -211,6 +212,7 @@ fn an_exported_animation_survives_import_of_the_character() {
         name: "bad".into(),
         times: vec![0.0],
         weights: vec![vec![0.0; n - 1]],
+        rotations: None,
     };
     let err = export_glb(c, &[bad]).unwrap_err().to_string();
     assert_eq!(

@@ -168,6 +168,7 @@ impl Sketch<'_> {
                 name: name.to_owned(),
                 times,
                 weights,
+                rotations: None,
             },
         })
     }

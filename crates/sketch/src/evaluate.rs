@@ -139,6 +139,8 @@ impl Sketch<'_> {
                 .collect(),
             frames,
             head: None,
+            head_position: None,
+            presence: None,
         }
     }
 }

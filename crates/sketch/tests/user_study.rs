@@ -46,6 +46,8 @@ fn reference(frames: usize, curves: &[(&str, &dyn Fn(f32) -> f32)]) -> Clip {
         blendshapes: names,
         frames,
         head: None,
+        head_position: None,
+        presence: None,
     }
 }
 

@@ -9,7 +9,7 @@
 //!   1.5×; it is resampled (bilinear) into the 256×256 landmark crop, and the landmarks are
 //!   mapped back into image pixels.
 
-use crate::{FaceModels, ModelError};
+use crate::{FaceModels, HeadPose, ModelError};
 
 /// An RGB image, 8 bits per channel, rows top to bottom.
 #[derive(Debug, Clone, Copy)]
@@ -35,6 +35,8 @@ pub struct Face {
     pub scores: Vec<(&'static str, f32)>,
     /// Centre, size (side, pixels) and rotation (radians) of the region the landmarks came from.
     pub region: Region,
+    /// Head pose from the landmarks (`None` only for degenerate landmarks).
+    pub pose: Option<HeadPose>,
 }
 
 /// A square region of the image, turned by `rotation` about its centre.
@@ -52,7 +54,8 @@ pub struct Region {
 
 const MIN_SCORE: f32 = 0.5;
 const MIN_SUPPRESSION_IOU: f32 = 0.3;
-const REGION_SCALE: f32 = 1.5;
+/// How much larger than the face's box its landmark crop is.
+pub(crate) const REGION_SCALE: f32 = 1.5;
 
 struct Detection {
     score: f32,
@@ -247,7 +250,9 @@ impl FaceModels {
             })
             .collect();
         let scores = self.expression(&landmarks)?;
+        let pose = self.canonical.fit(&landmarks, frame.width, frame.height);
         Ok(Face {
+            pose,
             detection_score,
             presence: out.presence,
             landmarks,

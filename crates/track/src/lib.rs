@@ -8,10 +8,14 @@
 #![deny(missing_docs)]
 
 mod face;
+mod pose;
+mod tracker;
 
 use std::io::Read as _;
 
 pub use face::{Face, Frame, Region};
+pub use pose::{CanonicalFace, HeadPose};
+pub use tracker::{Found, MIN_PRESENCE, Tracker, TrackerStats, TrackingMode, region_from_landmarks};
 
 use tract_tflite::prelude::*;
 
@@ -114,6 +118,7 @@ pub struct FaceModels {
     detector: Plan,
     landmarks: Plan,
     blendshapes: Plan,
+    canonical: CanonicalFace,
 }
 
 impl std::fmt::Debug for FaceModels {
@@ -143,16 +148,21 @@ fn bundle_entry(name: &str) -> Result<Vec<u8>, ModelError> {
     Ok(bytes)
 }
 
-fn plan(model: &'static str, file: &str) -> Result<Plan, ModelError> {
+fn plan(model: &'static str, file: &str, threads: usize) -> Result<Plan, ModelError> {
     let runtime = |e: TractError| ModelError::Runtime {
         model,
         message: format!("{e:#}"),
     };
     let bytes = bundle_entry(file)?;
+    let options = RunOptions {
+        executor: (threads > 1)
+            .then(|| tract_linalg::multithread::Executor::multithread_with_name(threads, "faceanim-track")),
+        ..RunOptions::default()
+    };
     tract_tflite::tflite()
         .model_for_read(&mut std::io::Cursor::new(bytes))
         .and_then(|m| m.into_optimized())
-        .and_then(|m| m.into_runnable())
+        .and_then(|m| m.into_runnable_with_options(&options))
         .map_err(runtime)
 }
 
@@ -162,10 +172,23 @@ impl FaceModels {
     /// # Errors
     /// [`ModelError`] if a model does not load (a broken build).
     pub fn load() -> Result<FaceModels, ModelError> {
+        FaceModels::load_with_threads(1)
+    }
+
+    /// Loads the embedded models to run on `threads` threads each (matrix products split
+    /// across a private pool; 1 runs on the caller's thread).
+    ///
+    /// # Errors
+    /// [`ModelError`] if a model does not load (a broken build).
+    pub fn load_with_threads(threads: usize) -> Result<FaceModels, ModelError> {
         Ok(FaceModels {
-            detector: plan("face detector", "face_detector.tflite")?,
-            landmarks: plan("face landmarks", "face_landmarks_detector.tflite")?,
-            blendshapes: plan("face blendshapes", "face_blendshapes.tflite")?,
+            detector: plan("face detector", "face_detector.tflite", threads)?,
+            landmarks: plan("face landmarks", "face_landmarks_detector.tflite", threads)?,
+            blendshapes: plan("face blendshapes", "face_blendshapes.tflite", threads)?,
+            canonical: CanonicalFace::parse(&bundle_entry(
+                "geometry_pipeline_metadata_landmarks.binarypb",
+            )?)
+            .map_err(|e| ModelError::Bundle(format!("canonical face: {e}")))?,
         })
     }
 
@@ -175,6 +198,12 @@ impl FaceModels {
                 model,
                 message: format!("{e:#}"),
             })
+    }
+
+    /// MediaPipe's canonical face, which head poses are measured against.
+    #[must_use]
+    pub fn canonical_face(&self) -> &CanonicalFace {
+        &self.canonical
     }
 
     /// The detector on a 128×128 RGB image with values in [−1, 1]: 896 anchors × 16

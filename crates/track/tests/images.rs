@@ -43,6 +43,15 @@ fn scores(models: &FaceModels, name: &str) -> HashMap<&'static str, f32> {
         face.presence,
         face.detection_score
     );
+    // Every face found has a head pose: a plausible one for these near-frontal portraits.
+    let pose = face.pose.unwrap_or_else(|| panic!("{name}: no pose"));
+    eprintln!("{name}: pose {pose:?}");
+    assert!(
+        pose.yaw.abs() < 30.0 && pose.pitch.abs() < 30.0 && pose.roll.abs() < 25.0,
+        "{name}: {pose:?}"
+    );
+    // A head in a portrait is a few tens of centimetres to a couple of metres from the camera.
+    assert!((-2.5..-0.15).contains(&pose.translation[2]), "{name}: {pose:?}");
     face.scores.into_iter().collect()
 }
 

@@ -1,0 +1,116 @@
+//! A video made here with the real ffmpeg, from renders of the ICT head (mouth shut, mouth
+//! open, and a blank frame with no face), through the whole capture pipeline.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::float_cmp, reason = "tests (exact frame rates and copied keys compare exactly)")]
+
+use std::io::Write as _;
+use std::process::{Command, Stdio};
+
+use faceanim_capture::{Filtering, capture};
+use faceanim_media::{FrameSource, read_image};
+use faceanim_track::{FaceModels, TrackingMode};
+
+/// The frames' story: N = neutral, O = jaw open, B = blank (no face).
+const STORY: &str = "NNNOOONNBBNNOOON";
+const FPS: u32 = 25;
+
+fn make_video(path: &std::path::Path) {
+    let neutral = read_image(&faceanim_testdata::shared("images/ict-face-neutral.png")).unwrap();
+    let open = read_image(&faceanim_testdata::shared("images/ict-face-jawopen.png")).unwrap();
+    let (width, height) = (neutral.width, neutral.height);
+    let mut child = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
+        .args(["-s", &format!("{width}x{height}"), "-r", &FPS.to_string(), "-i", "-"])
+        .args(["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "4"])
+        .arg(path)
+        .stdin(Stdio::piped())
+        .spawn()
+        .expect("ffmpeg must be installed (scripts/setup.sh installs it)");
+    let mut stdin = child.stdin.take().unwrap();
+    for c in STORY.chars() {
+        match c {
+            'N' => stdin.write_all(&neutral.rgb).unwrap(),
+            'O' => stdin.write_all(&open.rgb).unwrap(),
+            _ => stdin.write_all(&vec![40u8; width * height * 3]).unwrap(),
+        }
+    }
+    drop(stdin);
+    assert!(child.wait().unwrap().success());
+}
+
+#[test]
+fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ict.mp4");
+    make_video(&path);
+    let models = FaceModels::load().unwrap();
+    let mut source = FrameSource::open(&path, 30.0).unwrap();
+    let mut reported = 0;
+    let result = capture(&models, &mut source, TrackingMode::Track, |n| reported = n).unwrap();
+    assert_eq!(result.frames.len(), STORY.len());
+    assert_eq!(reported, STORY.len());
+    assert_eq!(result.fps, FPS as f32);
+    let clip = result.clip(Filtering::default()).unwrap();
+    assert_eq!(clip.frames.len(), STORY.len());
+    assert_eq!(clip.fps, FPS as f32);
+    let jaw = clip.blendshapes.iter().position(|n| n == "jawOpen").unwrap();
+    let presence = clip.presence.as_ref().unwrap();
+    for (i, c) in STORY.chars().enumerate() {
+        let record = &result.frames[i];
+        assert!((record.time - i as f32 / FPS as f32).abs() < 1e-6);
+        let w = clip.frames[i][jaw];
+        match c {
+            'B' => {
+                assert_eq!(record.found, None, "frame {i}");
+                assert_eq!(presence[i], 0.0);
+            }
+            'O' => assert!(w > 0.5 && presence[i] > 0.9, "frame {i}: jawOpen {w}"),
+            _ => assert!(w < 0.15 && presence[i] > 0.9, "frame {i}: jawOpen {w}"),
+        }
+    }
+    // Tracking: the detector ran on the first frame, on the blanks and when the face came back,
+    // not on every frame.
+    assert!(result.detector_runs <= 4, "{} detector runs", result.detector_runs);
+    let every = capture(
+        &models,
+        &mut FrameSource::open(&path, 30.0).unwrap(),
+        TrackingMode::DetectEveryFrame,
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(every.detector_runs, STORY.len());
+    // Both modes agree on the expression.
+    let every_clip = every.clip(Filtering::default()).unwrap();
+    for (a, b) in clip.frames.iter().zip(&every_clip.frames) {
+        assert!((a[jaw] - b[jaw]).abs() < 0.1, "{} vs {}", a[jaw], b[jaw]);
+    }
+    // Blank frames are bridged from their neighbours, not zeroed: the timeline has no hole.
+    let blank = STORY.find('B').unwrap();
+    assert!((clip.frames[blank][jaw] - clip.frames[blank - 1][jaw]).abs() < 0.1);
+    // A still, frontal render: the head pose is near zero.
+    let head = clip.head.as_ref().unwrap();
+    assert!(head[0].iter().all(|a| a.abs() < 12.0), "{:?}", head[0]);
+}
+
+#[test]
+fn keyframes_every_five_are_interpolated_and_smoothing_is_separate() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ict.mp4");
+    make_video(&path);
+    let models = FaceModels::load().unwrap();
+    let result = capture(&models, &mut FrameSource::open(&path, 30.0).unwrap(), TrackingMode::Track, |_| {}).unwrap();
+    let raw = result.clip(Filtering::default()).unwrap();
+    let keyed = result
+        .clip(Filtering { keyframe_every: Some(5), one_euro: None })
+        .unwrap();
+    let jaw = raw.blendshapes.iter().position(|n| n == "jawOpen").unwrap();
+    for k in [0, 5, 10, 15] {
+        assert_eq!(keyed.frames[k][jaw], raw.frames[k][jaw], "key {k}");
+    }
+    let expected = raw.frames[5][jaw] + (raw.frames[10][jaw] - raw.frames[5][jaw]) * 0.4;
+    assert!((keyed.frames[7][jaw] - expected).abs() < 1e-5);
+    let smooth = result
+        .clip(Filtering { one_euro: Some(Default::default()), keyframe_every: None })
+        .unwrap();
+    assert_eq!(smooth.frames.len(), raw.frames.len());
+    assert!(faceanim_anim::metrics::jitter(&smooth.frames) < faceanim_anim::metrics::jitter(&raw.frames));
+}

@@ -1,0 +1,146 @@
+//! Images, folders and videos (made here with the real ffmpeg) as frame sources, and the
+//! errors a user sees for inputs that are not any of them.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::float_cmp, reason = "tests (exact frame rates and copied keys compare exactly)")]
+
+use std::io::Write as _;
+use std::path::Path;
+use std::process::{Command, Stdio};
+
+use faceanim_media::{FrameSource, MediaError, read_image};
+
+/// A frame whose colour encodes its index, so order and count can be checked after a lossy
+/// codec: the red channel is 20 × index.
+fn frame(index: usize, width: usize, height: usize) -> Vec<u8> {
+    (0..width * height)
+        .flat_map(|_| [(index * 20) as u8, 128, 255 - (index * 20) as u8])
+        .collect()
+}
+
+/// Encodes `count` frames at `fps` into `path` with ffmpeg.
+fn make_video(path: &Path, count: usize, fps: u32, codec: &[&str]) {
+    let (width, height) = (64, 48);
+    let mut child = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
+        .args(["-s", &format!("{width}x{height}"), "-r", &fps.to_string(), "-i", "-"])
+        .args(codec)
+        .arg(path)
+        .stdin(Stdio::piped())
+        .spawn()
+        .expect("ffmpeg must be installed for these tests (scripts/setup.sh installs it)");
+    let mut stdin = child.stdin.take().unwrap();
+    for i in 0..count {
+        stdin.write_all(&frame(i, width, height)).unwrap();
+    }
+    drop(stdin);
+    assert!(child.wait().unwrap().success());
+}
+
+fn read_all(source: &mut FrameSource) -> Vec<faceanim_media::Image> {
+    let mut frames = Vec::new();
+    while let Some(f) = source.next_frame().unwrap() {
+        frames.push(f);
+    }
+    frames
+}
+
+#[test]
+fn a_video_keeps_its_frame_count_order_and_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, fps, codec) in [
+        ("clip.mp4", 25, &["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "0"][..]),
+        ("clip.avi", 30, &["-c:v", "mjpeg", "-q:v", "2"][..]),
+        ("clip.mkv", 24, &["-c:v", "ffv1"][..]),
+    ] {
+        let path = dir.path().join(name);
+        make_video(&path, 12, fps, codec);
+        let mut source = FrameSource::open(&path, 30.0).unwrap();
+        let info = source.info();
+        assert_eq!((info.width, info.height), (64, 48), "{name}");
+        assert!((info.fps - fps as f32).abs() < 1e-3, "{name}: {} fps", info.fps);
+        assert_eq!(info.frames, Some(12), "{name}");
+        let frames = read_all(&mut source);
+        assert_eq!(frames.len(), 12, "{name}");
+        for (i, f) in frames.iter().enumerate() {
+            let red = f.rgb[(24 * 64 + 32) * 3];
+            assert!((i32::from(red) - (i * 20) as i32).abs() <= 6, "{name} frame {i}: red {red}");
+        }
+    }
+}
+
+#[test]
+fn images_and_folders_in_name_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let video = dir.path().join("v.mkv");
+    make_video(&video, 3, 10, &["-c:v", "ffv1"]);
+    // Split into a PNG and JPEG sequence with ffmpeg, then read the folder back.
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    for (ext, start) in [("png", 0), ("jpg", 3)] {
+        let status = Command::new("ffmpeg")
+            .args(["-v", "error", "-i"])
+            .arg(&video)
+            .args(["-start_number", &start.to_string()])
+            .arg(frames.join(format!("f%03d.{ext}")))
+            .status()
+            .unwrap();
+        assert!(status.success());
+    }
+    std::fs::write(frames.join("notes.txt"), "not a frame").unwrap();
+    let mut source = FrameSource::open(&frames, 12.0).unwrap();
+    assert_eq!(source.info().frames, Some(6));
+    assert_eq!(source.info().fps, 12.0);
+    let images = read_all(&mut source);
+    let reds: Vec<u8> = images.iter().map(|f| f.rgb[(24 * 64 + 32) * 3]).collect();
+    for (i, red) in reds.iter().enumerate() {
+        let expected = (i % 3) * 20;
+        assert!((i32::from(*red) - expected as i32).abs() <= 6, "{reds:?}");
+    }
+    let jpeg = read_image(&frames.join("f004.jpg")).unwrap();
+    assert_eq!((jpeg.width, jpeg.height, jpeg.rgb.len()), (64, 48, 64 * 48 * 3));
+    // A single image is one frame.
+    let mut one = FrameSource::open(&frames.join("f001.png"), 30.0).unwrap();
+    assert_eq!(read_all(&mut one).len(), 1);
+}
+
+#[test]
+fn inputs_that_are_not_frames_get_errors_that_name_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = dir.path().join("notes.mp4");
+    std::fs::write(&text, "this is text, not a video").unwrap();
+    let empty = dir.path().join("empty.mp4");
+    std::fs::write(&empty, b"").unwrap();
+    let broken_png = dir.path().join("broken.png");
+    std::fs::write(&broken_png, b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR").unwrap();
+    let empty_folder = dir.path().join("nothing");
+    std::fs::create_dir(&empty_folder).unwrap();
+
+    for (path, check) in [
+        (&text, "not an image or a video"),
+        (&empty, "not an image or a video"),
+        (&broken_png, "not a readable image"),
+        (&empty_folder, "has no PNG or JPEG"),
+    ] {
+        let err = FrameSource::open(path, 30.0).unwrap_err();
+        let message = err.to_string();
+        assert!(message.contains(&path.display().to_string()), "{message}");
+        assert!(message.contains(check), "{message}");
+    }
+    let missing = FrameSource::open(&dir.path().join("missing.mp4"), 30.0).unwrap_err();
+    assert!(matches!(missing, MediaError::Io { .. }), "{missing}");
+}
+
+#[test]
+fn a_video_with_no_frames_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("zero.mkv");
+    make_video(&path, 0, 25, &["-c:v", "ffv1"]);
+    if !path.exists() {
+        // ffmpeg may refuse to write a file with no frames at all; then there is nothing to test.
+        return;
+    }
+    let message = match FrameSource::open(&path, 30.0) {
+        Err(e) => e.to_string(),
+        Ok(mut source) => source.next_frame().unwrap_err().to_string(),
+    };
+    assert!(message.contains("zero.mkv") && message.contains("no"), "{message}");
+}
