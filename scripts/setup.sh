@@ -2,7 +2,8 @@
 # Installs what the test suite checks faceanim's files with, when it is missing:
 #   - Blender 3.4 and NumPy for its glTF importer (Debian packages), to open exports as users do;
 #   - Node.js and the Khronos glTF-Validator (npm, pinned in tools/package-lock.json);
-#   - ffmpeg, which faceanim uses to read video and the tests use to make videos.
+#   - ffmpeg, which faceanim uses to read video and the tests use to make videos;
+#   - Chromium (Debian) and playwright-core (npm), to test the studio in a real browser.
 # Safe to run again: it installs only what is not there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -13,6 +14,7 @@ dpkg -s python3-numpy >/dev/null 2>&1 || packages+=(python3-numpy)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
+command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 if ((${#packages[@]})); then
   sudo=""
   [ "$(id -u)" -eq 0 ] || sudo="sudo"
@@ -21,7 +23,7 @@ if ((${#packages[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${packages[@]}" >/dev/null
 fi
 
-if [ ! -d tools/node_modules/gltf-validator ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
-  echo "setup: installing the glTF-Validator (npm ci in tools/)"
+if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
+  echo "setup: installing the glTF-Validator and playwright-core (npm ci in tools/)"
   (cd tools && npm ci --no-audit --no-fund --loglevel=error)
 fi

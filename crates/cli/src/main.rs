@@ -30,6 +30,26 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The studio: a local web app to sketch facial animation on a character (the main job).
+    ///
+    /// Serves the page on http://127.0.0.1:PORT (local connections only) and prints the URL.
+    /// The project is saved to --project (default: CHARACTER-NAME.faceanim.json in the current
+    /// folder); every edit is also autosaved beside it.
+    ///
+    /// Example: faceanim studio head.glb --open
+    Studio {
+        /// The character: .glb, .gltf, or a folder of OBJ files (default: the built-in head).
+        character: Option<PathBuf>,
+        /// Port on 127.0.0.1 (0 picks a free one).
+        #[arg(long, default_value_t = 7878)]
+        port: u16,
+        /// Open the page in the default browser.
+        #[arg(long)]
+        open: bool,
+        /// The project file (strokes JSON) to open and save.
+        #[arg(long)]
+        project: Option<PathBuf>,
+    },
     /// Describe a character: vertices, triangles, blendshapes, symmetry pairs, ARKit coverage.
     ///
     /// Example: faceanim info head.glb --json
@@ -192,6 +212,12 @@ fn main() -> ExitCode {
 
 fn run(command: Command) -> anyhow::Result<()> {
     match command {
+        Command::Studio {
+            character,
+            port,
+            open,
+            project,
+        } => studio(character.as_deref(), port, open, project),
         Command::Info { character, json } => {
             let imported = load_or_default(character.as_deref())?;
             let report = info::Report::of(&imported.character);
@@ -412,6 +438,48 @@ fn sketch(
         baked.character.blendshapes().len() - character.blendshapes().len()
     );
     Ok(())
+}
+
+fn studio(
+    character: Option<&std::path::Path>,
+    port: u16,
+    open: bool,
+    project: Option<PathBuf>,
+) -> anyhow::Result<()> {
+    let character = load_or_default(character)?.character;
+    let project_path = match project {
+        Some(path) => path,
+        None => std::env::current_dir()
+            .context("finding the current folder for the project file")?
+            .join(format!("{}.faceanim.json", safe_file_name(character.name()))),
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the server runtime")?;
+    runtime.block_on(async move {
+        let (listener, address) = faceanim_studio::bind(port).await?;
+        let url = format!("http://{address}/");
+        println!("faceanim studio: {url}  (character: {}, project: {})", character.name(), project_path.display());
+        if open {
+            let opener = if cfg!(target_os = "macos") { "open" } else { "xdg-open" };
+            if let Err(e) = std::process::Command::new(opener).arg(&url).spawn() {
+                eprintln!("warning: could not open a browser ({opener}: {e}); open {url} yourself");
+            }
+        }
+        faceanim_studio::serve(faceanim_studio::Config { character, project_path }, listener).await?;
+        anyhow::Ok(())
+    })
+}
+
+/// A character name made safe to use as a file name.
+fn safe_file_name(name: &str) -> String {
+    let cleaned: String = name
+        .chars()
+        .map(|c| if c.is_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .collect();
+    if cleaned.is_empty() { "character".to_owned() } else { cleaned }
 }
 
 /// The character at `path`, or the built-in default head.

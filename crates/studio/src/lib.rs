@@ -1,0 +1,80 @@
+//! # faceanim-studio: the local web app
+//!
+//! One axum server on 127.0.0.1 serves the page (embedded from `web/`, so the binary runs from
+//! anywhere with no Node.js or build step) and a small HTTP/JSON API that the page and scripts
+//! use alike (see `API.md` beside this crate). The engines stay in Rust: the server keeps the
+//! project (the strokes file of DESIGN.md) as the single source of truth and rebuilds the
+//! sketch from it on each change, which takes milliseconds and makes undo/redo exact.
+//!
+//! Safety: it listens on loopback only; requests whose `Host` or `Origin` is not the studio's
+//! own are refused (a web page elsewhere cannot drive it through DNS rebinding); request bodies
+//! are size-limited; it writes only the project file it was started with (and its autosave
+//! beside it) — exports are downloads the browser saves.
+#![deny(missing_docs)]
+
+mod api;
+mod state;
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use faceanim_rig::Character;
+
+pub use state::Studio;
+
+/// What the studio opens with.
+#[derive(Debug)]
+pub struct Config {
+    /// The character to animate.
+    pub character: Character,
+    /// Where the project is saved (and read from, if it exists).
+    pub project_path: PathBuf,
+}
+
+/// Why the studio could not start.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum StudioError {
+    /// The port is taken or not allowed.
+    #[error("cannot listen on {address}: {source}")]
+    Listen {
+        /// The address.
+        address: SocketAddr,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The saved project or its autosave exists but cannot be used.
+    #[error("{0}")]
+    Project(String),
+    /// The server stopped with an error.
+    #[error("server: {0}")]
+    Serve(std::io::Error),
+}
+
+/// Binds 127.0.0.1:`port` (0 picks a free port) and returns the listener with its address.
+///
+/// # Errors
+/// [`StudioError::Listen`].
+pub async fn bind(port: u16) -> Result<(tokio::net::TcpListener, SocketAddr), StudioError> {
+    let address = SocketAddr::from(([127, 0, 0, 1], port));
+    let listener = tokio::net::TcpListener::bind(address)
+        .await
+        .map_err(|source| StudioError::Listen { address, source })?;
+    let bound = listener
+        .local_addr()
+        .map_err(|source| StudioError::Listen { address, source })?;
+    Ok((listener, bound))
+}
+
+/// Serves the studio on `listener` until the process is stopped.
+///
+/// # Errors
+/// [`StudioError`] if the project cannot be opened or the server fails.
+pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<(), StudioError> {
+    let address = listener.local_addr().map_err(StudioError::Serve)?;
+    let studio = Studio::open(config.character, config.project_path).map_err(StudioError::Project)?;
+    let shared = Arc::new(Mutex::new(studio));
+    let app = api::router(shared, address.port());
+    axum::serve(listener, app).await.map_err(StudioError::Serve)
+}

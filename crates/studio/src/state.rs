@@ -1,0 +1,382 @@
+//! The studio's state: the character, the project (strokes with their edits, settings), the
+//! undo and redo stacks, and what the page is shown of it.
+
+use std::path::PathBuf;
+
+use faceanim_rig::Character;
+use faceanim_sketch::engine::Target;
+use faceanim_sketch::project::{ProjectFile, StrokeFile};
+use faceanim_sketch::{Project, Sketch};
+use glam::Vec3;
+use serde_json::{Value, json};
+
+/// How many edits undo remembers.
+const UNDO_DEPTH: usize = 500;
+
+/// A character and the animation being sketched on it.
+#[derive(Debug)]
+pub struct Studio {
+    /// The character.
+    pub character: Character,
+    project: ProjectFile,
+    undo: Vec<ProjectFile>,
+    redo: Vec<ProjectFile>,
+    /// The gesture the last change belonged to.
+    gesture: Option<String>,
+    /// Where Save writes.
+    pub project_path: PathBuf,
+    /// Where every edit is written at once, so a crash loses nothing.
+    pub autosave_path: PathBuf,
+}
+
+/// A new studio project. It selects targets by segment rather than by the paper's Eq. 1: a
+/// stroke drawn on a screen, or an arrow dragged part-way back, should keep its blendshape at a
+/// partial weight, not jump to whichever smaller blendshape's full target is nearer. Files
+/// replayed on the command line keep the paper's default unless they say otherwise.
+fn empty_project() -> ProjectFile {
+    let mut project: ProjectFile =
+        serde_json::from_value(json!({ "version": 1 })).unwrap_or_else(|_| unreachable_project());
+    project.settings.selection = faceanim_sketch::settings::Selection::Segment;
+    project
+}
+
+/// `ProjectFile` always parses `{"version": 1}`; this keeps the type total without a panic.
+fn unreachable_project() -> ProjectFile {
+    ProjectFile {
+        version: 1,
+        fps: 30.0,
+        settings: Default::default(),
+        strokes: Vec::new(),
+    }
+}
+
+fn parse_project(bytes: &[u8], what: &str) -> Result<ProjectFile, String> {
+    let file: ProjectFile =
+        serde_json::from_slice(bytes).map_err(|e| format!("{what}: not a strokes project: {e}"))?;
+    Project::from_file(file.clone()).map_err(|e| format!("{what}: {e}"))?;
+    Ok(file)
+}
+
+impl Studio {
+    /// Opens `project_path` if it exists (or its autosave, when that is newer: the last
+    /// session ended without saving), else starts an empty project.
+    ///
+    /// # Errors
+    /// A message naming the file when a project exists but is not valid.
+    pub fn open(character: Character, project_path: PathBuf) -> Result<Studio, String> {
+        let autosave_path = autosave_path(&project_path);
+        let modified = |p: &PathBuf| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+        let newest = match (modified(&project_path), modified(&autosave_path)) {
+            (Some(saved), Some(auto)) if auto > saved => Some(&autosave_path),
+            (None, Some(_)) => Some(&autosave_path),
+            (Some(_), _) => Some(&project_path),
+            (None, None) => None,
+        };
+        let project = match newest {
+            Some(path) => {
+                let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+                if path == &autosave_path {
+                    tracing::warn!("recovered unsaved work from {}", path.display());
+                }
+                parse_project(&bytes, &path.display().to_string())?
+            }
+            None => empty_project(),
+        };
+        Ok(Studio {
+            character,
+            project,
+            undo: Vec::new(),
+            redo: Vec::new(),
+            gesture: None,
+            project_path,
+            autosave_path,
+        })
+    }
+
+    /// The project as it would be saved.
+    #[must_use]
+    pub fn project(&self) -> &ProjectFile {
+        &self.project
+    }
+
+    /// Replaces the project after checking it, remembering the old one for undo.
+    ///
+    /// # Errors
+    /// The project's validation message (the change is not made).
+    pub fn change(&mut self, next: ProjectFile) -> Result<(), String> {
+        self.change_in_gesture(next, None)
+    }
+
+    /// Like [`Studio::change`], but the changes of one gesture (every step of dragging a
+    /// handle, named by the page) undo as one.
+    ///
+    /// # Errors
+    /// The project's validation message (the change is not made).
+    pub fn change_in_gesture(&mut self, next: ProjectFile, gesture: Option<String>) -> Result<(), String> {
+        Project::from_file(next.clone()).map_err(|e| e.to_string())?;
+        let same_gesture = gesture.is_some() && gesture == self.gesture;
+        self.gesture = gesture;
+        let previous = std::mem::replace(&mut self.project, next);
+        if same_gesture {
+            // The undo stack already holds the state from before the gesture began.
+            self.autosave();
+            return Ok(());
+        }
+        self.undo.push(previous);
+        if self.undo.len() > UNDO_DEPTH {
+            self.undo.remove(0);
+        }
+        self.redo.clear();
+        self.autosave();
+        Ok(())
+    }
+
+    /// Steps back one edit; false when there is none.
+    pub fn undo(&mut self) -> bool {
+        self.gesture = None;
+        let Some(previous) = self.undo.pop() else {
+            return false;
+        };
+        self.redo.push(std::mem::replace(&mut self.project, previous));
+        self.autosave();
+        true
+    }
+
+    /// Steps forward one undone edit; false when there is none.
+    pub fn redo(&mut self) -> bool {
+        self.gesture = None;
+        let Some(next) = self.redo.pop() else {
+            return false;
+        };
+        self.undo.push(std::mem::replace(&mut self.project, next));
+        self.autosave();
+        true
+    }
+
+    /// A new, empty project (undoable).
+    pub fn new_project(&mut self) {
+        let fresh = ProjectFile {
+            fps: self.project.fps,
+            settings: self.project.settings.clone(),
+            ..empty_project()
+        };
+        let _ = self.change(fresh);
+    }
+
+    /// Switches to another character; the project starts empty, with nothing to undo.
+    pub fn replace_character(&mut self, character: Character) {
+        self.character = character;
+        self.project = ProjectFile {
+            fps: self.project.fps,
+            settings: self.project.settings.clone(),
+            ..empty_project()
+        };
+        self.undo.clear();
+        self.redo.clear();
+        self.autosave();
+    }
+
+    /// Writes the project where it was opened from (atomically), and drops the autosave.
+    ///
+    /// # Errors
+    /// The file error, naming the path.
+    pub fn save(&self) -> Result<(), String> {
+        faceanim_files::write_atomic(&self.project_path, &self.project_json())
+            .map_err(|e| e.to_string())?;
+        let _ = std::fs::remove_file(&self.autosave_path);
+        Ok(())
+    }
+
+    /// Reads the saved project back from disk (undoable).
+    ///
+    /// # Errors
+    /// A message naming the file.
+    pub fn reopen(&mut self) -> Result<(), String> {
+        let bytes = std::fs::read(&self.project_path)
+            .map_err(|e| format!("{}: {e}", self.project_path.display()))?;
+        let file = parse_project(&bytes, &self.project_path.display().to_string())?;
+        self.change(file)
+    }
+
+    /// Parses a project sent by the page (from a file the user picked).
+    ///
+    /// # Errors
+    /// A message naming `what`.
+    pub fn parse(bytes: &[u8], what: &str) -> Result<ProjectFile, String> {
+        parse_project(bytes, what)
+    }
+
+    fn project_json(&self) -> Vec<u8> {
+        serde_json::to_vec_pretty(&self.project).unwrap_or_default()
+    }
+
+    fn autosave(&self) {
+        if let Err(e) = faceanim_files::write_atomic(&self.autosave_path, &self.project_json()) {
+            tracing::warn!("autosave failed: {e}");
+        }
+    }
+
+    /// The sketch the project describes, with the warnings of skipped strokes.
+    #[must_use]
+    pub fn sketch(&self) -> (Sketch<'_>, Vec<String>) {
+        match Project::from_file(self.project.clone()) {
+            Ok(project) => Sketch::from_project(&self.character, &project),
+            // `change` only admits valid projects; an invalid one shows as empty.
+            Err(e) => (
+                Sketch::new(&self.character, Default::default(), 30.0),
+                vec![e.to_string()],
+            ),
+        }
+    }
+
+    /// Adds a stroke.
+    ///
+    /// # Errors
+    /// The stroke's validation message.
+    pub fn add_stroke(&mut self, stroke: StrokeFile) -> Result<usize, String> {
+        let mut next = self.project.clone();
+        next.strokes.push(stroke);
+        let index = next.strokes.len() - 1;
+        self.change(next)?;
+        Ok(index)
+    }
+
+    /// Everything the page draws: actions with their handles and paths, timeline, settings.
+    #[must_use]
+    pub fn view(&self) -> Value {
+        let (sketch, warnings) = self.sketch();
+        let resolved = sketch.resolved();
+        let character = &self.character;
+        let mut actions = Vec::new();
+        let mut rejected = Vec::new();
+        for (index, result) in sketch.results().iter().enumerate() {
+            match result {
+                Ok(action) => {
+                    let sides: Vec<Value> = action
+                        .sides
+                        .iter()
+                        .map(|side| {
+                            let path: Vec<[f32; 3]> = (0..=24)
+                                .map(|k| side.path.point(side.a, side.c, k as f32 / 24.0).to_array())
+                                .collect();
+                            let target = match side.target {
+                                Target::Blendshape(id) => {
+                                    character.blendshape(id).map(|b| b.name().to_owned())
+                                }
+                                Target::Neutral => Some("neutral".to_owned()),
+                                Target::Multi => Some("multi".to_owned()),
+                            };
+                            json!({
+                                "target": target,
+                                "weight": side.weight,
+                                "exaggeration": side.exaggeration.length(),
+                                "start": side.a.to_array(),
+                                "mid": side.b.to_array(),
+                                "end": side.c.to_array(),
+                                "target_position": side.target_position.to_array(),
+                                "straight": side.path.is_straight(),
+                                "path": path,
+                            })
+                        })
+                        .collect();
+                    actions.push(json!({
+                        "stroke": index,
+                        "name": action.name(character),
+                        "chain": action.chain.0,
+                        "previous": action.previous.map(|p| p.0),
+                        "start_frame": action.start_frame,
+                        "end_frame": action.end_frame(),
+                        "ease": action.ease,
+                        "symmetric": action.sides.len() > 1,
+                        "sides": sides,
+                    }));
+                }
+                Err(reason) => rejected.push(json!({ "stroke": index, "reason": reason.to_string() })),
+            }
+        }
+        json!({
+            "character": character.name(),
+            "fps": sketch.fps(),
+            "last_frame": sketch.last_frame(),
+            "settings": self.project.settings,
+            "resolved": {
+                "candidate_radius": resolved.candidate_radius,
+                "pen_distance": resolved.pen_distance,
+                "edit_radius": resolved.edit_radius,
+                "hook_radius": resolved.hook_radius,
+                "snap_distance": resolved.snap_distance,
+                "stroke_thickness": resolved.stroke_thickness,
+            },
+            "actions": actions,
+            "rejected": rejected,
+            "warnings": warnings,
+            "can_undo": !self.undo.is_empty(),
+            "can_redo": !self.redo.is_empty(),
+            "project_path": self.project_path.display().to_string(),
+        })
+    }
+
+    /// Candidate targets for a stroke starting at `point` on the pose at `frame`.
+    #[must_use]
+    pub fn candidates(&self, point: Vec3, frame: f32) -> Value {
+        let (sketch, _) = self.sketch();
+        let Some(found) = sketch.candidates(point, frame) else {
+            return Value::Null;
+        };
+        let candidates: Vec<Value> = found
+            .candidates
+            .iter()
+            .map(|c| {
+                let name = match c.target {
+                    Target::Blendshape(id) => self
+                        .character
+                        .blendshape(id)
+                        .map_or_else(String::new, |b| b.name().to_owned()),
+                    Target::Neutral => "neutral".to_owned(),
+                    Target::Multi => "multi".to_owned(),
+                };
+                json!({ "name": name, "position": c.position.to_array() })
+            })
+            .collect();
+        json!({
+            "reference": found.reference,
+            "reference_position": found.reference_position.to_array(),
+            "continues": found.continues.map(|a| a.0),
+            "candidates": candidates,
+        })
+    }
+
+    /// Where a blendshape moves the most: the vertex (rest position) and where weight 1 takes
+    /// it. Scripts and tests use it to aim strokes; the page to label targets.
+    #[must_use]
+    pub fn blendshape_anchors(&self) -> Value {
+        let positions = self.character.positions();
+        let anchors: Vec<Value> = self
+            .character
+            .blendshapes()
+            .iter()
+            .map(|shape| {
+                let best = shape
+                    .indices()
+                    .iter()
+                    .zip(shape.deltas())
+                    .max_by(|a, b| a.1.length_squared().total_cmp(&b.1.length_squared()));
+                match best {
+                    Some((&vertex, delta)) => {
+                        let rest = positions[vertex as usize];
+                        json!({ "name": shape.name(), "vertex": vertex, "rest": rest.to_array(), "target": (rest + *delta).to_array() })
+                    }
+                    None => json!({ "name": shape.name(), "vertex": null }),
+                }
+            })
+            .collect();
+        Value::Array(anchors)
+    }
+}
+
+fn autosave_path(project: &std::path::Path) -> PathBuf {
+    let name = project
+        .file_name()
+        .map_or_else(|| "project".into(), |n| n.to_string_lossy().into_owned());
+    project.with_file_name(format!(".{name}.autosave"))
+}

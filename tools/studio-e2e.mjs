@@ -1,0 +1,153 @@
+// The studio in a real browser (Debian's chromium, driven by playwright-core), as an animator
+// uses it: draw a stroke with pointer events, drag the end arrow, undo/redo, symmetry, save,
+// reload and reopen, a broken upload; screenshots of each step; the viewport's frame rate.
+// Usage: node studio-e2e.mjs URL OUTPUT_DIR   (the studio must be running on ICT-FaceKit's head)
+// Prints one JSON line of measurements; exits non-zero with a message on the first failure.
+import { chromium } from 'playwright-core';
+import fs from 'node:fs';
+import path from 'node:path';
+
+const [url, out] = process.argv.slice(2);
+fs.mkdirSync(out, { recursive: true });
+const fail = (message) => { console.error(`studio-e2e: ${message}`); process.exit(1); };
+const check = (condition, message) => { if (!condition) fail(message); };
+
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+});
+const measurements = {};
+try {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 860 } });
+  const consoleErrors = [];
+  page.on('pageerror', (e) => consoleErrors.push(String(e)));
+  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  const shot = (name) => page.screenshot({ path: path.join(out, `${name}.png`) });
+  const state = () => page.evaluate(() => fetch('api/state').then((r) => r.json()));
+  const clip = () => page.evaluate(() => fetch('api/export.json').then((r) => r.json()));
+  const maxWeight = (c, name) => { const i = c.blendshapes.indexOf(name); return Math.max(...c.frames.map((f) => f[i])); };
+  const ready = () => page.waitForFunction(() => window.studio && window.studio.bakedReady, null, { timeout: 60000 });
+
+  await page.goto(url);
+  await ready();
+  await shot('01-opened');
+  check(consoleErrors.length === 0, `page errors on open: ${consoleErrors.join('; ')}`);
+
+  // 1. A stroke from the left mouth corner towards the mouthSmile_L target.
+  const anchors = await page.evaluate(() => fetch('api/character/anchors').then((r) => r.json()));
+  const smile = anchors.find((a) => a.name === 'mouthSmile_L');
+  check(smile && smile.vertex !== null, 'no mouthSmile_L anchor on this character');
+  const [sx, sy] = await page.evaluate((p) => window.studio.project(p), smile.rest);
+  // Aim as a user does: at the mouthSmile_L sphere the studio offers from where the stroke starts.
+  const startPoint = await page.evaluate(([x, y]) => window.studio.hit(x, y), [sx, sy]);
+  check(startPoint, 'the mouth corner is not under the pointer');
+  const offered = await page.evaluate((p) => fetch('api/candidates', { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ point: p, frame: 0 }) }).then((r) => r.json()), startPoint);
+  const sphere = offered && offered.candidates.find((c) => c.name === 'mouthSmile_L');
+  check(sphere, `no mouthSmile_L target from the mouth corner: ${JSON.stringify(offered && offered.candidates.map((c) => c.name))}`);
+  const [tx, ty] = await page.evaluate((p) => window.studio.project(p), sphere.position);
+  await page.mouse.move(sx, sy);
+  await page.mouse.down();
+  for (let i = 1; i <= 20; i++) {
+    await page.mouse.move(sx + (tx - sx) * i / 20, sy + (ty - sy) * i / 20);
+    await page.waitForTimeout(25);
+  }
+  const released = Date.now();
+  await page.mouse.up();
+  await page.waitForSelector('#timeline .row', { timeout: 10000 });
+  measurements.action_visible_ms = Date.now() - released;
+  await ready();
+  await page.waitForFunction(() => window.studio.state.actions.length === 1);
+  await shot('02-stroke');
+  let s = await state();
+  check(s.actions.length === 1, `expected one action, got ${JSON.stringify(s.actions.map((a) => a.name))}`);
+  const label = await page.textContent('#timeline .row .label');
+  check(label.includes('mouthSmile_L'), `timeline shows '${label}', not mouthSmile_L`);
+  let c = await clip();
+  const smileWeight = maxWeight(c, 'mouthSmile_L');
+  check(smileWeight > 0.5, `exported mouthSmile_L reaches only ${smileWeight}`);
+  measurements.smile_weight = smileWeight;
+  const weightBefore = s.actions[0].sides[0].weight;
+
+  // 2. Drag the end arrow halfway back: the weight changes, live.
+  const end = s.actions[0].sides[0].end;
+  const start = s.actions[0].sides[0].start;
+  const [ex, ey] = await page.evaluate((p) => window.studio.project(p), end);
+  const mid = end.map((v, i) => (v + start[i]) / 2);
+  const [mx, my] = await page.evaluate((p) => window.studio.project(p), mid);
+  await page.mouse.move(ex, ey);
+  await page.mouse.down();
+  for (let i = 1; i <= 10; i++) { await page.mouse.move(ex + (mx - ex) * i / 10, ey + (my - ey) * i / 10); await page.waitForTimeout(30); }
+  await page.mouse.up();
+  await page.waitForTimeout(300);
+  await ready();
+  s = await state();
+  const weightDragged = s.actions[0].sides[0].weight;
+  check(Math.abs(weightDragged - weightBefore) > 0.1, `dragging the arrow left the weight at ${weightDragged} (was ${weightBefore})`);
+  await shot('03-arrow-dragged');
+  measurements.weight_before = weightBefore;
+  measurements.weight_dragged = weightDragged;
+
+  // 3. Undo and redo with the keyboard.
+  await page.locator('#viewport').focus();
+  const weightNow = async () => (await state()).actions[0]?.sides[0].weight;
+  await page.keyboard.press('Control+z');
+  await page.waitForTimeout(300);
+  check(Math.abs((await weightNow()) - weightBefore) < 1e-4, 'undo did not restore the drawn weight');
+  await page.keyboard.press('Control+Shift+z');
+  await page.waitForTimeout(300);
+  check(Math.abs((await weightNow()) - weightDragged) < 1e-4, 'redo did not bring back the dragged weight');
+  await shot('04-undo-redo');
+
+  // 4. Symmetry: the action gains its mirror (mouthSmile_R).
+  await page.check('#symmetry');
+  await page.waitForFunction(() => window.studio.state.actions[0]?.symmetric === true, null, { timeout: 10000 });
+  await ready();
+  s = await state();
+  const mirrored = s.actions[0].sides.map((x) => x.target);
+  check(mirrored.includes('mouthSmile_R'), `the mirrored side targets ${mirrored}`);
+  await page.waitForTimeout(500);
+  await shot('05-symmetry');
+
+  // 5. Save, reload the page, reopen the saved project: the same clip.
+  const before = await clip();
+  await page.click('#save');
+  await page.waitForFunction(() => document.querySelector('#status').textContent.startsWith('Saved'));
+  await page.click('#new');
+  await page.waitForFunction(() => window.studio.state.actions.length === 0);
+  await page.reload();
+  await ready();
+  await page.click('#reopen');
+  await page.waitForFunction(() => window.studio.state.actions.length === 1);
+  await ready();
+  const after = await clip();
+  check(JSON.stringify(after) === JSON.stringify(before), 'the reopened project bakes a different clip');
+  await shot('06-reopened');
+
+  // 6. Playback: frames per second of the viewport while playing (software GL here).
+  const timing = await page.evaluate(async () => {
+    const st = window.studio;
+    const info = { meshes: st.meshes.length, morphTargets: st.meshes[0]?.morphTargetInfluences?.length ?? 0 };
+    if (!st.playing) document.getElementById('play').click();
+    const f0 = st.frameCount, t0 = performance.now();
+    await new Promise((r) => setTimeout(r, 3000));
+    info.fps = (st.frameCount - f0) / ((performance.now() - t0) / 1000);
+    document.getElementById('play').click();
+    return info;
+  });
+  Object.assign(measurements, { viewport_fps: timing.fps, draw_meshes: timing.meshes, morph_targets: timing.morphTargets });
+
+  // 7. A broken character upload shows the importer's error in the page (the browser logs the
+  // refused request itself; that one is expected).
+  check(consoleErrors.length === 0, `page errors: ${consoleErrors.join('; ')}`);
+  await page.setInputFiles('#character-file', { name: 'broken.glb', mimeType: 'model/gltf-binary', buffer: Buffer.from('glTF but not really a binary glTF file') });
+  await page.waitForSelector('#error:not([hidden])', { timeout: 10000 });
+  const error = await page.textContent('#error');
+  check(error.includes('broken.glb'), `the error does not name the file: ${error}`);
+  await shot('07-broken-upload');
+  const unexpected = consoleErrors.filter((e) => !e.includes('status of 400'));
+  check(unexpected.length === 0, `page errors: ${unexpected.join('; ')}`);
+  console.log(JSON.stringify(measurements));
+} finally {
+  await browser.close();
+}

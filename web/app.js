@@ -1,0 +1,573 @@
+// faceanim studio: the page. Plain ES module, no build step. The server owns the project and
+// the engines; this file draws what /api/state describes, plays the exported GLB and turns
+// pointer input (mouse, pen, touch; later XR controllers) into strokes and handle edits.
+// Everything goes through pointer events and rays, never mouse-only events, so the same code
+// can be driven from a WebXR controller ray.
+
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+
+/** @typedef {{stroke:number,name:string,chain:number,previous:number|null,start_frame:number,end_frame:number,ease:number,symmetric:boolean,sides:any[]}} ActionView */
+
+const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
+
+// ---------- API ----------
+async function api(method, path, body, headers = {}) {
+  const init = { method, headers: { ...headers } };
+  if (body !== undefined) {
+    if (body instanceof ArrayBuffer || body instanceof Blob) { init.body = body; }
+    else { init.body = JSON.stringify(body); init.headers['content-type'] = 'application/json'; }
+  }
+  const response = await fetch(path, init);
+  const text = await response.text();
+  let json = null;
+  try { json = text ? JSON.parse(text) : null; } catch { json = null; }
+  if (!response.ok) throw new Error(json && json.error ? json.error : text || response.statusText);
+  return json;
+}
+
+function showError(message) {
+  const box = $('error');
+  box.textContent = message;
+  box.hidden = !message;
+}
+
+// ---------- scene ----------
+const viewport = $('viewport');
+const renderer = new THREE.WebGLRenderer({ antialias: !new URLSearchParams(location.search).has('fast') });
+renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+viewport.appendChild(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x2a2d33);
+const camera = new THREE.PerspectiveCamera(30, 1, 0.001, 1000);
+const controls = new OrbitControls(camera, renderer.domElement);
+controls.enableDamping = false;
+scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.2));
+const key = new THREE.DirectionalLight(0xffffff, 1.6);
+key.position.set(-1, 1.2, 2);
+scene.add(key);
+const overlay = new THREE.Group();
+scene.add(overlay);
+const candidateGroup = new THREE.Group();
+scene.add(candidateGroup);
+
+const studio = {
+  /** @type {any} */ state: null,
+  /** @type {any} */ character: null,
+  frame: 0,
+  playing: false,
+  selected: /** @type {number|null} */ (null),
+  /** @type {THREE.Mesh[]} */ meshes: [],
+  /** @type {THREE.Object3D|null} */ root: null,
+  /** @type {{mixer: THREE.AnimationMixer, a: THREE.AnimationAction}[]} */ actions: [],
+  bakedReady: false,
+  lastFrameTime: 0,
+  frameCount: 0,
+  /** @type {any} The candidate targets last shown (what a stroke starting there can reach). */
+  candidates: null,
+  /** The point of the face under a screen position (CSS pixels), or null. */
+  hit(x, y) {
+    const p = hitFace(rayFrom({ clientX: x, clientY: y }));
+    return p ? p.toArray() : null;
+  },
+  /** Screen position (CSS pixels, relative to the page) of a point in character space. */
+  project(p) {
+    const v = new THREE.Vector3(p[0], p[1], p[2]).project(camera);
+    const rect = renderer.domElement.getBoundingClientRect();
+    return [rect.left + (v.x + 1) / 2 * rect.width, rect.top + (1 - v.y) / 2 * rect.height];
+  },
+};
+// Scripts and tests drive the studio through this object and the HTTP API.
+window.studio = studio;
+
+function resize() {
+  const { clientWidth: w, clientHeight: h } = viewport;
+  renderer.setSize(w, h, false);
+  camera.aspect = w / Math.max(h, 1);
+  camera.updateProjectionMatrix();
+}
+new ResizeObserver(resize).observe(viewport);
+
+function frameCamera() {
+  const b = studio.character.bounds;
+  const min = new THREE.Vector3(...b.min), max = new THREE.Vector3(...b.max);
+  const size = max.clone().sub(min);
+  const target = new THREE.Vector3((min.x + max.x) / 2, min.y + 0.58 * size.y, (min.z + max.z) / 2);
+  const distance = 0.5 * Math.max(size.x, size.y) * 0.8 / Math.tan(THREE.MathUtils.degToRad(15)) + 0.5 * size.z;
+  camera.near = distance * 0.01; camera.far = distance * 20; camera.updateProjectionMatrix();
+  camera.position.copy(target).add(new THREE.Vector3(0, 0, distance));
+  controls.target.copy(target);
+  controls.update();
+}
+
+const loader = new GLTFLoader();
+let bakeGeneration = 0;
+/** Loads the export (character + baked corrective targets + animation) and plays it. */
+async function loadBaked() {
+  const generation = ++bakeGeneration;
+  const response = await fetch('api/export.glb');
+  if (!response.ok) throw new Error(await response.text());
+  const buffer = await response.arrayBuffer();
+  if (generation !== bakeGeneration) return;
+  const gltf = await loader.parseAsync(buffer, '');
+  if (generation !== bakeGeneration) return;
+  if (studio.root) { scene.remove(studio.root); studio.root.traverse((o) => { if (o.isMesh) o.geometry.dispose(); }); }
+  studio.meshes = [];
+  const root = gltf.scene;
+  const fast = new URLSearchParams(location.search).has('fast');
+  root.traverse((o) => {
+    if (!o.isMesh) return;
+    if (fast) { const m = o.material; o.material = new THREE.MeshLambertMaterial({ color: m.color, map: m.map, vertexColors: m.vertexColors }); }
+    o.material.side = THREE.DoubleSide;
+    studio.meshes.push(o);
+  });
+  scene.add(root);
+  studio.root = root;
+  if (gltf.animations.length && studio.meshes.length) {
+    // The clip targets the node by name; bind its weight tracks to each mesh (primitive) directly.
+    const clip = gltf.animations[0];
+    for (const track of clip.tracks) { track.name = '.morphTargetInfluences'; }
+    studio.actions = studio.meshes.map((m) => { const mixer = new THREE.AnimationMixer(m); const a = mixer.clipAction(clip); a.play(); return { mixer, a }; });
+  } else {
+    studio.actions = [];
+  }
+  studio.bakedReady = true;
+  setFrame(studio.frame);
+}
+
+function setFrame(frame) {
+  const last = Math.max(0, Math.ceil(studio.state ? studio.state.last_frame : 0));
+  studio.frame = Math.min(Math.max(0, frame), Math.max(last, 0));
+  const fps = studio.state ? studio.state.fps : 30;
+  for (const { mixer } of studio.actions || []) { mixer.setTime(studio.frame / fps); }
+  $('frame-label').textContent = `frame ${studio.frame.toFixed(0)} / ${last}`;
+  drawPlayhead();
+}
+
+// ---------- overlays: strokes, arrows, spheres ----------
+const handleTargets = [];
+function drawOverlays() {
+  overlay.clear();
+  handleTargets.length = 0;
+  if (!studio.state) return;
+  const d = studio.character.diagonal;
+  const thickness = studio.state.resolved.stroke_thickness || d / 400;
+  for (const action of studio.state.actions) {
+    action.sides.forEach((side, sideIndex) => {
+      const selected = studio.selected === action.stroke;
+      const points = side.path.map((p) => new THREE.Vector3(...p));
+      const curve = new THREE.CatmullRomCurve3(points);
+      const tube = new THREE.Mesh(new THREE.TubeGeometry(curve, 48, thickness, 6, false),
+        new THREE.MeshBasicMaterial({ color: selected ? 0xffffff : 0x80c0ff, depthTest: false, transparent: true, opacity: sideIndex ? 0.5 : 0.9 }));
+      tube.renderOrder = 10;
+      overlay.add(tube);
+      if (sideIndex > 0) return;
+      // Red end arrow, pointing along the stroke's last direction.
+      const end = points[points.length - 1];
+      const dir = end.clone().sub(points[points.length - 2]).normalize();
+      const cone = new THREE.Mesh(new THREE.ConeGeometry(d / 120, d / 40, 12), new THREE.MeshBasicMaterial({ color: 0xe03030, depthTest: false }));
+      cone.position.copy(end);
+      cone.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), dir);
+      cone.renderOrder = 11;
+      cone.userData = { handle: 'end', stroke: action.stroke };
+      overlay.add(cone); handleTargets.push(cone);
+      // Yellow middle sphere; green when the stroke is straight.
+      const sphere = new THREE.Mesh(new THREE.SphereGeometry(d / 150, 16, 12), new THREE.MeshBasicMaterial({ color: side.straight ? 0x30d050 : 0xf0d020, depthTest: false }));
+      sphere.position.set(...side.mid);
+      sphere.renderOrder = 11;
+      sphere.userData = { handle: 'mid', stroke: action.stroke, path: side.path };
+      overlay.add(sphere); handleTargets.push(sphere);
+    });
+  }
+}
+
+function showCandidates(found, faint) {
+  candidateGroup.clear();
+  if (!found) return;
+  const r = studio.character.diagonal / 220;
+  for (const c of found.candidates) {
+    const s = new THREE.Mesh(new THREE.SphereGeometry(r, 12, 8), new THREE.MeshBasicMaterial({ color: 0x40e0ff, transparent: true, opacity: faint ? 0.35 : 0.8, depthTest: false }));
+    s.position.set(...c.position);
+    s.renderOrder = 12;
+    s.userData = { name: c.name };
+    candidateGroup.add(s);
+  }
+}
+
+// ---------- pointer input ----------
+const raycaster = new THREE.Raycaster();
+function rayFrom(event) {
+  const rect = renderer.domElement.getBoundingClientRect();
+  const ndc = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1, -((event.clientY - rect.top) / rect.height) * 2 + 1);
+  raycaster.setFromCamera(ndc, camera);
+  return raycaster;
+}
+function hitFace(ray) {
+  const hits = ray.intersectObjects(studio.meshes, false);
+  return hits.length ? hits[0].point : null;
+}
+function planeFacingCamera(point) {
+  const normal = new THREE.Vector3();
+  camera.getWorldDirection(normal);
+  return new THREE.Plane().setFromNormalAndCoplanarPoint(normal, point);
+}
+function onPlane(ray, plane) {
+  const p = new THREE.Vector3();
+  return ray.ray.intersectPlane(plane, p) ? p : null;
+}
+
+/** @type {null | {kind:'stroke', plane:THREE.Plane, t0:number, samples:any[], pending:number[][], line:THREE.Line} | {kind:'handle', handle:string, stroke:number, plane:THREE.Plane, path?:any[], ease:boolean, pending:boolean, gesture:string}} */
+let drag = null;
+
+renderer.domElement.addEventListener('pointerdown', async (event) => {
+  if (event.button !== 0 || !studio.bakedReady) return;
+  const ray = rayFrom(event);
+  const handle = ray.intersectObjects(handleTargets, false)[0];
+  if (handle) {
+    controls.enabled = false;
+    renderer.domElement.setPointerCapture(event.pointerId);
+    const { handle: kind, stroke, path } = handle.object.userData;
+    studio.selected = stroke;
+    drag = { kind: 'handle', handle: kind, stroke, path, plane: planeFacingCamera(handle.object.position), ease: event.shiftKey && kind === 'mid', pending: false, gesture: `${Date.now()}-${Math.random()}` };
+    return;
+  }
+  const hit = hitFace(ray);
+  if (!hit) return; // orbit
+  controls.enabled = false;
+  renderer.domElement.setPointerCapture(event.pointerId);
+  const geometry = new THREE.BufferGeometry().setFromPoints([hit, hit]);
+  const line = new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: 0xffe080, depthTest: false }));
+  line.renderOrder = 13;
+  scene.add(line);
+  drag = { kind: 'stroke', plane: planeFacingCamera(hit), t0: performance.now(), samples: [{ t: 0, p: hit.toArray() }], pending: [], line };
+  api('POST', 'api/candidates', { point: hit.toArray(), frame: studio.frame }).then((found) => { studio.candidates = found; showCandidates(found, false); }).catch(() => {});
+});
+
+let hoverTimer = 0;
+renderer.domElement.addEventListener('pointermove', (event) => {
+  if (!drag) {
+    // The paper's users asked to see the targets before drawing: show them on hover.
+    if (event.pointerType !== 'touch' && studio.bakedReady && performance.now() - hoverTimer > 120) {
+      hoverTimer = performance.now();
+      const hit = hitFace(rayFrom(event));
+      if (hit) api('POST', 'api/candidates', { point: hit.toArray(), frame: studio.frame }).then((f) => { if (!drag) showCandidates(f, true); }).catch(() => {});
+      else candidateGroup.clear();
+    }
+    return;
+  }
+  const events = event.getCoalescedEvents ? event.getCoalescedEvents() : [event];
+  for (const e of events.length ? events : [event]) {
+    const p = onPlane(rayFrom(e), drag.plane);
+    if (!p) continue;
+    if (drag.kind === 'stroke') {
+      drag.pending.push(p.toArray());
+    } else {
+      dragHandleTo(p);
+    }
+  }
+  if (drag.kind === 'stroke') {
+    // Coalesced points of this event share its arrival time span: spread them evenly between
+    // the previous sample's time and now (event timestamps are not reliable across devices).
+    const now = (performance.now() - drag.t0) / 1000;
+    const previous = drag.samples[drag.samples.length - 1].t;
+    drag.pending.forEach((q, i) => drag.samples.push({ t: previous + (now - previous) * (i + 1) / drag.pending.length, p: q }));
+    drag.pending = [];
+    drag.line.geometry.dispose();
+    drag.line.geometry = new THREE.BufferGeometry().setFromPoints(drag.samples.map((s) => new THREE.Vector3(...s.p)));
+  }
+});
+
+async function dragHandleTo(p) {
+  if (!drag || drag.kind !== 'handle' || drag.pending) return;
+  let edit;
+  if (drag.handle === 'end') edit = { end: p.toArray() };
+  else if (drag.ease) {
+    // Slide along the stroke: the easing α is where along the path the sphere is.
+    let best = 0, bestDistance = Infinity;
+    drag.path.forEach((q, i) => { const dd = p.distanceToSquared(new THREE.Vector3(...q)); if (dd < bestDistance) { bestDistance = dd; best = i; } });
+    edit = { ease: Math.min(0.98, Math.max(0.02, best / (drag.path.length - 1))) };
+  } else edit = { mid: p.toArray() };
+  drag.pending = true;
+  try { applyState(await api('PATCH', `api/strokes/${drag.stroke}`, edit, { 'x-gesture': drag.gesture }), false); showError(''); }
+  catch (e) { showError(String(e.message || e)); }
+  finally { if (drag) drag.pending = false; }
+}
+
+/** Pixels within which a release counts as "on" a candidate sphere. */
+const SPHERE_PICK_PIXELS = 14;
+
+/**
+ * A stroke drawn on a screen has no depth of its own: it lies on the plane through its start
+ * facing the camera. When it is released on a candidate sphere, the user meant that sphere, so
+ * the stroke is carried along each sample's view ray, progressively (none at the start, all at
+ * the end), to end at the sphere's depth. On screen nothing moves.
+ */
+function aimAtReleasedSphere(samples) {
+  const found = studio.candidates;
+  if (!found || !found.candidates.length) return;
+  const last = samples[samples.length - 1].p;
+  const [lx, ly] = studio.project(last);
+  let best = null, bestPixels = SPHERE_PICK_PIXELS;
+  for (const c of found.candidates) {
+    const [x, y] = studio.project(c.position);
+    const pixels = Math.hypot(x - lx, y - ly);
+    if (pixels < bestPixels) { bestPixels = pixels; best = c; }
+  }
+  if (!best) return;
+  const eye = camera.position.clone();
+  const forward = new THREE.Vector3();
+  camera.getWorldDirection(forward);
+  const depthOf = (p) => new THREE.Vector3(...p).sub(eye).dot(forward);
+  const startDepth = depthOf(samples[0].p);
+  const endDepth = depthOf(best.position);
+  const lengths = [0];
+  for (let i = 1; i < samples.length; i++) lengths.push(lengths[i - 1] + new THREE.Vector3(...samples[i].p).distanceTo(new THREE.Vector3(...samples[i - 1].p)));
+  const total = lengths[lengths.length - 1] || 1;
+  samples.forEach((sample, i) => {
+    const p = new THREE.Vector3(...sample.p);
+    const ray = p.clone().sub(eye);
+    const depth = startDepth + (endDepth - startDepth) * (lengths[i] / total);
+    sample.p = eye.clone().add(ray.multiplyScalar(depth / ray.dot(forward))).toArray();
+  });
+}
+
+async function endDrag(event) {
+  if (!drag) return;
+  const finished = drag;
+  drag = null;
+  controls.enabled = true;
+  try { renderer.domElement.releasePointerCapture(event.pointerId); } catch { /* already released */ }
+  if (finished.kind === 'stroke') {
+    scene.remove(finished.line);
+    candidateGroup.clear();
+    if (finished.samples.length < 2) return;
+    aimAtReleasedSphere(finished.samples);
+    try {
+      const state = await api('POST', 'api/strokes', { samples: finished.samples });
+      studio.selected = state.added;
+      applyState(state, true);
+      const rejected = state.rejected.find((r) => r.stroke === state.added);
+      showError(rejected ? `That stroke made no action: ${rejected.reason}` : '');
+    } catch (e) { showError(String(e.message || e)); }
+  } else {
+    // Wait for the last live edit, then show the bake of the final handle position.
+    while (finished.pending) await new Promise((r) => setTimeout(r, 10));
+    await loadBaked();
+  }
+}
+renderer.domElement.addEventListener('pointerup', endDrag);
+renderer.domElement.addEventListener('pointercancel', endDrag);
+
+// ---------- state ----------
+function applyState(state, rebake) {
+  studio.state = state;
+  $('undo').disabled = !state.can_undo;
+  $('redo').disabled = !state.can_redo;
+  $('delete').disabled = studio.selected === null;
+  $('fps').value = state.fps;
+  fillSettings(state);
+  drawOverlays();
+  drawTimeline();
+  $('status').textContent = `${state.actions.length} action(s); ${state.rejected.length} stroke(s) ignored; project: ${state.project_path}`;
+  if (rebake) loadBaked().catch((e) => showError(String(e.message || e)));
+}
+
+async function run(method, path, body) {
+  try { const state = await api(method, path, body); applyState(state, true); showError(''); return state; }
+  catch (e) { showError(String(e.message || e)); return null; }
+}
+
+// ---------- timeline ----------
+const timeline = $('timeline');
+const LABEL = 200, PX = 8; // label column width and pixels per frame
+function frameX(f) { return LABEL + f * PX; }
+function drawPlayhead() {
+  const head = timeline.querySelector('.playhead');
+  if (head) head.style.left = `${frameX(studio.frame)}px`;
+}
+function drawTimeline() {
+  const state = studio.state;
+  timeline.innerHTML = '';
+  const last = Math.ceil(state.last_frame) + 30;
+  const width = frameX(last) + 20;
+  const ruler = document.createElement('div');
+  ruler.className = 'ruler';
+  ruler.style.width = `${width}px`;
+  for (let f = 0; f <= last; f += 10) { const s = document.createElement('span'); s.style.left = `${frameX(f)}px`; s.textContent = String(f); ruler.appendChild(s); }
+  ruler.addEventListener('pointerdown', (e) => {
+    const scrub = (ev) => { const rect = ruler.getBoundingClientRect(); setFrame(Math.round((ev.clientX - rect.left - LABEL) / PX)); };
+    scrub(e);
+    ruler.setPointerCapture(e.pointerId);
+    ruler.onpointermove = scrub;
+    ruler.onpointerup = () => { ruler.onpointermove = null; };
+  });
+  timeline.appendChild(ruler);
+  // The temporal window: where animation exists.
+  const win = document.createElement('div');
+  win.className = 'window';
+  win.style.left = `${frameX(0)}px`; win.style.width = `${state.last_frame * PX}px`;
+  timeline.appendChild(win);
+  const chainColours = ['#4a7bd0', '#3fa36b', '#b0609c', '#c7843a', '#5aa8b8', '#9a8a3f'];
+  for (const action of state.actions) {
+    const row = document.createElement('div');
+    row.className = 'row';
+    row.style.width = `${width}px`;
+    row.dataset.stroke = String(action.stroke);
+    const label = document.createElement('div');
+    label.className = 'label';
+    label.textContent = action.name;
+    row.appendChild(label);
+    const box = document.createElement('div');
+    box.className = 'box' + (studio.selected === action.stroke ? ' selected' : '');
+    box.style.left = `${frameX(action.start_frame)}px`;
+    box.style.width = `${Math.max(4, (action.end_frame - action.start_frame) * PX)}px`;
+    box.style.background = chainColours[action.chain % chainColours.length];
+    box.title = `${action.name}: frames ${action.start_frame.toFixed(1)}–${action.end_frame.toFixed(1)}${action.previous !== null ? ' (continues the stroke before it)' : ''}${action.symmetric ? ' (with its mirror)' : ''}`;
+    if (action.previous !== null || action.symmetric) {
+      const link = document.createElement('span');
+      link.className = 'link';
+      link.textContent = action.symmetric ? '⇋' : '⛓';
+      box.appendChild(link);
+    }
+    for (const side of ['left', 'right']) { const g = document.createElement('div'); g.className = `grip ${side}`; g.dataset.grip = side; box.appendChild(g); }
+    box.addEventListener('pointerdown', (e) => timelineDrag(e, action, box));
+    row.appendChild(box);
+    timeline.appendChild(row);
+  }
+  const head = document.createElement('div');
+  head.className = 'playhead';
+  timeline.appendChild(head);
+  drawPlayhead();
+}
+function timelineDrag(event, action, box) {
+  event.stopPropagation();
+  studio.selected = action.stroke;
+  $('delete').disabled = false;
+  const grip = /** @type {HTMLElement} */ (event.target).dataset.grip;
+  const x0 = event.clientX;
+  const start = action.start_frame, duration = action.end_frame - action.start_frame;
+  box.setPointerCapture(event.pointerId);
+  let edit = null;
+  box.onpointermove = (e) => {
+    const df = (e.clientX - x0) / PX;
+    if (grip === 'left') { const s = Math.min(start + duration - 1, Math.max(0, start + df)); edit = { start_frame: s, duration: start + duration - s }; }
+    else if (grip === 'right') edit = { start_frame: start, duration: Math.max(1, duration + df) };
+    else edit = { start_frame: Math.max(0, start + df) };
+    box.style.left = `${frameX(edit.start_frame)}px`;
+    box.style.width = `${(edit.duration ?? duration) * PX}px`;
+  };
+  box.onpointerup = async () => {
+    box.onpointermove = null; box.onpointerup = null;
+    if (edit) await run('PATCH', `api/strokes/${action.stroke}`, edit);
+    else { drawOverlays(); drawTimeline(); }
+  };
+}
+
+// ---------- settings ----------
+const numberFields = ['stroke_thickness', 'candidate_radius', 'pen_distance', 'edit_radius', 'hook_radius'];
+function fillSettings(state) {
+  const s = state.settings;
+  /** @type {HTMLInputElement} */ ($('symmetry')).checked = !!s.symmetry;
+  /** @type {HTMLSelectElement} */ ($('falloff')).value = s.falloff;
+  /** @type {HTMLSelectElement} */ ($('mode')).value = s.mode;
+  /** @type {HTMLSelectElement} */ ($('selection')).value = s.selection;
+  /** @type {HTMLInputElement} */ ($('subsample')).value = s.subsample;
+  for (const f of numberFields) {
+    const input = /** @type {HTMLInputElement} */ ($(f));
+    if (document.activeElement !== input) { input.value = s[f] ?? ''; input.placeholder = state.resolved[f].toPrecision(3); }
+  }
+  $('resolved').textContent = `In use: candidate radius ${state.resolved.candidate_radius.toPrecision(3)}, pen ${state.resolved.pen_distance.toPrecision(3)}, editing ${state.resolved.edit_radius.toPrecision(3)}, hook ${state.resolved.hook_radius.toPrecision(3)}`;
+}
+function settingsFromPanel() {
+  const s = { ...studio.state.settings };
+  s.symmetry = /** @type {HTMLInputElement} */ ($('symmetry')).checked;
+  s.falloff = /** @type {HTMLSelectElement} */ ($('falloff')).value;
+  s.mode = /** @type {HTMLSelectElement} */ ($('mode')).value;
+  s.selection = /** @type {HTMLSelectElement} */ ($('selection')).value;
+  s.subsample = Math.max(1, Math.round(Number(/** @type {HTMLInputElement} */ ($('subsample')).value) || 1));
+  for (const f of numberFields) { const v = /** @type {HTMLInputElement} */ ($(f)).value; s[f] = v === '' ? null : Number(v); }
+  return s;
+}
+for (const id of ['symmetry', 'falloff', 'mode', 'selection', 'subsample', ...numberFields]) {
+  $(id).addEventListener('change', () => run('PUT', 'api/settings', settingsFromPanel()));
+}
+$('fps').addEventListener('change', () => run('PUT', 'api/fps', { fps: Number(/** @type {HTMLInputElement} */ ($('fps')).value) }));
+
+// ---------- commands ----------
+const commands = {
+  undo: () => run('POST', 'api/undo'),
+  redo: () => run('POST', 'api/redo'),
+  delete: () => { if (studio.selected !== null) { const s = studio.selected; studio.selected = null; return run('DELETE', `api/strokes/${s}`); } },
+  save: async () => { try { const r = await api('POST', 'api/project/save'); showError(''); $('status').textContent = `Saved ${r.saved}`; } catch (e) { showError(String(e.message || e)); } },
+  reopen: () => run('POST', 'api/project/reopen'),
+  new: () => run('POST', 'api/project/new'),
+  play: () => { studio.playing = !studio.playing; $('play').textContent = studio.playing ? 'Pause' : 'Play'; studio.lastFrameTime = performance.now(); },
+};
+$('undo').onclick = commands.undo; $('redo').onclick = commands.redo; $('delete').onclick = commands.delete;
+$('save').onclick = commands.save; $('reopen').onclick = commands.reopen; $('new').onclick = commands.new;
+$('play').onclick = commands.play;
+$('open').onclick = () => $('project-file').click();
+$('project-file').addEventListener('change', async (e) => {
+  const file = /** @type {HTMLInputElement} */ (e.target).files?.[0];
+  if (!file) return;
+  try { applyState(await api('PUT', 'api/project', await file.arrayBuffer()), true); showError(''); }
+  catch (err) { showError(`${file.name}: ${err.message || err}`); }
+});
+async function uploadCharacter(file) {
+  showError('');
+  $('status').textContent = `Opening ${file.name}…`;
+  try {
+    const result = await api('POST', 'api/character/upload', await file.arrayBuffer(), { 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') });
+    studio.character = await api('GET', 'api/character');
+    $('character-name').textContent = studio.character.name;
+    frameCamera();
+    applyState(result.state, true);
+    if (result.warnings.length) showError(result.warnings.join('\n'));
+  } catch (err) { showError(String(err.message || err)); $('status').textContent = `Could not open ${file.name}; still on ${studio.character.name}.`; }
+}
+$('open-character').onclick = () => $('character-file').click();
+$('character-file').addEventListener('change', (e) => { const f = /** @type {HTMLInputElement} */ (e.target).files?.[0]; if (f) uploadCharacter(f); });
+viewport.addEventListener('dragover', (e) => { e.preventDefault(); viewport.classList.add('dragover'); });
+viewport.addEventListener('dragleave', () => viewport.classList.remove('dragover'));
+viewport.addEventListener('drop', (e) => { e.preventDefault(); viewport.classList.remove('dragover'); const f = e.dataTransfer?.files?.[0]; if (f) uploadCharacter(f); });
+$('help-button').onclick = () => { $('help').hidden = !$('help').hidden; };
+$('help-close').onclick = () => { $('help').hidden = true; };
+window.addEventListener('keydown', (e) => {
+  if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+  const ctrl = e.ctrlKey || e.metaKey;
+  if (ctrl && e.key.toLowerCase() === 'z') { e.preventDefault(); (e.shiftKey ? commands.redo : commands.undo)(); }
+  else if (ctrl && e.key.toLowerCase() === 'y') { e.preventDefault(); commands.redo(); }
+  else if (ctrl && e.key.toLowerCase() === 's') { e.preventDefault(); commands.save(); }
+  else if (e.key === 'Delete' || e.key === 'Backspace') commands.delete();
+  else if (e.key === ' ') { e.preventDefault(); commands.play(); }
+  else if (e.key === 'ArrowRight') setFrame(studio.frame + 1);
+  else if (e.key === 'ArrowLeft') setFrame(studio.frame - 1);
+  else if (e.key === '?') $('help').hidden = !$('help').hidden;
+  else if (e.key === 'Escape') $('help').hidden = true;
+});
+
+// ---------- loop ----------
+renderer.setAnimationLoop((now) => {
+  if (studio.playing && studio.state) {
+    const fps = studio.state.fps;
+    const last = Math.max(1, studio.state.last_frame);
+    let f = studio.frame + (now - studio.lastFrameTime) / 1000 * fps;
+    if (f > last) { if (/** @type {HTMLInputElement} */ ($('loop')).checked) f = f % last; else { f = last; commands.play(); } }
+    setFrame(f);
+  }
+  studio.lastFrameTime = now;
+  renderer.render(scene, camera);
+  studio.frameCount++;
+});
+
+// ---------- start ----------
+(async () => {
+  try {
+    studio.character = await api('GET', 'api/character');
+    $('character-name').textContent = studio.character.name;
+    resize();
+    frameCamera();
+    applyState(await api('GET', 'api/state'), true);
+  } catch (e) { showError(String(e.message || e)); }
+})();
