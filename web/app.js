@@ -64,6 +64,8 @@ const studio = {
   bakedReady: false,
   lastFrameTime: 0,
   frameCount: 0,
+  drawCalls: 0,
+  lastStrokeMs: 0,
   /** @type {any} The candidate targets last shown (what a stroke starting there can reach). */
   candidates: null,
   /** The point of the face under a screen position (CSS pixels), or null. */
@@ -195,6 +197,41 @@ function showCandidates(found, faint) {
   }
 }
 
+// ---------- ghost: the blendshape a stroke's end currently selects ----------
+/** @type {THREE.Mesh|null} */
+let ghost = null;
+function showGhost(name) {
+  const base = studio.meshes[0];
+  const index = name && base && base.morphTargetDictionary ? base.morphTargetDictionary[name] : undefined;
+  if (index === undefined) { if (ghost) ghost.visible = false; return; }
+  if (!ghost || ghost.geometry !== base.geometry) {
+    if (ghost) scene.remove(ghost);
+    ghost = new THREE.Mesh(base.geometry, new THREE.MeshBasicMaterial({ color: 0x60d0ff, transparent: true, opacity: 0.22, depthWrite: false }));
+    ghost.updateMorphTargets();
+    ghost.matrixAutoUpdate = false;
+    ghost.renderOrder = 5;
+    scene.add(ghost);
+  }
+  ghost.matrix.copy(base.matrixWorld);
+  ghost.matrixWorldNeedsUpdate = true;
+  ghost.morphTargetInfluences.fill(0);
+  ghost.morphTargetInfluences[index] = 1;
+  ghost.visible = true;
+}
+
+/** The candidate sphere nearest the pointer on screen, if any is shown. */
+function nearestCandidate(x, y) {
+  const found = studio.candidates;
+  if (!found) return null;
+  let best = null, bestPixels = Infinity;
+  for (const c of found.candidates) {
+    const [cx, cy] = studio.project(c.position);
+    const pixels = Math.hypot(cx - x, cy - y);
+    if (pixels < bestPixels) { bestPixels = pixels; best = c; }
+  }
+  return best;
+}
+
 // ---------- pointer input ----------
 const raycaster = new THREE.Raycaster();
 function rayFrom(event) {
@@ -273,6 +310,8 @@ renderer.domElement.addEventListener('pointermove', (event) => {
     const previous = drag.samples[drag.samples.length - 1].t;
     drag.pending.forEach((q, i) => drag.samples.push({ t: previous + (now - previous) * (i + 1) / drag.pending.length, p: q }));
     drag.pending = [];
+    const nearest = nearestCandidate(event.clientX, event.clientY);
+    showGhost(nearest && nearest.name);
     drag.line.geometry.dispose();
     drag.line.geometry = new THREE.BufferGeometry().setFromPoints(drag.samples.map((s) => new THREE.Vector3(...s.p)));
   }
@@ -289,7 +328,13 @@ async function dragHandleTo(p) {
     edit = { ease: Math.min(0.98, Math.max(0.02, best / (drag.path.length - 1))) };
   } else edit = { mid: p.toArray() };
   drag.pending = true;
-  try { applyState(await api('PATCH', `api/strokes/${drag.stroke}`, edit, { 'x-gesture': drag.gesture }), false); showError(''); }
+  try {
+    const state = await api('PATCH', `api/strokes/${drag.stroke}`, edit, { 'x-gesture': drag.gesture });
+    applyState(state, false);
+    showError('');
+    const action = state.actions.find((a) => a.stroke === drag?.stroke);
+    if (drag && action) showGhost(action.sides[0].target);
+  }
   catch (e) { showError(String(e.message || e)); }
   finally { if (drag) drag.pending = false; }
 }
@@ -337,16 +382,20 @@ async function endDrag(event) {
   const finished = drag;
   drag = null;
   controls.enabled = true;
+  showGhost(null);
   try { renderer.domElement.releasePointerCapture(event.pointerId); } catch { /* already released */ }
   if (finished.kind === 'stroke') {
     scene.remove(finished.line);
     candidateGroup.clear();
     if (finished.samples.length < 2) return;
+    const released = performance.now();
     aimAtReleasedSphere(finished.samples);
     try {
       const state = await api('POST', 'api/strokes', { samples: finished.samples });
       studio.selected = state.added;
       applyState(state, true);
+      // From release to the action drawn (arc, handles, timeline row); the bake for playback follows.
+      studio.lastStrokeMs = performance.now() - released;
       const rejected = state.rejected.find((r) => r.stroke === state.added);
       showError(rejected ? `That stroke made no action: ${rejected.reason}` : '');
     } catch (e) { showError(String(e.message || e)); }
@@ -558,6 +607,7 @@ renderer.setAnimationLoop((now) => {
   }
   studio.lastFrameTime = now;
   renderer.render(scene, camera);
+  studio.drawCalls = renderer.info.render.calls;
   studio.frameCount++;
 });
 

@@ -53,9 +53,9 @@ pub struct FrameRecord {
     pub detection_score: f32,
     /// 52 scores in MediaPipe's order with names (`_neutral` first); empty when no face.
     pub scores: Vec<(&'static str, f32)>,
-    /// Head yaw, pitch, roll (degrees) and position (metres), when a face was found.
+    /// Head yaw, pitch and roll in degrees, when a face was found.
     pub head: Option<[f32; 3]>,
-    /// Head position in metres from the camera.
+    /// Head position in metres from the camera, when a face was found.
     pub head_position: Option<[f32; 3]>,
     /// The 478 landmarks in image pixels (x, y, z); empty when no face.
     pub landmarks: Vec<[f32; 3]>,

@@ -221,7 +221,9 @@ pub struct FrameSource {
 #[derive(Debug)]
 enum Kind {
     Images(std::vec::IntoIter<PathBuf>, Option<Image>),
-    Video(Child),
+    /// ffmpeg, and a thread collecting what it says on stderr (drained as it comes, so a
+    /// chatty ffmpeg can never block on a full pipe).
+    Video(Child, Option<std::thread::JoinHandle<String>>),
 }
 
 impl FrameSource {
@@ -327,7 +329,9 @@ impl FrameSource {
                     None
                 }
             }
-            Kind::Video(child) => read_video_frame(&self.path, child, width, height, self.delivered)?,
+            Kind::Video(child, stderr) => {
+                read_video_frame(&self.path, child, stderr, width, height, self.delivered)?
+            }
         };
         if frame.is_some() {
             self.delivered += 1;
@@ -338,7 +342,7 @@ impl FrameSource {
 
 impl Drop for FrameSource {
     fn drop(&mut self) {
-        if let Kind::Video(child) = &mut self.kind {
+        if let Kind::Video(child, _) = &mut self.kind {
             // Stopped early (an error downstream, or the caller had enough): don't leave
             // ffmpeg running or a zombie behind.
             let _ = child.kill();
@@ -438,10 +442,17 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
-    let child = decode.spawn().map_err(|source| MediaError::Io {
+    let mut child = decode.spawn().map_err(|source| MediaError::Io {
         path: path.to_owned(),
         source,
     })?;
+    let stderr = child.stderr.take().map(|mut pipe| {
+        std::thread::spawn(move || {
+            let mut text = String::new();
+            let _ = pipe.read_to_string(&mut text);
+            text
+        })
+    });
     Ok(FrameSource {
         path: path.to_owned(),
         info: SourceInfo {
@@ -450,7 +461,7 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
             fps,
             frames: packets,
         },
-        kind: Kind::Video(child),
+        kind: Kind::Video(child, stderr),
         delivered: 0,
     })
 }
@@ -458,6 +469,7 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
 fn read_video_frame(
     path: &Path,
     child: &mut Child,
+    stderr: &mut Option<std::thread::JoinHandle<String>>,
     width: usize,
     height: usize,
     delivered: usize,
@@ -485,14 +497,14 @@ fn read_video_frame(
     }
     // End of the pipe: a clean end, or ffmpeg failed.
     child.stdout = None;
-    let mut message = String::new();
-    if let Some(mut stderr) = child.stderr.take() {
-        let _ = stderr.read_to_string(&mut message);
-    }
     let status = child.wait().map_err(|source| MediaError::Io {
         path: path.to_owned(),
         source,
     })?;
+    let message = stderr
+        .take()
+        .and_then(|reader| reader.join().ok())
+        .unwrap_or_default();
     if !status.success() || filled != 0 {
         return Err(MediaError::Decode {
             path: path.to_owned(),
