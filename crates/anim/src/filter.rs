@@ -41,7 +41,10 @@ impl OneEuro {
     /// A message naming the bad field.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.min_cutoff.is_finite() && self.min_cutoff > 0.0) {
-            return Err(format!("min_cutoff must be positive, got {}", self.min_cutoff));
+            return Err(format!(
+                "min_cutoff must be positive, got {}",
+                self.min_cutoff
+            ));
         }
         if !(self.beta.is_finite() && self.beta >= 0.0) {
             return Err(format!("beta must be zero or more, got {}", self.beta));
@@ -91,7 +94,9 @@ impl OneEuroState {
             Some((last_time, last, speed)) if last.len() == values.len() && time > *last_time => {
                 let dt = time - *last_time;
                 let a_speed = smoothing_factor(derivative_cutoff, dt);
-                for ((value, last), speed) in values.iter_mut().zip(last.iter_mut()).zip(speed.iter_mut()) {
+                for ((value, last), speed) in
+                    values.iter_mut().zip(last.iter_mut()).zip(speed.iter_mut())
+                {
                     let raw_speed = (*value - *last) / dt;
                     *speed += a_speed * (raw_speed - *speed);
                     let cutoff = min_cutoff + beta * speed.abs();
@@ -146,7 +151,9 @@ pub fn fill_gaps<const N: usize>(rows: &mut [[f32; N]], known: &[bool]) {
 
 /// [`fill_gaps`] for rows of any length (a clip's weight rows).
 pub fn fill_gaps_rows(rows: &mut [Vec<f32>], known: &[bool]) {
-    let indices: Vec<usize> = (0..rows.len()).filter(|&i| known.get(i) == Some(&true)).collect();
+    let indices: Vec<usize> = (0..rows.len())
+        .filter(|&i| known.get(i) == Some(&true))
+        .collect();
     let (Some(&first), Some(&last)) = (indices.first(), indices.last()) else {
         return;
     };
@@ -195,11 +202,16 @@ mod tests {
         let rest: Vec<f32> = (0..60).map(|i| 0.3 + jitter(i)).collect();
         let mut c = clip(&rest);
         smooth(&mut c, OneEuro::default()).unwrap();
-        let spread = c.frames[30..].iter().map(|r| (r[0] - 0.3).abs()).fold(0.0f32, f32::max);
+        let spread = c.frames[30..]
+            .iter()
+            .map(|r| (r[0] - 0.3).abs())
+            .fold(0.0f32, f32::max);
         assert!(spread < 0.006, "jitter left: {spread}");
 
         // 0 → 1 over 6 frames (0.2 s), then hold: within 0.05 of 1 three frames later.
-        let step: Vec<f32> = (0..30).map(|i| ((i as f32 - 10.0) / 6.0).clamp(0.0, 1.0)).collect();
+        let step: Vec<f32> = (0..30)
+            .map(|i| ((i as f32 - 10.0) / 6.0).clamp(0.0, 1.0))
+            .collect();
         let mut c = clip(&step);
         smooth(&mut c, OneEuro::default()).unwrap();
         assert!(c.frames[19][0] > 0.95, "{:?}", &c.frames[14..22]);
@@ -209,13 +221,23 @@ mod tests {
     #[test]
     fn bad_settings_are_named() {
         let mut c = clip(&[0.0, 1.0]);
-        let bad = OneEuro { min_cutoff: 0.0, ..OneEuro::default() };
+        let bad = OneEuro {
+            min_cutoff: 0.0,
+            ..OneEuro::default()
+        };
         assert!(smooth(&mut c, bad).unwrap_err().contains("min_cutoff"));
     }
 
     #[test]
     fn gaps_are_bridged_and_ends_held() {
-        let mut rows = vec![vec![9.0], vec![0.0], vec![9.0], vec![9.0], vec![1.0], vec![9.0]];
+        let mut rows = vec![
+            vec![9.0],
+            vec![0.0],
+            vec![9.0],
+            vec![9.0],
+            vec![1.0],
+            vec![9.0],
+        ];
         fill_gaps_rows(&mut rows, &[false, true, false, false, true, false]);
         let got: Vec<f32> = rows.iter().map(|r| r[0]).collect();
         let want = [0.0, 0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0, 1.0];

@@ -63,7 +63,9 @@ mod tests {
         let clip = Clip {
             fps: 30.0,
             blendshapes: vec!["a".into()],
-            frames: (0..11).map(|i| vec![if i % 2 == 0 { 1.0 } else { 0.0 }]).collect(),
+            frames: (0..11)
+                .map(|i| vec![if i % 2 == 0 { 1.0 } else { 0.0 }])
+                .collect(),
             head: Some((0..11).map(|i| [i as f32, 0.0, 0.0]).collect()),
             head_position: None,
             presence: None,

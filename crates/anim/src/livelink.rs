@@ -14,22 +14,70 @@ use crate::Clip;
 
 /// The ARKit blendshapes in Live Link Face's column order.
 pub const LIVE_LINK_BLENDSHAPES: [&str; 52] = [
-    "eyeBlinkLeft", "eyeLookDownLeft", "eyeLookInLeft", "eyeLookOutLeft", "eyeLookUpLeft",
-    "eyeSquintLeft", "eyeWideLeft", "eyeBlinkRight", "eyeLookDownRight", "eyeLookInRight",
-    "eyeLookOutRight", "eyeLookUpRight", "eyeSquintRight", "eyeWideRight", "jawForward",
-    "jawLeft", "jawRight", "jawOpen", "mouthClose", "mouthFunnel", "mouthPucker", "mouthLeft",
-    "mouthRight", "mouthSmileLeft", "mouthSmileRight", "mouthFrownLeft", "mouthFrownRight",
-    "mouthDimpleLeft", "mouthDimpleRight", "mouthStretchLeft", "mouthStretchRight",
-    "mouthRollLower", "mouthRollUpper", "mouthShrugLower", "mouthShrugUpper", "mouthPressLeft",
-    "mouthPressRight", "mouthLowerDownLeft", "mouthLowerDownRight", "mouthUpperUpLeft",
-    "mouthUpperUpRight", "browDownLeft", "browDownRight", "browInnerUp", "browOuterUpLeft",
-    "browOuterUpRight", "cheekPuff", "cheekSquintLeft", "cheekSquintRight", "noseSneerLeft",
-    "noseSneerRight", "tongueOut",
+    "eyeBlinkLeft",
+    "eyeLookDownLeft",
+    "eyeLookInLeft",
+    "eyeLookOutLeft",
+    "eyeLookUpLeft",
+    "eyeSquintLeft",
+    "eyeWideLeft",
+    "eyeBlinkRight",
+    "eyeLookDownRight",
+    "eyeLookInRight",
+    "eyeLookOutRight",
+    "eyeLookUpRight",
+    "eyeSquintRight",
+    "eyeWideRight",
+    "jawForward",
+    "jawLeft",
+    "jawRight",
+    "jawOpen",
+    "mouthClose",
+    "mouthFunnel",
+    "mouthPucker",
+    "mouthLeft",
+    "mouthRight",
+    "mouthSmileLeft",
+    "mouthSmileRight",
+    "mouthFrownLeft",
+    "mouthFrownRight",
+    "mouthDimpleLeft",
+    "mouthDimpleRight",
+    "mouthStretchLeft",
+    "mouthStretchRight",
+    "mouthRollLower",
+    "mouthRollUpper",
+    "mouthShrugLower",
+    "mouthShrugUpper",
+    "mouthPressLeft",
+    "mouthPressRight",
+    "mouthLowerDownLeft",
+    "mouthLowerDownRight",
+    "mouthUpperUpLeft",
+    "mouthUpperUpRight",
+    "browDownLeft",
+    "browDownRight",
+    "browInnerUp",
+    "browOuterUpLeft",
+    "browOuterUpRight",
+    "cheekPuff",
+    "cheekSquintLeft",
+    "cheekSquintRight",
+    "noseSneerLeft",
+    "noseSneerRight",
+    "tongueOut",
 ];
 
 const ROTATIONS: [&str; 9] = [
-    "HeadYaw", "HeadPitch", "HeadRoll", "LeftEyeYaw", "LeftEyePitch", "LeftEyeRoll",
-    "RightEyeYaw", "RightEyePitch", "RightEyeRoll",
+    "HeadYaw",
+    "HeadPitch",
+    "HeadRoll",
+    "LeftEyeYaw",
+    "LeftEyePitch",
+    "LeftEyeRoll",
+    "RightEyeYaw",
+    "RightEyePitch",
+    "RightEyeRoll",
 ];
 
 const EYE_SIDEWAYS_DEGREES: f32 = 30.0;
@@ -84,10 +132,7 @@ pub fn to_csv(clip: &Clip) -> String {
     out.push('\n');
     let index_of = |arkit: &str| LIVE_LINK_BLENDSHAPES.iter().position(|n| *n == arkit);
     for (f, row) in clip.frames.iter().enumerate() {
-        let values: Vec<f32> = columns
-            .iter()
-            .map(|c| c.map_or(0.0, |c| row[c]))
-            .collect();
+        let values: Vec<f32> = columns.iter().map(|c| c.map_or(0.0, |c| row[c])).collect();
         let get = |arkit: &str| index_of(arkit).map_or(0.0, |i| values[i]);
         let head = clip
             .head
@@ -102,12 +147,23 @@ pub fn to_csv(clip: &Clip) -> String {
         let left_pitch = (get("eyeLookUpLeft") - get("eyeLookDownLeft")) * EYE_VERTICAL_DEGREES;
         let right_pitch = (get("eyeLookUpRight") - get("eyeLookDownRight")) * EYE_VERTICAL_DEGREES;
         out.push_str(&timecode(f, clip.fps));
-        out.push_str(&format!(",{}", LIVE_LINK_BLENDSHAPES.len() + ROTATIONS.len()));
+        out.push_str(&format!(
+            ",{}",
+            LIVE_LINK_BLENDSHAPES.len() + ROTATIONS.len()
+        ));
         for v in values {
             out.push_str(&format!(",{v:.6}"));
         }
         for degrees in [
-            head[0], head[1], head[2], left_yaw, left_pitch, 0.0, right_yaw, right_pitch, 0.0,
+            head[0],
+            head[1],
+            head[2],
+            left_yaw,
+            left_pitch,
+            0.0,
+            right_yaw,
+            right_pitch,
+            0.0,
         ] {
             out.push_str(&format!(",{:.6}", degrees.to_radians()));
         }
@@ -135,8 +191,19 @@ mod tests {
         assert_eq!(lines.len(), 33);
         let header: Vec<&str> = lines[0].split(',').collect();
         assert_eq!(header.len(), 63);
-        assert_eq!(&header[..4], ["Timecode", "BlendShapeCount", "EyeBlinkLeft", "EyeLookDownLeft"]);
-        assert_eq!(&header[16..20], ["JawForward", "JawLeft", "JawRight", "JawOpen"]);
+        assert_eq!(
+            &header[..4],
+            [
+                "Timecode",
+                "BlendShapeCount",
+                "EyeBlinkLeft",
+                "EyeLookDownLeft"
+            ]
+        );
+        assert_eq!(
+            &header[16..20],
+            ["JawForward", "JawLeft", "JawRight", "JawOpen"]
+        );
         assert_eq!(&header[53..56], ["TongueOut", "HeadYaw", "HeadPitch"]);
         assert_eq!(header[62], "RightEyeRoll");
         let row: Vec<&str> = lines[32].split(',').collect();

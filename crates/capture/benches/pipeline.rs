@@ -13,7 +13,8 @@ const FRAMES: usize = 30;
 /// 640×480 frames of a moving face: the astronaut photograph scaled to 400 px and drifting
 /// by a pixel a frame, over a grey background.
 fn video() -> Vec<Vec<u8>> {
-    let photo = faceanim_media::read_image(&faceanim_testdata::shared("images/astronaut.png")).unwrap();
+    let photo =
+        faceanim_media::read_image(&faceanim_testdata::shared("images/astronaut.png")).unwrap();
     (0..FRAMES)
         .map(|f| {
             let mut rgb = vec![90u8; 640 * 480 * 3];
@@ -41,7 +42,11 @@ fn run(models: &FaceModels, frames: &[Vec<u8>], mode: TrackingMode) -> usize {
     let mut tracker = Tracker::new(models, mode);
     let mut found = 0;
     for rgb in frames {
-        let frame = Frame { width: 640, height: 480, rgb };
+        let frame = Frame {
+            width: 640,
+            height: 480,
+            rgb,
+        };
         found += usize::from(tracker.next_frame(&frame).unwrap().is_some());
     }
     found
@@ -51,7 +56,11 @@ fn benches(c: &mut Criterion) {
     let frames = video();
     for threads in [1, 2] {
         let models = FaceModels::load_with_threads(threads).unwrap();
-        assert_eq!(run(&models, &frames, TrackingMode::Track), FRAMES, "the face must be found");
+        assert_eq!(
+            run(&models, &frames, TrackingMode::Track),
+            FRAMES,
+            "the face must be found"
+        );
         let mut group = c.benchmark_group(format!("capture 640x480, {threads} thread(s)"));
         group.throughput(Throughput::Elements(FRAMES as u64));
         group.sample_size(10);
@@ -64,17 +73,36 @@ fn benches(c: &mut Criterion) {
         group.finish();
     }
     let models = FaceModels::load().unwrap();
-    let frame = Frame { width: 640, height: 480, rgb: &frames[0] };
+    let frame = Frame {
+        width: 640,
+        height: 480,
+        rgb: &frames[0],
+    };
     let face = models.find_face(&frame).unwrap().unwrap();
     let mut group = c.benchmark_group("capture stages (1 thread)");
-    group.bench_function("find_face (detector + crop + landmarks + scores + pose)", |b| {
-        b.iter(|| black_box(models.find_face(black_box(&frame)).unwrap()));
-    });
+    group.bench_function(
+        "find_face (detector + crop + landmarks + scores + pose)",
+        |b| {
+            b.iter(|| black_box(models.find_face(black_box(&frame)).unwrap()));
+        },
+    );
     group.bench_function("face_in_region (crop + landmarks + scores + pose)", |b| {
-        b.iter(|| black_box(models.face_in_region(black_box(&frame), face.region, 1.0).unwrap()));
+        b.iter(|| {
+            black_box(
+                models
+                    .face_in_region(black_box(&frame), face.region, 1.0)
+                    .unwrap(),
+            )
+        });
     });
     group.bench_function("head pose fit", |b| {
-        b.iter(|| black_box(models.canonical_face().fit(black_box(&face.landmarks), 640, 480)));
+        b.iter(|| {
+            black_box(
+                models
+                    .canonical_face()
+                    .fit(black_box(&face.landmarks), 640, 480),
+            )
+        });
     });
     group.finish();
 }

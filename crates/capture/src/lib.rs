@@ -130,7 +130,10 @@ pub fn capture_frame(
 ) -> Result<FrameRecord, CaptureError> {
     let face = tracker
         .next_frame(frame)
-        .map_err(|source| CaptureError::Model { frame: index, source })?;
+        .map_err(|source| CaptureError::Model {
+            frame: index,
+            source,
+        })?;
     Ok(FrameRecord::from_face(index, time, face))
 }
 
@@ -155,7 +158,12 @@ pub fn capture(
             height: image.height,
             rgb: &image.rgb,
         };
-        frames.push(capture_frame(&mut tracker, index, index as f32 / info.fps, &frame)?);
+        frames.push(capture_frame(
+            &mut tracker,
+            index,
+            index as f32 / info.fps,
+            &frame,
+        )?);
         progress(index + 1);
     }
     if frames.is_empty() {
@@ -202,7 +210,11 @@ impl Capture {
             .collect();
         fill_gaps_rows(&mut rows, &known);
         let posed: Vec<bool> = self.frames.iter().map(|f| f.head.is_some()).collect();
-        let mut head: Vec<[f32; 3]> = self.frames.iter().map(|f| f.head.unwrap_or([0.0; 3])).collect();
+        let mut head: Vec<[f32; 3]> = self
+            .frames
+            .iter()
+            .map(|f| f.head.unwrap_or([0.0; 3]))
+            .collect();
         let mut position: Vec<[f32; 3]> = self
             .frames
             .iter()
@@ -216,7 +228,12 @@ impl Capture {
             frames: rows,
             head: Some(head),
             head_position: Some(position),
-            presence: Some(self.frames.iter().map(|f| f.presence.clamp(0.0, 1.0)).collect()),
+            presence: Some(
+                self.frames
+                    .iter()
+                    .map(|f| f.presence.clamp(0.0, 1.0))
+                    .collect(),
+            ),
         };
         if let Some(settings) = filtering.one_euro {
             faceanim_anim::filter::smooth(&mut clip, settings)?;

@@ -1,6 +1,12 @@
 //! A video made here with the real ffmpeg, from renders of the ICT head (mouth shut, mouth
 //! open, and a blank frame with no face), through the whole capture pipeline.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::float_cmp, reason = "tests (exact frame rates and copied keys compare exactly)")]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests (exact frame rates and copied keys compare exactly)"
+)]
 
 use std::io::Write as _;
 use std::process::{Command, Stdio};
@@ -19,7 +25,14 @@ fn make_video(path: &std::path::Path) {
     let (width, height) = (neutral.width, neutral.height);
     let mut child = Command::new("ffmpeg")
         .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
-        .args(["-s", &format!("{width}x{height}"), "-r", &FPS.to_string(), "-i", "-"])
+        .args([
+            "-s",
+            &format!("{width}x{height}"),
+            "-r",
+            &FPS.to_string(),
+            "-i",
+            "-",
+        ])
         .args(["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "4"])
         .arg(path)
         .stdin(Stdio::piped())
@@ -52,7 +65,11 @@ fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
     let clip = result.clip(Filtering::default()).unwrap();
     assert_eq!(clip.frames.len(), STORY.len());
     assert_eq!(clip.fps, FPS as f32);
-    let jaw = clip.blendshapes.iter().position(|n| n == "jawOpen").unwrap();
+    let jaw = clip
+        .blendshapes
+        .iter()
+        .position(|n| n == "jawOpen")
+        .unwrap();
     let presence = clip.presence.as_ref().unwrap();
     for (i, c) in STORY.chars().enumerate() {
         let record = &result.frames[i];
@@ -69,7 +86,11 @@ fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
     }
     // Tracking: the detector ran on the first frame, on the blanks and when the face came back,
     // not on every frame.
-    assert!(result.detector_runs <= 4, "{} detector runs", result.detector_runs);
+    assert!(
+        result.detector_runs <= 4,
+        "{} detector runs",
+        result.detector_runs
+    );
     let every = capture(
         &models,
         &mut FrameSource::open(&path, 30.0).unwrap(),
@@ -97,10 +118,19 @@ fn keyframes_every_five_are_interpolated_and_smoothing_is_separate() {
     let path = dir.path().join("ict.mp4");
     make_video(&path);
     let models = FaceModels::load().unwrap();
-    let result = capture(&models, &mut FrameSource::open(&path, 30.0).unwrap(), TrackingMode::Track, |_| {}).unwrap();
+    let result = capture(
+        &models,
+        &mut FrameSource::open(&path, 30.0).unwrap(),
+        TrackingMode::Track,
+        |_| {},
+    )
+    .unwrap();
     let raw = result.clip(Filtering::default()).unwrap();
     let keyed = result
-        .clip(Filtering { keyframe_every: Some(5), one_euro: None })
+        .clip(Filtering {
+            keyframe_every: Some(5),
+            one_euro: None,
+        })
         .unwrap();
     let jaw = raw.blendshapes.iter().position(|n| n == "jawOpen").unwrap();
     for k in [0, 5, 10, 15] {
@@ -109,8 +139,14 @@ fn keyframes_every_five_are_interpolated_and_smoothing_is_separate() {
     let expected = raw.frames[5][jaw] + (raw.frames[10][jaw] - raw.frames[5][jaw]) * 0.4;
     assert!((keyed.frames[7][jaw] - expected).abs() < 1e-5);
     let smooth = result
-        .clip(Filtering { one_euro: Some(Default::default()), keyframe_every: None })
+        .clip(Filtering {
+            one_euro: Some(Default::default()),
+            keyframe_every: None,
+        })
         .unwrap();
     assert_eq!(smooth.frames.len(), raw.frames.len());
-    assert!(faceanim_anim::metrics::jitter(&smooth.frames) < faceanim_anim::metrics::jitter(&raw.frames));
+    assert!(
+        faceanim_anim::metrics::jitter(&smooth.frames)
+            < faceanim_anim::metrics::jitter(&raw.frames)
+    );
 }

@@ -451,7 +451,10 @@ fn studio(
         Some(path) => path,
         None => std::env::current_dir()
             .context("finding the current folder for the project file")?
-            .join(format!("{}.faceanim.json", safe_file_name(character.name()))),
+            .join(format!(
+                "{}.faceanim.json",
+                safe_file_name(character.name())
+            )),
     };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -461,14 +464,29 @@ fn studio(
     runtime.block_on(async move {
         let (listener, address) = faceanim_studio::bind(port).await?;
         let url = format!("http://{address}/");
-        println!("faceanim studio: {url}  (character: {}, project: {})", character.name(), project_path.display());
+        println!(
+            "faceanim studio: {url}  (character: {}, project: {})",
+            character.name(),
+            project_path.display()
+        );
         if open {
-            let opener = if cfg!(target_os = "macos") { "open" } else { "xdg-open" };
+            let opener = if cfg!(target_os = "macos") {
+                "open"
+            } else {
+                "xdg-open"
+            };
             if let Err(e) = std::process::Command::new(opener).arg(&url).spawn() {
                 eprintln!("warning: could not open a browser ({opener}: {e}); open {url} yourself");
             }
         }
-        faceanim_studio::serve(faceanim_studio::Config { character, project_path }, listener).await?;
+        faceanim_studio::serve(
+            faceanim_studio::Config {
+                character,
+                project_path,
+            },
+            listener,
+        )
+        .await?;
         anyhow::Ok(())
     })
 }
@@ -477,9 +495,19 @@ fn studio(
 fn safe_file_name(name: &str) -> String {
     let cleaned: String = name
         .chars()
-        .map(|c| if c.is_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
-    if cleaned.is_empty() { "character".to_owned() } else { cleaned }
+    if cleaned.is_empty() {
+        "character".to_owned()
+    } else {
+        cleaned
+    }
 }
 
 /// The character at `path`, or the built-in default head.

@@ -62,26 +62,49 @@ fn format_of(path: &Path) -> anyhow::Result<Format> {
 }
 
 pub fn run(args: TrackArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(!args.outputs.is_empty() || args.raw.is_some(), "give at least one -o OUTPUT (.json, .glb or .csv) or --raw");
-    let formats: Vec<Format> = args.outputs.iter().map(|p| format_of(p)).collect::<anyhow::Result<_>>()?;
-    anyhow::ensure!(args.fps.is_finite() && args.fps > 0.0, "--fps must be a positive number, got {}", args.fps);
-    anyhow::ensure!((1..=64).contains(&args.threads), "--threads must be between 1 and 64, got {}", args.threads);
-    args.one_euro.validate().map_err(|e| anyhow::anyhow!("--min-cutoff/--beta: {e}"))?;
+    anyhow::ensure!(
+        !args.outputs.is_empty() || args.raw.is_some(),
+        "give at least one -o OUTPUT (.json, .glb or .csv) or --raw"
+    );
+    let formats: Vec<Format> = args
+        .outputs
+        .iter()
+        .map(|p| format_of(p))
+        .collect::<anyhow::Result<_>>()?;
+    anyhow::ensure!(
+        args.fps.is_finite() && args.fps > 0.0,
+        "--fps must be a positive number, got {}",
+        args.fps
+    );
+    anyhow::ensure!(
+        (1..=64).contains(&args.threads),
+        "--threads must be between 1 and 64, got {}",
+        args.threads
+    );
+    args.one_euro
+        .validate()
+        .map_err(|e| anyhow::anyhow!("--min-cutoff/--beta: {e}"))?;
     // Load the character first: a bad character should fail before minutes of video work.
     let character = crate::load_or_default(args.character.as_deref())?.character;
 
     let mut source = FrameSource::open(&args.input, args.fps)?;
     let info = source.info();
     let models = FaceModels::load_with_threads(args.threads).context("loading the face models")?;
-    let mode = if args.detect_every_frame { TrackingMode::DetectEveryFrame } else { TrackingMode::Track };
+    let mode = if args.detect_every_frame {
+        TrackingMode::DetectEveryFrame
+    } else {
+        TrackingMode::Track
+    };
     let bar = match info.frames {
         Some(n) => indicatif::ProgressBar::new(n as u64),
         None => indicatif::ProgressBar::no_length(),
     };
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} {pos}/{len} frames [{bar:40}] {per_sec} {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-            .progress_chars("=> "),
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {pos}/{len} frames [{bar:40}] {per_sec} {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
     );
     let started = Instant::now();
     let result = capture(&models, &mut source, mode, |n| bar.set_position(n as u64))
@@ -92,22 +115,37 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     if let Some(raw) = &args.raw {
         let json = serde_json::to_vec(&result)?;
         faceanim_files::write_atomic(raw, &json)?;
-        eprintln!("wrote {} (landmarks and scores of {} frames)", raw.display(), result.frames.len());
+        eprintln!(
+            "wrote {} (landmarks and scores of {} frames)",
+            raw.display(),
+            result.frames.len()
+        );
     }
 
-    let raw_clip = result.clip(Filtering::default()).map_err(anyhow::Error::msg)?;
+    let raw_clip = result
+        .clip(Filtering::default())
+        .map_err(anyhow::Error::msg)?;
     let one_euro = result
-        .clip(Filtering { one_euro: Some(args.one_euro), keyframe_every: None })
+        .clip(Filtering {
+            one_euro: Some(args.one_euro),
+            keyframe_every: None,
+        })
         .map_err(anyhow::Error::msg)?;
     let keyed = result
-        .clip(Filtering { one_euro: None, keyframe_every: Some(args.keyframe_every) })
+        .clip(Filtering {
+            one_euro: None,
+            keyframe_every: Some(args.keyframe_every),
+        })
         .map_err(anyhow::Error::msg)?;
     let chosen = match args.filter {
         FilterChoice::None => raw_clip.clone(),
         FilterChoice::OneEuro => one_euro.clone(),
         FilterChoice::Keyframes => keyed.clone(),
         FilterChoice::Both => result
-            .clip(Filtering { one_euro: Some(args.one_euro), keyframe_every: Some(args.keyframe_every) })
+            .clip(Filtering {
+                one_euro: Some(args.one_euro),
+                keyframe_every: Some(args.keyframe_every),
+            })
             .map_err(anyhow::Error::msg)?,
     };
 
@@ -115,7 +153,11 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     let retarget = chosen
         .retarget(&character, &stem(&args.input))
         .with_context(|| format!("mapping the capture onto {}", character.name()))?;
-    let names: Vec<String> = character.blendshapes().iter().map(|b| b.name().to_owned()).collect();
+    let names: Vec<String> = character
+        .blendshapes()
+        .iter()
+        .map(|b| b.name().to_owned())
+        .collect();
     let matched = chosen.blendshapes.len() - retarget.unmatched.len();
     let character_clip = Clip {
         fps: chosen.fps,
@@ -127,14 +169,22 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     };
     for (path, format) in args.outputs.iter().zip(formats) {
         match format {
-            Format::ClipJson => faceanim_files::write_atomic(path, character_clip.to_json().as_bytes())?,
+            Format::ClipJson => {
+                faceanim_files::write_atomic(path, character_clip.to_json().as_bytes())?
+            }
             Format::Glb => {
-                let glb = faceanim_rig::export::export_glb(&character, std::slice::from_ref(&retarget.animation))?;
+                let glb = faceanim_rig::export::export_glb(
+                    &character,
+                    std::slice::from_ref(&retarget.animation),
+                )?;
                 faceanim_files::write_atomic(path, &glb)?;
             }
             // Live Link Face speaks ARKit: write the capture's own ARKit weights, whatever the
             // character.
-            Format::LiveLinkCsv => faceanim_files::write_atomic(path, faceanim_anim::livelink::to_csv(&chosen).as_bytes())?,
+            Format::LiveLinkCsv => faceanim_files::write_atomic(
+                path,
+                faceanim_anim::livelink::to_csv(&chosen).as_bytes(),
+            )?,
         }
         eprintln!("wrote {}", path.display());
     }
@@ -155,13 +205,22 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     });
     println!("{summary}");
     if result.faces_found() == 0 {
-        eprintln!("warning: {}: no face was found in any frame; the animation is all zeros", args.input.display());
+        eprintln!(
+            "warning: {}: no face was found in any frame; the animation is all zeros",
+            args.input.display()
+        );
     } else if matched == 0 {
-        eprintln!("warning: {} has no ARKit-named blendshapes; train an adapter for it (faceanim adapt)", character.name());
+        eprintln!(
+            "warning: {} has no ARKit-named blendshapes; train an adapter for it (faceanim adapt)",
+            character.name()
+        );
     }
     Ok(())
 }
 
 fn stem(path: &Path) -> String {
-    path.file_stem().map_or_else(|| "capture".to_owned(), |s| s.to_string_lossy().into_owned())
+    path.file_stem().map_or_else(
+        || "capture".to_owned(),
+        |s| s.to_string_lossy().into_owned(),
+    )
 }

@@ -2,7 +2,12 @@
 //! driven by playwright-core, `tools/studio-e2e.mjs`) on the ICT head: draw a stroke, drag the
 //! arrow, undo/redo, symmetry, save and reopen, a broken upload. Screenshots go to
 //! `test-output/studio/`.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, reason = "tests")]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    reason = "tests"
+)]
 
 mod support;
 
@@ -27,14 +32,24 @@ impl Drop for Studio {
 
 fn start(project: &std::path::Path) -> Studio {
     let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
-        .args(["studio", faceanim_testdata::shared("characters/ict-face.glb").to_str().unwrap(), "--port", "0", "--project"])
+        .args([
+            "studio",
+            faceanim_testdata::shared("characters/ict-face.glb")
+                .to_str()
+                .unwrap(),
+            "--port",
+            "0",
+            "--project",
+        ])
         .arg(project)
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()
         .unwrap();
     let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
     // "faceanim studio: http://127.0.0.1:PORT/  (…)"
     let port = line
         .split("127.0.0.1:")
@@ -46,9 +61,18 @@ fn start(project: &std::path::Path) -> Studio {
 }
 
 /// One raw HTTP/1.1 request; returns the status code and body.
-fn request(port: u16, method: &str, path: &str, headers: &[(&str, &str)], body: &[u8]) -> (u16, String) {
+fn request(
+    port: u16,
+    method: &str,
+    path: &str,
+    headers: &[(&str, &str)],
+    body: &[u8],
+) -> (u16, String) {
     let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
-    let mut text = format!("{method} {path} HTTP/1.1\r\nConnection: close\r\nContent-Length: {}\r\n", body.len());
+    let mut text = format!(
+        "{method} {path} HTTP/1.1\r\nConnection: close\r\nContent-Length: {}\r\n",
+        body.len()
+    );
     if !headers.iter().any(|(k, _)| k.eq_ignore_ascii_case("host")) {
         text.push_str(&format!("Host: 127.0.0.1:{port}\r\n"));
     }
@@ -61,7 +85,11 @@ fn request(port: u16, method: &str, path: &str, headers: &[(&str, &str)], body: 
     let mut response = Vec::new();
     stream.read_to_end(&mut response).unwrap();
     let response = String::from_utf8_lossy(&response).into_owned();
-    let status = response.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap();
+    let status = response
+        .split(' ')
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap();
     let body = response.split("\r\n\r\n").nth(1).unwrap_or("").to_owned();
     (status, body)
 }
@@ -73,20 +101,47 @@ fn only_its_own_host_and_origin_are_served() {
     let port = studio.port;
     assert_eq!(request(port, "GET", "/api/state", &[], b"").0, 200);
     let own = format!("localhost:{port}");
-    assert_eq!(request(port, "GET", "/api/state", &[("Host", &own)], b"").0, 200);
+    assert_eq!(
+        request(port, "GET", "/api/state", &[("Host", &own)], b"").0,
+        200
+    );
     // DNS rebinding: a page on another name resolving to 127.0.0.1.
-    let (status, body) = request(port, "GET", "/api/state", &[("Host", "attacker.example:80")], b"");
+    let (status, body) = request(
+        port,
+        "GET",
+        "/api/state",
+        &[("Host", "attacker.example:80")],
+        b"",
+    );
     assert_eq!(status, 403, "{body}");
     // Another site's page posting to the studio.
-    let (status, _) = request(port, "POST", "/api/undo", &[("Origin", "http://attacker.example")], b"");
+    let (status, _) = request(
+        port,
+        "POST",
+        "/api/undo",
+        &[("Origin", "http://attacker.example")],
+        b"",
+    );
     assert_eq!(status, 403);
     let origin = format!("http://127.0.0.1:{port}");
-    assert_eq!(request(port, "POST", "/api/undo", &[("Origin", &origin)], b"").0, 200);
+    assert_eq!(
+        request(port, "POST", "/api/undo", &[("Origin", &origin)], b"").0,
+        200
+    );
     // The page is embedded: paths outside it do not reach the file system.
     assert_eq!(request(port, "GET", "/../../Cargo.toml", &[], b"").0, 404);
-    assert_eq!(request(port, "GET", "/%2e%2e/%2e%2e/Cargo.toml", &[], b"").0, 404);
+    assert_eq!(
+        request(port, "GET", "/%2e%2e/%2e%2e/Cargo.toml", &[], b"").0,
+        404
+    );
     // Bad JSON gets a message naming what was wrong.
-    let (status, body) = request(port, "POST", "/api/strokes", &[("Content-Type", "application/json")], b"{\"samples\": 3}");
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/strokes",
+        &[("Content-Type", "application/json")],
+        b"{\"samples\": 3}",
+    );
     assert_eq!(status, 400);
     assert!(body.contains("stroke"), "{body}");
     // Oversized JSON is refused before it is read.
@@ -112,7 +167,12 @@ fn an_animator_session_in_a_real_browser() {
         .expect("node");
     let stdout = String::from_utf8_lossy(&run.stdout);
     eprintln!("{stdout}");
-    assert!(run.status.success(), "{}\n{}", stdout, String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}\n{}",
+        stdout,
+        String::from_utf8_lossy(&run.stderr)
+    );
     let measured: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
     assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
     // The project was saved where the studio was pointed, and nowhere else.

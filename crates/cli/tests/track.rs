@@ -2,7 +2,13 @@
 //! (mouth shut, open, shut) animates the ICT character by name, written as clip JSON, a GLB the
 //! glTF-Validator accepts and a Live Link Face CSV; and inputs that are not footage fail with
 //! messages that name them.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::float_cmp, reason = "tests (exact frame rates and copied keys compare exactly)")]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests (exact frame rates and copied keys compare exactly)"
+)]
 
 mod support;
 
@@ -12,17 +18,25 @@ use std::process::{Command, Stdio};
 use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir};
 
 fn ict() -> String {
-    faceanim_testdata::shared("characters/ict-face.glb").display().to_string()
+    faceanim_testdata::shared("characters/ict-face.glb")
+        .display()
+        .to_string()
 }
 
 /// 10 frames at 24 fps: 3 shut, 4 open, 3 shut.
 fn make_video(path: &std::path::Path) {
-    let read = |name: &str| faceanim_media::read_image(&faceanim_testdata::shared(&format!("images/{name}"))).unwrap();
+    let read = |name: &str| {
+        faceanim_media::read_image(&faceanim_testdata::shared(&format!("images/{name}"))).unwrap()
+    };
     let (neutral, open) = (read("ict-face-neutral.png"), read("ict-face-jawopen.png"));
     let mut child = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s"])
+        .args([
+            "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
+        ])
         .arg(format!("{}x{}", neutral.width, neutral.height))
-        .args(["-r", "24", "-i", "-", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "12"])
+        .args([
+            "-r", "24", "-i", "-", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "12",
+        ])
         .arg(path)
         .stdin(Stdio::piped())
         .spawn()
@@ -41,23 +55,46 @@ fn a_video_animates_an_arkit_named_character_in_three_formats() {
     let dir = output_dir("track");
     let video = dir.join("jaw.mp4");
     make_video(&video);
-    let (json, glb, csv, raw) = (dir.join("jaw.json"), dir.join("jaw.glb"), dir.join("jaw.csv"), dir.join("jaw.raw.json"));
+    let (json, glb, csv, raw) = (
+        dir.join("jaw.json"),
+        dir.join("jaw.glb"),
+        dir.join("jaw.csv"),
+        dir.join("jaw.raw.json"),
+    );
     let summary = faceanim_ok(&[
-        "track", video.to_str().unwrap(), "--character", &ict(),
-        "-o", json.to_str().unwrap(), "-o", glb.to_str().unwrap(), "-o", csv.to_str().unwrap(),
-        "--raw", raw.to_str().unwrap(), "--filter", "none",
+        "track",
+        video.to_str().unwrap(),
+        "--character",
+        &ict(),
+        "-o",
+        json.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+        "-o",
+        csv.to_str().unwrap(),
+        "--raw",
+        raw.to_str().unwrap(),
+        "--filter",
+        "none",
     ]);
     let summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
     assert_eq!(summary["frames"], 10);
     assert_eq!(summary["faces_found"], 10);
-    assert!(summary["blendshapes_driven"].as_u64().unwrap() >= 45, "{summary}");
+    assert!(
+        summary["blendshapes_driven"].as_u64().unwrap() >= 45,
+        "{summary}"
+    );
 
     // The clip is in the character's own names and keeps the video's frames and rate.
     let clip = faceanim_anim::Clip::from_json(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(clip.fps, 24.0);
     assert_eq!(clip.frames.len(), 10);
     assert_eq!(clip.blendshapes.len(), 53);
-    let jaw = clip.blendshapes.iter().position(|n| n == "jawOpen").unwrap();
+    let jaw = clip
+        .blendshapes
+        .iter()
+        .position(|n| n == "jawOpen")
+        .unwrap();
     for (i, row) in clip.frames.iter().enumerate() {
         if (3..7).contains(&i) {
             assert!(row[jaw] > 0.5, "frame {i}: {}", row[jaw]);
@@ -73,7 +110,10 @@ fn a_video_animates_an_arkit_named_character_in_three_formats() {
     assert_eq!(report["info"]["animationCount"], 1, "{report:#}");
     let document = gltf::Gltf::from_slice(&std::fs::read(&glb).unwrap()).unwrap();
     let animation = document.animations().next().unwrap();
-    let paths: Vec<String> = animation.channels().map(|c| format!("{:?}", c.target().property())).collect();
+    let paths: Vec<String> = animation
+        .channels()
+        .map(|c| format!("{:?}", c.target().property()))
+        .collect();
     assert_eq!(paths, ["MorphTargetWeights", "Rotation"]);
 
     // Live Link Face: header, 10 rows, jawOpen in its column.
@@ -100,7 +140,10 @@ fn footage_problems_are_reported_by_name() {
     let run = faceanim(&["track", text.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert_eq!(run.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&run.stderr);
-    assert!(stderr.contains("notes.txt") && stderr.contains("not an image or a video"), "{stderr}");
+    assert!(
+        stderr.contains("notes.txt") && stderr.contains("not an image or a video"),
+        "{stderr}"
+    );
     assert!(!out.exists());
 
     let bad_extension = faceanim(&["track", text.to_str().unwrap(), "-o", "take.mov"]);
@@ -110,8 +153,17 @@ fn footage_problems_are_reported_by_name() {
     let blank = dir.path().join("blank.png");
     let image = faceanim_render::Image::filled(64, 48, [30, 30, 30]);
     std::fs::write(&blank, image.to_png().unwrap()).unwrap();
-    let run = faceanim(&["track", blank.to_str().unwrap(), "-o", out.to_str().unwrap()]);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let run = faceanim(&[
+        "track",
+        blank.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     assert!(String::from_utf8_lossy(&run.stderr).contains("no face"));
     let clip = faceanim_anim::Clip::from_json(&std::fs::read(&out).unwrap()).unwrap();
     assert_eq!(clip.frames.len(), 1);

@@ -246,11 +246,9 @@ impl FrameSource {
                 .filter_map(Result::ok)
                 .map(|entry| entry.path())
                 .filter(|p| {
-                    p.extension()
-                        .and_then(|e| e.to_str())
-                        .is_some_and(|e| {
-                            matches!(e.to_ascii_lowercase().as_str(), "png" | "jpg" | "jpeg")
-                        })
+                    p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                        matches!(e.to_ascii_lowercase().as_str(), "png" | "jpg" | "jpeg")
+                    })
                 })
                 .collect();
             files.sort();
@@ -414,7 +412,9 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
             .filter(|&v| v > 0 && v <= 8192)
     };
     let (Some(width), Some(height)) = (dimension("width"), dimension("height")) else {
-        return Err(not_video("the video stream has no usable frame size".into()));
+        return Err(not_video(
+            "the video stream has no usable frame size".into(),
+        ));
     };
     let rate = |key: &str| {
         let text = stream[key].as_str()?;

@@ -1,6 +1,12 @@
 //! Images, folders and videos (made here with the real ffmpeg) as frame sources, and the
 //! errors a user sees for inputs that are not any of them.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::float_cmp, reason = "tests (exact frame rates and copied keys compare exactly)")]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests (exact frame rates and copied keys compare exactly)"
+)]
 
 use std::io::Write as _;
 use std::path::Path;
@@ -21,7 +27,14 @@ fn make_video(path: &Path, count: usize, fps: u32, codec: &[&str]) {
     let (width, height) = (64, 48);
     let mut child = Command::new("ffmpeg")
         .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
-        .args(["-s", &format!("{width}x{height}"), "-r", &fps.to_string(), "-i", "-"])
+        .args([
+            "-s",
+            &format!("{width}x{height}"),
+            "-r",
+            &fps.to_string(),
+            "-i",
+            "-",
+        ])
         .args(codec)
         .arg(path)
         .stdin(Stdio::piped())
@@ -47,7 +60,11 @@ fn read_all(source: &mut FrameSource) -> Vec<faceanim_media::Image> {
 fn a_video_keeps_its_frame_count_order_and_rate() {
     let dir = tempfile::tempdir().unwrap();
     for (name, fps, codec) in [
-        ("clip.mp4", 25, &["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "0"][..]),
+        (
+            "clip.mp4",
+            25,
+            &["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "0"][..],
+        ),
         ("clip.avi", 30, &["-c:v", "mjpeg", "-q:v", "2"][..]),
         ("clip.mkv", 24, &["-c:v", "ffv1"][..]),
     ] {
@@ -56,13 +73,20 @@ fn a_video_keeps_its_frame_count_order_and_rate() {
         let mut source = FrameSource::open(&path, 30.0).unwrap();
         let info = source.info();
         assert_eq!((info.width, info.height), (64, 48), "{name}");
-        assert!((info.fps - fps as f32).abs() < 1e-3, "{name}: {} fps", info.fps);
+        assert!(
+            (info.fps - fps as f32).abs() < 1e-3,
+            "{name}: {} fps",
+            info.fps
+        );
         assert_eq!(info.frames, Some(12), "{name}");
         let frames = read_all(&mut source);
         assert_eq!(frames.len(), 12, "{name}");
         for (i, f) in frames.iter().enumerate() {
             let red = f.rgb[(24 * 64 + 32) * 3];
-            assert!((i32::from(red) - (i * 20) as i32).abs() <= 6, "{name} frame {i}: red {red}");
+            assert!(
+                (i32::from(red) - (i * 20) as i32).abs() <= 6,
+                "{name} frame {i}: red {red}"
+            );
         }
     }
 }
@@ -96,7 +120,10 @@ fn images_and_folders_in_name_order() {
         assert!((i32::from(*red) - expected as i32).abs() <= 6, "{reds:?}");
     }
     let jpeg = read_image(&frames.join("f004.jpg")).unwrap();
-    assert_eq!((jpeg.width, jpeg.height, jpeg.rgb.len()), (64, 48, 64 * 48 * 3));
+    assert_eq!(
+        (jpeg.width, jpeg.height, jpeg.rgb.len()),
+        (64, 48, 64 * 48 * 3)
+    );
     // A single image is one frame.
     let mut one = FrameSource::open(&frames.join("f001.png"), 30.0).unwrap();
     assert_eq!(read_all(&mut one).len(), 1);
@@ -142,5 +169,8 @@ fn a_video_with_no_frames_is_refused() {
         Err(e) => e.to_string(),
         Ok(mut source) => source.next_frame().unwrap_err().to_string(),
     };
-    assert!(message.contains("zero.mkv") && message.contains("no"), "{message}");
+    assert!(
+        message.contains("zero.mkv") && message.contains("no"),
+        "{message}"
+    );
 }

@@ -249,12 +249,15 @@ pub fn export_glb(
             );
             let flat: Vec<f32> = animation.weights.iter().flatten().copied().collect();
             let output = bin.floats(&flat, "SCALAR", None, None);
-            let mut samplers = vec![json!({ "input": input, "output": output, "interpolation": "LINEAR" })];
-            let mut channels = vec![json!({ "sampler": 0, "target": { "node": 0, "path": "weights" } })];
+            let mut samplers =
+                vec![json!({ "input": input, "output": output, "interpolation": "LINEAR" })];
+            let mut channels =
+                vec![json!({ "sampler": 0, "target": { "node": 0, "path": "weights" } })];
             if let Some(rotations) = &animation.rotations {
                 let flat: Vec<f32> = rotations.iter().flatten().copied().collect();
                 let output = bin.floats(&flat, "VEC4", None, None);
-                samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
+                samplers
+                    .push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
                 channels.push(json!({ "sampler": 1, "target": { "node": 0, "path": "rotation" } }));
             }
             json!({ "name": animation.name, "samplers": samplers, "channels": channels })

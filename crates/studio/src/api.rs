@@ -45,7 +45,9 @@ fn bad(message: impl Into<String>) -> ApiError {
 fn lock(shared: &Shared) -> MutexGuard<'_, Studio> {
     // A panic while holding the lock leaves a consistent project (changes are whole
     // replacements), so a poisoned lock is still safe to use.
-    shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    shared
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 fn json_body<T: serde::de::DeserializeOwned>(bytes: &[u8], what: &str) -> Result<T, ApiError> {
@@ -64,7 +66,10 @@ pub fn router(shared: Shared, port: u16) -> Router {
         .route("/api/settings", put(put_settings))
         .route("/api/fps", put(put_fps))
         .route("/api/strokes", post(add_stroke))
-        .route("/api/strokes/{index}", axum::routing::patch(edit_stroke).delete(delete_stroke))
+        .route(
+            "/api/strokes/{index}",
+            axum::routing::patch(edit_stroke).delete(delete_stroke),
+        )
         .route("/api/candidates", post(candidates))
         .route("/api/undo", post(undo))
         .route("/api/redo", post(redo))
@@ -81,7 +86,9 @@ pub fn router(shared: Shared, port: u16) -> Router {
         .merge(api)
         .merge(upload)
         .fallback(get(page))
-        .layer(middleware::from_fn(move |request, next| only_local(port, request, next)))
+        .layer(middleware::from_fn(move |request, next| {
+            only_local(port, request, next)
+        }))
 }
 
 /// Refuses requests not addressed to this studio by its own name (DNS rebinding) and
@@ -98,12 +105,22 @@ async fn only_local(port: u16, request: Request, next: Next) -> Response {
         .and_then(|h| h.to_str().ok())
         .unwrap_or("");
     if !allowed_hosts.iter().any(|a| a == host) {
-        return (StatusCode::FORBIDDEN, format!("host '{host}' is not this studio")).into_response();
+        return (
+            StatusCode::FORBIDDEN,
+            format!("host '{host}' is not this studio"),
+        )
+            .into_response();
     }
     if let Some(origin) = request.headers().get(header::ORIGIN) {
         let origin = origin.to_str().unwrap_or("");
-        if !allowed_hosts.iter().any(|a| origin == format!("http://{a}")) {
-            return (StatusCode::FORBIDDEN, format!("origin '{origin}' is not this studio"))
+        if !allowed_hosts
+            .iter()
+            .any(|a| origin == format!("http://{a}"))
+        {
+            return (
+                StatusCode::FORBIDDEN,
+                format!("origin '{origin}' is not this studio"),
+            )
                 .into_response();
         }
     }
@@ -163,10 +180,11 @@ async fn upload_character(
         return Err(bad(format!("{name}: the file is empty")));
     }
     // Import off the async threads: a large character takes a moment.
-    let imported = tokio::task::spawn_blocking(move || import_gltf(&body, &name, &NoExternalResources))
-        .await
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
-        .map_err(|e| bad(e.to_string()))?;
+    let imported =
+        tokio::task::spawn_blocking(move || import_gltf(&body, &name, &NoExternalResources))
+            .await
+            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
+            .map_err(|e| bad(e.to_string()))?;
     let mut studio = lock(&shared);
     studio.replace_character(imported.character);
     Ok(axum::Json(json!({
@@ -179,7 +197,10 @@ async fn project(State(shared): State<Shared>) -> axum::Json<Value> {
     axum::Json(serde_json::to_value(lock(&shared).project()).unwrap_or(Value::Null))
 }
 
-async fn put_project(State(shared): State<Shared>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn put_project(
+    State(shared): State<Shared>,
+    body: Bytes,
+) -> Result<axum::Json<Value>, ApiError> {
     let file = Studio::parse(&body, "project").map_err(bad)?;
     let mut studio = lock(&shared);
     studio.change(file).map_err(bad)?;
@@ -194,8 +215,12 @@ async fn new_project(State(shared): State<Shared>) -> axum::Json<Value> {
 
 async fn save(State(shared): State<Shared>) -> Result<axum::Json<Value>, ApiError> {
     let studio = lock(&shared);
-    studio.save().map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e))?;
-    Ok(axum::Json(json!({ "saved": studio.project_path.display().to_string() })))
+    studio
+        .save()
+        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e))?;
+    Ok(axum::Json(
+        json!({ "saved": studio.project_path.display().to_string() }),
+    ))
 }
 
 async fn reopen(State(shared): State<Shared>) -> Result<axum::Json<Value>, ApiError> {
@@ -204,7 +229,10 @@ async fn reopen(State(shared): State<Shared>) -> Result<axum::Json<Value>, ApiEr
     Ok(axum::Json(studio.view()))
 }
 
-async fn put_settings(State(shared): State<Shared>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn put_settings(
+    State(shared): State<Shared>,
+    body: Bytes,
+) -> Result<axum::Json<Value>, ApiError> {
     let settings: Settings = json_body(&body, "settings")?;
     let mut studio = lock(&shared);
     let mut next = studio.project().clone();
@@ -231,7 +259,10 @@ async fn put_fps(State(shared): State<Shared>, body: Bytes) -> Result<axum::Json
     Ok(axum::Json(studio.view()))
 }
 
-async fn add_stroke(State(shared): State<Shared>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn add_stroke(
+    State(shared): State<Shared>,
+    body: Bytes,
+) -> Result<axum::Json<Value>, ApiError> {
     let stroke: StrokeFile = json_body(&body, "stroke")?;
     let mut studio = lock(&shared);
     let index = studio.add_stroke(stroke).map_err(bad)?;
@@ -263,10 +294,12 @@ async fn edit_stroke(
     let mut studio = lock(&shared);
     let mut next = studio.project().clone();
     let count = next.strokes.len();
-    let stroke = next
-        .strokes
-        .get_mut(index)
-        .ok_or_else(|| ApiError(StatusCode::NOT_FOUND, format!("no stroke {index} (there are {count})")))?;
+    let stroke = next.strokes.get_mut(index).ok_or_else(|| {
+        ApiError(
+            StatusCode::NOT_FOUND,
+            format!("no stroke {index} (there are {count})"),
+        )
+    })?;
     let mut value = serde_json::to_value(&*stroke).map_err(|e| bad(e.to_string()))?;
     for (key, change) in changes {
         value[key] = change;
@@ -276,11 +309,17 @@ async fn edit_stroke(
     Ok(axum::Json(studio.view()))
 }
 
-async fn delete_stroke(State(shared): State<Shared>, Path(index): Path<usize>) -> Result<axum::Json<Value>, ApiError> {
+async fn delete_stroke(
+    State(shared): State<Shared>,
+    Path(index): Path<usize>,
+) -> Result<axum::Json<Value>, ApiError> {
     let mut studio = lock(&shared);
     let mut next = studio.project().clone();
     if index >= next.strokes.len() {
-        return Err(ApiError(StatusCode::NOT_FOUND, format!("no stroke {index}")));
+        return Err(ApiError(
+            StatusCode::NOT_FOUND,
+            format!("no stroke {index}"),
+        ));
     }
     // Later strokes keep their indices' meaning for the page only if positions stay stable:
     // removing shifts them, which the page handles by redrawing from the returned state.
@@ -297,12 +336,17 @@ struct CandidateQuery {
     frame: f32,
 }
 
-async fn candidates(State(shared): State<Shared>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn candidates(
+    State(shared): State<Shared>,
+    body: Bytes,
+) -> Result<axum::Json<Value>, ApiError> {
     let query: CandidateQuery = json_body(&body, "candidates")?;
     if query.point.iter().any(|x| !x.is_finite()) || !query.frame.is_finite() {
         return Err(bad("candidates: point and frame must be finite numbers"));
     }
-    Ok(axum::Json(lock(&shared).candidates(Vec3::from_array(query.point), query.frame)))
+    Ok(axum::Json(
+        lock(&shared).candidates(Vec3::from_array(query.point), query.frame),
+    ))
 }
 
 async fn undo(State(shared): State<Shared>) -> axum::Json<Value> {
@@ -329,31 +373,42 @@ fn download(bytes: Vec<u8>, mime: &'static str, name: &str) -> Response {
 }
 
 fn file_stem(studio: &Studio) -> String {
-    studio
-        .project_path
-        .file_stem()
-        .map_or_else(|| "faceanim".to_owned(), |s| s.to_string_lossy().replace('"', ""))
+    studio.project_path.file_stem().map_or_else(
+        || "faceanim".to_owned(),
+        |s| s.to_string_lossy().replace('"', ""),
+    )
 }
 
 async fn export_glb(State(shared): State<Shared>) -> Result<Response, ApiError> {
     let studio = lock(&shared);
     let (sketch, _) = studio.sketch();
     let name = file_stem(&studio);
-    let baked = sketch.bake(&name).map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
-    let glb = faceanim_rig::export::export_glb(&baked.character, std::slice::from_ref(&baked.animation))
+    let baked = sketch
+        .bake(&name)
         .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
+    let glb =
+        faceanim_rig::export::export_glb(&baked.character, std::slice::from_ref(&baked.animation))
+            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
     Ok(download(glb, "model/gltf-binary", &format!("{name}.glb")))
 }
 
 async fn export_clip(State(shared): State<Shared>) -> Response {
     let studio = lock(&shared);
     let clip = studio.sketch().0.bake_clip();
-    download(clip.to_json().into_bytes(), "application/json", &format!("{}.clip.json", file_stem(&studio)))
+    download(
+        clip.to_json().into_bytes(),
+        "application/json",
+        &format!("{}.clip.json", file_stem(&studio)),
+    )
 }
 
 async fn export_csv(State(shared): State<Shared>) -> Response {
     let studio = lock(&shared);
     let clip = studio.sketch().0.bake_clip();
     let csv = faceanim_anim::livelink::to_csv(&clip);
-    download(csv.into_bytes(), "text/csv", &format!("{}.csv", file_stem(&studio)))
+    download(
+        csv.into_bytes(),
+        "text/csv",
+        &format!("{}.csv", file_stem(&studio)),
+    )
 }

@@ -73,7 +73,8 @@ pub async fn bind(port: u16) -> Result<(tokio::net::TcpListener, SocketAddr), St
 /// [`StudioError`] if the project cannot be opened or the server fails.
 pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<(), StudioError> {
     let address = listener.local_addr().map_err(StudioError::Serve)?;
-    let studio = Studio::open(config.character, config.project_path).map_err(StudioError::Project)?;
+    let studio =
+        Studio::open(config.character, config.project_path).map_err(StudioError::Project)?;
     let shared = Arc::new(Mutex::new(studio));
     let app = api::router(shared, address.port());
     axum::serve(listener, app).await.map_err(StudioError::Serve)

@@ -112,7 +112,11 @@ impl Studio {
     ///
     /// # Errors
     /// The project's validation message (the change is not made).
-    pub fn change_in_gesture(&mut self, next: ProjectFile, gesture: Option<String>) -> Result<(), String> {
+    pub fn change_in_gesture(
+        &mut self,
+        next: ProjectFile,
+        gesture: Option<String>,
+    ) -> Result<(), String> {
         Project::from_file(next.clone()).map_err(|e| e.to_string())?;
         let same_gesture = gesture.is_some() && gesture == self.gesture;
         self.gesture = gesture;
@@ -137,7 +141,8 @@ impl Studio {
         let Some(previous) = self.undo.pop() else {
             return false;
         };
-        self.redo.push(std::mem::replace(&mut self.project, previous));
+        self.redo
+            .push(std::mem::replace(&mut self.project, previous));
         self.autosave();
         true
     }
@@ -257,7 +262,9 @@ impl Studio {
                         .iter()
                         .map(|side| {
                             let path: Vec<[f32; 3]> = (0..=24)
-                                .map(|k| side.path.point(side.a, side.c, k as f32 / 24.0).to_array())
+                                .map(|k| {
+                                    side.path.point(side.a, side.c, k as f32 / 24.0).to_array()
+                                })
                                 .collect();
                             let target = match side.target {
                                 Target::Blendshape(id) => {
@@ -291,7 +298,9 @@ impl Studio {
                         "sides": sides,
                     }));
                 }
-                Err(reason) => rejected.push(json!({ "stroke": index, "reason": reason.to_string() })),
+                Err(reason) => {
+                    rejected.push(json!({ "stroke": index, "reason": reason.to_string() }))
+                }
             }
         }
         json!({

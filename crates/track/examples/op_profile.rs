@@ -4,34 +4,54 @@
 use std::collections::HashMap;
 use std::io::Read as _;
 use std::time::Instant;
-use tract_tflite::prelude::*;
 use tract_tflite::internal::*;
+use tract_tflite::prelude::*;
 
 fn main() {
-    let bundle = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/face_landmarker.task")).unwrap();
+    let bundle = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/face_landmarker.task"
+    ))
+    .unwrap();
     let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bundle)).unwrap();
     let mut bytes = Vec::new();
-    archive.by_name("face_landmarks_detector.tflite").unwrap().read_to_end(&mut bytes).unwrap();
-    let model = tract_tflite::tflite().model_for_read(&mut std::io::Cursor::new(bytes)).unwrap().into_optimized().unwrap();
+    archive
+        .by_name("face_landmarks_detector.tflite")
+        .unwrap()
+        .read_to_end(&mut bytes)
+        .unwrap();
+    let model = tract_tflite::tflite()
+        .model_for_read(&mut std::io::Cursor::new(bytes))
+        .unwrap()
+        .into_optimized()
+        .unwrap();
     let plan = model.into_runnable().unwrap();
-    let input: Tensor = tract_ndarray::Array4::<f32>::from_shape_fn((1, 256, 256, 3), |(_, y, x, c)| ((x + y + c) % 251) as f32 / 251.0).into();
+    let input: Tensor =
+        tract_ndarray::Array4::<f32>::from_shape_fn((1, 256, 256, 3), |(_, y, x, c)| {
+            ((x + y + c) % 251) as f32 / 251.0
+        })
+        .into();
     let mut state = SimpleState::new(&plan).unwrap();
     let mut times: HashMap<String, (f64, usize)> = HashMap::new();
     for round in 0..30 {
-        state.run_plan_with_eval(tvec!(input.clone().into()), |ctx, st, node, inputs| {
-            let t = Instant::now();
-            let r = tract_core::plan::eval(ctx, st, node, inputs);
-            if round >= 10 {
-                let e = times.entry(node.op().name().to_string()).or_default();
-                e.0 += t.elapsed().as_secs_f64() * 1000.0 / 20.0;
-                e.1 += 1;
-            }
-            r
-        }).unwrap();
+        state
+            .run_plan_with_eval(tvec!(input.clone().into()), |ctx, st, node, inputs| {
+                let t = Instant::now();
+                let r = tract_core::plan::eval(ctx, st, node, inputs);
+                if round >= 10 {
+                    let e = times.entry(node.op().name().to_string()).or_default();
+                    e.0 += t.elapsed().as_secs_f64() * 1000.0 / 20.0;
+                    e.1 += 1;
+                }
+                r
+            })
+            .unwrap();
     }
     let mut v: Vec<_> = times.into_iter().collect();
     v.sort_by(|a, b| b.1.0.total_cmp(&a.1.0));
     let total: f64 = v.iter().map(|x| x.1.0).sum();
     println!("total {total:.2} ms");
-    for (k, (ms, n)) in v { println!("{k:40} {ms:7.2} ms  x{}", n / 20); }
+    for (k, (ms, n)) in v {
+        println!("{k:40} {ms:7.2} ms  x{}", n / 20);
+    }
 }

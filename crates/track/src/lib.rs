@@ -15,7 +15,9 @@ use std::io::Read as _;
 
 pub use face::{Face, Frame, Region};
 pub use pose::{CanonicalFace, HeadPose};
-pub use tracker::{Found, MIN_PRESENCE, Tracker, TrackerStats, TrackingMode, region_from_landmarks};
+pub use tracker::{
+    Found, MIN_PRESENCE, Tracker, TrackerStats, TrackingMode, region_from_landmarks,
+};
 
 use tract_tflite::prelude::*;
 
@@ -155,8 +157,9 @@ fn plan(model: &'static str, file: &str, threads: usize) -> Result<Plan, ModelEr
     };
     let bytes = bundle_entry(file)?;
     let options = RunOptions {
-        executor: (threads > 1)
-            .then(|| tract_linalg::multithread::Executor::multithread_with_name(threads, "faceanim-track")),
+        executor: (threads > 1).then(|| {
+            tract_linalg::multithread::Executor::multithread_with_name(threads, "faceanim-track")
+        }),
         ..RunOptions::default()
     };
     tract_tflite::tflite()

@@ -111,7 +111,10 @@ impl<'a> Proto<'a> {
         let value = match key & 7 {
             0 => Value::Varint(self.varint()?),
             5 => {
-                let raw = self.bytes.get(self.at..self.at + 4).ok_or("truncated fixed32")?;
+                let raw = self
+                    .bytes
+                    .get(self.at..self.at + 4)
+                    .ok_or("truncated fixed32")?;
                 self.at += 4;
                 Value::Fixed32(u32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]))
             }
@@ -185,7 +188,11 @@ impl CanonicalFace {
             ));
         }
         let vertices: Vec<[f32; 3]> = floats.chunks_exact(5).map(|c| [c[0], c[1], c[2]]).collect();
-        if basis.len() < 3 || basis.iter().any(|&(i, w)| i >= vertices.len() || w.is_nan() || w <= 0.0) {
+        if basis.len() < 3
+            || basis
+                .iter()
+                .any(|&(i, w)| i >= vertices.len() || w.is_nan() || w <= 0.0)
+        {
             return Err(format!(
                 "Procrustes basis of {} landmarks does not fit {} vertices",
                 basis.len(),
@@ -200,7 +207,8 @@ impl CanonicalFace {
     /// are degenerate (all in one point, or not finite).
     #[must_use]
     pub fn fit(&self, landmarks: &[[f32; 3]], width: usize, height: usize) -> Option<HeadPose> {
-        let to_fit_frame = |p: [f32; 3]| DVec3::new(f64::from(p[0]), -f64::from(p[1]), -f64::from(p[2]));
+        let to_fit_frame =
+            |p: [f32; 3]| DVec3::new(f64::from(p[0]), -f64::from(p[1]), -f64::from(p[2]));
         let mut pairs = Vec::with_capacity(self.basis.len());
         for &(index, weight) in &self.basis {
             let target = to_fit_frame(*landmarks.get(index)?);
@@ -242,8 +250,10 @@ impl CanonicalFace {
         }
         // Where the canonical origin lands, in pixels (fit frame), then metres from the camera.
         let origin = target_mean - rotation * source_mean * scale;
-        let focal =
-            (height as f64 / 2.0) / (f64::from(HeadPose::VERTICAL_FOV_DEGREES) / 2.0).to_radians().tan();
+        let focal = (height as f64 / 2.0)
+            / (f64::from(HeadPose::VERTICAL_FOV_DEGREES) / 2.0)
+                .to_radians()
+                .tan();
         let depth_cm = focal / scale;
         let (cx, cy) = (width as f64 / 2.0, -(height as f64) / 2.0);
         let translation = [
@@ -274,7 +284,12 @@ fn horn_rotation(s: &[[f64; 3]; 3]) -> Option<DQuat> {
     ];
     let (values, vectors) = jacobi_eigen(n);
     let best = (0..4).max_by(|&a, &b| values[a].total_cmp(&values[b]))?;
-    let v = [vectors[0][best], vectors[1][best], vectors[2][best], vectors[3][best]];
+    let v = [
+        vectors[0][best],
+        vectors[1][best],
+        vectors[2][best],
+        vectors[3][best],
+    ];
     // Horn's vector is (w, x, y, z).
     let q = DQuat::from_xyzw(v[1], v[2], v[3], v[0]);
     let length = q.length();
@@ -335,7 +350,11 @@ mod tests {
         let vertices: Vec<[f32; 3]> = (0..40)
             .map(|i| {
                 let t = i as f32 * 0.7;
-                [t.sin() * 7.0, (t * 1.3).cos() * 9.0, (t * 0.4).sin() * 4.0 + 2.0]
+                [
+                    t.sin() * 7.0,
+                    (t * 1.3).cos() * 9.0,
+                    (t * 0.4).sin() * 4.0 + 2.0,
+                ]
             })
             .collect();
         let basis = (0..40).map(|i| (i, 1.0 + (i % 3) as f32)).collect();
@@ -348,7 +367,8 @@ mod tests {
         face.vertices
             .iter()
             .map(|v| {
-                let p = r * DVec3::from_array(v.map(f64::from)) * scale + DVec3::new(320.0, -240.0, 0.0);
+                let p = r * DVec3::from_array(v.map(f64::from)) * scale
+                    + DVec3::new(320.0, -240.0, 0.0);
                 [p.x as f32, -p.y as f32, -p.z as f32]
             })
             .collect()
@@ -357,12 +377,29 @@ mod tests {
     #[test]
     fn recovers_a_known_rotation_and_scale() {
         let face = face();
-        for (yaw, pitch, roll) in [(0.0, 0.0, 0.0), (25.0, -10.0, 5.0), (-40.0, 20.0, -15.0), (5.0, 35.0, 30.0)] {
+        for (yaw, pitch, roll) in [
+            (0.0, 0.0, 0.0),
+            (25.0, -10.0, 5.0),
+            (-40.0, 20.0, -15.0),
+            (5.0, 35.0, 30.0),
+        ] {
             let landmarks = project(&face, yaw, pitch, roll, 12.0);
             let pose = face.fit(&landmarks, 640, 480).unwrap();
-            assert!((f64::from(pose.yaw) - yaw).abs() < 1e-3, "yaw {} vs {yaw}", pose.yaw);
-            assert!((f64::from(pose.pitch) - pitch).abs() < 1e-3, "pitch {} vs {pitch}", pose.pitch);
-            assert!((f64::from(pose.roll) - roll).abs() < 1e-3, "roll {} vs {roll}", pose.roll);
+            assert!(
+                (f64::from(pose.yaw) - yaw).abs() < 1e-3,
+                "yaw {} vs {yaw}",
+                pose.yaw
+            );
+            assert!(
+                (f64::from(pose.pitch) - pitch).abs() < 1e-3,
+                "pitch {} vs {pitch}",
+                pose.pitch
+            );
+            assert!(
+                (f64::from(pose.roll) - roll).abs() < 1e-3,
+                "roll {} vs {roll}",
+                pose.roll
+            );
             assert!((pose.pixels_per_cm - 12.0).abs() < 1e-3);
             // Centred in the image: no sideways offset.
             assert!(pose.translation[0].abs() < 1e-4 && pose.translation[1].abs() < 1e-4);
@@ -374,7 +411,10 @@ mod tests {
     fn degenerate_landmarks_give_no_pose() {
         let face = face();
         assert!(face.fit(&vec![[5.0, 5.0, 0.0]; 40], 640, 480).is_none());
-        assert!(face.fit(&vec![[f32::NAN, 5.0, 0.0]; 40], 640, 480).is_none());
+        assert!(
+            face.fit(&vec![[f32::NAN, 5.0, 0.0]; 40], 640, 480)
+                .is_none()
+        );
         assert!(face.fit(&[[0.0; 3]; 3], 640, 480).is_none());
     }
 

@@ -88,7 +88,8 @@ impl<'m> Tracker<'m> {
         self.stats.detector_runs += 1;
         match self.models.find_face(frame)? {
             Some(face) if face.presence >= MIN_PRESENCE => {
-                self.previous = Some((region_from_landmarks(&face.landmarks), face.detection_score));
+                self.previous =
+                    Some((region_from_landmarks(&face.landmarks), face.detection_score));
                 Ok(Some((face, Found::Detected)))
             }
             _ => {
@@ -143,8 +144,15 @@ mod tests {
         points[33] = eye(-30.0);
         points[263] = eye(30.0);
         let region = region_from_landmarks(&points);
-        assert!((region.rotation - angle).abs() < 1e-4, "{}", region.rotation);
-        assert!((region.cx - 200.0).abs() < 0.5 && (region.cy - 150.0).abs() < 3.0, "{region:?}");
+        assert!(
+            (region.rotation - angle).abs() < 1e-4,
+            "{}",
+            region.rotation
+        );
+        assert!(
+            (region.cx - 200.0).abs() < 0.5 && (region.cy - 150.0).abs() < 3.0,
+            "{region:?}"
+        );
         // The grid spans 105 × 105 (22 columns, 22 rows): enlarged 1.5×.
         assert!((region.size - 105.0 * 1.5).abs() < 1.0, "{}", region.size);
     }

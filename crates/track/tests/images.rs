@@ -51,7 +51,10 @@ fn scores(models: &FaceModels, name: &str) -> HashMap<&'static str, f32> {
         "{name}: {pose:?}"
     );
     // A head in a portrait is a few tens of centimetres to a couple of metres from the camera.
-    assert!((-2.5..-0.15).contains(&pose.translation[2]), "{name}: {pose:?}");
+    assert!(
+        (-2.5..-0.15).contains(&pose.translation[2]),
+        "{name}: {pose:?}"
+    );
     face.scores.into_iter().collect()
 }
 
