@@ -5,7 +5,6 @@ use std::collections::HashMap;
 use std::io::Read as _;
 use std::time::Instant;
 use tract_tflite::internal::*;
-use tract_tflite::prelude::*;
 
 fn main() {
     let bundle = std::fs::read(concat!(
