@@ -35,7 +35,9 @@ function showError(message) {
 
 // ---------- scene ----------
 const viewport = $('viewport');
-const renderer = new THREE.WebGLRenderer({ antialias: !new URLSearchParams(location.search).has('fast') });
+// `?fast`: a cheaper viewport (no antialiasing, Lambert shading) for machines without a GPU.
+const FAST = new URLSearchParams(location.search).has('fast');
+const renderer = new THREE.WebGLRenderer({ antialias: !FAST });
 renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
 viewport.appendChild(renderer.domElement);
 const scene = new THREE.Scene();
@@ -117,10 +119,9 @@ async function loadBaked() {
   if (studio.root) { scene.remove(studio.root); studio.root.traverse((o) => { if (o.isMesh) o.geometry.dispose(); }); }
   studio.meshes = [];
   const root = gltf.scene;
-  const fast = new URLSearchParams(location.search).has('fast');
   root.traverse((o) => {
     if (!o.isMesh) return;
-    if (fast) { const m = o.material; o.material = new THREE.MeshLambertMaterial({ color: m.color, map: m.map, vertexColors: m.vertexColors }); }
+    if (FAST) { const m = o.material; o.material = new THREE.MeshLambertMaterial({ color: m.color, map: m.map, vertexColors: m.vertexColors }); m.dispose(); }
     o.material.side = THREE.DoubleSide;
     studio.meshes.push(o);
   });
@@ -147,10 +148,19 @@ function setFrame(frame) {
   drawPlayhead();
 }
 
+/** Empties an overlay group, freeing its GPU buffers (overlays are rebuilt on every change). */
+function clearGroup(group) {
+  for (const child of group.children) {
+    child.geometry?.dispose();
+    child.material?.dispose();
+  }
+  group.clear();
+}
+
 // ---------- overlays: strokes, arrows, spheres ----------
 const handleTargets = [];
 function drawOverlays() {
-  overlay.clear();
+  clearGroup(overlay);
   handleTargets.length = 0;
   if (!studio.state) return;
   const d = studio.character.diagonal;
@@ -185,7 +195,7 @@ function drawOverlays() {
 }
 
 function showCandidates(found, faint) {
-  candidateGroup.clear();
+  clearGroup(candidateGroup);
   if (!found) return;
   const r = studio.character.diagonal / 220;
   for (const c of found.candidates) {
@@ -289,7 +299,7 @@ renderer.domElement.addEventListener('pointermove', (event) => {
       hoverTimer = performance.now();
       const hit = hitFace(rayFrom(event));
       if (hit) api('POST', 'api/candidates', { point: hit.toArray(), frame: studio.frame }).then((f) => { if (!drag) showCandidates(f, true); }).catch(() => {});
-      else candidateGroup.clear();
+      else clearGroup(candidateGroup);
     }
     return;
   }
@@ -386,7 +396,7 @@ async function endDrag(event) {
   try { renderer.domElement.releasePointerCapture(event.pointerId); } catch { /* already released */ }
   if (finished.kind === 'stroke') {
     scene.remove(finished.line);
-    candidateGroup.clear();
+    clearGroup(candidateGroup);
     if (finished.samples.length < 2) return;
     const released = performance.now();
     aimAtReleasedSphere(finished.samples);

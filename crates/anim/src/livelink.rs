@@ -1,6 +1,7 @@
 //! Live Link Face CSV: the file Epic's Live Link Face app records, which Unreal, Blender
 //! add-ons and MetaHuman tools import. Columns: `Timecode`, `BlendShapeCount` (61), the 52
-//! ARKit blendshapes in ARKit's `ARFaceAnchor` order (Unreal's `EARFaceBlendShape`), then head
+//! ARKit blendshapes in ARKit's `ARFaceAnchor` order ([`ARKIT_52`]; Unreal's
+//! `EARFaceBlendShape` has the same), then head
 //! yaw, pitch, roll and each eye's yaw, pitch, roll in radians.
 //!
 //! Clip columns are matched to ARKit names in any spelling faceanim recognises (`jawOpen`,
@@ -8,65 +9,9 @@
 //! are derived from the eyeLook weights (at weight 1: 30° sideways, 25° up or down), since a
 //! clip carries no eye bones.
 
-use faceanim_rig::names::arkit_name;
+use faceanim_rig::names::{ARKIT_52, arkit_name};
 
 use crate::Clip;
-
-/// The ARKit blendshapes in Live Link Face's column order.
-pub const LIVE_LINK_BLENDSHAPES: [&str; 52] = [
-    "eyeBlinkLeft",
-    "eyeLookDownLeft",
-    "eyeLookInLeft",
-    "eyeLookOutLeft",
-    "eyeLookUpLeft",
-    "eyeSquintLeft",
-    "eyeWideLeft",
-    "eyeBlinkRight",
-    "eyeLookDownRight",
-    "eyeLookInRight",
-    "eyeLookOutRight",
-    "eyeLookUpRight",
-    "eyeSquintRight",
-    "eyeWideRight",
-    "jawForward",
-    "jawLeft",
-    "jawRight",
-    "jawOpen",
-    "mouthClose",
-    "mouthFunnel",
-    "mouthPucker",
-    "mouthLeft",
-    "mouthRight",
-    "mouthSmileLeft",
-    "mouthSmileRight",
-    "mouthFrownLeft",
-    "mouthFrownRight",
-    "mouthDimpleLeft",
-    "mouthDimpleRight",
-    "mouthStretchLeft",
-    "mouthStretchRight",
-    "mouthRollLower",
-    "mouthRollUpper",
-    "mouthShrugLower",
-    "mouthShrugUpper",
-    "mouthPressLeft",
-    "mouthPressRight",
-    "mouthLowerDownLeft",
-    "mouthLowerDownRight",
-    "mouthUpperUpLeft",
-    "mouthUpperUpRight",
-    "browDownLeft",
-    "browDownRight",
-    "browInnerUp",
-    "browOuterUpLeft",
-    "browOuterUpRight",
-    "cheekPuff",
-    "cheekSquintLeft",
-    "cheekSquintRight",
-    "noseSneerLeft",
-    "noseSneerRight",
-    "tongueOut",
-];
 
 const ROTATIONS: [&str; 9] = [
     "HeadYaw",
@@ -112,7 +57,7 @@ fn capitalise(name: &str) -> String {
 /// The clip as a Live Link Face CSV (see the module docs).
 #[must_use]
 pub fn to_csv(clip: &Clip) -> String {
-    let columns: Vec<Option<usize>> = LIVE_LINK_BLENDSHAPES
+    let columns: Vec<Option<usize>> = ARKIT_52
         .iter()
         .map(|arkit| {
             clip.blendshapes
@@ -121,7 +66,7 @@ pub fn to_csv(clip: &Clip) -> String {
         })
         .collect();
     let mut out = String::from("Timecode,BlendShapeCount");
-    for name in LIVE_LINK_BLENDSHAPES {
+    for name in ARKIT_52 {
         out.push(',');
         out.push_str(&capitalise(name));
     }
@@ -130,7 +75,7 @@ pub fn to_csv(clip: &Clip) -> String {
         out.push_str(name);
     }
     out.push('\n');
-    let index_of = |arkit: &str| LIVE_LINK_BLENDSHAPES.iter().position(|n| *n == arkit);
+    let index_of = |arkit: &str| ARKIT_52.iter().position(|n| *n == arkit);
     for (f, row) in clip.frames.iter().enumerate() {
         let values: Vec<f32> = columns.iter().map(|c| c.map_or(0.0, |c| row[c])).collect();
         let get = |arkit: &str| index_of(arkit).map_or(0.0, |i| values[i]);
@@ -147,10 +92,7 @@ pub fn to_csv(clip: &Clip) -> String {
         let left_pitch = (get("eyeLookUpLeft") - get("eyeLookDownLeft")) * EYE_VERTICAL_DEGREES;
         let right_pitch = (get("eyeLookUpRight") - get("eyeLookDownRight")) * EYE_VERTICAL_DEGREES;
         out.push_str(&timecode(f, clip.fps));
-        out.push_str(&format!(
-            ",{}",
-            LIVE_LINK_BLENDSHAPES.len() + ROTATIONS.len()
-        ));
+        out.push_str(&format!(",{}", ARKIT_52.len() + ROTATIONS.len()));
         for v in values {
             out.push_str(&format!(",{v:.6}"));
         }

@@ -235,9 +235,12 @@ async fn put_settings(
 ) -> Result<axum::Json<Value>, ApiError> {
     let settings: Settings = json_body(&body, "settings")?;
     let mut studio = lock(&shared);
-    let mut next = studio.project().clone();
-    next.settings = settings;
-    studio.change(next).map_err(bad)?;
+    studio
+        .edit(None, |next| {
+            next.settings = settings;
+            Ok(())
+        })
+        .map_err(bad)?;
     Ok(axum::Json(studio.view()))
 }
 
@@ -253,9 +256,12 @@ async fn put_fps(State(shared): State<Shared>, body: Bytes) -> Result<axum::Json
         return Err(bad(format!("fps: must be between 1 and 240, got {fps}")));
     }
     let mut studio = lock(&shared);
-    let mut next = studio.project().clone();
-    next.fps = fps;
-    studio.change(next).map_err(bad)?;
+    studio
+        .edit(None, |next| {
+            next.fps = fps;
+            Ok(())
+        })
+        .map_err(bad)?;
     Ok(axum::Json(studio.view()))
 }
 
@@ -292,21 +298,31 @@ async fn edit_stroke(
         )));
     }
     let mut studio = lock(&shared);
-    let mut next = studio.project().clone();
-    let count = next.strokes.len();
-    let stroke = next.strokes.get_mut(index).ok_or_else(|| {
-        ApiError(
-            StatusCode::NOT_FOUND,
-            format!("no stroke {index} (there are {count})"),
-        )
-    })?;
-    let mut value = serde_json::to_value(&*stroke).map_err(|e| bad(e.to_string()))?;
-    for (key, change) in changes {
-        value[key] = change;
-    }
-    *stroke = serde_json::from_value(value).map_err(|e| bad(format!("edit: {e}")))?;
-    studio.change_in_gesture(next, gesture).map_err(bad)?;
+    no_such_stroke(&studio, index)?;
+    studio
+        .edit(gesture, |next| {
+            let stroke = &mut next.strokes[index];
+            let mut value = serde_json::to_value(&*stroke).map_err(|e| e.to_string())?;
+            for (key, change) in changes {
+                value[key] = change;
+            }
+            *stroke = serde_json::from_value(value).map_err(|e| format!("edit: {e}"))?;
+            Ok(())
+        })
+        .map_err(bad)?;
     Ok(axum::Json(studio.view()))
+}
+
+/// `404` naming the stroke when the project has no stroke `index`.
+fn no_such_stroke(studio: &Studio, index: usize) -> Result<(), ApiError> {
+    let count = studio.project().strokes.len();
+    if index < count {
+        return Ok(());
+    }
+    Err(ApiError(
+        StatusCode::NOT_FOUND,
+        format!("no stroke {index} (there are {count})"),
+    ))
 }
 
 async fn delete_stroke(
@@ -314,17 +330,14 @@ async fn delete_stroke(
     Path(index): Path<usize>,
 ) -> Result<axum::Json<Value>, ApiError> {
     let mut studio = lock(&shared);
-    let mut next = studio.project().clone();
-    if index >= next.strokes.len() {
-        return Err(ApiError(
-            StatusCode::NOT_FOUND,
-            format!("no stroke {index}"),
-        ));
-    }
-    // Later strokes keep their indices' meaning for the page only if positions stay stable:
-    // removing shifts them, which the page handles by redrawing from the returned state.
-    next.strokes.remove(index);
-    studio.change(next).map_err(bad)?;
+    no_such_stroke(&studio, index)?;
+    // Later strokes shift down one index; the page redraws everything from the returned state.
+    studio
+        .edit(None, |next| {
+            next.strokes.remove(index);
+            Ok(())
+        })
+        .map_err(bad)?;
     Ok(axum::Json(studio.view()))
 }
 

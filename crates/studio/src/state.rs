@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use faceanim_rig::Character;
 use faceanim_sketch::engine::Target;
 use faceanim_sketch::project::{ProjectFile, StrokeFile};
+use faceanim_sketch::settings::{Selection, Settings};
 use faceanim_sketch::{Project, Sketch};
 use glam::Vec3;
 use serde_json::{Value, json};
@@ -34,18 +35,13 @@ pub struct Studio {
 /// partial weight, not jump to whichever smaller blendshape's full target is nearer. Files
 /// replayed on the command line keep the paper's default unless they say otherwise.
 fn empty_project() -> ProjectFile {
-    let mut project: ProjectFile =
-        serde_json::from_value(json!({ "version": 1 })).unwrap_or_else(|_| unreachable_project());
-    project.settings.selection = faceanim_sketch::settings::Selection::Segment;
-    project
-}
-
-/// `ProjectFile` always parses `{"version": 1}`; this keeps the type total without a panic.
-fn unreachable_project() -> ProjectFile {
     ProjectFile {
         version: 1,
         fps: 30.0,
-        settings: Default::default(),
+        settings: Settings {
+            selection: Selection::Segment,
+            ..Settings::default()
+        },
         strokes: Vec::new(),
     }
 }
@@ -135,6 +131,21 @@ impl Studio {
         Ok(())
     }
 
+    /// Applies `apply` to a copy of the project and makes the copy current (see
+    /// [`Studio::change_in_gesture`]); nothing changes when `apply` or the validation fails.
+    ///
+    /// # Errors
+    /// `apply`'s message or the project's validation message.
+    pub fn edit(
+        &mut self,
+        gesture: Option<String>,
+        apply: impl FnOnce(&mut ProjectFile) -> Result<(), String>,
+    ) -> Result<(), String> {
+        let mut next = self.project.clone();
+        apply(&mut next)?;
+        self.change_in_gesture(next, gesture)
+    }
+
     /// Steps back one edit; false when there is none.
     pub fn undo(&mut self) -> bool {
         self.gesture = None;
@@ -160,12 +171,11 @@ impl Studio {
 
     /// A new, empty project (undoable).
     pub fn new_project(&mut self) {
-        let fresh = ProjectFile {
-            fps: self.project.fps,
-            settings: self.project.settings.clone(),
-            ..empty_project()
-        };
-        let _ = self.change(fresh);
+        // Keeping the settings and rate of a valid project cannot fail validation.
+        let _ = self.edit(None, |next| {
+            next.strokes.clear();
+            Ok(())
+        });
     }
 
     /// Switches to another character; the project starts empty, with nothing to undo.
@@ -239,10 +249,11 @@ impl Studio {
     /// # Errors
     /// The stroke's validation message.
     pub fn add_stroke(&mut self, stroke: StrokeFile) -> Result<usize, String> {
-        let mut next = self.project.clone();
-        next.strokes.push(stroke);
-        let index = next.strokes.len() - 1;
-        self.change(next)?;
+        let index = self.project.strokes.len();
+        self.edit(None, |next| {
+            next.strokes.push(stroke);
+            Ok(())
+        })?;
         Ok(index)
     }
 

@@ -89,6 +89,12 @@ fn iou(a: &[f32; 16], b: &[f32; 16]) -> f32 {
     if union > 0.0 { inter / union } else { 0.0 }
 }
 
+/// The rotation (radians, the [`Region`] convention) that makes the line from `a` to `b` (two
+/// image points, the subject's right then left eye) level in the crop.
+pub(crate) fn level_rotation(a: [f32; 2], b: [f32; 2]) -> f32 {
+    -(-(b[1] - a[1])).atan2(b[0] - a[0])
+}
+
 /// Bilinear sample of `frame` at (x, y) pixels; outside the image is black.
 fn sample(frame: &Frame<'_>, x: f32, y: f32) -> [f32; 3] {
     let (x, y) = (x - 0.5, y - 0.5);
@@ -199,7 +205,7 @@ impl FaceModels {
         let (x1, y1) = to_image(merged[2], merged[3]);
         let (ex0, ey0) = to_image(merged[4], merged[5]);
         let (ex1, ey1) = to_image(merged[6], merged[7]);
-        let rotation = -(-(ey1 - ey0)).atan2(ex1 - ex0);
+        let rotation = level_rotation([ex0, ey0], [ex1, ey1]);
         let region = Region {
             cx: (x0 + x1) / 2.0,
             cy: (y0 + y1) / 2.0,

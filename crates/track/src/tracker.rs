@@ -3,7 +3,7 @@
 //! and the detector runs only on the first frame and whenever the landmark network says the
 //! face is gone (presence below [`MIN_PRESENCE`]).
 
-use crate::face::REGION_SCALE;
+use crate::face::{REGION_SCALE, level_rotation};
 use crate::{Face, FaceModels, Frame, ModelError, Region};
 
 /// Landmark presence below which a face counts as lost (MediaPipe's default
@@ -107,7 +107,7 @@ impl<'m> Tracker<'m> {
 #[must_use]
 pub fn region_from_landmarks(landmarks: &[[f32; 3]]) -> Region {
     let (a, b) = (landmarks[33], landmarks[263]);
-    let rotation = -(-(b[1] - a[1])).atan2(b[0] - a[0]);
+    let rotation = level_rotation([a[0], a[1]], [b[0], b[1]]);
     let (sin, cos) = rotation.sin_cos();
     // Into the face-aligned frame (inverse rotation), box there, centre back to the image.
     let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
