@@ -8,9 +8,6 @@
     reason = "tests (exact frame rates and copied keys compare exactly)"
 )]
 
-use std::io::Write as _;
-use std::process::{Command, Stdio};
-
 use faceanim_capture::{Filtering, capture};
 use faceanim_media::{FrameSource, read_image};
 use faceanim_track::{FaceModels, TrackingMode};
@@ -23,31 +20,14 @@ fn make_video(path: &std::path::Path) {
     let neutral = read_image(&faceanim_testdata::shared("images/ict-face-neutral.png")).unwrap();
     let open = read_image(&faceanim_testdata::shared("images/ict-face-jawopen.png")).unwrap();
     let (width, height) = (neutral.width, neutral.height);
-    let mut child = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
-        .args([
-            "-s",
-            &format!("{width}x{height}"),
-            "-r",
-            &FPS.to_string(),
-            "-i",
-            "-",
-        ])
-        .args(["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "4"])
-        .arg(path)
-        .stdin(Stdio::piped())
-        .spawn()
-        .expect("ffmpeg must be installed (scripts/setup.sh installs it)");
-    let mut stdin = child.stdin.take().unwrap();
-    for c in STORY.chars() {
-        match c {
-            'N' => stdin.write_all(&neutral.rgb).unwrap(),
-            'O' => stdin.write_all(&open.rgb).unwrap(),
-            _ => stdin.write_all(&vec![40u8; width * height * 3]).unwrap(),
-        }
-    }
-    drop(stdin);
-    assert!(child.wait().unwrap().success());
+    let blank = vec![40u8; width * height * 3];
+    let frames = STORY.chars().map(|c| match c {
+        'N' => neutral.rgb.as_slice(),
+        'O' => open.rgb.as_slice(),
+        _ => blank.as_slice(),
+    });
+    let codec = ["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "4"];
+    faceanim_testdata::encode_video(path, (width, height), FPS, &codec, frames);
 }
 
 #[test]

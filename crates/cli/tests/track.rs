@@ -12,9 +12,6 @@
 
 mod support;
 
-use std::io::Write as _;
-use std::process::{Command, Stdio};
-
 use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir};
 
 fn ict() -> String {
@@ -29,25 +26,15 @@ fn make_video(path: &std::path::Path) {
         faceanim_media::read_image(&faceanim_testdata::shared(&format!("images/{name}"))).unwrap()
     };
     let (neutral, open) = (read("ict-face-neutral.png"), read("ict-face-jawopen.png"));
-    let mut child = Command::new("ffmpeg")
-        .args([
-            "-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
-        ])
-        .arg(format!("{}x{}", neutral.width, neutral.height))
-        .args([
-            "-r", "24", "-i", "-", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "12",
-        ])
-        .arg(path)
-        .stdin(Stdio::piped())
-        .spawn()
-        .expect("ffmpeg (scripts/setup.sh installs it)");
-    let mut stdin = child.stdin.take().unwrap();
-    for i in 0..10 {
-        let image = if (3..7).contains(&i) { &open } else { &neutral };
-        stdin.write_all(&image.rgb).unwrap();
-    }
-    drop(stdin);
-    assert!(child.wait().unwrap().success());
+    let frames = (0..10).map(|i| {
+        if (3..7).contains(&i) {
+            open.rgb.as_slice()
+        } else {
+            neutral.rgb.as_slice()
+        }
+    });
+    let codec = ["-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "12"];
+    faceanim_testdata::encode_video(path, (neutral.width, neutral.height), 24, &codec, frames);
 }
 
 #[test]

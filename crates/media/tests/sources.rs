@@ -8,9 +8,8 @@
     reason = "tests (exact frame rates and copied keys compare exactly)"
 )]
 
-use std::io::Write as _;
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 use faceanim_media::{FrameSource, MediaError, read_image};
 
@@ -25,27 +24,14 @@ fn frame(index: usize, width: usize, height: usize) -> Vec<u8> {
 /// Encodes `count` frames at `fps` into `path` with ffmpeg.
 fn make_video(path: &Path, count: usize, fps: u32, codec: &[&str]) {
     let (width, height) = (64, 48);
-    let mut child = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
-        .args([
-            "-s",
-            &format!("{width}x{height}"),
-            "-r",
-            &fps.to_string(),
-            "-i",
-            "-",
-        ])
-        .args(codec)
-        .arg(path)
-        .stdin(Stdio::piped())
-        .spawn()
-        .expect("ffmpeg must be installed for these tests (scripts/setup.sh installs it)");
-    let mut stdin = child.stdin.take().unwrap();
-    for i in 0..count {
-        stdin.write_all(&frame(i, width, height)).unwrap();
-    }
-    drop(stdin);
-    assert!(child.wait().unwrap().success());
+    let frames: Vec<Vec<u8>> = (0..count).map(|i| frame(i, width, height)).collect();
+    faceanim_testdata::encode_video(
+        path,
+        (width, height),
+        fps,
+        codec,
+        frames.iter().map(Vec::as_slice),
+    );
 }
 
 fn read_all(source: &mut FrameSource) -> Vec<faceanim_media::Image> {

@@ -67,3 +67,48 @@ pub fn ict() -> &'static Character {
             .character
     })
 }
+
+/// Encodes RGB `frames` (`width × height × 3` bytes each) at `fps` into `path` with the real
+/// `ffmpeg` program, `codec` being its output options (for example `["-c:v", "ffv1"]`): how the
+/// tests make the videos users would bring.
+///
+/// # Panics
+/// When ffmpeg is missing or fails.
+#[expect(
+    clippy::panic,
+    clippy::expect_used,
+    reason = "test support: a video that cannot be made must stop the test loudly"
+)]
+pub fn encode_video<'a>(
+    path: &std::path::Path,
+    (width, height): (usize, usize),
+    fps: u32,
+    codec: &[&str],
+    frames: impl IntoIterator<Item = &'a [u8]>,
+) {
+    use std::io::Write as _;
+    let mut child = std::process::Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24"])
+        .args([
+            "-s",
+            &format!("{width}x{height}"),
+            "-r",
+            &fps.to_string(),
+            "-i",
+            "-",
+        ])
+        .args(codec)
+        .arg(path)
+        .stdin(std::process::Stdio::piped())
+        .spawn()
+        .expect("ffmpeg must be installed for these tests (scripts/setup.sh installs it)");
+    let mut stdin = child.stdin.take().expect("ffmpeg's stdin");
+    for frame in frames {
+        stdin.write_all(frame).expect("writing a frame to ffmpeg");
+    }
+    drop(stdin);
+    let status = child.wait().expect("waiting for ffmpeg");
+    if !status.success() {
+        panic!("ffmpeg could not write {}: {status}", path.display());
+    }
+}
