@@ -3,7 +3,9 @@
 //! Errors are mapped once, here: every failure prints `error: ` followed by its cause chain
 //! (which names the file and the problem) and exits with status 1; usage errors exit with 2.
 
+mod adapt;
 mod info;
+mod session;
 mod track;
 
 use std::path::PathBuf;
@@ -162,6 +164,92 @@ enum Command {
         /// Threads for the face models.
         #[arg(long, default_value_t = 1)]
         threads: usize,
+        /// Drive the character through its adapter (from `faceanim adapt`) instead of by name.
+        #[arg(long)]
+        adapter: Option<PathBuf>,
+        /// With --adapter: also write the session (frames, estimates, keyframes) to correct
+        /// with `faceanim session`.
+        #[arg(long)]
+        session: Option<PathBuf>,
+        /// With --adapter: a frame to keep as a keyframe besides every --keyframe-every-th;
+        /// repeatable.
+        #[arg(long = "keyframe")]
+        keyframes: Vec<usize>,
+        /// With --adapter and a still image: frames of the 0 → peak → 0 animation it becomes.
+        #[arg(long, default_value_t = 30)]
+        image_frames: usize,
+    },
+    /// Train a character's adapter: render it with random expressions, read them back through
+    /// the capture pipeline, and fit a small network from those readings to its own weights.
+    ///
+    /// Any blendshape set works, whatever its names. The adapter is written next to the
+    /// character (NAME.adapter.safetensors) unless -o says otherwise, and the rendered
+    /// training set is cached beside it. --ablation prints the seed's Table 1 for this
+    /// character instead; --finetune SESSION… retrains the adapter on the corrections made in
+    /// sessions (the seed's offline mode).
+    ///
+    /// Examples: faceanim adapt head.glb --json;
+    /// faceanim adapt head.glb --finetune take.session.json
+    Adapt {
+        /// The character (default: the built-in head).
+        character: Option<PathBuf>,
+        /// The adapter file to write.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Random expressions to render (split 80/10/10 into training, validation and test).
+        #[arg(long, default_value_t = 10_000)]
+        samples: usize,
+        /// Random seed (expressions, initial weights, batch order).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Print {"mae_test", "mae_val", "samples", "seconds"} as JSON at the end.
+        #[arg(long)]
+        json: bool,
+        /// What the adapter reads.
+        #[arg(long, value_enum, default_value_t = FeatureChoice::Both)]
+        features: FeatureChoice,
+        /// Width of the hidden layer.
+        #[arg(long, default_value_t = 256)]
+        hidden: usize,
+        /// ReLU instead of LeakyReLU between the layers.
+        #[arg(long)]
+        relu: bool,
+        /// Do not clamp the outputs to [0, 1].
+        #[arg(long)]
+        no_clamp: bool,
+        /// Two blendshapes never active together in the training set, `A,B`; repeatable
+        /// (opposites such as jawLeft/jawRight are found on their own).
+        #[arg(long)]
+        exclusive: Vec<String>,
+        /// Where the rendered training set is cached (default: beside the adapter).
+        #[arg(long)]
+        dataset: Option<PathBuf>,
+        /// Render the training set again even when a cached one fits.
+        #[arg(long)]
+        fresh: bool,
+        /// Train every row of the ablation table and print it, instead of writing an adapter.
+        #[arg(long)]
+        ablation: bool,
+        /// Fine-tune on the corrections in these session files.
+        #[arg(long, num_args = 1..)]
+        finetune: Vec<PathBuf>,
+        /// With --finetune: the adapter to start from (default: -o's file).
+        #[arg(long)]
+        from: Option<PathBuf>,
+        /// Instead of training, measure this adapter's MAE on renders of CHARACTER (for
+        /// example another identity of the rig it was trained on); prints {"mae", "samples"}.
+        #[arg(long, conflicts_with_all = ["finetune", "ablation"])]
+        evaluate: Option<PathBuf>,
+    },
+    /// Correct a capture session (from `faceanim track --adapter … --session FILE`) and export
+    /// it: the seed's human in the loop.
+    ///
+    /// Example: faceanim session take.session.json correct 40 jawOpen=0.9
+    Session {
+        /// The session file.
+        session: PathBuf,
+        #[command(subcommand)]
+        action: session::SessionAction,
     },
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
@@ -175,6 +263,17 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// What an adapter reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum FeatureChoice {
+    /// The 52 expression scores.
+    Scores,
+    /// Pose-normalised landmarks.
+    Landmarks,
+    /// Both.
+    Both,
 }
 
 fn main() -> ExitCode {
@@ -330,13 +429,11 @@ fn run(command: Command) -> anyhow::Result<()> {
                 }
                 let pose = character.pose(&w);
                 let camera = faceanim_render::Camera::front(&character.bounds(), 0.75);
-                faceanim_render::render(
-                    &character,
-                    &pose,
-                    &camera,
-                    &faceanim_render::vertex_colours(&character),
-                    size,
-                )
+                let appearance = faceanim_render::Appearance::of(&character);
+                for warning in appearance.warnings() {
+                    eprintln!("warning: {warning}");
+                }
+                faceanim_render::render(&character, &pose, &camera, &appearance, size)
             };
             faceanim_files::write_atomic(&output, &image.to_png()?)?;
             eprintln!(
@@ -359,6 +456,10 @@ fn run(command: Command) -> anyhow::Result<()> {
             detect_every_frame,
             fps,
             threads,
+            adapter,
+            session,
+            keyframes,
+            image_frames,
         } => track::run(track::TrackArgs {
             input,
             character,
@@ -374,7 +475,57 @@ fn run(command: Command) -> anyhow::Result<()> {
             detect_every_frame,
             fps,
             threads,
+            adapter,
+            session,
+            keyframes,
+            image_frames,
         }),
+        Command::Adapt {
+            character,
+            output,
+            samples,
+            seed,
+            json,
+            features,
+            hidden,
+            relu,
+            no_clamp,
+            exclusive,
+            dataset,
+            fresh,
+            ablation,
+            finetune,
+            from,
+            evaluate,
+        } => adapt::run(adapt::AdaptArgs {
+            character,
+            output,
+            samples,
+            seed,
+            json,
+            architecture: faceanim_adapt::Architecture {
+                features: match features {
+                    FeatureChoice::Scores => faceanim_adapt::FeatureSet::Scores,
+                    FeatureChoice::Landmarks => faceanim_adapt::FeatureSet::Landmarks,
+                    FeatureChoice::Both => faceanim_adapt::FeatureSet::Both,
+                },
+                hidden,
+                activation: if relu {
+                    faceanim_adapt::Activation::Relu
+                } else {
+                    faceanim_adapt::Activation::LeakyRelu
+                },
+                clamp: !no_clamp,
+            },
+            exclusive,
+            dataset,
+            fresh,
+            ablation,
+            finetune,
+            from,
+            evaluate,
+        }),
+        Command::Session { session, action } => session::run(&session, action),
         Command::Eval { a, b, json } => {
             let (clip_a, clip_b) = (
                 faceanim_files::load_clip(&a)?,

@@ -2,13 +2,13 @@
 //! `cargo run -p faceanim-head --example closeup -- OUT_DIR`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use faceanim_render::{Camera, render, vertex_colours};
+use faceanim_render::{Appearance, Camera, render};
 use glam::{Mat4, Vec3};
 
 fn main() {
     let dir = std::path::PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| ".".into()));
     let head = faceanim_head::default_character();
-    let colours = vertex_colours(&head);
+    let colours = Appearance::of(&head);
     let views = [
         (
             "eye",

@@ -195,7 +195,7 @@ fn the_jaw_opens_onto_teeth_and_a_dark_mouth() {
     let mut w = vec![0.0; 52];
     w[c.find_blendshape("jawOpen").unwrap().index()] = 1.0;
     let camera = faceanim_render::Camera::front(&c.bounds(), 0.75);
-    let colours = faceanim_render::vertex_colours(c);
+    let colours = faceanim_render::Appearance::of(c);
     let closed = faceanim_render::render(c, &c.pose(&[]), &camera, &colours, 256);
     let open = faceanim_render::render(c, &c.pose(&w), &camera, &colours, 256);
     // Dark pixels (luminance under 70) in the middle of the lower face, which skin fills when closed.

@@ -100,6 +100,11 @@ pub enum MediaError {
     },
 }
 
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+}
+
 /// What kind of picture file the first bytes say this is.
 fn image_kind(head: &[u8]) -> Option<&'static str> {
     if head.starts_with(b"\x89PNG\r\n\x1a\n") {
@@ -216,6 +221,8 @@ pub struct FrameSource {
     info: SourceInfo,
     kind: Kind,
     delivered: usize,
+    /// File names of an image or image sequence, in frame order.
+    image_names: Vec<String>,
 }
 
 #[derive(Debug)]
@@ -252,6 +259,7 @@ impl FrameSource {
                 })
                 .collect();
             files.sort();
+            let image_names = files.iter().map(|f| file_name(f)).collect();
             let Some(first_path) = files.first() else {
                 return Err(MediaError::EmptyFolder {
                     path: path.to_owned(),
@@ -271,6 +279,7 @@ impl FrameSource {
                 info,
                 kind: Kind::Images(rest, Some(first)),
                 delivered: 0,
+                image_names,
             });
         }
         let mut head = [0u8; 8];
@@ -289,6 +298,7 @@ impl FrameSource {
                 },
                 kind: Kind::Images(Vec::new().into_iter(), Some(image)),
                 delivered: 0,
+                image_names: vec![file_name(path)],
             });
         }
         open_video(path)
@@ -298,6 +308,25 @@ impl FrameSource {
     #[must_use]
     pub fn info(&self) -> SourceInfo {
         self.info
+    }
+
+    /// True for a single still image (not a sequence, not a video).
+    #[must_use]
+    pub fn is_still(&self) -> bool {
+        matches!(self.kind, Kind::Images(..)) && self.image_names.len() == 1 && !self.path.is_dir()
+    }
+
+    /// A name for frame `index`: the image's file name, or for a video the video's name and
+    /// the frame number from 1 (`take_000001.png`), as the seed's CSV lists frames.
+    #[must_use]
+    pub fn frame_name(&self, index: usize) -> String {
+        self.image_names.get(index).cloned().unwrap_or_else(|| {
+            let stem = self
+                .path
+                .file_stem()
+                .map_or_else(|| "frame".into(), |s| s.to_string_lossy().into_owned());
+            format!("{stem}_{:06}.png", index + 1)
+        })
     }
 
     /// The next frame, or `None` at the end.
@@ -463,6 +492,7 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
         },
         kind: Kind::Video(child, stderr),
         delivered: 0,
+        image_names: Vec::new(),
     })
 }
 

@@ -2,9 +2,11 @@
 //!
 //! A small deterministic software rasteriser: the character at given weights, seen by a front
 //! camera that frames its head, lit by a key, a fill and a rim light with Gouraud shading over
-//! vertex colours and material base colours, anti-aliased by supersampling. It runs on machines
-//! with no GPU and no display, and the same inputs give the same bytes. On top of it,
-//! [`contact_sheet`] lays out the neutral face and every blendshape at weight 1, labelled.
+//! vertex colours, material base colours and base-colour textures, anti-aliased by
+//! supersampling. It runs on machines with no GPU and no display, and the same inputs give the
+//! same bytes. [`Camera::cropped`] narrows a camera to a square of its picture, so a face crop
+//! can be rendered directly at the size a network wants. On top of it, [`contact_sheet`] lays
+//! out the neutral face and every blendshape at weight 1, labelled.
 #![deny(missing_docs)]
 
 use faceanim_rig::{Aabb, Character, Pose};
@@ -137,33 +139,148 @@ impl Camera {
             eye,
         }
     }
-}
 
-/// Per-vertex linear RGB colours of a character: vertex colours times material base colours.
-#[must_use]
-pub fn vertex_colours(character: &Character) -> Vec<Vec3> {
-    let mut colours: Vec<Vec3> = match character.colors() {
-        Some(c) => c.iter().map(|c| Vec3::new(c[0], c[1], c[2])).collect(),
-        None => vec![Vec3::ONE; character.vertex_count()],
-    };
-    // A vertex takes the base colour of the first part that uses it.
-    let mut tinted = vec![false; character.vertex_count()];
-    for part in character.parts() {
-        let base = character
-            .materials()
-            .get(part.material.0 as usize)
-            .map_or(Vec3::ONE, |m| {
-                Vec3::new(m.base_color[0], m.base_color[1], m.base_color[2])
-            });
-        for tri in &character.triangles()[part.triangles.clone()] {
-            for &v in tri {
-                if !std::mem::replace(&mut tinted[v as usize], true) {
-                    colours[v as usize] *= base;
-                }
-            }
+    /// This camera narrowed to a square of its `size`×`size` picture: centre (`cx`, `cy`) and
+    /// side `side` in pixels, turned by `rotation` radians (clockwise on screen, about the
+    /// centre). Rendering the result at any size gives that square, upright, as if cut out of
+    /// a full render and resampled.
+    #[must_use]
+    pub fn cropped(&self, size: f32, cx: f32, cy: f32, side: f32, rotation: f32) -> Camera {
+        // In normalised device coordinates (y up) the square's centre, half side and axes.
+        let centre = glam::Vec2::new(2.0 * cx / size - 1.0, 1.0 - 2.0 * cy / size);
+        let half = side / size;
+        let (sin, cos) = rotation.sin_cos();
+        // The crop's x axis runs along (cos, sin) on screen (y down), (cos, −sin) with y up;
+        // its y axis (up) is perpendicular to it.
+        let x_axis = glam::Vec2::new(cos, -sin);
+        let y_axis = glam::Vec2::new(sin, cos);
+        // Acting on clip coordinates (x, y, z, w): x' = x_axis · ((x, y) − centre·w) / half.
+        let crop = Mat4::from_cols(
+            Vec4::new(x_axis.x / half, y_axis.x / half, 0.0, 0.0),
+            Vec4::new(x_axis.y / half, y_axis.y / half, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, 1.0, 0.0),
+            Vec4::new(
+                -x_axis.dot(centre) / half,
+                -y_axis.dot(centre) / half,
+                0.0,
+                1.0,
+            ),
+        );
+        Camera {
+            view_projection: crop * self.view_projection,
+            eye: self.eye,
         }
     }
-    colours
+}
+
+/// A decoded base-colour texture, sRGB bytes.
+#[derive(Debug, Clone)]
+struct Texels {
+    width: usize,
+    height: usize,
+    rgb: Vec<u8>,
+}
+
+impl Texels {
+    /// Bilinear sample at (`u`, `v`) with glTF's repeat wrapping, in display (sRGB) space, 0..1.
+    fn sample(&self, u: f32, v: f32) -> Vec3 {
+        let x = u.rem_euclid(1.0) * self.width as f32 - 0.5;
+        let y = v.rem_euclid(1.0) * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let wrap = |i: f32, n: usize| (i as i64).rem_euclid(n as i64) as usize;
+        let mut sum = Vec3::ZERO;
+        for (dx, dy, w) in [
+            (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
+            (1.0, 0.0, fx * (1.0 - fy)),
+            (0.0, 1.0, (1.0 - fx) * fy),
+            (1.0, 1.0, fx * fy),
+        ] {
+            let i = (wrap(y0 + dy, self.height) * self.width + wrap(x0 + dx, self.width)) * 3;
+            let t = &self.rgb[i..i + 3];
+            sum += w * Vec3::new(f32::from(t[0]), f32::from(t[1]), f32::from(t[2]));
+        }
+        sum / 255.0
+    }
+}
+
+/// How a character looks to the renderer: vertex colours, and per triangle its material's
+/// base colour and decoded base-colour texture. Built once per character (decoding textures is
+/// the slow part), then shared by every frame.
+#[derive(Debug, Clone)]
+pub struct Appearance {
+    /// Linear vertex colours (white where the character has none).
+    vertex_colours: Vec<Vec3>,
+    /// Per material: `base_color^(1/2.2)`, the factor in display space.
+    material_factors: Vec<Vec3>,
+    /// Per material: its texture, when it has one that decoded.
+    textures: Vec<Option<Texels>>,
+    /// Per triangle: its material.
+    triangle_materials: Vec<u32>,
+    /// Textures that could not be used, with why (the material then shows its base colour).
+    warnings: Vec<String>,
+}
+
+impl Appearance {
+    /// Gathers the character's colours and decodes its textures.
+    #[must_use]
+    pub fn of(character: &Character) -> Appearance {
+        let vertex_colours = match character.colors() {
+            Some(c) => c.iter().map(|c| Vec3::new(c[0], c[1], c[2])).collect(),
+            None => vec![Vec3::ONE; character.vertex_count()],
+        };
+        let mut warnings = Vec::new();
+        let uvs = character.uvs();
+        let mut textures = Vec::with_capacity(character.materials().len());
+        let mut material_factors = Vec::with_capacity(character.materials().len());
+        for (index, material) in character.materials().iter().enumerate() {
+            let [r, g, b, _] = material.base_color;
+            material_factors.push(Vec3::new(r, g, b).max(Vec3::ZERO).powf(1.0 / 2.2));
+            let label = if material.name.is_empty() {
+                format!("material {index}")
+            } else {
+                format!("material '{}'", material.name)
+            };
+            let texels = material.base_color_texture.as_ref().and_then(|texture| {
+                if uvs.is_none() {
+                    warnings.push(format!(
+                        "{label}: base-colour texture ignored, the mesh has no TEXCOORD_0"
+                    ));
+                    return None;
+                }
+                let name = std::path::PathBuf::from(format!("{label} base-colour texture"));
+                match faceanim_media::decode_image(&name, &texture.bytes) {
+                    Ok(image) => Some(Texels {
+                        width: image.width,
+                        height: image.height,
+                        rgb: image.rgb,
+                    }),
+                    Err(error) => {
+                        warnings.push(format!("{error}; showing its base colour instead"));
+                        None
+                    }
+                }
+            });
+            textures.push(texels);
+        }
+        let mut triangle_materials = vec![0; character.triangles().len()];
+        for part in character.parts() {
+            triangle_materials[part.triangles.clone()].fill(part.material.0);
+        }
+        Appearance {
+            vertex_colours,
+            material_factors,
+            textures,
+            triangle_materials,
+            warnings,
+        }
+    }
+
+    /// Textures that could not be decoded or mapped, each naming its material.
+    #[must_use]
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
 }
 
 /// Renders `pose` of `character` at `size`×`size` pixels.
@@ -172,7 +289,7 @@ pub fn render(
     character: &Character,
     pose: &Pose,
     camera: &Camera,
-    colours: &[Vec3],
+    appearance: &Appearance,
     size: u32,
 ) -> Image {
     const SUPERSAMPLE: u32 = 2;
@@ -183,16 +300,17 @@ pub fn render(
 
     let key = Vec3::new(-0.4, 0.55, 0.75).normalize();
     let fill = Vec3::new(0.6, 0.1, 0.5).normalize();
+    // Lit vertex colour in display space; material factors and textures multiply it there
+    // (sRGB is close enough to a 2.2 gamma that this equals shading the product in linear).
     let shade: Vec<Vec3> = pose
         .positions
         .iter()
         .zip(&pose.normals)
-        .zip(colours)
+        .zip(&appearance.vertex_colours)
         .map(|((p, n), c)| {
             let view = (camera.eye - *p).normalize_or_zero();
             let rim = (1.0 - n.dot(view).max(0.0)).powi(3) * 0.25;
             let light = 0.22 + 0.75 * n.dot(key).max(0.0) + 0.25 * n.dot(fill).max(0.0) + rim;
-            // Linear to display: a gamma of 2.2 keeps skin tones natural.
             (*c * light).powf(1.0 / 2.2)
         })
         .collect();
@@ -210,8 +328,9 @@ pub fn render(
             )
         })
         .collect();
+    let uvs = character.uvs();
 
-    for tri in character.triangles() {
+    for (t, tri) in character.triangles().iter().enumerate() {
         let [a, b, c] = tri.map(|v| v as usize);
         let (pa, pb, pc) = (screen[a], screen[b], screen[c]);
         if pa.w <= 0.0 || pb.w <= 0.0 || pc.w <= 0.0 {
@@ -222,6 +341,17 @@ pub fn render(
         if area >= 0.0 {
             continue;
         }
+        let material = appearance.triangle_materials[t] as usize;
+        let factor = appearance
+            .material_factors
+            .get(material)
+            .copied()
+            .unwrap_or(Vec3::ONE);
+        let texture = appearance
+            .textures
+            .get(material)
+            .and_then(Option::as_ref)
+            .zip(uvs);
         let min_x = pa.x.min(pb.x).min(pc.x).floor().max(0.0) as u32;
         let max_x = pa.x.max(pb.x).max(pc.x).ceil().min(s as f32 - 1.0) as u32;
         let min_y = pa.y.min(pb.y).min(pc.y).floor().max(0.0) as u32;
@@ -239,7 +369,19 @@ pub fn render(
                 let i = (y * s + x) as usize;
                 if z < depth[i] {
                     depth[i] = z;
-                    colour[i] = shade[a] * w0 + shade[b] * w1 + shade[c] * w2;
+                    let lit = shade[a] * w0 + shade[b] * w1 + shade[c] * w2;
+                    colour[i] = match texture {
+                        None => lit * factor,
+                        Some((texels, uvs)) => {
+                            // Perspective-correct: interpolate uv/w and 1/w in screen space.
+                            let (qa, qb, qc) = (w0 / pa.w, w1 / pb.w, w2 / pc.w);
+                            let q = qa + qb + qc;
+                            let (ua, ub, uc) = (uvs[a], uvs[b], uvs[c]);
+                            let u = (qa * ua[0] + qb * ub[0] + qc * uc[0]) / q;
+                            let v = (qa * ua[1] + qb * ub[1] + qc * uc[1]) / q;
+                            lit * factor * texels.sample(u, v)
+                        }
+                    };
                 }
             }
         }
@@ -274,7 +416,7 @@ pub fn contact_sheet(character: &Character, cell: u32) -> Image {
     let label_height = 20;
     let mut sheet = Image::filled(columns * cell, rows * (cell + label_height), [24, 25, 28]);
     let camera = Camera::front(&character.bounds(), 0.75);
-    let colours = vertex_colours(character);
+    let appearance = Appearance::of(character);
     let mut weights = vec![0.0; character.blendshapes().len()];
     let mut pose = Pose::default();
     for k in 0..count {
@@ -286,7 +428,7 @@ pub fn contact_sheet(character: &Character, cell: u32) -> Image {
             character.blendshapes()[k - 1].name().to_owned()
         };
         character.pose_into(&weights, &mut pose);
-        let image = render(character, &pose, &camera, &colours, cell);
+        let image = render(character, &pose, &camera, &appearance, cell);
         let (x, y) = (
             (k as u32 % columns) * cell,
             (k as u32 / columns) * (cell + label_height),

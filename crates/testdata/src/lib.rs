@@ -112,3 +112,68 @@ pub fn encode_video<'a>(
         panic!("ffmpeg could not write {}: {status}", path.display());
     }
 }
+
+/// The ICT head with another identity (same mesh and blendshapes, other face), imported once.
+///
+/// # Panics
+/// When the file is missing or does not import.
+#[must_use]
+#[expect(
+    clippy::expect_used,
+    reason = "test support: a missing fixture must stop the test loudly"
+)]
+pub fn ict_id7() -> &'static Character {
+    static ID7: OnceLock<Character> = OnceLock::new();
+    ID7.get_or_init(|| {
+        let bytes = std::fs::read(shared("characters/ict-face-id7.glb"))
+            .expect("ict-face-id7.glb is readable");
+        import_gltf(&bytes, "ict-face-id7.glb", &NoExternalResources)
+            .expect("ict-face-id7.glb imports")
+            .character
+    })
+}
+
+/// `character` with its blendshapes renamed `shape_1…shape_N` and shuffled (a fixed
+/// permutation from `seed`): a rig whose names say nothing. Returns the character and, for each
+/// new position, the original blendshape's index.
+///
+/// # Panics
+/// When the shuffled parts do not make a character (they always do).
+#[must_use]
+#[expect(
+    clippy::expect_used,
+    reason = "test support: reordering a valid character's shapes keeps it valid"
+)]
+pub fn renamed_and_shuffled(character: &Character, seed: u64) -> (Character, Vec<usize>) {
+    let mut parts = character.to_parts();
+    let n = parts.blendshapes.len();
+    // A small deterministic shuffle (xorshift), so the fixture needs no random crate.
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    for k in (1..n).rev() {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        order.swap(k, (state % (k as u64 + 1)) as usize);
+    }
+    let shapes = std::mem::take(&mut parts.blendshapes);
+    parts.blendshapes = order
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| {
+            faceanim_rig::Blendshape::from_sparse(
+                format!("shape_{}", k + 1),
+                shapes[i].indices().to_vec(),
+                shapes[i].deltas().to_vec(),
+            )
+        })
+        .collect();
+    if let Some(normals) = parts.normal_deltas.take() {
+        parts.normal_deltas = Some(order.iter().map(|&i| normals[i].clone()).collect());
+    }
+    parts.name = format!("{} (renamed, shuffled)", character.name());
+    (
+        Character::new(parts).expect("a shuffled character is valid"),
+        order,
+    )
+}

@@ -9,7 +9,7 @@
     reason = "tests"
 )]
 
-use faceanim_render::{Camera, render, vertex_colours};
+use faceanim_render::{Appearance, Camera, render};
 use faceanim_track::{BLENDSHAPE_NAMES, FaceModels, Frame};
 use glam::{Mat4, Vec3};
 
@@ -27,7 +27,7 @@ fn portrait(head: &faceanim_rig::Character, weights: &[f32]) -> Vec<u8> {
         head,
         &head.pose(weights),
         &camera,
-        &vertex_colours(head),
+        &Appearance::of(head),
         384,
     )
     .rgb

@@ -8,7 +8,7 @@
     reason = "tests"
 )]
 
-use faceanim_render::{Camera, render, vertex_colours};
+use faceanim_render::{Appearance, Camera, render};
 use faceanim_track::{FaceModels, Frame};
 use glam::Quat;
 
@@ -18,7 +18,7 @@ fn turned_heads_give_the_angles_they_were_turned_by() {
     let ict = faceanim_testdata::ict();
     let bounds = ict.bounds();
     let camera = Camera::front(&bounds, 0.75);
-    let colours = vertex_colours(ict);
+    let colours = Appearance::of(ict);
     let rest = ict.pose(&vec![0.0; ict.blendshapes().len()]);
     let centre = bounds.center();
     // (yaw, pitch, roll) in the documented convention, and the rotation that makes them.

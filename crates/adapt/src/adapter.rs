@@ -1,0 +1,307 @@
+//! A trained adapter: the generic expression in, the character's own weights out, and the
+//! small file it is kept in.
+//!
+//! Inference is plain Rust over the stored weights (two small matrix products, well under a
+//! tenth of a millisecond), so playing an adapter needs no training library. The file is
+//! safetensors: `input_mean`, `input_scale`, `hidden.weight`, `hidden.bias`, `output.weight`,
+//! `output.bias`, and metadata naming the blendshapes, the character's fingerprint, the
+//! architecture and how training went.
+
+use std::collections::HashMap;
+
+use faceanim_rig::Character;
+use serde::{Deserialize, Serialize};
+
+use crate::features::{Expression, FeatureSet};
+use crate::{AdaptError, Fingerprint};
+
+/// The nonlinearity between the two layers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Activation {
+    /// max(x, 0).
+    Relu,
+    /// max(x, 0.01·x) (the seed's best).
+    #[default]
+    LeakyRelu,
+}
+
+impl Activation {
+    /// The slope for negative inputs.
+    #[must_use]
+    pub fn negative_slope(self) -> f32 {
+        match self {
+            Activation::Relu => 0.0,
+            Activation::LeakyRelu => 0.01,
+        }
+    }
+}
+
+/// The shape of the network.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Architecture {
+    /// Which features it reads.
+    pub features: FeatureSet,
+    /// Width of the hidden layer.
+    pub hidden: usize,
+    /// Nonlinearity between the layers.
+    pub activation: Activation,
+    /// Whether outputs are clamped to [0, 1] (in training too).
+    pub clamp: bool,
+}
+
+impl Default for Architecture {
+    /// The seed's best: Linear → LeakyReLU → Linear → Clamp, hidden 256, over both feature
+    /// sets.
+    fn default() -> Architecture {
+        Architecture {
+            features: FeatureSet::Both,
+            hidden: 256,
+            activation: Activation::LeakyRelu,
+            clamp: true,
+        }
+    }
+}
+
+/// How training went, kept in the file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct TrainingReport {
+    /// Mean absolute error on the test split.
+    pub mae_test: f32,
+    /// Mean absolute error on the validation split (at the kept epoch).
+    pub mae_val: f32,
+    /// Samples in the dataset.
+    pub samples: usize,
+    /// Epochs run.
+    pub epochs: usize,
+    /// The epoch whose weights were kept.
+    pub best_epoch: usize,
+    /// Seconds spent training.
+    pub seconds: f64,
+    /// Corrected frames it was fine-tuned on (0 for plain training).
+    #[serde(default)]
+    pub corrections: usize,
+}
+
+/// How a character relates to an adapter that passed [`Adapter::check`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Fit {
+    /// Trained on this very character.
+    Exact,
+    /// Same mesh and names, other shape (another identity of the rig, or edited shapes).
+    OtherShape,
+}
+
+/// A trained adapter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Adapter {
+    /// The character's blendshape names, one per output.
+    pub blendshapes: Vec<String>,
+    /// The character it was trained on.
+    pub fingerprint: Fingerprint,
+    /// Its shape.
+    pub architecture: Architecture,
+    /// How training went.
+    pub report: TrainingReport,
+    /// Per input: subtracted before the first layer (the training set's mean).
+    pub(crate) input_mean: Vec<f32>,
+    /// Per input: multiplied after subtracting (1 / the training set's deviation).
+    pub(crate) input_scale: Vec<f32>,
+    /// hidden × inputs, row-major.
+    pub(crate) hidden_weight: Vec<f32>,
+    pub(crate) hidden_bias: Vec<f32>,
+    /// outputs × hidden, row-major.
+    pub(crate) output_weight: Vec<f32>,
+    pub(crate) output_bias: Vec<f32>,
+}
+
+const ADAPTER_FORMAT: &str = "faceanim-adapter-1";
+
+impl Adapter {
+    /// Number of inputs.
+    #[must_use]
+    pub fn inputs(&self) -> usize {
+        self.input_mean.len()
+    }
+
+    /// The character's weights for one input vector (`self.inputs()` long), written to `out`
+    /// (one per blendshape). Allocation-free apart from the hidden layer's buffer.
+    pub fn predict_into(&self, input: &[f32], out: &mut [f32]) {
+        let hidden = self.architecture.hidden;
+        let slope = self.architecture.activation.negative_slope();
+        let x: Vec<f32> = input
+            .iter()
+            .zip(&self.input_mean)
+            .zip(&self.input_scale)
+            .map(|((v, m), s)| (v - m) * s)
+            .collect();
+        let mut h = vec![0.0f32; hidden];
+        for (k, slot) in h.iter_mut().enumerate() {
+            let row = &self.hidden_weight[k * x.len()..(k + 1) * x.len()];
+            let z = dot(row, &x) + self.hidden_bias[k];
+            *slot = if z >= 0.0 { z } else { slope * z };
+        }
+        for (o, slot) in out.iter_mut().enumerate().take(self.blendshapes.len()) {
+            let row = &self.output_weight[o * hidden..(o + 1) * hidden];
+            let y = dot(row, &h) + self.output_bias[o];
+            *slot = if self.architecture.clamp {
+                y.clamp(0.0, 1.0)
+            } else {
+                y
+            };
+        }
+    }
+
+    /// The character's weights for `expression`.
+    #[must_use]
+    pub fn predict(&self, expression: &Expression) -> Vec<f32> {
+        let mut out = vec![0.0; self.blendshapes.len()];
+        self.predict_into(&expression.input(self.architecture.features), &mut out);
+        out
+    }
+
+    /// Whether this adapter can drive `character`: the same blendshape names in the same
+    /// order and the same mesh.
+    ///
+    /// # Errors
+    /// [`AdaptError::Mismatch`] saying what differs.
+    pub fn check(&self, character: &Character) -> Result<Fit, AdaptError> {
+        let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
+        let mismatch = |reason: String| AdaptError::Mismatch {
+            character: character.name().to_owned(),
+            reason,
+        };
+        if names != self.blendshapes {
+            let missing: Vec<&str> = self
+                .blendshapes
+                .iter()
+                .filter(|n| !names.contains(&n.as_str()))
+                .map(String::as_str)
+                .take(5)
+                .collect();
+            let extra: Vec<&str> = names
+                .iter()
+                .filter(|n| !self.blendshapes.iter().any(|m| m == *n))
+                .copied()
+                .take(5)
+                .collect();
+            return Err(mismatch(if missing.is_empty() && extra.is_empty() {
+                format!(
+                    "the adapter's {} blendshapes are the character's, in another order",
+                    names.len()
+                )
+            } else {
+                format!(
+                    "the adapter was trained for {} blendshapes, the character has {}; the character lacks {:?} and has {:?} the adapter does not know",
+                    self.blendshapes.len(),
+                    names.len(),
+                    missing,
+                    extra
+                )
+            }));
+        }
+        let fingerprint = Fingerprint::of(character);
+        if fingerprint.topology != self.fingerprint.topology {
+            return Err(mismatch(format!(
+                "the adapter was trained on another mesh (topology {} here, {} in the adapter)",
+                fingerprint.topology, self.fingerprint.topology
+            )));
+        }
+        Ok(if fingerprint.geometry == self.fingerprint.geometry {
+            Fit::Exact
+        } else {
+            Fit::OtherShape
+        })
+    }
+
+    /// The adapter as a safetensors file.
+    ///
+    /// # Errors
+    /// [`AdaptError::Format`] if serialisation fails.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, AdaptError> {
+        use crate::tensors::json;
+        let mut metadata = HashMap::new();
+        metadata.insert("format".to_owned(), ADAPTER_FORMAT.to_owned());
+        metadata.insert("blendshapes".to_owned(), json(&self.blendshapes)?);
+        metadata.insert("fingerprint".to_owned(), json(&self.fingerprint)?);
+        metadata.insert("architecture".to_owned(), json(&self.architecture)?);
+        metadata.insert("report".to_owned(), json(&self.report)?);
+        let (inputs, hidden, outputs) = (
+            self.inputs(),
+            self.architecture.hidden,
+            self.blendshapes.len(),
+        );
+        crate::tensors::write(
+            &[
+                ("input_mean", &self.input_mean, &[inputs]),
+                ("input_scale", &self.input_scale, &[inputs]),
+                ("hidden.weight", &self.hidden_weight, &[hidden, inputs]),
+                ("hidden.bias", &self.hidden_bias, &[hidden]),
+                ("output.weight", &self.output_weight, &[outputs, hidden]),
+                ("output.bias", &self.output_bias, &[outputs]),
+            ],
+            metadata,
+        )
+    }
+
+    /// Reads [`Adapter::to_bytes`]'s output, checking every shape.
+    ///
+    /// # Errors
+    /// [`AdaptError::Format`] naming what is missing or inconsistent.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Adapter, AdaptError> {
+        let file = crate::tensors::Read::new(bytes)?;
+        file.expect_format(ADAPTER_FORMAT)?;
+        let blendshapes: Vec<String> = file.metadata_json("blendshapes")?;
+        let architecture: Architecture = file.metadata_json("architecture")?;
+        let input_mean = file.vector("input_mean")?;
+        let input_scale = file.vector("input_scale")?;
+        let (hidden_weight, [h, i]) = file.matrix("hidden.weight")?;
+        let hidden_bias = file.vector("hidden.bias")?;
+        let (output_weight, [o, h2]) = file.matrix("output.weight")?;
+        let output_bias = file.vector("output.bias")?;
+        let inputs = architecture.features.len();
+        let consistent = input_mean.len() == inputs
+            && input_scale.len() == inputs
+            && i == inputs
+            && h == architecture.hidden
+            && hidden_bias.len() == h
+            && h2 == h
+            && o == blendshapes.len()
+            && output_bias.len() == o;
+        if !consistent {
+            return Err(AdaptError::Format(format!(
+                "tensor shapes do not fit {} inputs ({} features), {} hidden and {} blendshapes",
+                inputs,
+                architecture.features.name(),
+                architecture.hidden,
+                blendshapes.len()
+            )));
+        }
+        Ok(Adapter {
+            blendshapes,
+            fingerprint: file.metadata_json("fingerprint")?,
+            architecture,
+            report: file.metadata_json("report")?,
+            input_mean,
+            input_scale,
+            hidden_weight,
+            hidden_bias,
+            output_weight,
+            output_bias,
+        })
+    }
+}
+
+fn dot(a: &[f32], b: &[f32]) -> f32 {
+    // Eight independent sums let the compiler vectorise without reassociating floats itself.
+    let mut sums = [0.0f32; 8];
+    let (a8, a_rest) = a.split_at(a.len() / 8 * 8);
+    let (b8, b_rest) = b.split_at(a8.len());
+    for (x, y) in a8.chunks_exact(8).zip(b8.chunks_exact(8)) {
+        for k in 0..8 {
+            sums[k] += x[k] * y[k];
+        }
+    }
+    let tail: f32 = a_rest.iter().zip(b_rest).map(|(x, y)| x * y).sum();
+    sums.iter().sum::<f32>() + tail
+}

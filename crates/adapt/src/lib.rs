@@ -1,0 +1,66 @@
+//! # faceanim-adapt: bring your own character
+//!
+//! Seed 003 ("Bring Your Own Character", Bai et al.) in Rust: any blendshape character — any
+//! number, order and naming of shapes — is animated from a face image or video through a small
+//! adapter that learns, from renders of that very character, to turn the capture pipeline's
+//! generic expression into the character's own weights.
+//!
+//! - [`sampling`]: random weight vectors in the seed's groups, exclusive pairs zeroed.
+//! - [`dataset`]: each vector rendered from a fixed camera and read back by the capture
+//!   pipeline ([`FaceCamera`], [`Dataset`]).
+//! - [`features`]: what the adapter sees (scores, pose-normalised landmarks, or both).
+//! - [`train`] (candle): MSE and Adam with early stopping; fine-tuning from corrections.
+//! - [`adapter`]: inference in plain Rust and the safetensors file, bound to its character.
+//! - [`session`]: the human in the loop — estimates, keyframes, corrections and preference
+//!   for one input, kept in a file.
+#![deny(missing_docs)]
+
+pub mod adapter;
+pub mod dataset;
+pub mod features;
+mod fingerprint;
+pub mod sampling;
+pub mod session;
+mod tensors;
+pub mod train;
+
+pub use adapter::{Activation, Adapter, Architecture, Fit, TrainingReport};
+pub use dataset::{Control, Dataset, DatasetOptions, FaceCamera, Framing, Split};
+pub use features::{Expression, FeatureSet};
+pub use fingerprint::Fingerprint;
+pub use session::Session;
+pub use train::{Correction, FinetuneReport, TrainOptions, finetune, train};
+
+/// Why adaptation failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum AdaptError {
+    /// A face network failed.
+    #[error(transparent)]
+    Model(#[from] faceanim_track::ModelError),
+    /// An adapter, dataset or session file is malformed.
+    #[error("{0}")]
+    Format(String),
+    /// The adapter does not belong to this character.
+    #[error(
+        "this adapter cannot drive {character}: {reason}; train one for it with `faceanim adapt`"
+    )]
+    Mismatch {
+        /// The character's name.
+        character: String,
+        /// What differs.
+        reason: String,
+    },
+    /// The training library failed.
+    #[error("training failed: {0}")]
+    Training(String),
+    /// Too few samples to split into training, validation and test.
+    #[error("{0} samples are too few to train on")]
+    NotEnoughData(usize),
+    /// A session edit was out of range.
+    #[error("{0}")]
+    Session(String),
+    /// The user stopped the work.
+    #[error("cancelled")]
+    Cancelled,
+}

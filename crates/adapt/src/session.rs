@@ -1,0 +1,619 @@
+//! The human in the loop: one input's frames with the adapter's estimates, the keyframes, the
+//! user's corrections and preference, kept in a JSON file between commands (and between the
+//! studio's requests).
+//!
+//! The animation is derived, never stored: estimates → optional One Euro smoothing →
+//! preference (per blendshape, the mean of the user's corrections added to every other frame,
+//! clamped to [0, 1]) → corrections → keyframes (every N frames, plus the user's, plus every
+//! corrected frame, minus keys the user removed) with linear interpolation between them. So
+//! clearing the preference or a correction restores exactly what was there before.
+
+use std::collections::BTreeMap;
+
+use faceanim_anim::Clip;
+use faceanim_anim::filter::OneEuro;
+use serde::{Deserialize, Serialize};
+
+use crate::features::Expression;
+use crate::train::Correction;
+use crate::{AdaptError, Adapter, Fingerprint};
+
+/// One frame of a session.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SessionFrame {
+    /// A name for the frame: the image's file name, or the video's name and frame number
+    /// (the first column of the seed's CSV).
+    pub name: String,
+    /// Seconds from the first frame.
+    pub time: f32,
+    /// Face presence (0 where none was found).
+    pub presence: f32,
+    /// Head yaw, pitch, roll in degrees, where a face was found.
+    pub head: Option<[f32; 3]>,
+    /// Head position in metres, where a face was found.
+    pub head_position: Option<[f32; 3]>,
+    /// What capture read (kept for re-estimating and fine-tuning); `None` without a face.
+    pub expression: Option<Expression>,
+    /// The estimate, one weight per blendshape (bridged from neighbours without a face).
+    pub estimate: Vec<f32>,
+}
+
+/// A session file. See the module docs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Session {
+    /// File format version (1).
+    pub version: u32,
+    /// The input it came from.
+    pub source: String,
+    /// The character's name.
+    pub character: String,
+    /// The character's blendshapes, one per estimate column.
+    pub blendshapes: Vec<String>,
+    /// The character's fingerprint.
+    pub fingerprint: Fingerprint,
+    /// Frames per second.
+    pub fps: f32,
+    /// Automatic keyframes every this many frames (1 keeps every frame).
+    pub keyframe_every: usize,
+    /// One Euro smoothing of the estimates, when chosen.
+    #[serde(default)]
+    pub smoothing: Option<OneEuro>,
+    /// The frames.
+    pub frames: Vec<SessionFrame>,
+    /// Keyframes the user added.
+    #[serde(default)]
+    pub added_keyframes: Vec<usize>,
+    /// Automatic keyframes the user removed.
+    #[serde(default)]
+    pub removed_keyframes: Vec<usize>,
+    /// Frame → blendshape name → the weight the user set.
+    #[serde(default)]
+    pub corrections: BTreeMap<usize, BTreeMap<String, f32>>,
+    /// Per blendshape offsets, while the preference is applied.
+    #[serde(default)]
+    pub preference: Option<Vec<f32>>,
+    /// For a still image: the length in frames of the 0 → peak → 0 animation it becomes.
+    #[serde(default)]
+    pub still_frames: Option<usize>,
+}
+
+impl Session {
+    /// A session over `frames` for a character with these blendshapes.
+    #[must_use]
+    pub fn new(
+        source: String,
+        character: String,
+        blendshapes: Vec<String>,
+        fingerprint: Fingerprint,
+        fps: f32,
+        keyframe_every: usize,
+        frames: Vec<SessionFrame>,
+    ) -> Session {
+        Session {
+            version: 1,
+            source,
+            character,
+            blendshapes,
+            fingerprint,
+            fps,
+            keyframe_every: keyframe_every.max(1),
+            smoothing: None,
+            frames,
+            added_keyframes: Vec::new(),
+            removed_keyframes: Vec::new(),
+            corrections: BTreeMap::new(),
+            preference: None,
+            still_frames: None,
+        }
+    }
+
+    fn frame_index(&self, frame: usize) -> Result<usize, AdaptError> {
+        if frame < self.frames.len() {
+            Ok(frame)
+        } else {
+            Err(AdaptError::Session(format!(
+                "frame {frame} is past the end (the session has {} frames, 0 to {})",
+                self.frames.len(),
+                self.frames.len().saturating_sub(1)
+            )))
+        }
+    }
+
+    fn blendshape_index(&self, name: &str) -> Result<usize, AdaptError> {
+        self.blendshapes
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| {
+                AdaptError::Session(format!(
+                    "{} has no blendshape named '{name}'",
+                    self.character
+                ))
+            })
+    }
+
+    /// Sets blendshape `name` to `value` on `frame`; the frame becomes a keyframe.
+    ///
+    /// # Errors
+    /// [`AdaptError::Session`] for a frame past the end, an unknown name or a value outside
+    /// [0, 1].
+    pub fn correct(&mut self, frame: usize, name: &str, value: f32) -> Result<(), AdaptError> {
+        let frame = self.frame_index(frame)?;
+        self.blendshape_index(name)?;
+        if !(0.0..=1.0).contains(&value) {
+            return Err(AdaptError::Session(format!(
+                "{name} = {value}: weights are between 0 and 1"
+            )));
+        }
+        self.corrections
+            .entry(frame)
+            .or_default()
+            .insert(name.to_owned(), value);
+        Ok(())
+    }
+
+    /// Removes the correction of `name` on `frame` (all of the frame's with `None`).
+    ///
+    /// # Errors
+    /// [`AdaptError::Session`] for a frame past the end or an unknown name.
+    pub fn uncorrect(&mut self, frame: usize, name: Option<&str>) -> Result<(), AdaptError> {
+        let frame = self.frame_index(frame)?;
+        match name {
+            None => {
+                self.corrections.remove(&frame);
+            }
+            Some(name) => {
+                self.blendshape_index(name)?;
+                if let Some(c) = self.corrections.get_mut(&frame) {
+                    c.remove(name);
+                    if c.is_empty() {
+                        self.corrections.remove(&frame);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Makes `frame` a keyframe.
+    ///
+    /// # Errors
+    /// [`AdaptError::Session`] for a frame past the end.
+    pub fn add_keyframe(&mut self, frame: usize) -> Result<(), AdaptError> {
+        let frame = self.frame_index(frame)?;
+        self.removed_keyframes.retain(|&k| k != frame);
+        if !self.added_keyframes.contains(&frame) {
+            self.added_keyframes.push(frame);
+            self.added_keyframes.sort_unstable();
+        }
+        Ok(())
+    }
+
+    /// Stops `frame` being a keyframe (it is then interpolated).
+    ///
+    /// # Errors
+    /// [`AdaptError::Session`] for a frame past the end, or a corrected frame (a correction
+    /// is kept as a key; remove the correction first).
+    pub fn remove_keyframe(&mut self, frame: usize) -> Result<(), AdaptError> {
+        let frame = self.frame_index(frame)?;
+        if self.corrections.contains_key(&frame) {
+            return Err(AdaptError::Session(format!(
+                "frame {frame} is corrected, so it stays a keyframe; remove its corrections first"
+            )));
+        }
+        self.added_keyframes.retain(|&k| k != frame);
+        if !self.removed_keyframes.contains(&frame) {
+            self.removed_keyframes.push(frame);
+            self.removed_keyframes.sort_unstable();
+        }
+        Ok(())
+    }
+
+    /// The keyframes: every `keyframe_every`-th frame and the last, minus removed ones, plus
+    /// added and corrected frames, sorted. Never empty for a non-empty session: with every key
+    /// removed, the first frame stays.
+    #[must_use]
+    pub fn keyframes(&self) -> Vec<usize> {
+        let n = self.frames.len();
+        let mut keys: Vec<usize> =
+            faceanim_anim::keyframes::keyframe_indices(n, self.keyframe_every, &[])
+                .into_iter()
+                .filter(|k| !self.removed_keyframes.contains(k))
+                .collect();
+        keys.extend(self.added_keyframes.iter().copied().filter(|&k| k < n));
+        keys.extend(self.corrections.keys().copied().filter(|&k| k < n));
+        keys.sort_unstable();
+        keys.dedup();
+        if keys.is_empty() && n > 0 {
+            keys.push(0);
+        }
+        keys
+    }
+
+    /// The estimates after smoothing, before any user change.
+    fn smoothed_estimates(&self) -> Vec<Vec<f32>> {
+        let mut rows: Vec<Vec<f32>> = self.frames.iter().map(|f| f.estimate.clone()).collect();
+        if let Some(settings) = self.smoothing {
+            let mut state = faceanim_anim::filter::OneEuroState::new(settings);
+            for (row, frame) in rows.iter_mut().zip(&self.frames) {
+                state.filter(frame.time, row);
+                row.iter_mut().for_each(|w| *w = w.clamp(0.0, 1.0));
+            }
+        }
+        rows
+    }
+
+    /// Per blendshape, the mean of (correction − estimate) over the frames where it was
+    /// corrected; 0 for blendshapes never corrected.
+    #[must_use]
+    pub fn preference_offsets(&self) -> Vec<f32> {
+        let estimates = self.smoothed_estimates();
+        let mut sum = vec![0.0f32; self.blendshapes.len()];
+        let mut count = vec![0usize; self.blendshapes.len()];
+        for (&frame, values) in &self.corrections {
+            for (name, &value) in values {
+                if let (Ok(b), Some(row)) = (self.blendshape_index(name), estimates.get(frame)) {
+                    sum[b] += value - row[b];
+                    count[b] += 1;
+                }
+            }
+        }
+        sum.iter()
+            .zip(&count)
+            .map(|(s, &c)| if c > 0 { s / c as f32 } else { 0.0 })
+            .collect()
+    }
+
+    /// Applies the preference: the current mean corrections are added to every other frame.
+    /// Applying again after more corrections updates it.
+    pub fn apply_preference(&mut self) {
+        self.preference = Some(self.preference_offsets());
+    }
+
+    /// Removes the preference.
+    pub fn clear_preference(&mut self) {
+        self.preference = None;
+    }
+
+    /// The weights of every frame, one row per frame (see the module docs for the order).
+    #[must_use]
+    pub fn weights(&self) -> Vec<Vec<f32>> {
+        let mut rows = self.smoothed_estimates();
+        if let Some(offsets) = &self.preference {
+            for row in &mut rows {
+                for (w, o) in row.iter_mut().zip(offsets) {
+                    *w = (*w + o).clamp(0.0, 1.0);
+                }
+            }
+        }
+        for (&frame, values) in &self.corrections {
+            for (name, &value) in values {
+                if let (Ok(b), Some(row)) = (self.blendshape_index(name), rows.get_mut(frame)) {
+                    row[b] = value;
+                }
+            }
+        }
+        let mut known = vec![false; rows.len()];
+        for k in self.keyframes() {
+            known[k] = true;
+        }
+        faceanim_anim::filter::fill_gaps_rows(&mut rows, &known);
+        rows
+    }
+
+    /// The animation as a clip (weights as [`Session::weights`], head pose interpolated
+    /// between the same keyframes); for a still image, the 0 → peak → 0 animation.
+    #[must_use]
+    pub fn clip(&self) -> Clip {
+        if let Some(length) = self.still_frames {
+            let peak = self.weights().into_iter().next().unwrap_or_default();
+            return peak_animation(&peak, self.blendshapes.clone(), self.fps, length);
+        }
+        let head: Option<Vec<[f32; 3]>> = self
+            .frames
+            .iter()
+            .any(|f| f.head.is_some())
+            .then(|| bridged(self.frames.iter().map(|f| f.head).collect()));
+        let head_position: Option<Vec<[f32; 3]>> = self
+            .frames
+            .iter()
+            .any(|f| f.head_position.is_some())
+            .then(|| bridged(self.frames.iter().map(|f| f.head_position).collect()));
+        let mut clip = Clip {
+            fps: self.fps,
+            blendshapes: self.blendshapes.clone(),
+            frames: self.weights(),
+            head,
+            head_position,
+            presence: Some(self.frames.iter().map(|f| f.presence).collect()),
+        };
+        let keys = self.keyframes();
+        let mut known = vec![false; clip.frames.len()];
+        for k in keys {
+            known[k] = true;
+        }
+        if let Some(head) = clip.head.as_mut() {
+            faceanim_anim::filter::fill_gaps(head, &known);
+        }
+        if let Some(position) = clip.head_position.as_mut() {
+            faceanim_anim::filter::fill_gaps(position, &known);
+        }
+        clip
+    }
+
+    /// The corrected frames as fine-tuning examples: each frame's expression and its estimate
+    /// with the user's values (frames without a face are skipped).
+    #[must_use]
+    pub fn corrections_for_training(&self) -> Vec<Correction> {
+        self.corrections
+            .iter()
+            .filter_map(|(&frame, values)| {
+                let f = self.frames.get(frame)?;
+                let expression = f.expression.clone()?;
+                let mut target = f.estimate.clone();
+                for (name, &value) in values {
+                    let b = self.blendshape_index(name).ok()?;
+                    target[b] = value;
+                }
+                Some(Correction { expression, target })
+            })
+            .collect()
+    }
+
+    /// Estimates every frame again with `adapter` (after fine-tuning, say); corrections,
+    /// keyframes and preference stay.
+    ///
+    /// # Errors
+    /// [`AdaptError::Mismatch`] when the adapter is for other blendshapes.
+    pub fn reestimate(&mut self, adapter: &Adapter) -> Result<(), AdaptError> {
+        if adapter.blendshapes != self.blendshapes {
+            return Err(AdaptError::Mismatch {
+                character: self.character.clone(),
+                reason: "the adapter's blendshapes are not the session's".into(),
+            });
+        }
+        let estimates = estimate_frames(
+            &self
+                .frames
+                .iter()
+                .map(|f| f.expression.clone())
+                .collect::<Vec<_>>(),
+            self.blendshapes.len(),
+            |e| adapter.predict(e),
+        );
+        for (frame, estimate) in self.frames.iter_mut().zip(estimates) {
+            frame.estimate = estimate;
+        }
+        Ok(())
+    }
+
+    /// The session as JSON.
+    #[must_use]
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+
+    /// Parses and checks a session file.
+    ///
+    /// # Errors
+    /// [`AdaptError::Format`] naming the field that is wrong.
+    pub fn from_json(bytes: &[u8]) -> Result<Session, AdaptError> {
+        let session: Session = serde_json::from_slice(bytes)
+            .map_err(|e| AdaptError::Format(format!("not a session file: {e}")))?;
+        let bad = |m: String| Err(AdaptError::Format(m));
+        if session.version != 1 {
+            return bad(format!(
+                "version {} is not supported (1 is)",
+                session.version
+            ));
+        }
+        if !(session.fps.is_finite() && session.fps > 0.0) {
+            return bad(format!("fps {} must be positive", session.fps));
+        }
+        let width = session.blendshapes.len();
+        for (k, frame) in session.frames.iter().enumerate() {
+            if frame.estimate.len() != width {
+                return bad(format!(
+                    "frames[{k}].estimate has {} weights for {width} blendshapes",
+                    frame.estimate.len()
+                ));
+            }
+            if frame.estimate.iter().any(|w| !w.is_finite()) {
+                return bad(format!("frames[{k}].estimate is not finite"));
+            }
+        }
+        for (&frame, values) in &session.corrections {
+            if frame >= session.frames.len() {
+                return bad(format!("corrections: frame {frame} is past the end"));
+            }
+            for (name, value) in values {
+                if !session.blendshapes.contains(name) {
+                    return bad(format!("corrections[{frame}]: no blendshape '{name}'"));
+                }
+                if !(0.0..=1.0).contains(value) {
+                    return bad(format!(
+                        "corrections[{frame}].{name} = {value} is outside 0..1"
+                    ));
+                }
+            }
+        }
+        if session
+            .preference
+            .as_ref()
+            .is_some_and(|p| p.len() != width)
+        {
+            return bad(format!("preference must have {width} offsets"));
+        }
+        Ok(session)
+    }
+
+    /// The seed toolkit's CSV: one line per frame, `name.png,w1,…,wN`, in the session's
+    /// blendshape order, without a header.
+    #[must_use]
+    pub fn to_seed_csv(&self) -> String {
+        let mut out = String::new();
+        for (frame, row) in self.frames.iter().zip(self.weights()) {
+            out.push_str(&frame.name);
+            for w in row {
+                out.push(',');
+                out.push_str(&format!("{w:.6}"));
+            }
+            out.push('\n');
+        }
+        out
+    }
+}
+
+/// Per frame, `estimate(expression)`; frames without an expression take values interpolated
+/// from their neighbours (all zeros when no frame has a face).
+pub fn estimate_frames(
+    expressions: &[Option<Expression>],
+    blendshapes: usize,
+    estimate: impl Fn(&Expression) -> Vec<f32>,
+) -> Vec<Vec<f32>> {
+    let mut rows: Vec<Vec<f32>> = expressions
+        .iter()
+        .map(|e| e.as_ref().map_or_else(|| vec![0.0; blendshapes], &estimate))
+        .collect();
+    let known: Vec<bool> = expressions.iter().map(Option::is_some).collect();
+    faceanim_anim::filter::fill_gaps_rows(&mut rows, &known);
+    rows
+}
+
+fn bridged(values: Vec<Option<[f32; 3]>>) -> Vec<[f32; 3]> {
+    let known: Vec<bool> = values.iter().map(Option::is_some).collect();
+    let mut rows: Vec<[f32; 3]> = values.into_iter().map(Option::unwrap_or_default).collect();
+    faceanim_anim::filter::fill_gaps(&mut rows, &known);
+    rows
+}
+
+/// A still image's estimate as a short animation: 0 → `peak` → 0 over `frames` frames at
+/// `fps`, eased in and out (smoothstep), the peak on the middle frame.
+#[must_use]
+pub fn peak_animation(peak: &[f32], blendshapes: Vec<String>, fps: f32, frames: usize) -> Clip {
+    let frames = frames.max(1);
+    let middle = (frames - 1) as f32 / 2.0;
+    let rows = (0..frames)
+        .map(|i| {
+            let u = if middle > 0.0 {
+                1.0 - ((i as f32 - middle) / middle).abs()
+            } else {
+                1.0
+            };
+            let s = u * u * (3.0 - 2.0 * u);
+            peak.iter().map(|w| w * s).collect()
+        })
+        .collect();
+    Clip {
+        fps,
+        blendshapes,
+        frames: rows,
+        head: None,
+        head_position: None,
+        presence: None,
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp, reason = "values set and copied exactly")]
+mod tests {
+    use super::*;
+
+    fn session(frames: usize) -> Session {
+        let names = vec!["a".to_owned(), "b".to_owned()];
+        let frames = (0..frames)
+            .map(|i| SessionFrame {
+                name: format!("f_{i:06}.png"),
+                time: i as f32 / 30.0,
+                presence: 1.0,
+                head: None,
+                head_position: None,
+                expression: None,
+                estimate: vec![0.1 + 0.01 * i as f32, 0.5],
+            })
+            .collect();
+        Session::new(
+            "test".into(),
+            "char".into(),
+            names,
+            Fingerprint {
+                topology: "t".into(),
+                geometry: "g".into(),
+            },
+            30.0,
+            1,
+            frames,
+        )
+    }
+
+    #[test]
+    fn preference_shifts_every_other_frame_by_the_mean_correction() {
+        let mut s = session(10);
+        s.correct(3, "a", 0.43).unwrap(); // estimate 0.13: +0.30
+        s.correct(6, "a", 0.56).unwrap(); // estimate 0.16: +0.40
+        s.apply_preference();
+        let w = s.weights();
+        assert_eq!(w[3][0], 0.43);
+        assert_eq!(w[6][0], 0.56);
+        for (i, row) in w.iter().enumerate().filter(|(i, _)| *i != 3 && *i != 6) {
+            assert!(
+                (row[0] - (0.1 + 0.01 * i as f32 + 0.35)).abs() < 1e-6,
+                "{i}: {row:?}"
+            );
+            assert_eq!(row[1], 0.5, "an uncorrected blendshape keeps its estimate");
+        }
+        s.clear_preference();
+        assert!((s.weights()[0][0] - 0.1).abs() < 1e-6);
+    }
+
+    #[test]
+    fn preference_is_clamped() {
+        let mut s = session(4);
+        s.correct(0, "b", 1.0).unwrap(); // +0.5 on b, whose estimate is 0.5 everywhere
+        s.correct(1, "b", 1.0).unwrap();
+        s.apply_preference();
+        assert!(s.weights().iter().all(|r| r[1] == 1.0));
+    }
+
+    #[test]
+    fn keyframes_interpolate_and_corrections_are_keys() {
+        let mut s = session(11);
+        s.keyframe_every = 5;
+        assert_eq!(s.keyframes(), vec![0, 5, 10]);
+        s.correct(2, "b", 0.9).unwrap();
+        s.add_keyframe(8).unwrap();
+        s.remove_keyframe(5).unwrap();
+        assert_eq!(s.keyframes(), vec![0, 2, 8, 10]);
+        let w = s.weights();
+        // Frame 1 is halfway between keys 0 (0.5) and 2 (0.9) for b.
+        assert!((w[1][1] - 0.7).abs() < 1e-6);
+        assert!(s.remove_keyframe(2).is_err());
+        assert!(s.correct(11, "a", 0.5).is_err());
+        assert!(s.correct(1, "nope", 0.5).is_err());
+        assert!(s.correct(1, "a", 1.5).is_err());
+    }
+
+    #[test]
+    fn a_session_survives_its_file() {
+        let mut s = session(5);
+        s.correct(1, "a", 0.9).unwrap();
+        s.apply_preference();
+        let back = Session::from_json(s.to_json().as_bytes()).unwrap();
+        assert_eq!(back, s);
+        let broken = s.to_json().replace("\"fps\":30.0", "\"fps\":-1.0");
+        let error = Session::from_json(broken.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("fps"), "{error}");
+    }
+
+    #[test]
+    fn an_image_becomes_zero_peak_zero() {
+        let clip = peak_animation(&[0.8, 0.4], vec!["a".into(), "b".into()], 30.0, 31);
+        assert_eq!(clip.frames.len(), 31);
+        assert_eq!(clip.frames[0], vec![0.0, 0.0]);
+        assert_eq!(clip.frames[30], vec![0.0, 0.0]);
+        assert_eq!(clip.frames[15], vec![0.8, 0.4]);
+        assert!(clip.frames[7][0] > 0.0 && clip.frames[7][0] < 0.8);
+    }
+}

@@ -1,0 +1,479 @@
+//! Training the adapter with candle: MSE and Adam on the character's renders, the step halved
+//! whenever the validation MAE stalls for a third of the patience, early stopping on the
+//! validation split, the MAE on the test split; and fine-tuning from a user's corrections
+//! (the seed's offline mode).
+//!
+//! Weights are initialised from our own seeded generator (PyTorch's uniform ±1/√fan-in), so a
+//! seed gives the same adapter every time.
+
+use std::time::Instant;
+
+use candle_core::{Device, Tensor, Var};
+use candle_nn::Optimizer as _;
+use rand::{Rng as _, SeedableRng as _};
+
+use crate::AdaptError;
+use crate::adapter::{Adapter, Architecture, TrainingReport};
+use crate::dataset::{Control, Dataset};
+use crate::features::Expression;
+
+impl From<candle_core::Error> for AdaptError {
+    fn from(e: candle_core::Error) -> AdaptError {
+        AdaptError::Training(e.to_string())
+    }
+}
+
+/// How to train.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrainOptions {
+    /// The network.
+    pub architecture: Architecture,
+    /// Adam's step size.
+    pub learning_rate: f64,
+    /// Samples per step.
+    pub batch_size: usize,
+    /// At most this many passes over the training split.
+    pub max_epochs: usize,
+    /// Stop after this many epochs without a better validation MAE (the step is halved after
+    /// each third of it).
+    pub patience: usize,
+    /// Seed of the initial weights and the batch order.
+    pub seed: u64,
+}
+
+impl Default for TrainOptions {
+    fn default() -> TrainOptions {
+        TrainOptions {
+            architecture: Architecture::default(),
+            learning_rate: 1e-3,
+            batch_size: 128,
+            max_epochs: 400,
+            patience: 25,
+            seed: 1,
+        }
+    }
+}
+
+/// The two layers as trainable candle variables.
+struct Net {
+    hidden_weight: Var,
+    hidden_bias: Var,
+    output_weight: Var,
+    output_bias: Var,
+    architecture: Architecture,
+}
+
+impl Net {
+    fn init(
+        architecture: Architecture,
+        inputs: usize,
+        outputs: usize,
+        rng: &mut rand_chacha::ChaCha8Rng,
+    ) -> Result<Net, AdaptError> {
+        let hidden = architecture.hidden;
+        let mut uniform = |n: usize, fan_in: usize| -> Vec<f32> {
+            let bound = 1.0 / (fan_in as f32).sqrt();
+            (0..n).map(|_| rng.random_range(-bound..bound)).collect()
+        };
+        let var = |values: Vec<f32>, shape: &[usize]| {
+            Var::from_vec(values, shape, &Device::Cpu).map_err(AdaptError::from)
+        };
+        Ok(Net {
+            hidden_weight: var(uniform(hidden * inputs, inputs), &[hidden, inputs])?,
+            hidden_bias: var(uniform(hidden, inputs), &[hidden])?,
+            output_weight: var(uniform(outputs * hidden, hidden), &[outputs, hidden])?,
+            output_bias: var(uniform(outputs, hidden), &[outputs])?,
+            architecture,
+        })
+    }
+
+    fn from_adapter(adapter: &Adapter) -> Result<Net, AdaptError> {
+        let (inputs, hidden, outputs) = (
+            adapter.inputs(),
+            adapter.architecture.hidden,
+            adapter.blendshapes.len(),
+        );
+        let var = |values: &[f32], shape: &[usize]| {
+            Var::from_slice(values, shape, &Device::Cpu).map_err(AdaptError::from)
+        };
+        Ok(Net {
+            hidden_weight: var(&adapter.hidden_weight, &[hidden, inputs])?,
+            hidden_bias: var(&adapter.hidden_bias, &[hidden])?,
+            output_weight: var(&adapter.output_weight, &[outputs, hidden])?,
+            output_bias: var(&adapter.output_bias, &[outputs])?,
+            architecture: adapter.architecture,
+        })
+    }
+
+    fn vars(&self) -> Vec<Var> {
+        vec![
+            self.hidden_weight.clone(),
+            self.hidden_bias.clone(),
+            self.output_weight.clone(),
+            self.output_bias.clone(),
+        ]
+    }
+
+    /// Standardised inputs (rows) to outputs (rows).
+    fn forward(&self, x: &Tensor) -> Result<Tensor, AdaptError> {
+        let h = x
+            .matmul(&self.hidden_weight.as_tensor().t()?)?
+            .broadcast_add(self.hidden_bias.as_tensor())?;
+        let h = match self.architecture.activation {
+            crate::adapter::Activation::Relu => h.relu()?,
+            crate::adapter::Activation::LeakyRelu => candle_nn::ops::leaky_relu(
+                &h,
+                f64::from(self.architecture.activation.negative_slope()),
+            )?,
+        };
+        let y = h
+            .matmul(&self.output_weight.as_tensor().t()?)?
+            .broadcast_add(self.output_bias.as_tensor())?;
+        Ok(if self.architecture.clamp {
+            y.clamp(0f32, 1f32)?
+        } else {
+            y
+        })
+    }
+
+    fn mae(&self, x: &Tensor, y: &Tensor) -> Result<f32, AdaptError> {
+        if x.dim(0)? == 0 {
+            return Ok(0.0);
+        }
+        // Whatever the network says, the weights a character gets are in [0, 1].
+        let prediction = self.forward(x)?.clamp(0f32, 1f32)?;
+        Ok((prediction - y)?.abs()?.mean_all()?.to_scalar::<f32>()?)
+    }
+
+    fn snapshot(&self) -> Result<[Vec<f32>; 4], AdaptError> {
+        let flat = |v: &Var| -> Result<Vec<f32>, AdaptError> {
+            Ok(v.as_tensor().flatten_all()?.to_vec1::<f32>()?)
+        };
+        Ok([
+            flat(&self.hidden_weight)?,
+            flat(&self.hidden_bias)?,
+            flat(&self.output_weight)?,
+            flat(&self.output_bias)?,
+        ])
+    }
+}
+
+/// Rows of standardised inputs and of targets, as tensors.
+struct Examples {
+    x: Tensor,
+    y: Tensor,
+}
+
+impl Examples {
+    fn new(
+        rows: &[Vec<f32>],
+        targets: &[Vec<f32>],
+        mean: &[f32],
+        scale: &[f32],
+    ) -> Result<Examples, AdaptError> {
+        let inputs = mean.len();
+        let outputs = targets.first().map_or(0, Vec::len);
+        let x: Vec<f32> = rows
+            .iter()
+            .flat_map(|r| r.iter().zip(mean).zip(scale).map(|((v, m), s)| (v - m) * s))
+            .collect();
+        let y: Vec<f32> = targets.concat();
+        Ok(Examples {
+            x: Tensor::from_vec(x, (rows.len(), inputs), &Device::Cpu)?,
+            y: Tensor::from_vec(y, (targets.len(), outputs), &Device::Cpu)?,
+        })
+    }
+
+    fn len(&self) -> usize {
+        self.x.dims()[0]
+    }
+}
+
+/// Per-input mean and 1/deviation over `rows` (inputs that never vary get scale 1).
+fn standardisation(rows: &[Vec<f32>], inputs: usize) -> (Vec<f32>, Vec<f32>) {
+    let n = rows.len().max(1) as f64;
+    let mut mean = vec![0.0f64; inputs];
+    for r in rows {
+        for (m, v) in mean.iter_mut().zip(r) {
+            *m += f64::from(*v);
+        }
+    }
+    mean.iter_mut().for_each(|m| *m /= n);
+    let mut variance = vec![0.0f64; inputs];
+    for r in rows {
+        for ((s, v), m) in variance.iter_mut().zip(r).zip(&mean) {
+            *s += (f64::from(*v) - m).powi(2);
+        }
+    }
+    let scale = variance
+        .iter()
+        .map(|s| {
+            let deviation = (s / n).sqrt();
+            if deviation > 1e-6 {
+                (1.0 / deviation) as f32
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    (mean.iter().map(|m| *m as f32).collect(), scale)
+}
+
+/// One pass over `train` in random batches.
+fn epoch(
+    net: &Net,
+    optimizer: &mut candle_nn::AdamW,
+    train: &Examples,
+    batch_size: usize,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> Result<(), AdaptError> {
+    let n = train.len();
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    for k in (1..n).rev() {
+        order.swap(k, rng.random_range(0..=k));
+    }
+    for batch in order.chunks(batch_size.max(1)) {
+        let index = Tensor::from_slice(batch, batch.len(), &Device::Cpu)?;
+        let x = train.x.index_select(&index, 0)?;
+        let y = train.y.index_select(&index, 0)?;
+        let loss = candle_nn::loss::mse(&net.forward(&x)?, &y)?;
+        optimizer.backward_step(&loss)?;
+    }
+    Ok(())
+}
+
+fn adam(net: &Net, learning_rate: f64) -> Result<candle_nn::AdamW, AdaptError> {
+    Ok(candle_nn::AdamW::new(
+        net.vars(),
+        candle_nn::ParamsAdamW {
+            lr: learning_rate,
+            weight_decay: 0.0,
+            ..candle_nn::ParamsAdamW::default()
+        },
+    )?)
+}
+
+/// Trains an adapter on `dataset`; `control.progress` gets (epoch, max epochs).
+///
+/// # Errors
+/// [`AdaptError::Training`] if candle fails, [`AdaptError::NotEnoughData`] for fewer than 10
+/// samples, [`AdaptError::Cancelled`] when cancelled.
+pub fn train(
+    dataset: &Dataset,
+    options: &TrainOptions,
+    control: Control<'_>,
+) -> Result<Adapter, AdaptError> {
+    let started = Instant::now();
+    if dataset.len() < 10 {
+        return Err(AdaptError::NotEnoughData(dataset.len()));
+    }
+    let features = options.architecture.features;
+    let inputs: Vec<Vec<f32>> = dataset
+        .expressions
+        .iter()
+        .map(|e| e.input(features))
+        .collect();
+    let split = dataset.split();
+    let (mean, scale) = standardisation(&inputs[split.train.clone()], features.len());
+    let part = |range: std::ops::Range<usize>| {
+        Examples::new(
+            &inputs[range.clone()],
+            &dataset.targets[range],
+            &mean,
+            &scale,
+        )
+    };
+    let (train_set, validation, test) = (
+        part(split.train.clone())?,
+        part(split.validation.clone())?,
+        part(split.test.clone())?,
+    );
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(options.seed);
+    let net = Net::init(
+        options.architecture,
+        features.len(),
+        dataset.blendshapes.len(),
+        &mut rng,
+    )?;
+    let mut optimizer = adam(&net, options.learning_rate)?;
+    let mut best = (f32::INFINITY, 0usize, net.snapshot()?);
+    let mut epochs = 0;
+    for e in 1..=options.max_epochs {
+        if control.cancelled() {
+            return Err(AdaptError::Cancelled);
+        }
+        epoch(
+            &net,
+            &mut optimizer,
+            &train_set,
+            options.batch_size,
+            &mut rng,
+        )?;
+        epochs = e;
+        let mae = net.mae(&validation.x, &validation.y)?;
+        tracing::debug!(epoch = e, mae_val = mae, "trained");
+        if mae < best.0 {
+            best = (mae, e, net.snapshot()?);
+        } else if e - best.1 >= options.patience {
+            break;
+        } else if (e - best.1) % (options.patience / 3).max(1) == 0 {
+            // On a plateau, smaller steps settle into the minimum Adam keeps jumping over.
+            optimizer.set_learning_rate(optimizer.learning_rate() * 0.5);
+        }
+        (control.progress)(e, options.max_epochs);
+    }
+    let [hidden_weight, hidden_bias, output_weight, output_bias] = best.2;
+    let mut adapter = Adapter {
+        blendshapes: dataset.blendshapes.clone(),
+        fingerprint: dataset.fingerprint.clone(),
+        architecture: options.architecture,
+        report: TrainingReport::default(),
+        input_mean: mean,
+        input_scale: scale,
+        hidden_weight,
+        hidden_bias,
+        output_weight,
+        output_bias,
+    };
+    let kept = Net::from_adapter(&adapter)?;
+    adapter.report = TrainingReport {
+        mae_test: kept.mae(&test.x, &test.y)?,
+        mae_val: best.0,
+        samples: dataset.len(),
+        epochs,
+        best_epoch: best.1,
+        seconds: started.elapsed().as_secs_f64(),
+        corrections: 0,
+    };
+    Ok(adapter)
+}
+
+/// A frame the user corrected: what capture read, and the weights the user wants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Correction {
+    /// The frame's expression.
+    pub expression: Expression,
+    /// The wanted weights, one per blendshape (the estimate, with the user's changes).
+    pub target: Vec<f32>,
+}
+
+/// How fine-tuning went.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct FinetuneReport {
+    /// MAE on the corrected frames before and after.
+    pub corrected_before: f32,
+    /// MAE on the corrected frames after.
+    pub corrected_after: f32,
+    /// Test MAE before.
+    pub test_before: f32,
+    /// Test MAE after.
+    pub test_after: f32,
+    /// Epochs run.
+    pub epochs: usize,
+}
+
+/// Fine-tunes `adapter` on `corrections` (the offline mode), mixed with its training set so it
+/// does not forget the character: corrected frames are repeated to make up about a fifth of
+/// each epoch, the step is a third of training's, and the kept epoch is the one that fits the
+/// corrections best while the validation MAE stays within 5% of where it started.
+///
+/// # Errors
+/// [`AdaptError::Mismatch`] when `dataset` is another character's,
+/// [`AdaptError::NotEnoughData`] without corrections, [`AdaptError::Training`] if candle fails.
+pub fn finetune(
+    adapter: &Adapter,
+    dataset: &Dataset,
+    corrections: &[Correction],
+    options: &TrainOptions,
+    control: Control<'_>,
+) -> Result<(Adapter, FinetuneReport), AdaptError> {
+    if corrections.is_empty() {
+        return Err(AdaptError::NotEnoughData(0));
+    }
+    if dataset.blendshapes != adapter.blendshapes {
+        return Err(AdaptError::Mismatch {
+            character: "the training set".into(),
+            reason: "its blendshapes are not the adapter's".into(),
+        });
+    }
+    if let Some(bad) = corrections
+        .iter()
+        .find(|c| c.target.len() != adapter.blendshapes.len())
+    {
+        return Err(AdaptError::Format(format!(
+            "a correction has {} weights for {} blendshapes",
+            bad.target.len(),
+            adapter.blendshapes.len()
+        )));
+    }
+    let features = adapter.architecture.features;
+    let (mean, scale) = (&adapter.input_mean, &adapter.input_scale);
+    let split = dataset.split();
+    let inputs: Vec<Vec<f32>> = dataset
+        .expressions
+        .iter()
+        .map(|e| e.input(features))
+        .collect();
+    let part = |range: std::ops::Range<usize>| {
+        Examples::new(&inputs[range.clone()], &dataset.targets[range], mean, scale)
+    };
+    let (validation, test) = (part(split.validation.clone())?, part(split.test.clone())?);
+    let corrected_inputs: Vec<Vec<f32>> = corrections
+        .iter()
+        .map(|c| c.expression.input(features))
+        .collect();
+    let corrected_targets: Vec<Vec<f32>> = corrections.iter().map(|c| c.target.clone()).collect();
+    let corrected = Examples::new(&corrected_inputs, &corrected_targets, mean, scale)?;
+    // The training split plus the corrections, repeated.
+    let repeats = (split.train.len() / 4 / corrections.len()).max(1);
+    let mut mixed_inputs = inputs[split.train.clone()].to_vec();
+    let mut mixed_targets = dataset.targets[split.train.clone()].to_vec();
+    for _ in 0..repeats {
+        mixed_inputs.extend(corrected_inputs.iter().cloned());
+        mixed_targets.extend(corrected_targets.iter().cloned());
+    }
+    let mixed = Examples::new(&mixed_inputs, &mixed_targets, mean, scale)?;
+
+    let net = Net::from_adapter(adapter)?;
+    let validation_before = net.mae(&validation.x, &validation.y)?;
+    let corrected_before = net.mae(&corrected.x, &corrected.y)?;
+    let test_before = net.mae(&test.x, &test.y)?;
+    let mut optimizer = adam(&net, options.learning_rate / 3.0)?;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(options.seed ^ 0x5eed);
+    let mut best = (corrected_before, net.snapshot()?);
+    let max_epochs = options.max_epochs.min(40);
+    let mut epochs = 0;
+    for e in 1..=max_epochs {
+        if control.cancelled() {
+            return Err(AdaptError::Cancelled);
+        }
+        epoch(&net, &mut optimizer, &mixed, options.batch_size, &mut rng)?;
+        epochs = e;
+        let fit = net.mae(&corrected.x, &corrected.y)?;
+        let kept_generality = net.mae(&validation.x, &validation.y)? <= validation_before * 1.05;
+        if kept_generality && fit < best.0 {
+            best = (fit, net.snapshot()?);
+        }
+        (control.progress)(e, max_epochs);
+    }
+    let [hidden_weight, hidden_bias, output_weight, output_bias] = best.1;
+    let mut tuned = Adapter {
+        hidden_weight,
+        hidden_bias,
+        output_weight,
+        output_bias,
+        ..adapter.clone()
+    };
+    let kept = Net::from_adapter(&tuned)?;
+    let report = FinetuneReport {
+        corrected_before,
+        corrected_after: best.0,
+        test_before,
+        test_after: kept.mae(&test.x, &test.y)?,
+        epochs,
+    };
+    tuned.report.mae_test = report.test_after;
+    tuned.report.mae_val = kept.mae(&validation.x, &validation.y)?;
+    tuned.report.corrections += corrections.len();
+    Ok((tuned, report))
+}

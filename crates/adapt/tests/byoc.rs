@@ -1,0 +1,211 @@
+//! Bring your own character, end to end on the ICT heads: the training set from renders, the
+//! adapter, its file and its checks, another identity of the rig, a rig whose names say
+//! nothing, and fine-tuning from corrections.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
+use faceanim_adapt::{
+    Adapter, Control, Correction, Dataset, DatasetOptions, FaceCamera, Fit, Framing, TrainOptions,
+    finetune, train,
+};
+use faceanim_rig::Character;
+use faceanim_track::FaceModels;
+
+/// Enough samples for a test to show the adapter learns (10,000 is the product's default).
+const SAMPLES: usize = 2000;
+
+fn dataset(character: &Character, models: &FaceModels, samples: usize, seed: u64) -> Dataset {
+    let camera = FaceCamera::frame(character, models).unwrap();
+    assert_eq!(camera.framing, Framing::Detected, "the head is found");
+    let options = DatasetOptions {
+        samples,
+        seed,
+        exclusive: exclusive_pairs(character, &[]).unwrap(),
+    };
+    Dataset::generate(character, models, &camera, &options, Control::silent()).unwrap()
+}
+
+/// MAE of `adapter` over every sample of `dataset`.
+fn mae(adapter: &Adapter, dataset: &Dataset) -> f32 {
+    let mut sum = 0.0;
+    let mut count = 0;
+    for (expression, target) in dataset.expressions.iter().zip(&dataset.targets) {
+        for (p, t) in adapter.predict(expression).iter().zip(target) {
+            sum += (p - t).abs();
+            count += 1;
+        }
+    }
+    sum / count as f32
+}
+
+#[test]
+fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
+    let models = FaceModels::load().unwrap();
+    let ict = faceanim_testdata::ict();
+    let pairs = exclusive_pairs(ict, &[]).unwrap();
+    let names: Vec<(&str, &str)> = pairs
+        .iter()
+        .map(|p| (ict.blendshapes()[p.a].name(), ict.blendshapes()[p.b].name()))
+        .collect();
+    let has = |a: &str, b: &str| {
+        names
+            .iter()
+            .any(|&(x, y)| (x, y) == (a, b) || (y, x) == (a, b))
+    };
+    assert!(has("jawLeft", "jawRight"), "{names:?}");
+    assert!(has("mouthLeft", "mouthRight"), "{names:?}");
+    assert!(
+        pairs.iter().any(|p| p.reason == ExclusionReason::Opposite),
+        "opposites are found from the geometry: {names:?}"
+    );
+
+    let data = dataset(ict, &models, SAMPLES, 1);
+    assert!(data.len() >= SAMPLES * 99 / 100, "{} kept", data.len());
+    // The cache round-trips exactly.
+    assert_eq!(
+        Dataset::from_bytes(&data.to_bytes().unwrap()).unwrap(),
+        data
+    );
+
+    let adapter = train(&data, &TrainOptions::default(), Control::silent()).unwrap();
+    let report = adapter.report.clone();
+    eprintln!("ICT, {SAMPLES} samples: {report:?}");
+    assert!(report.mae_test < 0.07, "test MAE {}", report.mae_test);
+    assert!(report.best_epoch > 1 && report.best_epoch <= report.epochs);
+
+    // The file keeps everything and is bound to its character.
+    let bytes = adapter.to_bytes().unwrap();
+    let back = Adapter::from_bytes(&bytes).unwrap();
+    assert_eq!(back, adapter);
+    assert_eq!(back.check(ict).unwrap(), Fit::Exact);
+    let other = faceanim_head::default_character();
+    let refused = back.check(&other).unwrap_err().to_string();
+    assert!(
+        refused.contains("52") && refused.contains("53") && refused.contains("faceanim adapt"),
+        "{refused}"
+    );
+    let broken = Adapter::from_bytes(&bytes[..bytes.len() / 2]).unwrap_err();
+    assert!(broken.to_string().contains("safetensors"), "{broken}");
+
+    // A known expression comes back: the jaw open at 0.7, the rest of the face still.
+    let camera = FaceCamera::frame(ict, &models).unwrap();
+    let mut weights = vec![0.0; ict.blendshapes().len()];
+    let jaw = ict.find_blendshape("jawOpen").unwrap().index();
+    weights[jaw] = 0.7;
+    let (expression, presence) = camera
+        .expression(ict, &models, &weights, &mut faceanim_rig::Pose::default())
+        .unwrap();
+    assert!(presence > 0.5);
+    let estimate = adapter.predict(&expression.unwrap());
+    assert!(
+        (estimate[jaw] - 0.7).abs() < 0.2,
+        "jawOpen {}",
+        estimate[jaw]
+    );
+    let others = estimate
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| *k != jaw)
+        .map(|(_, w)| w)
+        .sum::<f32>()
+        / (estimate.len() - 1) as f32;
+    assert!(
+        others < 0.1,
+        "the other shapes average {others}: {estimate:?}"
+    );
+
+    // Another identity of the same rig: the adapter is accepted with a warning, and works.
+    let id7 = faceanim_testdata::ict_id7();
+    assert_eq!(adapter.check(id7).unwrap(), Fit::OtherShape);
+    let id7_data = dataset(id7, &models, 300, 7);
+    let id7_mae = mae(&adapter, &id7_data);
+    eprintln!("ict-face-id7 with ict-face's adapter: MAE {id7_mae:.4}");
+    assert!(id7_mae < 0.1, "id7 MAE {id7_mae}");
+
+    // Offline fine-tuning: a user corrects 30 frames of the other identity to their true
+    // weights. The error on those frames drops; the test MAE rises by at most 10%.
+    let corrections: Vec<Correction> = id7_data
+        .expressions
+        .iter()
+        .zip(&id7_data.targets)
+        .take(30)
+        .map(|(e, t)| Correction {
+            expression: e.clone(),
+            target: t.clone(),
+        })
+        .collect();
+    let (tuned, outcome) = finetune(
+        &adapter,
+        &data,
+        &corrections,
+        &TrainOptions::default(),
+        Control::silent(),
+    )
+    .unwrap();
+    eprintln!("fine-tuning on 30 corrected id7 frames: {outcome:?}");
+    assert!(
+        outcome.corrected_after < outcome.corrected_before * 0.9,
+        "{outcome:?}"
+    );
+    assert!(
+        outcome.test_after <= outcome.test_before * 1.1,
+        "{outcome:?}"
+    );
+    assert_eq!(tuned.report.corrections, 30);
+}
+
+#[test]
+fn a_rig_whose_names_say_nothing_adapts_as_well() {
+    let models = FaceModels::load().unwrap();
+    let (shuffled, order) = faceanim_testdata::renamed_and_shuffled(faceanim_testdata::ict(), 5);
+    assert!(
+        shuffled
+            .blendshapes()
+            .iter()
+            .all(|b| b.name().starts_with("shape_"))
+    );
+    let pairs = exclusive_pairs(&shuffled, &[]).unwrap();
+    let jaw_left = order
+        .iter()
+        .position(|&i| {
+            i == faceanim_testdata::ict()
+                .find_blendshape("jawLeft")
+                .unwrap()
+                .index()
+        })
+        .unwrap();
+    let jaw_right = order
+        .iter()
+        .position(|&i| {
+            i == faceanim_testdata::ict()
+                .find_blendshape("jawRight")
+                .unwrap()
+                .index()
+        })
+        .unwrap();
+    assert!(
+        pairs
+            .iter()
+            .any(|p| (p.a, p.b) == (jaw_left.min(jaw_right), jaw_left.max(jaw_right))),
+        "jawLeft/jawRight are opposites by geometry alone"
+    );
+    let data = dataset(&shuffled, &models, SAMPLES, 1);
+    let adapter = train(&data, &TrainOptions::default(), Control::silent()).unwrap();
+    eprintln!(
+        "renamed and shuffled ICT, {SAMPLES} samples: {:?}",
+        adapter.report
+    );
+    assert!(
+        adapter.report.mae_test < 0.07,
+        "test MAE {}",
+        adapter.report.mae_test
+    );
+    assert_eq!(adapter.blendshapes[0], "shape_1");
+    assert_eq!(adapter.check(&shuffled).unwrap(), Fit::Exact);
+    // The ICT adapter's names are not these: refused, naming the difference.
+    let message = adapter
+        .check(faceanim_testdata::ict())
+        .unwrap_err()
+        .to_string();
+    assert!(message.contains("shape_"), "{message}");
+}

@@ -1,0 +1,468 @@
+//! `faceanim adapt`: train a character's adapter (renders → capture pipeline → candle), its
+//! ablation table, and fine-tuning from the corrections in session files.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
+use faceanim_adapt::{
+    Activation, Adapter, Architecture, Control, Dataset, DatasetOptions, FaceCamera, FeatureSet,
+    Session, TrainOptions,
+};
+use faceanim_rig::Character;
+use faceanim_track::FaceModels;
+
+/// What `faceanim adapt` was asked to do.
+#[derive(Debug)]
+pub struct AdaptArgs {
+    pub character: Option<PathBuf>,
+    pub output: Option<PathBuf>,
+    pub samples: usize,
+    pub seed: u64,
+    pub json: bool,
+    pub architecture: Architecture,
+    pub exclusive: Vec<String>,
+    pub dataset: Option<PathBuf>,
+    pub fresh: bool,
+    pub ablation: bool,
+    pub finetune: Vec<PathBuf>,
+    pub from: Option<PathBuf>,
+    pub evaluate: Option<PathBuf>,
+}
+
+/// The adapter file next to a character: `NAME.adapter.safetensors`.
+pub fn default_adapter_path(character: Option<&Path>, name: &str) -> PathBuf {
+    let file = format!("{name}.adapter.safetensors");
+    match character.and_then(Path::parent) {
+        Some(dir) => dir.join(file),
+        None => PathBuf::from(file),
+    }
+}
+
+/// The training set's cache beside the adapter.
+fn dataset_path(adapter: &Path) -> PathBuf {
+    let name = adapter
+        .file_name()
+        .map_or_else(|| "adapter".into(), |n| n.to_string_lossy().into_owned());
+    let stem = name.strip_suffix(".safetensors").unwrap_or(&name);
+    let stem = stem.strip_suffix(".adapter").unwrap_or(stem);
+    adapter.with_file_name(format!("{stem}.dataset.safetensors"))
+}
+
+fn bar(total: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{spinner}} {what} {{pos}}/{{len}} [{{bar:40}}] {{per_sec}} {{eta}}"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    bar
+}
+
+fn parse_exclusive(rules: &[String]) -> anyhow::Result<Vec<(String, String)>> {
+    rules
+        .iter()
+        .map(|rule| {
+            let (a, b) = rule.split_once(',').with_context(|| {
+                format!("--exclusive '{rule}': give two blendshape names separated by a comma")
+            })?;
+            Ok((a.trim().to_owned(), b.trim().to_owned()))
+        })
+        .collect()
+}
+
+/// Loads the cached training set when it was made from this character with these settings,
+/// else renders a new one and caches it.
+fn dataset(
+    character: &Character,
+    options: &DatasetOptions,
+    cache: &Path,
+    fresh: bool,
+) -> anyhow::Result<(Dataset, bool)> {
+    if !fresh && cache.exists() {
+        let bytes = faceanim_files::read_bytes(cache)?;
+        match Dataset::from_bytes(&bytes) {
+            Ok(cached)
+                if cached.fingerprint == faceanim_adapt::Fingerprint::of(character)
+                    && cached.blendshapes.len() == character.blendshapes().len()
+                    && cached.seed == options.seed
+                    && cached.drawn == options.samples
+                    && cached.exclusive == options.exclusive =>
+            {
+                eprintln!(
+                    "using the training set cached in {} ({} samples)",
+                    cache.display(),
+                    cached.len()
+                );
+                return Ok((cached, true));
+            }
+            Ok(_) => eprintln!(
+                "{} was made with other settings or another character; rendering a new one",
+                cache.display()
+            ),
+            Err(e) => eprintln!("{}: {e}; rendering a new one", cache.display()),
+        }
+    }
+    let models = FaceModels::load_with_threads(1).context("loading the face models")?;
+    let camera = FaceCamera::frame(character, &models)?;
+    for warning in camera.warnings() {
+        eprintln!("warning: {warning}");
+    }
+    if camera.framing == faceanim_adapt::Framing::Assumed {
+        eprintln!(
+            "warning: no face was detected in a front render of {}; using the middle of the picture",
+            character.name()
+        );
+    }
+    let progress = bar(options.samples as u64, "rendering");
+    let never = AtomicBool::new(false);
+    let report = |done: usize, _total: usize| progress.set_position(done as u64);
+    let dataset = Dataset::generate(
+        character,
+        &models,
+        &camera,
+        options,
+        Control {
+            progress: &report,
+            cancel: &never,
+        },
+    )?;
+    progress.finish_and_clear();
+    let dropped = options.samples - dataset.len();
+    if dropped > 0 {
+        eprintln!("{dropped} renders gave degenerate landmarks and were left out");
+    }
+    faceanim_files::write_atomic(cache, &dataset.to_bytes()?)?;
+    Ok((dataset, false))
+}
+
+fn train_with_bar(dataset: &Dataset, options: &TrainOptions) -> anyhow::Result<Adapter> {
+    let progress = bar(options.max_epochs as u64, "training epoch");
+    let never = AtomicBool::new(false);
+    let report = |epoch: usize, _| progress.set_position(epoch as u64);
+    let adapter = faceanim_adapt::train(
+        dataset,
+        options,
+        Control {
+            progress: &report,
+            cancel: &never,
+        },
+    )?;
+    progress.finish_and_clear();
+    Ok(adapter)
+}
+
+pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
+    let started = Instant::now();
+    anyhow::ensure!(
+        args.samples >= 10,
+        "--samples must be at least 10, got {}",
+        args.samples
+    );
+    anyhow::ensure!(
+        (1..=4096).contains(&args.architecture.hidden),
+        "--hidden must be between 1 and 4096, got {}",
+        args.architecture.hidden
+    );
+    let character = crate::load_or_default(args.character.as_deref())?.character;
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_adapter_path(args.character.as_deref(), character.name()));
+    let cache = args
+        .dataset
+        .clone()
+        .unwrap_or_else(|| dataset_path(&output));
+    let user_rules = parse_exclusive(&args.exclusive)?;
+    let exclusive = exclusive_pairs(&character, &user_rules)?;
+    let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
+    let describe = |reason: ExclusionReason| {
+        exclusive
+            .iter()
+            .filter(|p| p.reason == reason)
+            .map(|p| format!("{}/{}", names[p.a], names[p.b]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    eprintln!(
+        "{} exclusive pairs — opposite motion: {}; ARKit names: {}; yours: {}",
+        exclusive.len(),
+        describe(ExclusionReason::Opposite),
+        describe(ExclusionReason::ArkitNames),
+        describe(ExclusionReason::User)
+    );
+    let options = DatasetOptions {
+        samples: args.samples,
+        seed: args.seed,
+        exclusive,
+    };
+
+    if !args.finetune.is_empty() {
+        return finetune(&args, &character, &options, &cache, &output, started);
+    }
+    if let Some(path) = &args.evaluate {
+        return evaluate(path, &character, &options, &cache, args.fresh);
+    }
+
+    let (dataset, _) = dataset(&character, &options, &cache, args.fresh)?;
+    let dataset_seconds = started.elapsed().as_secs_f64();
+    let train_options = TrainOptions {
+        architecture: args.architecture,
+        seed: args.seed,
+        ..TrainOptions::default()
+    };
+    if args.ablation {
+        return ablation(&dataset, &train_options, args.json);
+    }
+    let adapter = train_with_bar(&dataset, &train_options)?;
+    faceanim_files::write_atomic(&output, &adapter.to_bytes()?)?;
+    let seconds = started.elapsed().as_secs_f64();
+    let report = &adapter.report;
+    eprintln!(
+        "wrote {} — test MAE {:.4}, validation MAE {:.4}, {} samples, best epoch {} of {}; {:.1} s ({:.1} s for the training set, {:.1} s training)",
+        output.display(),
+        report.mae_test,
+        report.mae_val,
+        report.samples,
+        report.best_epoch,
+        report.epochs,
+        seconds,
+        dataset_seconds,
+        report.seconds
+    );
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "mae_test": report.mae_test,
+                "mae_val": report.mae_val,
+                "samples": report.samples,
+                "seconds": seconds,
+            })
+        );
+    }
+    Ok(())
+}
+
+/// The seed's Table 1 on this character: one row per setting, test MAE.
+fn ablation(dataset: &Dataset, base: &TrainOptions, json: bool) -> anyhow::Result<()> {
+    let default = Architecture::default();
+    let rows = [
+        Architecture {
+            features: FeatureSet::Scores,
+            ..default
+        },
+        Architecture {
+            features: FeatureSet::Landmarks,
+            ..default
+        },
+        default,
+        Architecture {
+            hidden: 100,
+            ..default
+        },
+        Architecture {
+            hidden: 384,
+            ..default
+        },
+        Architecture {
+            activation: Activation::Relu,
+            clamp: false,
+            ..default
+        },
+        Architecture {
+            activation: Activation::Relu,
+            ..default
+        },
+        Architecture {
+            clamp: false,
+            ..default
+        },
+    ];
+    let mut results = Vec::new();
+    for architecture in rows {
+        let adapter = train_with_bar(
+            dataset,
+            &TrainOptions {
+                architecture,
+                ..*base
+            },
+        )?;
+        eprintln!(
+            "{} {} {:?} clamp={}: test MAE {:.4}",
+            architecture.features.name(),
+            architecture.hidden,
+            architecture.activation,
+            architecture.clamp,
+            adapter.report.mae_test
+        );
+        results.push((architecture, adapter.report));
+    }
+    if json {
+        let rows: Vec<_> = results
+            .iter()
+            .map(|(a, r)| {
+                serde_json::json!({
+                    "features": a.features.name(), "hidden": a.hidden,
+                    "activation": a.activation, "clamp": a.clamp,
+                    "mae_test": r.mae_test, "mae_val": r.mae_val,
+                    "epochs": r.best_epoch, "seconds": r.seconds,
+                })
+            })
+            .collect();
+        println!("{}", serde_json::Value::Array(rows));
+    } else {
+        println!("| features | layers | hidden | test MAE | val MAE | best epoch | seconds |");
+        println!("| --- | --- | --- | --- | --- | --- | --- |");
+        for (a, r) in &results {
+            let activation = match a.activation {
+                Activation::Relu => "ReLU",
+                Activation::LeakyRelu => "LeakyReLU",
+            };
+            let clamp = if a.clamp { " → Clamp" } else { "" };
+            println!(
+                "| {} | Linear → {activation} → Linear{clamp} | {} | {:.4} | {:.4} | {} | {:.1} |",
+                a.features.name(),
+                a.hidden,
+                r.mae_test,
+                r.mae_val,
+                r.best_epoch,
+                r.seconds
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The seed's offline mode: the corrections recorded in sessions fine-tune the adapter.
+fn finetune(
+    args: &AdaptArgs,
+    character: &Character,
+    options: &DatasetOptions,
+    cache: &Path,
+    output: &Path,
+    started: Instant,
+) -> anyhow::Result<()> {
+    let from = args.from.clone().unwrap_or_else(|| output.to_owned());
+    let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(&from)?)
+        .with_context(|| format!("reading the adapter {}", from.display()))?;
+    adapter.check(character)?;
+    let mut corrections = Vec::new();
+    for path in &args.finetune {
+        let session = Session::from_json(&faceanim_files::read_bytes(path)?)
+            .with_context(|| format!("reading the session {}", path.display()))?;
+        anyhow::ensure!(
+            session.blendshapes == adapter.blendshapes,
+            "{}: the session is for other blendshapes than the adapter {}",
+            path.display(),
+            from.display()
+        );
+        let found = session.corrections_for_training();
+        eprintln!("{}: {} corrected frames", path.display(), found.len());
+        corrections.extend(found);
+    }
+    anyhow::ensure!(
+        !corrections.is_empty(),
+        "the sessions hold no corrected frames with a face; correct some first (faceanim session SESSION correct …)"
+    );
+    // Fine-tuning mixes in the training set, so that the adapter does not forget the
+    // character: the cached one the adapter was trained on, whatever settings made it.
+    let cached = cache
+        .exists()
+        .then(|| faceanim_files::read_bytes(cache).ok())
+        .flatten()
+        .and_then(|bytes| Dataset::from_bytes(&bytes).ok())
+        .filter(|d| d.fingerprint == faceanim_adapt::Fingerprint::of(character));
+    let dataset = match cached {
+        Some(d) => d,
+        None => dataset(character, options, cache, false)?.0,
+    };
+    let train_options = TrainOptions {
+        architecture: adapter.architecture,
+        seed: args.seed,
+        ..TrainOptions::default()
+    };
+    let progress = bar(40, "fine-tuning epoch");
+    let never = AtomicBool::new(false);
+    let report = |epoch: usize, _| progress.set_position(epoch as u64);
+    let (tuned, outcome) = faceanim_adapt::finetune(
+        &adapter,
+        &dataset,
+        &corrections,
+        &train_options,
+        Control {
+            progress: &report,
+            cancel: &never,
+        },
+    )?;
+    progress.finish_and_clear();
+    faceanim_files::write_atomic(output, &tuned.to_bytes()?)?;
+    let seconds = started.elapsed().as_secs_f64();
+    eprintln!(
+        "wrote {}: MAE on the {} corrected frames {:.4} → {:.4}; test MAE {:.4} → {:.4}",
+        output.display(),
+        corrections.len(),
+        outcome.corrected_before,
+        outcome.corrected_after,
+        outcome.test_before,
+        outcome.test_after
+    );
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "mae_test": tuned.report.mae_test,
+                "mae_val": tuned.report.mae_val,
+                "samples": tuned.report.samples,
+                "seconds": seconds,
+                "corrected_frames": corrections.len(),
+                "mae_corrected_before": outcome.corrected_before,
+                "mae_corrected_after": outcome.corrected_after,
+                "mae_test_before": outcome.test_before,
+            })
+        );
+    }
+    Ok(())
+}
+
+/// MAE of an existing adapter on renders of `character` (another identity of its rig, say).
+fn evaluate(
+    path: &Path,
+    character: &Character,
+    options: &DatasetOptions,
+    cache: &Path,
+    fresh: bool,
+) -> anyhow::Result<()> {
+    let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(path)?)
+        .with_context(|| format!("reading the adapter {}", path.display()))?;
+    if adapter.check(character)? == faceanim_adapt::Fit::OtherShape {
+        eprintln!(
+            "{} was trained on another shape of this rig: measuring how well it transfers",
+            path.display()
+        );
+    }
+    let (dataset, _) = dataset(character, options, cache, fresh)?;
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for (expression, target) in dataset.expressions.iter().zip(&dataset.targets) {
+        for (p, t) in adapter.predict(expression).iter().zip(target) {
+            sum += f64::from((p - t).abs());
+            count += 1;
+        }
+    }
+    let mae = sum / count.max(1) as f64;
+    eprintln!(
+        "{} on {} renders of {}: MAE {mae:.4}",
+        path.display(),
+        dataset.len(),
+        character.name()
+    );
+    println!(
+        "{}",
+        serde_json::json!({ "mae": mae, "samples": dataset.len() })
+    );
+    Ok(())
+}

@@ -1,0 +1,177 @@
+//! `faceanim session`: the human in the loop on the command line — show a session, correct a
+//! blendshape on a frame, add or remove keyframes, apply or clear the preference, estimate
+//! again with a fine-tuned adapter, and export the result. Every edit saves the file
+//! atomically.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use faceanim_adapt::{Adapter, Session};
+
+/// What to do with a session.
+#[derive(Debug, clap::Subcommand)]
+pub enum SessionAction {
+    /// Frames, keyframes, corrections and preference (JSON with --json).
+    Show {
+        /// Machine-readable JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Set blendshapes on a frame: `correct 12 jawOpen=0.8 mouthSmileLeft=0.3`.
+    Correct {
+        /// The frame (from 0).
+        frame: usize,
+        /// NAME=VALUE pairs, values in 0..1.
+        #[arg(required = true)]
+        values: Vec<String>,
+    },
+    /// Remove a frame's corrections (one blendshape's with NAME).
+    Uncorrect {
+        /// The frame (from 0).
+        frame: usize,
+        /// Only this blendshape.
+        name: Option<String>,
+    },
+    /// Make a frame a keyframe.
+    AddKeyframe {
+        /// The frame (from 0).
+        frame: usize,
+    },
+    /// Stop a frame being a keyframe.
+    RemoveKeyframe {
+        /// The frame (from 0).
+        frame: usize,
+    },
+    /// Add each blendshape's mean correction to every other frame (clamped to 0..1).
+    ApplyPreference,
+    /// Take the preference off again.
+    ClearPreference,
+    /// Estimate every frame again with an adapter (after `faceanim adapt --finetune`).
+    Reestimate {
+        /// The adapter.
+        #[arg(long)]
+        adapter: PathBuf,
+    },
+    /// Write the animation: .json clip, .glb (needs --character), .csv Live Link Face,
+    /// .byoc.csv the seed's CSV; repeatable.
+    Export {
+        /// Output files.
+        #[arg(short, long, required = true)]
+        output: Vec<PathBuf>,
+        /// The character, for .glb.
+        #[arg(long)]
+        character: Option<PathBuf>,
+    },
+}
+
+fn load(path: &Path) -> anyhow::Result<Session> {
+    Session::from_json(&faceanim_files::read_bytes(path)?)
+        .with_context(|| format!("reading the session {}", path.display()))
+}
+
+fn save(path: &Path, session: &Session) -> anyhow::Result<()> {
+    faceanim_files::write_atomic(path, session.to_json().as_bytes())?;
+    Ok(())
+}
+
+pub fn run(path: &Path, action: SessionAction) -> anyhow::Result<()> {
+    let mut session = load(path)?;
+    let edit = |e: faceanim_adapt::AdaptError| anyhow::anyhow!("{}: {e}", path.display());
+    match action {
+        SessionAction::Show { json } => {
+            let corrections: usize = session.corrections.values().map(|c| c.len()).sum();
+            let summary = serde_json::json!({
+                "source": session.source,
+                "character": session.character,
+                "frames": session.frames.len(),
+                "fps": session.fps,
+                "blendshapes": session.blendshapes,
+                "keyframes": session.keyframes(),
+                "corrections": session.corrections,
+                "corrected_values": corrections,
+                "preference": session.preference,
+            });
+            if json {
+                println!("{summary}");
+            } else {
+                println!(
+                    "{}: {} frames at {} fps of {}, for {} ({} blendshapes)",
+                    path.display(),
+                    session.frames.len(),
+                    session.fps,
+                    session.source,
+                    session.character,
+                    session.blendshapes.len()
+                );
+                println!("keyframes: {:?}", session.keyframes());
+                for (frame, values) in &session.corrections {
+                    let list: Vec<String> =
+                        values.iter().map(|(n, v)| format!("{n}={v:.3}")).collect();
+                    println!("frame {frame}: {}", list.join(" "));
+                }
+                println!(
+                    "preference: {}",
+                    if session.preference.is_some() {
+                        "applied"
+                    } else {
+                        "off"
+                    }
+                );
+            }
+            return Ok(());
+        }
+        SessionAction::Correct { frame, values } => {
+            for pair in values {
+                let (name, value) = pair.split_once('=').with_context(|| {
+                    format!("'{pair}': write NAME=VALUE, for example jawOpen=0.8")
+                })?;
+                let value: f32 = value
+                    .trim()
+                    .parse()
+                    .map_err(|_| anyhow::anyhow!("'{pair}': '{value}' is not a number"))?;
+                session.correct(frame, name.trim(), value).map_err(edit)?;
+            }
+        }
+        SessionAction::Uncorrect { frame, name } => {
+            session.uncorrect(frame, name.as_deref()).map_err(edit)?;
+        }
+        SessionAction::AddKeyframe { frame } => session.add_keyframe(frame).map_err(edit)?,
+        SessionAction::RemoveKeyframe { frame } => session.remove_keyframe(frame).map_err(edit)?,
+        SessionAction::ApplyPreference => session.apply_preference(),
+        SessionAction::ClearPreference => session.clear_preference(),
+        SessionAction::Reestimate { adapter } => {
+            let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(&adapter)?)
+                .with_context(|| format!("reading the adapter {}", adapter.display()))?;
+            session.reestimate(&adapter).map_err(edit)?;
+        }
+        SessionAction::Export { output, character } => {
+            let formats = crate::track::formats_of(&output)?;
+            let character = crate::load_or_default(character.as_deref())?.character;
+            let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
+            if formats.contains(&crate::track::Format::Glb) {
+                anyhow::ensure!(
+                    names == session.blendshapes,
+                    "the session is for {} ({} blendshapes); give that character with --character for .glb",
+                    session.character,
+                    session.blendshapes.len()
+                );
+            }
+            let stem = path
+                .file_stem()
+                .map_or_else(|| "session".into(), |s| s.to_string_lossy().into_owned());
+            crate::track::write_outputs(
+                &output,
+                &formats,
+                &character,
+                &session.clip(),
+                None,
+                &session,
+                &stem,
+            )?;
+            return Ok(());
+        }
+    }
+    save(path, &session)?;
+    eprintln!("saved {}", path.display());
+    Ok(())
+}
