@@ -160,6 +160,19 @@ impl Adapter {
         out
     }
 
+    /// Mean absolute error over every sample of `dataset` (outputs against rendered weights).
+    #[must_use]
+    pub fn mean_absolute_error(&self, dataset: &crate::Dataset) -> f32 {
+        let (mut sum, mut count) = (0.0f64, 0usize);
+        for (expression, target) in dataset.expressions.iter().zip(&dataset.targets) {
+            for (p, t) in self.predict(expression).iter().zip(target) {
+                sum += f64::from((p - t).abs());
+                count += 1;
+            }
+        }
+        (sum / count.max(1) as f64) as f32
+    }
+
     /// Whether this adapter can drive `character`: the same blendshape names in the same
     /// order and the same mesh.
     ///

@@ -25,19 +25,6 @@ fn dataset(character: &Character, models: &FaceModels, samples: usize, seed: u64
     Dataset::generate(character, models, &camera, &options, Control::silent()).unwrap()
 }
 
-/// MAE of `adapter` over every sample of `dataset`.
-fn mae(adapter: &Adapter, dataset: &Dataset) -> f32 {
-    let mut sum = 0.0;
-    let mut count = 0;
-    for (expression, target) in dataset.expressions.iter().zip(&dataset.targets) {
-        for (p, t) in adapter.predict(expression).iter().zip(target) {
-            sum += (p - t).abs();
-            count += 1;
-        }
-    }
-    sum / count as f32
-}
-
 #[test]
 fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
     let models = FaceModels::load().unwrap();
@@ -118,7 +105,7 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
     let id7 = faceanim_testdata::ict_id7();
     assert_eq!(adapter.check(id7).unwrap(), Fit::OtherShape);
     let id7_data = dataset(id7, &models, 300, 7);
-    let id7_mae = mae(&adapter, &id7_data);
+    let id7_mae = adapter.mean_absolute_error(&id7_data);
     eprintln!("ict-face-id7 with ict-face's adapter: MAE {id7_mae:.4}");
     assert!(id7_mae < 0.1, "id7 MAE {id7_mae}");
 

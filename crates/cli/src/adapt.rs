@@ -63,6 +63,23 @@ fn bar(total: u64, what: &str) -> indicatif::ProgressBar {
     bar
 }
 
+/// Runs `work` with a progress bar of `total` steps; the command line never cancels.
+fn with_bar<T>(
+    total: usize,
+    what: &str,
+    work: impl FnOnce(Control<'_>) -> Result<T, faceanim_adapt::AdaptError>,
+) -> anyhow::Result<T> {
+    let progress = bar(total as u64, what);
+    let never = AtomicBool::new(false);
+    let report = |done: usize, _total: usize| progress.set_position(done as u64);
+    let result = work(Control {
+        progress: &report,
+        cancel: &never,
+    })?;
+    progress.finish_and_clear();
+    Ok(result)
+}
+
 fn parse_exclusive(rules: &[String]) -> anyhow::Result<Vec<(String, String)>> {
     rules
         .iter()
@@ -118,20 +135,9 @@ fn dataset(
             character.name()
         );
     }
-    let progress = bar(options.samples as u64, "rendering");
-    let never = AtomicBool::new(false);
-    let report = |done: usize, _total: usize| progress.set_position(done as u64);
-    let dataset = Dataset::generate(
-        character,
-        &models,
-        &camera,
-        options,
-        Control {
-            progress: &report,
-            cancel: &never,
-        },
-    )?;
-    progress.finish_and_clear();
+    let dataset = with_bar(options.samples, "rendering", |control| {
+        Dataset::generate(character, &models, &camera, options, control)
+    })?;
     let dropped = options.samples - dataset.len();
     if dropped > 0 {
         eprintln!("{dropped} renders gave degenerate landmarks and were left out");
@@ -141,19 +147,9 @@ fn dataset(
 }
 
 fn train_with_bar(dataset: &Dataset, options: &TrainOptions) -> anyhow::Result<Adapter> {
-    let progress = bar(options.max_epochs as u64, "training epoch");
-    let never = AtomicBool::new(false);
-    let report = |epoch: usize, _| progress.set_position(epoch as u64);
-    let adapter = faceanim_adapt::train(
-        dataset,
-        options,
-        Control {
-            progress: &report,
-            cancel: &never,
-        },
-    )?;
-    progress.finish_and_clear();
-    Ok(adapter)
+    with_bar(options.max_epochs, "training epoch", |control| {
+        faceanim_adapt::train(dataset, options, control)
+    })
 }
 
 pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
@@ -386,20 +382,9 @@ fn finetune(
         seed: args.seed,
         ..TrainOptions::default()
     };
-    let progress = bar(40, "fine-tuning epoch");
-    let never = AtomicBool::new(false);
-    let report = |epoch: usize, _| progress.set_position(epoch as u64);
-    let (tuned, outcome) = faceanim_adapt::finetune(
-        &adapter,
-        &dataset,
-        &corrections,
-        &train_options,
-        Control {
-            progress: &report,
-            cancel: &never,
-        },
-    )?;
-    progress.finish_and_clear();
+    let (tuned, outcome) = with_bar(40, "fine-tuning epoch", |control| {
+        faceanim_adapt::finetune(&adapter, &dataset, &corrections, &train_options, control)
+    })?;
     faceanim_files::write_atomic(output, &tuned.to_bytes()?)?;
     let seconds = started.elapsed().as_secs_f64();
     eprintln!(
@@ -446,14 +431,7 @@ fn evaluate(
         );
     }
     let (dataset, _) = dataset(character, options, cache, fresh)?;
-    let (mut sum, mut count) = (0.0f64, 0usize);
-    for (expression, target) in dataset.expressions.iter().zip(&dataset.targets) {
-        for (p, t) in adapter.predict(expression).iter().zip(target) {
-            sum += f64::from((p - t).abs());
-            count += 1;
-        }
-    }
-    let mae = sum / count.max(1) as f64;
+    let mae = adapter.mean_absolute_error(&dataset);
     eprintln!(
         "{} on {} renders of {}: MAE {mae:.4}",
         path.display(),
