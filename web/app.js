@@ -70,6 +70,17 @@ const studio = {
   lastStrokeMs: 0,
   /** @type {any} The candidate targets last shown (what a stroke starting there can reach). */
   candidates: null,
+  /** Playback direction: 1 forwards, -1 backwards. */
+  direction: 1,
+  /** Frames beyond the sketch's own (a captured take) that the timeline and playback cover. */
+  extraLastFrame: 0,
+  /** @type {((frame: number) => number[]|null)|null} Weights of the character's own targets
+   * added under the sketch at a frame (capture mode's take or live face), or null. */
+  layer: null,
+  /** @type {((frame: number) => void)[]} Called after every frame change. */
+  onFrame: [],
+  /** @type {(() => void)[]} Called after every render of the viewport. */
+  onRender: [],
   /** The point of the face under a screen position (CSS pixels), or null. */
   hit(x, y) {
     const p = hitFace(rayFrom({ clientX: x, clientY: y }));
@@ -82,12 +93,14 @@ const studio = {
     return [rect.left + (v.x + 1) / 2 * rect.width, rect.top + (1 - v.y) / 2 * rect.height];
   },
 };
-// Scripts and tests drive the studio through this object and the HTTP API.
+// Scripts and tests drive the studio through this object and the HTTP API; capture.js builds
+// capture mode on the same object.
 window.studio = studio;
 
 function resize() {
   const { clientWidth: w, clientHeight: h } = viewport;
   renderer.setSize(w, h, false);
+  studio.invalidate?.();
   camera.aspect = w / Math.max(h, 1);
   camera.updateProjectionMatrix();
 }
@@ -103,6 +116,7 @@ function frameCamera() {
   camera.position.copy(target).add(new THREE.Vector3(0, 0, distance));
   controls.target.copy(target);
   controls.update();
+  studio.invalidate?.();
 }
 
 const loader = new GLTFLoader();
@@ -121,7 +135,7 @@ async function loadBaked() {
   const root = gltf.scene;
   root.traverse((o) => {
     if (!o.isMesh) return;
-    if (FAST) { const m = o.material; o.material = new THREE.MeshLambertMaterial({ color: m.color, map: m.map, vertexColors: m.vertexColors }); m.dispose(); }
+    if (FAST) { const m = o.material; o.material = new THREE.MeshLambertMaterial({ color: m.color, map: m.map, vertexColors: m.vertexColors }); m.dispose(); blendOnCpu(o); }
     o.material.side = THREE.DoubleSide;
     studio.meshes.push(o);
   });
@@ -139,17 +153,103 @@ async function loadBaked() {
   setFrame(studio.frame);
 }
 
+/** The last frame with animation: the sketch's or the captured take's. */
+function lastFrame() {
+  return Math.max(0, Math.ceil(studio.state ? studio.state.last_frame : 0), studio.extraLastFrame);
+}
+
+/** Without a GPU, morphing 50 targets per vertex in the (software) vertex shader costs most of
+ * a frame. `?fast` moves it to the CPU instead: each target is kept as the sparse list of the
+ * vertices it moves, and only targets with weight are added, once per drawn frame. The mesh
+ * keeps its `morphTargetInfluences` (the mixer and the layers write them as before). */
+function blendOnCpu(mesh) {
+  const geometry = mesh.geometry;
+  const morphs = geometry.morphAttributes.position;
+  if (!morphs || !morphs.length || !geometry.morphTargetsRelative) return;
+  const sparse = (attribute) => {
+    if (!attribute) return null;
+    const indices = [], values = [];
+    for (let v = 0; v < attribute.count; v++) {
+      const x = attribute.getX(v), y = attribute.getY(v), z = attribute.getZ(v);
+      if (x !== 0 || y !== 0 || z !== 0) { indices.push(v); values.push(x, y, z); }
+    }
+    return { indices: Int32Array.from(indices), values: Float32Array.from(values) };
+  };
+  const normals = geometry.morphAttributes.normal || [];
+  mesh.userData.cpuMorph = {
+    basePosition: Float32Array.from(geometry.attributes.position.array),
+    baseNormal: geometry.attributes.normal ? Float32Array.from(geometry.attributes.normal.array) : null,
+    targets: morphs.map((m, i) => ({ position: sparse(m), normal: sparse(normals[i]) })),
+    shown: /** @type {number[]|null} */ (null),
+  };
+  geometry.morphAttributes = {};
+  mesh.frustumCulled = false;
+}
+
+/** Applies the CPU blend of `mesh` when its weights changed since it was last drawn. */
+function blendNow(mesh) {
+  const cpu = mesh.userData.cpuMorph;
+  const weights = mesh.morphTargetInfluences;
+  if (!cpu || !weights) return;
+  if (cpu.shown && cpu.shown.length === weights.length && cpu.shown.every((w, i) => w === weights[i])) return;
+  cpu.shown = Array.from(weights);
+  const add = (out, base, kind) => {
+    out.set(base);
+    cpu.targets.forEach((target, t) => {
+      const w = weights[t], part = target[kind];
+      if (!part || Math.abs(w) < 1e-4) return;
+      const { indices, values } = part;
+      for (let k = 0; k < indices.length; k++) {
+        const o = indices[k] * 3;
+        out[o] += w * values[3 * k]; out[o + 1] += w * values[3 * k + 1]; out[o + 2] += w * values[3 * k + 2];
+      }
+    });
+  };
+  const position = mesh.geometry.attributes.position;
+  add(position.array, cpu.basePosition, 'position');
+  position.needsUpdate = true;
+  const normal = mesh.geometry.attributes.normal;
+  if (normal && cpu.baseNormal) { add(normal.array, cpu.baseNormal, 'normal'); normal.needsUpdate = true; }
+}
+
 function setFrame(frame) {
-  const last = Math.max(0, Math.ceil(studio.state ? studio.state.last_frame : 0));
-  studio.frame = Math.min(Math.max(0, frame), Math.max(last, 0));
+  const last = lastFrame();
+  studio.frame = Math.min(Math.max(0, frame), last);
   const fps = studio.state ? studio.state.fps : 30;
+  // The mixer writes a track only when its value changes, so the sketch's own values go back
+  // before it runs, and are kept after it for the layer to add to.
+  for (const mesh of studio.meshes) { if (mesh.userData.sketch && mesh.morphTargetInfluences) mesh.morphTargetInfluences.splice(0, Infinity, ...mesh.userData.sketch); }
   for (const { mixer } of studio.actions || []) { mixer.setTime(studio.frame / fps); }
+  const sketchPlays = (studio.actions || []).length > 0;
+  for (const mesh of studio.meshes) {
+    const influences = mesh.morphTargetInfluences;
+    if (influences) mesh.userData.sketch = sketchPlays ? influences.slice() : influences.map(() => 0);
+  }
+  applyLayer();
   $('frame-label').textContent = `frame ${studio.frame.toFixed(0)} / ${last}`;
   drawPlayhead();
+  for (const f of studio.onFrame) f(studio.frame);
+}
+
+/** Shows the sketch's values at the current frame (kept by setFrame) plus the layer's weights
+ * (a captured take, the live face) on the character's own targets. */
+function applyLayer() {
+  studio.invalidate?.();
+  const weights = studio.layer ? studio.layer(studio.frame) : null;
+  for (const mesh of studio.meshes) {
+    const influences = mesh.morphTargetInfluences;
+    const sketch = mesh.userData.sketch;
+    if (!influences || !sketch) continue;
+    for (let i = 0; i < influences.length; i++) {
+      const w = weights && i < weights.length ? weights[i] : 0;
+      influences[i] = Math.min(1, Math.max(0, sketch[i] + w));
+    }
+  }
 }
 
 /** Empties an overlay group, freeing its GPU buffers (overlays are rebuilt on every change). */
 function clearGroup(group) {
+  studio.invalidate?.();
   for (const child of group.children) {
     child.geometry?.dispose();
     child.material?.dispose();
@@ -211,6 +311,7 @@ function showCandidates(found, faint) {
 /** @type {THREE.Mesh|null} */
 let ghost = null;
 function showGhost(name) {
+  studio.invalidate?.();
   const base = studio.meshes[0];
   const index = name && base && base.morphTargetDictionary ? base.morphTargetDictionary[name] : undefined;
   if (index === undefined) { if (ghost) ghost.visible = false; return; }
@@ -251,6 +352,7 @@ function rayFrom(event) {
   return raycaster;
 }
 function hitFace(ray) {
+  if (FAST) for (const mesh of studio.meshes) blendNow(mesh);
   const hits = ray.intersectObjects(studio.meshes, false);
   return hits.length ? hits[0].point : null;
 }
@@ -448,7 +550,7 @@ function drawPlayhead() {
 function drawTimeline() {
   const state = studio.state;
   timeline.innerHTML = '';
-  const last = Math.ceil(state.last_frame) + 30;
+  const last = lastFrame() + 30;
   const width = frameX(last) + 20;
   const ruler = document.createElement('div');
   ruler.className = 'ruler';
@@ -561,7 +663,10 @@ const commands = {
   save: async () => { try { const r = await api('POST', 'api/project/save'); showError(''); $('status').textContent = `Saved ${r.saved}`; } catch (e) { showError(String(e.message || e)); } },
   reopen: () => run('POST', 'api/project/reopen'),
   new: () => run('POST', 'api/project/new'),
-  play: () => { studio.playing = !studio.playing; $('play').textContent = studio.playing ? 'Pause' : 'Play'; studio.lastFrameTime = performance.now(); },
+  play: () => { studio.direction = 1; studio.playing = !studio.playing; $('play').textContent = studio.playing ? 'Pause' : 'Play'; studio.lastFrameTime = performance.now(); },
+  playBackwards: () => { studio.direction = -1; studio.playing = true; $('play').textContent = 'Pause'; studio.lastFrameTime = performance.now(); },
+  pause: () => { studio.playing = false; $('play').textContent = 'Play'; },
+  step: (by) => { commands.pause(); setFrame(Math.round(studio.frame) + by); },
 };
 $('undo').onclick = commands.undo; $('redo').onclick = commands.redo; $('delete').onclick = commands.delete;
 $('save').onclick = commands.save; $('reopen').onclick = commands.reopen; $('new').onclick = commands.new;
@@ -600,26 +705,47 @@ window.addEventListener('keydown', (e) => {
   else if (ctrl && e.key.toLowerCase() === 's') { e.preventDefault(); commands.save(); }
   else if (e.key === 'Delete' || e.key === 'Backspace') commands.delete();
   else if (e.key === ' ') { e.preventDefault(); commands.play(); }
-  else if (e.key === 'ArrowRight') setFrame(studio.frame + 1);
-  else if (e.key === 'ArrowLeft') setFrame(studio.frame - 1);
+  else if (e.key === 'ArrowRight') commands.step(1);
+  else if (e.key === 'ArrowLeft') commands.step(-1);
+  else if (e.key === 'j') commands.playBackwards();
+  else if (e.key === 'k') commands.pause();
+  else if (e.key === 'l') { commands.pause(); commands.play(); }
+  else if (e.key === 'Home') setFrame(0);
+  else if (e.key === 'End') setFrame(lastFrame());
   else if (e.key === '?') $('help').hidden = !$('help').hidden;
   else if (e.key === 'Escape') $('help').hidden = true;
 });
 
 // ---------- loop ----------
+// Draw only when something changed: an idle studio leaves the CPU to capture and training
+// (and a laptop's battery alone). Pointer input and playback always redraw.
+let dirty = true;
+studio.invalidate = () => { dirty = true; };
+controls.addEventListener('change', studio.invalidate);
+for (const type of ['pointerdown', 'pointermove', 'pointerup', 'wheel', 'keydown']) viewport.addEventListener(type, studio.invalidate, { passive: true });
+window.addEventListener('keydown', studio.invalidate);
 renderer.setAnimationLoop((now) => {
   if (studio.playing && studio.state) {
     const fps = studio.state.fps;
-    const last = Math.max(1, studio.state.last_frame);
-    let f = studio.frame + (now - studio.lastFrameTime) / 1000 * fps;
-    if (f > last) { if (/** @type {HTMLInputElement} */ ($('loop')).checked) f = f % last; else { f = last; commands.play(); } }
+    const last = Math.max(1, lastFrame());
+    const loop = /** @type {HTMLInputElement} */ ($('loop')).checked;
+    let f = studio.frame + studio.direction * (now - studio.lastFrameTime) / 1000 * fps;
+    if (f > last) { if (loop) f = f % last; else { f = last; commands.pause(); } }
+    if (f < 0) { if (loop) f = last + (f % last); else { f = 0; commands.pause(); } }
     setFrame(f);
   }
   studio.lastFrameTime = now;
+  if (!dirty && !studio.playing) return;
+  dirty = false;
+  if (FAST) for (const mesh of studio.meshes) blendNow(mesh);
   renderer.render(scene, camera);
+  for (const f of studio.onRender) f();
   studio.drawCalls = renderer.info.render.calls;
   studio.frameCount++;
 });
+
+// What capture.js (capture mode) uses of the sketch page.
+Object.assign(studio, { api, showError, setFrame, applyLayer, lastFrame, run, commands, drawTimeline });
 
 // ---------- start ----------
 (async () => {

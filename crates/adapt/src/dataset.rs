@@ -273,6 +273,17 @@ impl Dataset {
         Ok(dataset)
     }
 
+    /// Whether this set was rendered from `character` with `options`, so a cached copy can
+    /// stand in for rendering it again.
+    #[must_use]
+    pub fn made_with(&self, character: &Character, options: &DatasetOptions) -> bool {
+        self.fingerprint == Fingerprint::of(character)
+            && self.blendshapes.len() == character.blendshapes().len()
+            && self.seed == options.seed
+            && self.drawn == options.samples
+            && self.exclusive == options.exclusive
+    }
+
     /// Number of samples kept.
     #[must_use]
     pub fn len(&self) -> usize {

@@ -31,6 +31,30 @@ pub use fingerprint::Fingerprint;
 pub use session::Session;
 pub use train::{Correction, FinetuneReport, TrainOptions, finetune, train};
 
+use std::path::{Path, PathBuf};
+
+/// Where a character's adapter lives by default: `NAME.adapter.safetensors` in `folder` (the
+/// character file's folder), or in the current folder.
+#[must_use]
+pub fn default_adapter_path(folder: Option<&Path>, character_name: &str) -> PathBuf {
+    let file = format!("{character_name}.adapter.safetensors");
+    match folder {
+        Some(dir) => dir.join(file),
+        None => PathBuf::from(file),
+    }
+}
+
+/// Where the training set behind `adapter` is cached: `NAME.dataset.safetensors` beside it.
+#[must_use]
+pub fn dataset_cache_path(adapter: &Path) -> PathBuf {
+    let name = adapter
+        .file_name()
+        .map_or_else(|| "adapter".into(), |n| n.to_string_lossy().into_owned());
+    let stem = name.strip_suffix(".safetensors").unwrap_or(&name);
+    let stem = stem.strip_suffix(".adapter").unwrap_or(stem);
+    adapter.with_file_name(format!("{stem}.dataset.safetensors"))
+}
+
 /// Why adaptation failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

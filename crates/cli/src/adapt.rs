@@ -34,21 +34,7 @@ pub struct AdaptArgs {
 
 /// The adapter file next to a character: `NAME.adapter.safetensors`.
 pub fn default_adapter_path(character: Option<&Path>, name: &str) -> PathBuf {
-    let file = format!("{name}.adapter.safetensors");
-    match character.and_then(Path::parent) {
-        Some(dir) => dir.join(file),
-        None => PathBuf::from(file),
-    }
-}
-
-/// The training set's cache beside the adapter.
-fn dataset_path(adapter: &Path) -> PathBuf {
-    let name = adapter
-        .file_name()
-        .map_or_else(|| "adapter".into(), |n| n.to_string_lossy().into_owned());
-    let stem = name.strip_suffix(".safetensors").unwrap_or(&name);
-    let stem = stem.strip_suffix(".adapter").unwrap_or(stem);
-    adapter.with_file_name(format!("{stem}.dataset.safetensors"))
+    faceanim_adapt::default_adapter_path(character.and_then(Path::parent), name)
 }
 
 fn bar(total: u64, what: &str) -> indicatif::ProgressBar {
@@ -103,13 +89,7 @@ fn dataset(
     if !fresh && cache.exists() {
         let bytes = faceanim_files::read_bytes(cache)?;
         match Dataset::from_bytes(&bytes) {
-            Ok(cached)
-                if cached.fingerprint == faceanim_adapt::Fingerprint::of(character)
-                    && cached.blendshapes.len() == character.blendshapes().len()
-                    && cached.seed == options.seed
-                    && cached.drawn == options.samples
-                    && cached.exclusive == options.exclusive =>
-            {
+            Ok(cached) if cached.made_with(character, options) => {
                 eprintln!(
                     "using the training set cached in {} ({} samples)",
                     cache.display(),
@@ -172,7 +152,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
     let cache = args
         .dataset
         .clone()
-        .unwrap_or_else(|| dataset_path(&output));
+        .unwrap_or_else(|| faceanim_adapt::dataset_cache_path(&output));
     let user_rules = parse_exclusive(&args.exclusive)?;
     let exclusive = exclusive_pairs(&character, &user_rules)?;
     let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();

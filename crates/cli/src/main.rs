@@ -32,11 +32,14 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// The studio: a local web app to sketch facial animation on a character (the main job).
+    /// The studio: a local web app to sketch facial animation on a character, or drive it from
+    /// a face video, photos or the webcam (the main job).
     ///
     /// Serves the page on http://127.0.0.1:PORT (local connections only) and prints the URL.
     /// The project is saved to --project (default: CHARACTER-NAME.faceanim.json in the current
-    /// folder); every edit is also autosaved beside it.
+    /// folder); every edit is also autosaved beside it. Capture mode uses the character's
+    /// adapter (--adapter, default NAME.adapter.safetensors beside the character) when there is
+    /// one, and trains it there from the page.
     ///
     /// Example: faceanim studio head.glb --open
     Studio {
@@ -51,6 +54,10 @@ enum Command {
         /// The project file (strokes JSON) to open and save.
         #[arg(long)]
         project: Option<PathBuf>,
+        /// The character's adapter for capture mode: read if it exists, written when trained
+        /// from the page.
+        #[arg(long)]
+        adapter: Option<PathBuf>,
     },
     /// Describe a character: vertices, triangles, blendshapes, symmetry pairs, ARKit coverage.
     ///
@@ -316,7 +323,8 @@ fn run(command: Command) -> anyhow::Result<()> {
             port,
             open,
             project,
-        } => studio(character.as_deref(), port, open, project),
+            adapter,
+        } => studio(character.as_deref(), port, open, project, adapter),
         Command::Info { character, json } => {
             let imported = load_or_default(character.as_deref())?;
             let report = info::Report::of(&imported.character);
@@ -596,7 +604,9 @@ fn studio(
     port: u16,
     open: bool,
     project: Option<PathBuf>,
+    adapter: Option<PathBuf>,
 ) -> anyhow::Result<()> {
+    let character_file = character;
     let character = load_or_default(character)?.character;
     let project_path = match project {
         Some(path) => path,
@@ -607,6 +617,15 @@ fn studio(
                 safe_file_name(character.name())
             )),
     };
+    // The adapter lives beside the character file; the built-in head's beside the project.
+    let adapter_path = adapter.unwrap_or_else(|| {
+        faceanim_adapt::default_adapter_path(
+            character_file
+                .and_then(std::path::Path::parent)
+                .or_else(|| project_path.parent()),
+            character.name(),
+        )
+    });
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -632,6 +651,7 @@ fn studio(
         }
         faceanim_studio::serve(
             faceanim_studio::Config {
+                adapter_path,
                 character,
                 project_path,
             },

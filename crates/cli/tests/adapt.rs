@@ -29,32 +29,8 @@ fn jaw_curve(i: usize) -> f32 {
 
 /// 24 frames at 24 fps of the ICT head rendered with `jaw_curve`, as x264 would deliver them.
 fn make_video(path: &Path) {
-    let character = faceanim_testdata::ict();
-    let camera = faceanim_render::Camera::front(&character.bounds(), 0.75);
-    let appearance = faceanim_render::Appearance::of(character);
-    let jaw = character.find_blendshape("jawOpen").unwrap().index();
-    let frames: Vec<Vec<u8>> = (0..24)
-        .map(|i| {
-            let mut weights = vec![0.0; character.blendshapes().len()];
-            weights[jaw] = jaw_curve(i);
-            faceanim_render::render(
-                character,
-                &character.pose(&weights),
-                &camera,
-                &appearance,
-                320,
-            )
-            .rgb
-        })
-        .collect();
-    let codec = ["-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "12"];
-    faceanim_testdata::encode_video(
-        path,
-        (320, 320),
-        24,
-        &codec,
-        frames.iter().map(Vec::as_slice),
-    );
+    let jaw: Vec<f32> = (0..24).map(jaw_curve).collect();
+    support::encode_h264(path, 320, 24, &support::ict_jaw_frames(&jaw, 320));
 }
 
 fn read_json(path: &Path) -> serde_json::Value {

@@ -15,7 +15,7 @@ use std::io::{BufRead as _, BufReader, Read as _, Write as _};
 use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};
 
-use support::{output_dir, repo};
+use support::{assert_valid_gltf, output_dir, repo};
 
 /// A running studio, stopped when dropped.
 struct Studio {
@@ -31,6 +31,10 @@ impl Drop for Studio {
 }
 
 fn start(project: &std::path::Path) -> Studio {
+    start_with(project, &[])
+}
+
+fn start_with(project: &std::path::Path, more: &[&std::ffi::OsStr]) -> Studio {
     let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
         .args([
             "studio",
@@ -42,6 +46,7 @@ fn start(project: &std::path::Path) -> Studio {
             "--project",
         ])
         .arg(project)
+        .args(more)
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()
@@ -177,4 +182,147 @@ fn an_animator_session_in_a_real_browser() {
     assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
     // The project was saved where the studio was pointed, and nowhere else.
     assert!(dir.path().join("session.faceanim.json").exists());
+}
+
+#[test]
+fn capture_mode_refuses_bad_input_with_a_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let studio = start(&dir.path().join("p.json"));
+    let port = studio.port;
+    let json = [("Content-Type", "application/json")];
+    // Nothing open yet: edits say what to do first.
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/correct",
+        &json,
+        br#"{"frame": 0, "name": "jawOpen", "value": 0.5}"#,
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("open a video"), "{body}");
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/open",
+        &json,
+        br#"{"path": "/no/such/video.mp4"}"#,
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("/no/such/video.mp4"), "{body}");
+    // A file that is no video: the job ends with ffmpeg's reason, naming the upload.
+    let (status, _) = request(
+        port,
+        "POST",
+        "/api/capture/upload",
+        &[("x-filename", "notes.mp4")],
+        b"this is not a video",
+    );
+    assert_eq!(status, 200);
+    let mut job = serde_json::Value::Null;
+    for _ in 0..100 {
+        let (_, body) = request(port, "GET", "/api/capture/state", &[], b"");
+        job = serde_json::from_str::<serde_json::Value>(&body).unwrap()["job"].clone();
+        if job["running"] == false {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    let error = job["error"].as_str().unwrap_or_default();
+    assert!(error.contains("notes.mp4"), "{job}");
+    // Live frames must be the size they claim.
+    let (_, body) = request(port, "POST", "/api/capture/live/start", &[], b"");
+    assert!(body.contains("\"live\""), "{body}");
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/live/frame",
+        &[("x-width", "4"), ("x-height", "4")],
+        &[0u8; 10],
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("4×4 RGBA"), "{body}");
+    let (status, body) = request(
+        port,
+        "PUT",
+        "/api/capture/filtering",
+        &json,
+        br#"{"keyframe_every": 0, "smoothing": null}"#,
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("keyframe_every"), "{body}");
+}
+
+/// The jawOpen of frame `i` of the capture test's video: shut, open to 0.8, shut, twice.
+fn jaw_curve(i: usize) -> f32 {
+    let t = i as f32 / 47.0;
+    0.8 * (2.0 * std::f32::consts::PI * t).sin().powi(2)
+}
+
+/// Capture mode as a newcomer uses it, in a real browser (`tools/capture-e2e.mjs`): upload a
+/// video of the ICT head with a known jawOpen curve, see the estimate follow it, correct one
+/// frame, apply the preference, export every format, train and fine-tune the adapter from the
+/// page (and cancel a training), then the webcam — Chromium's fake camera playing a rendered
+/// face that opens its mouth — in live mode, and a recorded take. Screenshots go to
+/// `test-output/capture/`.
+#[test]
+fn capture_mode_in_a_real_browser() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = output_dir("capture");
+    let video = dir.path().join("jaw.mp4");
+    let truth: Vec<f32> = (0..48).map(jaw_curve).collect();
+    support::encode_h264(&video, 320, 24, &support::ict_jaw_frames(&truth, 320));
+    // The webcam: shut for half a second, open for a second, looping (Chromium replays it).
+    let webcam: Vec<f32> = (0..45).map(|i| if i < 15 { 0.0 } else { 0.9 }).collect();
+    let y4m = dir.path().join("webcam.y4m");
+    let frames = support::ict_jaw_frames(&webcam, 480);
+    faceanim_testdata::encode_video(
+        &y4m,
+        (480, 480),
+        30,
+        &["-pix_fmt", "yuv420p"],
+        frames.iter().map(Vec::as_slice),
+    );
+    let adapter = dir.path().join("ict.adapter.safetensors");
+    let studio = start_with(
+        &dir.path().join("capture.faceanim.json"),
+        &["--adapter".as_ref(), adapter.as_os_str()],
+    );
+    let truth_json = serde_json::to_string(&truth).unwrap();
+    let run = Command::new("node")
+        .arg(repo().join("tools/capture-e2e.mjs"))
+        .arg(format!("http://127.0.0.1:{}/", studio.port))
+        .arg(&out)
+        .arg(&video)
+        .arg(&y4m)
+        .arg(&truth_json)
+        .output()
+        .expect("node");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    eprintln!("{stdout}");
+    assert!(
+        run.status.success(),
+        "{}\n{}",
+        stdout,
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let measured: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    assert!(
+        measured["live_max_jaw_open"].as_f64().unwrap() > 0.4,
+        "{measured}"
+    );
+    // The page's downloads are real files in the formats users open elsewhere.
+    let glb = out.join("download.glb");
+    assert_valid_gltf(&glb);
+    let clip: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("download.clip.json")).unwrap()).unwrap();
+    assert_eq!(clip["frames"].as_array().unwrap().len(), truth.len());
+    let csv = std::fs::read_to_string(out.join("download.csv")).unwrap();
+    assert!(
+        csv.starts_with("Timecode,BlendShapeCount,"),
+        "{}",
+        &csv[..80.min(csv.len())]
+    );
+    assert_eq!(csv.lines().count(), truth.len() + 1);
+    // The adapter trained from the page was saved where the studio was told.
+    assert!(adapter.exists());
 }

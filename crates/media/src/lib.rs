@@ -26,6 +26,66 @@ pub struct Image {
     pub rgb: Vec<u8>,
 }
 
+impl Image {
+    /// A copy no taller than `max_height` pixels (each output pixel the mean of the input
+    /// pixels it covers), for previews; the image itself when it is small enough.
+    #[must_use]
+    pub fn preview(&self, max_height: usize) -> Image {
+        if self.height <= max_height || max_height == 0 || self.width == 0 {
+            return self.clone();
+        }
+        let height = max_height;
+        let width = (self.width * height).div_ceil(self.height).max(1);
+        let mut rgb = vec![0u8; width * height * 3];
+        // Each output pixel averages the input block it covers (at least one pixel).
+        let span = |i: usize, out: usize, input: usize| {
+            let start = i * input / out;
+            (start, ((i + 1) * input / out).clamp(start + 1, input))
+        };
+        for y in 0..height {
+            let (y0, y1) = span(y, height, self.height);
+            for x in 0..width {
+                let (x0, x1) = span(x, width, self.width);
+                let mut sum = [0u32; 3];
+                for sy in y0..y1 {
+                    let row = &self.rgb[(sy * self.width + x0) * 3..(sy * self.width + x1) * 3];
+                    for pixel in row.chunks_exact(3) {
+                        for (s, &v) in sum.iter_mut().zip(pixel) {
+                            *s += u32::from(v);
+                        }
+                    }
+                }
+                let n = ((y1 - y0) * (x1 - x0)) as u32;
+                let d = (y * width + x) * 3;
+                for (out, s) in rgb[d..d + 3].iter_mut().zip(sum) {
+                    *out = (s / n) as u8;
+                }
+            }
+        }
+        Image { width, height, rgb }
+    }
+
+    /// The image as PNG bytes (fast compression: previews are made while capturing).
+    ///
+    /// # Errors
+    /// The encoder's message when the buffer does not match the size.
+    pub fn to_png(&self) -> Result<Vec<u8>, String> {
+        let mut out = Vec::new();
+        let width = u32::try_from(self.width).map_err(|e| e.to_string())?;
+        let height = u32::try_from(self.height).map_err(|e| e.to_string())?;
+        let mut encoder = png::Encoder::new(&mut out, width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::Fast);
+        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+        writer
+            .write_image_data(&self.rgb)
+            .map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())?;
+        Ok(out)
+    }
+}
+
 /// Why an input cannot be read. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

@@ -17,6 +17,7 @@ use serde::Deserialize;
 use serde_json::{Value, json};
 
 use crate::Studio;
+use crate::capture_api::Both;
 
 /// The page, embedded at build time so the binary needs nothing beside it.
 #[derive(rust_embed::Embed)]
@@ -54,7 +55,8 @@ fn json_body<T: serde::de::DeserializeOwned>(bytes: &[u8], what: &str) -> Result
     serde_json::from_slice(bytes).map_err(|e| bad(format!("{what}: {e}")))
 }
 
-pub fn router(shared: Shared, port: u16) -> Router {
+pub fn router(both: Both, port: u16) -> Router {
+    let shared = both.studio.clone();
     let api = Router::new()
         .route("/api/state", get(view))
         .route("/api/character", get(character_info))
@@ -81,10 +83,11 @@ pub fn router(shared: Shared, port: u16) -> Router {
     let upload = Router::new()
         .route("/api/character/upload", post(upload_character))
         .layer(DefaultBodyLimit::max(CHARACTER_LIMIT))
-        .with_state(shared);
+        .with_state(both.clone());
     Router::new()
         .merge(api)
         .merge(upload)
+        .merge(crate::capture_api::router(both))
         .fallback(get(page))
         .layer(middleware::from_fn(move |request, next| {
             only_local(port, request, next)
@@ -167,7 +170,7 @@ async fn anchors(State(shared): State<Shared>) -> axum::Json<Value> {
 }
 
 async fn upload_character(
-    State(shared): State<Shared>,
+    State(both): State<Both>,
     headers: HeaderMap,
     body: Bytes,
 ) -> Result<axum::Json<Value>, ApiError> {
@@ -185,8 +188,15 @@ async fn upload_character(
             .await
             .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
             .map_err(|e| bad(e.to_string()))?;
-    let mut studio = lock(&shared);
+    let mut studio = lock(&both.studio);
     studio.replace_character(imported.character);
+    // An uploaded character's adapter lives beside the project.
+    let adapter_path =
+        faceanim_adapt::default_adapter_path(studio.project_path.parent(), studio.character.name());
+    both.desk
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+        .character_changed(&studio.character, adapter_path);
     Ok(axum::Json(json!({
         "warnings": imported.warnings.iter().map(ToString::to_string).collect::<Vec<_>>(),
         "state": studio.view(),

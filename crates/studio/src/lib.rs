@@ -6,13 +6,19 @@
 //! project (the strokes file of DESIGN.md) as the single source of truth and rebuilds the
 //! sketch from it on each change, which takes milliseconds and makes undo/redo exact.
 //!
+//! Capture mode ([`capture`]) adds a face video, photos or the webcam as the animation's
+//! source, with seed 003's human-in-the-loop editing; its long jobs run on their own threads
+//! and report progress through the API.
+//!
 //! Safety: it listens on loopback only; requests whose `Host` or `Origin` is not the studio's
 //! own are refused (a web page elsewhere cannot drive it through DNS rebinding); request bodies
 //! are size-limited; it writes only the project file it was started with (and its autosave
-//! beside it) — exports are downloads the browser saves.
+//! beside it), the character's adapter and its cached training set — exports are downloads the browser saves.
 #![deny(missing_docs)]
 
 mod api;
+pub mod capture;
+mod capture_api;
 mod state;
 
 use std::net::SocketAddr;
@@ -30,6 +36,9 @@ pub struct Config {
     pub character: Character,
     /// Where the project is saved (and read from, if it exists).
     pub project_path: PathBuf,
+    /// Where the character's adapter is read from and trained into (capture mode);
+    /// characters uploaded later keep theirs beside the project file.
+    pub adapter_path: PathBuf,
 }
 
 /// Why the studio could not start.
@@ -73,9 +82,13 @@ pub async fn bind(port: u16) -> Result<(tokio::net::TcpListener, SocketAddr), St
 /// [`StudioError`] if the project cannot be opened or the server fails.
 pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<(), StudioError> {
     let address = listener.local_addr().map_err(StudioError::Serve)?;
+    let desk = capture::CaptureDesk::new(&config.character, config.adapter_path);
     let studio =
         Studio::open(config.character, config.project_path).map_err(StudioError::Project)?;
-    let shared = Arc::new(Mutex::new(studio));
-    let app = api::router(shared, address.port());
+    let both = capture_api::Both {
+        studio: Arc::new(Mutex::new(studio)),
+        desk: Arc::new(Mutex::new(desk)),
+    };
+    let app = api::router(both, address.port());
     axum::serve(listener, app).await.map_err(StudioError::Serve)
 }

@@ -2,6 +2,7 @@
 //! undo and redo stacks, and what the page is shown of it.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use faceanim_rig::Character;
 use faceanim_sketch::engine::Target;
@@ -17,8 +18,8 @@ const UNDO_DEPTH: usize = 500;
 /// A character and the animation being sketched on it.
 #[derive(Debug)]
 pub struct Studio {
-    /// The character.
-    pub character: Character,
+    /// The character (shared with capture jobs that outlive a request).
+    pub character: Arc<Character>,
     project: ProjectFile,
     undo: Vec<ProjectFile>,
     redo: Vec<ProjectFile>,
@@ -79,7 +80,7 @@ impl Studio {
             None => empty_project(),
         };
         Ok(Studio {
-            character,
+            character: Arc::new(character),
             project,
             undo: Vec::new(),
             redo: Vec::new(),
@@ -180,7 +181,7 @@ impl Studio {
 
     /// Switches to another character; the project starts empty, with nothing to undo.
     pub fn replace_character(&mut self, character: Character) {
-        self.character = character;
+        self.character = Arc::new(character);
         self.project = ProjectFile {
             fps: self.project.fps,
             settings: self.project.settings.clone(),

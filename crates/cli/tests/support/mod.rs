@@ -73,3 +73,38 @@ pub fn assert_valid_gltf(file: &Path) -> serde_json::Value {
     );
     report
 }
+
+/// The ICT head from the front, `size` pixels square, one frame per jawOpen value (every other
+/// weight 0): footage whose true jawOpen curve the tests know.
+pub fn ict_jaw_frames(jaw: &[f32], size: u32) -> Vec<Vec<u8>> {
+    let character = faceanim_testdata::ict();
+    let camera = faceanim_render::Camera::front(&character.bounds(), 0.75);
+    let appearance = faceanim_render::Appearance::of(character);
+    let column = character.find_blendshape("jawOpen").unwrap().index();
+    jaw.iter()
+        .map(|&value| {
+            let mut weights = vec![0.0; character.blendshapes().len()];
+            weights[column] = value;
+            faceanim_render::render(
+                character,
+                &character.pose(&weights),
+                &camera,
+                &appearance,
+                size,
+            )
+            .rgb
+        })
+        .collect()
+}
+
+/// `frames` (RGB, `size` square) as an H.264 video at `fps`, as a phone or x264 delivers them.
+pub fn encode_h264(path: &Path, size: u32, fps: u32, frames: &[Vec<u8>]) {
+    let codec = ["-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "12"];
+    faceanim_testdata::encode_video(
+        path,
+        (size as usize, size as usize),
+        fps,
+        &codec,
+        frames.iter().map(Vec::as_slice),
+    );
+}

@@ -1,0 +1,250 @@
+//! Live webcam puppeteering: frames tracked as they arrive, the character's weights sent
+//! back, and a take recorded from them.
+
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use faceanim_adapt::{Adapter, Expression};
+use faceanim_anim::filter::{OneEuro, OneEuroState};
+use faceanim_capture::FrameRecord;
+use faceanim_media::Image;
+use faceanim_rig::Character;
+use faceanim_track::{Frame, Tracker, TrackingMode};
+
+use super::{ByName, CaptureDesk, Footage, LIVE_PREVIEW_HEIGHT, face_models, lock, make_take};
+
+/// Live webcam tracking: the tracker follows the face from frame to frame.
+pub(super) struct Live {
+    tracker: Tracker<'static>,
+    by_name: ByName,
+    started: Instant,
+    filter: Option<OneEuroState>,
+    recording: Option<Recording>,
+    frames: usize,
+}
+
+impl Live {
+    /// Smooths the frames from now on with `smoothing` (or not at all).
+    pub(super) fn set_smoothing(&mut self, smoothing: Option<OneEuro>) {
+        self.filter = smoothing.map(OneEuroState::new);
+    }
+
+    /// Frames tracked, and frames recorded while recording.
+    pub(super) fn view(&self) -> serde_json::Value {
+        serde_json::json!({
+            "frames": self.frames,
+            "recording": self.recording.as_ref().map(|r| r.records.len()),
+        })
+    }
+}
+
+impl std::fmt::Debug for Live {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Live")
+            .field("frames", &self.frames)
+            .finish_non_exhaustive()
+    }
+}
+
+#[derive(Default)]
+pub(super) struct Recording {
+    records: Vec<FrameRecord>,
+    previews: Vec<Vec<u8>>,
+    started: Option<f32>,
+}
+
+/// One webcam frame's result.
+#[derive(Debug, serde::Serialize)]
+pub struct LiveResult {
+    /// The character's weights.
+    pub weights: Vec<f32>,
+    /// Whether a face was found.
+    pub found: bool,
+    /// Head yaw, pitch, roll in degrees.
+    pub head: Option<[f32; 3]>,
+    /// Milliseconds the server spent on the frame.
+    pub server_ms: f64,
+    /// Frames recorded so far, while recording.
+    pub recorded: Option<usize>,
+}
+
+impl CaptureDesk {
+    /// Starts (or restarts) live tracking.
+    ///
+    /// # Errors
+    /// The face models' load error.
+    pub fn start_live(&mut self, character: &Character) -> Result<(), String> {
+        let models = face_models()?;
+        *lock(&self.live) = Some(Live {
+            tracker: Tracker::new(models, TrackingMode::Track),
+            by_name: ByName::new(character),
+            started: Instant::now(),
+            filter: self.smoothing.map(OneEuroState::new),
+            recording: None,
+            frames: 0,
+        });
+        Ok(())
+    }
+
+    /// Stops live tracking (a recording in progress is dropped).
+    pub fn stop_live(&mut self) {
+        *lock(&self.live) = None;
+    }
+
+    /// The live state, to track frames without holding the desk.
+    #[must_use]
+    pub fn live_handle(&self) -> LiveHandle {
+        LiveHandle {
+            live: self.live.clone(),
+            adapter: self.adapter.clone(),
+        }
+    }
+
+    /// Starts recording a take from the live frames.
+    ///
+    /// # Errors
+    /// A message when live tracking is off.
+    pub fn start_recording(&mut self) -> Result<(), String> {
+        let mut live = lock(&self.live);
+        let live = live.as_mut().ok_or("start live mode first")?;
+        live.recording = Some(Recording::default());
+        Ok(())
+    }
+
+    /// Stops recording and makes the recording the take.
+    ///
+    /// # Errors
+    /// A message when nothing was recorded.
+    pub fn stop_recording(&mut self, character: &Character) -> Result<usize, String> {
+        let recording = {
+            let mut live = lock(&self.live);
+            let live = live.as_mut().ok_or("live mode is off")?;
+            live.recording.take().ok_or("not recording")?
+        };
+        let n = recording.records.len();
+        if n == 0 {
+            return Err("nothing was recorded (no frames arrived)".into());
+        }
+        if recording.records.iter().all(|r| r.found.is_none()) {
+            return Err("no face was seen while recording".into());
+        }
+        let duration = recording.records.last().map_or(0.0, |r| r.time);
+        // The webcam's own rate, rounded: frames were recorded as they arrived.
+        let fps = if n > 1 && duration > 0.0 {
+            ((n - 1) as f32 / duration).round().clamp(1.0, 120.0)
+        } else {
+            30.0
+        };
+        let names = (0..n).map(|i| format!("webcam_{:06}.png", i + 1)).collect();
+        let take = make_take(
+            character,
+            self.adapter.as_ref(),
+            Footage {
+                source: "webcam".into(),
+                fps,
+                records: recording.records,
+                frame_names: names,
+                previews: recording.previews,
+                still: false,
+            },
+            (self.keyframe_every, self.smoothing),
+        )?;
+        self.take = Some(take);
+        Ok(n)
+    }
+}
+
+/// What a live frame needs, taken from the desk so tracking does not block it.
+pub struct LiveHandle {
+    live: Arc<Mutex<Option<Live>>>,
+    adapter: Option<Adapter>,
+}
+
+impl LiveHandle {
+    /// Tracks one webcam frame (`rgba`: `width × height × 4` bytes) and returns the
+    /// character's weights.
+    ///
+    /// # Errors
+    /// A message for a malformed frame, live mode off, or a failing model.
+    pub fn track(
+        &self,
+        character: &Character,
+        width: usize,
+        height: usize,
+        rgba: &[u8],
+    ) -> Result<LiveResult, String> {
+        let started = Instant::now();
+        if width == 0
+            || height == 0
+            || width > 8192
+            || height > 8192
+            || rgba.len() != width * height * 4
+        {
+            return Err(format!(
+                "frame: {} bytes is not {width}×{height} RGBA ({} bytes)",
+                rgba.len(),
+                width * height * 4
+            ));
+        }
+        let mut rgb = vec![0u8; width * height * 3];
+        for (out, pixel) in rgb.chunks_exact_mut(3).zip(rgba.chunks_exact(4)) {
+            out.copy_from_slice(&pixel[..3]);
+        }
+        let mut guard = lock(&self.live);
+        let live = guard.as_mut().ok_or("live mode is off: start it first")?;
+        let time = live.started.elapsed().as_secs_f32();
+        let index = live.frames;
+        let record = faceanim_capture::capture_frame(
+            &mut live.tracker,
+            index,
+            time,
+            &Frame {
+                width,
+                height,
+                rgb: &rgb,
+            },
+        )
+        .map_err(|e| e.to_string())?;
+        live.frames += 1;
+        let scores: Vec<f32> = record.scores.iter().map(|s| s.1).collect();
+        let found = record.found.is_some();
+        let mut weights = if !found {
+            vec![0.0; character.blendshapes().len()]
+        } else {
+            match &self.adapter {
+                Some(adapter) => Expression::from_face(&scores, &record.landmarks, record.head)
+                    .map_or_else(
+                        || vec![0.0; adapter.blendshapes.len()],
+                        |e| adapter.predict(&e),
+                    ),
+                None => live.by_name.estimate(&scores),
+            }
+        };
+        if found && let Some(filter) = live.filter.as_mut() {
+            filter.filter(time, &mut weights);
+        }
+        let head = record.head;
+        let recorded = match live.recording.as_mut() {
+            Some(recording) => {
+                let start = *recording.started.get_or_insert(time);
+                let mut record = record;
+                record.index = recording.records.len();
+                record.time = time - start;
+                recording.records.push(record);
+                let image = Image { width, height, rgb };
+                recording
+                    .previews
+                    .push(image.preview(LIVE_PREVIEW_HEIGHT).to_png()?);
+                Some(recording.records.len())
+            }
+            None => None,
+        };
+        Ok(LiveResult {
+            weights,
+            found,
+            head,
+            server_ms: started.elapsed().as_secs_f64() * 1000.0,
+            recorded,
+        })
+    }
+}

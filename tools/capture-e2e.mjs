@@ -1,0 +1,206 @@
+// Capture mode in a real browser (Debian's chromium, driven by playwright-core), as a newcomer
+// uses it: upload a face video, check the estimated jawOpen follows the true curve, correct one
+// frame with its slider, apply the preference (every other frame shifts by the same amount,
+// clamped), clear it, export every format, train the adapter from the page with a progress bar,
+// cancel a second training, fine-tune from the corrections, then the webcam (Chromium's fake
+// camera playing FILE.y4m) in live mode and a recorded take. Screenshots of each step.
+// Usage: node capture-e2e.mjs URL OUTPUT_DIR VIDEO WEBCAM.y4m TRUE_JAW_JSON
+// Prints one JSON line of measurements; exits non-zero with a message on the first failure.
+import { chromium } from 'playwright-core';
+import fs from 'node:fs';
+import path from 'node:path';
+
+const [url, out, video, y4m, truthJson] = process.argv.slice(2);
+const truth = JSON.parse(truthJson);
+fs.mkdirSync(out, { recursive: true });
+const fail = (message) => { console.error(`capture-e2e: ${message}`); process.exit(1); };
+const check = (condition, message) => { if (!condition) fail(message); };
+
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    '--use-fake-device-for-media-stream', `--use-file-for-fake-video-capture=${y4m}`, '--use-fake-ui-for-media-stream'],
+});
+const measurements = {};
+try {
+  const context = await browser.newContext({ viewport: { width: 1400, height: 900 }, acceptDownloads: true });
+  const page = await context.newPage();
+  const consoleErrors = [];
+  page.on('pageerror', (e) => consoleErrors.push(String(e)));
+  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  const shot = (name) => page.screenshot({ path: path.join(out, `${name}.png`) });
+  const captureState = () => page.evaluate(() => fetch('api/capture/state').then((r) => r.json()));
+  const settled = (ms = 300000) => page.evaluate((t) => window.studio.capture.settled(t), ms);
+  const column = (take, names, name) => { const i = names.indexOf(name); return take.weights.map((row) => row[i]); };
+  const errorText = () => page.evaluate(() => document.getElementById('error').hidden ? '' : document.getElementById('error').textContent);
+
+  await page.goto(`${url}?fast`);
+  await page.waitForFunction(() => window.studio && window.studio.bakedReady && window.studio.capture, null, { timeout: 60000 });
+  await page.click('#tab-capture');
+  await shot('01-capture-tab');
+
+  // 1. Upload the video through the file picker; a progress bar shows while it is read.
+  await page.setInputFiles('#capture-file', video);
+  await page.waitForFunction(() => { const v = window.studio.capture.view; return v && v.job; }, null, { timeout: 30000 });
+  await shot('02-reading');
+  const read = await settled();
+  check(read && !read.error, `reading the video failed: ${JSON.stringify(read)} ${await errorText()}`);
+  let state = await captureState();
+  const take = state.take;
+  check(take && take.frames === truth.length, `the take has ${take && take.frames} frames, the video ${truth.length}`);
+  const estimated = column(take, state.blendshapes, 'jawOpen');
+  const mean = (a) => a.reduce((s, x) => s + x, 0) / a.length;
+  const correlation = (a, b) => {
+    const ma = mean(a), mb = mean(b);
+    let num = 0, da = 0, db = 0;
+    for (let i = 0; i < a.length; i++) { num += (a[i] - ma) * (b[i] - mb); da += (a[i] - ma) ** 2; db += (b[i] - mb) ** 2; }
+    return num / Math.sqrt(da * db);
+  };
+  measurements.jaw_correlation = correlation(estimated, truth);
+  measurements.jaw_mae = mean(estimated.map((e, i) => Math.abs(e - truth[i])));
+  check(measurements.jaw_correlation > 0.9, `the estimated jawOpen does not follow the video: correlation ${measurements.jaw_correlation}`);
+  check(Math.max(...estimated) > 0.35 && Math.min(...estimated) < 0.15, `jawOpen should open and shut: ${estimated.map((x) => x.toFixed(2)).join(' ')}`);
+  // The input frame and the character are in sync: jump to the widest open frame by clicking the diagram.
+  const peak = truth.indexOf(Math.max(...truth));
+  const box = await page.locator('#diagram').boundingBox();
+  await page.mouse.click(box.x + 8 + (peak / (truth.length - 1)) * (box.width - 16), box.y + box.height / 2);
+  check(await page.evaluate(() => Math.round(window.studio.frame)) === peak, 'clicking the diagram did not jump to the frame');
+  const shown = await page.evaluate(() => document.getElementById('capture-frame').getAttribute('src'));
+  check(shown.includes(`frame/${peak}.png`), `the input shows ${shown}, not frame ${peak}`);
+  const influence = await page.evaluate((i) => window.studio.meshes[0].morphTargetInfluences[i], state.blendshapes.indexOf('jawOpen'));
+  check(Math.abs(influence - estimated[peak]) < 1e-3, `the character shows jawOpen ${influence}, the take ${estimated[peak]}`);
+  await page.waitForTimeout(300);
+  await shot('03-video-read');
+
+  // 2. Every frame a keyframe, so each frame keeps its own estimate (the smoothing panel).
+  await page.fill('#keyframe-every', '1');
+  await page.dispatchEvent('#keyframe-every', 'change');
+  await page.waitForFunction(() => window.studio.capture.view.take.keyframe_every === 1);
+  state = await captureState();
+  const before = column(state.take, state.blendshapes, 'jawOpen');
+
+  // 3. Correct jawOpen on one frame where the mouth is nearly shut, through its slider.
+  const corrected = 1;
+  await page.mouse.click(box.x + 2, box.y + box.height / 2);
+  for (let i = 0; i < corrected; i++) await page.click('#step-forward');
+  check(await page.evaluate(() => Math.round(window.studio.frame)) === corrected, 'stepping did not reach the frame');
+  await page.fill('#slider-search', 'jaw');
+  const value = Math.min(1, before[corrected] + 0.45);
+  await page.evaluate(([v]) => {
+    const range = document.querySelector('#sliders .slider[data-name="jawOpen"] input[type=range]');
+    range.value = String(v);
+    range.dispatchEvent(new Event('input'));
+    range.dispatchEvent(new Event('change'));
+  }, [value]);
+  await page.waitForFunction((f) => window.studio.capture.view.take.corrected.includes(f), corrected);
+  state = await captureState();
+  check(Math.abs(column(state.take, state.blendshapes, 'jawOpen')[corrected] - Number(value.toFixed(2))) < 0.011, 'the correction did not take');
+  await shot('04-corrected');
+
+  // 4. Apply the preference: every other frame moves by the same offset, clamped to [0, 1].
+  const offset = Number(value.toFixed(2)) - state.take.estimates[corrected][state.blendshapes.indexOf('jawOpen')];
+  await page.click('#apply-preference');
+  await page.waitForFunction(() => !!window.studio.capture.view.take.preference);
+  state = await captureState();
+  const after = column(state.take, state.blendshapes, 'jawOpen');
+  let worst = 0, clamped = 0;
+  for (let f = 0; f < after.length; f++) {
+    if (f === corrected) continue;
+    const expected = Math.min(1, Math.max(0, before[f] + offset));
+    if (before[f] + offset > 1) clamped++;
+    worst = Math.max(worst, Math.abs(after[f] - expected));
+  }
+  measurements.preference_offset = offset;
+  measurements.preference_worst_error = worst;
+  measurements.preference_clamped_frames = clamped;
+  check(worst < 1e-4, `after the preference a frame is ${worst} from its estimate + ${offset}`);
+  check(clamped > 0, `the test should see frames clamped at 1 (offset ${offset}, widest ${Math.max(...before)})`);
+  await shot('05-preference');
+  await page.click('#clear-preference');
+  await page.waitForFunction(() => !window.studio.capture.view.take.preference);
+  state = await captureState();
+  const cleared = column(state.take, state.blendshapes, 'jawOpen');
+  check(cleared.every((x, f) => f === corrected || Math.abs(x - before[f]) < 1e-6), 'clearing the preference did not restore the frames');
+  await page.click('#apply-preference');
+  await page.waitForFunction(() => !!window.studio.capture.view.take.preference);
+
+  // 5. Export every format from the page's links.
+  const download = async (selector, name) => {
+    const [file] = await Promise.all([page.waitForEvent('download'), page.click(selector)]);
+    const target = path.join(out, name);
+    await file.saveAs(target);
+    return target;
+  };
+  await download('#capture-export-glb', 'download.glb');
+  const clipFile = await download('#capture-export-json', 'download.clip.json');
+  await download('#capture-export-csv', 'download.csv');
+  const seed = fs.readFileSync(await download('#capture-export-seed', 'download.byoc.csv'), 'utf8');
+  const seedRows = seed.split('\n').filter((l) => l);
+  check(seedRows.length === truth.length && seedRows[0].startsWith('jaw_000001.png,'), `the seed CSV should have one row per frame, named by frame: ${seedRows[0]}`);
+  const clip = JSON.parse(fs.readFileSync(clipFile, 'utf8'));
+  const exported = clip.frames.map((row) => row[clip.blendshapes.indexOf('jawOpen')]);
+  check(exported.every((x, f) => Math.abs(x - after[f]) < 1e-5 || f === corrected), 'the exported clip is not what the page shows');
+
+  // 6. Train the adapter from the page (few renders: the adapter tests check accuracy); the
+  //    progress bar moves; then the take is estimated by the adapter.
+  await page.fill('#train-samples', '300');
+  await page.click('#train');
+  await page.waitForFunction(() => { const j = window.studio.capture.view.job; return j && j.kind.includes('training') && j.running && j.done > 0; }, null, { timeout: 120000 });
+  await shot('06-training');
+  const trained = await settled();
+  check(trained && !trained.error, `training failed: ${JSON.stringify(trained)}`);
+  state = await captureState();
+  check(state.adapter.loaded && state.take.by_adapter, 'the take was not re-estimated by the new adapter');
+  measurements.adapter_test_mae_300 = state.adapter.report.mae_test;
+
+  // 7. A training can be cancelled.
+  await page.fill('#train-samples', '20000');
+  await page.click('#train');
+  await page.waitForFunction(() => { const j = window.studio.capture.view.job; return j && j.running && j.done > 0; }, null, { timeout: 120000 });
+  await page.click('#job-cancel');
+  const cancelled = await settled();
+  check(cancelled && cancelled.error && cancelled.error.includes('cancel'), `cancel did not stop the training: ${JSON.stringify(cancelled)}`);
+  check((await captureState()).adapter.report.samples === state.adapter.report.samples, 'a cancelled training replaced the adapter');
+
+  // 8. Fine-tune from the correction (the seed's offline mode), then every frame is re-estimated.
+  await page.click('#finetune');
+  const tuned = await settled();
+  check(tuned && !tuned.error && tuned.result.includes('fine-tuned'), `fine-tuning failed: ${JSON.stringify(tuned)}`);
+  measurements.finetune = tuned.result;
+  await shot('07-fine-tuned');
+
+  // 9. The webcam: live mode follows the face; the fake camera opens the mouth every second.
+  await page.click('#live');
+  await page.waitForFunction(() => window.studio.capture.live.frames > 20, null, { timeout: 60000 });
+  const live = await page.evaluate(async () => {
+    const c = window.studio.capture;
+    const i = c.view.blendshapes.indexOf('jawOpen');
+    let max = 0, min = 1;
+    const start = performance.now(), f0 = c.live.frames;
+    while (performance.now() - start < 4000) {
+      if (c.live.weights) { max = Math.max(max, c.live.weights[i]); min = Math.min(min, c.live.weights[i]); }
+      await new Promise((r) => setTimeout(r, 10));
+    }
+    return { max, min, fps: (c.live.frames - f0) / ((performance.now() - start) / 1000), latency: c.live.latency_ms, server: c.live.server_ms };
+  });
+  Object.assign(measurements, { live_max_jaw_open: live.max, live_min_jaw_open: live.min, live_fps: live.fps, live_latency_ms: live.latency, live_server_ms: live.server });
+  check(live.max > 0.4, `live mode never opened the jaw past 0.4 (max ${live.max})`);
+  check(live.min < 0.2, `live mode never shut the jaw (min ${live.min})`);
+  await shot('08-live');
+
+  // 10. Record a take from the webcam into the timeline.
+  await page.click('#record');
+  await page.waitForTimeout(2000);
+  await page.click('#record');
+  await page.waitForFunction(() => { const t = window.studio.capture.view.take; return t && t.source === 'webcam'; }, null, { timeout: 30000 });
+  state = await captureState();
+  measurements.recorded_frames = state.take.frames;
+  check(state.take.frames >= 20, `the recorded take has only ${state.take.frames} frames`);
+  await page.waitForTimeout(300);
+  await shot('09-recorded-take');
+  check(consoleErrors.length === 0, `page errors: ${consoleErrors.join('; ')}`);
+  console.log(JSON.stringify(measurements));
+} finally {
+  await browser.close();
+}
