@@ -4,13 +4,14 @@
 // clamped), clear it, export every format, train the adapter from the page with a progress bar,
 // cancel a second training, fine-tune from the corrections, then the webcam (Chromium's fake
 // camera playing FILE.y4m) in live mode and a recorded take. Screenshots of each step.
-// Usage: node capture-e2e.mjs URL OUTPUT_DIR VIDEO WEBCAM.y4m TRUE_JAW_JSON
+// Usage: node capture-e2e.mjs URL OUTPUT_DIR VIDEO WEBCAM.y4m TRUE_JAW_JSON PHOTO…
+// (the photos show the jaw opening wider from one to the next)
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
 import { chromium } from 'playwright-core';
 import fs from 'node:fs';
 import path from 'node:path';
 
-const [url, out, video, y4m, truthJson] = process.argv.slice(2);
+const [url, out, video, y4m, truthJson, ...photos] = process.argv.slice(2);
 const truth = JSON.parse(truthJson);
 fs.mkdirSync(out, { recursive: true });
 const fail = (message) => { console.error(`capture-e2e: ${message}`); process.exit(1); };
@@ -40,13 +41,26 @@ try {
   await page.click('#tab-capture');
   await shot('01-capture-tab');
 
-  // 1. Upload the video through the file picker; a progress bar shows while it is read.
-  await page.setInputFiles('#capture-file', video);
+  // 1. Photos picked together are one sequence, in name order.
+  await page.setInputFiles('#capture-file', photos);
   await page.waitForFunction(() => { const v = window.studio.capture.view; return v && v.job; }, null, { timeout: 30000 });
+  const readPhotos = await settled();
+  check(readPhotos && !readPhotos.error, `reading the photos failed: ${JSON.stringify(readPhotos)} ${await errorText()}`);
+  let state = await captureState();
+  check(state.take.frames === photos.length, `${photos.length} photos made ${state.take.frames} frames`);
+  check(state.take.names.join() === photos.map((p) => path.basename(p)).join(), `frames are named ${state.take.names}`);
+  const photoJaw = column(state.take, state.blendshapes, 'jawOpen');
+  check(photoJaw.every((x, i) => i === 0 || x > photoJaw[i - 1]), `jawOpen should grow from photo to photo: ${photoJaw}`);
+  await shot('01-photos');
+
+  // 2. Upload the video through the file picker; a progress bar shows while it is read.
+  await page.setInputFiles('#capture-file', video);
   await shot('02-reading');
+  // The photos' job has ended: wait for the video's to start (or to have ended already).
+  await page.waitForFunction((n) => { const v = window.studio.capture.view; return v.job.running || (v.take && v.take.frames === n); }, truth.length, { timeout: 30000 });
   const read = await settled();
   check(read && !read.error, `reading the video failed: ${JSON.stringify(read)} ${await errorText()}`);
-  let state = await captureState();
+  state = await captureState();
   const take = state.take;
   check(take && take.frames === truth.length, `the take has ${take && take.frames} frames, the video ${truth.length}`);
   const estimated = column(take, state.blendshapes, 'jawOpen');
@@ -97,6 +111,11 @@ try {
   state = await captureState();
   check(Math.abs(column(state.take, state.blendshapes, 'jawOpen')[corrected] - Number(value.toFixed(2))) < 0.011, 'the correction did not take');
   await shot('04-corrected');
+  // Undo and redo (the toolbar's buttons step through the take's edits in this tab).
+  await page.click('#undo');
+  await page.waitForFunction((f) => !window.studio.capture.view.take.corrected.includes(f), corrected);
+  await page.click('#redo');
+  await page.waitForFunction((f) => window.studio.capture.view.take.corrected.includes(f), corrected);
 
   // 4. Apply the preference: every other frame moves by the same offset, clamped to [0, 1].
   const offset = Number(value.toFixed(2)) - state.take.estimates[corrected][state.blendshapes.indexOf('jawOpen')];
@@ -191,7 +210,8 @@ try {
 
   // 10. Record a take from the webcam into the timeline.
   await page.click('#record');
-  await page.waitForTimeout(2000);
+  // However fast this machine tracks: a take of at least 20 frames.
+  await page.waitForFunction(() => window.studio.capture.live.recorded >= 20, null, { timeout: 60000 });
   await page.click('#record');
   await page.waitForFunction(() => { const t = window.studio.capture.view.take; return t && t.source === 'webcam'; }, null, { timeout: 30000 });
   state = await captureState();

@@ -18,7 +18,7 @@ let preview = null;
 const capture = {
   get view() { return view; },
   /** Live webcam measurements: frames per second and camera-to-screen latency (ms). */
-  live: { running: false, fps: 0, latency_ms: 0, server_ms: 0, frames: 0, /** @type {number[]|null} */ weights: null, latencies: /** @type {number[]} */ ([]) },
+  live: { running: false, fps: 0, latency_ms: 0, server_ms: 0, frames: 0, /** @type {number|null} frames recorded so far */ recorded: null, /** @type {number[]|null} */ weights: null, latencies: /** @type {number[]} */ ([]) },
   /** Waits until no job runs; resolves with the last job's view. */
   async settled(timeoutMs = 600000) {
     const until = Date.now() + timeoutMs;
@@ -43,7 +43,26 @@ function setMode(mode) {
   $('capture-panel').hidden = !on;
   $('settings').hidden = on;
   if (on) refresh().catch((e) => studio.showError(String(e.message || e)));
+  historyButtons();
   window.dispatchEvent(new Event('resize'));
+}
+// In capture mode, undo and redo (Ctrl+Z, the toolbar) step through the take's edits; the
+// strokes' own history is the sketch tab's.
+const inCapture = () => document.body.classList.contains('capture');
+const sketchHistory = { undo: studio.commands.undo, redo: studio.commands.redo };
+studio.commands.undo = () => (inCapture() ? post('api/capture/undo') : sketchHistory.undo());
+studio.commands.redo = () => (inCapture() ? post('api/capture/redo') : sketchHistory.redo());
+$('undo').onclick = () => studio.commands.undo();
+$('redo').onclick = () => studio.commands.redo();
+function historyButtons() {
+  if (inCapture()) {
+    const take = view && view.take;
+    /** @type {HTMLButtonElement} */ ($('undo')).disabled = !(take && take.can_undo);
+    /** @type {HTMLButtonElement} */ ($('redo')).disabled = !(take && take.can_redo);
+  } else if (studio.state) {
+    /** @type {HTMLButtonElement} */ ($('undo')).disabled = !studio.state.can_undo;
+    /** @type {HTMLButtonElement} */ ($('redo')).disabled = !studio.state.can_redo;
+  }
 }
 $('tab-sketch').onclick = () => setMode('sketch');
 $('tab-capture').onclick = () => setMode('capture');
@@ -106,6 +125,7 @@ function apply(v) {
   /** @type {HTMLButtonElement} */ ($('clear-preference')).disabled = !take || !take.preference;
   for (const a2 of document.querySelectorAll('#capture-panel .exports a')) a2.classList.toggle('disabled', !take);
   buildSliders(v);
+  historyButtons();
   studio.layer = layer;
   if (studio.state) studio.drawTimeline();
   studio.setFrame(newTake ? 0 : studio.frame);
@@ -131,10 +151,19 @@ input('capture-file').addEventListener('change', async () => {
   input('capture-file').value = '';
   if (!files.length) return;
   studio.showError('');
+  const header = (file) => ({ 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') });
   try {
-    if (files.length > 1) throw new Error('pick one video or one photo (for a sequence of photos, give their folder as a path)');
-    const file = files[0];
-    apply(await studio.api('POST', 'api/capture/upload', await file.arrayBuffer(), { 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') }));
+    if (files.length === 1) {
+      apply(await studio.api('POST', 'api/capture/upload', await files[0].arrayBuffer(), header(files[0])));
+      return;
+    }
+    // Several photos are one sequence, in name order, like a folder of frames.
+    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, or any number of PNG or JPEG photos');
+    const batch = Date.now().toString(36) + Math.random().toString(36).slice(2, 8);
+    for (const [index, file] of files.entries()) {
+      $('take-info').textContent = `Sending ${file.name} (${index + 1} of ${files.length})…`;
+      apply(await studio.api('POST', `api/capture/upload?batch=${batch}&index=${index}&count=${files.length}`, await file.arrayBuffer(), header(file)));
+    }
   } catch (e) { studio.showError(String(e.message || e)); }
 });
 $('capture-open').onclick = async () => {
@@ -448,6 +477,7 @@ function send(pixels, width, height, captured) {
       fpsWindow.count++;
       pendingShown = captured;
       studio.applyLayer();
+      capture.live.recorded = result.recorded ?? null;
       if (result.recorded !== null && result.recorded !== undefined) $('record').textContent = `Stop (${result.recorded})`;
     })
     .catch((e) => { if (capture.live.running) studio.showError(String(e.message || e)); })

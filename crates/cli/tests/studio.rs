@@ -258,8 +258,8 @@ fn jaw_curve(i: usize) -> f32 {
     0.8 * (2.0 * std::f32::consts::PI * t).sin().powi(2)
 }
 
-/// Capture mode as a newcomer uses it, in a real browser (`tools/capture-e2e.mjs`): upload a
-/// video of the ICT head with a known jawOpen curve, see the estimate follow it, correct one
+/// Capture mode as a newcomer uses it, in a real browser (`tools/capture-e2e.mjs`): pick a few
+/// photos, then upload a video of the ICT head with a known jawOpen curve, see the estimate follow it, correct one
 /// frame, apply the preference, export every format, train and fine-tune the adapter from the
 /// page (and cancel a training), then the webcam — Chromium's fake camera playing a rendered
 /// face that opens its mouth — in live mode, and a recorded take. Screenshots go to
@@ -282,6 +282,21 @@ fn capture_mode_in_a_real_browser() {
         &["-pix_fmt", "yuv420p"],
         frames.iter().map(Vec::as_slice),
     );
+    // Three photos, the jaw wider in each: a sequence picked together in the page.
+    let photos: Vec<std::path::PathBuf> = support::ict_jaw_frames(&[0.0, 0.35, 0.7], 256)
+        .into_iter()
+        .enumerate()
+        .map(|(i, rgb)| {
+            let path = dir.path().join(format!("photo_{i}.png"));
+            let image = faceanim_render::Image {
+                width: 256,
+                height: 256,
+                rgb,
+            };
+            std::fs::write(&path, image.to_png().unwrap()).unwrap();
+            path
+        })
+        .collect();
     let adapter = dir.path().join("ict.adapter.safetensors");
     let studio = start_with(
         &dir.path().join("capture.faceanim.json"),
@@ -295,6 +310,7 @@ fn capture_mode_in_a_real_browser() {
         .arg(&video)
         .arg(&y4m)
         .arg(&truth_json)
+        .args(&photos)
         .output()
         .expect("node");
     let stdout = String::from_utf8_lossy(&run.stdout);

@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use axum::Router;
 use axum::body::Bytes;
-use axum::extract::{DefaultBodyLimit, Path, State};
+use axum::extract::{DefaultBodyLimit, Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post, put};
@@ -69,6 +69,8 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/uncorrect", post(uncorrect))
         .route("/api/capture/keyframe", post(keyframe))
         .route("/api/capture/preference", post(preference))
+        .route("/api/capture/undo", post(undo))
+        .route("/api/capture/redo", post(redo))
         .route("/api/capture/filtering", put(filtering))
         .route("/api/capture/adapter/train", post(train))
         .route("/api/capture/adapter/finetune", post(finetune))
@@ -118,8 +120,21 @@ async fn open_path(State(both): State<Both>, body: Bytes) -> Result<axum::Json<V
     Ok(axum::Json(state_of(&both)))
 }
 
+/// Several photos sent as one sequence: each names the batch, its place and the count; the
+/// last one starts reading the folder.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct Batch {
+    batch: Option<String>,
+    #[serde(default)]
+    index: usize,
+    #[serde(default)]
+    count: usize,
+}
+
 async fn upload(
     State(both): State<Both>,
+    Query(batch): Query<Batch>,
     headers: HeaderMap,
     body: Bytes,
 ) -> Result<axum::Json<Value>, ApiError> {
@@ -131,9 +146,30 @@ async fn upload(
     if body.is_empty() {
         return Err(bad(format!("{name}: the file is empty")));
     }
-    let path = both.desk().store_upload(&name, &body).map_err(bad)?;
+    if batch.batch.is_some() && batch.index >= batch.count {
+        return Err(bad(format!(
+            "index: {} is not below count {}",
+            batch.index, batch.count
+        )));
+    }
+    let path = both
+        .desk()
+        .store_upload(&name, &body, batch.batch.as_deref())
+        .map_err(bad)?;
+    let (path, shown) = match batch.batch {
+        // More photos of the sequence are coming.
+        Some(_) if batch.index + 1 < batch.count => return Ok(axum::Json(state_of(&both))),
+        Some(_) => {
+            let folder = path
+                .parent()
+                .map(std::path::Path::to_path_buf)
+                .unwrap_or(path);
+            (folder, format!("{} photos", batch.count))
+        }
+        None => (path, name),
+    };
     let character = both.studio().character.clone();
-    capture::start_capture(&both.desk, character, path, name).map_err(bad)?;
+    capture::start_capture(&both.desk, character, path, shown).map_err(bad)?;
     Ok(axum::Json(state_of(&both)))
 }
 
@@ -175,9 +211,11 @@ async fn correct(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Val
     {
         let mut desk = both.desk();
         let take = desk.take_mut().map_err(bad)?;
-        take.session
-            .correct(c.frame, &c.name, c.value)
-            .map_err(|e| bad(e.to_string()))?;
+        take.edit(|s| {
+            s.correct(c.frame, &c.name, c.value)
+                .map_err(|e| e.to_string())
+        })
+        .map_err(bad)?;
     }
     Ok(axum::Json(state_of(&both)))
 }
@@ -195,9 +233,11 @@ async fn uncorrect(State(both): State<Both>, body: Bytes) -> Result<axum::Json<V
     {
         let mut desk = both.desk();
         let take = desk.take_mut().map_err(bad)?;
-        take.session
-            .uncorrect(u.frame, u.name.as_deref())
-            .map_err(|e| bad(e.to_string()))?;
+        take.edit(|s| {
+            s.uncorrect(u.frame, u.name.as_deref())
+                .map_err(|e| e.to_string())
+        })
+        .map_err(bad)?;
     }
     Ok(axum::Json(state_of(&both)))
 }
@@ -214,12 +254,15 @@ async fn keyframe(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Va
     {
         let mut desk = both.desk();
         let take = desk.take_mut().map_err(bad)?;
-        if k.on {
-            take.session.add_keyframe(k.frame)
-        } else {
-            take.session.remove_keyframe(k.frame)
-        }
-        .map_err(|e| bad(e.to_string()))?;
+        take.edit(|s| {
+            if k.on {
+                s.add_keyframe(k.frame)
+            } else {
+                s.remove_keyframe(k.frame)
+            }
+            .map_err(|e| e.to_string())
+        })
+        .map_err(bad)?;
     }
     Ok(axum::Json(state_of(&both)))
 }
@@ -235,15 +278,28 @@ async fn preference(State(both): State<Both>, body: Bytes) -> Result<axum::Json<
     {
         let mut desk = both.desk();
         let take = desk.take_mut().map_err(bad)?;
-        if on {
-            if take.session.corrections.is_empty() {
-                return Err(bad("preference: correct at least one frame first"));
+        take.edit(|s| {
+            if !on {
+                s.clear_preference();
+            } else if s.corrections.is_empty() {
+                return Err("preference: correct at least one frame first".into());
+            } else {
+                s.apply_preference();
             }
-            take.session.apply_preference();
-        } else {
-            take.session.clear_preference();
-        }
+            Ok(())
+        })
+        .map_err(bad)?;
     }
+    Ok(axum::Json(state_of(&both)))
+}
+
+async fn undo(State(both): State<Both>) -> Result<axum::Json<Value>, ApiError> {
+    both.desk().take_mut().map_err(bad)?.undo();
+    Ok(axum::Json(state_of(&both)))
+}
+
+async fn redo(State(both): State<Both>) -> Result<axum::Json<Value>, ApiError> {
+    both.desk().take_mut().map_err(bad)?.redo();
     Ok(axum::Json(state_of(&both)))
 }
 

@@ -134,11 +134,17 @@ fn rename(message: &str, path: &Path, shown: &str) -> String {
 }
 
 impl CaptureDesk {
-    /// Saves an uploaded input to a private folder and returns its path.
+    /// Saves an uploaded input (or one photo of a sequence sent as `batch`) to a private
+    /// folder and returns its path.
     ///
     /// # Errors
     /// The file error.
-    pub fn store_upload(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf, String> {
+    pub fn store_upload(
+        &mut self,
+        name: &str,
+        bytes: &[u8],
+        batch: Option<&str>,
+    ) -> Result<PathBuf, String> {
         if self.uploads.is_none() {
             self.uploads = Some(
                 tempfile::Builder::new()
@@ -147,11 +153,19 @@ impl CaptureDesk {
                     .map_err(|e| format!("making a folder for uploads: {e}"))?,
             );
         }
-        let dir = self
+        let mut dir = self
             .uploads
             .as_ref()
             .map(|d| d.path().to_owned())
             .ok_or("no upload folder")?;
+        // Photos sent together are one sequence: a folder of their own, read in name order.
+        if let Some(batch) = batch {
+            if batch.is_empty() || !batch.chars().all(|c| c.is_ascii_alphanumeric()) {
+                return Err(format!("batch: '{batch}' must be letters and digits"));
+            }
+            dir = dir.join(format!("batch-{batch}"));
+            std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        }
         // Keep only a safe file name (its extension tells images from videos).
         let clean: String = name
             .chars()
@@ -223,7 +237,7 @@ pub fn start_training(
                 adapter.report.mae_test,
                 adapter_path.display()
             );
-            install_adapter(&desk, &character, adapter)?;
+            install_adapter(&desk, &character, &adapter_path, adapter)?;
             Ok(message)
         })();
         job.finish(outcome);
@@ -277,7 +291,7 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
                 &tuned.to_bytes().map_err(|e| e.to_string())?,
             )
             .map_err(|e| e.to_string())?;
-            install_adapter(&desk, &character, tuned)?;
+            install_adapter(&desk, &character, &adapter_path, tuned)?;
             Ok(format!(
                 "fine-tuned on {} corrected frames: their error {:.4} → {:.4}, test {:.4} → {:.4}; saved {}",
                 corrections.len(),
@@ -347,9 +361,16 @@ fn dataset_for(
 fn install_adapter(
     desk: &SharedDesk,
     character: &Character,
+    adapter_path: &Path,
     adapter: Adapter,
 ) -> Result<(), String> {
     let mut guard = lock(desk);
+    if guard.adapter_path != adapter_path {
+        return Err(format!(
+            "another character was opened meanwhile; the adapter was saved to {} but is not used",
+            adapter_path.display()
+        ));
+    }
     if let Some(take) = guard.take.as_mut() {
         take.session
             .reestimate(&adapter)

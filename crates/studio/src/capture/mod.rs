@@ -64,6 +64,100 @@ pub struct Take {
     pub previews: Vec<Vec<u8>>,
     /// Whether the estimates came from the adapter (else by name).
     pub by_adapter: bool,
+    undo: Vec<Edits>,
+    redo: Vec<Edits>,
+}
+
+/// What the user changes in a take (the frames and estimates stay): small enough to keep
+/// hundreds of steps of undo.
+#[derive(Debug, Clone, PartialEq)]
+struct Edits {
+    keyframe_every: usize,
+    smoothing: Option<OneEuro>,
+    added_keyframes: Vec<usize>,
+    removed_keyframes: Vec<usize>,
+    corrections: std::collections::BTreeMap<usize, std::collections::BTreeMap<String, f32>>,
+    preference: Option<Vec<f32>>,
+}
+
+impl Edits {
+    fn of(session: &Session) -> Edits {
+        Edits {
+            keyframe_every: session.keyframe_every,
+            smoothing: session.smoothing,
+            added_keyframes: session.added_keyframes.clone(),
+            removed_keyframes: session.removed_keyframes.clone(),
+            corrections: session.corrections.clone(),
+            preference: session.preference.clone(),
+        }
+    }
+
+    fn restore(self, session: &mut Session) {
+        session.keyframe_every = self.keyframe_every;
+        session.smoothing = self.smoothing;
+        session.added_keyframes = self.added_keyframes;
+        session.removed_keyframes = self.removed_keyframes;
+        session.corrections = self.corrections;
+        session.preference = self.preference;
+    }
+}
+
+/// How many edits of a take undo remembers.
+const TAKE_UNDO_DEPTH: usize = 500;
+
+impl Take {
+    fn new(session: Session, previews: Vec<Vec<u8>>, by_adapter: bool) -> Take {
+        Take {
+            session,
+            previews,
+            by_adapter,
+            undo: Vec::new(),
+            redo: Vec::new(),
+        }
+    }
+
+    /// Applies `change` to the session; a change that changed something can be undone.
+    ///
+    /// # Errors
+    /// `change`'s message (the session is then as it was).
+    pub fn edit(
+        &mut self,
+        change: impl FnOnce(&mut Session) -> Result<(), String>,
+    ) -> Result<(), String> {
+        let before = Edits::of(&self.session);
+        if let Err(e) = change(&mut self.session) {
+            before.restore(&mut self.session);
+            return Err(e);
+        }
+        if Edits::of(&self.session) != before {
+            self.undo.push(before);
+            if self.undo.len() > TAKE_UNDO_DEPTH {
+                self.undo.remove(0);
+            }
+            self.redo.clear();
+        }
+        Ok(())
+    }
+
+    /// Steps back one edit; false when there is none.
+    pub fn undo(&mut self) -> bool {
+        let Some(previous) = self.undo.pop() else {
+            return false;
+        };
+        self.redo.push(Edits::of(&self.session));
+        previous.restore(&mut self.session);
+        true
+    }
+
+    /// Steps forward one undone edit; false when there is none.
+    pub fn redo(&mut self) -> bool {
+        let Some(next) = self.redo.pop() else {
+            return false;
+        };
+        self.undo.push(Edits::of(&self.session));
+        next.restore(&mut self.session);
+        true
+    }
 }
 
 /// One long piece of work: progress, a cancel flag, and how it ended.
@@ -286,8 +380,11 @@ impl CaptureDesk {
         self.keyframe_every = keyframe_every;
         self.smoothing = smoothing;
         if let Some(take) = &mut self.take {
-            take.session.keyframe_every = keyframe_every;
-            take.session.smoothing = smoothing;
+            take.edit(|session| {
+                session.keyframe_every = keyframe_every;
+                session.smoothing = smoothing;
+                Ok(())
+            })?;
         }
         if let Some(live) = lock(&self.live).as_mut() {
             live.set_smoothing(smoothing);
@@ -366,6 +463,8 @@ fn take_view(take: &Take) -> Value {
         "preference": session.preference,
         "preference_pending": session.preference_offsets(),
         "keyframe_every": session.keyframe_every,
+        "can_undo": !take.undo.is_empty(),
+        "can_redo": !take.redo.is_empty(),
     })
 }
 
@@ -504,11 +603,7 @@ fn make_take(
     if still {
         session.still_frames = Some(STILL_FRAMES);
     }
-    Ok(Take {
-        session,
-        previews,
-        by_adapter: adapter.is_some(),
-    })
+    Ok(Take::new(session, previews, adapter.is_some()))
 }
 
 /// The take's clip with the sketch's weights added on top (clamped to [0, 1]); the longer of
@@ -578,6 +673,59 @@ mod tests {
         );
         // No strokes: the take as it is.
         assert_eq!(layered_weights(&base, &[]).frames, base.frames);
+    }
+
+    fn two_frame_take() -> Take {
+        let frames = (0..2)
+            .map(|i| SessionFrame {
+                name: format!("f{i}.png"),
+                time: i as f32 / 30.0,
+                presence: 1.0,
+                head: None,
+                head_position: None,
+                expression: None,
+                estimate: vec![0.25, 0.5],
+            })
+            .collect();
+        let character = faceanim_testdata::ict();
+        let session = Session::new(
+            "test".into(),
+            "test".into(),
+            vec!["a".into(), "b".into()],
+            Fingerprint::of(character),
+            30.0,
+            1,
+            frames,
+        );
+        Take::new(session, Vec::new(), false)
+    }
+
+    #[test]
+    fn a_takes_edits_undo_and_redo_and_a_failed_edit_changes_nothing() {
+        let mut take = two_frame_take();
+        take.edit(|s| s.correct(1, "a", 0.75).map_err(|e| e.to_string()))
+            .unwrap_or_default();
+        take.edit(|s| {
+            s.apply_preference();
+            Ok(())
+        })
+        .unwrap_or_default();
+        assert_eq!(take.session.weights()[0], vec![0.75, 0.5]);
+        // A refused edit leaves no trace, not even on the undo stack.
+        let refused = take.edit(|s| {
+            s.keyframe_every = 7;
+            s.correct(9, "a", 0.5).map_err(|e| e.to_string())
+        });
+        assert!(refused.is_err());
+        assert_eq!(take.session.keyframe_every, 1);
+        assert!(take.undo());
+        assert_eq!(take.session.weights()[0], vec![0.25, 0.5]);
+        assert!(take.undo());
+        assert!(take.session.corrections.is_empty());
+        assert!(!take.undo());
+        assert!(take.redo() && take.redo());
+        assert_eq!(take.session.weights()[0], vec![0.75, 0.5]);
+        assert!(!take.redo());
     }
 
     #[test]
