@@ -84,6 +84,18 @@ try {
   check(shown.includes(`frame/${peak}.png`), `the input shows ${shown}, not frame ${peak}`);
   const influence = await page.evaluate((i) => window.studio.meshes[0].morphTargetInfluences[i], state.blendshapes.indexOf('jawOpen'));
   check(Math.abs(influence - estimated[peak]) < 1e-3, `the character shows jawOpen ${influence}, the take ${estimated[peak]}`);
+  // The character turns as the captured head does (the export's R = Ry(yaw)·Rx(−pitch)·Rz(roll)).
+  const [yaw, pitch, roll] = take.head[peak].map((d) => d * Math.PI / 180);
+  const mul = (a, b) => [
+    a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
+    a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
+    a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
+    a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2],
+  ];
+  const expectedTurn = mul(mul([0, Math.sin(yaw / 2), 0, Math.cos(yaw / 2)], [Math.sin(-pitch / 2), 0, 0, Math.cos(-pitch / 2)]), [0, 0, Math.sin(roll / 2), Math.cos(roll / 2)]);
+  const shownTurn = await page.evaluate(() => window.studio.root.quaternion.toArray());
+  const alignment = Math.abs(expectedTurn.reduce((sum, x, i) => sum + x * shownTurn[i], 0));
+  check(alignment > 0.99999, `the character's turn ${shownTurn} is not the captured head's ${expectedTurn}`);
   await page.waitForTimeout(300);
   await shot('03-video-read');
 

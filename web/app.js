@@ -81,6 +81,8 @@ const studio = {
   onFrame: [],
   /** @type {(() => void)[]} Called after every render of the viewport. */
   onRender: [],
+  /** While a stroke or handle is dragged the character stays at rest (no captured head turn). */
+  holdRest: false,
   /** The point of the face under a screen position (CSS pixels), or null. */
   hit(x, y) {
     const p = hitFace(rayFrom({ clientX: x, clientY: y }));
@@ -315,18 +317,30 @@ function showGhost(name) {
   const base = studio.meshes[0];
   const index = name && base && base.morphTargetDictionary ? base.morphTargetDictionary[name] : undefined;
   if (index === undefined) { if (ghost) ghost.visible = false; return; }
-  if (!ghost || ghost.geometry !== base.geometry) {
-    if (ghost) scene.remove(ghost);
-    ghost = new THREE.Mesh(base.geometry, new THREE.MeshBasicMaterial({ color: 0x60d0ff, transparent: true, opacity: 0.22, depthWrite: false }));
+  const cpu = base.userData.cpuMorph;
+  if (!ghost || ghost.userData.base !== base.geometry || (cpu && ghost.userData.index !== index)) {
+    if (ghost) { scene.remove(ghost); if (ghost.geometry !== base.geometry) ghost.geometry.dispose(); }
+    let geometry = base.geometry;
+    if (cpu) {
+      // Blended on the CPU (`?fast`): the ghost gets the target's own positions.
+      const positions = Float32Array.from(cpu.basePosition);
+      const target = cpu.targets[index].position;
+      if (target) for (let k = 0; k < target.indices.length; k++) { const o = target.indices[k] * 3; for (let c = 0; c < 3; c++) positions[o + c] += target.values[3 * k + c]; }
+      geometry = new THREE.BufferGeometry();
+      geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+      if (base.geometry.index) geometry.setIndex(base.geometry.index);
+    }
+    ghost = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ color: 0x60d0ff, transparent: true, opacity: 0.22, depthWrite: false }));
+    ghost.userData = { base: base.geometry, index };
     ghost.updateMorphTargets();
     ghost.matrixAutoUpdate = false;
     ghost.renderOrder = 5;
+    ghost.frustumCulled = !cpu;
     scene.add(ghost);
   }
   ghost.matrix.copy(base.matrixWorld);
   ghost.matrixWorldNeedsUpdate = true;
-  ghost.morphTargetInfluences.fill(0);
-  ghost.morphTargetInfluences[index] = 1;
+  if (ghost.morphTargetInfluences) { ghost.morphTargetInfluences.fill(0); ghost.morphTargetInfluences[index] = 1; }
   ghost.visible = true;
 }
 
@@ -369,8 +383,21 @@ function onPlane(ray, plane) {
 /** @type {null | {kind:'stroke', plane:THREE.Plane, t0:number, samples:any[], pending:number[][], line:THREE.Line} | {kind:'handle', handle:string, stroke:number, plane:THREE.Plane, path?:any[], ease:boolean, pending:boolean, gesture:string}} */
 let drag = null;
 
+/** Whether the character stands at rest (capture mode turns it by the captured head pose). */
+function atRest() {
+  const q = studio.root ? studio.root.quaternion : null;
+  return !q || (q.x === 0 && q.y === 0 && q.z === 0);
+}
+
 renderer.domElement.addEventListener('pointerdown', async (event) => {
   if (event.button !== 0 || !studio.bakedReady) return;
+  if (!atRest()) {
+    // Strokes and handles live in the character's own space: draw on the face at rest.
+    studio.holdRest = true;
+    studio.root.quaternion.identity();
+    studio.root.updateMatrixWorld(true);
+    studio.invalidate();
+  }
   const ray = rayFrom(event);
   const handle = ray.intersectObjects(handleTargets, false)[0];
   if (handle) {
@@ -399,7 +426,7 @@ renderer.domElement.addEventListener('pointermove', (event) => {
     // The paper's users asked to see the targets before drawing: show them on hover.
     if (event.pointerType !== 'touch' && studio.bakedReady && performance.now() - hoverTimer > 120) {
       hoverTimer = performance.now();
-      const hit = hitFace(rayFrom(event));
+      const hit = atRest() ? hitFace(rayFrom(event)) : null;
       if (hit) api('POST', 'api/candidates', { point: hit.toArray(), frame: studio.frame }).then((f) => { if (!drag) showCandidates(f, true); }).catch(() => {});
       else clearGroup(candidateGroup);
     }
@@ -490,6 +517,7 @@ function aimAtReleasedSphere(samples) {
 }
 
 async function endDrag(event) {
+  if (studio.holdRest) { studio.holdRest = false; setFrame(studio.frame); }
   if (!drag) return;
   const finished = drag;
   drag = null;

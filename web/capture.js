@@ -4,6 +4,8 @@
 // recording. The server owns the take; this file draws /api/capture/state and sends edits.
 // Sketch strokes keep working on top: the take is the layer under them (window.studio.layer).
 
+import * as THREE from 'three';
+
 const studio = /** @type {any} */ (window).studio;
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 const input = (id) => /** @type {HTMLInputElement} */ (document.getElementById(id));
@@ -44,6 +46,8 @@ function setMode(mode) {
   $('settings').hidden = on;
   if (on) refresh().catch((e) => studio.showError(String(e.message || e)));
   historyButtons();
+  if (!on) turnHead(null);
+  else studio.setFrame(studio.frame);
   window.dispatchEvent(new Event('resize'));
 }
 // In capture mode, undo and redo (Ctrl+Z, the toolbar) step through the take's edits; the
@@ -120,7 +124,8 @@ function apply(v) {
   $('take-info').textContent = take
     ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; estimated ${take.by_adapter ? 'by the adapter' : 'by ARKit name'}${take.preference ? '; preference applied' : ''}.`
     : '';
-  $('capture-input-note').hidden = !!take || capture.live.running;
+  if (!take) $('capture-input-note').textContent = 'Open a video, photos or the webcam (right).';
+  $('capture-input-note').hidden = (!!take && !frameImage.hidden) || capture.live.running;
   for (const id of ['keyframe', 'uncorrect-frame', 'apply-preference', 'clear-preference']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !take;
   /** @type {HTMLButtonElement} */ ($('clear-preference')).disabled = !take || !take.preference;
   for (const a2 of document.querySelectorAll('#capture-panel .exports a')) a2.classList.toggle('disabled', !take);
@@ -358,20 +363,45 @@ $('step-back').onclick = () => studio.commands.step(-1);
 $('step-forward').onclick = () => studio.commands.step(1);
 $('play-back').onclick = () => studio.commands.playBackwards();
 
+/** Turns the character's root by a captured head pose `[yaw, pitch, roll]` in degrees (the
+ * export's convention: R = Ry(yaw)·Rx(−pitch)·Rz(roll)), or back to rest. Only in this tab:
+ * strokes are drawn on the unturned face. */
+const headEuler = new THREE.Euler(0, 0, 0, 'YXZ');
+function turnHead(head) {
+  const root = studio.root;
+  if (!root) return;
+  const on = head && inCapture() && input('head-turn').checked && !studio.holdRest;
+  const d = THREE.MathUtils.degToRad;
+  headEuler.set(on ? -d(head[1]) : 0, on ? d(head[0]) : 0, on ? d(head[2]) : 0, 'YXZ');
+  root.quaternion.setFromEuler(headEuler);
+  studio.invalidate();
+}
+$('head-turn').addEventListener('change', () => studio.setFrame(studio.frame));
+
 // The input frame, the sliders and the diagram follow the current frame.
 let shownFrame = -1;
 studio.onFrame.push((frame) => {
   const take = view && view.take;
   if (!view) return;
   const f = take ? Math.min(Math.round(frame), take.frames - 1) : -1;
+  if (!capture.live.running) turnHead(take ? take.head[f] : null);
   if (take && !capture.live.running && f !== shownFrame) {
     shownFrame = f;
     const img = /** @type {HTMLImageElement} */ ($('capture-frame'));
-    img.hidden = false;
     img.src = `api/capture/frame/${f}.png?t=${encodeURIComponent(take.source)}-${take.frames}`;
     fillSliders();
   }
   drawDiagram();
+});
+
+// A take reopened from the autosave has no previews (the input itself is not kept).
+const frameImage = /** @type {HTMLImageElement} */ ($('capture-frame'));
+frameImage.addEventListener('load', () => { frameImage.hidden = false; });
+frameImage.addEventListener('error', () => {
+  frameImage.hidden = true;
+  const note = $('capture-input-note');
+  note.textContent = 'No preview of this frame: the take was reopened from its autosave, and the input itself is not kept.';
+  note.hidden = false;
 });
 
 // ---------- live webcam ----------
@@ -472,6 +502,7 @@ function send(pixels, width, height, captured) {
       if (!response.ok) throw new Error(result.error || response.statusText);
       if (!capture.live.running) return;
       capture.live.weights = result.weights;
+      if (result.head) turnHead(result.head);
       capture.live.server_ms = result.server_ms;
       capture.live.frames++;
       fpsWindow.count++;

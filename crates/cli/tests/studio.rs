@@ -252,6 +252,68 @@ fn capture_mode_refuses_bad_input_with_a_reason() {
     assert!(body.contains("keyframe_every"), "{body}");
 }
 
+/// Waits for the capture job to end and returns the capture state.
+fn settled(port: u16) -> serde_json::Value {
+    for _ in 0..600 {
+        let (_, body) = request(port, "GET", "/api/capture/state", &[], b"");
+        let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+        if state["job"]["running"] != true {
+            return state;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    panic!("the capture job did not end in a minute");
+}
+
+#[test]
+fn a_take_and_its_corrections_survive_closing_the_studio() {
+    let dir = tempfile::tempdir().unwrap();
+    let video = dir.path().join("jaw.mp4");
+    let jaw: Vec<f32> = (0..12).map(|i| i as f32 / 12.0).collect();
+    support::encode_h264(&video, 256, 24, &support::ict_jaw_frames(&jaw, 256));
+    let project = dir.path().join("take.faceanim.json");
+    let json = [("Content-Type", "application/json")];
+    let studio = start(&project);
+    let open = serde_json::json!({ "path": video }).to_string();
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/open",
+        &json,
+        open.as_bytes(),
+    );
+    assert_eq!(status, 200, "{body}");
+    let state = settled(studio.port);
+    assert_eq!(state["take"]["frames"], 12, "{}", state["job"]);
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/correct",
+        &json,
+        br#"{"frame": 3, "name": "jawOpen", "value": 0.875}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    drop(studio);
+
+    // A new studio on the same project reopens the take with the correction.
+    let studio = start(&project);
+    let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["take"]["frames"], 12, "{body}");
+    assert_eq!(state["take"]["corrections"]["3"]["jawOpen"], 0.875);
+    // Its input is not kept: frames have no preview, and say so.
+    assert_eq!(
+        request(studio.port, "GET", "/api/capture/frame/0.png", &[], b"").0,
+        404
+    );
+    // Closing the take removes it for good.
+    request(studio.port, "POST", "/api/capture/close", &[], b"");
+    drop(studio);
+    let studio = start(&project);
+    let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    assert!(body.contains("\"take\":null"), "{body}");
+}
+
 /// The jawOpen of frame `i` of the capture test's video: shut, open to 0.8, shut, twice.
 fn jaw_curve(i: usize) -> f32 {
     let t = i as f32 / 47.0;

@@ -209,13 +209,12 @@ struct Correction {
 async fn correct(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
     let c: Correction = json_body(&body, "correction")?;
     {
-        let mut desk = both.desk();
-        let take = desk.take_mut().map_err(bad)?;
-        take.edit(|s| {
-            s.correct(c.frame, &c.name, c.value)
-                .map_err(|e| e.to_string())
-        })
-        .map_err(bad)?;
+        both.desk()
+            .edit_take(|s| {
+                s.correct(c.frame, &c.name, c.value)
+                    .map_err(|e| e.to_string())
+            })
+            .map_err(bad)?;
     }
     Ok(axum::Json(state_of(&both)))
 }
@@ -231,13 +230,12 @@ struct Uncorrect {
 async fn uncorrect(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
     let u: Uncorrect = json_body(&body, "uncorrect")?;
     {
-        let mut desk = both.desk();
-        let take = desk.take_mut().map_err(bad)?;
-        take.edit(|s| {
-            s.uncorrect(u.frame, u.name.as_deref())
-                .map_err(|e| e.to_string())
-        })
-        .map_err(bad)?;
+        both.desk()
+            .edit_take(|s| {
+                s.uncorrect(u.frame, u.name.as_deref())
+                    .map_err(|e| e.to_string())
+            })
+            .map_err(bad)?;
     }
     Ok(axum::Json(state_of(&both)))
 }
@@ -252,17 +250,16 @@ struct Keyframe {
 async fn keyframe(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
     let k: Keyframe = json_body(&body, "keyframe")?;
     {
-        let mut desk = both.desk();
-        let take = desk.take_mut().map_err(bad)?;
-        take.edit(|s| {
-            if k.on {
-                s.add_keyframe(k.frame)
-            } else {
-                s.remove_keyframe(k.frame)
-            }
-            .map_err(|e| e.to_string())
-        })
-        .map_err(bad)?;
+        both.desk()
+            .edit_take(|s| {
+                if k.on {
+                    s.add_keyframe(k.frame)
+                } else {
+                    s.remove_keyframe(k.frame)
+                }
+                .map_err(|e| e.to_string())
+            })
+            .map_err(bad)?;
     }
     Ok(axum::Json(state_of(&both)))
 }
@@ -276,30 +273,29 @@ struct Switch {
 async fn preference(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
     let Switch { on } = json_body(&body, "preference")?;
     {
-        let mut desk = both.desk();
-        let take = desk.take_mut().map_err(bad)?;
-        take.edit(|s| {
-            if !on {
-                s.clear_preference();
-            } else if s.corrections.is_empty() {
-                return Err("preference: correct at least one frame first".into());
-            } else {
-                s.apply_preference();
-            }
-            Ok(())
-        })
-        .map_err(bad)?;
+        both.desk()
+            .edit_take(|s| {
+                if !on {
+                    s.clear_preference();
+                } else if s.corrections.is_empty() {
+                    return Err("preference: correct at least one frame first".into());
+                } else {
+                    s.apply_preference();
+                }
+                Ok(())
+            })
+            .map_err(bad)?;
     }
     Ok(axum::Json(state_of(&both)))
 }
 
 async fn undo(State(both): State<Both>) -> Result<axum::Json<Value>, ApiError> {
-    both.desk().take_mut().map_err(bad)?.undo();
+    both.desk().step_history(true).map_err(bad)?;
     Ok(axum::Json(state_of(&both)))
 }
 
 async fn redo(State(both): State<Both>) -> Result<axum::Json<Value>, ApiError> {
-    both.desk().take_mut().map_err(bad)?.redo();
+    both.desk().step_history(false).map_err(bad)?;
     Ok(axum::Json(state_of(&both)))
 }
 

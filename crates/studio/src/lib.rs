@@ -13,7 +13,9 @@
 //! Safety: it listens on loopback only; requests whose `Host` or `Origin` is not the studio's
 //! own are refused (a web page elsewhere cannot drive it through DNS rebinding); request bodies
 //! are size-limited; it writes only the project file it was started with (and its autosave
-//! beside it), the character's adapter and its cached training set — exports are downloads the browser saves.
+//! beside it), the take being captured (`.NAME.take.json` beside it), the character's adapter and
+//! its cached training set (uploaded inputs go to a private temporary folder removed on exit) —
+//! exports are downloads the browser saves.
 #![deny(missing_docs)]
 
 mod api;
@@ -82,7 +84,8 @@ pub async fn bind(port: u16) -> Result<(tokio::net::TcpListener, SocketAddr), St
 /// [`StudioError`] if the project cannot be opened or the server fails.
 pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<(), StudioError> {
     let address = listener.local_addr().map_err(StudioError::Serve)?;
-    let desk = capture::CaptureDesk::new(&config.character, config.adapter_path);
+    let take_path = state::take_autosave_path(&config.project_path);
+    let desk = capture::CaptureDesk::new(&config.character, config.adapter_path, take_path);
     let studio =
         Studio::open(config.character, config.project_path).map_err(StudioError::Project)?;
     let both = capture_api::Both {

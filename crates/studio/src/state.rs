@@ -401,3 +401,11 @@ fn autosave_path(project: &std::path::Path) -> PathBuf {
         .map_or_else(|| "project".into(), |n| n.to_string_lossy().into_owned());
     project.with_file_name(format!(".{name}.autosave"))
 }
+
+/// Where capture mode keeps the take being edited: `.NAME.take.json` beside the project.
+pub(crate) fn take_autosave_path(project: &std::path::Path) -> PathBuf {
+    let name = project
+        .file_name()
+        .map_or_else(|| "project".into(), |n| n.to_string_lossy().into_owned());
+    project.with_file_name(format!(".{name}.take.json"))
+}

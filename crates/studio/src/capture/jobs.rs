@@ -55,7 +55,7 @@ pub fn start_capture(
                     take.session.frames.len(),
                     take.session.fps
                 );
-                lock(&desk).take = Some(take);
+                lock(&desk).set_take(take);
                 Ok(message)
             }
             Err(e) => Err(e),
@@ -376,6 +376,7 @@ fn install_adapter(
             .reestimate(&adapter)
             .map_err(|e| e.to_string())?;
         take.by_adapter = true;
+        guard.save_take();
     }
     guard.adapter_note = match adapter.check(character) {
         Ok(Fit::OtherShape) => Some("trained on another shape of this rig".into()),

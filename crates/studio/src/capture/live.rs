@@ -149,7 +149,7 @@ impl CaptureDesk {
             },
             (self.keyframe_every, self.smoothing),
         )?;
-        self.take = Some(take);
+        self.set_take(take);
         Ok(n)
     }
 }

@@ -240,6 +240,9 @@ pub struct CaptureDesk {
     smoothing: Option<OneEuro>,
     /// Uploaded inputs are written here (ffmpeg reads files).
     uploads: Option<tempfile::TempDir>,
+    /// The take's session is written here after every change and read back at start, so
+    /// closing the studio loses no correction.
+    take_path: PathBuf,
 }
 
 /// A shared capture desk.
@@ -255,10 +258,12 @@ fn default_smoothing() -> OneEuro {
 }
 
 impl CaptureDesk {
-    /// A desk for `character`, loading its adapter from `adapter_path` when there is one.
+    /// A desk for `character`, loading its adapter from `adapter_path` when there is one and
+    /// the take autosaved at `take_path` when it belongs to this character.
     #[must_use]
-    pub fn new(character: &Character, adapter_path: PathBuf) -> CaptureDesk {
+    pub fn new(character: &Character, adapter_path: PathBuf, take_path: PathBuf) -> CaptureDesk {
         let mut desk = CaptureDesk {
+            take_path,
             adapter_path,
             adapter: None,
             adapter_note: None,
@@ -270,7 +275,80 @@ impl CaptureDesk {
             uploads: None,
         };
         desk.load_adapter(character);
+        desk.restore_take(character);
         desk
+    }
+
+    /// Reopens the autosaved take (without its previews: the input is not kept).
+    fn restore_take(&mut self, character: &Character) {
+        let Ok(bytes) = std::fs::read(&self.take_path) else {
+            return;
+        };
+        let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
+        match Session::from_json(&bytes) {
+            Ok(session) if session.blendshapes == names => {
+                tracing::info!(
+                    "reopened the take of {} from {}",
+                    session.source,
+                    self.take_path.display()
+                );
+                self.take = Some(Take::new(session, Vec::new(), self.adapter.is_some()));
+            }
+            Ok(_) => tracing::warn!(
+                "{} is a take of another character; not opened",
+                self.take_path.display()
+            ),
+            Err(e) => tracing::warn!("{}: {e}; not opened", self.take_path.display()),
+        }
+    }
+
+    /// Writes the take (or, with none, removes the autosave).
+    fn save_take(&self) {
+        let result = match &self.take {
+            Some(take) => {
+                faceanim_files::write_atomic(&self.take_path, take.session.to_json().as_bytes())
+                    .map_err(|e| e.to_string())
+            }
+            None => match std::fs::remove_file(&self.take_path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e.to_string()),
+                _ => Ok(()),
+            },
+        };
+        if let Err(e) = result {
+            tracing::warn!("autosaving the take failed: {e}");
+        }
+    }
+
+    /// Makes `take` the one being edited (and autosaves it).
+    fn set_take(&mut self, take: Take) {
+        self.take = Some(take);
+        self.save_take();
+    }
+
+    /// Applies `change` to the take's session (undoably) and autosaves it.
+    ///
+    /// # Errors
+    /// A message when no take is open, or `change`'s.
+    pub fn edit_take(
+        &mut self,
+        change: impl FnOnce(&mut Session) -> Result<(), String>,
+    ) -> Result<(), String> {
+        self.take_mut()?.edit(change)?;
+        self.save_take();
+        Ok(())
+    }
+
+    /// Undoes (`back`) or redoes one edit of the take; false when there was none.
+    ///
+    /// # Errors
+    /// A message when no take is open.
+    pub fn step_history(&mut self, back: bool) -> Result<bool, String> {
+        let take = self.take_mut()?;
+        let stepped = if back { take.undo() } else { take.redo() };
+        if stepped {
+            self.save_take();
+        }
+        Ok(stepped)
     }
 
     /// Reads the adapter beside the character, keeping it only when it fits.
@@ -337,6 +415,7 @@ impl CaptureDesk {
     /// Closes the take.
     pub fn close(&mut self) {
         self.take = None;
+        self.save_take();
     }
 
     fn busy(&self) -> Result<(), String> {
@@ -379,8 +458,8 @@ impl CaptureDesk {
         }
         self.keyframe_every = keyframe_every;
         self.smoothing = smoothing;
-        if let Some(take) = &mut self.take {
-            take.edit(|session| {
+        if self.take.is_some() {
+            self.edit_take(|session| {
                 session.keyframe_every = keyframe_every;
                 session.smoothing = smoothing;
                 Ok(())
