@@ -80,10 +80,11 @@ async function refresh() {
 }
 
 function apply(v) {
-  const hadTake = view && view.take ? `${view.take.source}/${view.take.frames}` : null;
+  const hadTake = view && view.take ? view.take.id : null;
   view = v;
   const take = v.take;
-  const newTake = take && `${take.source}/${take.frames}` !== hadTake;
+  const newTake = take && take.id !== hadTake;
+  if (newTake) shownFrame = -1;
   studio.extraLastFrame = take ? take.frames - 1 : 0;
   if (newTake && studio.state && Math.abs(studio.state.fps - take.fps) > 1e-3) {
     // Strokes layered on the take count frames at the take's rate.
@@ -388,7 +389,7 @@ studio.onFrame.push((frame) => {
   if (take && !capture.live.running && f !== shownFrame) {
     shownFrame = f;
     const img = /** @type {HTMLImageElement} */ ($('capture-frame'));
-    img.src = `api/capture/frame/${f}.png?t=${encodeURIComponent(take.source)}-${take.frames}`;
+    img.src = `api/capture/frame/${f}.png?take=${take.id}`;
     fillSliders();
   }
   drawDiagram();

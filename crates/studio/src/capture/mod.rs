@@ -15,7 +15,7 @@ mod jobs;
 mod live;
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
@@ -66,6 +66,9 @@ pub struct Take {
     pub by_adapter: bool,
     undo: Vec<Edits>,
     redo: Vec<Edits>,
+    /// Different for every take this process opened: the page tells takes apart by it (two
+    /// uploads of `clip.mp4` are different takes).
+    id: u64,
 }
 
 /// What the user changes in a take (the frames and estimates stay): small enough to keep
@@ -107,7 +110,9 @@ const TAKE_UNDO_DEPTH: usize = 500;
 
 impl Take {
     fn new(session: Session, previews: Vec<Vec<u8>>, by_adapter: bool) -> Take {
+        static NEXT: AtomicU64 = AtomicU64::new(1);
         Take {
+            id: NEXT.fetch_add(1, Ordering::Relaxed),
             session,
             previews,
             by_adapter,
@@ -523,6 +528,7 @@ fn take_view(take: &Take) -> Value {
         .collect();
     let corrected: Vec<usize> = session.corrections.keys().copied().collect();
     json!({
+        "id": take.id,
         "source": session.source,
         "fps": session.fps,
         "frames": session.frames.len(),
