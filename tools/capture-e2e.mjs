@@ -30,6 +30,8 @@ try {
   const consoleErrors = [];
   page.on('pageerror', (e) => consoleErrors.push(String(e)));
   page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  // Which request a "Failed to load resource" was.
+  page.on('response', (r) => { if (r.status() >= 400) consoleErrors.push(`${r.status()} ${r.request().method()} ${r.url()}`); });
   const shot = (name) => page.screenshot({ path: path.join(out, `${name}.png`) });
   const captureState = () => page.evaluate(() => fetch('api/capture/state').then((r) => r.json()));
   const settled = (ms = 300000) => page.evaluate((t) => window.studio.capture.settled(t), ms);

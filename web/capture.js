@@ -501,7 +501,7 @@ function send(pixels, width, height, captured) {
     .then(async (response) => {
       const result = await response.json();
       if (!response.ok) throw new Error(result.error || response.statusText);
-      if (!capture.live.running) return;
+      if (!capture.live.running || !result.live) return;
       capture.live.weights = result.weights;
       if (result.head) turnHead(result.head);
       capture.live.server_ms = result.server_ms;
@@ -536,6 +536,8 @@ studio.onRender.push(() => {
 
 async function stopLive() {
   capture.live.running = false;
+  // Let frames already on their way come back before the server stops tracking.
+  for (let i = 0; i < 100 && inFlight > 0; i++) await new Promise((r) => setTimeout(r, 20));
   if (stream) for (const t of stream.getTracks()) t.stop();
   stream = null;
   video.hidden = true;

@@ -241,6 +241,17 @@ fn capture_mode_refuses_bad_input_with_a_reason() {
     );
     assert_eq!(status, 400);
     assert!(body.contains("4×4 RGBA"), "{body}");
+    // A frame still on its way when live mode stops is dropped, not an error.
+    request(port, "POST", "/api/capture/live/stop", &[], b"");
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/live/frame",
+        &[("x-width", "4"), ("x-height", "4")],
+        &[0u8; 64],
+    );
+    assert_eq!(status, 200, "{body}");
+    assert!(body.contains("\"live\":false"), "{body}");
     let (status, body) = request(
         port,
         "PUT",

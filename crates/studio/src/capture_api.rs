@@ -186,12 +186,15 @@ async fn cancel(State(both): State<Both>) -> axum::Json<Value> {
 async fn preview(State(both): State<Both>, Path(index): Path<String>) -> Response {
     let index = index.trim_end_matches(".png").parse::<usize>().ok();
     let desk = both.desk();
-    match (index, desk.take()) {
-        (Some(i), Some(take)) if i < take.previews.len() => {
+    match (
+        index.and_then(|i| desk.take().map(|t| t.previews.get(i))),
+        desk.take(),
+    ) {
+        (Some(Some(png)), _) => {
             let mut headers = HeaderMap::new();
             headers.insert(header::CONTENT_TYPE, HeaderValue::from_static("image/png"));
             headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
-            (headers, take.previews[i].clone()).into_response()
+            (headers, png).into_response()
         }
         (_, None) => (StatusCode::NOT_FOUND, "no capture is open").into_response(),
         _ => (StatusCode::NOT_FOUND, "no such frame").into_response(),

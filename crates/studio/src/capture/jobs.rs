@@ -13,7 +13,7 @@ use faceanim_rig::Character;
 use faceanim_track::{Frame, Tracker, TrackingMode};
 
 use super::{
-    CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Footage, Job, PREVIEW_HEIGHT, SharedDesk, Take,
+    CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Footage, Job, PREVIEW_HEIGHT, Previews, SharedDesk, Take,
     face_models, lock, make_take,
 };
 
@@ -38,29 +38,24 @@ pub fn start_capture(
         )
     };
     let desk = desk.clone();
-    std::thread::spawn(move || {
+    spawn_job(job, move |job| {
         let outcome = read_input(
-            &job,
+            job,
             &character,
             adapter.as_ref(),
             &path,
             &shown_name,
             filtering,
         );
-        let message = match outcome {
-            Ok(take) => {
-                let message = format!(
-                    "{}: {} frames at {} fps",
-                    shown_name,
-                    take.session.frames.len(),
-                    take.session.fps
-                );
-                lock(&desk).set_take(take);
-                Ok(message)
-            }
-            Err(e) => Err(e),
-        };
-        job.finish(message);
+        let take = outcome?;
+        let message = format!(
+            "{}: {} frames at {} fps",
+            shown_name,
+            take.session.frames.len(),
+            take.session.fps
+        );
+        lock(&desk).set_take(take);
+        Ok(message)
     });
     Ok(())
 }
@@ -81,7 +76,7 @@ fn read_input(
     job.stage("reading frames", info.frames.unwrap_or(0));
     let mut tracker = Tracker::new(models, TrackingMode::Track);
     let mut records = Vec::new();
-    let mut previews = Vec::new();
+    let mut previews = Previews::new();
     let mut names = Vec::new();
     while let Some(image) = source
         .next_frame()
@@ -100,7 +95,7 @@ fn read_input(
             faceanim_capture::capture_frame(&mut tracker, index, index as f32 / info.fps, &frame)
                 .map_err(|e| e.to_string())?,
         );
-        previews.push(image.preview(PREVIEW_HEIGHT).to_png()?);
+        previews.push(&image.preview(PREVIEW_HEIGHT).to_png()?)?;
         names.push(source.frame_name(index));
         job.progress(index + 1);
     }
@@ -214,33 +209,30 @@ pub fn start_training(
         guard.adapter_path.clone()
     };
     let desk = desk.clone();
-    std::thread::spawn(move || {
-        let outcome = (|| {
-            let cache = faceanim_adapt::dataset_cache_path(&adapter_path);
-            let dataset = dataset_for(&job, &character, &options, &cache, true)?;
-            let train_options = TrainOptions {
-                seed,
-                ..TrainOptions::default()
-            };
-            job.stage("training", train_options.max_epochs);
-            let adapter = with_control(&job, |control| {
-                faceanim_adapt::train(&dataset, &train_options, control)
-            })?;
-            faceanim_files::write_atomic(
-                &adapter_path,
-                &adapter.to_bytes().map_err(|e| e.to_string())?,
-            )
-            .map_err(|e| e.to_string())?;
-            let message = format!(
-                "trained on {} renders: test MAE {:.4}; saved {}",
-                adapter.report.samples,
-                adapter.report.mae_test,
-                adapter_path.display()
-            );
-            install_adapter(&desk, &character, &adapter_path, adapter)?;
-            Ok(message)
-        })();
-        job.finish(outcome);
+    spawn_job(job, move |job| {
+        let cache = faceanim_adapt::dataset_cache_path(&adapter_path);
+        let dataset = dataset_for(job, &character, &options, &cache, true)?;
+        let train_options = TrainOptions {
+            seed,
+            ..TrainOptions::default()
+        };
+        job.stage("training", train_options.max_epochs);
+        let adapter = with_control(job, |control| {
+            faceanim_adapt::train(&dataset, &train_options, control)
+        })?;
+        faceanim_files::write_atomic(
+            &adapter_path,
+            &adapter.to_bytes().map_err(|e| e.to_string())?,
+        )
+        .map_err(|e| e.to_string())?;
+        let message = format!(
+            "trained on {} renders: test MAE {:.4}; saved {}",
+            adapter.report.samples,
+            adapter.report.mae_test,
+            adapter_path.display()
+        );
+        install_adapter(&desk, &character, &adapter_path, adapter)?;
+        Ok(message)
     });
     Ok(())
 }
@@ -268,43 +260,49 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
         (adapter, corrections, guard.adapter_path.clone())
     };
     let desk = desk.clone();
-    std::thread::spawn(move || {
-        let outcome = (|| {
-            let cache = faceanim_adapt::dataset_cache_path(&adapter_path);
-            let options = DatasetOptions {
-                samples: FINETUNE_ANCHOR_SAMPLES,
-                seed: 1,
-                exclusive: faceanim_adapt::sampling::exclusive_pairs(&character, &[])
-                    .map_err(|e| e.to_string())?,
-            };
-            let dataset = dataset_for(&job, &character, &options, &cache, false)?;
-            let options = TrainOptions {
-                architecture: adapter.architecture,
-                ..TrainOptions::default()
-            };
-            job.stage("fine-tuning", options.max_epochs);
-            let (tuned, report) = with_control(&job, |control| {
-                faceanim_adapt::finetune(&adapter, &dataset, &corrections, &options, control)
-            })?;
-            faceanim_files::write_atomic(
-                &adapter_path,
-                &tuned.to_bytes().map_err(|e| e.to_string())?,
-            )
+    spawn_job(job, move |job| {
+        let cache = faceanim_adapt::dataset_cache_path(&adapter_path);
+        let options = DatasetOptions {
+            samples: FINETUNE_ANCHOR_SAMPLES,
+            seed: 1,
+            exclusive: faceanim_adapt::sampling::exclusive_pairs(&character, &[])
+                .map_err(|e| e.to_string())?,
+        };
+        let dataset = dataset_for(job, &character, &options, &cache, false)?;
+        let options = TrainOptions {
+            architecture: adapter.architecture,
+            ..TrainOptions::default()
+        };
+        job.stage("fine-tuning", options.max_epochs);
+        let (tuned, report) = with_control(job, |control| {
+            faceanim_adapt::finetune(&adapter, &dataset, &corrections, &options, control)
+        })?;
+        faceanim_files::write_atomic(&adapter_path, &tuned.to_bytes().map_err(|e| e.to_string())?)
             .map_err(|e| e.to_string())?;
-            install_adapter(&desk, &character, &adapter_path, tuned)?;
-            Ok(format!(
-                "fine-tuned on {} corrected frames: their error {:.4} → {:.4}, test {:.4} → {:.4}; saved {}",
-                corrections.len(),
-                report.corrected_before,
-                report.corrected_after,
-                report.test_before,
-                report.test_after,
-                adapter_path.display()
-            ))
-        })();
-        job.finish(outcome);
+        install_adapter(&desk, &character, &adapter_path, tuned)?;
+        Ok(format!(
+            "fine-tuned on {} corrected frames: their error {:.4} → {:.4}, test {:.4} → {:.4}; saved {}",
+            corrections.len(),
+            report.corrected_before,
+            report.corrected_after,
+            report.test_before,
+            report.test_after,
+            adapter_path.display()
+        ))
     });
     Ok(())
+}
+
+/// Runs `work` on its own thread and ends `job` with its outcome. A panic (a bug) ends the job
+/// with an error instead of leaving the studio busy for ever.
+fn spawn_job(job: Arc<Job>, work: impl FnOnce(&Job) -> Result<String, String> + Send + 'static) {
+    std::thread::spawn(move || {
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&job)))
+            .unwrap_or_else(|_| {
+                Err("stopped by an internal error (a bug; the studio's log says where)".into())
+            });
+        job.finish(outcome);
+    });
 }
 
 /// Runs `work` with the job's progress and cancel flag.

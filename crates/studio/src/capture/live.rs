@@ -11,7 +11,9 @@ use faceanim_media::Image;
 use faceanim_rig::Character;
 use faceanim_track::{Frame, Tracker, TrackingMode};
 
-use super::{ByName, CaptureDesk, Footage, LIVE_PREVIEW_HEIGHT, face_models, lock, make_take};
+use super::{
+    ByName, CaptureDesk, Footage, LIVE_PREVIEW_HEIGHT, Previews, face_models, lock, make_take,
+};
 
 /// Live webcam tracking: the tracker follows the face from frame to frame.
 pub(super) struct Live {
@@ -49,14 +51,17 @@ impl std::fmt::Debug for Live {
 #[derive(Default)]
 pub(super) struct Recording {
     records: Vec<FrameRecord>,
-    previews: Vec<Vec<u8>>,
+    previews: Previews,
     started: Option<f32>,
 }
 
 /// One webcam frame's result.
 #[derive(Debug, serde::Serialize)]
 pub struct LiveResult {
-    /// The character's weights.
+    /// False when live mode was stopped while the frame was on its way: it is dropped (a
+    /// normal race between the camera and the stop button, not an error).
+    pub live: bool,
+    /// The character's weights (empty when dropped).
     pub weights: Vec<f32>,
     /// Whether a face was found.
     pub found: bool,
@@ -191,7 +196,16 @@ impl LiveHandle {
             out.copy_from_slice(&pixel[..3]);
         }
         let mut guard = lock(&self.live);
-        let live = guard.as_mut().ok_or("live mode is off: start it first")?;
+        let Some(live) = guard.as_mut() else {
+            return Ok(LiveResult {
+                live: false,
+                weights: Vec::new(),
+                found: false,
+                head: None,
+                server_ms: started.elapsed().as_secs_f64() * 1000.0,
+                recorded: None,
+            });
+        };
         let time = live.started.elapsed().as_secs_f32();
         let index = live.frames;
         let record = faceanim_capture::capture_frame(
@@ -234,12 +248,13 @@ impl LiveHandle {
                 let image = Image { width, height, rgb };
                 recording
                     .previews
-                    .push(image.preview(LIVE_PREVIEW_HEIGHT).to_png()?);
+                    .push(&image.preview(LIVE_PREVIEW_HEIGHT).to_png()?)?;
                 Some(recording.records.len())
             }
             None => None,
         };
         Ok(LiveResult {
+            live: true,
             weights,
             found,
             head,

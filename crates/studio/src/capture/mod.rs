@@ -60,8 +60,8 @@ fn face_models() -> Result<&'static FaceModels, String> {
 pub struct Take {
     /// Estimates, keyframes, corrections and preference.
     pub session: Session,
-    /// PNG preview of each input frame.
-    pub previews: Vec<Vec<u8>>,
+    /// A PNG preview of each input frame.
+    pub previews: Previews,
     /// Whether the estimates came from the adapter (else by name).
     pub by_adapter: bool,
     undo: Vec<Edits>,
@@ -69,6 +69,51 @@ pub struct Take {
     /// Different for every take this process opened: the page tells takes apart by it (two
     /// uploads of `clip.mp4` are different takes).
     id: u64,
+}
+
+/// A take's frame previews: PNG files in a private temporary folder (a long video's previews
+/// would not fit in memory), removed with the take.
+#[derive(Debug, Default)]
+pub struct Previews {
+    dir: Option<tempfile::TempDir>,
+    count: usize,
+}
+
+impl Previews {
+    /// An empty set, its folder made on the first frame.
+    #[must_use]
+    pub fn new() -> Previews {
+        Previews::default()
+    }
+
+    /// Adds the next frame's preview.
+    ///
+    /// # Errors
+    /// The file error.
+    pub fn push(&mut self, png: &[u8]) -> Result<(), String> {
+        if self.dir.is_none() {
+            self.dir = Some(
+                tempfile::Builder::new()
+                    .prefix("faceanim-previews-")
+                    .tempdir()
+                    .map_err(|e| format!("making a folder for previews: {e}"))?,
+            );
+        }
+        let dir = self.dir.as_ref().ok_or("no preview folder")?;
+        let path = dir.path().join(format!("{}.png", self.count));
+        std::fs::write(&path, png).map_err(|e| format!("{}: {e}", path.display()))?;
+        self.count += 1;
+        Ok(())
+    }
+
+    /// Frame `index`'s preview, if there is one.
+    #[must_use]
+    pub fn get(&self, index: usize) -> Option<Vec<u8>> {
+        let dir = self.dir.as_ref()?;
+        (index < self.count)
+            .then(|| std::fs::read(dir.path().join(format!("{index}.png"))).ok())
+            .flatten()
+    }
 }
 
 /// What the user changes in a take (the frames and estimates stay): small enough to keep
@@ -109,7 +154,7 @@ impl Edits {
 const TAKE_UNDO_DEPTH: usize = 500;
 
 impl Take {
-    fn new(session: Session, previews: Vec<Vec<u8>>, by_adapter: bool) -> Take {
+    fn new(session: Session, previews: Previews, by_adapter: bool) -> Take {
         static NEXT: AtomicU64 = AtomicU64::new(1);
         Take {
             id: NEXT.fetch_add(1, Ordering::Relaxed),
@@ -297,7 +342,7 @@ impl CaptureDesk {
                     session.source,
                     self.take_path.display()
                 );
-                self.take = Some(Take::new(session, Vec::new(), self.adapter.is_some()));
+                self.take = Some(Take::new(session, Previews::new(), self.adapter.is_some()));
             }
             Ok(_) => tracing::warn!(
                 "{} is a take of another character; not opened",
@@ -600,7 +645,7 @@ struct Footage {
     records: Vec<FrameRecord>,
     /// One per record: the image file, or `{stem}_{n}.png` for video frames.
     frame_names: Vec<String>,
-    previews: Vec<Vec<u8>>,
+    previews: Previews,
     /// A single photo (animated 0 → peak → 0).
     still: bool,
 }
@@ -782,7 +827,7 @@ mod tests {
             1,
             frames,
         );
-        Take::new(session, Vec::new(), false)
+        Take::new(session, Previews::new(), false)
     }
 
     #[test]
