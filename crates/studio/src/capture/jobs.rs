@@ -380,6 +380,9 @@ fn install_adapter(
         Ok(Fit::OtherShape) => Some("trained on another shape of this rig".into()),
         _ => None,
     };
+    if let Some(live) = lock(&guard.live).as_mut() {
+        live.adapter = Some(adapter.clone());
+    }
     guard.adapter = Some(adapter);
     Ok(())
 }

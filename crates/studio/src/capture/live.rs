@@ -19,6 +19,8 @@ use super::{
 pub(super) struct Live {
     tracker: Tracker<'static>,
     by_name: ByName,
+    /// The adapter in use (copied once, not per frame; replaced when one is trained).
+    pub(super) adapter: Option<Adapter>,
     started: Instant,
     filter: Option<OneEuroState>,
     recording: Option<Recording>,
@@ -83,6 +85,7 @@ impl CaptureDesk {
         *lock(&self.live) = Some(Live {
             tracker: Tracker::new(models, TrackingMode::Track),
             by_name: ByName::new(character),
+            adapter: self.adapter.clone(),
             started: Instant::now(),
             filter: self.smoothing.map(OneEuroState::new),
             recording: None,
@@ -101,7 +104,6 @@ impl CaptureDesk {
     pub fn live_handle(&self) -> LiveHandle {
         LiveHandle {
             live: self.live.clone(),
-            adapter: self.adapter.clone(),
         }
     }
 
@@ -162,7 +164,6 @@ impl CaptureDesk {
 /// What a live frame needs, taken from the desk so tracking does not block it.
 pub struct LiveHandle {
     live: Arc<Mutex<Option<Live>>>,
-    adapter: Option<Adapter>,
 }
 
 impl LiveHandle {
@@ -170,7 +171,7 @@ impl LiveHandle {
     /// character's weights.
     ///
     /// # Errors
-    /// A message for a malformed frame, live mode off, or a failing model.
+    /// A message for a malformed frame or a failing model.
     pub fn track(
         &self,
         character: &Character,
@@ -225,7 +226,7 @@ impl LiveHandle {
         let mut weights = if !found {
             vec![0.0; character.blendshapes().len()]
         } else {
-            match &self.adapter {
+            match &live.adapter {
                 Some(adapter) => Expression::from_face(&scores, &record.landmarks, record.head)
                     .map_or_else(
                         || vec![0.0; adapter.blendshapes.len()],
