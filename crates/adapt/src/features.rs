@@ -94,6 +94,13 @@ impl Expression {
         })
     }
 
+    /// From one frame capture recorded (see [`Expression::from_face`]).
+    #[must_use]
+    pub fn from_record(record: &faceanim_capture::FrameRecord) -> Option<Expression> {
+        let scores: Vec<f32> = record.scores.iter().map(|s| s.1).collect();
+        Expression::from_face(&scores, &record.landmarks, record.head)
+    }
+
     /// The adapter's input for `set`.
     #[must_use]
     pub fn input(&self, set: FeatureSet) -> Vec<f32> {

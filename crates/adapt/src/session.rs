@@ -38,6 +38,28 @@ pub struct SessionFrame {
     pub estimate: Vec<f32>,
 }
 
+impl SessionFrame {
+    /// The session's frame for what capture recorded of it, named `name`, with its
+    /// `expression` (from [`Expression::from_record`]) and `estimate`.
+    #[must_use]
+    pub fn from_record(
+        record: &faceanim_capture::FrameRecord,
+        name: String,
+        expression: Option<Expression>,
+        estimate: Vec<f32>,
+    ) -> SessionFrame {
+        SessionFrame {
+            name,
+            time: record.time,
+            presence: record.presence,
+            head: record.head,
+            head_position: record.head_position,
+            expression,
+            estimate,
+        }
+    }
+}
+
 /// A session file. See the module docs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -276,10 +276,7 @@ fn with_adapter(
     let expressions: Vec<Option<faceanim_adapt::Expression>> = result
         .frames
         .iter()
-        .map(|f| {
-            let scores: Vec<f32> = f.scores.iter().map(|s| s.1).collect();
-            faceanim_adapt::Expression::from_face(&scores, &f.landmarks, f.head)
-        })
+        .map(faceanim_adapt::Expression::from_record)
         .collect();
     let estimates = estimate_frames(&expressions, adapter.blendshapes.len(), |e| {
         adapter.predict(e)
@@ -290,14 +287,8 @@ fn with_adapter(
         .iter()
         .zip(expressions)
         .zip(estimates)
-        .map(|((f, expression), estimate)| SessionFrame {
-            name: source.frame_name(f.index),
-            time: f.time,
-            presence: f.presence,
-            head: f.head,
-            head_position: f.head_position,
-            expression,
-            estimate,
+        .map(|((f, expression), estimate)| {
+            SessionFrame::from_record(f, source.frame_name(f.index), expression, estimate)
         })
         .collect();
     let (every, smoothing) = match args.filter {

@@ -99,6 +99,36 @@ fn request(
     (status, body)
 }
 
+/// Runs `tools/SCRIPT URL OUT ARGUMENTS…` (playwright-core driving Debian's chromium) against
+/// `studio` and returns the JSON line of measurements it prints last; fails with its output.
+fn browser_script(
+    script: &str,
+    studio: &Studio,
+    out: &std::path::Path,
+    arguments: &[std::ffi::OsString],
+) -> serde_json::Value {
+    assert!(
+        repo().join("tools/node_modules/playwright-core").exists(),
+        "playwright-core is not installed: run scripts/setup.sh"
+    );
+    let run = Command::new("node")
+        .arg(repo().join("tools").join(script))
+        .arg(format!("http://127.0.0.1:{}/", studio.port))
+        .arg(out)
+        .args(arguments)
+        .output()
+        .expect("node");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    eprintln!("{stdout}");
+    assert!(
+        run.status.success(),
+        "{}\n{}",
+        stdout,
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_str(stdout.lines().last().unwrap()).unwrap()
+}
+
 #[test]
 fn only_its_own_host_and_origin_are_served() {
     let dir = tempfile::tempdir().unwrap();
@@ -158,27 +188,7 @@ fn only_its_own_host_and_origin_are_served() {
 fn an_animator_session_in_a_real_browser() {
     let dir = tempfile::tempdir().unwrap();
     let studio = start(&dir.path().join("session.faceanim.json"));
-    let out = output_dir("studio");
-    let script = repo().join("tools/studio-e2e.mjs");
-    assert!(
-        repo().join("tools/node_modules/playwright-core").exists(),
-        "playwright-core is not installed: run scripts/setup.sh"
-    );
-    let run = Command::new("node")
-        .arg(&script)
-        .arg(format!("http://127.0.0.1:{}/", studio.port))
-        .arg(&out)
-        .output()
-        .expect("node");
-    let stdout = String::from_utf8_lossy(&run.stdout);
-    eprintln!("{stdout}");
-    assert!(
-        run.status.success(),
-        "{}\n{}",
-        stdout,
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let measured: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    let measured = browser_script("studio-e2e.mjs", &studio, &output_dir("studio"), &[]);
     assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
     // The project was saved where the studio was pointed, and nowhere else.
     assert!(dir.path().join("session.faceanim.json").exists());
@@ -332,11 +342,11 @@ fn jaw_curve(i: usize) -> f32 {
 }
 
 /// Capture mode as a newcomer uses it, in a real browser (`tools/capture-e2e.mjs`): pick a few
-/// photos, then upload a video of the ICT head with a known jawOpen curve, see the estimate follow it, correct one
-/// frame, apply the preference, export every format, train and fine-tune the adapter from the
-/// page (and cancel a training), then the webcam — Chromium's fake camera playing a rendered
-/// face that opens its mouth — in live mode, and a recorded take. Screenshots go to
-/// `test-output/capture/`.
+/// photos, then upload a video of the ICT head with a known jawOpen curve, see the estimate
+/// follow it, correct one frame, apply the preference, export every format, train and
+/// fine-tune the adapter from the page (and cancel a training), then the webcam — Chromium's
+/// fake camera playing a rendered face that opens its mouth — in live mode, and a recorded take.
+/// Screenshots go to `test-output/capture/`.
 #[test]
 fn capture_mode_in_a_real_browser() {
     let dir = tempfile::tempdir().unwrap();
@@ -376,25 +386,13 @@ fn capture_mode_in_a_real_browser() {
         &["--adapter".as_ref(), adapter.as_os_str()],
     );
     let truth_json = serde_json::to_string(&truth).unwrap();
-    let run = Command::new("node")
-        .arg(repo().join("tools/capture-e2e.mjs"))
-        .arg(format!("http://127.0.0.1:{}/", studio.port))
-        .arg(&out)
-        .arg(&video)
-        .arg(&y4m)
-        .arg(&truth_json)
-        .args(&photos)
-        .output()
-        .expect("node");
-    let stdout = String::from_utf8_lossy(&run.stdout);
-    eprintln!("{stdout}");
-    assert!(
-        run.status.success(),
-        "{}\n{}",
-        stdout,
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let measured: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    let mut arguments = vec![
+        video.into_os_string(),
+        y4m.into_os_string(),
+        truth_json.into(),
+    ];
+    arguments.extend(photos.into_iter().map(std::path::PathBuf::into_os_string));
+    let measured = browser_script("capture-e2e.mjs", &studio, &out, &arguments);
     assert!(
         measured["live_max_jaw_open"].as_f64().unwrap() > 0.4,
         "{measured}"

@@ -1,6 +1,6 @@
 //! The HTTP/JSON API (documented in `crates/studio/API.md`) and the embedded page.
 
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex};
 
 use axum::Router;
 use axum::body::Bytes;
@@ -16,8 +16,8 @@ use glam::Vec3;
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use crate::Studio;
 use crate::capture_api::Both;
+use crate::{Studio, lock};
 
 /// The page, embedded at build time so the binary needs nothing beside it.
 #[derive(rust_embed::Embed)]
@@ -31,7 +31,8 @@ const JSON_LIMIT: usize = 16 * 1024 * 1024;
 /// Character uploads may be this large.
 const CHARACTER_LIMIT: usize = 512 * 1024 * 1024;
 
-struct ApiError(StatusCode, String);
+/// An error answer: the status and a message naming the field or file.
+pub(crate) struct ApiError(pub(crate) StatusCode, pub(crate) String);
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
@@ -39,19 +40,16 @@ impl IntoResponse for ApiError {
     }
 }
 
-fn bad(message: impl Into<String>) -> ApiError {
+/// `400` with `message`.
+pub(crate) fn bad(message: impl Into<String>) -> ApiError {
     ApiError(StatusCode::BAD_REQUEST, message.into())
 }
 
-fn lock(shared: &Shared) -> MutexGuard<'_, Studio> {
-    // A panic while holding the lock leaves a consistent project (changes are whole
-    // replacements), so a poisoned lock is still safe to use.
-    shared
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner)
-}
-
-fn json_body<T: serde::de::DeserializeOwned>(bytes: &[u8], what: &str) -> Result<T, ApiError> {
+/// A JSON body as `T`, or `400` naming `what` and the problem.
+pub(crate) fn json_body<T: serde::de::DeserializeOwned>(
+    bytes: &[u8],
+    what: &str,
+) -> Result<T, ApiError> {
     serde_json::from_slice(bytes).map_err(|e| bad(format!("{what}: {e}")))
 }
 
@@ -174,14 +172,7 @@ async fn upload_character(
     headers: HeaderMap,
     body: Bytes,
 ) -> Result<axum::Json<Value>, ApiError> {
-    let name = headers
-        .get("x-filename")
-        .and_then(|h| h.to_str().ok())
-        .unwrap_or("uploaded file")
-        .to_owned();
-    if body.is_empty() {
-        return Err(bad(format!("{name}: the file is empty")));
-    }
+    let name = uploaded_name(&headers, &body, "uploaded file")?;
     // Import off the async threads: a large character takes a moment.
     let imported =
         tokio::task::spawn_blocking(move || import_gltf(&body, &name, &NoExternalResources))
@@ -193,10 +184,7 @@ async fn upload_character(
     // An uploaded character's adapter lives beside the project.
     let adapter_path =
         faceanim_adapt::default_adapter_path(studio.project_path.parent(), studio.character.name());
-    both.desk
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner)
-        .character_changed(&studio.character, adapter_path);
+    lock(&both.desk).character_changed(&studio.character, adapter_path);
     Ok(axum::Json(json!({
         "warnings": imported.warnings.iter().map(ToString::to_string).collect::<Vec<_>>(),
         "state": studio.view(),
@@ -384,8 +372,9 @@ async fn redo(State(shared): State<Shared>) -> axum::Json<Value> {
     axum::Json(studio.view())
 }
 
-fn download(bytes: Vec<u8>, mime: &'static str, name: &str) -> Response {
-    let disposition = format!("attachment; filename=\"{name}\"");
+/// A file the browser saves as `name`.
+pub(crate) fn download(bytes: Vec<u8>, mime: &'static str, name: &str) -> Response {
+    let disposition = format!("attachment; filename=\"{}\"", name.replace('"', ""));
     let mut headers = HeaderMap::new();
     headers.insert(header::CONTENT_TYPE, HeaderValue::from_static(mime));
     if let Ok(value) = HeaderValue::from_str(&disposition) {
@@ -393,6 +382,24 @@ fn download(bytes: Vec<u8>, mime: &'static str, name: &str) -> Response {
     }
     headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
     (headers, bytes).into_response()
+}
+
+/// The name an upload was sent with (header `x-filename`, else `fallback`); `400` naming it
+/// when the file is empty.
+pub(crate) fn uploaded_name(
+    headers: &HeaderMap,
+    body: &[u8],
+    fallback: &str,
+) -> Result<String, ApiError> {
+    let name = headers
+        .get("x-filename")
+        .and_then(|h| h.to_str().ok())
+        .unwrap_or(fallback)
+        .to_owned();
+    if body.is_empty() {
+        return Err(bad(format!("{name}: the file is empty")));
+    }
+    Ok(name)
 }
 
 fn file_stem(studio: &Studio) -> String {

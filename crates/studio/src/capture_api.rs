@@ -13,10 +13,11 @@ use faceanim_anim::Clip;
 use faceanim_anim::filter::OneEuro;
 use faceanim_rig::export::MorphAnimation;
 use serde::Deserialize;
-use serde_json::{Value, json};
+use serde_json::Value;
 
-use crate::Studio;
+use crate::api::{ApiError, bad, download, json_body, uploaded_name};
 use crate::capture::{self, CaptureDesk, SharedDesk};
+use crate::{Studio, lock};
 
 /// Uploaded videos may be this large.
 const INPUT_LIMIT: usize = 2 * 1024 * 1024 * 1024;
@@ -31,31 +32,11 @@ pub struct Both {
 
 impl Both {
     fn studio(&self) -> MutexGuard<'_, Studio> {
-        self.studio
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner)
+        lock(&self.studio)
     }
     fn desk(&self) -> MutexGuard<'_, CaptureDesk> {
-        self.desk
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner)
+        lock(&self.desk)
     }
-}
-
-struct ApiError(StatusCode, String);
-
-impl IntoResponse for ApiError {
-    fn into_response(self) -> Response {
-        (self.0, axum::Json(json!({ "error": self.1 }))).into_response()
-    }
-}
-
-fn bad(message: impl Into<String>) -> ApiError {
-    ApiError(StatusCode::BAD_REQUEST, message.into())
-}
-
-fn json_body<T: serde::de::DeserializeOwned>(bytes: &[u8], what: &str) -> Result<T, ApiError> {
-    serde_json::from_slice(bytes).map_err(|e| bad(format!("{what}: {e}")))
 }
 
 pub fn router(both: Both) -> Router {
@@ -138,14 +119,7 @@ async fn upload(
     headers: HeaderMap,
     body: Bytes,
 ) -> Result<axum::Json<Value>, ApiError> {
-    let name = headers
-        .get("x-filename")
-        .and_then(|h| h.to_str().ok())
-        .unwrap_or("upload")
-        .to_owned();
-    if body.is_empty() {
-        return Err(bad(format!("{name}: the file is empty")));
-    }
+    let name = uploaded_name(&headers, &body, "upload")?;
     if batch.batch.is_some() && batch.index >= batch.count {
         return Err(bad(format!(
             "index: {} is not below count {}",
@@ -376,14 +350,10 @@ async fn live_start(State(both): State<Both>) -> Result<axum::Json<Value>, ApiEr
     // Loading the models the first time takes a moment: off the async threads.
     let desk = both.desk.clone();
     let character = both.studio().character.clone();
-    tokio::task::spawn_blocking(move || {
-        desk.lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner)
-            .start_live(&character)
-    })
-    .await
-    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
-    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e))?;
+    tokio::task::spawn_blocking(move || lock(&desk).start_live(&character))
+        .await
+        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
+        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e))?;
     Ok(axum::Json(state_of(&both)))
 }
 
@@ -428,17 +398,6 @@ async fn live_frame(
 }
 
 // ---------- exports ----------
-
-fn download(bytes: Vec<u8>, mime: &'static str, name: &str) -> Response {
-    let disposition = format!("attachment; filename=\"{}\"", name.replace('"', ""));
-    let mut headers = HeaderMap::new();
-    headers.insert(header::CONTENT_TYPE, HeaderValue::from_static(mime));
-    if let Ok(value) = HeaderValue::from_str(&disposition) {
-        headers.insert(header::CONTENT_DISPOSITION, value);
-    }
-    headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
-    (headers, bytes).into_response()
-}
 
 fn take_name(desk: &CaptureDesk) -> String {
     desk.take()

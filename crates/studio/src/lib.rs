@@ -28,8 +28,18 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use faceanim_rig::Character;
+use std::sync::MutexGuard;
 
 pub use state::Studio;
+
+/// Locks `mutex`. Every change made under the studio's locks replaces a whole value (a
+/// project, a take, a job's outcome), so a lock poisoned by a panic still guards a consistent
+/// state and is used as it is.
+pub(crate) fn lock<T>(mutex: &Mutex<T>) -> MutexGuard<'_, T> {
+    mutex
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
 
 /// What the studio opens with.
 #[derive(Debug)]

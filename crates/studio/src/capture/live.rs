@@ -221,18 +221,18 @@ impl LiveHandle {
         )
         .map_err(|e| e.to_string())?;
         live.frames += 1;
-        let scores: Vec<f32> = record.scores.iter().map(|s| s.1).collect();
         let found = record.found.is_some();
         let mut weights = if !found {
             vec![0.0; character.blendshapes().len()]
         } else {
             match &live.adapter {
-                Some(adapter) => Expression::from_face(&scores, &record.landmarks, record.head)
-                    .map_or_else(
-                        || vec![0.0; adapter.blendshapes.len()],
-                        |e| adapter.predict(&e),
-                    ),
-                None => live.by_name.estimate(&scores),
+                Some(adapter) => Expression::from_record(&record).map_or_else(
+                    || vec![0.0; adapter.blendshapes.len()],
+                    |e| adapter.predict(&e),
+                ),
+                None => live
+                    .by_name
+                    .estimate(&record.scores.iter().map(|s| s.1).collect::<Vec<_>>()),
             }
         };
         if found && let Some(filter) = live.filter.as_mut() {

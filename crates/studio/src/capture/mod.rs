@@ -28,6 +28,8 @@ use faceanim_rig::Character;
 use faceanim_track::FaceModels;
 use serde_json::{Value, json};
 
+use crate::lock;
+
 pub use jobs::{start_capture, start_finetune, start_training};
 use live::Live;
 pub use live::{LiveHandle, LiveResult};
@@ -265,13 +267,6 @@ impl Job {
             "error": outcome.as_ref().and_then(|o| o.as_ref().err()),
         })
     }
-}
-
-fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    // Every change under these locks is a whole replacement; a poisoned lock is still valid.
-    mutex
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// Capture mode's state (see the module docs).
@@ -665,13 +660,8 @@ fn make_take(
         previews,
         still,
     } = footage;
-    let expressions: Vec<Option<Expression>> = records
-        .iter()
-        .map(|f| {
-            let scores: Vec<f32> = f.scores.iter().map(|s| s.1).collect();
-            Expression::from_face(&scores, &f.landmarks, f.head)
-        })
-        .collect();
+    let expressions: Vec<Option<Expression>> =
+        records.iter().map(Expression::from_record).collect();
     let count = character.blendshapes().len();
     let estimates = match adapter {
         Some(adapter) => estimate_frames(&expressions, count, |e| adapter.predict(e)),
@@ -705,14 +695,8 @@ fn make_take(
         .zip(expressions)
         .zip(estimates)
         .zip(frame_names)
-        .map(|(((f, expression), estimate), name)| SessionFrame {
-            name,
-            time: f.time,
-            presence: f.presence,
-            head: f.head,
-            head_position: f.head_position,
-            expression,
-            estimate,
+        .map(|(((f, expression), estimate), name)| {
+            SessionFrame::from_record(f, name, expression, estimate)
         })
         .collect();
     let names = character
