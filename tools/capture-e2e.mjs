@@ -42,6 +42,15 @@ try {
   await page.waitForFunction(() => window.studio && window.studio.bakedReady && window.studio.capture, null, { timeout: 60000 });
   await page.click('#tab-capture');
   await shot('01-capture-tab');
+  // Side by side: the input frame, the character, the capture panel; the sketch settings gone.
+  const layout = await page.evaluate(() => Object.fromEntries(['capture-input', 'viewport', 'capture-panel', 'settings'].map((id) => {
+    const r = document.getElementById(id).getBoundingClientRect();
+    return [id, { width: Math.round(r.width), left: Math.round(r.left) }];
+  })));
+  check(layout.settings.width === 0, `the sketch settings show in the Capture tab: ${JSON.stringify(layout)}`);
+  check(layout['capture-input'].width > 200 && layout.viewport.width > 200 && layout['capture-panel'].width > 200
+    && layout['capture-input'].left < layout.viewport.left && layout.viewport.left < layout['capture-panel'].left,
+  `the Capture tab is not input | character | panel: ${JSON.stringify(layout)}`);
 
   // 1. Photos picked together are one sequence, in name order.
   await page.setInputFiles('#capture-file', photos);

@@ -32,6 +32,13 @@ try {
   await page.goto(url);
   await ready();
   await shot('01-opened');
+  // The Sketch tab is the viewport and its settings, and nothing of capture mode.
+  const layout = await page.evaluate(() => {
+    const box = (id) => { const e = document.getElementById(id); const r = e.getBoundingClientRect(); return { visible: e.getClientRects().length > 0, width: r.width }; };
+    return { viewport: box('viewport'), input: box('capture-input'), panel: box('capture-panel'), window: innerWidth };
+  });
+  check(!layout.input.visible && !layout.panel.visible, `capture mode's panels show in the Sketch tab: ${JSON.stringify(layout)}`);
+  check(layout.viewport.width > layout.window * 0.6, `the viewport is squeezed in the Sketch tab: ${JSON.stringify(layout)}`);
   check(consoleErrors.length === 0, `page errors on open: ${consoleErrors.join('; ')}`);
 
   // 1. A stroke from the left mouth corner towards the mouthSmile_L target.

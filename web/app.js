@@ -35,7 +35,8 @@ function showError(message) {
 
 // ---------- scene ----------
 const viewport = $('viewport');
-// `?fast`: a cheaper viewport (no antialiasing, Lambert shading) for machines without a GPU.
+// `?fast`: a cheaper viewport for machines without a GPU: no antialiasing, morph targets blended
+// on the CPU (blendOnCpu) and lighting computed per vertex (vertexLitMaterial).
 const FAST = new URLSearchParams(location.search).has('fast');
 const renderer = new THREE.WebGLRenderer({ antialias: !FAST });
 renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
@@ -45,7 +46,8 @@ scene.background = new THREE.Color(0x2a2d33);
 const camera = new THREE.PerspectiveCamera(30, 1, 0.001, 1000);
 const controls = new OrbitControls(camera, renderer.domElement);
 controls.enableDamping = false;
-scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.2));
+const hemisphere = new THREE.HemisphereLight(0xffffff, 0x404050, 1.2);
+scene.add(hemisphere);
 const key = new THREE.DirectionalLight(0xffffff, 1.6);
 key.position.set(-1, 1.2, 2);
 scene.add(key);
@@ -137,7 +139,7 @@ async function loadBaked() {
   const root = gltf.scene;
   root.traverse((o) => {
     if (!o.isMesh) return;
-    if (FAST) { const m = o.material; o.material = new THREE.MeshLambertMaterial({ color: m.color, map: m.map, vertexColors: m.vertexColors }); m.dispose(); blendOnCpu(o); }
+    if (FAST) { const m = o.material; o.material = vertexLitMaterial(m); m.dispose(); blendOnCpu(o); }
     o.material.side = THREE.DoubleSide;
     studio.meshes.push(o);
   });
@@ -158,6 +160,72 @@ async function loadBaked() {
 /** The last frame with animation: the sketch's or the captured take's. */
 function lastFrame() {
   return Math.max(0, Math.ceil(studio.state ? studio.state.last_frame : 0), studio.extraLastFrame);
+}
+
+/** The same lights as the scene's, evaluated once per vertex instead of once per pixel: software
+ * GL (SwiftShader) drew the head's 49k triangles at 12 frames per second with three.js's Lambert
+ * material and at over 50 with this one. The lit colour is turned to sRGB in the vertex shader
+ * too, so a pixel only interpolates it (and multiplies a texture, left sRGB-encoded: gamma is a
+ * power law, so encoding the product or the factors agrees). Both faces are lit: the fragment
+ * picks the side it sees. */
+function vertexLitMaterial(/** @type {any} */ source) {
+  const map = source.map ? source.map.clone() : null;
+  if (map) { map.colorSpace = THREE.NoColorSpace; map.needsUpdate = true; }
+  const material = new THREE.ShaderMaterial({
+    vertexColors: !!source.vertexColors,
+    defines: map ? { FAST_MAP: '' } : {},
+    uniforms: {
+      albedo: { value: (source.color || new THREE.Color(1, 1, 1)).clone() },
+      map: { value: map },
+      sky: { value: hemisphere.color.clone().multiplyScalar(hemisphere.intensity) },
+      ground: { value: hemisphere.groundColor.clone().multiplyScalar(hemisphere.intensity) },
+      keyColor: { value: key.color.clone().multiplyScalar(key.intensity) },
+      keyDirection: { value: key.position.clone().sub(key.target.position).normalize() },
+    },
+    vertexShader: `
+      uniform vec3 albedo, sky, ground, keyColor, keyDirection;
+      varying vec3 litFront, litBack;
+      #ifdef FAST_MAP
+      varying vec2 texCoord;
+      #endif
+      vec3 encodeSrgb(vec3 c) {
+        c = clamp(c, 0.0, 1.0);
+        return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+      }
+      vec3 lit(vec3 n, vec3 up, vec3 toKey, vec3 base) {
+        vec3 irradiance = mix(ground, sky, 0.5 * dot(n, up) + 0.5) + keyColor * max(dot(n, toKey), 0.0);
+        return encodeSrgb(base * irradiance / 3.14159265);
+      }
+      void main() {
+        vec3 n = normalize(normalMatrix * normal);
+        vec3 up = normalize((viewMatrix * vec4(0.0, 1.0, 0.0, 0.0)).xyz);
+        vec3 toKey = normalize((viewMatrix * vec4(keyDirection, 0.0)).xyz);
+        vec3 base = albedo;
+        #ifdef USE_COLOR
+        base *= color.rgb;
+        #endif
+        litFront = lit(n, up, toKey, base);
+        litBack = lit(-n, up, toKey, base);
+        #ifdef FAST_MAP
+        texCoord = uv;
+        #endif
+        gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+      }`,
+    fragmentShader: `
+      varying vec3 litFront, litBack;
+      #ifdef FAST_MAP
+      uniform sampler2D map;
+      varying vec2 texCoord;
+      #endif
+      void main() {
+        vec3 c = gl_FrontFacing ? litFront : litBack;
+        #ifdef FAST_MAP
+        c *= texture2D(map, texCoord).rgb;
+        #endif
+        gl_FragColor = vec4(c, 1.0);
+      }`,
+  });
+  return material;
 }
 
 /** Without a GPU, morphing 50 targets per vertex in the (software) vertex shader costs most of

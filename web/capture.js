@@ -20,7 +20,15 @@ let preview = null;
 const capture = {
   get view() { return view; },
   /** Live webcam measurements: frames per second and camera-to-screen latency (ms). */
-  live: { running: false, fps: 0, latency_ms: 0, server_ms: 0, frames: 0, /** @type {number|null} frames recorded so far */ recorded: null, /** @type {number[]|null} */ weights: null, latencies: /** @type {number[]} */ ([]) },
+  live: {
+    running: false, fps: 0, latency_ms: 0, server_ms: 0, frames: 0,
+    /** Where the latency goes (ms, last frame): reading the camera frame, the round trip to
+     * the server, and drawing the character. */
+    stages: { grab_ms: 0, round_trip_ms: 0, draw_ms: 0 },
+    /** @type {number|null} frames recorded so far */ recorded: null,
+    /** @type {number[]|null} */ weights: null,
+    latencies: /** @type {number[]} */ ([]),
+  },
   /** Waits until no job runs; resolves with the last job's view. */
   async settled(timeoutMs = 600000) {
     const until = Date.now() + timeoutMs;
@@ -410,8 +418,8 @@ const video = /** @type {HTMLVideoElement} */ ($('capture-video'));
 const grab = document.createElement('canvas');
 let stream = /** @type {MediaStream|null} */ (null);
 let inFlight = 0;
-/** Capture times of frames whose weights are on the character but not yet rendered. */
-let pendingShown = /** @type {number|null} */ (null);
+/** Timings of the frame whose weights are on the character but not yet drawn. */
+let pendingShown = /** @type {{captured: number, sent: number, received: number}|null} */ (null);
 let fpsWindow = { start: 0, count: 0 };
 
 async function startLive() {
@@ -468,7 +476,7 @@ async function readTrack(reader) {
       }
       if (shownCanvas.width !== width) { shownCanvas.width = width; shownCanvas.height = height; }
       shownCanvas.getContext('2d')?.drawImage(frame, 0, 0);
-      send(pixels, width, height, captured);
+      send(pixels, width, height, captured, performance.now());
     } finally { frame.close(); }
   }
   reader.releaseLock();
@@ -491,13 +499,15 @@ function onVideoFrame(captured) {
   const g = grab.getContext('2d', { willReadFrequently: true });
   if (!g) return;
   g.drawImage(video, 0, 0, width, height);
-  send(g.getImageData(0, 0, width, height).data, width, height, captured);
+  send(g.getImageData(0, 0, width, height).data, width, height, captured, performance.now());
 }
 
 /** Sends one RGBA frame; its weights go on the character when they come back. */
-function send(pixels, width, height, captured) {
+function send(pixels, width, height, captured, sent) {
   inFlight++;
-  fetch('api/capture/live/frame', { method: 'POST', headers: { 'x-width': String(width), 'x-height': String(height) }, body: pixels })
+  // A Blob, not the array itself: Chromium hands a Blob to its network process without copying
+  // it through a pipe, which took ~70 ms of the round trip for a 480×480 frame here.
+  fetch('api/capture/live/frame', { method: 'POST', headers: { 'x-width': String(width), 'x-height': String(height) }, body: new Blob([pixels]) })
     .then(async (response) => {
       const result = await response.json();
       if (!response.ok) throw new Error(result.error || response.statusText);
@@ -507,7 +517,7 @@ function send(pixels, width, height, captured) {
       capture.live.server_ms = result.server_ms;
       capture.live.frames++;
       fpsWindow.count++;
-      pendingShown = captured;
+      pendingShown = { captured, sent, received: performance.now() };
       studio.applyLayer();
       capture.live.recorded = result.recorded ?? null;
       if (result.recorded !== null && result.recorded !== undefined) $('record').textContent = `Stop (${result.recorded})`;
@@ -519,7 +529,10 @@ function send(pixels, width, height, captured) {
 // Latency is measured when the character showing the frame's weights has been drawn.
 studio.onRender.push(() => {
   if (pendingShown === null) return;
-  const latency = performance.now() - pendingShown;
+  const drawn = performance.now();
+  const { captured, sent, received } = pendingShown;
+  const latency = drawn - captured;
+  capture.live.stages = { grab_ms: sent - captured, round_trip_ms: received - sent, draw_ms: drawn - received };
   pendingShown = null;
   const l = capture.live.latencies;
   l.push(latency);
