@@ -4,8 +4,9 @@
 // measures it: from the camera frame's capture to the drawn character wearing its weights), the
 // server's time per frame, and the CPU each of Chromium's processes and the studio spent.
 // Usage: node live-bench.mjs URL WEBCAM.y4m [SECONDS] [--studio-pid PID] [--query QUERY]
-//   [--chromium-args "FLAGS"]
-// (QUERY defaults to `fast`, the page's software-GL viewport; FLAGS are added to Chromium's).
+//   [--chromium-args "FLAGS"] [--in-flight N]
+// (QUERY defaults to `fast`, the page's software-GL viewport; FLAGS are added to Chromium's;
+// N frames at most are with the server at once, by default the page's own choice).
 import { chromium } from 'playwright-core';
 import fs from 'node:fs';
 
@@ -18,6 +19,7 @@ const option = (name, fallback) => {
 };
 const studioPid = option('--studio-pid', null);
 const query = option('--query', 'fast');
+const maxInFlight = option('--in-flight', null);
 const extraArgs = (option('--chromium-args', '') || '').split(' ').filter(Boolean);
 const [url, y4m, secondsArg] = args;
 if (!url || !y4m) {
@@ -77,6 +79,7 @@ try {
   await page.goto(query ? `${url}?${query}` : url);
   await page.waitForFunction(() => window.studio && window.studio.bakedReady && window.studio.capture, null, { timeout: 60000 });
   await page.click('#tab-capture');
+  if (maxInFlight) await page.evaluate((n) => { window.studio.capture.live.maxInFlight = n; }, Number(maxInFlight));
   await page.click('#live');
   await page.waitForFunction(() => window.studio.capture.live.frames > 10, null, { timeout: 60000 });
 
@@ -97,7 +100,8 @@ try {
     let last = live.frames;
     const start = performance.now();
     while (performance.now() - start < ms) {
-      await new Promise((r) => requestAnimationFrame(r));
+      // Polled by a timer, not requestAnimationFrame, so as not to ask for frames itself.
+      await new Promise((r) => setTimeout(r, 4));
       if (live.frames !== last) {
         last = live.frames;
         latencies.push(live.latencies[live.latencies.length - 1]);
@@ -115,6 +119,7 @@ try {
       server_ms_median: q(server, 0.5),
       stages_ms_median: { grab: q(grab, 0.5), round_trip: q(trip, 0.5), draw: q(draw, 0.5) },
       viewport_px: canvas ? [canvas.width, canvas.height] : null,
+      pixel_format: live.format,
       elapsed_s: elapsed,
     };
   }, seconds * 1000);

@@ -25,9 +25,16 @@ const capture = {
     /** Where the latency goes (ms, last frame): reading the camera frame, the round trip to
      * the server, and drawing the character. */
     stages: { grab_ms: 0, round_trip_ms: 0, draw_ms: 0 },
+    /** The pixel format frames are sent in (the camera's own YUV when the browser gives it). */
+    format: '',
     /** @type {number|null} frames recorded so far */ recorded: null,
     /** @type {number[]|null} */ weights: null,
     latencies: /** @type {number[]} */ ([]),
+    /** Frames sent to the server and not yet answered, at most: a newer camera frame waits
+     * for a free slot and is dropped if another comes first, so a slow server costs frames,
+     * not latency. One: the server tracks one frame at a time, and a second one queued
+     * behind it doubled the latency for a few more frames per second (tools/live-bench.mjs). */
+    maxInFlight: 1,
   },
   /** Waits until no job runs; resolves with the last job's view. */
   async settled(timeoutMs = 600000) {
@@ -456,30 +463,77 @@ shownCanvas.id = 'capture-live';
 shownCanvas.hidden = true;
 $('capture-input').appendChild(shownCanvas);
 
+/** The newest camera frame not yet sent, with the time it arrived: a frame that arrives while
+ * the server is busy waits here (replacing an older one), so that the next is sent the moment
+ * an answer comes back instead of when the camera next delivers. */
+let waiting = /** @type {{frame: any, captured: number}|null} */ (null);
+
 async function readTrack(reader) {
   while (capture.live.running) {
     const { value: frame, done } = await reader.read();
     if (done || !frame) break;
-    if (!capture.live.running || inFlight >= 2) { frame.close(); continue; }
-    const captured = performance.now();
-    try {
-      const width = frame.displayWidth, height = frame.displayHeight;
-      let pixels;
-      try {
-        pixels = new Uint8Array(frame.allocationSize({ format: 'RGBA' }));
-        await frame.copyTo(pixels, { format: 'RGBA' });
-      } catch {
-        grab.width = width; grab.height = height;
-        const g = grab.getContext('2d', { willReadFrequently: true });
-        g.drawImage(frame, 0, 0);
-        pixels = g.getImageData(0, 0, width, height).data;
-      }
-      if (shownCanvas.width !== width) { shownCanvas.width = width; shownCanvas.height = height; }
-      shownCanvas.getContext('2d')?.drawImage(frame, 0, 0);
-      send(pixels, width, height, captured, performance.now());
-    } finally { frame.close(); }
+    if (!capture.live.running) { frame.close(); continue; }
+    if (waiting) waiting.frame.close();
+    waiting = { frame, captured: performance.now() };
+    sendWaiting();
   }
+  if (waiting) { waiting.frame.close(); waiting = null; }
   reader.releaseLock();
+}
+
+/** Sends the waiting frame if a slot with the server is free. */
+async function sendWaiting() {
+  if (!waiting || !capture.live.running || inFlight >= capture.live.maxInFlight) return;
+  const { frame, captured } = waiting;
+  waiting = null;
+  inFlight++; // the slot is taken while the frame is read, too
+  try {
+    const { pixels, width, height, format } = await frameBytes(frame);
+    if (shownCanvas.width !== width) { shownCanvas.width = width; shownCanvas.height = height; }
+    shownCanvas.getContext('2d')?.drawImage(frame, 0, 0, width, height);
+    send(pixels, width, height, format, captured, performance.now());
+  } catch (e) {
+    inFlight--;
+    if (capture.live.running) studio.showError(`The webcam frame could not be read: ${e.message || e}`);
+  } finally { frame.close(); }
+}
+
+/** Pixel-format headers of a frame the page converted to RGBA itself. */
+const RGBA = { 'x-pixel-format': 'RGBA' };
+
+/** A camera frame's bytes as the server reads them: the camera's own 4:2:0 planes when it
+ * gives them (no conversion in the page, and 40 % of the bytes of RGBA), else RGBA. */
+async function frameBytes(/** @type {any} */ frame) {
+  const { width, height } = frame.visibleRect;
+  const cw = Math.ceil(width / 2), ch = Math.ceil(height / 2);
+  if (frame.format === 'I420' || frame.format === 'NV12') {
+    // Tightly packed planes, whatever the camera's own strides.
+    const layout = frame.format === 'I420'
+      ? [{ offset: 0, stride: width }, { offset: width * height, stride: cw }, { offset: width * height + cw * ch, stride: cw }]
+      : [{ offset: 0, stride: width }, { offset: width * height, stride: 2 * cw }];
+    try {
+      const pixels = new Uint8Array(width * height + 2 * cw * ch);
+      await frame.copyTo(pixels, { layout });
+      const space = frame.colorSpace || {};
+      const format = {
+        'x-pixel-format': frame.format,
+        // BT.709 for HD cameras (and BT.2020, nearer to it than to BT.601); BT.601 otherwise.
+        'x-yuv-matrix': space.matrix === 'bt709' || space.matrix === 'bt2020-ncl' ? 'bt709' : 'bt601',
+        'x-yuv-range': space.fullRange ? 'full' : 'limited',
+      };
+      return { pixels, width, height, format };
+    } catch { /* fall through to RGBA */ }
+  }
+  try {
+    const pixels = new Uint8Array(frame.allocationSize({ format: 'RGBA' }));
+    await frame.copyTo(pixels, { format: 'RGBA' });
+    return { pixels, width, height, format: RGBA };
+  } catch {
+    grab.width = width; grab.height = height;
+    const g = /** @type {CanvasRenderingContext2D} */ (grab.getContext('2d', { willReadFrequently: true }));
+    g.drawImage(frame, 0, 0, width, height);
+    return { pixels: g.getImageData(0, 0, width, height).data, width, height, format: RGBA };
+  }
 }
 
 function nextVideoFrame() {
@@ -488,26 +542,29 @@ function nextVideoFrame() {
   else requestAnimationFrame(() => onVideoFrame(performance.now()));
 }
 
-/** Sends the newest camera frame when fewer than two are with the server (a slow server drops
- * frames instead of falling behind). */
+/** Sends the newest camera frame when a slot is free (a slow server drops frames instead of
+ * falling behind). */
 function onVideoFrame(captured) {
   nextVideoFrame();
-  if (inFlight >= 2 || !video.videoWidth) return;
+  if (inFlight >= capture.live.maxInFlight || !video.videoWidth) return;
   const scale = Math.min(1, 640 / video.videoWidth);
   const width = Math.round(video.videoWidth * scale), height = Math.round(video.videoHeight * scale);
   grab.width = width; grab.height = height;
   const g = grab.getContext('2d', { willReadFrequently: true });
   if (!g) return;
   g.drawImage(video, 0, 0, width, height);
-  send(g.getImageData(0, 0, width, height).data, width, height, captured, performance.now());
+  inFlight++;
+  send(g.getImageData(0, 0, width, height).data, width, height, RGBA, captured, performance.now());
 }
 
-/** Sends one RGBA frame; its weights go on the character when they come back. */
-function send(pixels, width, height, captured, sent) {
-  inFlight++;
+/** Sends one frame (`format`: its pixel-format headers) in a slot already taken; its weights
+ * go on the character when they come back, and the slot goes to the waiting frame. */
+function send(pixels, width, height, format, captured, sent) {
+  capture.live.format = format['x-pixel-format'];
   // A Blob, not the array itself: Chromium hands a Blob to its network process without copying
   // it through a pipe, which took ~70 ms of the round trip for a 480×480 frame here.
-  fetch('api/capture/live/frame', { method: 'POST', headers: { 'x-width': String(width), 'x-height': String(height) }, body: new Blob([pixels]) })
+  const headers = { 'x-width': String(width), 'x-height': String(height), ...format };
+  fetch('api/capture/live/frame', { method: 'POST', headers, body: new Blob([pixels]) })
     .then(async (response) => {
       const result = await response.json();
       if (!response.ok) throw new Error(result.error || response.statusText);
@@ -523,7 +580,7 @@ function send(pixels, width, height, captured, sent) {
       if (result.recorded !== null && result.recorded !== undefined) $('record').textContent = `Stop (${result.recorded})`;
     })
     .catch((e) => { if (capture.live.running) studio.showError(String(e.message || e)); })
-    .finally(() => { inFlight--; });
+    .finally(() => { inFlight--; sendWaiting(); });
 }
 
 // Latency is measured when the character showing the frame's weights has been drawn.

@@ -251,6 +251,35 @@ fn capture_mode_refuses_bad_input_with_a_reason() {
     );
     assert_eq!(status, 400);
     assert!(body.contains("4×4 RGBA"), "{body}");
+    // The camera's own YUV: its size is checked too, and an unknown format is named.
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/live/frame",
+        &[
+            ("x-width", "4"),
+            ("x-height", "4"),
+            ("x-pixel-format", "I420"),
+        ],
+        &[0u8; 64],
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("4×4 I420 frame (24 bytes)"), "{body}");
+    for (header, value) in [
+        ("x-pixel-format", "P010"),
+        ("x-yuv-matrix", "bt2020"),
+        ("x-yuv-range", "tv"),
+    ] {
+        let (status, body) = request(
+            port,
+            "POST",
+            "/api/capture/live/frame",
+            &[("x-width", "4"), ("x-height", "4"), (header, value)],
+            &[0u8; 64],
+        );
+        assert_eq!(status, 400);
+        assert!(body.contains(header) && body.contains(value), "{body}");
+    }
     // A frame still on its way when live mode stops is dropped, not an error.
     request(port, "POST", "/api/capture/live/stop", &[], b"");
     let (status, body) = request(

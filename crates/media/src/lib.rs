@@ -7,13 +7,15 @@
 //! average rate) so that frame `i` is always at `i / fps` seconds: a dropped or duplicated
 //! frame in the file never shifts the timeline.
 //!
-//! Raw frames from a caller (the studio's webcam) need none of this: they go straight to
-//! `faceanim_track::Frame`.
+//! Raw frames from a caller (the studio's webcam, as packed RGB or the camera's own YUV) are
+//! turned into the same [`Image`] by [`raw`].
 #![deny(missing_docs)]
 
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
+
+pub mod raw;
 
 /// An RGB image, 8 bits per channel, rows top to bottom.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -11,6 +11,7 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post, put};
 use faceanim_anim::Clip;
 use faceanim_anim::filter::OneEuro;
+use faceanim_media::raw::{PixelLayout, YuvMatrix, YuvRange, raw_to_image};
 use faceanim_rig::export::MorphAnimation;
 use serde::Deserialize;
 use serde_json::Value;
@@ -381,6 +382,48 @@ fn dimension(headers: &HeaderMap, name: &str) -> Result<usize, ApiError> {
         .ok_or_else(|| bad(format!("frame: header {name} must give the size in pixels")))
 }
 
+/// The optional header `name`, as text; `default` when absent.
+fn text_header<'a>(
+    headers: &'a HeaderMap,
+    name: &str,
+    default: &'a str,
+) -> Result<&'a str, ApiError> {
+    headers.get(name).map_or(Ok(default), |h| {
+        h.to_str()
+            .map_err(|_| bad(format!("frame: header {name} is not text")))
+    })
+}
+
+/// The frame's byte layout from its headers: `x-pixel-format` (RGBA by default, or what the
+/// browser's `VideoFrame.format` says), and for YUV `x-yuv-matrix` (bt601, the default, or
+/// bt709) and `x-yuv-range` (limited, the default, or full).
+fn pixel_layout(headers: &HeaderMap) -> Result<PixelLayout, ApiError> {
+    let matrix = match text_header(headers, "x-yuv-matrix", "bt601")? {
+        "bt601" => YuvMatrix::Bt601,
+        "bt709" => YuvMatrix::Bt709,
+        other => {
+            return Err(bad(format!(
+                "frame: header x-yuv-matrix is {other:?}, not bt601 or bt709"
+            )));
+        }
+    };
+    let range = match text_header(headers, "x-yuv-range", "limited")? {
+        "limited" => YuvRange::Limited,
+        "full" => YuvRange::Full,
+        other => {
+            return Err(bad(format!(
+                "frame: header x-yuv-range is {other:?}, not limited or full"
+            )));
+        }
+    };
+    PixelLayout::from_names(
+        text_header(headers, "x-pixel-format", "RGBA")?,
+        matrix,
+        range,
+    )
+    .map_err(|e| bad(format!("frame: header x-pixel-format: {e}")))
+}
+
 async fn live_frame(
     State(both): State<Both>,
     headers: HeaderMap,
@@ -388,12 +431,22 @@ async fn live_frame(
 ) -> Result<axum::Json<capture::LiveResult>, ApiError> {
     let width = dimension(&headers, "x-width")?;
     let height = dimension(&headers, "x-height")?;
+    if width == 0 || height == 0 || width > 8192 || height > 8192 {
+        return Err(bad(format!(
+            "frame: {width}×{height} pixels is not a camera frame (1 to 8192 each way)"
+        )));
+    }
+    let layout = pixel_layout(&headers)?;
     let live = both.desk().live_handle();
     let character = both.studio().character.clone();
-    let result = tokio::task::spawn_blocking(move || live.track(&character, width, height, &body))
-        .await
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
-        .map_err(bad)?;
+    let result = tokio::task::spawn_blocking(move || {
+        let image =
+            raw_to_image(layout, width, height, &body).map_err(|e| format!("frame: {e}"))?;
+        live.track(&character, image)
+    })
+    .await
+    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
+    .map_err(bad)?;
     Ok(axum::Json(result))
 }
 

@@ -167,35 +167,12 @@ pub struct LiveHandle {
 }
 
 impl LiveHandle {
-    /// Tracks one webcam frame (`rgba`: `width × height × 4` bytes) and returns the
-    /// character's weights.
+    /// Tracks one webcam frame and returns the character's weights.
     ///
     /// # Errors
-    /// A message for a malformed frame or a failing model.
-    pub fn track(
-        &self,
-        character: &Character,
-        width: usize,
-        height: usize,
-        rgba: &[u8],
-    ) -> Result<LiveResult, String> {
+    /// A message for a failing model.
+    pub fn track(&self, character: &Character, image: Image) -> Result<LiveResult, String> {
         let started = Instant::now();
-        if width == 0
-            || height == 0
-            || width > 8192
-            || height > 8192
-            || rgba.len() != width * height * 4
-        {
-            return Err(format!(
-                "frame: {} bytes is not {width}×{height} RGBA ({} bytes)",
-                rgba.len(),
-                width * height * 4
-            ));
-        }
-        let mut rgb = vec![0u8; width * height * 3];
-        for (out, pixel) in rgb.chunks_exact_mut(3).zip(rgba.chunks_exact(4)) {
-            out.copy_from_slice(&pixel[..3]);
-        }
         let mut guard = lock(&self.live);
         let Some(live) = guard.as_mut() else {
             return Ok(LiveResult {
@@ -214,9 +191,9 @@ impl LiveHandle {
             index,
             time,
             &Frame {
-                width,
-                height,
-                rgb: &rgb,
+                width: image.width,
+                height: image.height,
+                rgb: &image.rgb,
             },
         )
         .map_err(|e| e.to_string())?;
@@ -246,7 +223,6 @@ impl LiveHandle {
                 record.index = recording.records.len();
                 record.time = time - start;
                 recording.records.push(record);
-                let image = Image { width, height, rgb };
                 recording
                     .previews
                     .push(&image.preview(LIVE_PREVIEW_HEIGHT).to_png()?)?;
