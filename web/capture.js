@@ -32,8 +32,10 @@ const capture = {
     latencies: /** @type {number[]} */ ([]),
     /** Frames sent to the server and not yet answered, at most: a newer camera frame waits
      * for a free slot and is dropped if another comes first, so a slow server costs frames,
-     * not latency. One: the server tracks one frame at a time, and a second one queued
-     * behind it doubled the latency for a few more frames per second (tools/live-bench.mjs). */
+     * not latency. One: the server tracks one frame at a time, so a second one only queues
+     * behind it. Without a GPU (tools/live-bench.mjs) two gave 24 % more frames per second for
+     * 14 % more median latency and 27 % more at the 90th percentile; with a GPU the server is
+     * the limit and a queued frame adds latency only. */
     maxInFlight: 1,
   },
   /** Waits until no job runs; resolves with the last job's view. */
@@ -502,7 +504,7 @@ async function sendWaiting() {
 const RGBA = { 'x-pixel-format': 'RGBA' };
 
 /** A camera frame's bytes as the server reads them: the camera's own 4:2:0 planes when it
- * gives them (no conversion in the page, and 40 % of the bytes of RGBA), else RGBA. */
+ * gives them (no conversion in the page, and 3/8 of the bytes of RGBA), else RGBA. */
 async function frameBytes(/** @type {any} */ frame) {
   const { width, height } = frame.visibleRect;
   const cw = Math.ceil(width / 2), ch = Math.ceil(height / 2);
