@@ -3,7 +3,8 @@
 // frame with its slider, apply the preference (every other frame shifts by the same amount,
 // clamped), clear it, export every format, train the adapter from the page with a progress bar,
 // cancel a second training, fine-tune from the corrections, then the webcam (Chromium's fake
-// camera playing FILE.y4m) in live mode and a recorded take. Screenshots of each step.
+// camera playing FILE.y4m) in live mode and a recorded take, and the exported session opened
+// again. Screenshots of each step.
 // Usage: node capture-e2e.mjs URL OUTPUT_DIR VIDEO WEBCAM.y4m TRUE_JAW_JSON PHOTO…
 // (the photos show the jaw opening wider from one to the next)
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
@@ -177,6 +178,7 @@ try {
   await download('#capture-export-glb', 'download.glb');
   const clipFile = await download('#capture-export-json', 'download.clip.json');
   await download('#capture-export-csv', 'download.csv');
+  const sessionFile = await download('#capture-export-session', 'download.session.json');
   const seed = fs.readFileSync(await download('#capture-export-seed', 'download.byoc.csv'), 'utf8');
   const seedRows = seed.split('\n').filter((l) => l);
   check(seedRows.length === truth.length && seedRows[0].startsWith('jaw_000001.png,'), `the seed CSV should have one row per frame, named by frame: ${seedRows[0]}`);
@@ -242,6 +244,22 @@ try {
   check(state.take.frames >= 20, `the recorded take has only ${state.take.frames} frames`);
   await page.waitForTimeout(300);
   await shot('09-recorded-take');
+
+  // 11. The session exported in step 5 opens again through the same file picker: the video's
+  //     take as it was then, its correction and preference included, without input previews.
+  await page.setInputFiles('#capture-file', sessionFile);
+  await page.waitForFunction(() => { const t = window.studio.capture.view.take; return t && t.source !== 'webcam'; }, null, { timeout: 30000 });
+  state = await captureState();
+  check(state.take.frames === truth.length, `the reopened session has ${state.take.frames} frames, not ${truth.length}`);
+  check(state.take.by_adapter === null && state.take.previews === 0, `a reopened session claims an estimator or previews: ${JSON.stringify({ by_adapter: state.take.by_adapter, previews: state.take.previews })}`);
+  check(state.take.corrected.includes(corrected) && state.take.preference, `the reopened session lost its correction or preference: ${JSON.stringify({ corrected: state.take.corrected, preference: state.take.preference })}`);
+  const reopened = column(state.take, state.blendshapes, 'jawOpen');
+  check(reopened.every((x, f) => Math.abs(x - exported[f]) < 1e-5), 'the reopened session does not give the exported clip');
+  await page.click('#diagram', { position: { x: 40, y: 30 } });
+  await page.waitForFunction(() => !document.getElementById('capture-input-note').hidden, null, { timeout: 10000 });
+  const note = await page.textContent('#capture-input-note');
+  check(note.includes('No preview'), `a session without previews shows '${note}'`);
+  await shot('10-session-reopened');
   check(consoleErrors.length === 0, `page errors: ${consoleErrors.join('; ')}`);
   console.log(JSON.stringify(measurements));
 } finally {

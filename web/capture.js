@@ -140,7 +140,7 @@ function apply(v) {
   if (document.activeElement !== $('keyframe-every')) input('keyframe-every').value = String(f.keyframe_every);
   // Take.
   $('take-info').textContent = take
-    ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; estimated ${take.by_adapter ? 'by the adapter' : 'by ARKit name'}${take.preference ? '; preference applied' : ''}.`
+    ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; ${take.by_adapter === null ? 'opened from a session' : `estimated ${take.by_adapter ? 'by the adapter' : 'by ARKit name'}`}${take.preference ? '; preference applied' : ''}.`
     : '';
   if (!take) $('capture-input-note').textContent = 'Open a video, photos or the webcam (right).';
   $('capture-input-note').hidden = (!!take && !frameImage.hidden) || capture.live.running;
@@ -181,7 +181,7 @@ input('capture-file').addEventListener('change', async () => {
       return;
     }
     // Several photos are one sequence, in name order, like a folder of frames.
-    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, or any number of PNG or JPEG photos');
+    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, one session, or any number of PNG or JPEG photos');
     const batch = Date.now().toString(36) + Math.random().toString(36).slice(2, 8);
     for (const [index, file] of files.entries()) {
       $('take-info').textContent = `Sending ${file.name} (${index + 1} of ${files.length})…`;
@@ -191,7 +191,7 @@ input('capture-file').addEventListener('change', async () => {
 });
 $('capture-open').onclick = async () => {
   const path = input('capture-path').value.trim();
-  if (!path) { studio.showError('Type the path of a video, an image or a folder of images'); return; }
+  if (!path) { studio.showError('Type the path of a video, an image, a folder of images or a session file'); return; }
   try { studio.showError(''); apply(await studio.api('POST', 'api/capture/open', { path })); }
   catch (e) { studio.showError(String(e.message || e)); }
 };
@@ -405,22 +405,25 @@ studio.onFrame.push((frame) => {
   if (!capture.live.running) turnHead(take ? take.head[f] : null);
   if (take && !capture.live.running && f !== shownFrame) {
     shownFrame = f;
-    const img = /** @type {HTMLImageElement} */ ($('capture-frame'));
-    img.src = `api/capture/frame/${f}.png?take=${take.id}`;
+    if (f < take.previews) frameImage.src = `api/capture/frame/${f}.png?take=${take.id}`;
+    else noPreview();
     fillSliders();
   }
   drawDiagram();
 });
 
-// A take reopened from the autosave has no previews (the input itself is not kept).
+// A take reopened from the autosave or opened from a session file has no previews (a session
+// does not keep its input).
 const frameImage = /** @type {HTMLImageElement} */ ($('capture-frame'));
 frameImage.addEventListener('load', () => { frameImage.hidden = false; });
-frameImage.addEventListener('error', () => {
+frameImage.addEventListener('error', noPreview);
+function noPreview() {
   frameImage.hidden = true;
+  frameImage.removeAttribute('src');
   const note = $('capture-input-note');
-  note.textContent = 'No preview of this frame: the take was reopened from its autosave, and the input itself is not kept.';
+  note.textContent = 'No preview of this frame: the take was opened from a session (or its autosave), which does not keep the input.';
   note.hidden = false;
-});
+}
 
 // ---------- live webcam ----------
 const video = /** @type {HTMLVideoElement} */ ($('capture-video'));

@@ -239,6 +239,39 @@ fn capture_mode_refuses_bad_input_with_a_reason() {
     }
     let error = job["error"].as_str().unwrap_or_default();
     assert!(error.contains("notes.mp4"), "{job}");
+    // A session file must be one, and of this character.
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/upload",
+        &[("x-filename", "notes.json")],
+        br#"{"title": "my notes"}"#,
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("notes.json: not a session file"), "{body}");
+    let other = br#"{"version": 1, "source": "x.mp4", "character": "robot",
+        "blendshapes": ["beep", "boop"], "fingerprint": {"topology": "t", "geometry": "g"},
+        "fps": 30, "keyframe_every": 5,
+        "frames": [{"name": "f1", "time": 0, "presence": 1, "head": null,
+                    "head_position": null, "expression": null, "estimate": [0.1, 0.2]}]}"#;
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/upload",
+        &[("x-filename", "robot.session.json")],
+        other,
+    );
+    assert_eq!(status, 400);
+    assert!(
+        body.contains("robot.session.json: a session of robot with 2 blendshapes")
+            && body.contains("not of ict-face with 53 (it lacks 53:"),
+        "{body}"
+    );
+    let (_, body) = request(port, "GET", "/api/capture/state", &[], b"");
+    assert!(
+        body.contains("\"take\":null"),
+        "a refused session left a take: {body}"
+    );
     // Live frames must be the size they claim.
     let (_, body) = request(port, "POST", "/api/capture/live/start", &[], b"");
     assert!(body.contains("\"live\""), "{body}");

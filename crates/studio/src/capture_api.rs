@@ -98,8 +98,22 @@ async fn open_path(State(both): State<Both>, body: Bytes) -> Result<axum::Json<V
     }
     let character = both.studio().character.clone();
     let shown = path.display().to_string();
-    capture::start_capture(&both.desk, character, path, shown).map_err(bad)?;
+    if is_session(&shown) {
+        let bytes = std::fs::read(&path).map_err(|e| bad(format!("{shown}: {e}")))?;
+        both.desk()
+            .open_session(&character, &bytes, &shown)
+            .map_err(bad)?;
+    } else {
+        capture::start_capture(&both.desk, character, path, shown).map_err(bad)?;
+    }
     Ok(axum::Json(state_of(&both)))
+}
+
+/// Whether a file named `name` is a session (JSON) rather than a video or an image.
+fn is_session(name: &str) -> bool {
+    std::path::Path::new(name)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
 }
 
 /// Several photos sent as one sequence: each names the batch, its place and the count; the
@@ -121,6 +135,18 @@ async fn upload(
     body: Bytes,
 ) -> Result<axum::Json<Value>, ApiError> {
     let name = uploaded_name(&headers, &body, "upload")?;
+    if is_session(&name) {
+        if batch.batch.is_some() {
+            return Err(bad(format!(
+                "{name}: a session opens on its own, not in a sequence of photos"
+            )));
+        }
+        let character = both.studio().character.clone();
+        both.desk()
+            .open_session(&character, &body, &name)
+            .map_err(bad)?;
+        return Ok(axum::Json(state_of(&both)));
+    }
     if batch.batch.is_some() && batch.index >= batch.count {
         return Err(bad(format!(
             "index: {} is not below count {}",

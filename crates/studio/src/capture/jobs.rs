@@ -373,7 +373,7 @@ fn install_adapter(
         take.session
             .reestimate(&adapter)
             .map_err(|e| e.to_string())?;
-        take.by_adapter = true;
+        take.by_adapter = Some(true);
         guard.save_take();
     }
     guard.adapter_note = match adapter.check(character) {

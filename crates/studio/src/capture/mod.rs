@@ -64,8 +64,9 @@ pub struct Take {
     pub session: Session,
     /// A PNG preview of each input frame.
     pub previews: Previews,
-    /// Whether the estimates came from the adapter (else by name).
-    pub by_adapter: bool,
+    /// Whether the estimates came from the adapter (else by name); unknown for a take opened
+    /// from a session file, which does not say.
+    pub by_adapter: Option<bool>,
     undo: Vec<Edits>,
     redo: Vec<Edits>,
     /// Different for every take this process opened: the page tells takes apart by it (two
@@ -106,6 +107,18 @@ impl Previews {
         std::fs::write(&path, png).map_err(|e| format!("{}: {e}", path.display()))?;
         self.count += 1;
         Ok(())
+    }
+
+    /// How many frames have a preview (the first ones).
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    /// Whether no frame has a preview.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
     }
 
     /// Frame `index`'s preview, if there is one.
@@ -156,7 +169,7 @@ impl Edits {
 const TAKE_UNDO_DEPTH: usize = 500;
 
 impl Take {
-    fn new(session: Session, previews: Previews, by_adapter: bool) -> Take {
+    fn new(session: Session, previews: Previews, by_adapter: Option<bool>) -> Take {
         static NEXT: AtomicU64 = AtomicU64::new(1);
         Take {
             id: NEXT.fetch_add(1, Ordering::Relaxed),
@@ -337,7 +350,7 @@ impl CaptureDesk {
                     session.source,
                     self.take_path.display()
                 );
-                self.take = Some(Take::new(session, Previews::new(), self.adapter.is_some()));
+                self.take = Some(Take::new(session, Previews::new(), None));
             }
             Ok(_) => tracing::warn!(
                 "{} is a take of another character; not opened",
@@ -345,6 +358,48 @@ impl CaptureDesk {
             ),
             Err(e) => tracing::warn!("{}: {e}; not opened", self.take_path.display()),
         }
+    }
+
+    /// Opens a session file as the take: one written by `faceanim track --adapter A --session
+    /// FILE`, edited by
+    /// `faceanim session`, or exported from this tab. It has no previews (a session does not
+    /// keep its input). Returns its frame count.
+    ///
+    /// # Errors
+    /// A message naming `shown` when the bytes are not a session, the session is of a
+    /// character with other blendshapes, or a job is running.
+    pub fn open_session(
+        &mut self,
+        character: &Character,
+        bytes: &[u8],
+        shown: &str,
+    ) -> Result<usize, String> {
+        self.busy()?;
+        let session = Session::from_json(bytes).map_err(|e| format!("{shown}: {e}"))?;
+        let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
+        if session.blendshapes != names {
+            let lacking: Vec<&str> = names
+                .iter()
+                .filter(|n| !session.blendshapes.iter().any(|s| s == *n))
+                .copied()
+                .collect();
+            let how = match lacking.len() {
+                0 => "the same names in another order or with others".to_owned(),
+                n @ 1..=5 => format!("it lacks {n}: {}", lacking.join(", ")),
+                n => format!("it lacks {n}: {}, …", lacking[..5].join(", ")),
+            };
+            return Err(format!(
+                "{shown}: a session of {} with {} blendshapes, not of {} with {} ({how})",
+                session.character,
+                session.blendshapes.len(),
+                character.name(),
+                names.len()
+            ));
+        }
+        let frames = session.frames.len();
+        tracing::info!("opened the session {shown}: {frames} frames");
+        self.set_take(Take::new(session, Previews::new(), None));
+        Ok(frames)
     }
 
     /// Writes the take (or, with none, removes the autosave).
@@ -572,6 +627,7 @@ fn take_view(take: &Take) -> Value {
         "source": session.source,
         "fps": session.fps,
         "frames": session.frames.len(),
+        "previews": take.previews.len(),
         "still": session.still_frames.is_some(),
         "by_adapter": take.by_adapter,
         "names": session.frames.iter().map(|f| &f.name).collect::<Vec<_>>(),
@@ -717,7 +773,7 @@ fn make_take(
     if still {
         session.still_frames = Some(STILL_FRAMES);
     }
-    Ok(Take::new(session, previews, adapter.is_some()))
+    Ok(Take::new(session, previews, Some(adapter.is_some())))
 }
 
 /// The take's clip with the sketch's weights added on top (clamped to [0, 1]); the longer of
@@ -811,7 +867,7 @@ mod tests {
             1,
             frames,
         );
-        Take::new(session, Previews::new(), false)
+        Take::new(session, Previews::new(), Some(false))
     }
 
     #[test]
