@@ -135,6 +135,10 @@ try {
   // 6. Playback of a 10-action animation: frames per second of the viewport (software GL here),
   // with draw calls and morph targets. Nine more strokes, each from a blendshape's most-moved
   // vertex to its target, drawn over half a second, one after the other.
+  // The drawn stroke lasts as long as the page took to handle the mouse (longer where the page
+  // draws slowly), and the nine strokes below start on the face it poses: its length is pinned
+  // so that they meet the same animation on any machine.
+  await page.evaluate(() => fetch('api/strokes/0', { method: 'PATCH', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ duration: 270 }) }).then((r) => { if (!r.ok) throw new Error(`PATCH: ${r.status}`); }));
   const names = ['jawOpen', 'mouthSmile_R', 'eyeBlink_L', 'eyeBlink_R', 'browInnerUp_L', 'mouthFunnel', 'cheekPuff_L', 'browOuterUp_L', 'mouthPucker'];
   for (const [k, name] of names.entries()) {
     const a = anchors.find((x) => x.name === name);

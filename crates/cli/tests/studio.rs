@@ -1,7 +1,7 @@
 //! The studio: its HTTP safety rules, and the whole page in a real browser (Debian's chromium
 //! driven by playwright-core, `tools/studio-e2e.mjs`) on the ICT head: draw a stroke, drag the
-//! arrow, undo/redo, symmetry, save and reopen, a broken upload. Screenshots go to
-//! `test-output/studio/`.
+//! arrow, undo/redo, symmetry, save and reopen, a broken upload, in both viewports (the full one
+//! and `?fast`'s). Screenshots go to `test-output/studio/` and `test-output/studio-fast/`.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -104,6 +104,7 @@ fn request(
 fn browser_script(
     script: &str,
     studio: &Studio,
+    query: &str,
     out: &std::path::Path,
     arguments: &[std::ffi::OsString],
 ) -> serde_json::Value {
@@ -113,7 +114,7 @@ fn browser_script(
     );
     let run = Command::new("node")
         .arg(repo().join("tools").join(script))
-        .arg(format!("http://127.0.0.1:{}/", studio.port))
+        .arg(format!("http://127.0.0.1:{}/{query}", studio.port))
         .arg(out)
         .args(arguments)
         .output()
@@ -188,10 +189,26 @@ fn only_its_own_host_and_origin_are_served() {
 fn an_animator_session_in_a_real_browser() {
     let dir = tempfile::tempdir().unwrap();
     let studio = start(&dir.path().join("session.faceanim.json"));
-    let measured = browser_script("studio-e2e.mjs", &studio, &output_dir("studio"), &[]);
+    let measured = browser_script("studio-e2e.mjs", &studio, "", &output_dir("studio"), &[]);
     assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
     // The project was saved where the studio was pointed, and nowhere else.
     assert!(dir.path().join("session.faceanim.json").exists());
+}
+
+/// The same session in the viewport the README recommends without a GPU (`?fast`: morph
+/// targets blended on the CPU, lighting per vertex).
+#[test]
+fn an_animator_session_in_the_viewport_for_machines_without_a_gpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let studio = start(&dir.path().join("session.faceanim.json"));
+    let measured = browser_script(
+        "studio-e2e.mjs",
+        &studio,
+        "?fast",
+        &output_dir("studio-fast"),
+        &[],
+    );
+    assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
 }
 
 #[test]
@@ -454,7 +471,7 @@ fn capture_mode_in_a_real_browser() {
         truth_json.into(),
     ];
     arguments.extend(photos.into_iter().map(std::path::PathBuf::into_os_string));
-    let measured = browser_script("capture-e2e.mjs", &studio, &out, &arguments);
+    let measured = browser_script("capture-e2e.mjs", &studio, "", &out, &arguments);
     assert!(
         measured["live_max_jaw_open"].as_f64().unwrap() > 0.4,
         "{measured}"
