@@ -142,7 +142,7 @@ function apply(v) {
   $('take-info').textContent = take
     ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; ${take.by_adapter === null ? 'opened from a session' : `estimated ${take.by_adapter ? 'by the adapter' : 'by ARKit name'}`}${take.preference ? '; preference applied' : ''}.`
     : '';
-  if (!take) $('capture-input-note').textContent = 'Open a video, photos or the webcam (right).';
+  if (!take) $('capture-input-note').textContent = 'Open a video, photos, a session or the webcam (right).';
   $('capture-input-note').hidden = (!!take && !frameImage.hidden) || capture.live.running;
   for (const id of ['keyframe', 'uncorrect-frame', 'apply-preference', 'clear-preference']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !take;
   /** @type {HTMLButtonElement} */ ($('clear-preference')).disabled = !take || !take.preference;

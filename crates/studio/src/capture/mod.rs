@@ -361,9 +361,8 @@ impl CaptureDesk {
     }
 
     /// Opens a session file as the take: one written by `faceanim track --adapter A --session
-    /// FILE`, edited by
-    /// `faceanim session`, or exported from this tab. It has no previews (a session does not
-    /// keep its input). Returns its frame count.
+    /// FILE`, edited by `faceanim session`, or exported from this tab. It has no previews (a
+    /// session does not keep its input). Returns its frame count.
     ///
     /// # Errors
     /// A message naming `shown` when the bytes are not a session, the session is of a
