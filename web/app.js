@@ -171,7 +171,7 @@ function lastFrame() {
 function vertexLitMaterial(/** @type {any} */ source) {
   const map = source.map ? source.map.clone() : null;
   if (map) { map.colorSpace = THREE.NoColorSpace; map.needsUpdate = true; }
-  const material = new THREE.ShaderMaterial({
+  return new THREE.ShaderMaterial({
     vertexColors: !!source.vertexColors,
     defines: map ? { FAST_MAP: '' } : {},
     uniforms: {
@@ -225,7 +225,6 @@ function vertexLitMaterial(/** @type {any} */ source) {
         gl_FragColor = vec4(c, 1.0);
       }`,
   });
-  return material;
 }
 
 /** Without a GPU, morphing 50 targets per vertex in the (software) vertex shader costs most of

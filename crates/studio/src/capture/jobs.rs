@@ -14,7 +14,7 @@ use faceanim_track::{Frame, Tracker, TrackingMode};
 
 use super::{
     CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Footage, Job, PREVIEW_HEIGHT, Previews, SharedDesk, Take,
-    face_models, lock, make_take,
+    face_models, lock, make_take, private_dir,
 };
 
 /// Starts reading `path` (a video, an image or a folder of images) in the background.
@@ -140,19 +140,7 @@ impl CaptureDesk {
         bytes: &[u8],
         batch: Option<&str>,
     ) -> Result<PathBuf, String> {
-        if self.uploads.is_none() {
-            self.uploads = Some(
-                tempfile::Builder::new()
-                    .prefix("faceanim-capture-")
-                    .tempdir()
-                    .map_err(|e| format!("making a folder for uploads: {e}"))?,
-            );
-        }
-        let mut dir = self
-            .uploads
-            .as_ref()
-            .map(|d| d.path().to_owned())
-            .ok_or("no upload folder")?;
+        let mut dir = private_dir(&mut self.uploads, "faceanim-capture-", "uploads")?.to_owned();
         // Photos sent together are one sequence: a folder of their own, read in name order.
         if let Some(batch) = batch {
             if batch.is_empty() || !batch.chars().all(|c| c.is_ascii_alphanumeric()) {

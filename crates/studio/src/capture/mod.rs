@@ -94,16 +94,8 @@ impl Previews {
     /// # Errors
     /// The file error.
     pub fn push(&mut self, png: &[u8]) -> Result<(), String> {
-        if self.dir.is_none() {
-            self.dir = Some(
-                tempfile::Builder::new()
-                    .prefix("faceanim-previews-")
-                    .tempdir()
-                    .map_err(|e| format!("making a folder for previews: {e}"))?,
-            );
-        }
-        let dir = self.dir.as_ref().ok_or("no preview folder")?;
-        let path = dir.path().join(format!("{}.png", self.count));
+        let dir = private_dir(&mut self.dir, "faceanim-previews-", "previews")?;
+        let path = dir.join(format!("{}.png", self.count));
         std::fs::write(&path, png).map_err(|e| format!("{}: {e}", path.display()))?;
         self.count += 1;
         Ok(())
@@ -129,6 +121,23 @@ impl Previews {
             .then(|| std::fs::read(dir.path().join(format!("{index}.png"))).ok())
             .flatten()
     }
+}
+
+/// The private temporary folder kept in `slot`, made on first use (named `prefix…`; `what` it
+/// holds names it in the error).
+pub(super) fn private_dir<'a>(
+    slot: &'a mut Option<tempfile::TempDir>,
+    prefix: &str,
+    what: &str,
+) -> Result<&'a std::path::Path, String> {
+    let dir = match slot.take() {
+        Some(dir) => dir,
+        None => tempfile::Builder::new()
+            .prefix(prefix)
+            .tempdir()
+            .map_err(|e| format!("making a folder for {what}: {e}"))?,
+    };
+    Ok(slot.insert(dir).path())
 }
 
 /// What the user changes in a take (the frames and estimates stay): small enough to keep
