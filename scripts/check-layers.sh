@@ -1,18 +1,28 @@
 #!/usr/bin/env bash
-# Fails when a pure crate (character, animation, sketch, default head) depends, directly or not,
-# on what belongs only to the crates at the edges: HTTP servers, async runtimes, video, neural
-# networks. Keeps the core fast to build and usable anywhere.
+# Fails when a crate depends, directly or not, on what belongs to a layer above it. Two bands:
+#   - the pure core (character, animation, sketch, default head) knows no HTTP server, async
+#     runtime, video or neural network;
+#   - the middle band (face tracking, media, capture, the take layer, the exporter) may run
+#     MediaPipe's models with tract, but knows no HTTP server, async runtime or training library.
+# Keeps the core fast to build and usable anywhere, and the front ends thin.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-forbidden='^(tract-|axum|tokio|hyper|reqwest|burn|candle|ort|ffmpeg|rust-embed|tower)'
 status=0
-for crate in faceanim-rig faceanim-anim faceanim-sketch faceanim-head; do
-  found=$(cargo tree --locked -p "$crate" -e normal --prefix none --format '{p}' | awk '{print $1}' | grep -E "$forbidden" | sort -u || true)
-  if [ -n "$found" ]; then
-    echo "check-layers: $crate must stay pure but depends on: $found" >&2
-    status=1
-  fi
-done
-[ "$status" -eq 0 ] && echo "check-layers: the pure crates depend on no edge crates"
+check() {
+  local band=$1 forbidden=$2
+  shift 2
+  for crate in "$@"; do
+    found=$(cargo tree --locked -p "$crate" -e normal --prefix none --format '{p}' | awk '{print $1}' | grep -E "$forbidden" | sort -u || true)
+    if [ -n "$found" ]; then
+      echo "check-layers: $crate ($band) must not depend on: $found" >&2
+      status=1
+    fi
+  done
+}
+check "pure core" '^(tract-|axum|tokio|hyper|reqwest|burn|candle|ort|ffmpeg|rust-embed|tower)' \
+  faceanim-rig faceanim-anim faceanim-sketch faceanim-head
+check "middle band" '^(axum|tokio|hyper|reqwest|burn|candle|rust-embed|tower)' \
+  faceanim-track faceanim-media faceanim-capture faceanim-take faceanim-export
+[ "$status" -eq 0 ] && echo "check-layers: the pure core and the middle band depend on nothing above them"
 exit "$status"

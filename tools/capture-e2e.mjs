@@ -195,7 +195,7 @@ try {
   const trained = await settled();
   check(trained && !trained.error, `training failed: ${JSON.stringify(trained)}`);
   state = await captureState();
-  check(state.adapter.loaded && state.take.by_adapter, 'the take was not re-estimated by the new adapter');
+  check(state.adapter.loaded && state.take.estimator === 'adapter', 'the take was not re-estimated by the new adapter');
   measurements.adapter_test_mae_300 = state.adapter.report.mae_test;
 
   // 7. A training can be cancelled.
@@ -251,7 +251,7 @@ try {
   await page.waitForFunction(() => { const t = window.studio.capture.view.take; return t && t.source !== 'webcam'; }, null, { timeout: 30000 });
   state = await captureState();
   check(state.take.frames === truth.length, `the reopened session has ${state.take.frames} frames, not ${truth.length}`);
-  check(state.take.by_adapter === null && state.take.previews === 0, `a reopened session claims an estimator or previews: ${JSON.stringify({ by_adapter: state.take.by_adapter, previews: state.take.previews })}`);
+  check(state.take.estimator === 'session_file' && state.take.previews === 0, `a reopened session claims an estimator or previews: ${JSON.stringify({ estimator: state.take.estimator, previews: state.take.previews })}`);
   check(state.take.corrected.includes(corrected) && state.take.preference, `the reopened session lost its correction or preference: ${JSON.stringify({ corrected: state.take.corrected, preference: state.take.preference })}`);
   const reopened = column(state.take, state.blendshapes, 'jawOpen');
   check(reopened.every((x, f) => Math.abs(x - exported[f]) < 1e-5), 'the reopened session does not give the exported clip');
@@ -260,6 +260,30 @@ try {
   const note = await page.textContent('#capture-input-note');
   check(note.includes('No preview'), `a session without previews shows '${note}'`);
   await shot('10-session-reopened');
+
+  // 12. A stroke over the take: the page plays the rule the export applies (faceanim_take::layer:
+  //     the take plus the sketch on the character's own targets, clamped), frame by frame.
+  const anchors = await page.evaluate(() => fetch('api/character/anchors').then((r) => r.json()));
+  const smile = anchors.find((a) => a.name === 'mouthSmile_L');
+  const samples = Array.from({ length: 11 }, (_, i) => ({ t: i * 0.05, p: smile.rest.map((v, j) => v + (smile.target[j] - v) * i / 10) }));
+  const added = await page.evaluate((stroke) => fetch('api/strokes', { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(stroke) }).then((r) => r.json()), { samples, start_frame: 2 });
+  check(added.actions.length === 1, `the stroke over the take made no action: ${JSON.stringify(added.rejected)}`);
+  await page.reload();
+  await page.waitForFunction(() => window.studio && window.studio.bakedReady && window.studio.state && window.studio.state.actions.length === 1, null, { timeout: 60000 });
+  await page.click('#tab-capture');
+  await page.waitForFunction(() => window.studio.capture.view && window.studio.capture.view.take, null, { timeout: 60000 });
+  const layered = await page.evaluate(() => fetch('api/capture/export.json').then((r) => r.json()));
+  const diagramBox = await page.locator('#diagram').boundingBox();
+  for (const f of [0, 4, 9, 14, truth.length - 1]) {
+    await page.mouse.click(diagramBox.x + 8 + (f / (truth.length - 1)) * (diagramBox.width - 16), diagramBox.y + diagramBox.height / 2);
+    await page.waitForFunction((want) => Math.round(window.studio.frame) === want, f, { timeout: 10000 });
+    const shownWeights = await page.evaluate((n) => Array.from(window.studio.meshes[0].morphTargetInfluences.slice(0, n)), layered.blendshapes.length);
+    const worst = Math.max(...shownWeights.map((w, i) => Math.abs(w - layered.frames[f][i])));
+    check(worst < 1e-4, `frame ${f}: the page shows weights ${worst} away from the export's layered clip`);
+  }
+  const smileColumn = layered.blendshapes.indexOf('mouthSmile_L');
+  check(Math.max(...layered.frames.map((row) => row[smileColumn])) > 0.5, 'the stroke did not reach the layered clip');
+  await shot('11-stroke-over-take');
   check(consoleErrors.length === 0, `page errors: ${consoleErrors.join('; ')}`);
   console.log(JSON.stringify(measurements));
 } finally {

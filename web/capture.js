@@ -2,11 +2,17 @@
 // (seed 003's toolkit): the input frame beside the character, the frame diagram, corrections
 // by name, keyframes, preference, the adapter (train, fine-tune), live webcam puppeteering and
 // recording. The server owns the take; this file draws /api/capture/state and sends edits.
-// Sketch strokes keep working on top: the take is the layer under them (window.studio.layer).
+// Sketch strokes keep working on top: the take is the layer under them (playback's layer).
 
 import * as THREE from 'three';
+import { api } from './api.js';
+import { inCapture, onMode } from './mode.js';
+import { applyLayer, currentFrame, onFrame, pause, setExtent, setFrame, setLayer, setTurn } from './playback.js';
+import { onRender } from './scene.js';
+import { showError, showFailure } from './status.js';
+import * as store from './store.js';
+import { drawTimeline } from './timeline.js';
 
-const studio = /** @type {any} */ (window).studio;
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 const input = (id) => /** @type {HTMLInputElement} */ (document.getElementById(id));
 
@@ -17,7 +23,8 @@ let selectedName = 'jawOpen';
 /** A slider being dragged: its name and value show on the character before the server has it. */
 let preview = null;
 
-const capture = {
+/** Capture mode as scripts and tests see it (`window.studio.capture`). */
+export const capture = {
   get view() { return view; },
   /** Live webcam measurements: frames per second and camera-to-screen latency (ms). */
   live: {
@@ -50,48 +57,36 @@ const capture = {
   },
   refresh: () => refresh(),
 };
-studio.capture = capture;
 
-// ---------- mode ----------
-function setMode(mode) {
-  const on = mode === 'capture';
-  document.body.classList.toggle('capture', on);
-  $('tab-sketch').setAttribute('aria-selected', String(!on));
-  $('tab-capture').setAttribute('aria-selected', String(on));
-  $('capture-input').hidden = !on;
-  $('capture-panel').hidden = !on;
-  $('settings').hidden = on;
-  if (on) refresh().catch((e) => studio.showError(String(e.message || e)));
-  historyButtons();
-  if (!on) turnHead(null);
-  else studio.setFrame(studio.frame);
-  window.dispatchEvent(new Event('resize'));
+// ---------- tab and history ----------
+onMode((mode) => {
+  if (mode === 'capture') { refresh().catch(showFailure); setFrame(currentFrame()); }
+  else turnHead(null);
+  notify();
+});
+
+/** @type {(() => void)[]} */
+const changeListeners = [];
+/** Calls `listener()` after every new capture state. */
+export function onChange(listener) { changeListeners.push(listener); }
+function notify() { for (const listener of changeListeners) listener(); }
+
+// In the Capture tab, undo and redo (Ctrl+Z, the toolbar) step through the take's edits; the
+// strokes' own history is the Sketch tab's.
+/** Undoes one edit of the take. */
+export const undo = () => post('api/capture/undo');
+/** Redoes one undone edit of the take. */
+export const redo = () => post('api/capture/redo');
+/** Whether the take has an edit to undo or redo. */
+export function history() {
+  const take = view && view.take;
+  return { canUndo: !!(take && take.can_undo), canRedo: !!(take && take.can_redo) };
 }
-// In capture mode, undo and redo (Ctrl+Z, the toolbar) step through the take's edits; the
-// strokes' own history is the sketch tab's.
-const inCapture = () => document.body.classList.contains('capture');
-const sketchHistory = { undo: studio.commands.undo, redo: studio.commands.redo };
-studio.commands.undo = () => (inCapture() ? post('api/capture/undo') : sketchHistory.undo());
-studio.commands.redo = () => (inCapture() ? post('api/capture/redo') : sketchHistory.redo());
-$('undo').onclick = () => studio.commands.undo();
-$('redo').onclick = () => studio.commands.redo();
-function historyButtons() {
-  if (inCapture()) {
-    const take = view && view.take;
-    /** @type {HTMLButtonElement} */ ($('undo')).disabled = !(take && take.can_undo);
-    /** @type {HTMLButtonElement} */ ($('redo')).disabled = !(take && take.can_redo);
-  } else if (studio.state) {
-    /** @type {HTMLButtonElement} */ ($('undo')).disabled = !studio.state.can_undo;
-    /** @type {HTMLButtonElement} */ ($('redo')).disabled = !studio.state.can_redo;
-  }
-}
-$('tab-sketch').onclick = () => setMode('sketch');
-$('tab-capture').onclick = () => setMode('capture');
 
 // ---------- state ----------
 let polling = 0;
 async function refresh() {
-  const v = await studio.api('GET', 'api/capture/state');
+  const v = await api('GET', 'api/capture/state');
   apply(v);
   return v;
 }
@@ -102,10 +97,11 @@ function apply(v) {
   const take = v.take;
   const newTake = take && take.id !== hadTake;
   if (newTake) shownFrame = -1;
-  studio.extraLastFrame = take ? take.frames - 1 : 0;
-  if (newTake && studio.state && Math.abs(studio.state.fps - take.fps) > 1e-3) {
+  setExtent(take ? take.frames - 1 : 0);
+  const sketch = store.state();
+  if (newTake && sketch && Math.abs(sketch.fps - take.fps) > 1e-3) {
     // Strokes layered on the take count frames at the take's rate.
-    studio.run('PUT', 'api/fps', { fps: take.fps });
+    store.run('PUT', 'api/fps', { fps: take.fps });
   }
   // Job and progress.
   const job = v.job;
@@ -114,8 +110,8 @@ function apply(v) {
   if (job) {
     const fraction = job.total ? job.done / job.total : 0;
     $('job-stage').textContent = running
-      ? `${job.kind}: ${job.stage} ${job.total ? `${job.done}/${job.total}` : ''}${job.cancelling ? ' (cancelling…)' : ''}`
-      : job.error ? `${job.kind}: ${job.error}` : `${job.kind}: ${job.result}`;
+      ? `${job.title}: ${job.stage} ${job.total ? `${job.done}/${job.total}` : ''}${job.cancelling ? ' (cancelling…)' : ''}`
+      : job.error ? `${job.title}: ${job.error}` : `${job.title}: ${job.result}`;
     $('job-stage').className = job.error ? 'error-text' : '';
     /** @type {HTMLProgressElement} */ ($('job-progress')).value = running ? fraction : 1;
     $('job-progress').hidden = !running;
@@ -140,7 +136,7 @@ function apply(v) {
   if (document.activeElement !== $('keyframe-every')) input('keyframe-every').value = String(f.keyframe_every);
   // Take.
   $('take-info').textContent = take
-    ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; ${take.by_adapter === null ? 'opened from a session' : `estimated ${take.by_adapter ? 'by the adapter' : 'by ARKit name'}`}${take.preference ? '; preference applied' : ''}.`
+    ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; ${ESTIMATED[take.estimator] || take.estimator}${take.preference ? '; preference applied' : ''}.`
     : '';
   if (!take) $('capture-input-note').textContent = 'Open a video, photos, a session or the webcam (right).';
   $('capture-input-note').hidden = (!!take && !frameImage.hidden) || capture.live.running;
@@ -148,10 +144,9 @@ function apply(v) {
   /** @type {HTMLButtonElement} */ ($('clear-preference')).disabled = !take || !take.preference;
   for (const a2 of document.querySelectorAll('#capture-panel .exports a')) a2.classList.toggle('disabled', !take);
   buildSliders(v);
-  historyButtons();
-  studio.layer = layer;
-  if (studio.state) studio.drawTimeline();
-  studio.setFrame(newTake ? 0 : studio.frame);
+  notify();
+  drawTimeline();
+  setFrame(newTake ? 0 : currentFrame());
 }
 
 /** The weights under the sketch at `frame`: the live face, else the take (with a slider
@@ -168,16 +163,19 @@ function layer(frame) {
   return copy;
 }
 
+/** How the take-info line says where the estimates came from. */
+const ESTIMATED = { adapter: 'estimated by the adapter', by_name: 'estimated by ARKit name', session_file: 'opened from a session' };
+
 // ---------- input ----------
 input('capture-file').addEventListener('change', async () => {
   const files = [...(input('capture-file').files || [])];
   input('capture-file').value = '';
   if (!files.length) return;
-  studio.showError('');
+  showError('');
   const header = (file) => ({ 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') });
   try {
     if (files.length === 1) {
-      apply(await studio.api('POST', 'api/capture/upload', await files[0].arrayBuffer(), header(files[0])));
+      apply(await api('POST', 'api/capture/upload', await files[0].arrayBuffer(), header(files[0])));
       return;
     }
     // Several photos are one sequence, in name order, like a folder of frames.
@@ -185,22 +183,22 @@ input('capture-file').addEventListener('change', async () => {
     const batch = Date.now().toString(36) + Math.random().toString(36).slice(2, 8);
     for (const [index, file] of files.entries()) {
       $('take-info').textContent = `Sending ${file.name} (${index + 1} of ${files.length})…`;
-      apply(await studio.api('POST', `api/capture/upload?batch=${batch}&index=${index}&count=${files.length}`, await file.arrayBuffer(), header(file)));
+      apply(await api('POST', `api/capture/upload?batch=${batch}&index=${index}&count=${files.length}`, await file.arrayBuffer(), header(file)));
     }
-  } catch (e) { studio.showError(String(e.message || e)); }
+  } catch (e) { showError(String(e.message || e)); }
 });
 $('capture-open').onclick = async () => {
   const path = input('capture-path').value.trim();
-  if (!path) { studio.showError('Type the path of a video, an image, a folder of images or a session file'); return; }
-  try { studio.showError(''); apply(await studio.api('POST', 'api/capture/open', { path })); }
-  catch (e) { studio.showError(String(e.message || e)); }
+  if (!path) { showError('Type the path of a video, an image, a folder of images or a session file'); return; }
+  try { showError(''); apply(await api('POST', 'api/capture/open', { path })); }
+  catch (e) { showError(String(e.message || e)); }
 };
 $('capture-close').onclick = () => post('api/capture/close');
 $('job-cancel').onclick = () => post('api/capture/cancel');
 
 async function post(path, body) {
-  try { studio.showError(''); apply(await studio.api('POST', path, body)); return true; }
-  catch (e) { studio.showError(String(e.message || e)); return false; }
+  try { showError(''); apply(await api('POST', path, body)); return true; }
+  catch (e) { showError(String(e.message || e)); return false; }
 }
 
 // ---------- adapter ----------
@@ -213,20 +211,20 @@ async function sendFiltering() {
     keyframe_every: Math.max(1, Math.round(Number(input('keyframe-every').value) || 1)),
     smoothing: input('one-euro').checked ? { min_cutoff: Number(input('min-cutoff').value), beta: Number(input('beta').value) } : null,
   };
-  try { studio.showError(''); apply(await studio.api('PUT', 'api/capture/filtering', body)); }
-  catch (e) { studio.showError(String(e.message || e)); }
+  try { showError(''); apply(await api('PUT', 'api/capture/filtering', body)); }
+  catch (e) { showError(String(e.message || e)); }
 }
 for (const id of ['one-euro', 'min-cutoff', 'beta', 'keyframe-every']) $(id).addEventListener('change', sendFiltering);
 
 // ---------- the current frame: keyframes, corrections, preference ----------
-const currentFrame = () => Math.round(studio.frame);
+const shownFrameIndex = () => Math.round(currentFrame());
 $('keyframe').onclick = () => {
   const take = view && view.take;
   if (!take) return;
-  const f = currentFrame();
+  const f = shownFrameIndex();
   post('api/capture/keyframe', { frame: f, on: !take.keyframes.includes(f) });
 };
-$('uncorrect-frame').onclick = () => post('api/capture/uncorrect', { frame: currentFrame() });
+$('uncorrect-frame').onclick = () => post('api/capture/uncorrect', { frame: shownFrameIndex() });
 $('apply-preference').onclick = () => post('api/capture/preference', { on: true });
 $('clear-preference').onclick = () => post('api/capture/preference', { on: false });
 
@@ -274,17 +272,17 @@ function buildSliders(v) {
         clear.textContent = '×';
         clear.title = `Remove the correction of ${name} on this frame`;
         range.addEventListener('input', () => {
-          preview = { frame: currentFrame(), name, value: Number(range.value) };
+          preview = { frame: shownFrameIndex(), name, value: Number(range.value) };
           out.textContent = Number(range.value).toFixed(2);
-          studio.applyLayer();
+          applyLayer();
         });
         range.addEventListener('change', async () => {
           const value = Number(range.value);
-          const ok = await post('api/capture/correct', { frame: currentFrame(), name, value });
+          const ok = await post('api/capture/correct', { frame: shownFrameIndex(), name, value });
           preview = null;
           if (ok) { selectedName = name; markSelected(); drawDiagram(); }
         });
-        clear.onclick = () => post('api/capture/uncorrect', { frame: currentFrame(), name });
+        clear.onclick = () => post('api/capture/uncorrect', { frame: shownFrameIndex(), name });
         row.append(label, range, out, clear);
         parent.appendChild(row);
         sliders.set(name, { row, range, out });
@@ -301,7 +299,7 @@ function markSelected() {
 }
 function fillSliders() {
   const take = view && view.take;
-  const f = currentFrame();
+  const f = shownFrameIndex();
   const row = take ? take.weights[Math.min(f, take.frames - 1)] : null;
   const corrected = take ? take.corrections[String(f)] || {} : {};
   view.blendshapes.forEach((name, i) => {
@@ -359,7 +357,7 @@ function drawDiagram() {
     g.beginPath(); g.arc(x(f), yMean(m), corrected.has(f) || keys.has(f) ? radius + 1 : radius, 0, Math.PI * 2); g.fill();
   });
   g.strokeStyle = '#e04040'; g.lineWidth = 2;
-  const cx = x(Math.min(studio.frame, n - 1));
+  const cx = x(Math.min(currentFrame(), n - 1));
   g.beginPath(); g.moveTo(cx, 0); g.lineTo(cx, h); g.stroke();
 }
 function frameAt(clientX) {
@@ -370,35 +368,29 @@ function frameAt(clientX) {
   return Math.round(Math.min(1, Math.max(0, u)) * (take.frames - 1));
 }
 diagram.addEventListener('pointerdown', (e) => {
-  studio.commands.pause();
-  studio.setFrame(frameAt(e.clientX));
+  pause();
+  setFrame(frameAt(e.clientX));
   diagram.setPointerCapture(e.pointerId);
-  diagram.onpointermove = (ev) => studio.setFrame(frameAt(ev.clientX));
+  diagram.onpointermove = (ev) => setFrame(frameAt(ev.clientX));
   diagram.onpointerup = () => { diagram.onpointermove = null; };
 });
 new ResizeObserver(drawDiagram).observe(diagram);
-$('step-back').onclick = () => studio.commands.step(-1);
-$('step-forward').onclick = () => studio.commands.step(1);
-$('play-back').onclick = () => studio.commands.playBackwards();
 
-/** Turns the character's root by a captured head pose `[yaw, pitch, roll]` in degrees (the
- * export's convention: R = Ry(yaw)·Rx(−pitch)·Rz(roll)), or back to rest. Only in this tab:
- * strokes are drawn on the unturned face. */
+/** Turns the character by a captured head pose `[yaw, pitch, roll]` in degrees (the export's
+ * convention: R = Ry(yaw)·Rx(−pitch)·Rz(roll); the capture browser test compares the two), or
+ * back to rest. Only in this tab: strokes are drawn on the unturned face. */
 const headEuler = new THREE.Euler(0, 0, 0, 'YXZ');
 function turnHead(head) {
-  const root = studio.root;
-  if (!root) return;
-  const on = head && inCapture() && input('head-turn').checked && !studio.holdRest;
+  if (!(head && inCapture() && input('head-turn').checked)) { setTurn(null); return; }
   const d = THREE.MathUtils.degToRad;
-  headEuler.set(on ? -d(head[1]) : 0, on ? d(head[0]) : 0, on ? d(head[2]) : 0, 'YXZ');
-  root.quaternion.setFromEuler(headEuler);
-  studio.invalidate();
+  headEuler.set(-d(head[1]), d(head[0]), d(head[2]), 'YXZ');
+  setTurn(new THREE.Quaternion().setFromEuler(headEuler));
 }
-$('head-turn').addEventListener('change', () => studio.setFrame(studio.frame));
+$('head-turn').addEventListener('change', () => setFrame(currentFrame()));
 
 // The input frame, the sliders and the diagram follow the current frame.
 let shownFrame = -1;
-studio.onFrame.push((frame) => {
+onFrame((frame) => {
   const take = view && view.take;
   if (!view) return;
   const f = take ? Math.min(Math.round(frame), take.frames - 1) : -1;
@@ -435,18 +427,18 @@ let pendingShown = /** @type {{captured: number, sent: number, received: number}
 let fpsWindow = { start: 0, count: 0 };
 
 async function startLive() {
-  studio.showError('');
+  showError('');
   try {
     stream = await navigator.mediaDevices.getUserMedia({ video: { width: { ideal: 640 }, height: { ideal: 480 }, frameRate: { ideal: 30 } }, audio: false });
-  } catch (e) { studio.showError(`The webcam could not be opened: ${e.message || e}`); return; }
-  try { apply(await studio.api('POST', 'api/capture/live/start')); }
-  catch (e) { studio.showError(String(e.message || e)); stopLive(); return; }
+  } catch (e) { showError(`The webcam could not be opened: ${e.message || e}`); return; }
+  try { apply(await api('POST', 'api/capture/live/start')); }
+  catch (e) { showError(String(e.message || e)); stopLive(); return; }
   $('capture-frame').hidden = true;
   Object.assign(capture.live, { running: true, fps: 0, latency_ms: 0, frames: 0, weights: null, latencies: [] });
   fpsWindow = { start: performance.now(), count: 0 };
   $('live').textContent = 'Stop webcam';
   /** @type {HTMLButtonElement} */ ($('record')).disabled = false;
-  studio.commands.pause();
+  pause();
   const track = stream.getVideoTracks()[0];
   const Processor = /** @type {any} */ (window).MediaStreamTrackProcessor;
   if (Processor && typeof VideoFrame !== 'undefined') {
@@ -499,7 +491,7 @@ async function sendWaiting() {
     send(pixels, width, height, format, captured, performance.now());
   } catch (e) {
     inFlight--;
-    if (capture.live.running) studio.showError(`The webcam frame could not be read: ${e.message || e}`);
+    if (capture.live.running) showError(`The webcam frame could not be read: ${e.message || e}`);
   } finally { frame.close(); }
 }
 
@@ -580,16 +572,16 @@ function send(pixels, width, height, format, captured, sent) {
       capture.live.frames++;
       fpsWindow.count++;
       pendingShown = { captured, sent, received: performance.now() };
-      studio.applyLayer();
+      applyLayer();
       capture.live.recorded = result.recorded ?? null;
       if (result.recorded !== null && result.recorded !== undefined) $('record').textContent = `Stop (${result.recorded})`;
     })
-    .catch((e) => { if (capture.live.running) studio.showError(String(e.message || e)); })
+    .catch((e) => { if (capture.live.running) showError(String(e.message || e)); })
     .finally(() => { inFlight--; sendWaiting(); });
 }
 
 // Latency is measured when the character showing the frame's weights has been drawn.
-studio.onRender.push(() => {
+onRender(() => {
   if (pendingShown === null) return;
   const drawn = performance.now();
   const { captured, sent, received } = pendingShown;
@@ -621,9 +613,9 @@ async function stopLive() {
   $('live').textContent = 'Webcam (live)';
   $('record').textContent = 'Record';
   /** @type {HTMLButtonElement} */ ($('record')).disabled = true;
-  try { apply(await studio.api('POST', 'api/capture/live/stop')); } catch { /* the server may be gone */ }
+  try { apply(await api('POST', 'api/capture/live/stop')); } catch { /* the server may be gone */ }
   shownFrame = -1;
-  studio.setFrame(studio.frame);
+  setFrame(currentFrame());
 }
 $('live').onclick = () => (capture.live.running ? stopLive() : startLive());
 $('record').onclick = async () => {
@@ -634,9 +626,6 @@ $('record').onclick = async () => {
     await stopLive();
   }
 };
-capture.startLive = startLive;
-capture.stopLive = stopLive;
-capture.setMode = setMode;
 
-// Open in capture mode with `#capture` in the address.
-if (location.hash === '#capture') setMode('capture');
+// The take (or the live face) is the layer under the sketch.
+setLayer(layer);

@@ -55,7 +55,7 @@ fn benches(c: &mut Criterion) {
     let adapter = train(&dataset, &TrainOptions::default(), Control::silent()).unwrap();
     group.sample_size(100);
     let mut out = vec![0.0; adapter.blendshapes.len()];
-    let input = dataset.expressions[0].input(adapter.architecture.features);
+    let input = adapter.architecture.features.input(&dataset.expressions[0]);
     group.bench_function("adapter inference per frame", |b| {
         b.iter(|| adapter.predict_into(black_box(&input), &mut out));
     });

@@ -117,6 +117,21 @@ pub struct Adapter {
 
 const ADAPTER_FORMAT: &str = "faceanim-adapter-1";
 
+/// Takes, live tracking and re-estimation use an adapter through the take layer's estimator.
+impl faceanim_take::Estimator for Adapter {
+    fn blendshapes(&self) -> &[String] {
+        &self.blendshapes
+    }
+
+    fn estimate(&self, expression: &Expression) -> Vec<f32> {
+        self.predict(expression)
+    }
+
+    fn source(&self) -> faceanim_take::EstimatorSource {
+        faceanim_take::EstimatorSource::Adapter
+    }
+}
+
 impl Adapter {
     /// Number of inputs.
     #[must_use]
@@ -156,7 +171,7 @@ impl Adapter {
     #[must_use]
     pub fn predict(&self, expression: &Expression) -> Vec<f32> {
         let mut out = vec![0.0; self.blendshapes.len()];
-        self.predict_into(&expression.input(self.architecture.features), &mut out);
+        self.predict_into(&self.architecture.features.input(expression), &mut out);
         out
     }
 

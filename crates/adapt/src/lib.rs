@@ -10,26 +10,26 @@
 //!   pipeline ([`FaceCamera`], [`Dataset`]).
 //! - [`features`]: what the adapter sees (scores, pose-normalised landmarks, or both).
 //! - [`train`] (candle): MSE and Adam with early stopping; fine-tuning from corrections.
-//! - [`adapter`]: inference in plain Rust and the safetensors file, bound to its character.
-//! - [`session`]: the human in the loop — estimates, keyframes, corrections and preference
-//!   for one input, kept in a file.
+//! - [`adapter`]: inference in plain Rust and the safetensors file, bound to its character;
+//!   an [`Adapter`] is a [`faceanim_take::Estimator`], so takes and live tracking use it like
+//!   the by-name mapping.
+//!
+//! The human in the loop (sessions, corrections, preference, undo) is `faceanim-take`'s, which
+//! needs no training library; fine-tuning reads its corrections.
 #![deny(missing_docs)]
 
 pub mod adapter;
 pub mod dataset;
 pub mod features;
-mod fingerprint;
 pub mod sampling;
-pub mod session;
 mod tensors;
 pub mod train;
 
 pub use adapter::{Activation, Adapter, Architecture, Fit, TrainingReport};
 pub use dataset::{Control, Dataset, DatasetOptions, FaceCamera, Framing, Split};
+pub use faceanim_take::{Correction, Fingerprint};
 pub use features::{Expression, FeatureSet};
-pub use fingerprint::Fingerprint;
-pub use session::Session;
-pub use train::{Correction, FinetuneReport, TrainOptions, finetune, train};
+pub use train::{FinetuneReport, TrainOptions, finetune, train};
 
 use std::path::{Path, PathBuf};
 
@@ -62,7 +62,7 @@ pub enum AdaptError {
     /// A face network failed.
     #[error(transparent)]
     Model(#[from] faceanim_track::ModelError),
-    /// An adapter, dataset or session file is malformed.
+    /// An adapter or dataset file is malformed.
     #[error("{0}")]
     Format(String),
     /// The adapter does not belong to this character.
@@ -81,9 +81,6 @@ pub enum AdaptError {
     /// Too few samples to split into training, validation and test.
     #[error("{0} samples are too few to train on")]
     NotEnoughData(usize),
-    /// A session edit was out of range.
-    #[error("{0}")]
-    Session(String),
     /// The user stopped the work.
     #[error("cancelled")]
     Cancelled,

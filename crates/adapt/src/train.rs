@@ -15,7 +15,7 @@ use rand::{Rng as _, SeedableRng as _};
 use crate::AdaptError;
 use crate::adapter::{Adapter, Architecture, TrainingReport};
 use crate::dataset::{Control, Dataset};
-use crate::features::Expression;
+use faceanim_take::Correction;
 
 impl From<candle_core::Error> for AdaptError {
     fn from(e: candle_core::Error) -> AdaptError {
@@ -271,7 +271,7 @@ pub fn train(
     let inputs: Vec<Vec<f32>> = dataset
         .expressions
         .iter()
-        .map(|e| e.input(features))
+        .map(|e| features.input(e))
         .collect();
     let split = dataset.split();
     let (mean, scale) = standardisation(&inputs[split.train.clone()], features.len());
@@ -348,15 +348,6 @@ pub fn train(
     Ok(adapter)
 }
 
-/// A frame the user corrected: what capture read, and the weights the user wants.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Correction {
-    /// The frame's expression.
-    pub expression: Expression,
-    /// The wanted weights, one per blendshape (the estimate, with the user's changes).
-    pub target: Vec<f32>,
-}
-
 /// How fine-tuning went.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct FinetuneReport {
@@ -412,7 +403,7 @@ pub fn finetune(
     let inputs: Vec<Vec<f32>> = dataset
         .expressions
         .iter()
-        .map(|e| e.input(features))
+        .map(|e| features.input(e))
         .collect();
     let part = |range: std::ops::Range<usize>| {
         Examples::new(&inputs[range.clone()], &dataset.targets[range], mean, scale)
@@ -420,7 +411,7 @@ pub fn finetune(
     let (validation, test) = (part(split.validation.clone())?, part(split.test.clone())?);
     let corrected_inputs: Vec<Vec<f32>> = corrections
         .iter()
-        .map(|c| c.expression.input(features))
+        .map(|c| features.input(&c.expression))
         .collect();
     let corrected_targets: Vec<Vec<f32>> = corrections.iter().map(|c| c.target.clone()).collect();
     let corrected = Examples::new(&corrected_inputs, &corrected_targets, mean, scale)?;

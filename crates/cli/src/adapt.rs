@@ -9,27 +9,102 @@ use anyhow::Context as _;
 use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
 use faceanim_adapt::{
     Activation, Adapter, Architecture, Control, Dataset, DatasetOptions, FaceCamera, FeatureSet,
-    Session, TrainOptions,
+    TrainOptions,
 };
 use faceanim_rig::Character;
+use faceanim_take::Session;
 use faceanim_track::FaceModels;
 
-/// What `faceanim adapt` was asked to do.
-#[derive(Debug)]
+/// `faceanim adapt`'s arguments.
+#[derive(Debug, clap::Args)]
 pub struct AdaptArgs {
+    /// The character (default: the built-in head).
     pub character: Option<PathBuf>,
+    /// The adapter file to write.
+    #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Random expressions to render (split 80/10/10 into training, validation and test).
+    #[arg(long, default_value_t = 10_000)]
     pub samples: usize,
+    /// Random seed (expressions, initial weights, batch order).
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Print {"mae_test", "mae_val", "samples", "seconds"} as JSON at the end.
+    #[arg(long)]
     pub json: bool,
-    pub architecture: Architecture,
+    /// What the adapter reads.
+    #[arg(long, value_enum, default_value_t = FeatureChoice::Both)]
+    pub features: FeatureChoice,
+    /// Width of the hidden layer.
+    #[arg(long, default_value_t = 256)]
+    pub hidden: usize,
+    /// ReLU instead of LeakyReLU between the layers.
+    #[arg(long)]
+    pub relu: bool,
+    /// Do not clamp the outputs to [0, 1].
+    #[arg(long)]
+    pub no_clamp: bool,
+    /// Two blendshapes never active together in the training set, `A,B`; repeatable
+    /// (opposites such as jawLeft/jawRight are found on their own).
+    #[arg(long)]
     pub exclusive: Vec<String>,
+    /// Where the rendered training set is cached (default: beside the adapter).
+    #[arg(long)]
     pub dataset: Option<PathBuf>,
+    /// Render the training set again even when a cached one fits.
+    #[arg(long)]
     pub fresh: bool,
+    /// Train every row of the ablation table and print it, instead of writing an adapter.
+    #[arg(long)]
     pub ablation: bool,
+    /// Fine-tune on the corrections in these session files.
+    #[arg(long, num_args = 1..)]
     pub finetune: Vec<PathBuf>,
+    /// With --finetune: the adapter to start from (default: -o's file).
+    #[arg(long)]
     pub from: Option<PathBuf>,
+    /// Instead of training, measure this adapter's MAE on renders of CHARACTER (for
+    /// example another identity of the rig it was trained on); prints {"mae", "samples"}.
+    #[arg(long, conflicts_with_all = ["finetune", "ablation"])]
     pub evaluate: Option<PathBuf>,
+}
+
+/// What an adapter reads (the command line's names for [`FeatureSet`]; clap stays out of the
+/// library).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FeatureChoice {
+    /// The 52 expression scores.
+    Scores,
+    /// Pose-normalised landmarks.
+    Landmarks,
+    /// Both.
+    Both,
+}
+
+impl From<FeatureChoice> for FeatureSet {
+    fn from(choice: FeatureChoice) -> FeatureSet {
+        match choice {
+            FeatureChoice::Scores => FeatureSet::Scores,
+            FeatureChoice::Landmarks => FeatureSet::Landmarks,
+            FeatureChoice::Both => FeatureSet::Both,
+        }
+    }
+}
+
+impl AdaptArgs {
+    /// The network the arguments describe.
+    fn architecture(&self) -> Architecture {
+        Architecture {
+            features: self.features.into(),
+            hidden: self.hidden,
+            activation: if self.relu {
+                Activation::Relu
+            } else {
+                Activation::LeakyRelu
+            },
+            clamp: !self.no_clamp,
+        }
+    }
 }
 
 /// The adapter file next to a character: `NAME.adapter.safetensors`.
@@ -140,9 +215,9 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         args.samples
     );
     anyhow::ensure!(
-        (1..=4096).contains(&args.architecture.hidden),
+        (1..=4096).contains(&args.hidden),
         "--hidden must be between 1 and 4096, got {}",
-        args.architecture.hidden
+        args.hidden
     );
     let character = crate::load_or_default(args.character.as_deref())?.character;
     let output = args
@@ -187,7 +262,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
     let (dataset, _) = dataset(&character, &options, &cache, args.fresh)?;
     let dataset_seconds = started.elapsed().as_secs_f64();
     let train_options = TrainOptions {
-        architecture: args.architecture,
+        architecture: args.architecture(),
         seed: args.seed,
         ..TrainOptions::default()
     };

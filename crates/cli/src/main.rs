@@ -2,9 +2,11 @@
 //!
 //! Errors are mapped once, here: every failure prints `error: ` followed by its cause chain
 //! (which names the file and the problem) and exits with status 1; usage errors exit with 2.
+//! Each subcommand's arguments are a clap `Args` struct, passed as they are to its code.
 
 mod adapt;
 mod info;
+mod outputs;
 mod session;
 mod track;
 
@@ -12,8 +14,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use clap::{Parser, Subcommand};
-use faceanim_anim::filter::OneEuro;
+use clap::{Args, Parser, Subcommand};
 
 /// faceanim animates the face of any blendshape character.
 ///
@@ -42,150 +43,42 @@ enum Command {
     /// one, and trains it there from the page.
     ///
     /// Example: faceanim studio head.glb --open
-    Studio {
-        /// The character: .glb, .gltf, or a folder of OBJ files (default: the built-in head).
-        character: Option<PathBuf>,
-        /// Port on 127.0.0.1 (0 picks a free one).
-        #[arg(long, default_value_t = 7878)]
-        port: u16,
-        /// Open the page in the default browser.
-        #[arg(long)]
-        open: bool,
-        /// The project file (strokes JSON) to open and save.
-        #[arg(long)]
-        project: Option<PathBuf>,
-        /// The character's adapter for capture mode: read if it exists, written when trained
-        /// from the page.
-        #[arg(long)]
-        adapter: Option<PathBuf>,
-    },
+    Studio(StudioArgs),
     /// Describe a character: vertices, triangles, blendshapes, symmetry pairs, ARKit coverage.
     ///
     /// Example: faceanim info head.glb --json
-    Info {
-        /// The character: .glb, .gltf, or a folder of OBJ files (default: the built-in head).
-        character: Option<PathBuf>,
-        /// Print machine-readable JSON instead of text.
-        #[arg(long)]
-        json: bool,
-    },
+    Info(InfoArgs),
     /// Write a character as a binary glTF (.glb), optionally with an animation from a clip.
     ///
     /// Converts OBJ folders and .gltf files to a single .glb that Blender, Unity, Unreal and
     /// three.js open directly. Example: faceanim export ict-obj/ -o ict.glb --clip take.json
-    Export {
-        /// The character: .glb, .gltf, or a folder of OBJ files.
-        character: PathBuf,
-        /// Where to write the .glb.
-        #[arg(short, long)]
-        output: PathBuf,
-        /// A clip JSON (DESIGN.md "Baked clip") to add as a morph-weight animation; its
-        /// blendshape names are matched to the character's (ARKit spellings understood).
-        #[arg(long)]
-        clip: Option<PathBuf>,
-    },
+    Export(ExportArgs),
     /// Replay a strokes file (DESIGN.md format: samples, handle edits, settings) on a character
     /// and write the animation: a GLB whose extra morph targets carry arcs and exaggerations,
     /// and optionally the baked clip of blendshape weights.
     ///
     /// Example: faceanim sketch head.glb take.strokes.json -o take.glb --clip take.json
-    Sketch {
-        /// `[CHARACTER] STROKES`: the character (default: the built-in head) and the strokes file.
-        #[arg(num_args = 1..=2, required = true, value_names = ["CHARACTER", "STROKES"])]
-        inputs: Vec<PathBuf>,
-        /// Where to write the animated .glb.
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Also write the baked clip (one row of weights per frame) here.
-        #[arg(long)]
-        clip: Option<PathBuf>,
-    },
+    Sketch(SketchArgs),
     /// Write the built-in default head (52 ARKit blendshapes) as a .glb.
     ///
     /// Example: faceanim export-default -o default.glb
-    ExportDefault {
-        /// Where to write the .glb.
-        #[arg(short, long)]
-        output: PathBuf,
-    },
+    ExportDefault(ExportDefaultArgs),
     /// Render a character to PNG: one pose, or a contact sheet of every blendshape at weight 1.
     ///
     /// Examples: faceanim render --sheet -o sheet.png;
     /// faceanim render head.glb --weights jawOpen=0.6,mouthSmileLeft=1 -o smile.png
-    Render {
-        /// The character (default: the built-in head).
-        character: Option<PathBuf>,
-        /// Where to write the PNG.
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Blendshape weights as NAME=VALUE pairs separated by commas (ARKit spellings match).
-        #[arg(long, value_delimiter = ',')]
-        weights: Vec<String>,
-        /// A labelled grid of the neutral face and each blendshape at weight 1 instead.
-        #[arg(long, conflicts_with = "weights")]
-        sheet: bool,
-        /// Image size in pixels (for a sheet, each cell's size, at most 512).
-        #[arg(long, default_value_t = 512)]
-        size: u32,
-    },
+    Render(RenderArgs),
     /// Animate a character from a face photo, an image folder or a video: landmarks, ARKit
     /// scores and head pose per frame (MediaPipe's face models, run on the CPU), mapped by name
-    /// onto the character's blendshapes.
+    /// onto the character's blendshapes, or through its adapter.
     ///
     /// Outputs by extension (repeat -o for several): .json the clip (DESIGN.md), .glb the
-    /// character with the animation (head pose on its root), .csv Live Link Face. Prints a JSON
-    /// summary with the jitter of each filter so you can choose.
+    /// character with the animation (head pose on its root), .csv Live Link Face, .byoc.csv
+    /// the seed's CSV, .session.json the session. Prints a JSON summary with the jitter of
+    /// each filter so you can choose.
     ///
     /// Example: faceanim track take.mp4 --character ict.glb -o take.glb -o take.csv
-    Track {
-        /// A PNG or JPEG, a folder of them (an image sequence, in name order), or a video
-        /// (read with the ffmpeg program).
-        input: PathBuf,
-        /// The character (default: the built-in head).
-        #[arg(long)]
-        character: Option<PathBuf>,
-        /// Where to write: .json, .glb or .csv; repeatable.
-        #[arg(short, long)]
-        output: Vec<PathBuf>,
-        /// Also keep every frame's landmarks, scores and pose here (JSON).
-        #[arg(long)]
-        raw: Option<PathBuf>,
-        /// Clean-up of the per-frame estimates.
-        #[arg(long, value_enum, default_value_t = track::FilterChoice::Keyframes)]
-        filter: track::FilterChoice,
-        /// Keyframe spacing in frames (the seed's default is 5).
-        #[arg(long, default_value_t = faceanim_anim::keyframes::DEFAULT_EVERY)]
-        keyframe_every: usize,
-        /// One Euro cutoff at rest, Hz: lower is smoother.
-        #[arg(long, default_value_t = OneEuro::default().min_cutoff)]
-        min_cutoff: f32,
-        /// One Euro speed coefficient: higher follows fast motion more closely.
-        #[arg(long, default_value_t = OneEuro::default().beta)]
-        beta: f32,
-        /// Run the face detector on every frame instead of tracking from the previous one.
-        #[arg(long)]
-        detect_every_frame: bool,
-        /// Frame rate given to a still image or an image folder (videos carry their own).
-        #[arg(long, default_value_t = 30.0)]
-        fps: f32,
-        /// Threads for the face models.
-        #[arg(long, default_value_t = 1)]
-        threads: usize,
-        /// Drive the character through its adapter (from `faceanim adapt`) instead of by name.
-        #[arg(long)]
-        adapter: Option<PathBuf>,
-        /// With --adapter: also write the session (frames, estimates, keyframes) to correct
-        /// with `faceanim session`.
-        #[arg(long)]
-        session: Option<PathBuf>,
-        /// With --adapter: a frame to keep as a keyframe besides every --keyframe-every-th;
-        /// repeatable.
-        #[arg(long = "keyframe")]
-        keyframes: Vec<usize>,
-        /// With --adapter and a still image: frames of the 0 → peak → 0 animation it becomes.
-        #[arg(long, default_value_t = 30)]
-        image_frames: usize,
-    },
+    Track(track::TrackArgs),
     /// Train a character's adapter: render it with random expressions, read them back through
     /// the capture pipeline, and fit a small network from those readings to its own weights.
     ///
@@ -197,90 +90,113 @@ enum Command {
     ///
     /// Examples: faceanim adapt head.glb --json;
     /// faceanim adapt head.glb --finetune take.session.json
-    Adapt {
-        /// The character (default: the built-in head).
-        character: Option<PathBuf>,
-        /// The adapter file to write.
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-        /// Random expressions to render (split 80/10/10 into training, validation and test).
-        #[arg(long, default_value_t = 10_000)]
-        samples: usize,
-        /// Random seed (expressions, initial weights, batch order).
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Print {"mae_test", "mae_val", "samples", "seconds"} as JSON at the end.
-        #[arg(long)]
-        json: bool,
-        /// What the adapter reads.
-        #[arg(long, value_enum, default_value_t = FeatureChoice::Both)]
-        features: FeatureChoice,
-        /// Width of the hidden layer.
-        #[arg(long, default_value_t = 256)]
-        hidden: usize,
-        /// ReLU instead of LeakyReLU between the layers.
-        #[arg(long)]
-        relu: bool,
-        /// Do not clamp the outputs to [0, 1].
-        #[arg(long)]
-        no_clamp: bool,
-        /// Two blendshapes never active together in the training set, `A,B`; repeatable
-        /// (opposites such as jawLeft/jawRight are found on their own).
-        #[arg(long)]
-        exclusive: Vec<String>,
-        /// Where the rendered training set is cached (default: beside the adapter).
-        #[arg(long)]
-        dataset: Option<PathBuf>,
-        /// Render the training set again even when a cached one fits.
-        #[arg(long)]
-        fresh: bool,
-        /// Train every row of the ablation table and print it, instead of writing an adapter.
-        #[arg(long)]
-        ablation: bool,
-        /// Fine-tune on the corrections in these session files.
-        #[arg(long, num_args = 1..)]
-        finetune: Vec<PathBuf>,
-        /// With --finetune: the adapter to start from (default: -o's file).
-        #[arg(long)]
-        from: Option<PathBuf>,
-        /// Instead of training, measure this adapter's MAE on renders of CHARACTER (for
-        /// example another identity of the rig it was trained on); prints {"mae", "samples"}.
-        #[arg(long, conflicts_with_all = ["finetune", "ablation"])]
-        evaluate: Option<PathBuf>,
-    },
-    /// Correct a capture session (from `faceanim track --adapter … --session FILE`) and export
-    /// it: the seed's human in the loop.
+    Adapt(adapt::AdaptArgs),
+    /// Correct a capture session (from `faceanim track … --session FILE`) and export it: the
+    /// seed's human in the loop.
     ///
     /// Example: faceanim session take.session.json correct 40 jawOpen=0.9
-    Session {
-        /// The session file.
-        session: PathBuf,
-        #[command(subcommand)]
-        action: session::SessionAction,
-    },
+    Session(session::SessionArgs),
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
     /// Example: faceanim eval take.json reference.json --json
-    Eval {
-        /// The clip to judge.
-        a: PathBuf,
-        /// The reference clip.
-        b: PathBuf,
-        /// Print machine-readable JSON.
-        #[arg(long)]
-        json: bool,
-    },
+    Eval(EvalArgs),
 }
 
-/// What an adapter reads.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum FeatureChoice {
-    /// The 52 expression scores.
-    Scores,
-    /// Pose-normalised landmarks.
-    Landmarks,
-    /// Both.
-    Both,
+/// `faceanim studio`'s arguments.
+#[derive(Debug, Args)]
+struct StudioArgs {
+    /// The character: .glb, .gltf, or a folder of OBJ files (default: the built-in head).
+    character: Option<PathBuf>,
+    /// Port on 127.0.0.1 (0 picks a free one).
+    #[arg(long, default_value_t = 7878)]
+    port: u16,
+    /// Open the page in the default browser.
+    #[arg(long)]
+    open: bool,
+    /// The project file (strokes JSON) to open and save.
+    #[arg(long)]
+    project: Option<PathBuf>,
+    /// The character's adapter for capture mode: read if it exists, written when trained
+    /// from the page.
+    #[arg(long)]
+    adapter: Option<PathBuf>,
+}
+
+/// `faceanim info`'s arguments.
+#[derive(Debug, Args)]
+struct InfoArgs {
+    /// The character: .glb, .gltf, or a folder of OBJ files (default: the built-in head).
+    character: Option<PathBuf>,
+    /// Print machine-readable JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `faceanim export`'s arguments.
+#[derive(Debug, Args)]
+struct ExportArgs {
+    /// The character: .glb, .gltf, or a folder of OBJ files.
+    character: PathBuf,
+    /// Where to write the .glb.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// A clip JSON (DESIGN.md "Baked clip") to add as a morph-weight animation; its
+    /// blendshape names are matched to the character's (ARKit spellings understood).
+    #[arg(long)]
+    clip: Option<PathBuf>,
+}
+
+/// `faceanim sketch`'s arguments.
+#[derive(Debug, Args)]
+struct SketchArgs {
+    /// `[CHARACTER] STROKES`: the character (default: the built-in head) and the strokes file.
+    #[arg(num_args = 1..=2, required = true, value_names = ["CHARACTER", "STROKES"])]
+    inputs: Vec<PathBuf>,
+    /// Where to write the animated .glb.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write the baked clip (one row of weights per frame) here.
+    #[arg(long)]
+    clip: Option<PathBuf>,
+}
+
+/// `faceanim export-default`'s arguments.
+#[derive(Debug, Args)]
+struct ExportDefaultArgs {
+    /// Where to write the .glb.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// `faceanim render`'s arguments.
+#[derive(Debug, Args)]
+struct RenderArgs {
+    /// The character (default: the built-in head).
+    character: Option<PathBuf>,
+    /// Where to write the PNG.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Blendshape weights as NAME=VALUE pairs separated by commas (ARKit spellings match).
+    #[arg(long, value_delimiter = ',')]
+    weights: Vec<String>,
+    /// A labelled grid of the neutral face and each blendshape at weight 1 instead.
+    #[arg(long, conflicts_with = "weights")]
+    sheet: bool,
+    /// Image size in pixels (for a sheet, each cell's size, at most 512).
+    #[arg(long, default_value_t = 512)]
+    size: u32,
+}
+
+/// `faceanim eval`'s arguments.
+#[derive(Debug, Args)]
+struct EvalArgs {
+    /// The clip to judge.
+    a: PathBuf,
+    /// The reference clip.
+    b: PathBuf,
+    /// Print machine-readable JSON.
+    #[arg(long)]
+    json: bool,
 }
 
 fn main() -> ExitCode {
@@ -318,257 +234,164 @@ fn main() -> ExitCode {
 
 fn run(command: Command) -> anyhow::Result<()> {
     match command {
-        Command::Studio {
-            character,
-            port,
-            open,
-            project,
-            adapter,
-        } => studio(character.as_deref(), port, open, project, adapter),
-        Command::Info { character, json } => {
-            let imported = load_or_default(character.as_deref())?;
-            let report = info::Report::of(&imported.character);
-            if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
-            } else {
-                print!("{}", report.text(&imported.character));
-            }
-            Ok(())
-        }
-        Command::Export {
-            character,
-            output,
-            clip,
-        } => {
-            let imported = load(&character)?;
-            let character = imported.character;
-            let mut animations = Vec::new();
-            if let Some(clip_path) = clip {
-                let clip = faceanim_files::load_clip(&clip_path)?;
-                let name = clip_path
-                    .file_stem()
-                    .map_or_else(|| "clip".to_owned(), |s| s.to_string_lossy().into_owned());
-                let retarget = clip
-                    .retarget(&character, &name)
-                    .with_context(|| format!("applying {}", clip_path.display()))?;
-                if !retarget.unmatched.is_empty() {
-                    tracing::warn!(
-                        "{}: no blendshape for {}",
-                        clip_path.display(),
-                        retarget.unmatched.join(", ")
-                    );
-                }
-                animations.push(retarget.animation);
-            }
-            let glb = faceanim_rig::export::export_glb(&character, &animations)?;
-            faceanim_files::write_atomic(&output, &glb)?;
-            eprintln!(
-                "wrote {} ({} vertices, {} blendshapes{})",
-                output.display(),
-                character.vertex_count(),
-                character.blendshapes().len(),
-                if animations.is_empty() {
-                    String::new()
-                } else {
-                    format!(", {} animation", animations.len())
-                }
-            );
-            Ok(())
-        }
-        Command::Sketch {
-            inputs,
-            output,
-            clip,
-        } => {
-            let (character, strokes) = match inputs.as_slice() {
-                [strokes] => (None, strokes),
-                [character, strokes] => (Some(character.as_path()), strokes),
-                _ => anyhow::bail!("give [CHARACTER] STROKES"),
-            };
-            sketch(character, strokes, &output, clip.as_deref())
-        }
-        Command::ExportDefault { output } => {
+        Command::Studio(args) => studio(args),
+        Command::Info(args) => info(&args),
+        Command::Export(args) => export(&args),
+        Command::Sketch(args) => sketch(&args),
+        Command::ExportDefault(args) => {
             let character = faceanim_head::default_character();
-            let glb = faceanim_rig::export::export_glb(&character, &[])?;
-            faceanim_files::write_atomic(&output, &glb)?;
+            faceanim_files::write_atomic(&args.output, &faceanim_export::glb(&character, None)?)?;
             eprintln!(
                 "wrote {} ({} vertices, {} blendshapes)",
-                output.display(),
+                args.output.display(),
                 character.vertex_count(),
                 character.blendshapes().len()
             );
             Ok(())
         }
-        Command::Render {
-            character,
-            output,
-            weights,
-            sheet,
-            size,
-        } => {
-            let character = load_or_default(character.as_deref())?.character;
-            anyhow::ensure!(
-                (16..=4096).contains(&size),
-                "--size must be between 16 and 4096 pixels, got {size}"
-            );
-            let image = if sheet {
-                faceanim_render::contact_sheet(&character, size.min(512))
-            } else {
-                let mut w = vec![0.0; character.blendshapes().len()];
-                for pair in &weights {
-                    let (name, value) = pair
-                        .split_once('=')
-                        .ok_or_else(|| anyhow::anyhow!("--weights: '{pair}' is not NAME=VALUE"))?;
-                    let id = character.find_blendshape(name.trim()).ok_or_else(|| {
-                        anyhow::anyhow!(
-                            "--weights: '{name}' is not a blendshape of {}",
-                            character.name()
-                        )
-                    })?;
-                    let value: f32 = value
-                        .trim()
-                        .parse()
-                        .map_err(|_| anyhow::anyhow!("--weights: '{value}' is not a number"))?;
-                    anyhow::ensure!(
-                        value.is_finite(),
-                        "--weights: '{value}' is not a finite number"
-                    );
-                    w[id.index()] = value;
-                }
-                let pose = character.pose(&w);
-                let camera = faceanim_render::Camera::front(&character.bounds(), 0.75);
-                let appearance = faceanim_render::Appearance::of(&character);
-                for warning in appearance.warnings() {
-                    eprintln!("warning: {warning}");
-                }
-                faceanim_render::render(&character, &pose, &camera, &appearance, size)
-            };
-            faceanim_files::write_atomic(&output, &image.to_png()?)?;
-            eprintln!(
-                "wrote {} ({}×{})",
-                output.display(),
-                image.width,
-                image.height
-            );
-            Ok(())
-        }
-        Command::Track {
-            input,
-            character,
-            output,
-            raw,
-            filter,
-            keyframe_every,
-            min_cutoff,
-            beta,
-            detect_every_frame,
-            fps,
-            threads,
-            adapter,
-            session,
-            keyframes,
-            image_frames,
-        } => track::run(track::TrackArgs {
-            input,
-            character,
-            outputs: output,
-            raw,
-            filter,
-            keyframe_every,
-            one_euro: OneEuro {
-                min_cutoff,
-                beta,
-                ..OneEuro::default()
-            },
-            detect_every_frame,
-            fps,
-            threads,
-            adapter,
-            session,
-            keyframes,
-            image_frames,
-        }),
-        Command::Adapt {
-            character,
-            output,
-            samples,
-            seed,
-            json,
-            features,
-            hidden,
-            relu,
-            no_clamp,
-            exclusive,
-            dataset,
-            fresh,
-            ablation,
-            finetune,
-            from,
-            evaluate,
-        } => adapt::run(adapt::AdaptArgs {
-            character,
-            output,
-            samples,
-            seed,
-            json,
-            architecture: faceanim_adapt::Architecture {
-                features: match features {
-                    FeatureChoice::Scores => faceanim_adapt::FeatureSet::Scores,
-                    FeatureChoice::Landmarks => faceanim_adapt::FeatureSet::Landmarks,
-                    FeatureChoice::Both => faceanim_adapt::FeatureSet::Both,
-                },
-                hidden,
-                activation: if relu {
-                    faceanim_adapt::Activation::Relu
-                } else {
-                    faceanim_adapt::Activation::LeakyRelu
-                },
-                clamp: !no_clamp,
-            },
-            exclusive,
-            dataset,
-            fresh,
-            ablation,
-            finetune,
-            from,
-            evaluate,
-        }),
-        Command::Session { session, action } => session::run(&session, action),
-        Command::Eval { a, b, json } => {
-            let (clip_a, clip_b) = (
-                faceanim_files::load_clip(&a)?,
-                faceanim_files::load_clip(&b)?,
-            );
-            let result = faceanim_anim::metrics::compare(&clip_a, &clip_b);
-            if json {
-                println!("{}", serde_json::to_string(&result)?);
-            } else {
-                println!(
-                    "DTW distance        {:.4} ({:.4} per frame)",
-                    result.dtw, result.dtw_per_frame
-                );
-                println!(
-                    "jitter (RMS change) {:.4} vs {:.4} (difference {:+.4})",
-                    result.jitter_a, result.jitter_b, result.jitter_diff
-                );
-                match result.mae {
-                    Some(mae) => println!("MAE                 {mae:.4}"),
-                    None => {
-                        println!("MAE                 n/a (the clips differ in frames or names)")
-                    }
-                }
-            }
-            Ok(())
-        }
+        Command::Render(args) => render(&args),
+        Command::Track(args) => track::run(args),
+        Command::Adapt(args) => adapt::run(args),
+        Command::Session(args) => session::run(args),
+        Command::Eval(args) => eval(&args),
     }
 }
 
-fn sketch(
-    character: Option<&std::path::Path>,
-    strokes: &std::path::Path,
-    output: &std::path::Path,
-    clip: Option<&std::path::Path>,
-) -> anyhow::Result<()> {
+fn info(args: &InfoArgs) -> anyhow::Result<()> {
+    let imported = load_or_default(args.character.as_deref())?;
+    let report = info::Report::of(&imported.character);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", report.text(&imported.character));
+    }
+    Ok(())
+}
+
+fn export(args: &ExportArgs) -> anyhow::Result<()> {
+    let character = load(&args.character)?.character;
+    let glb = match &args.clip {
+        Some(clip_path) => {
+            let clip = faceanim_files::load_clip(clip_path)?;
+            let name = clip_path
+                .file_stem()
+                .map_or_else(|| "clip".to_owned(), |s| s.to_string_lossy().into_owned());
+            let unmatched: Vec<&str> = clip
+                .blendshapes
+                .iter()
+                .filter(|n| character.find_blendshape(n).is_none())
+                .map(String::as_str)
+                .collect();
+            if !unmatched.is_empty() {
+                tracing::warn!(
+                    "{}: no blendshape for {}",
+                    clip_path.display(),
+                    unmatched.join(", ")
+                );
+            }
+            let animation = faceanim_export::Animation::from_clip(&character, &clip, &name)
+                .with_context(|| format!("applying {}", clip_path.display()))?;
+            faceanim_export::export(faceanim_export::Format::Glb, &animation)?.bytes
+        }
+        None => faceanim_export::glb(&character, None)?,
+    };
+    faceanim_files::write_atomic(&args.output, &glb)?;
+    eprintln!(
+        "wrote {} ({} vertices, {} blendshapes{})",
+        args.output.display(),
+        character.vertex_count(),
+        character.blendshapes().len(),
+        if args.clip.is_some() {
+            ", 1 animation"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}
+
+fn render(args: &RenderArgs) -> anyhow::Result<()> {
+    let character = load_or_default(args.character.as_deref())?.character;
+    let size = args.size;
+    anyhow::ensure!(
+        (16..=4096).contains(&size),
+        "--size must be between 16 and 4096 pixels, got {size}"
+    );
+    let image = if args.sheet {
+        faceanim_render::contact_sheet(&character, size.min(512))
+    } else {
+        let mut w = vec![0.0; character.blendshapes().len()];
+        for pair in &args.weights {
+            let (name, value) = pair
+                .split_once('=')
+                .ok_or_else(|| anyhow::anyhow!("--weights: '{pair}' is not NAME=VALUE"))?;
+            let id = character.find_blendshape(name.trim()).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--weights: '{name}' is not a blendshape of {}",
+                    character.name()
+                )
+            })?;
+            let value: f32 = value
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--weights: '{value}' is not a number"))?;
+            anyhow::ensure!(
+                value.is_finite(),
+                "--weights: '{value}' is not a finite number"
+            );
+            w[id.index()] = value;
+        }
+        let pose = character.pose(&w);
+        let camera = faceanim_render::Camera::front(&character.bounds(), 0.75);
+        let appearance = faceanim_render::Appearance::of(&character);
+        for warning in appearance.warnings() {
+            eprintln!("warning: {warning}");
+        }
+        faceanim_render::render(&character, &pose, &camera, &appearance, size)
+    };
+    faceanim_files::write_atomic(&args.output, &image.to_png()?)?;
+    eprintln!(
+        "wrote {} ({}×{})",
+        args.output.display(),
+        image.width,
+        image.height
+    );
+    Ok(())
+}
+
+fn eval(args: &EvalArgs) -> anyhow::Result<()> {
+    let (clip_a, clip_b) = (
+        faceanim_files::load_clip(&args.a)?,
+        faceanim_files::load_clip(&args.b)?,
+    );
+    let result = faceanim_anim::metrics::compare(&clip_a, &clip_b);
+    if args.json {
+        println!("{}", serde_json::to_string(&result)?);
+    } else {
+        println!(
+            "DTW distance        {:.4} ({:.4} per frame)",
+            result.dtw, result.dtw_per_frame
+        );
+        println!(
+            "jitter (RMS change) {:.4} vs {:.4} (difference {:+.4})",
+            result.jitter_a, result.jitter_b, result.jitter_diff
+        );
+        match result.mae {
+            Some(mae) => println!("MAE                 {mae:.4}"),
+            None => {
+                println!("MAE                 n/a (the clips differ in frames or names)")
+            }
+        }
+    }
+    Ok(())
+}
+
+fn sketch(args: &SketchArgs) -> anyhow::Result<()> {
+    let (character, strokes) = match args.inputs.as_slice() {
+        [strokes] => (None, strokes),
+        [character, strokes] => (Some(character.as_path()), strokes),
+        _ => anyhow::bail!("give [CHARACTER] STROKES"),
+    };
     let character = load_or_default(character)?.character;
     let bytes = faceanim_files::read_bytes(strokes)?;
     let project = faceanim_sketch::Project::from_json(&bytes)
@@ -581,33 +404,38 @@ fn sketch(
         .file_stem()
         .map_or_else(|| "sketch".to_owned(), |s| s.to_string_lossy().into_owned());
     let baked = sketch.bake(&name)?;
-    let glb =
-        faceanim_rig::export::export_glb(&baked.character, std::slice::from_ref(&baked.animation))?;
-    faceanim_files::write_atomic(output, &glb)?;
-    let baked_clip = sketch.bake_clip();
-    if let Some(path) = clip {
-        faceanim_files::write_atomic(path, baked_clip.to_json().as_bytes())?;
+    let extra = baked.character.blendshapes().len() - character.blendshapes().len();
+    let animation = faceanim_export::Animation {
+        character: Some(&baked.character),
+        animation: baked.animation,
+        clip: sketch.bake_clip(),
+        arkit: None,
+        session: None,
+    };
+    outputs::write(&args.output, faceanim_export::Format::Glb, &animation)?;
+    if let Some(path) = &args.clip {
+        outputs::write(path, faceanim_export::Format::ClipJson, &animation)?;
     }
     eprintln!(
-        "wrote {} ({} actions, {} frames at {} fps, {} extra targets for arcs and exaggerations)",
-        output.display(),
+        "{}: {} actions, {} frames at {} fps, {} extra targets for arcs and exaggerations",
+        args.output.display(),
         sketch.actions().count(),
-        baked_clip.frames.len(),
+        animation.clip.frames.len(),
         sketch.fps(),
-        baked.character.blendshapes().len() - character.blendshapes().len()
+        extra
     );
     Ok(())
 }
 
-fn studio(
-    character: Option<&std::path::Path>,
-    port: u16,
-    open: bool,
-    project: Option<PathBuf>,
-    adapter: Option<PathBuf>,
-) -> anyhow::Result<()> {
-    let character_file = character;
-    let character = load_or_default(character)?.character;
+fn studio(args: StudioArgs) -> anyhow::Result<()> {
+    let StudioArgs {
+        character: character_file,
+        port,
+        open,
+        project,
+        adapter,
+    } = args;
+    let character = load_or_default(character_file.as_deref())?.character;
     let project_path = match project {
         Some(path) => path,
         None => std::env::current_dir()
@@ -621,6 +449,7 @@ fn studio(
     let adapter_path = adapter.unwrap_or_else(|| {
         faceanim_adapt::default_adapter_path(
             character_file
+                .as_deref()
                 .and_then(std::path::Path::parent)
                 .or_else(|| project_path.parent()),
             character.name(),

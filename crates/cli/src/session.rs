@@ -6,7 +6,18 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use faceanim_adapt::{Adapter, Session};
+use faceanim_adapt::Adapter;
+use faceanim_export::Format;
+use faceanim_take::{Session, TakeError};
+
+/// `faceanim session`'s arguments.
+#[derive(Debug, clap::Args)]
+pub struct SessionArgs {
+    /// The session file.
+    pub session: PathBuf,
+    #[command(subcommand)]
+    pub action: SessionAction,
+}
 
 /// What to do with a session.
 #[derive(Debug, clap::Subcommand)]
@@ -53,7 +64,7 @@ pub enum SessionAction {
         adapter: PathBuf,
     },
     /// Write the animation: .json clip, .glb (needs --character), .csv Live Link Face,
-    /// .byoc.csv the seed's CSV; repeatable.
+    /// .byoc.csv the seed's CSV, .session.json the session; repeatable.
     Export {
         /// Output files.
         #[arg(short, long, required = true)]
@@ -74,12 +85,13 @@ fn save(path: &Path, session: &Session) -> anyhow::Result<()> {
     Ok(())
 }
 
-pub fn run(path: &Path, action: SessionAction) -> anyhow::Result<()> {
+pub fn run(args: SessionArgs) -> anyhow::Result<()> {
+    let path = args.session.as_path();
     let mut session = load(path)?;
-    let edit = |e: faceanim_adapt::AdaptError| anyhow::anyhow!("{}: {e}", path.display());
-    match action {
+    let edit = |e: TakeError| anyhow::anyhow!("{}: {e}", path.display());
+    match args.action {
         SessionAction::Show { json } => {
-            let corrections: usize = session.corrections.values().map(|c| c.len()).sum();
+            let corrections: usize = session.edits.corrections.values().map(|c| c.len()).sum();
             let summary = serde_json::json!({
                 "source": session.source,
                 "character": session.character,
@@ -87,9 +99,9 @@ pub fn run(path: &Path, action: SessionAction) -> anyhow::Result<()> {
                 "fps": session.fps,
                 "blendshapes": session.blendshapes,
                 "keyframes": session.keyframes(),
-                "corrections": session.corrections,
+                "corrections": session.edits.corrections,
                 "corrected_values": corrections,
-                "preference": session.preference,
+                "preference": session.edits.preference,
             });
             if json {
                 println!("{summary}");
@@ -104,14 +116,14 @@ pub fn run(path: &Path, action: SessionAction) -> anyhow::Result<()> {
                     session.blendshapes.len()
                 );
                 println!("keyframes: {:?}", session.keyframes());
-                for (frame, values) in &session.corrections {
+                for (frame, values) in &session.edits.corrections {
                     let list: Vec<String> =
                         values.iter().map(|(n, v)| format!("{n}={v:.3}")).collect();
                     println!("frame {frame}: {}", list.join(" "));
                 }
                 println!(
                     "preference: {}",
-                    if session.preference.is_some() {
+                    if session.edits.preference.is_some() {
                         "applied"
                     } else {
                         "off"
@@ -145,29 +157,20 @@ pub fn run(path: &Path, action: SessionAction) -> anyhow::Result<()> {
             session.reestimate(&adapter).map_err(edit)?;
         }
         SessionAction::Export { output, character } => {
-            let formats = crate::track::formats_of(&output)?;
-            let character = crate::load_or_default(character.as_deref())?.character;
-            let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
-            if formats.contains(&crate::track::Format::Glb) {
-                anyhow::ensure!(
-                    names == session.blendshapes,
-                    "the session is for {} ({} blendshapes); give that character with --character for .glb",
-                    session.character,
-                    session.blendshapes.len()
-                );
-            }
+            let formats = crate::outputs::formats_of(&output)?;
+            // The GLB needs the character; the clip and the CSVs come from the session alone.
+            let character = if character.is_some() || formats.contains(&Format::Glb) {
+                Some(crate::load_or_default(character.as_deref())?.character)
+            } else {
+                None
+            };
             let stem = path
                 .file_stem()
                 .map_or_else(|| "session".into(), |s| s.to_string_lossy().into_owned());
-            crate::track::write_outputs(
-                &output,
-                &formats,
-                &character,
-                &session.clip(),
-                None,
-                &session,
-                &stem,
-            )?;
+            let animation = crate::track::take_animation(character.as_ref(), &session, &stem)?;
+            for (path, format) in output.iter().zip(formats) {
+                crate::outputs::write(path, format, &animation)?;
+            }
             return Ok(());
         }
     }

@@ -131,7 +131,7 @@ impl Default for Settings {
 }
 
 /// Settings with every distance resolved for one character.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Resolved {
     /// See [`Settings::candidate_radius`].
     pub candidate_radius: f32,

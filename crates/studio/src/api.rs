@@ -1,4 +1,5 @@
-//! The HTTP/JSON API (documented in `crates/studio/API.md`) and the embedded page.
+//! The HTTP/JSON API of the sketch (documented in `crates/studio/API.md`) and the embedded
+//! page. Answers are the view types of [`crate::views`]; errors are [`ApiError`]s.
 
 use std::sync::{Arc, Mutex};
 
@@ -9,14 +10,16 @@ use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post, put};
+use faceanim_export::{Animation, Exported, Format};
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_sketch::project::StrokeFile;
 use faceanim_sketch::settings::Settings;
 use glam::Vec3;
-use serde::Deserialize;
-use serde_json::{Value, json};
+use serde::{Deserialize, Deserializer};
 
 use crate::capture_api::Both;
+use crate::error::ApiError;
+use crate::views::{AnchorView, CandidatesView, CharacterView, SavedView, StateView, UploadView};
 use crate::{Studio, lock};
 
 /// The page, embedded at build time so the binary needs nothing beside it.
@@ -25,32 +28,19 @@ use crate::{Studio, lock};
 struct Page;
 
 type Shared = Arc<Mutex<Studio>>;
+type Answer<T> = Result<axum::Json<T>, ApiError>;
 
 /// JSON requests (projects, strokes) may be this large.
 const JSON_LIMIT: usize = 16 * 1024 * 1024;
 /// Character uploads may be this large.
 const CHARACTER_LIMIT: usize = 512 * 1024 * 1024;
 
-/// An error answer: the status and a message naming the field or file.
-pub(crate) struct ApiError(pub(crate) StatusCode, pub(crate) String);
-
-impl IntoResponse for ApiError {
-    fn into_response(self) -> Response {
-        (self.0, axum::Json(json!({ "error": self.1 }))).into_response()
-    }
-}
-
-/// `400` with `message`.
-pub(crate) fn bad(message: impl Into<String>) -> ApiError {
-    ApiError(StatusCode::BAD_REQUEST, message.into())
-}
-
-/// A JSON body as `T`, or `400` naming `what` and the problem.
+/// A JSON body as `T`, or [`ApiError::Invalid`] naming `what` and the problem.
 pub(crate) fn json_body<T: serde::de::DeserializeOwned>(
     bytes: &[u8],
     what: &str,
 ) -> Result<T, ApiError> {
-    serde_json::from_slice(bytes).map_err(|e| bad(format!("{what}: {e}")))
+    serde_json::from_slice(bytes).map_err(|e| ApiError::Invalid(format!("{what}: {e}")))
 }
 
 pub fn router(both: Both, port: u16) -> Router {
@@ -73,9 +63,18 @@ pub fn router(both: Both, port: u16) -> Router {
         .route("/api/candidates", post(candidates))
         .route("/api/undo", post(undo))
         .route("/api/redo", post(redo))
-        .route("/api/export.glb", get(export_glb))
-        .route("/api/export.json", get(export_clip))
-        .route("/api/export.csv", get(export_csv))
+        .route(
+            "/api/export.glb",
+            get(|s: State<Shared>| export(s, Format::Glb)),
+        )
+        .route(
+            "/api/export.json",
+            get(|s: State<Shared>| export(s, Format::ClipJson)),
+        )
+        .route(
+            "/api/export.csv",
+            get(|s: State<Shared>| export(s, Format::LiveLinkCsv)),
+        )
         .layer(DefaultBodyLimit::max(JSON_LIMIT))
         .with_state(shared.clone());
     let upload = Router::new()
@@ -146,24 +145,15 @@ async fn page(uri: axum::http::Uri) -> Response {
     }
 }
 
-async fn view(State(shared): State<Shared>) -> axum::Json<Value> {
+async fn view(State(shared): State<Shared>) -> axum::Json<StateView> {
     axum::Json(lock(&shared).view())
 }
 
-async fn character_info(State(shared): State<Shared>) -> axum::Json<Value> {
-    let studio = lock(&shared);
-    let c = &studio.character;
-    let bounds = c.bounds();
-    axum::Json(json!({
-        "name": c.name(),
-        "vertices": c.vertex_count(),
-        "blendshapes": c.blendshapes().iter().map(|b| b.name()).collect::<Vec<_>>(),
-        "bounds": { "min": bounds.min.to_array(), "max": bounds.max.to_array() },
-        "diagonal": (bounds.max - bounds.min).length(),
-    }))
+async fn character_info(State(shared): State<Shared>) -> axum::Json<CharacterView> {
+    axum::Json(CharacterView::of(&lock(&shared).character))
 }
 
-async fn anchors(State(shared): State<Shared>) -> axum::Json<Value> {
+async fn anchors(State(shared): State<Shared>) -> axum::Json<Vec<AnchorView>> {
     axum::Json(lock(&shared).blendshape_anchors())
 }
 
@@ -171,74 +161,65 @@ async fn upload_character(
     State(both): State<Both>,
     headers: HeaderMap,
     body: Bytes,
-) -> Result<axum::Json<Value>, ApiError> {
+) -> Answer<UploadView> {
     let name = uploaded_name(&headers, &body, "uploaded file")?;
     // Import off the async threads: a large character takes a moment.
     let imported =
         tokio::task::spawn_blocking(move || import_gltf(&body, &name, &NoExternalResources))
             .await
-            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
-            .map_err(|e| bad(e.to_string()))?;
+            .map_err(|e| ApiError::Internal(e.to_string()))??;
     let mut studio = lock(&both.studio);
     studio.replace_character(imported.character);
     // An uploaded character's adapter lives beside the project.
     let adapter_path =
         faceanim_adapt::default_adapter_path(studio.project_path.parent(), studio.character.name());
     lock(&both.desk).character_changed(&studio.character, adapter_path);
-    Ok(axum::Json(json!({
-        "warnings": imported.warnings.iter().map(ToString::to_string).collect::<Vec<_>>(),
-        "state": studio.view(),
-    })))
+    Ok(axum::Json(UploadView {
+        warnings: imported.warnings.iter().map(ToString::to_string).collect(),
+        state: studio.view(),
+    }))
 }
 
-async fn project(State(shared): State<Shared>) -> axum::Json<Value> {
-    axum::Json(serde_json::to_value(lock(&shared).project()).unwrap_or(Value::Null))
-}
-
-async fn put_project(
+async fn project(
     State(shared): State<Shared>,
-    body: Bytes,
-) -> Result<axum::Json<Value>, ApiError> {
-    let file = Studio::parse(&body, "project").map_err(bad)?;
+) -> axum::Json<faceanim_sketch::project::ProjectFile> {
+    axum::Json(lock(&shared).project().clone())
+}
+
+async fn put_project(State(shared): State<Shared>, body: Bytes) -> Answer<StateView> {
+    let file = Studio::parse(&body, "project")?;
     let mut studio = lock(&shared);
-    studio.change(file).map_err(bad)?;
+    studio.change(file)?;
     Ok(axum::Json(studio.view()))
 }
 
-async fn new_project(State(shared): State<Shared>) -> axum::Json<Value> {
+async fn new_project(State(shared): State<Shared>) -> axum::Json<StateView> {
     let mut studio = lock(&shared);
     studio.new_project();
     axum::Json(studio.view())
 }
 
-async fn save(State(shared): State<Shared>) -> Result<axum::Json<Value>, ApiError> {
+async fn save(State(shared): State<Shared>) -> Answer<SavedView> {
     let studio = lock(&shared);
-    studio
-        .save()
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e))?;
-    Ok(axum::Json(
-        json!({ "saved": studio.project_path.display().to_string() }),
-    ))
+    studio.save()?;
+    Ok(axum::Json(SavedView {
+        saved: studio.project_path.display().to_string(),
+    }))
 }
 
-async fn reopen(State(shared): State<Shared>) -> Result<axum::Json<Value>, ApiError> {
+async fn reopen(State(shared): State<Shared>) -> Answer<StateView> {
     let mut studio = lock(&shared);
-    studio.reopen().map_err(bad)?;
+    studio.reopen()?;
     Ok(axum::Json(studio.view()))
 }
 
-async fn put_settings(
-    State(shared): State<Shared>,
-    body: Bytes,
-) -> Result<axum::Json<Value>, ApiError> {
+async fn put_settings(State(shared): State<Shared>, body: Bytes) -> Answer<StateView> {
     let settings: Settings = json_body(&body, "settings")?;
     let mut studio = lock(&shared);
-    studio
-        .edit(None, |next| {
-            next.settings = settings;
-            Ok(())
-        })
-        .map_err(bad)?;
+    studio.edit(None, |next| {
+        next.settings = settings;
+        Ok(())
+    })?;
     Ok(axum::Json(studio.view()))
 }
 
@@ -248,94 +229,109 @@ struct Fps {
     fps: f32,
 }
 
-async fn put_fps(State(shared): State<Shared>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+/// The project's rate; the project's own validation says which rates are allowed.
+async fn put_fps(State(shared): State<Shared>, body: Bytes) -> Answer<StateView> {
     let Fps { fps } = json_body(&body, "fps")?;
-    if !(fps.is_finite() && (1.0..=240.0).contains(&fps)) {
-        return Err(bad(format!("fps: must be between 1 and 240, got {fps}")));
-    }
     let mut studio = lock(&shared);
-    studio
-        .edit(None, |next| {
-            next.fps = fps;
-            Ok(())
-        })
-        .map_err(bad)?;
+    studio.edit(None, |next| {
+        next.fps = fps;
+        Ok(())
+    })?;
     Ok(axum::Json(studio.view()))
 }
 
-async fn add_stroke(
-    State(shared): State<Shared>,
-    body: Bytes,
-) -> Result<axum::Json<Value>, ApiError> {
+async fn add_stroke(State(shared): State<Shared>, body: Bytes) -> Answer<StateView> {
     let stroke: StrokeFile = json_body(&body, "stroke")?;
     let mut studio = lock(&shared);
-    let index = studio.add_stroke(stroke).map_err(bad)?;
-    let mut view = studio.view();
-    view["added"] = json!(index);
-    Ok(axum::Json(view))
+    let index = studio.add_stroke(stroke)?;
+    Ok(axum::Json(StateView {
+        added: Some(index),
+        ..studio.view()
+    }))
 }
 
-/// Fields of a stroke that handles and the timeline edit; a present `null` clears an edit.
-const EDITABLE: [&str; 6] = ["start_frame", "duration", "end", "mid", "ease", "symmetry"];
+/// What handles and the timeline change of a stroke: each field present is set (a present
+/// `null` clears that edit); absent fields stay as they are.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StrokeEdit {
+    #[serde(default, deserialize_with = "present")]
+    start_frame: Option<Option<f32>>,
+    #[serde(default, deserialize_with = "present")]
+    duration: Option<Option<f32>>,
+    #[serde(default, deserialize_with = "present")]
+    end: Option<Option<[f32; 3]>>,
+    #[serde(default, deserialize_with = "present")]
+    mid: Option<Option<[f32; 3]>>,
+    #[serde(default, deserialize_with = "present")]
+    ease: Option<Option<f32>>,
+    #[serde(default, deserialize_with = "present")]
+    symmetry: Option<Option<bool>>,
+}
+
+/// A field that is present (even as `null`) becomes `Some`.
+fn present<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+    deserializer: D,
+) -> Result<Option<T>, D::Error> {
+    T::deserialize(deserializer).map(Some)
+}
+
+impl StrokeEdit {
+    fn apply(self, stroke: &mut StrokeFile) {
+        fn set<T>(field: &mut T, change: Option<T>) {
+            if let Some(value) = change {
+                *field = value;
+            }
+        }
+        set(&mut stroke.start_frame, self.start_frame);
+        set(&mut stroke.duration, self.duration);
+        set(&mut stroke.end, self.end);
+        set(&mut stroke.mid, self.mid);
+        set(&mut stroke.ease, self.ease);
+        set(&mut stroke.symmetry, self.symmetry);
+    }
+}
 
 async fn edit_stroke(
     State(shared): State<Shared>,
     Path(index): Path<usize>,
     headers: HeaderMap,
     body: Bytes,
-) -> Result<axum::Json<Value>, ApiError> {
+) -> Answer<StateView> {
     let gesture = headers
         .get("x-gesture")
         .and_then(|h| h.to_str().ok())
         .map(str::to_owned);
-    let changes: serde_json::Map<String, Value> = json_body(&body, "edit")?;
-    if let Some(unknown) = changes.keys().find(|k| !EDITABLE.contains(&k.as_str())) {
-        return Err(bad(format!(
-            "edit: '{unknown}' cannot be edited (only {})",
-            EDITABLE.join(", ")
-        )));
-    }
+    let edit: StrokeEdit = json_body(&body, "edit")?;
     let mut studio = lock(&shared);
     no_such_stroke(&studio, index)?;
-    studio
-        .edit(gesture, |next| {
-            let stroke = &mut next.strokes[index];
-            let mut value = serde_json::to_value(&*stroke).map_err(|e| e.to_string())?;
-            for (key, change) in changes {
-                value[key] = change;
-            }
-            *stroke = serde_json::from_value(value).map_err(|e| format!("edit: {e}"))?;
-            Ok(())
-        })
-        .map_err(bad)?;
+    studio.edit(gesture, |next| {
+        edit.apply(&mut next.strokes[index]);
+        Ok(())
+    })?;
     Ok(axum::Json(studio.view()))
 }
 
-/// `404` naming the stroke when the project has no stroke `index`.
+/// [`ApiError::NoStroke`] when the project has no stroke `index`.
 fn no_such_stroke(studio: &Studio, index: usize) -> Result<(), ApiError> {
     let count = studio.project().strokes.len();
     if index < count {
         return Ok(());
     }
-    Err(ApiError(
-        StatusCode::NOT_FOUND,
-        format!("no stroke {index} (there are {count})"),
-    ))
+    Err(ApiError::NoStroke { index, count })
 }
 
 async fn delete_stroke(
     State(shared): State<Shared>,
     Path(index): Path<usize>,
-) -> Result<axum::Json<Value>, ApiError> {
+) -> Answer<StateView> {
     let mut studio = lock(&shared);
     no_such_stroke(&studio, index)?;
     // Later strokes shift down one index; the page redraws everything from the returned state.
-    studio
-        .edit(None, |next| {
-            next.strokes.remove(index);
-            Ok(())
-        })
-        .map_err(bad)?;
+    studio.edit(None, |next| {
+        next.strokes.remove(index);
+        Ok(())
+    })?;
     Ok(axum::Json(studio.view()))
 }
 
@@ -347,44 +343,53 @@ struct CandidateQuery {
     frame: f32,
 }
 
-async fn candidates(
-    State(shared): State<Shared>,
-    body: Bytes,
-) -> Result<axum::Json<Value>, ApiError> {
+async fn candidates(State(shared): State<Shared>, body: Bytes) -> Answer<Option<CandidatesView>> {
     let query: CandidateQuery = json_body(&body, "candidates")?;
     if query.point.iter().any(|x| !x.is_finite()) || !query.frame.is_finite() {
-        return Err(bad("candidates: point and frame must be finite numbers"));
+        return Err(ApiError::Invalid(
+            "candidates: point and frame must be finite numbers".into(),
+        ));
     }
     Ok(axum::Json(
         lock(&shared).candidates(Vec3::from_array(query.point), query.frame),
     ))
 }
 
-async fn undo(State(shared): State<Shared>) -> axum::Json<Value> {
+async fn undo(State(shared): State<Shared>) -> axum::Json<StateView> {
     let mut studio = lock(&shared);
     studio.undo();
     axum::Json(studio.view())
 }
 
-async fn redo(State(shared): State<Shared>) -> axum::Json<Value> {
+async fn redo(State(shared): State<Shared>) -> axum::Json<StateView> {
     let mut studio = lock(&shared);
     studio.redo();
     axum::Json(studio.view())
 }
 
-/// A file the browser saves as `name`.
-pub(crate) fn download(bytes: Vec<u8>, mime: &'static str, name: &str) -> Response {
-    let disposition = format!("attachment; filename=\"{}\"", name.replace('"', ""));
+/// An export the browser saves as `NAME.EXTENSION` (its notes go to the log).
+pub(crate) fn download(format: Format, name: &str, exported: Exported) -> Response {
+    for note in &exported.notes {
+        tracing::info!("{name}.{}: {note}", format.extension());
+    }
+    let disposition = format!(
+        "attachment; filename=\"{}.{}\"",
+        name.replace('"', ""),
+        format.extension()
+    );
     let mut headers = HeaderMap::new();
-    headers.insert(header::CONTENT_TYPE, HeaderValue::from_static(mime));
+    headers.insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static(format.mime()),
+    );
     if let Ok(value) = HeaderValue::from_str(&disposition) {
         headers.insert(header::CONTENT_DISPOSITION, value);
     }
     headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
-    (headers, bytes).into_response()
+    (headers, exported.bytes).into_response()
 }
 
-/// The name an upload was sent with (header `x-filename`, else `fallback`); `400` naming it
+/// The name an upload was sent with (header `x-filename`, else `fallback`); refused naming it
 /// when the file is empty.
 pub(crate) fn uploaded_name(
     headers: &HeaderMap,
@@ -397,7 +402,7 @@ pub(crate) fn uploaded_name(
         .unwrap_or(fallback)
         .to_owned();
     if body.is_empty() {
-        return Err(bad(format!("{name}: the file is empty")));
+        return Err(ApiError::Invalid(format!("{name}: the file is empty")));
     }
     Ok(name)
 }
@@ -409,36 +414,30 @@ fn file_stem(studio: &Studio) -> String {
     )
 }
 
-async fn export_glb(State(shared): State<Shared>) -> Result<Response, ApiError> {
+/// The sketch in `format`: the GLB carries the baked corrective targets of arcs and
+/// exaggerations; the clip and the CSV need only the weights.
+async fn export(State(shared): State<Shared>, format: Format) -> Result<Response, ApiError> {
     let studio = lock(&shared);
     let (sketch, _) = studio.sketch();
     let name = file_stem(&studio);
-    let baked = sketch
-        .bake(&name)
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
-    let glb =
-        faceanim_rig::export::export_glb(&baked.character, std::slice::from_ref(&baked.animation))
-            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
-    Ok(download(glb, "model/gltf-binary", &format!("{name}.glb")))
-}
-
-async fn export_clip(State(shared): State<Shared>) -> Response {
-    let studio = lock(&shared);
-    let clip = studio.sketch().0.bake_clip();
-    download(
-        clip.to_json().into_bytes(),
-        "application/json",
-        &format!("{}.clip.json", file_stem(&studio)),
-    )
-}
-
-async fn export_csv(State(shared): State<Shared>) -> Response {
-    let studio = lock(&shared);
-    let clip = studio.sketch().0.bake_clip();
-    let csv = faceanim_anim::livelink::to_csv(&clip);
-    download(
-        csv.into_bytes(),
-        "text/csv",
-        &format!("{}.csv", file_stem(&studio)),
-    )
+    let clip = sketch.bake_clip();
+    let exported = if format == Format::Glb {
+        let baked = sketch.bake(&name)?;
+        faceanim_export::export(
+            format,
+            &Animation {
+                character: Some(&baked.character),
+                animation: baked.animation,
+                clip,
+                arkit: None,
+                session: None,
+            },
+        )?
+    } else {
+        faceanim_export::export(
+            format,
+            &Animation::from_clip(&studio.character, &clip, &name)?,
+        )?
+    };
+    Ok(download(format, &name, exported))
 }

@@ -6,19 +6,27 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use axum::Router;
 use axum::body::Bytes;
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
-use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::http::{HeaderMap, HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post, put};
-use faceanim_anim::Clip;
 use faceanim_anim::filter::OneEuro;
+use faceanim_export::{Animation, Format};
 use faceanim_media::raw::{PixelLayout, YuvMatrix, YuvRange, raw_to_image};
-use faceanim_rig::export::MorphAnimation;
+use faceanim_take::{Filtering, TakeError};
 use serde::Deserialize;
-use serde_json::Value;
 
-use crate::api::{ApiError, bad, download, json_body, uploaded_name};
+use crate::api::{download, json_body, uploaded_name};
 use crate::capture::{self, CaptureDesk, SharedDesk};
+use crate::error::ApiError;
+use crate::views::CaptureView;
 use crate::{Studio, lock};
+
+type Answer<T> = Result<axum::Json<T>, ApiError>;
+
+/// `400` with `message`: a request that names a wrong field or file.
+fn bad(message: impl Into<String>) -> ApiError {
+    ApiError::Invalid(message.into())
+}
 
 /// Uploaded videos may be this large.
 const INPUT_LIMIT: usize = 2 * 1024 * 1024 * 1024;
@@ -59,11 +67,26 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/live/start", post(live_start))
         .route("/api/capture/live/stop", post(live_stop))
         .route("/api/capture/live/record", post(live_record))
-        .route("/api/capture/session.json", get(export_session))
-        .route("/api/capture/export.glb", get(export_glb))
-        .route("/api/capture/export.json", get(export_clip))
-        .route("/api/capture/export.csv", get(export_csv))
-        .route("/api/capture/export.byoc.csv", get(export_seed_csv))
+        .route(
+            "/api/capture/session.json",
+            get(|b: State<Both>| export(b, Format::Session)),
+        )
+        .route(
+            "/api/capture/export.glb",
+            get(|b: State<Both>| export(b, Format::Glb)),
+        )
+        .route(
+            "/api/capture/export.json",
+            get(|b: State<Both>| export(b, Format::ClipJson)),
+        )
+        .route(
+            "/api/capture/export.csv",
+            get(|b: State<Both>| export(b, Format::LiveLinkCsv)),
+        )
+        .route(
+            "/api/capture/export.byoc.csv",
+            get(|b: State<Both>| export(b, Format::SeedCsv)),
+        )
         .with_state(both.clone());
     let upload = Router::new()
         .route("/api/capture/upload", post(upload))
@@ -76,13 +99,13 @@ pub fn router(both: Both) -> Router {
     Router::new().merge(api).merge(upload).merge(live)
 }
 
-fn state_of(both: &Both) -> Value {
+fn state_of(both: &Both) -> axum::Json<CaptureView> {
     let character = both.studio().character.clone();
-    both.desk().view(&character)
+    axum::Json(both.desk().view(&character))
 }
 
-async fn view(State(both): State<Both>) -> axum::Json<Value> {
-    axum::Json(state_of(&both))
+async fn view(State(both): State<Both>) -> axum::Json<CaptureView> {
+    state_of(&both)
 }
 
 #[derive(Deserialize)]
@@ -91,7 +114,7 @@ struct OpenPath {
     path: PathBuf,
 }
 
-async fn open_path(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn open_path(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let OpenPath { path } = json_body(&body, "open")?;
     if !path.exists() {
         return Err(bad(format!("path: {} does not exist", path.display())));
@@ -99,14 +122,12 @@ async fn open_path(State(both): State<Both>, body: Bytes) -> Result<axum::Json<V
     let character = both.studio().character.clone();
     let shown = path.display().to_string();
     if is_session(&shown) {
-        let bytes = std::fs::read(&path).map_err(|e| bad(format!("{shown}: {e}")))?;
-        both.desk()
-            .open_session(&character, &bytes, &shown)
-            .map_err(bad)?;
+        let bytes = faceanim_files::read_bytes(&path)?;
+        both.desk().open_session(&character, &bytes, &shown)?;
     } else {
-        capture::start_capture(&both.desk, character, path, shown).map_err(bad)?;
+        capture::start_capture(&both.desk, character, path, shown)?;
     }
-    Ok(axum::Json(state_of(&both)))
+    Ok(state_of(&both))
 }
 
 /// Whether a file named `name` is a session (JSON) rather than a video or an image.
@@ -133,7 +154,7 @@ async fn upload(
     Query(batch): Query<Batch>,
     headers: HeaderMap,
     body: Bytes,
-) -> Result<axum::Json<Value>, ApiError> {
+) -> Answer<CaptureView> {
     let name = uploaded_name(&headers, &body, "upload")?;
     if is_session(&name) {
         if batch.batch.is_some() {
@@ -142,10 +163,8 @@ async fn upload(
             )));
         }
         let character = both.studio().character.clone();
-        both.desk()
-            .open_session(&character, &body, &name)
-            .map_err(bad)?;
-        return Ok(axum::Json(state_of(&both)));
+        both.desk().open_session(&character, &body, &name)?;
+        return Ok(state_of(&both));
     }
     if batch.batch.is_some() && batch.index >= batch.count {
         return Err(bad(format!(
@@ -155,11 +174,10 @@ async fn upload(
     }
     let path = both
         .desk()
-        .store_upload(&name, &body, batch.batch.as_deref())
-        .map_err(bad)?;
+        .store_upload(&name, &body, batch.batch.as_deref())?;
     let (path, shown) = match batch.batch {
         // More photos of the sequence are coming.
-        Some(_) if batch.index + 1 < batch.count => return Ok(axum::Json(state_of(&both))),
+        Some(_) if batch.index + 1 < batch.count => return Ok(state_of(&both)),
         Some(_) => {
             let folder = path
                 .parent()
@@ -170,36 +188,36 @@ async fn upload(
         None => (path, name),
     };
     let character = both.studio().character.clone();
-    capture::start_capture(&both.desk, character, path, shown).map_err(bad)?;
-    Ok(axum::Json(state_of(&both)))
+    capture::start_capture(&both.desk, character, path, shown)?;
+    Ok(state_of(&both))
 }
 
-async fn close(State(both): State<Both>) -> axum::Json<Value> {
+async fn close(State(both): State<Both>) -> axum::Json<CaptureView> {
     both.desk().close();
-    axum::Json(state_of(&both))
+    state_of(&both)
 }
 
-async fn cancel(State(both): State<Both>) -> axum::Json<Value> {
+async fn cancel(State(both): State<Both>) -> axum::Json<CaptureView> {
     both.desk().cancel();
-    axum::Json(state_of(&both))
+    state_of(&both)
 }
 
-async fn preview(State(both): State<Both>, Path(index): Path<String>) -> Response {
+async fn preview(
+    State(both): State<Both>,
+    Path(index): Path<String>,
+) -> Result<Response, ApiError> {
     let index = index.trim_end_matches(".png").parse::<usize>().ok();
     let desk = both.desk();
-    match (
-        index.and_then(|i| desk.take().map(|t| t.previews.get(i))),
-        desk.take(),
-    ) {
-        (Some(Some(png)), _) => {
-            let mut headers = HeaderMap::new();
-            headers.insert(header::CONTENT_TYPE, HeaderValue::from_static("image/png"));
-            headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
-            (headers, png).into_response()
-        }
-        (_, None) => (StatusCode::NOT_FOUND, "no capture is open").into_response(),
-        _ => (StatusCode::NOT_FOUND, "no such frame").into_response(),
-    }
+    let open = desk
+        .take()
+        .ok_or(ApiError::NoPreview("no capture is open"))?;
+    let png = index
+        .and_then(|i| open.previews.get(i))
+        .ok_or(ApiError::NoPreview("no such frame"))?;
+    let mut headers = HeaderMap::new();
+    headers.insert(header::CONTENT_TYPE, HeaderValue::from_static("image/png"));
+    headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    Ok((headers, png).into_response())
 }
 
 #[derive(Deserialize)]
@@ -210,17 +228,13 @@ struct Correction {
     value: f32,
 }
 
-async fn correct(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn correct(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let c: Correction = json_body(&body, "correction")?;
     {
         both.desk()
-            .edit_take(|s| {
-                s.correct(c.frame, &c.name, c.value)
-                    .map_err(|e| e.to_string())
-            })
-            .map_err(bad)?;
+            .edit_take(|s| s.correct(c.frame, &c.name, c.value))?;
     }
-    Ok(axum::Json(state_of(&both)))
+    Ok(state_of(&both))
 }
 
 #[derive(Deserialize)]
@@ -231,17 +245,13 @@ struct Uncorrect {
     name: Option<String>,
 }
 
-async fn uncorrect(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn uncorrect(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let u: Uncorrect = json_body(&body, "uncorrect")?;
     {
         both.desk()
-            .edit_take(|s| {
-                s.uncorrect(u.frame, u.name.as_deref())
-                    .map_err(|e| e.to_string())
-            })
-            .map_err(bad)?;
+            .edit_take(|s| s.uncorrect(u.frame, u.name.as_deref()))?;
     }
-    Ok(axum::Json(state_of(&both)))
+    Ok(state_of(&both))
 }
 
 #[derive(Deserialize)]
@@ -251,21 +261,18 @@ struct Keyframe {
     on: bool,
 }
 
-async fn keyframe(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn keyframe(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let k: Keyframe = json_body(&body, "keyframe")?;
     {
-        both.desk()
-            .edit_take(|s| {
-                if k.on {
-                    s.add_keyframe(k.frame)
-                } else {
-                    s.remove_keyframe(k.frame)
-                }
-                .map_err(|e| e.to_string())
-            })
-            .map_err(bad)?;
+        both.desk().edit_take(|s| {
+            if k.on {
+                s.add_keyframe(k.frame)
+            } else {
+                s.remove_keyframe(k.frame)
+            }
+        })?;
     }
-    Ok(axum::Json(state_of(&both)))
+    Ok(state_of(&both))
 }
 
 #[derive(Deserialize)]
@@ -274,33 +281,31 @@ struct Switch {
     on: bool,
 }
 
-async fn preference(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn preference(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let Switch { on } = json_body(&body, "preference")?;
     {
-        both.desk()
-            .edit_take(|s| {
-                if !on {
-                    s.clear_preference();
-                } else if s.corrections.is_empty() {
-                    return Err("preference: correct at least one frame first".into());
-                } else {
-                    s.apply_preference();
-                }
-                Ok(())
-            })
-            .map_err(bad)?;
+        both.desk().edit_take(|s| {
+            if !on {
+                s.clear_preference();
+            } else if s.edits.corrections.is_empty() {
+                return Err(TakeError::NothingCorrected);
+            } else {
+                s.apply_preference();
+            }
+            Ok(())
+        })?;
     }
-    Ok(axum::Json(state_of(&both)))
+    Ok(state_of(&both))
 }
 
-async fn undo(State(both): State<Both>) -> Result<axum::Json<Value>, ApiError> {
-    both.desk().step_history(true).map_err(bad)?;
-    Ok(axum::Json(state_of(&both)))
+async fn undo(State(both): State<Both>) -> Answer<CaptureView> {
+    both.desk().step_history(true)?;
+    Ok(state_of(&both))
 }
 
-async fn redo(State(both): State<Both>) -> Result<axum::Json<Value>, ApiError> {
-    both.desk().step_history(false).map_err(bad)?;
-    Ok(axum::Json(state_of(&both)))
+async fn redo(State(both): State<Both>) -> Answer<CaptureView> {
+    both.desk().step_history(false)?;
+    Ok(state_of(&both))
 }
 
 #[derive(Deserialize)]
@@ -318,22 +323,21 @@ fn one() -> f32 {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Filtering {
+struct FilteringBody {
     keyframe_every: usize,
     smoothing: Option<Smoothing>,
 }
 
-async fn filtering(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
-    let f: Filtering = json_body(&body, "filtering")?;
+async fn filtering(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let f: FilteringBody = json_body(&body, "filtering")?;
     let smoothing = f.smoothing.map(|s| OneEuro {
         min_cutoff: s.min_cutoff,
         beta: s.beta,
         derivative_cutoff: s.derivative_cutoff,
     });
     both.desk()
-        .set_filtering(f.keyframe_every, smoothing)
-        .map_err(bad)?;
-    Ok(axum::Json(state_of(&both)))
+        .set_filtering(Filtering::new(f.keyframe_every, smoothing)?)?;
+    Ok(state_of(&both))
 }
 
 #[derive(Deserialize)]
@@ -353,7 +357,7 @@ fn one_u64() -> u64 {
     1
 }
 
-async fn train(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn train(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let t: Train = if body.is_empty() {
         Train {
             samples: default_samples(),
@@ -363,41 +367,40 @@ async fn train(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value
         json_body(&body, "train")?
     };
     let character = both.studio().character.clone();
-    capture::start_training(&both.desk, character, t.samples, t.seed).map_err(bad)?;
-    Ok(axum::Json(state_of(&both)))
+    capture::start_training(&both.desk, character, t.samples, t.seed)?;
+    Ok(state_of(&both))
 }
 
-async fn finetune(State(both): State<Both>) -> Result<axum::Json<Value>, ApiError> {
+async fn finetune(State(both): State<Both>) -> Answer<CaptureView> {
     let character = both.studio().character.clone();
-    capture::start_finetune(&both.desk, character).map_err(bad)?;
-    Ok(axum::Json(state_of(&both)))
+    capture::start_finetune(&both.desk, character)?;
+    Ok(state_of(&both))
 }
 
-async fn live_start(State(both): State<Both>) -> Result<axum::Json<Value>, ApiError> {
+async fn live_start(State(both): State<Both>) -> Answer<CaptureView> {
     // Loading the models the first time takes a moment: off the async threads.
     let desk = both.desk.clone();
     let character = both.studio().character.clone();
     tokio::task::spawn_blocking(move || lock(&desk).start_live(&character))
         .await
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e))?;
-    Ok(axum::Json(state_of(&both)))
+        .map_err(|e| ApiError::Internal(e.to_string()))??;
+    Ok(state_of(&both))
 }
 
-async fn live_stop(State(both): State<Both>) -> axum::Json<Value> {
+async fn live_stop(State(both): State<Both>) -> axum::Json<CaptureView> {
     both.desk().stop_live();
-    axum::Json(state_of(&both))
+    state_of(&both)
 }
 
-async fn live_record(State(both): State<Both>, body: Bytes) -> Result<axum::Json<Value>, ApiError> {
+async fn live_record(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let Switch { on } = json_body(&body, "record")?;
     if on {
-        both.desk().start_recording().map_err(bad)?;
+        both.desk().start_recording()?;
     } else {
         let character = both.studio().character.clone();
-        both.desk().stop_recording(&character).map_err(bad)?;
+        both.desk().stop_recording(&character)?;
     }
-    Ok(axum::Json(state_of(&both)))
+    Ok(state_of(&both))
 }
 
 fn dimension(headers: &HeaderMap, name: &str) -> Result<usize, ApiError> {
@@ -466,198 +469,59 @@ async fn live_frame(
     let live = both.desk().live_handle();
     let character = both.studio().character.clone();
     let result = tokio::task::spawn_blocking(move || {
-        let image =
-            raw_to_image(layout, width, height, &body).map_err(|e| format!("frame: {e}"))?;
+        let image = raw_to_image(layout, width, height, &body)
+            .map_err(|e| ApiError::Invalid(format!("frame: {e}")))?;
         live.track(&character, image)
     })
     .await
-    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
-    .map_err(bad)?;
+    .map_err(|e| ApiError::Internal(e.to_string()))??;
     Ok(axum::Json(result))
 }
 
 // ---------- exports ----------
 
-fn take_name(desk: &CaptureDesk) -> String {
-    desk.take()
-        .map(|t| {
-            std::path::Path::new(&t.session.source)
-                .file_stem()
-                .map_or_else(
-                    || "capture".to_owned(),
-                    |s| s.to_string_lossy().into_owned(),
-                )
-        })
-        .unwrap_or_else(|| "capture".into())
-}
-
-/// The take's clip with the sketch's strokes layered on top, and its name.
-fn layered_clip(both: &Both) -> Result<(Clip, String), ApiError> {
-    let desk = both.desk();
-    let take = desk.take().ok_or_else(|| bad("no capture is open"))?;
-    let base = take.session.clip();
-    let name = take_name(&desk);
-    drop(desk);
-    let studio = both.studio();
-    let sketch = studio.sketch().0.bake_clip();
-    let has_strokes = !studio.project().strokes.is_empty();
-    let clip = if has_strokes {
-        capture::layered_weights(&base, &sketch.frames)
-    } else {
-        base
-    };
-    Ok((clip, name))
-}
-
-async fn export_clip(State(both): State<Both>) -> Result<Response, ApiError> {
-    let (clip, name) = layered_clip(&both)?;
-    Ok(download(
-        clip.to_json().into_bytes(),
-        "application/json",
-        &format!("{name}.clip.json"),
-    ))
-}
-
-async fn export_csv(State(both): State<Both>) -> Result<Response, ApiError> {
-    let (clip, name) = layered_clip(&both)?;
-    Ok(download(
-        faceanim_anim::livelink::to_csv(&clip).into_bytes(),
-        "text/csv",
-        &format!("{name}.csv"),
-    ))
-}
-
-async fn export_seed_csv(State(both): State<Both>) -> Result<Response, ApiError> {
-    let desk = both.desk();
-    let take = desk.take().ok_or_else(|| bad("no capture is open"))?;
-    Ok(download(
-        take.session.to_seed_csv().into_bytes(),
-        "text/csv",
-        &format!("{}.byoc.csv", take_name(&desk)),
-    ))
-}
-
-async fn export_session(State(both): State<Both>) -> Result<Response, ApiError> {
-    let desk = both.desk();
-    let take = desk.take().ok_or_else(|| bad("no capture is open"))?;
-    Ok(download(
-        take.session.to_json().into_bytes(),
-        "application/json",
-        &format!("{}.session.json", take_name(&desk)),
-    ))
-}
-
-/// The character with the sketch's baked targets and one animation: the take's weights plus
-/// the strokes' (clamped), the strokes' arcs and exaggerations, and the captured head turn.
-async fn export_glb(State(both): State<Both>) -> Result<Response, ApiError> {
-    let (base, name) = {
+/// The take in `format`, with the sketch's strokes layered on top (`faceanim_take::layer`):
+/// the GLB carries the strokes' baked arcs and exaggerations and the captured head turn; the
+/// seed's CSV and the session are the take's own.
+async fn export(State(both): State<Both>, format: Format) -> Result<Response, ApiError> {
+    let (session, name) = {
         let desk = both.desk();
-        let take = desk.take().ok_or_else(|| bad("no capture is open"))?;
-        (take.session.clip(), take_name(&desk))
+        let open = desk.open_take()?;
+        (open.take.session.clone(), open.name())
     };
     let studio = both.studio();
-    let internal = |e: String| ApiError(StatusCode::INTERNAL_SERVER_ERROR, e);
-    let retarget = base
-        .retarget(&studio.character, &name)
-        .map_err(|e| internal(e.to_string()))?;
     let (sketch, _) = studio.sketch();
-    let baked = sketch.bake(&name).map_err(|e| internal(e.to_string()))?;
-    let animation = layer_animation(
-        &retarget.animation,
-        &baked.animation,
-        studio.character.blendshapes().len(),
-        base.fps,
-    );
-    let glb = faceanim_rig::export::export_glb(&baked.character, std::slice::from_ref(&animation))
-        .map_err(|e| internal(e.to_string()))?;
-    Ok(download(glb, "model/gltf-binary", &format!("{name}.glb")))
-}
-
-/// `base` drives the character's own targets; `sketch` drives them too (added, clamped) and
-/// the extra baked targets after them. Each holds its last key beyond its end.
-fn layer_animation(
-    base: &MorphAnimation,
-    sketch: &MorphAnimation,
-    own: usize,
-    fps: f32,
-) -> MorphAnimation {
-    let frames = base.weights.len().max(sketch.weights.len()).max(1);
-    let targets = sketch.weights.first().map_or(own, Vec::len).max(own);
-    let at = |rows: &[Vec<f32>], f: usize| rows.get(f.min(rows.len().saturating_sub(1))).cloned();
-    let weights = (0..frames)
-        .map(|f| {
-            let mut row = vec![0.0; targets];
-            if let Some(b) = at(&base.weights, f) {
-                for (w, v) in row.iter_mut().zip(b) {
-                    *w = v;
-                }
-            }
-            if let Some(s) = at(&sketch.weights, f) {
-                for (i, (w, v)) in row.iter_mut().zip(s).enumerate() {
-                    *w = if i < own { (*w + v).clamp(0.0, 1.0) } else { v };
-                }
-            }
-            row
-        })
-        .collect();
-    let rotations = base.rotations.as_ref().map(|r| {
-        (0..frames)
-            .map(|f| {
-                r.get(f.min(r.len().saturating_sub(1)))
-                    .copied()
-                    .unwrap_or([0.0, 0.0, 0.0, 1.0])
-            })
-            .collect()
-    });
-    MorphAnimation {
-        name: base.name.clone(),
-        times: (0..frames).map(|f| f as f32 / fps.max(1e-3)).collect(),
-        weights,
-        rotations,
-    }
-}
-
-#[cfg(test)]
-#[allow(clippy::float_cmp, reason = "sums of exact binary fractions")]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_export_layers_the_sketch_over_the_take_and_keeps_the_head_turn() {
-        let base = MorphAnimation {
-            name: "take".into(),
-            times: vec![0.0, 0.5],
-            weights: vec![vec![0.5, 0.25], vec![0.75, 0.25]],
-            rotations: Some(vec![[0.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 0.0]]),
-        };
-        // Two own targets and one baked exaggeration target; three frames.
-        let sketch = MorphAnimation {
-            name: "sketch".into(),
-            times: vec![0.0, 0.5, 1.0],
-            weights: vec![
-                vec![0.0, 0.0, 0.0],
-                vec![0.5, 0.5, 0.5],
-                vec![0.25, 0.0, 1.0],
-            ],
+    // The sketch's corrective targets matter to the GLB only; the rest needs its weights.
+    let (sketch_animation, baked_character) = if studio.project().strokes.is_empty() {
+        (None, None)
+    } else if format == Format::Glb {
+        let baked = sketch.bake(&name)?;
+        (Some(baked.animation), Some(baked.character))
+    } else {
+        let weights = faceanim_rig::export::MorphAnimation {
+            name: name.clone(),
+            times: Vec::new(),
+            weights: sketch.bake_clip().frames,
             rotations: None,
         };
-        let layered = layer_animation(&base, &sketch, 2, 2.0);
-        assert_eq!(layered.times, vec![0.0, 0.5, 1.0]);
-        assert_eq!(
-            layered.weights,
-            vec![
-                vec![0.5, 0.25, 0.0],
-                vec![1.0, 0.75, 0.5],
-                vec![1.0, 0.25, 1.0],
-            ]
-        );
-        assert_eq!(
-            layered.rotations,
-            Some(vec![
-                [0.0, 0.0, 0.0, 1.0],
-                [0.0, 1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0, 0.0]
-            ])
-        );
-    }
+        (Some(weights), None)
+    };
+    let layered = faceanim_take::layer(
+        &session.clip(),
+        sketch_animation.as_ref(),
+        studio.character.blendshapes().len(),
+        &name,
+    );
+    let character = baked_character.as_ref().unwrap_or(&studio.character);
+    let exported = faceanim_export::export(
+        format,
+        &Animation {
+            character: Some(character),
+            animation: layered.animation,
+            clip: layered.clip,
+            arkit: session.arkit_clip(),
+            session: Some(&session),
+        },
+    )?;
+    Ok(download(format, &name, exported))
 }

@@ -21,7 +21,9 @@
 mod api;
 pub mod capture;
 mod capture_api;
+pub mod error;
 mod state;
+pub mod views;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -30,6 +32,7 @@ use std::sync::{Arc, Mutex};
 use faceanim_rig::Character;
 use std::sync::MutexGuard;
 
+pub use error::ApiError;
 pub use state::Studio;
 
 /// Locks `mutex`. Every change made under the studio's locks replaces a whole value (a
@@ -66,8 +69,8 @@ pub enum StudioError {
         source: std::io::Error,
     },
     /// The saved project or its autosave exists but cannot be used.
-    #[error("{0}")]
-    Project(String),
+    #[error(transparent)]
+    Project(ApiError),
     /// The server stopped with an error.
     #[error("server: {0}")]
     Serve(std::io::Error),

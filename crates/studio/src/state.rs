@@ -5,12 +5,13 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use faceanim_rig::Character;
-use faceanim_sketch::engine::Target;
 use faceanim_sketch::project::{ProjectFile, StrokeFile};
 use faceanim_sketch::settings::{Selection, Settings};
 use faceanim_sketch::{Project, Sketch};
 use glam::Vec3;
-use serde_json::{Value, json};
+
+use crate::error::ApiError;
+use crate::views::{ActionView, AnchorView, CandidatesView, RejectedView, StateView};
 
 /// How many edits undo remembers.
 const UNDO_DEPTH: usize = 500;
@@ -47,10 +48,17 @@ fn empty_project() -> ProjectFile {
     }
 }
 
-fn parse_project(bytes: &[u8], what: &str) -> Result<ProjectFile, String> {
-    let file: ProjectFile =
-        serde_json::from_slice(bytes).map_err(|e| format!("{what}: not a strokes project: {e}"))?;
-    Project::from_file(file.clone()).map_err(|e| format!("{what}: {e}"))?;
+fn parse_project(bytes: &[u8], what: &str) -> Result<ProjectFile, ApiError> {
+    let invalid = |source| ApiError::Project {
+        what: what.to_owned(),
+        source,
+    };
+    let file: ProjectFile = serde_json::from_slice(bytes).map_err(|e| {
+        invalid(faceanim_sketch::project::ProjectError::Syntax(
+            e.to_string(),
+        ))
+    })?;
+    Project::from_file(file.clone()).map_err(invalid)?;
     Ok(file)
 }
 
@@ -59,8 +67,9 @@ impl Studio {
     /// session ended without saving), else starts an empty project.
     ///
     /// # Errors
-    /// A message naming the file when a project exists but is not valid.
-    pub fn open(character: Character, project_path: PathBuf) -> Result<Studio, String> {
+    /// [`ApiError::Disk`] or [`ApiError::Project`] naming the file when a project exists but
+    /// cannot be used.
+    pub fn open(character: Character, project_path: PathBuf) -> Result<Studio, ApiError> {
         let autosave_path = autosave_path(&project_path);
         let modified = |p: &PathBuf| std::fs::metadata(p).and_then(|m| m.modified()).ok();
         let newest = match (modified(&project_path), modified(&autosave_path)) {
@@ -71,7 +80,7 @@ impl Studio {
         };
         let project = match newest {
             Some(path) => {
-                let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+                let bytes = faceanim_files::read_bytes(path)?;
                 if path == &autosave_path {
                     tracing::warn!("recovered unsaved work from {}", path.display());
                 }
@@ -99,8 +108,8 @@ impl Studio {
     /// Replaces the project after checking it, remembering the old one for undo.
     ///
     /// # Errors
-    /// The project's validation message (the change is not made).
-    pub fn change(&mut self, next: ProjectFile) -> Result<(), String> {
+    /// [`ApiError::Project`] with every problem (the change is not made).
+    pub fn change(&mut self, next: ProjectFile) -> Result<(), ApiError> {
         self.change_in_gesture(next, None)
     }
 
@@ -108,13 +117,16 @@ impl Studio {
     /// handle, named by the page) undo as one.
     ///
     /// # Errors
-    /// The project's validation message (the change is not made).
+    /// [`ApiError::Project`] with every problem (the change is not made).
     pub fn change_in_gesture(
         &mut self,
         next: ProjectFile,
         gesture: Option<String>,
-    ) -> Result<(), String> {
-        Project::from_file(next.clone()).map_err(|e| e.to_string())?;
+    ) -> Result<(), ApiError> {
+        Project::from_file(next.clone()).map_err(|source| ApiError::Project {
+            what: "project".into(),
+            source,
+        })?;
         let same_gesture = gesture.is_some() && gesture == self.gesture;
         self.gesture = gesture;
         let previous = std::mem::replace(&mut self.project, next);
@@ -136,12 +148,12 @@ impl Studio {
     /// [`Studio::change_in_gesture`]); nothing changes when `apply` or the validation fails.
     ///
     /// # Errors
-    /// `apply`'s message or the project's validation message.
+    /// `apply`'s error or [`ApiError::Project`].
     pub fn edit(
         &mut self,
         gesture: Option<String>,
-        apply: impl FnOnce(&mut ProjectFile) -> Result<(), String>,
-    ) -> Result<(), String> {
+        apply: impl FnOnce(&mut ProjectFile) -> Result<(), ApiError>,
+    ) -> Result<(), ApiError> {
         let mut next = self.project.clone();
         apply(&mut next)?;
         self.change_in_gesture(next, gesture)
@@ -195,10 +207,9 @@ impl Studio {
     /// Writes the project where it was opened from (atomically), and drops the autosave.
     ///
     /// # Errors
-    /// The file error, naming the path.
-    pub fn save(&self) -> Result<(), String> {
-        faceanim_files::write_atomic(&self.project_path, &self.project_json())
-            .map_err(|e| e.to_string())?;
+    /// [`ApiError::Disk`] naming the path.
+    pub fn save(&self) -> Result<(), ApiError> {
+        faceanim_files::write_atomic(&self.project_path, &self.project_json())?;
         let _ = std::fs::remove_file(&self.autosave_path);
         Ok(())
     }
@@ -206,10 +217,9 @@ impl Studio {
     /// Reads the saved project back from disk (undoable).
     ///
     /// # Errors
-    /// A message naming the file.
-    pub fn reopen(&mut self) -> Result<(), String> {
-        let bytes = std::fs::read(&self.project_path)
-            .map_err(|e| format!("{}: {e}", self.project_path.display()))?;
+    /// [`ApiError::Disk`] or [`ApiError::Project`] naming the file.
+    pub fn reopen(&mut self) -> Result<(), ApiError> {
+        let bytes = faceanim_files::read_bytes(&self.project_path)?;
         let file = parse_project(&bytes, &self.project_path.display().to_string())?;
         self.change(file)
     }
@@ -217,8 +227,8 @@ impl Studio {
     /// Parses a project sent by the page (from a file the user picked).
     ///
     /// # Errors
-    /// A message naming `what`.
-    pub fn parse(bytes: &[u8], what: &str) -> Result<ProjectFile, String> {
+    /// [`ApiError::Project`] naming `what`.
+    pub fn parse(bytes: &[u8], what: &str) -> Result<ProjectFile, ApiError> {
         parse_project(bytes, what)
     }
 
@@ -248,8 +258,8 @@ impl Studio {
     /// Adds a stroke.
     ///
     /// # Errors
-    /// The stroke's validation message.
-    pub fn add_stroke(&mut self, stroke: StrokeFile) -> Result<usize, String> {
+    /// [`ApiError::Project`] naming what is wrong with the stroke.
+    pub fn add_stroke(&mut self, stroke: StrokeFile) -> Result<usize, ApiError> {
         let index = self.project.strokes.len();
         self.edit(None, |next| {
             next.strokes.push(stroke);
@@ -260,120 +270,50 @@ impl Studio {
 
     /// Everything the page draws: actions with their handles and paths, timeline, settings.
     #[must_use]
-    pub fn view(&self) -> Value {
+    pub fn view(&self) -> StateView {
         let (sketch, warnings) = self.sketch();
-        let resolved = sketch.resolved();
-        let character = &self.character;
         let mut actions = Vec::new();
         let mut rejected = Vec::new();
-        for (index, result) in sketch.results().iter().enumerate() {
+        for (stroke, result) in sketch.results().iter().enumerate() {
             match result {
-                Ok(action) => {
-                    let sides: Vec<Value> = action
-                        .sides
-                        .iter()
-                        .map(|side| {
-                            let path: Vec<[f32; 3]> = (0..=24)
-                                .map(|k| {
-                                    side.path.point(side.a, side.c, k as f32 / 24.0).to_array()
-                                })
-                                .collect();
-                            let target = match side.target {
-                                Target::Blendshape(id) => {
-                                    character.blendshape(id).map(|b| b.name().to_owned())
-                                }
-                                Target::Neutral => Some("neutral".to_owned()),
-                                Target::Multi => Some("multi".to_owned()),
-                            };
-                            json!({
-                                "target": target,
-                                "weight": side.weight,
-                                "exaggeration": side.exaggeration.length(),
-                                "start": side.a.to_array(),
-                                "mid": side.b.to_array(),
-                                "end": side.c.to_array(),
-                                "target_position": side.target_position.to_array(),
-                                "straight": side.path.is_straight(),
-                                "path": path,
-                            })
-                        })
-                        .collect();
-                    actions.push(json!({
-                        "stroke": index,
-                        "name": action.name(character),
-                        "chain": action.chain.0,
-                        "previous": action.previous.map(|p| p.0),
-                        "start_frame": action.start_frame,
-                        "end_frame": action.end_frame(),
-                        "ease": action.ease,
-                        "symmetric": action.sides.len() > 1,
-                        "sides": sides,
-                    }));
-                }
-                Err(reason) => {
-                    rejected.push(json!({ "stroke": index, "reason": reason.to_string() }))
-                }
+                Ok(action) => actions.push(ActionView::of(&self.character, stroke, action)),
+                Err(reason) => rejected.push(RejectedView {
+                    stroke,
+                    reason: reason.to_string(),
+                }),
             }
         }
-        json!({
-            "character": character.name(),
-            "fps": sketch.fps(),
-            "last_frame": sketch.last_frame(),
-            "settings": self.project.settings,
-            "resolved": {
-                "candidate_radius": resolved.candidate_radius,
-                "pen_distance": resolved.pen_distance,
-                "edit_radius": resolved.edit_radius,
-                "hook_radius": resolved.hook_radius,
-                "snap_distance": resolved.snap_distance,
-                "stroke_thickness": resolved.stroke_thickness,
-            },
-            "actions": actions,
-            "rejected": rejected,
-            "warnings": warnings,
-            "can_undo": !self.undo.is_empty(),
-            "can_redo": !self.redo.is_empty(),
-            "project_path": self.project_path.display().to_string(),
-        })
+        StateView {
+            character: self.character.name().to_owned(),
+            fps: sketch.fps(),
+            last_frame: sketch.last_frame(),
+            settings: self.project.settings.clone(),
+            resolved: sketch.resolved().clone(),
+            actions,
+            rejected,
+            warnings,
+            can_undo: !self.undo.is_empty(),
+            can_redo: !self.redo.is_empty(),
+            project_path: self.project_path.display().to_string(),
+            added: None,
+        }
     }
 
-    /// Candidate targets for a stroke starting at `point` on the pose at `frame`.
+    /// Candidate targets for a stroke starting at `point` on the pose at `frame`; `None` when
+    /// the point is too far from the face.
     #[must_use]
-    pub fn candidates(&self, point: Vec3, frame: f32) -> Value {
+    pub fn candidates(&self, point: Vec3, frame: f32) -> Option<CandidatesView> {
         let (sketch, _) = self.sketch();
-        let Some(found) = sketch.candidates(point, frame) else {
-            return Value::Null;
-        };
-        let candidates: Vec<Value> = found
-            .candidates
-            .iter()
-            .map(|c| {
-                let name = match c.target {
-                    Target::Blendshape(id) => self
-                        .character
-                        .blendshape(id)
-                        .map_or_else(String::new, |b| b.name().to_owned()),
-                    Target::Neutral => "neutral".to_owned(),
-                    Target::Multi => "multi".to_owned(),
-                };
-                json!({ "name": name, "position": c.position.to_array() })
-            })
-            .collect();
-        json!({
-            "reference": found.reference,
-            "reference_position": found.reference_position.to_array(),
-            "continues": found.continues.map(|a| a.0),
-            "candidates": candidates,
-        })
+        let found = sketch.candidates(point, frame)?;
+        Some(CandidatesView::of(&self.character, &found))
     }
 
-    /// Where a blendshape moves the most: the vertex (rest position) and where weight 1 takes
-    /// it. Scripts and tests use it to aim strokes; the page to label targets.
+    /// Where each blendshape moves the most: the vertex (rest position) and where weight 1
+    /// takes it. Scripts and tests use it to aim strokes; the page to label targets.
     #[must_use]
-    pub fn blendshape_anchors(&self) -> Value {
+    pub fn blendshape_anchors(&self) -> Vec<AnchorView> {
         let positions = self.character.positions();
-        let anchors: Vec<Value> = self
-            .character
+        self.character
             .blendshapes()
             .iter()
             .map(|shape| {
@@ -382,16 +322,26 @@ impl Studio {
                     .iter()
                     .zip(shape.deltas())
                     .max_by(|a, b| a.1.length_squared().total_cmp(&b.1.length_squared()));
+                let name = shape.name().to_owned();
                 match best {
                     Some((&vertex, delta)) => {
                         let rest = positions[vertex as usize];
-                        json!({ "name": shape.name(), "vertex": vertex, "rest": rest.to_array(), "target": (rest + *delta).to_array() })
+                        AnchorView {
+                            name,
+                            vertex: Some(vertex),
+                            rest: Some(rest.to_array()),
+                            target: Some((rest + *delta).to_array()),
+                        }
                     }
-                    None => json!({ "name": shape.name(), "vertex": null }),
+                    None => AnchorView {
+                        name,
+                        vertex: None,
+                        rest: None,
+                        target: None,
+                    },
                 }
             })
-            .collect();
-        Value::Array(anchors)
+            .collect()
     }
 }
 

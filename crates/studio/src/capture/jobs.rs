@@ -7,83 +7,66 @@ use std::sync::Arc;
 use faceanim_adapt::{
     Adapter, Control, Dataset, DatasetOptions, FaceCamera, Fingerprint, Fit, TrainOptions,
 };
-use faceanim_anim::filter::OneEuro;
 use faceanim_media::FrameSource;
 use faceanim_rig::Character;
+use faceanim_take::Footage;
 use faceanim_track::{Frame, Tracker, TrackingMode};
 
 use super::{
-    CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Footage, Job, PREVIEW_HEIGHT, Previews, SharedDesk, Take,
-    face_models, lock, make_take, private_dir,
+    CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Job, JobKind, PREVIEW_HEIGHT, Previews, STILL_FRAMES,
+    SharedDesk, face_models, lock, private_dir,
 };
+use crate::error::ApiError;
 
 /// Starts reading `path` (a video, an image or a folder of images) in the background.
 ///
 /// # Errors
-/// A message when another job runs.
+/// [`ApiError::Busy`] when another job runs.
 pub fn start_capture(
     desk: &SharedDesk,
     character: Arc<Character>,
     path: PathBuf,
     shown_name: String,
-) -> Result<(), String> {
-    let job = Job::new("reading the input");
-    let (adapter, filtering) = {
+) -> Result<(), ApiError> {
+    let job = Job::new(JobKind::ReadingInput);
+    {
         let mut guard = lock(desk);
         guard.busy()?;
         guard.job = Some(job.clone());
-        (
-            guard.adapter.clone(),
-            (guard.keyframe_every, guard.smoothing),
-        )
-    };
+    }
     let desk = desk.clone();
     spawn_job(job, move |job| {
-        let outcome = read_input(
-            job,
-            &character,
-            adapter.as_ref(),
-            &path,
-            &shown_name,
-            filtering,
-        );
-        let take = outcome?;
+        let (footage, previews) = read_input(job, &path, &shown_name)?;
+        let mut guard = lock(&desk);
+        let take = guard.take_of(&character, footage)?;
         let message = format!(
             "{}: {} frames at {} fps",
             shown_name,
             take.session.frames.len(),
             take.session.fps
         );
-        lock(&desk).set_take(take);
+        guard.set_take(take, previews);
         Ok(message)
     });
     Ok(())
 }
 
-fn read_input(
-    job: &Job,
-    character: &Character,
-    adapter: Option<&Adapter>,
-    path: &Path,
-    shown_name: &str,
-    filtering: (usize, Option<OneEuro>),
-) -> Result<Take, String> {
+/// Reads every frame of `path` through the capture pipeline, with a preview of each.
+fn read_input(job: &Job, path: &Path, shown_name: &str) -> Result<(Footage, Previews), ApiError> {
     job.stage("loading the face models", 1);
     let models = face_models()?;
-    let mut source =
-        FrameSource::open(path, 30.0).map_err(|e| rename(&e.to_string(), path, shown_name))?;
+    let renamed =
+        |e: faceanim_media::MediaError| ApiError::Invalid(rename(&e.to_string(), path, shown_name));
+    let mut source = FrameSource::open(path, 30.0).map_err(renamed)?;
     let info = source.info();
     job.stage("reading frames", info.frames.unwrap_or(0));
     let mut tracker = Tracker::new(models, TrackingMode::Track);
     let mut records = Vec::new();
     let mut previews = Previews::new();
     let mut names = Vec::new();
-    while let Some(image) = source
-        .next_frame()
-        .map_err(|e| rename(&e.to_string(), path, shown_name))?
-    {
+    while let Some(image) = source.next_frame().map_err(renamed)? {
         if job.cancelled() {
-            return Err("cancelled".into());
+            return Err(faceanim_adapt::AdaptError::Cancelled.into());
         }
         let index = records.len();
         let frame = Frame {
@@ -91,36 +74,33 @@ fn read_input(
             height: image.height,
             rgb: &image.rgb,
         };
-        records.push(
-            faceanim_capture::capture_frame(&mut tracker, index, index as f32 / info.fps, &frame)
-                .map_err(|e| e.to_string())?,
-        );
-        previews.push(&image.preview(PREVIEW_HEIGHT).to_png()?)?;
+        records.push(faceanim_capture::capture_frame(
+            &mut tracker,
+            index,
+            index as f32 / info.fps,
+            &frame,
+        )?);
+        previews.push_image(&image, PREVIEW_HEIGHT)?;
         names.push(source.frame_name(index));
         job.progress(index + 1);
     }
     if records.is_empty() {
-        return Err(format!("{shown_name}: no frames"));
+        return Err(ApiError::Invalid(format!("{shown_name}: no frames")));
     }
     if records.iter().all(|r| r.found.is_none()) {
-        return Err(format!(
+        return Err(ApiError::Invalid(format!(
             "{shown_name}: no face was found in any of its {} frames",
             records.len()
-        ));
+        )));
     }
-    make_take(
-        character,
-        adapter,
-        Footage {
-            source: shown_name.to_owned(),
-            fps: info.fps,
-            records,
-            frame_names: names,
-            previews,
-            still: source.is_still(),
-        },
-        filtering,
-    )
+    let footage = Footage {
+        source: shown_name.to_owned(),
+        fps: info.fps,
+        records,
+        frame_names: names,
+        still_frames: source.is_still().then_some(STILL_FRAMES),
+    };
+    Ok((footage, previews))
 }
 
 /// Messages about an uploaded file name the file the user picked, not its temporary copy.
@@ -133,21 +113,26 @@ impl CaptureDesk {
     /// folder and returns its path.
     ///
     /// # Errors
-    /// The file error.
+    /// [`ApiError::Invalid`] for a bad batch name, or the file error.
     pub fn store_upload(
         &mut self,
         name: &str,
         bytes: &[u8],
         batch: Option<&str>,
-    ) -> Result<PathBuf, String> {
+    ) -> Result<PathBuf, ApiError> {
         let mut dir = private_dir(&mut self.uploads, "faceanim-capture-", "uploads")?.to_owned();
         // Photos sent together are one sequence: a folder of their own, read in name order.
         if let Some(batch) = batch {
             if batch.is_empty() || !batch.chars().all(|c| c.is_ascii_alphanumeric()) {
-                return Err(format!("batch: '{batch}' must be letters and digits"));
+                return Err(ApiError::Invalid(format!(
+                    "batch: '{batch}' must be letters and digits"
+                )));
             }
             dir = dir.join(format!("batch-{batch}"));
-            std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            std::fs::create_dir_all(&dir).map_err(|source| ApiError::Scratch {
+                what: dir.display().to_string(),
+                source,
+            })?;
         }
         // Keep only a safe file name (its extension tells images from videos).
         let clean: String = name
@@ -162,7 +147,7 @@ impl CaptureDesk {
             .collect();
         let clean = clean.trim_start_matches('.');
         let path = dir.join(if clean.is_empty() { "input" } else { clean });
-        faceanim_files::write_atomic(&path, bytes).map_err(|e| e.to_string())?;
+        faceanim_files::write_atomic(&path, bytes)?;
         Ok(path)
     }
 }
@@ -172,24 +157,26 @@ impl CaptureDesk {
 /// take.
 ///
 /// # Errors
-/// A message for too few samples, an unknown exclusive shape, or another job running.
+/// [`ApiError::Invalid`] for too few samples, or [`ApiError::Busy`] with another job running.
 pub fn start_training(
     desk: &SharedDesk,
     character: Arc<Character>,
     samples: usize,
     seed: u64,
-) -> Result<(), String> {
+) -> Result<(), ApiError> {
     if samples < 100 {
-        return Err(format!("samples: at least 100, got {samples}"));
+        return Err(ApiError::Invalid(format!(
+            "samples: at least 100, got {samples}"
+        )));
     }
-    let exclusive =
-        faceanim_adapt::sampling::exclusive_pairs(&character, &[]).map_err(|e| e.to_string())?;
+    let exclusive = faceanim_adapt::sampling::exclusive_pairs(&character, &[])
+        .map_err(|e| ApiError::Invalid(e.to_string()))?;
     let options = DatasetOptions {
         samples,
         seed,
         exclusive,
     };
-    let job = Job::new("training the adapter");
+    let job = Job::new(JobKind::TrainingAdapter);
     let adapter_path = {
         let mut guard = lock(desk);
         guard.busy()?;
@@ -208,11 +195,7 @@ pub fn start_training(
         let adapter = with_control(job, |control| {
             faceanim_adapt::train(&dataset, &train_options, control)
         })?;
-        faceanim_files::write_atomic(
-            &adapter_path,
-            &adapter.to_bytes().map_err(|e| e.to_string())?,
-        )
-        .map_err(|e| e.to_string())?;
+        faceanim_files::write_atomic(&adapter_path, &adapter.to_bytes()?)?;
         let message = format!(
             "trained on {} renders: test MAE {:.4}; saved {}",
             adapter.report.samples,
@@ -229,20 +212,21 @@ pub fn start_training(
 /// the background; saves it and re-estimates the take.
 ///
 /// # Errors
-/// A message when there is no adapter, no take or no correction, or another job runs.
-pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<(), String> {
-    let job = Job::new("fine-tuning the adapter");
+/// [`ApiError::Invalid`] when there is no adapter or no correction, [`ApiError::NoTake`], or
+/// [`ApiError::Busy`] when another job runs.
+pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<(), ApiError> {
+    let job = Job::new(JobKind::FineTuning);
     let (adapter, corrections, adapter_path) = {
         let mut guard = lock(desk);
         guard.busy()?;
-        let adapter = guard
-            .adapter
-            .clone()
-            .ok_or("there is no adapter to fine-tune: train one first")?;
-        let take = guard.take.as_ref().ok_or("no capture is open")?;
-        let corrections = take.session.corrections_for_training();
+        let adapter = guard.adapter.clone().ok_or(ApiError::Invalid(
+            "there is no adapter to fine-tune: train one first".into(),
+        ))?;
+        let corrections = guard.open_take()?.take.session.corrections_for_training();
         if corrections.is_empty() {
-            return Err("correct at least one frame with a face first".into());
+            return Err(ApiError::Invalid(
+                "correct at least one frame with a face first".into(),
+            ));
         }
         guard.job = Some(job.clone());
         (adapter, corrections, guard.adapter_path.clone())
@@ -254,7 +238,7 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
             samples: FINETUNE_ANCHOR_SAMPLES,
             seed: 1,
             exclusive: faceanim_adapt::sampling::exclusive_pairs(&character, &[])
-                .map_err(|e| e.to_string())?,
+                .map_err(|e| ApiError::Invalid(e.to_string()))?,
         };
         let dataset = dataset_for(job, &character, &options, &cache, false)?;
         let options = TrainOptions {
@@ -265,8 +249,7 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
         let (tuned, report) = with_control(job, |control| {
             faceanim_adapt::finetune(&adapter, &dataset, &corrections, &options, control)
         })?;
-        faceanim_files::write_atomic(&adapter_path, &tuned.to_bytes().map_err(|e| e.to_string())?)
-            .map_err(|e| e.to_string())?;
+        faceanim_files::write_atomic(&adapter_path, &tuned.to_bytes()?)?;
         install_adapter(&desk, &character, &adapter_path, tuned)?;
         Ok(format!(
             "fine-tuned on {} corrected frames: their error {:.4} → {:.4}, test {:.4} → {:.4}; saved {}",
@@ -283,11 +266,13 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
 
 /// Runs `work` on its own thread and ends `job` with its outcome. A panic (a bug) ends the job
 /// with an error instead of leaving the studio busy for ever.
-fn spawn_job(job: Arc<Job>, work: impl FnOnce(&Job) -> Result<String, String> + Send + 'static) {
+fn spawn_job(job: Arc<Job>, work: impl FnOnce(&Job) -> Result<String, ApiError> + Send + 'static) {
     std::thread::spawn(move || {
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&job)))
             .unwrap_or_else(|_| {
-                Err("stopped by an internal error (a bug; the studio's log says where)".into())
+                Err(ApiError::Internal(
+                    "stopped by an internal error (a bug; the studio's log says where)".into(),
+                ))
             });
         job.finish(outcome);
     });
@@ -297,13 +282,12 @@ fn spawn_job(job: Arc<Job>, work: impl FnOnce(&Job) -> Result<String, String> + 
 fn with_control<T>(
     job: &Job,
     work: impl FnOnce(Control<'_>) -> Result<T, faceanim_adapt::AdaptError>,
-) -> Result<T, String> {
+) -> Result<T, ApiError> {
     let progress = |done: usize, _total: usize| job.progress(done);
-    work(Control {
+    Ok(work(Control {
         progress: &progress,
         cancel: &job.cancel,
-    })
-    .map_err(|e| e.to_string())
+    })?)
 }
 
 /// The training set: the cached one when it fits (exactly `options` when `exact`, else any
@@ -314,7 +298,7 @@ fn dataset_for(
     options: &DatasetOptions,
     cache: &Path,
     exact: bool,
-) -> Result<Dataset, String> {
+) -> Result<Dataset, ApiError> {
     if let Ok(bytes) = std::fs::read(cache)
         && let Ok(cached) = Dataset::from_bytes(&bytes)
     {
@@ -330,7 +314,7 @@ fn dataset_for(
     }
     job.stage("loading the face models", 1);
     let models = face_models()?;
-    let camera = FaceCamera::frame(character, models).map_err(|e| e.to_string())?;
+    let camera = FaceCamera::frame(character, models)?;
     job.stage("rendering", options.samples);
     let dataset = with_control(job, |control| {
         Dataset::generate(character, models, &camera, options, control)
@@ -349,19 +333,16 @@ fn install_adapter(
     character: &Character,
     adapter_path: &Path,
     adapter: Adapter,
-) -> Result<(), String> {
+) -> Result<(), ApiError> {
     let mut guard = lock(desk);
     if guard.adapter_path != adapter_path {
-        return Err(format!(
+        return Err(ApiError::Invalid(format!(
             "another character was opened meanwhile; the adapter was saved to {} but is not used",
             adapter_path.display()
-        ));
+        )));
     }
-    if let Some(take) = guard.take.as_mut() {
-        take.session
-            .reestimate(&adapter)
-            .map_err(|e| e.to_string())?;
-        take.by_adapter = Some(true);
+    if let Some(open) = guard.take.as_mut() {
+        open.take.reestimate(&adapter)?;
         guard.save_take();
     }
     guard.adapter_note = match adapter.check(character) {
@@ -369,7 +350,7 @@ fn install_adapter(
         _ => None,
     };
     if let Some(live) = lock(&guard.live).as_mut() {
-        live.adapter = Some(adapter.clone());
+        live.estimator = Box::new(adapter.clone());
     }
     guard.adapter = Some(adapter);
     Ok(())

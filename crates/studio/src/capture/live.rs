@@ -4,23 +4,23 @@
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use faceanim_adapt::{Adapter, Expression};
 use faceanim_anim::filter::{OneEuro, OneEuroState};
 use faceanim_capture::FrameRecord;
 use faceanim_media::Image;
 use faceanim_rig::Character;
+use faceanim_take::{Estimator, Expression, Footage};
 use faceanim_track::{Frame, Tracker, TrackingMode};
 
-use super::{
-    ByName, CaptureDesk, Footage, LIVE_PREVIEW_HEIGHT, Previews, face_models, lock, make_take,
-};
+use super::{CaptureDesk, LIVE_PREVIEW_HEIGHT, Previews, face_models, lock};
+use crate::error::ApiError;
+use crate::views::LiveView;
 
 /// Live webcam tracking: the tracker follows the face from frame to frame.
 pub(super) struct Live {
     tracker: Tracker<'static>,
-    by_name: ByName,
-    /// The adapter in use (copied once, not per frame; replaced when one is trained).
-    pub(super) adapter: Option<Adapter>,
+    /// The desk's estimator (the adapter copied once, not per frame, or the by-name mapping;
+    /// replaced when an adapter is trained).
+    pub(super) estimator: Box<dyn Estimator>,
     started: Instant,
     filter: Option<OneEuroState>,
     recording: Option<Recording>,
@@ -34,11 +34,11 @@ impl Live {
     }
 
     /// Frames tracked, and frames recorded while recording.
-    pub(super) fn view(&self) -> serde_json::Value {
-        serde_json::json!({
-            "frames": self.frames,
-            "recording": self.recording.as_ref().map(|r| r.records.len()),
-        })
+    pub(super) fn view(&self) -> LiveView {
+        LiveView {
+            frames: self.frames,
+            recording: self.recording.as_ref().map(|r| r.records.len()),
+        }
     }
 }
 
@@ -79,15 +79,14 @@ impl CaptureDesk {
     /// Starts (or restarts) live tracking.
     ///
     /// # Errors
-    /// The face models' load error.
-    pub fn start_live(&mut self, character: &Character) -> Result<(), String> {
+    /// [`ApiError::Models`] when the face models cannot be loaded.
+    pub fn start_live(&mut self, character: &Character) -> Result<(), ApiError> {
         let models = face_models()?;
         *lock(&self.live) = Some(Live {
             tracker: Tracker::new(models, TrackingMode::Track),
-            by_name: ByName::new(character),
-            adapter: self.adapter.clone(),
+            estimator: self.estimator(character),
             started: Instant::now(),
-            filter: self.smoothing.map(OneEuroState::new),
+            filter: self.filtering.smoothing.map(OneEuroState::new),
             recording: None,
             frames: 0,
         });
@@ -110,10 +109,12 @@ impl CaptureDesk {
     /// Starts recording a take from the live frames.
     ///
     /// # Errors
-    /// A message when live tracking is off.
-    pub fn start_recording(&mut self) -> Result<(), String> {
+    /// [`ApiError::Live`] when live tracking is off.
+    pub fn start_recording(&mut self) -> Result<(), ApiError> {
         let mut live = lock(&self.live);
-        let live = live.as_mut().ok_or("start live mode first")?;
+        let live = live
+            .as_mut()
+            .ok_or(ApiError::Live("start live mode first"))?;
         live.recording = Some(Recording::default());
         Ok(())
     }
@@ -121,19 +122,21 @@ impl CaptureDesk {
     /// Stops recording and makes the recording the take.
     ///
     /// # Errors
-    /// A message when nothing was recorded.
-    pub fn stop_recording(&mut self, character: &Character) -> Result<usize, String> {
+    /// [`ApiError::Live`] when nothing was recorded.
+    pub fn stop_recording(&mut self, character: &Character) -> Result<usize, ApiError> {
         let recording = {
             let mut live = lock(&self.live);
-            let live = live.as_mut().ok_or("live mode is off")?;
-            live.recording.take().ok_or("not recording")?
+            let live = live.as_mut().ok_or(ApiError::Live("live mode is off"))?;
+            live.recording
+                .take()
+                .ok_or(ApiError::Live("not recording"))?
         };
         let n = recording.records.len();
         if n == 0 {
-            return Err("nothing was recorded (no frames arrived)".into());
+            return Err(ApiError::Live("nothing was recorded (no frames arrived)"));
         }
         if recording.records.iter().all(|r| r.found.is_none()) {
-            return Err("no face was seen while recording".into());
+            return Err(ApiError::Live("no face was seen while recording"));
         }
         let duration = recording.records.last().map_or(0.0, |r| r.time);
         // The webcam's own rate, rounded: frames were recorded as they arrived.
@@ -143,20 +146,17 @@ impl CaptureDesk {
             30.0
         };
         let names = (0..n).map(|i| format!("webcam_{:06}.png", i + 1)).collect();
-        let take = make_take(
+        let take = self.take_of(
             character,
-            self.adapter.as_ref(),
             Footage {
                 source: "webcam".into(),
                 fps,
                 records: recording.records,
                 frame_names: names,
-                previews: recording.previews,
-                still: false,
+                still_frames: None,
             },
-            (self.keyframe_every, self.smoothing),
         )?;
-        self.set_take(take);
+        self.set_take(take, recording.previews);
         Ok(n)
     }
 }
@@ -170,8 +170,8 @@ impl LiveHandle {
     /// Tracks one webcam frame and returns the character's weights.
     ///
     /// # Errors
-    /// A message for a failing model.
-    pub fn track(&self, character: &Character, image: Image) -> Result<LiveResult, String> {
+    /// [`ApiError::Capture`] for a failing model.
+    pub fn track(&self, character: &Character, image: Image) -> Result<LiveResult, ApiError> {
         let started = Instant::now();
         let mut guard = lock(&self.live);
         let Some(live) = guard.as_mut() else {
@@ -195,22 +195,13 @@ impl LiveHandle {
                 height: image.height,
                 rgb: &image.rgb,
             },
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         live.frames += 1;
         let found = record.found.is_some();
-        let mut weights = if !found {
-            vec![0.0; character.blendshapes().len()]
-        } else {
-            match &live.adapter {
-                Some(adapter) => Expression::from_record(&record).map_or_else(
-                    || vec![0.0; adapter.blendshapes.len()],
-                    |e| adapter.predict(&e),
-                ),
-                None => live
-                    .by_name
-                    .estimate(&record.scores.iter().map(|s| s.1).collect::<Vec<_>>()),
-            }
+        let expression = found.then(|| Expression::from_record(&record)).flatten();
+        let mut weights = match &expression {
+            Some(e) => live.estimator.estimate(e),
+            None => vec![0.0; character.blendshapes().len()],
         };
         if found && let Some(filter) = live.filter.as_mut() {
             filter.filter(time, &mut weights);
@@ -223,9 +214,7 @@ impl LiveHandle {
                 record.index = recording.records.len();
                 record.time = time - start;
                 recording.records.push(record);
-                recording
-                    .previews
-                    .push(&image.preview(LIVE_PREVIEW_HEIGHT).to_png()?)?;
+                recording.previews.push_image(&image, LIVE_PREVIEW_HEIGHT)?;
                 Some(recording.records.len())
             }
             None => None,

@@ -14,9 +14,9 @@ use faceanim_anim::Clip;
 use faceanim_anim::filter::OneEuro;
 use serde::{Deserialize, Serialize};
 
-use crate::features::Expression;
-use crate::train::Correction;
-use crate::{AdaptError, Adapter, Fingerprint};
+use crate::estimator::Estimator;
+use crate::expression::Expression;
+use crate::{Fingerprint, TakeError};
 
 /// One frame of a session.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -60,9 +60,80 @@ impl SessionFrame {
     }
 }
 
-/// A session file. See the module docs.
+/// What the user changes in a session (the frames and their estimates stay): keyframes,
+/// corrections, preference and smoothing, as one value — small enough for hundreds of steps of
+/// undo, and compared to tell an edit that changed something from one that did not.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Edits {
+    /// Automatic keyframes every this many frames (1 keeps every frame).
+    pub keyframe_every: usize,
+    /// One Euro smoothing of the estimates, when chosen.
+    pub smoothing: Option<OneEuro>,
+    /// Keyframes the user added.
+    pub added_keyframes: Vec<usize>,
+    /// Automatic keyframes the user removed.
+    pub removed_keyframes: Vec<usize>,
+    /// Frame → blendshape name → the weight the user set.
+    pub corrections: BTreeMap<usize, BTreeMap<String, f32>>,
+    /// Per blendshape offsets, while the preference is applied.
+    pub preference: Option<Vec<f32>>,
+}
+
+impl Edits {
+    /// No edits yet: a keyframe every `keyframe_every` frames (at least 1), no smoothing.
+    #[must_use]
+    pub fn new(keyframe_every: usize) -> Edits {
+        Edits {
+            keyframe_every: keyframe_every.max(1),
+            smoothing: None,
+            added_keyframes: Vec::new(),
+            removed_keyframes: Vec::new(),
+            corrections: BTreeMap::new(),
+            preference: None,
+        }
+    }
+}
+
+/// How a session's estimates are cleaned up: One Euro smoothing (optional), then a keyframe
+/// every `keyframe_every` frames (1 to 1000) with the frames between interpolated. New takes
+/// get the filtering chosen last; changing a take's is an edit like any other.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Filtering {
+    /// Automatic keyframes every this many frames.
+    pub keyframe_every: usize,
+    /// One Euro smoothing of the estimates, when chosen.
+    pub smoothing: Option<OneEuro>,
+}
+
+impl Filtering {
+    /// The seed's default: a keyframe every 5 frames, no smoothing.
+    pub const SEED: Filtering = Filtering {
+        keyframe_every: 5,
+        smoothing: None,
+    };
+
+    /// Checked filtering.
+    ///
+    /// # Errors
+    /// [`TakeError::KeyframeSpacing`] or [`TakeError::Smoothing`] naming the bad value.
+    pub fn new(keyframe_every: usize, smoothing: Option<OneEuro>) -> Result<Filtering, TakeError> {
+        if !(1..=1000).contains(&keyframe_every) {
+            return Err(TakeError::KeyframeSpacing(keyframe_every));
+        }
+        if let Some(s) = smoothing {
+            s.validate().map_err(TakeError::Smoothing)?;
+        }
+        Ok(Filtering {
+            keyframe_every,
+            smoothing,
+        })
+    }
+}
+
+/// A session: one input's frames with their estimates, and the user's [`Edits`]. See the module
+/// docs. Its file is [`SessionFile`]'s JSON.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "SessionFile", into = "SessionFile")]
 pub struct Session {
     /// File format version (1).
     pub version: u32,
@@ -76,28 +147,92 @@ pub struct Session {
     pub fingerprint: Fingerprint,
     /// Frames per second.
     pub fps: f32,
-    /// Automatic keyframes every this many frames (1 keeps every frame).
-    pub keyframe_every: usize,
-    /// One Euro smoothing of the estimates, when chosen.
-    #[serde(default)]
-    pub smoothing: Option<OneEuro>,
     /// The frames.
     pub frames: Vec<SessionFrame>,
-    /// Keyframes the user added.
-    #[serde(default)]
-    pub added_keyframes: Vec<usize>,
-    /// Automatic keyframes the user removed.
-    #[serde(default)]
-    pub removed_keyframes: Vec<usize>,
-    /// Frame → blendshape name → the weight the user set.
-    #[serde(default)]
-    pub corrections: BTreeMap<usize, BTreeMap<String, f32>>,
-    /// Per blendshape offsets, while the preference is applied.
-    #[serde(default)]
-    pub preference: Option<Vec<f32>>,
     /// For a still image: the length in frames of the 0 → peak → 0 animation it becomes.
-    #[serde(default)]
     pub still_frames: Option<usize>,
+    /// What the user changed.
+    pub edits: Edits,
+}
+
+/// The session file as written (version 1): the session's fields with its edits inline.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SessionFile {
+    version: u32,
+    source: String,
+    character: String,
+    blendshapes: Vec<String>,
+    fingerprint: Fingerprint,
+    fps: f32,
+    keyframe_every: usize,
+    #[serde(default)]
+    smoothing: Option<OneEuro>,
+    frames: Vec<SessionFrame>,
+    #[serde(default)]
+    added_keyframes: Vec<usize>,
+    #[serde(default)]
+    removed_keyframes: Vec<usize>,
+    #[serde(default)]
+    corrections: BTreeMap<usize, BTreeMap<String, f32>>,
+    #[serde(default)]
+    preference: Option<Vec<f32>>,
+    #[serde(default)]
+    still_frames: Option<usize>,
+}
+
+impl From<SessionFile> for Session {
+    fn from(f: SessionFile) -> Session {
+        Session {
+            version: f.version,
+            source: f.source,
+            character: f.character,
+            blendshapes: f.blendshapes,
+            fingerprint: f.fingerprint,
+            fps: f.fps,
+            frames: f.frames,
+            still_frames: f.still_frames,
+            edits: Edits {
+                keyframe_every: f.keyframe_every,
+                smoothing: f.smoothing,
+                added_keyframes: f.added_keyframes,
+                removed_keyframes: f.removed_keyframes,
+                corrections: f.corrections,
+                preference: f.preference,
+            },
+        }
+    }
+}
+
+impl From<Session> for SessionFile {
+    fn from(s: Session) -> SessionFile {
+        SessionFile {
+            version: s.version,
+            source: s.source,
+            character: s.character,
+            blendshapes: s.blendshapes,
+            fingerprint: s.fingerprint,
+            fps: s.fps,
+            keyframe_every: s.edits.keyframe_every,
+            smoothing: s.edits.smoothing,
+            frames: s.frames,
+            added_keyframes: s.edits.added_keyframes,
+            removed_keyframes: s.edits.removed_keyframes,
+            corrections: s.edits.corrections,
+            preference: s.edits.preference,
+            still_frames: s.still_frames,
+        }
+    }
+}
+
+/// A frame the user corrected: what capture read, and the weights the user wants (the
+/// examples fine-tuning learns from).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Correction {
+    /// The frame's expression.
+    pub expression: Expression,
+    /// The wanted weights, one per blendshape (the estimate, with the user's changes).
+    pub target: Vec<f32>,
 }
 
 impl Session {
@@ -119,55 +254,49 @@ impl Session {
             blendshapes,
             fingerprint,
             fps,
-            keyframe_every: keyframe_every.max(1),
-            smoothing: None,
             frames,
-            added_keyframes: Vec::new(),
-            removed_keyframes: Vec::new(),
-            corrections: BTreeMap::new(),
-            preference: None,
             still_frames: None,
+            edits: Edits::new(keyframe_every),
         }
     }
 
-    fn frame_index(&self, frame: usize) -> Result<usize, AdaptError> {
+    fn frame_index(&self, frame: usize) -> Result<usize, TakeError> {
         if frame < self.frames.len() {
             Ok(frame)
         } else {
-            Err(AdaptError::Session(format!(
-                "frame {frame} is past the end (the session has {} frames, 0 to {})",
-                self.frames.len(),
-                self.frames.len().saturating_sub(1)
-            )))
+            Err(TakeError::PastTheEnd {
+                frame,
+                frames: self.frames.len(),
+            })
         }
     }
 
-    fn blendshape_index(&self, name: &str) -> Result<usize, AdaptError> {
+    fn blendshape_index(&self, name: &str) -> Result<usize, TakeError> {
         self.blendshapes
             .iter()
             .position(|n| n == name)
-            .ok_or_else(|| {
-                AdaptError::Session(format!(
-                    "{} has no blendshape named '{name}'",
-                    self.character
-                ))
+            .ok_or_else(|| TakeError::NoBlendshape {
+                character: self.character.clone(),
+                name: name.to_owned(),
             })
     }
 
     /// Sets blendshape `name` to `value` on `frame`; the frame becomes a keyframe.
     ///
     /// # Errors
-    /// [`AdaptError::Session`] for a frame past the end, an unknown name or a value outside
+    /// [`TakeError`] for a frame past the end, an unknown name or a value outside
     /// [0, 1].
-    pub fn correct(&mut self, frame: usize, name: &str, value: f32) -> Result<(), AdaptError> {
+    pub fn correct(&mut self, frame: usize, name: &str, value: f32) -> Result<(), TakeError> {
         let frame = self.frame_index(frame)?;
         self.blendshape_index(name)?;
         if !(0.0..=1.0).contains(&value) {
-            return Err(AdaptError::Session(format!(
-                "{name} = {value}: weights are between 0 and 1"
-            )));
+            return Err(TakeError::OutOfRange {
+                name: name.to_owned(),
+                value,
+            });
         }
-        self.corrections
+        self.edits
+            .corrections
             .entry(frame)
             .or_default()
             .insert(name.to_owned(), value);
@@ -177,19 +306,19 @@ impl Session {
     /// Removes the correction of `name` on `frame` (all of the frame's with `None`).
     ///
     /// # Errors
-    /// [`AdaptError::Session`] for a frame past the end or an unknown name.
-    pub fn uncorrect(&mut self, frame: usize, name: Option<&str>) -> Result<(), AdaptError> {
+    /// [`TakeError`] for a frame past the end or an unknown name.
+    pub fn uncorrect(&mut self, frame: usize, name: Option<&str>) -> Result<(), TakeError> {
         let frame = self.frame_index(frame)?;
         match name {
             None => {
-                self.corrections.remove(&frame);
+                self.edits.corrections.remove(&frame);
             }
             Some(name) => {
                 self.blendshape_index(name)?;
-                if let Some(c) = self.corrections.get_mut(&frame) {
+                if let Some(c) = self.edits.corrections.get_mut(&frame) {
                     c.remove(name);
                     if c.is_empty() {
-                        self.corrections.remove(&frame);
+                        self.edits.corrections.remove(&frame);
                     }
                 }
             }
@@ -200,13 +329,13 @@ impl Session {
     /// Makes `frame` a keyframe.
     ///
     /// # Errors
-    /// [`AdaptError::Session`] for a frame past the end.
-    pub fn add_keyframe(&mut self, frame: usize) -> Result<(), AdaptError> {
+    /// [`TakeError`] for a frame past the end.
+    pub fn add_keyframe(&mut self, frame: usize) -> Result<(), TakeError> {
         let frame = self.frame_index(frame)?;
-        self.removed_keyframes.retain(|&k| k != frame);
-        if !self.added_keyframes.contains(&frame) {
-            self.added_keyframes.push(frame);
-            self.added_keyframes.sort_unstable();
+        self.edits.removed_keyframes.retain(|&k| k != frame);
+        if !self.edits.added_keyframes.contains(&frame) {
+            self.edits.added_keyframes.push(frame);
+            self.edits.added_keyframes.sort_unstable();
         }
         Ok(())
     }
@@ -214,19 +343,17 @@ impl Session {
     /// Stops `frame` being a keyframe (it is then interpolated).
     ///
     /// # Errors
-    /// [`AdaptError::Session`] for a frame past the end, or a corrected frame (a correction
+    /// [`TakeError`] for a frame past the end, or a corrected frame (a correction
     /// is kept as a key; remove the correction first).
-    pub fn remove_keyframe(&mut self, frame: usize) -> Result<(), AdaptError> {
+    pub fn remove_keyframe(&mut self, frame: usize) -> Result<(), TakeError> {
         let frame = self.frame_index(frame)?;
-        if self.corrections.contains_key(&frame) {
-            return Err(AdaptError::Session(format!(
-                "frame {frame} is corrected, so it stays a keyframe; remove its corrections first"
-            )));
+        if self.edits.corrections.contains_key(&frame) {
+            return Err(TakeError::CorrectedKeyframe { frame });
         }
-        self.added_keyframes.retain(|&k| k != frame);
-        if !self.removed_keyframes.contains(&frame) {
-            self.removed_keyframes.push(frame);
-            self.removed_keyframes.sort_unstable();
+        self.edits.added_keyframes.retain(|&k| k != frame);
+        if !self.edits.removed_keyframes.contains(&frame) {
+            self.edits.removed_keyframes.push(frame);
+            self.edits.removed_keyframes.sort_unstable();
         }
         Ok(())
     }
@@ -238,12 +365,18 @@ impl Session {
     pub fn keyframes(&self) -> Vec<usize> {
         let n = self.frames.len();
         let mut keys: Vec<usize> =
-            faceanim_anim::keyframes::keyframe_indices(n, self.keyframe_every, &[])
+            faceanim_anim::keyframes::keyframe_indices(n, self.edits.keyframe_every, &[])
                 .into_iter()
-                .filter(|k| !self.removed_keyframes.contains(k))
+                .filter(|k| !self.edits.removed_keyframes.contains(k))
                 .collect();
-        keys.extend(self.added_keyframes.iter().copied().filter(|&k| k < n));
-        keys.extend(self.corrections.keys().copied().filter(|&k| k < n));
+        keys.extend(
+            self.edits
+                .added_keyframes
+                .iter()
+                .copied()
+                .filter(|&k| k < n),
+        );
+        keys.extend(self.edits.corrections.keys().copied().filter(|&k| k < n));
         keys.sort_unstable();
         keys.dedup();
         if keys.is_empty() && n > 0 {
@@ -254,8 +387,12 @@ impl Session {
 
     /// The estimates after smoothing, before any user change.
     fn smoothed_estimates(&self) -> Vec<Vec<f32>> {
-        let mut rows: Vec<Vec<f32>> = self.frames.iter().map(|f| f.estimate.clone()).collect();
-        if let Some(settings) = self.smoothing {
+        self.smoothed(self.frames.iter().map(|f| f.estimate.clone()).collect())
+    }
+
+    /// `rows` (one per frame) under the session's One Euro smoothing, clamped to [0, 1].
+    fn smoothed(&self, mut rows: Vec<Vec<f32>>) -> Vec<Vec<f32>> {
+        if let Some(settings) = self.edits.smoothing {
             let mut state = faceanim_anim::filter::OneEuroState::new(settings);
             for (row, frame) in rows.iter_mut().zip(&self.frames) {
                 state.filter(frame.time, row);
@@ -272,7 +409,7 @@ impl Session {
         let estimates = self.smoothed_estimates();
         let mut sum = vec![0.0f32; self.blendshapes.len()];
         let mut count = vec![0usize; self.blendshapes.len()];
-        for (&frame, values) in &self.corrections {
+        for (&frame, values) in &self.edits.corrections {
             for (name, &value) in values {
                 if let (Ok(b), Some(row)) = (self.blendshape_index(name), estimates.get(frame)) {
                     sum[b] += value - row[b];
@@ -289,47 +426,100 @@ impl Session {
     /// Applies the preference: the current mean corrections are added to every other frame.
     /// Applying again after more corrections updates it.
     pub fn apply_preference(&mut self) {
-        self.preference = Some(self.preference_offsets());
+        self.edits.preference = Some(self.preference_offsets());
     }
 
     /// Removes the preference.
     pub fn clear_preference(&mut self) {
-        self.preference = None;
+        self.edits.preference = None;
+    }
+
+    /// Sets the smoothing and keyframe spacing.
+    pub fn set_filtering(&mut self, filtering: Filtering) {
+        self.edits.keyframe_every = filtering.keyframe_every;
+        self.edits.smoothing = filtering.smoothing;
+    }
+
+    /// The smoothing and keyframe spacing in use.
+    #[must_use]
+    pub fn filtering(&self) -> Filtering {
+        Filtering {
+            keyframe_every: self.edits.keyframe_every,
+            smoothing: self.edits.smoothing,
+        }
     }
 
     /// The weights of every frame, one row per frame (see the module docs for the order).
     #[must_use]
     pub fn weights(&self) -> Vec<Vec<f32>> {
         let mut rows = self.smoothed_estimates();
-        if let Some(offsets) = &self.preference {
+        if let Some(offsets) = &self.edits.preference {
             for row in &mut rows {
                 for (w, o) in row.iter_mut().zip(offsets) {
                     *w = (*w + o).clamp(0.0, 1.0);
                 }
             }
         }
-        for (&frame, values) in &self.corrections {
+        for (&frame, values) in &self.edits.corrections {
             for (name, &value) in values {
                 if let (Ok(b), Some(row)) = (self.blendshape_index(name), rows.get_mut(frame)) {
                     row[b] = value;
                 }
             }
         }
-        let mut known = vec![false; rows.len()];
+        faceanim_anim::filter::fill_gaps_rows(&mut rows, &self.keyframe_mask());
+        rows
+    }
+
+    /// Per frame, whether it is a keyframe.
+    fn keyframe_mask(&self) -> Vec<bool> {
+        let mut known = vec![false; self.frames.len()];
         for k in self.keyframes() {
             known[k] = true;
         }
-        faceanim_anim::filter::fill_gaps_rows(&mut rows, &known);
-        rows
+        known
     }
 
     /// The animation as a clip (weights as [`Session::weights`], head pose interpolated
     /// between the same keyframes); for a still image, the 0 → peak → 0 animation.
     #[must_use]
     pub fn clip(&self) -> Clip {
+        self.clip_of(self.blendshapes.clone(), self.weights())
+    }
+
+    /// What capture read as ARKit weights (MediaPipe's scores but `_neutral`, bridged over
+    /// frames without a face) under the session's smoothing and keyframes, as a clip with the
+    /// session's head pose: what Live Link Face gets for a character without ARKit names. `None`
+    /// when no frame kept its expression.
+    #[must_use]
+    pub fn arkit_clip(&self) -> Option<Clip> {
+        let names = &faceanim_track::BLENDSHAPE_NAMES[1..];
+        let known: Vec<bool> = self.frames.iter().map(|f| f.expression.is_some()).collect();
+        if !known.contains(&true) {
+            return None;
+        }
+        let mut rows: Vec<Vec<f32>> = self
+            .frames
+            .iter()
+            .map(|f| {
+                f.expression.as_ref().map_or_else(
+                    || vec![0.0; names.len()],
+                    |e| e.scores.iter().skip(1).copied().collect(),
+                )
+            })
+            .collect();
+        faceanim_anim::filter::fill_gaps_rows(&mut rows, &known);
+        let mut rows = self.smoothed(rows);
+        faceanim_anim::filter::fill_gaps_rows(&mut rows, &self.keyframe_mask());
+        Some(self.clip_of(names.iter().map(|&n| n.to_owned()).collect(), rows))
+    }
+
+    /// A clip of `rows` (one per frame, in `names`' order) with the session's rate, head pose
+    /// and presence; for a still image, the 0 → peak → 0 animation of the first row.
+    fn clip_of(&self, names: Vec<String>, rows: Vec<Vec<f32>>) -> Clip {
         if let Some(length) = self.still_frames {
-            let peak = self.weights().into_iter().next().unwrap_or_default();
-            return peak_animation(&peak, self.blendshapes.clone(), self.fps, length);
+            let peak = rows.into_iter().next().unwrap_or_default();
+            return peak_animation(&peak, names, self.fps, length);
         }
         let head: Option<Vec<[f32; 3]>> = self
             .frames
@@ -343,17 +533,13 @@ impl Session {
             .then(|| bridged(self.frames.iter().map(|f| f.head_position).collect()));
         let mut clip = Clip {
             fps: self.fps,
-            blendshapes: self.blendshapes.clone(),
-            frames: self.weights(),
+            blendshapes: names,
+            frames: rows,
             head,
             head_position,
             presence: Some(self.frames.iter().map(|f| f.presence).collect()),
         };
-        let keys = self.keyframes();
-        let mut known = vec![false; clip.frames.len()];
-        for k in keys {
-            known[k] = true;
-        }
+        let known = self.keyframe_mask();
         if let Some(head) = clip.head.as_mut() {
             faceanim_anim::filter::fill_gaps(head, &known);
         }
@@ -367,7 +553,8 @@ impl Session {
     /// with the user's values (frames without a face are skipped).
     #[must_use]
     pub fn corrections_for_training(&self) -> Vec<Correction> {
-        self.corrections
+        self.edits
+            .corrections
             .iter()
             .filter_map(|(&frame, values)| {
                 let f = self.frames.get(frame)?;
@@ -382,27 +569,24 @@ impl Session {
             .collect()
     }
 
-    /// Estimates every frame again with `adapter` (after fine-tuning, say); corrections,
-    /// keyframes and preference stay.
+    /// Estimates every frame again with `estimator` (an adapter after fine-tuning, say);
+    /// corrections, keyframes and preference stay.
     ///
     /// # Errors
-    /// [`AdaptError::Mismatch`] when the adapter is for other blendshapes.
-    pub fn reestimate(&mut self, adapter: &Adapter) -> Result<(), AdaptError> {
-        if adapter.blendshapes != self.blendshapes {
-            return Err(AdaptError::Mismatch {
+    /// [`TakeError::Mismatch`] when the estimator is for other blendshapes.
+    pub fn reestimate(&mut self, estimator: &dyn Estimator) -> Result<(), TakeError> {
+        if estimator.blendshapes() != self.blendshapes.as_slice() {
+            return Err(TakeError::Mismatch {
                 character: self.character.clone(),
-                reason: "the adapter's blendshapes are not the session's".into(),
+                reason: format!(
+                    "the {}'s blendshapes are not the session's",
+                    estimator.source().noun()
+                ),
             });
         }
-        let estimates = estimate_frames(
-            &self
-                .frames
-                .iter()
-                .map(|f| f.expression.clone())
-                .collect::<Vec<_>>(),
-            self.blendshapes.len(),
-            |e| adapter.predict(e),
-        );
+        let expressions: Vec<Option<&Expression>> =
+            self.frames.iter().map(|f| f.expression.as_ref()).collect();
+        let estimates = estimate_frames(&expressions, estimator);
         for (frame, estimate) in self.frames.iter_mut().zip(estimates) {
             frame.estimate = estimate;
         }
@@ -418,11 +602,11 @@ impl Session {
     /// Parses and checks a session file.
     ///
     /// # Errors
-    /// [`AdaptError::Format`] naming the field that is wrong.
-    pub fn from_json(bytes: &[u8]) -> Result<Session, AdaptError> {
+    /// [`TakeError::Format`] naming the field that is wrong.
+    pub fn from_json(bytes: &[u8]) -> Result<Session, TakeError> {
         let session: Session = serde_json::from_slice(bytes)
-            .map_err(|e| AdaptError::Format(format!("not a session file: {e}")))?;
-        let bad = |m: String| Err(AdaptError::Format(m));
+            .map_err(|e| TakeError::Format(format!("not a session file: {e}")))?;
+        let bad = |m: String| Err(TakeError::Format(m));
         if session.version != 1 {
             return bad(format!(
                 "version {} is not supported (1 is)",
@@ -444,7 +628,7 @@ impl Session {
                 return bad(format!("frames[{k}].estimate is not finite"));
             }
         }
-        for (&frame, values) in &session.corrections {
+        for (&frame, values) in &session.edits.corrections {
             if frame >= session.frames.len() {
                 return bad(format!("corrections: frame {frame} is past the end"));
             }
@@ -460,6 +644,7 @@ impl Session {
             }
         }
         if session
+            .edits
             .preference
             .as_ref()
             .is_some_and(|p| p.len() != width)
@@ -486,16 +671,17 @@ impl Session {
     }
 }
 
-/// Per frame, `estimate(expression)`; frames without an expression take values interpolated
-/// from their neighbours (all zeros when no frame has a face).
+/// Per frame, the estimator's weights for its expression; frames without an expression take
+/// values interpolated from their neighbours (all zeros when no frame has a face).
+#[must_use]
 pub fn estimate_frames(
-    expressions: &[Option<Expression>],
-    blendshapes: usize,
-    estimate: impl Fn(&Expression) -> Vec<f32>,
+    expressions: &[Option<&Expression>],
+    estimator: &dyn Estimator,
 ) -> Vec<Vec<f32>> {
+    let width = estimator.blendshapes().len();
     let mut rows: Vec<Vec<f32>> = expressions
         .iter()
-        .map(|e| e.as_ref().map_or_else(|| vec![0.0; blendshapes], &estimate))
+        .map(|e| e.map_or_else(|| vec![0.0; width], |e| estimator.estimate(e)))
         .collect();
     let known: Vec<bool> = expressions.iter().map(Option::is_some).collect();
     faceanim_anim::filter::fill_gaps_rows(&mut rows, &known);
@@ -536,36 +722,42 @@ pub fn peak_animation(peak: &[f32], blendshapes: Vec<String>, fps: f32, frames: 
     }
 }
 
+/// A session of `frames` frames at 30 fps for blendshapes `a` and `b`, with no face and the
+/// estimate `estimate(frame)`: the fixture of this crate's tests.
+#[cfg(test)]
+pub(crate) fn test_session(frames: usize, estimate: impl Fn(usize) -> Vec<f32>) -> Session {
+    let frames = (0..frames)
+        .map(|i| SessionFrame {
+            name: format!("f_{i:06}.png"),
+            time: i as f32 / 30.0,
+            presence: 1.0,
+            head: None,
+            head_position: None,
+            expression: None,
+            estimate: estimate(i),
+        })
+        .collect();
+    Session::new(
+        "test".into(),
+        "char".into(),
+        vec!["a".to_owned(), "b".to_owned()],
+        Fingerprint {
+            topology: "t".into(),
+            geometry: "g".into(),
+        },
+        30.0,
+        1,
+        frames,
+    )
+}
+
 #[cfg(test)]
 #[allow(clippy::float_cmp, reason = "values set and copied exactly")]
 mod tests {
     use super::*;
 
     fn session(frames: usize) -> Session {
-        let names = vec!["a".to_owned(), "b".to_owned()];
-        let frames = (0..frames)
-            .map(|i| SessionFrame {
-                name: format!("f_{i:06}.png"),
-                time: i as f32 / 30.0,
-                presence: 1.0,
-                head: None,
-                head_position: None,
-                expression: None,
-                estimate: vec![0.1 + 0.01 * i as f32, 0.5],
-            })
-            .collect();
-        Session::new(
-            "test".into(),
-            "char".into(),
-            names,
-            Fingerprint {
-                topology: "t".into(),
-                geometry: "g".into(),
-            },
-            30.0,
-            1,
-            frames,
-        )
+        test_session(frames, |i| vec![0.1 + 0.01 * i as f32, 0.5])
     }
 
     #[test]
@@ -600,7 +792,7 @@ mod tests {
     #[test]
     fn keyframes_interpolate_and_corrections_are_keys() {
         let mut s = session(11);
-        s.keyframe_every = 5;
+        s.edits.keyframe_every = 5;
         assert_eq!(s.keyframes(), vec![0, 5, 10]);
         s.correct(2, "b", 0.9).unwrap();
         s.add_keyframe(8).unwrap();

@@ -1,0 +1,327 @@
+//! # faceanim-export: one exporter for every command and the studio
+//!
+//! Whatever made the animation (strokes, a capture, a take with strokes over it), it leaves as
+//! one [`Animation`]: the character, the weights of each of its targets per frame with the head
+//! turn, and the same frames as a clip by name. [`export`] writes it in any [`Format`], chosen
+//! by name or by a file's extension; the command line writes the bytes to files, the studio
+//! sends them as downloads. The rules that belong to a format live here once:
+//!
+//! - **GLB** — the character (with the sketch's baked corrective targets for arcs and
+//!   exaggerations, when there are any) and one morph-weight animation, the head turn on the
+//!   root node: what Blender, Unity, Unreal and three.js play.
+//! - **Live Link Face CSV** speaks ARKit: it gets the character's own weights when the
+//!   character has ARKit-named shapes, else the capture's own ARKit weights when a capture made
+//!   the animation (with a note saying so), else zero curves (with a warning).
+//! - The **seed toolkit's CSV** and the **session file** need the take's session.
+//!
+//! ```
+//! use faceanim_export::{Animation, Format, export};
+//!
+//! let character = faceanim_head::default_character();
+//! let clip = faceanim_anim::Clip {
+//!     fps: 30.0,
+//!     blendshapes: vec!["jawOpen".into()],
+//!     frames: vec![vec![0.0], vec![1.0]],
+//!     head: None,
+//!     head_position: None,
+//!     presence: None,
+//! };
+//! let animation = Animation::from_clip(&character, &clip, "open")?;
+//! let format = Format::from_path(std::path::Path::new("open.csv"))?;
+//! let csv = export(format, &animation)?;
+//! assert!(String::from_utf8(csv.bytes)?.starts_with("Timecode,BlendShapeCount"));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![deny(missing_docs)]
+
+use std::path::Path;
+
+use faceanim_anim::Clip;
+use faceanim_rig::Character;
+use faceanim_rig::export::MorphAnimation;
+use faceanim_take::Session;
+
+/// The formats an animation leaves in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Format {
+    /// The clip JSON of DESIGN.md: every blendshape's weight per frame, by name.
+    ClipJson,
+    /// The character with the animation, as a binary glTF.
+    Glb,
+    /// Live Link Face CSV (ARKit's 52 curves and the head and eye angles).
+    LiveLinkCsv,
+    /// The seed toolkit's CSV: `name.png,w1,…,wN` per frame (needs a session).
+    SeedCsv,
+    /// The session file, which `faceanim session` and the studio edit (needs a session).
+    Session,
+}
+
+impl Format {
+    /// Every format, in the order the studio offers them.
+    pub const ALL: [Format; 5] = [
+        Format::Glb,
+        Format::ClipJson,
+        Format::LiveLinkCsv,
+        Format::SeedCsv,
+        Format::Session,
+    ];
+
+    /// The format a file name asks for, by its ending: `.byoc.csv` the seed's CSV,
+    /// `.session.json` a session, `.json` a clip, `.glb` the character, `.csv` Live Link Face.
+    ///
+    /// # Errors
+    /// [`ExportError::UnknownExtension`] naming the file and the endings understood.
+    pub fn from_path(path: &Path) -> Result<Format, ExportError> {
+        let lower = path.to_string_lossy().to_ascii_lowercase();
+        // The longest endings first: `.byoc.csv` is also `.csv`.
+        let mut endings: Vec<(Format, &str)> = Format::ALL
+            .iter()
+            .map(|&f| (f, f.extension()))
+            .chain([(Format::ClipJson, "json")])
+            .collect();
+        endings.sort_by_key(|(_, e)| std::cmp::Reverse(e.len()));
+        endings
+            .into_iter()
+            .find(|(_, e)| lower.ends_with(&format!(".{e}")))
+            .map(|(f, _)| f)
+            .ok_or_else(|| ExportError::UnknownExtension(path.display().to_string()))
+    }
+
+    /// The ending of a file in this format (after the dot): `clip.json`, `glb`, `csv`,
+    /// `byoc.csv`, `session.json`.
+    #[must_use]
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::ClipJson => "clip.json",
+            Format::Glb => "glb",
+            Format::LiveLinkCsv => "csv",
+            Format::SeedCsv => "byoc.csv",
+            Format::Session => "session.json",
+        }
+    }
+
+    /// The media type of a file in this format.
+    #[must_use]
+    pub fn mime(self) -> &'static str {
+        match self {
+            Format::ClipJson | Format::Session => "application/json",
+            Format::Glb => "model/gltf-binary",
+            Format::LiveLinkCsv | Format::SeedCsv => "text/csv",
+        }
+    }
+
+    /// Whether the format needs the take's session ([`Animation::session`]).
+    #[must_use]
+    pub fn needs_session(self) -> bool {
+        matches!(self, Format::SeedCsv | Format::Session)
+    }
+
+    /// What the format is called in messages.
+    #[must_use]
+    pub fn describe(self) -> &'static str {
+        match self {
+            Format::ClipJson => "the clip JSON",
+            Format::Glb => "the GLB",
+            Format::LiveLinkCsv => "the Live Link Face CSV",
+            Format::SeedCsv => "the seed's CSV",
+            Format::Session => "the session file",
+        }
+    }
+}
+
+/// An animated character, ready to export in any [`Format`].
+#[derive(Debug, Clone)]
+pub struct Animation<'a> {
+    /// The character the animation is for: the user's, with the sketch's baked corrective
+    /// targets appended when there are any (its first targets are the user's own, in order).
+    /// Only the GLB needs it: a session exported on its own still gives the clip and the CSVs.
+    pub character: Option<&'a Character>,
+    /// Every target's weight per frame (the character's own, then any baked ones) and the head
+    /// turn.
+    pub animation: MorphAnimation,
+    /// The same frames as the character's own weights by name (with the head pose).
+    pub clip: Clip,
+    /// The capture's own ARKit weights, when a capture made the animation: Live Link Face's
+    /// curves for a character without ARKit names.
+    pub arkit: Option<Clip>,
+    /// The take's session, when the animation is a take's.
+    pub session: Option<&'a Session>,
+}
+
+impl<'a> Animation<'a> {
+    /// `clip` put on `character` by name (ARKit spellings match), as an animation named `name`.
+    ///
+    /// # Errors
+    /// [`ExportError::Clip`] when no name of the clip is one of the character's.
+    pub fn from_clip(
+        character: &'a Character,
+        clip: &Clip,
+        name: &str,
+    ) -> Result<Animation<'a>, ExportError> {
+        let retarget = clip.retarget(character, name)?;
+        let names: Vec<String> = character
+            .blendshapes()
+            .iter()
+            .map(|b| b.name().to_owned())
+            .collect();
+        Ok(Animation {
+            character: Some(character),
+            clip: Clip {
+                blendshapes: names,
+                frames: retarget.animation.weights.clone(),
+                ..clip.clone()
+            },
+            animation: retarget.animation,
+            arkit: None,
+            session: None,
+        })
+    }
+}
+
+/// An exported file's bytes, and what the user should know about them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Exported {
+    /// The file.
+    pub bytes: Vec<u8>,
+    /// Notes and warnings (a fallback taken, curves left at zero).
+    pub notes: Vec<String>,
+}
+
+/// Why an export could not be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExportError {
+    /// A file name whose ending names no format.
+    #[error(
+        "{0}: the name must end in .json (clip), .glb (character with the animation), .csv (Live Link Face), .byoc.csv (the seed's CSV) or .session.json (the session)"
+    )]
+    UnknownExtension(String),
+    /// The format needs a take's session and the animation has none.
+    #[error("{} needs a capture's session (track with --adapter, or the studio's Capture tab)", .0.describe())]
+    NeedsSession(Format),
+    /// The GLB needs the character and the animation has none.
+    #[error("the GLB needs the character: give it with --character")]
+    NeedsCharacter,
+    /// The clip cannot be put on the character.
+    #[error(transparent)]
+    Clip(#[from] faceanim_anim::ClipError),
+    /// The GLB writer refused the animation.
+    #[error(transparent)]
+    Glb(#[from] faceanim_rig::export::ExportError),
+}
+
+/// Writes `animation` in `format`.
+///
+/// # Errors
+/// [`ExportError::NeedsSession`] for the seed's CSV or the session without a session;
+/// [`ExportError::Glb`] when the animation does not fit the character.
+pub fn export(format: Format, animation: &Animation<'_>) -> Result<Exported, ExportError> {
+    let mut notes = Vec::new();
+    let bytes = match format {
+        Format::ClipJson => animation.clip.to_json().into_bytes(),
+        Format::Glb => glb(
+            animation.character.ok_or(ExportError::NeedsCharacter)?,
+            Some(&animation.animation),
+        )?,
+        Format::LiveLinkCsv => {
+            faceanim_anim::livelink::to_csv(live_link_curves(animation, &mut notes)).into_bytes()
+        }
+        Format::SeedCsv => session(format, animation)?.to_seed_csv().into_bytes(),
+        Format::Session => session(format, animation)?.to_json().into_bytes(),
+    };
+    Ok(Exported { bytes, notes })
+}
+
+/// The GLB writer: `character` with `animation` (when given), as a binary glTF.
+///
+/// # Errors
+/// [`ExportError::Glb`] when the animation does not fit the character.
+pub fn glb(
+    character: &Character,
+    animation: Option<&MorphAnimation>,
+) -> Result<Vec<u8>, ExportError> {
+    Ok(faceanim_rig::export::export_glb(
+        character,
+        animation.map(std::slice::from_ref).unwrap_or_default(),
+    )?)
+}
+
+fn session<'a>(format: Format, animation: &Animation<'a>) -> Result<&'a Session, ExportError> {
+    animation.session.ok_or(ExportError::NeedsSession(format))
+}
+
+/// Live Link Face speaks ARKit (see the crate docs).
+fn live_link_curves<'a>(animation: &'a Animation<'_>, notes: &mut Vec<String>) -> &'a Clip {
+    let name = match (animation.character, animation.session) {
+        (Some(character), _) => character.name().to_owned(),
+        (None, Some(session)) => session.character.clone(),
+        (None, None) => "the character".to_owned(),
+    };
+    let has_arkit = animation
+        .clip
+        .blendshapes
+        .iter()
+        .any(|n| faceanim_rig::names::arkit_name(n).is_some());
+    match (&animation.arkit, has_arkit) {
+        (_, true) => &animation.clip,
+        (Some(capture), false) => {
+            notes.push(format!(
+                "note: {name} has no ARKit-named blendshapes; Live Link Face gets the capture's ARKit weights"
+            ));
+            capture
+        }
+        (None, false) => {
+            notes.push(format!(
+                "warning: Live Link Face speaks ARKit and {name} has no ARKit-named blendshapes; the curves are zero"
+            ));
+            &animation.clip
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_by_ending_longest_first() {
+        let of = |name: &str| Format::from_path(Path::new(name));
+        assert_eq!(of("a/take.json"), Ok(Format::ClipJson));
+        assert_eq!(of("take.clip.json"), Ok(Format::ClipJson));
+        assert_eq!(of("take.session.json"), Ok(Format::Session));
+        assert_eq!(of("TAKE.GLB"), Ok(Format::Glb));
+        assert_eq!(of("take.csv"), Ok(Format::LiveLinkCsv));
+        assert_eq!(of("take.byoc.csv"), Ok(Format::SeedCsv));
+        let error = of("take.fbx").map(|_| ()).unwrap_err().to_string();
+        assert!(
+            error.starts_with("take.fbx: the name must end in .json"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn a_clip_leaves_in_every_format_that_needs_no_session() {
+        let character = faceanim_head::default_character();
+        let clip = Clip {
+            fps: 24.0,
+            blendshapes: vec!["jawOpen".into(), "eyeBlinkLeft".into()],
+            frames: vec![vec![0.0, 1.0], vec![1.0, 0.0]],
+            head: None,
+            head_position: None,
+            presence: None,
+        };
+        let animation = Animation::from_clip(&character, &clip, "test").unwrap_or_else(|e| {
+            panic!("{e}");
+        });
+        for format in Format::ALL {
+            let result = export(format, &animation);
+            if format.needs_session() {
+                assert_eq!(result, Err(ExportError::NeedsSession(format)));
+            } else {
+                let exported = result.unwrap_or_else(|e| panic!("{format:?}: {e}"));
+                assert!(!exported.bytes.is_empty() && exported.notes.is_empty());
+            }
+        }
+    }
+}

@@ -1,0 +1,542 @@
+//! What the API answers, as types: the page, scripts and `API.md` all read these shapes.
+
+use std::collections::BTreeMap;
+
+use faceanim_rig::Character;
+use faceanim_sketch::engine::{Action, Side, Target};
+use faceanim_sketch::settings::{Resolved, Settings};
+use faceanim_take::EstimatorSource;
+use serde::Serialize;
+
+/// What a stroke's end goes to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Goal {
+    /// A blendshape (named in `target`).
+    Blendshape,
+    /// Back to where the chain started (no blendshape of the chain active).
+    Neutral,
+    /// Every weight solved at once (multi-blendshape strokes).
+    Multi,
+}
+
+/// A target as the page shows it: the goal, and the blendshape's name when it is one.
+fn target_of(character: &Character, target: Target) -> (Goal, Option<String>) {
+    match target {
+        Target::Blendshape(id) => (
+            Goal::Blendshape,
+            character.blendshape(id).map(|b| b.name().to_owned()),
+        ),
+        Target::Neutral => (Goal::Neutral, None),
+        Target::Multi => (Goal::Multi, None),
+    }
+}
+
+/// `GET /api/state`: everything the page draws of the sketch.
+#[derive(Debug, Serialize)]
+pub struct StateView {
+    /// The character's name.
+    pub character: String,
+    /// The project's frame rate.
+    pub fps: f32,
+    /// The last frame with animation.
+    pub last_frame: f32,
+    /// The project's settings as saved (`null` distances follow the character's size).
+    pub settings: Settings,
+    /// The settings in use, distances resolved.
+    pub resolved: Resolved,
+    /// One per stroke that made an action.
+    pub actions: Vec<ActionView>,
+    /// Strokes that made none, with the reason.
+    pub rejected: Vec<RejectedView>,
+    /// Problems with the project as a whole.
+    pub warnings: Vec<String>,
+    /// Whether undo has something to undo.
+    pub can_undo: bool,
+    /// Whether redo has something to redo.
+    pub can_redo: bool,
+    /// Where Save writes.
+    pub project_path: String,
+    /// After `POST /api/strokes`: the new stroke's index.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub added: Option<usize>,
+}
+
+/// A stroke's action.
+#[derive(Debug, Serialize)]
+pub struct ActionView {
+    /// The stroke's index in the project.
+    pub stroke: usize,
+    /// Its display name (`mouthSmile_L 0.80`).
+    pub name: String,
+    /// The chain it belongs to.
+    pub chain: usize,
+    /// The action it continues.
+    pub previous: Option<usize>,
+    /// First frame.
+    pub start_frame: f32,
+    /// Last frame.
+    pub end_frame: f32,
+    /// The easing handle's position α.
+    pub ease: f32,
+    /// Whether it has a mirrored side.
+    pub symmetric: bool,
+    /// The stroke's own side, then its mirror.
+    pub sides: Vec<SideView>,
+}
+
+/// One side of an action.
+#[derive(Debug, Serialize)]
+pub struct SideView {
+    /// What the end goes to.
+    pub goal: Goal,
+    /// The blendshape's name (`null` for the neutral and multi goals).
+    pub target: Option<String>,
+    /// The blendshape's weight.
+    pub weight: f32,
+    /// Length of the exaggeration offset.
+    pub exaggeration: f32,
+    /// The stroke's start (A).
+    pub start: [f32; 3],
+    /// Its middle (B, the sphere).
+    pub mid: [f32; 3],
+    /// Its end (C, the arrow).
+    pub end: [f32; 3],
+    /// Where the reference vertex goes at full weight.
+    pub target_position: [f32; 3],
+    /// Whether the path is a straight line.
+    pub straight: bool,
+    /// 25 points along the path.
+    pub path: Vec<[f32; 3]>,
+}
+
+/// A stroke that made no action.
+#[derive(Debug, Serialize)]
+pub struct RejectedView {
+    /// The stroke's index.
+    pub stroke: usize,
+    /// Why.
+    pub reason: String,
+}
+
+impl ActionView {
+    /// The view of stroke `stroke`'s action.
+    #[must_use]
+    pub fn of(character: &Character, stroke: usize, action: &Action) -> ActionView {
+        ActionView {
+            stroke,
+            name: action.name(character),
+            chain: action.chain.0,
+            previous: action.previous.map(|p| p.0),
+            start_frame: action.start_frame,
+            end_frame: action.end_frame(),
+            ease: action.ease,
+            symmetric: action.sides.len() > 1,
+            sides: action
+                .sides
+                .iter()
+                .map(|side| SideView::of(character, side))
+                .collect(),
+        }
+    }
+}
+
+impl SideView {
+    fn of(character: &Character, side: &Side) -> SideView {
+        let (goal, target) = target_of(character, side.target);
+        SideView {
+            goal,
+            target,
+            weight: side.weight,
+            exaggeration: side.exaggeration.length(),
+            start: side.a.to_array(),
+            mid: side.b.to_array(),
+            end: side.c.to_array(),
+            target_position: side.target_position.to_array(),
+            straight: side.path.is_straight(),
+            path: (0..=24)
+                .map(|k| side.path.point(side.a, side.c, k as f32 / 24.0).to_array())
+                .collect(),
+        }
+    }
+}
+
+/// `POST /api/candidates`: what a stroke starting at a point can reach.
+#[derive(Debug, Serialize)]
+pub struct CandidatesView {
+    /// The reference vertex.
+    pub reference: u32,
+    /// Its displayed position.
+    pub reference_position: [f32; 3],
+    /// The action whose chain the stroke would continue.
+    pub continues: Option<usize>,
+    /// The targets.
+    pub candidates: Vec<CandidateView>,
+}
+
+/// One candidate target (a sphere in the page).
+#[derive(Debug, Serialize)]
+pub struct CandidateView {
+    /// What it goes to.
+    pub goal: Goal,
+    /// The blendshape's name (`null` for the neutral and multi goals).
+    pub name: Option<String>,
+    /// Where the reference vertex goes.
+    pub position: [f32; 3],
+}
+
+impl CandidatesView {
+    /// The view of `found`.
+    #[must_use]
+    pub fn of(character: &Character, found: &faceanim_sketch::engine::Candidates) -> Self {
+        CandidatesView {
+            reference: found.reference,
+            reference_position: found.reference_position.to_array(),
+            continues: found.continues.map(|a| a.0),
+            candidates: found
+                .candidates
+                .iter()
+                .map(|c| {
+                    let (goal, name) = target_of(character, c.target);
+                    CandidateView {
+                        goal,
+                        name,
+                        position: c.position.to_array(),
+                    }
+                })
+                .collect(),
+        }
+    }
+}
+
+/// `GET /api/character`.
+#[derive(Debug, Serialize)]
+pub struct CharacterView {
+    /// Its name.
+    pub name: String,
+    /// Vertex count.
+    pub vertices: usize,
+    /// Blendshape names, in order.
+    pub blendshapes: Vec<String>,
+    /// Bounding box.
+    pub bounds: BoundsView,
+    /// The bounding box's diagonal.
+    pub diagonal: f32,
+}
+
+/// An axis-aligned box.
+#[derive(Debug, Serialize)]
+pub struct BoundsView {
+    /// Smallest corner.
+    pub min: [f32; 3],
+    /// Largest corner.
+    pub max: [f32; 3],
+}
+
+impl CharacterView {
+    /// The view of `character`.
+    #[must_use]
+    pub fn of(character: &Character) -> CharacterView {
+        let bounds = character.bounds();
+        CharacterView {
+            name: character.name().to_owned(),
+            vertices: character.vertex_count(),
+            blendshapes: names(character),
+            bounds: BoundsView {
+                min: bounds.min.to_array(),
+                max: bounds.max.to_array(),
+            },
+            diagonal: (bounds.max - bounds.min).length(),
+        }
+    }
+}
+
+/// The character's blendshape names, in order.
+#[must_use]
+pub fn names(character: &Character) -> Vec<String> {
+    character
+        .blendshapes()
+        .iter()
+        .map(|b| b.name().to_owned())
+        .collect()
+}
+
+/// `GET /api/character/anchors`: where a blendshape moves the most.
+#[derive(Debug, Serialize)]
+pub struct AnchorView {
+    /// The blendshape.
+    pub name: String,
+    /// The vertex it moves most (`null` for a shape that moves nothing).
+    pub vertex: Option<u32>,
+    /// That vertex at rest.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rest: Option<[f32; 3]>,
+    /// Where weight 1 takes it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target: Option<[f32; 3]>,
+}
+
+/// `POST /api/character/upload`.
+#[derive(Debug, Serialize)]
+pub struct UploadView {
+    /// The importer's warnings.
+    pub warnings: Vec<String>,
+    /// The new state.
+    pub state: StateView,
+}
+
+/// `POST /api/project/save`.
+#[derive(Debug, Serialize)]
+pub struct SavedView {
+    /// Where the project was written.
+    pub saved: String,
+}
+
+// ---------- capture mode ----------
+
+/// `GET /api/capture/state`: everything the page shows of capture mode.
+#[derive(Debug, Serialize)]
+pub struct CaptureView {
+    /// The character's blendshapes.
+    pub blendshapes: Vec<String>,
+    /// Their ARKit families, for grouping the sliders.
+    pub groups: Vec<Group>,
+    /// The adapter.
+    pub adapter: AdapterView,
+    /// The current or last long job.
+    pub job: Option<JobView>,
+    /// The smoothing and keyframe spacing new takes get.
+    pub filtering: FilteringView,
+    /// Live tracking, while on.
+    pub live: Option<LiveView>,
+    /// The take, when one is open.
+    pub take: Option<TakeView>,
+}
+
+/// The ARKit family a blendshape belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Group {
+    /// `eye…`
+    Eye,
+    /// `brow…`
+    Brow,
+    /// `jaw…`
+    Jaw,
+    /// `mouth…`
+    Mouth,
+    /// `cheek…`
+    Cheek,
+    /// `nose…`
+    Nose,
+    /// `tongue…`
+    Tongue,
+    /// Not an ARKit name.
+    Other,
+}
+
+impl Group {
+    /// The family of `name` (`Other` when it is not an ARKit name).
+    #[must_use]
+    pub fn of(name: &str) -> Group {
+        let Some(arkit) = faceanim_rig::names::arkit_name(name) else {
+            return Group::Other;
+        };
+        [
+            ("eye", Group::Eye),
+            ("brow", Group::Brow),
+            ("jaw", Group::Jaw),
+            ("mouth", Group::Mouth),
+            ("cheek", Group::Cheek),
+            ("nose", Group::Nose),
+            ("tongue", Group::Tongue),
+        ]
+        .into_iter()
+        .find(|(prefix, _)| arkit.starts_with(prefix))
+        .map_or(Group::Other, |(_, g)| g)
+    }
+}
+
+/// The character's adapter.
+#[derive(Debug, Serialize)]
+pub struct AdapterView {
+    /// Where it is read from and saved to.
+    pub path: String,
+    /// Whether one is in use.
+    pub loaded: bool,
+    /// Why the one beside the character is not used, or that it fits another shape.
+    pub note: Option<String>,
+    /// How its training went.
+    pub report: Option<faceanim_adapt::TrainingReport>,
+}
+
+/// A long job.
+#[derive(Debug, Serialize)]
+pub struct JobView {
+    /// What it does.
+    pub kind: crate::capture::JobKind,
+    /// The same, in words for the page.
+    pub title: String,
+    /// Its current stage.
+    pub stage: String,
+    /// Steps of the stage done.
+    pub done: usize,
+    /// Steps of the stage.
+    pub total: usize,
+    /// Whether it still runs.
+    pub running: bool,
+    /// Whether it was asked to stop.
+    pub cancelling: bool,
+    /// Seconds since it started.
+    pub seconds: f64,
+    /// How it ended well.
+    pub result: Option<String>,
+    /// How it failed.
+    pub error: Option<String>,
+}
+
+/// One Euro settings.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct SmoothingView {
+    /// Cutoff at rest, Hz.
+    pub min_cutoff: f32,
+    /// Speed coefficient.
+    pub beta: f32,
+    /// Cutoff of the speed estimate, Hz.
+    pub derivative_cutoff: f32,
+}
+
+impl From<faceanim_anim::filter::OneEuro> for SmoothingView {
+    fn from(s: faceanim_anim::filter::OneEuro) -> SmoothingView {
+        SmoothingView {
+            min_cutoff: s.min_cutoff,
+            beta: s.beta,
+            derivative_cutoff: s.derivative_cutoff,
+        }
+    }
+}
+
+/// The filtering new takes get.
+#[derive(Debug, Serialize)]
+pub struct FilteringView {
+    /// Keyframe spacing.
+    pub keyframe_every: usize,
+    /// One Euro smoothing, when on.
+    pub smoothing: Option<SmoothingView>,
+    /// What the page offers when smoothing is turned on.
+    pub default_smoothing: SmoothingView,
+}
+
+/// Live tracking.
+#[derive(Debug, Serialize)]
+pub struct LiveView {
+    /// Frames tracked.
+    pub frames: usize,
+    /// Frames recorded, while recording.
+    pub recording: Option<usize>,
+}
+
+/// The take.
+#[derive(Debug, Serialize)]
+pub struct TakeView {
+    /// Different for every take this process opened.
+    pub id: u64,
+    /// The input's name.
+    pub source: String,
+    /// Frames per second.
+    pub fps: f32,
+    /// Frame count.
+    pub frames: usize,
+    /// How many frames have an input preview.
+    pub previews: usize,
+    /// Whether it is a single photo.
+    pub still: bool,
+    /// What estimated it.
+    pub estimator: EstimatorSource,
+    /// Per frame: its name.
+    pub names: Vec<String>,
+    /// Per frame: face presence.
+    pub presence: Vec<f32>,
+    /// Per frame: head yaw, pitch, roll.
+    pub head: Vec<Option<[f32; 3]>>,
+    /// Per frame: the estimate.
+    pub estimates: Vec<Vec<f32>>,
+    /// Per frame: what plays.
+    pub weights: Vec<Vec<f32>>,
+    /// Per frame: the mean weight.
+    pub mean: Vec<f32>,
+    /// The keyframes.
+    pub keyframes: Vec<usize>,
+    /// Keyframes the user added.
+    pub added_keyframes: Vec<usize>,
+    /// Automatic keyframes the user removed.
+    pub removed_keyframes: Vec<usize>,
+    /// Corrected frames.
+    pub corrected: Vec<usize>,
+    /// Frame → blendshape → value.
+    pub corrections: BTreeMap<usize, BTreeMap<String, f32>>,
+    /// The preference's offsets, while applied.
+    pub preference: Option<Vec<f32>>,
+    /// The offsets applying the preference now would give.
+    pub preference_pending: Vec<f32>,
+    /// Keyframe spacing.
+    pub keyframe_every: usize,
+    /// Whether undo has something to undo.
+    pub can_undo: bool,
+    /// Whether redo has something to redo.
+    pub can_redo: bool,
+}
+
+impl TakeView {
+    /// The view of `take` (numbered `id`, with `previews` input previews).
+    #[must_use]
+    pub fn of(take: &faceanim_take::Take, id: u64, previews: usize) -> TakeView {
+        let session = &take.session;
+        let weights = session.weights();
+        let mean = weights
+            .iter()
+            .map(|row| row.iter().sum::<f32>() / row.len().max(1) as f32)
+            .collect();
+        TakeView {
+            id,
+            source: session.source.clone(),
+            fps: session.fps,
+            frames: session.frames.len(),
+            previews,
+            still: session.still_frames.is_some(),
+            estimator: take.estimated_by(),
+            names: session.frames.iter().map(|f| f.name.clone()).collect(),
+            presence: session.frames.iter().map(|f| f.presence).collect(),
+            head: session.frames.iter().map(|f| f.head).collect(),
+            estimates: session.frames.iter().map(|f| f.estimate.clone()).collect(),
+            weights,
+            mean,
+            keyframes: session.keyframes(),
+            added_keyframes: session.edits.added_keyframes.clone(),
+            removed_keyframes: session.edits.removed_keyframes.clone(),
+            corrected: session.edits.corrections.keys().copied().collect(),
+            corrections: session.edits.corrections.clone(),
+            preference: session.edits.preference.clone(),
+            preference_pending: session.preference_offsets(),
+            keyframe_every: session.edits.keyframe_every,
+            can_undo: take.can_undo(),
+            can_redo: take.can_redo(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arkit_families_group_the_sliders() {
+        assert_eq!(Group::of("jawOpen"), Group::Jaw);
+        assert_eq!(Group::of("EyeBlink_L"), Group::Eye);
+        assert_eq!(Group::of("mouthSmile_R"), Group::Mouth);
+        assert_eq!(Group::of("browInnerUp"), Group::Brow);
+        assert_eq!(Group::of("cheekPuff"), Group::Cheek);
+        assert_eq!(Group::of("noseSneerLeft"), Group::Nose);
+        assert_eq!(Group::of("shape_017"), Group::Other);
+    }
+}

@@ -1,0 +1,238 @@
+//! A take: a session being edited, with its undo history, and how captured frames become one.
+
+use faceanim_capture::FrameRecord;
+use faceanim_rig::Character;
+
+use crate::estimator::{Estimator, EstimatorSource};
+use crate::expression::Expression;
+use crate::session::{Edits, Filtering, Session, SessionFrame, estimate_frames};
+use crate::{Fingerprint, TakeError};
+
+/// How many edits of a take undo remembers.
+const UNDO_DEPTH: usize = 500;
+
+/// What was captured from one input, before any character.
+#[derive(Debug, Clone)]
+pub struct Footage {
+    /// The input's name as the user knows it.
+    pub source: String,
+    /// Frames per second.
+    pub fps: f32,
+    /// One record per frame.
+    pub records: Vec<FrameRecord>,
+    /// One per record: the image file, or `{stem}_{n}.png` for video frames (the first column
+    /// of the seed's CSV).
+    pub frame_names: Vec<String>,
+    /// For a single photo: the length in frames of the 0 → peak → 0 animation it becomes.
+    pub still_frames: Option<usize>,
+}
+
+/// A captured input being edited: its session, where the estimates came from, and the undo and
+/// redo stacks of the user's [`Edits`].
+#[derive(Debug, Clone)]
+pub struct Take {
+    /// Estimates, keyframes, corrections and preference.
+    pub session: Session,
+    estimated_by: EstimatorSource,
+    undo: Vec<Edits>,
+    redo: Vec<Edits>,
+}
+
+impl Take {
+    /// A take of `session`, whose estimates came from `estimated_by`, with no history.
+    #[must_use]
+    pub fn new(session: Session, estimated_by: EstimatorSource) -> Take {
+        Take {
+            session,
+            estimated_by,
+            undo: Vec::new(),
+            redo: Vec::new(),
+        }
+    }
+
+    /// A take opened from a session file (which does not say what estimated it).
+    #[must_use]
+    pub fn from_session(session: Session) -> Take {
+        Take::new(session, EstimatorSource::SessionFile)
+    }
+
+    /// Estimates every frame of `footage` for `character` with `estimator` (frames without a
+    /// face are bridged from their neighbours) and starts a take with `filtering`.
+    ///
+    /// # Errors
+    /// [`TakeError::NoArkitNames`] when the estimator can move none of the character's shapes
+    /// (a by-name mapping onto a rig without ARKit names), or [`TakeError::Mismatch`] when the
+    /// estimator is for another character's blendshapes.
+    pub fn from_capture(
+        character: &Character,
+        estimator: &dyn Estimator,
+        footage: Footage,
+        filtering: Filtering,
+    ) -> Result<Take, TakeError> {
+        if estimator.driven() == 0 {
+            return Err(TakeError::NoArkitNames {
+                character: character.name().to_owned(),
+            });
+        }
+        let names: Vec<String> = character
+            .blendshapes()
+            .iter()
+            .map(|b| b.name().to_owned())
+            .collect();
+        if estimator.blendshapes() != names.as_slice() {
+            return Err(TakeError::Mismatch {
+                character: character.name().to_owned(),
+                reason: format!(
+                    "the {}'s blendshapes are not the character's",
+                    estimator.source().noun()
+                ),
+            });
+        }
+        let Footage {
+            source,
+            fps,
+            records,
+            frame_names,
+            still_frames,
+        } = footage;
+        let expressions: Vec<Option<Expression>> =
+            records.iter().map(Expression::from_record).collect();
+        let estimates = estimate_frames(
+            &expressions.iter().map(Option::as_ref).collect::<Vec<_>>(),
+            estimator,
+        );
+        let frames = records
+            .iter()
+            .zip(expressions)
+            .zip(estimates)
+            .zip(frame_names)
+            .map(|(((record, expression), estimate), name)| {
+                SessionFrame::from_record(record, name, expression, estimate)
+            })
+            .collect();
+        let mut session = Session::new(
+            source,
+            character.name().to_owned(),
+            names,
+            Fingerprint::of(character),
+            fps,
+            filtering.keyframe_every,
+            frames,
+        );
+        session.edits.smoothing = filtering.smoothing;
+        session.still_frames = still_frames;
+        Ok(Take::new(session, estimator.source()))
+    }
+
+    /// Where the estimates came from.
+    #[must_use]
+    pub fn estimated_by(&self) -> EstimatorSource {
+        self.estimated_by
+    }
+
+    /// Whether there is an edit to undo.
+    #[must_use]
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    /// Whether there is an undone edit to redo.
+    #[must_use]
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
+    /// Applies `change` to the session; a change that changed something can be undone.
+    ///
+    /// # Errors
+    /// `change`'s error (the session is then as it was).
+    pub fn edit(
+        &mut self,
+        change: impl FnOnce(&mut Session) -> Result<(), TakeError>,
+    ) -> Result<(), TakeError> {
+        let before = self.session.edits.clone();
+        if let Err(e) = change(&mut self.session) {
+            self.session.edits = before;
+            return Err(e);
+        }
+        if self.session.edits != before {
+            self.undo.push(before);
+            if self.undo.len() > UNDO_DEPTH {
+                self.undo.remove(0);
+            }
+            self.redo.clear();
+        }
+        Ok(())
+    }
+
+    /// Steps back one edit; false when there is none.
+    pub fn undo(&mut self) -> bool {
+        step(&mut self.undo, &mut self.redo, &mut self.session.edits)
+    }
+
+    /// Steps forward one undone edit; false when there is none.
+    pub fn redo(&mut self) -> bool {
+        step(&mut self.redo, &mut self.undo, &mut self.session.edits)
+    }
+
+    /// Estimates every frame again with `estimator` (a new or fine-tuned adapter); the edits
+    /// and their history stay.
+    ///
+    /// # Errors
+    /// [`TakeError::Mismatch`] when the estimator is for other blendshapes.
+    pub fn reestimate(&mut self, estimator: &dyn Estimator) -> Result<(), TakeError> {
+        self.session.reestimate(estimator)?;
+        self.estimated_by = estimator.source();
+        Ok(())
+    }
+}
+
+/// Moves the current edits onto `to` and makes the top of `from` current; false when `from` is
+/// empty.
+fn step(from: &mut Vec<Edits>, to: &mut Vec<Edits>, current: &mut Edits) -> bool {
+    let Some(edits) = from.pop() else {
+        return false;
+    };
+    to.push(std::mem::replace(current, edits));
+    true
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp, reason = "sums of exact binary fractions")]
+mod tests {
+    use super::*;
+
+    fn two_frame_take() -> Take {
+        Take::new(
+            crate::session::test_session(2, |_| vec![0.25, 0.5]),
+            EstimatorSource::ByName,
+        )
+    }
+
+    #[test]
+    fn a_takes_edits_undo_and_redo_and_a_failed_edit_changes_nothing() {
+        let mut take = two_frame_take();
+        take.edit(|s| s.correct(1, "a", 0.75)).unwrap_or_default();
+        take.edit(|s| {
+            s.apply_preference();
+            Ok(())
+        })
+        .unwrap_or_default();
+        assert_eq!(take.session.weights()[0], vec![0.75, 0.5]);
+        // A refused edit leaves no trace, not even on the undo stack.
+        let refused = take.edit(|s| {
+            s.edits.keyframe_every = 7;
+            s.correct(9, "a", 0.5)
+        });
+        assert!(refused.is_err());
+        assert_eq!(take.session.edits.keyframe_every, 1);
+        assert!(take.undo());
+        assert_eq!(take.session.weights()[0], vec![0.25, 0.5]);
+        assert!(take.undo());
+        assert!(take.session.edits.corrections.is_empty());
+        assert!(!take.undo());
+        assert!(take.redo() && take.redo());
+        assert_eq!(take.session.weights()[0], vec![0.75, 0.5]);
+        assert!(!take.redo());
+    }
+}

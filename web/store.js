@@ -1,0 +1,52 @@
+// The sketch's document as the server last described it (GET /api/state), the character's
+// facts (GET /api/character) and the selected action. This module owns them; others read them
+// here and change them only through the server (`run`) or `select`.
+
+import { api } from './api.js';
+import { showError, showFailure } from './status.js';
+
+let current = /** @type {any} */ (null);
+let characterView = /** @type {any} */ (null);
+let selected = /** @type {number|null} */ (null);
+/** @type {((state: any, rebake: boolean) => void)[]} */
+const stateListeners = [];
+/** @type {(() => void)[]} */
+const selectionListeners = [];
+
+/** The last state (`null` before the first). */
+export const state = () => current;
+/** The character (`name`, `vertices`, `blendshapes`, `bounds`, `diagonal`). */
+export const character = () => characterView;
+/** The selected action's stroke index, or null. */
+export const selection = () => selected;
+
+/** Calls `listener(state, rebake)` after every new state; `rebake` when the animation changed. */
+export function onState(listener) { stateListeners.push(listener); }
+/** Calls `listener()` when the selection changes. */
+export function onSelection(listener) { selectionListeners.push(listener); }
+
+/** Takes a state the server answered with. */
+export function setState(next, rebake) {
+  current = next;
+  for (const listener of stateListeners) listener(next, rebake);
+}
+
+/** Reads the character's facts again (after an upload). */
+export async function loadCharacter() {
+  characterView = await api('GET', 'api/character');
+  return characterView;
+}
+
+/** Selects the action of stroke `index` (or none). */
+export function select(index) {
+  if (selected === index) return;
+  selected = index;
+  for (const listener of selectionListeners) listener();
+}
+
+/** Sends a change; the answer becomes the state (and the animation is baked again). Errors go to
+ * the banner; resolves with the state, or null. */
+export async function run(method, path, body) {
+  try { const next = await api(method, path, body); setState(next, true); showError(''); return next; }
+  catch (e) { showFailure(e); return null; }
+}

@@ -1,0 +1,149 @@
+// Pointer input on the viewport (mouse, pen, touch): a press on a handle drags it (handles.js),
+// a press on the face draws a stroke, elsewhere the camera orbits. A stroke is sampled with its
+// times, so the drawing speed becomes the timing; the candidate targets of its start show while
+// drawing, and the ghost of the one nearest the pointer.
+
+import * as THREE from 'three';
+import { api } from './api.js';
+import * as handles from './handles.js';
+import { atRest, hitFace, holdRest, currentFrame, isReady } from './playback.js';
+import { nearestCandidate, shownCandidates, showCandidates, showGhost } from './overlays.js';
+import { camera, candidateGroup, clearGroup, controls, onPlane, planeFacingCamera, project, rayFrom, renderer, scene } from './scene.js';
+import { showError, showFailure } from './status.js';
+import * as store from './store.js';
+
+/** @type {null | {plane: THREE.Plane, t0: number, samples: any[], pending: number[][], line: THREE.Line}} */
+let stroke = null;
+let lastStrokeMs = 0;
+/** Milliseconds from the release of the last stroke to its action drawn. */
+export const strokeLatency = () => lastStrokeMs;
+
+/** The point of the face under a screen position (CSS pixels), or null. */
+export function faceAt(x, y) {
+  const p = hitFace(rayFrom({ clientX: x, clientY: y }));
+  return p ? p.toArray() : null;
+}
+
+const canvas = renderer.domElement;
+
+canvas.addEventListener('pointerdown', (event) => {
+  if (event.button !== 0 || !isReady()) return;
+  // Strokes and handles live in the character's own space: draw on the face at rest.
+  holdRest(true);
+  const ray = rayFrom(event);
+  if (handles.grab(ray, event.shiftKey)) {
+    controls.enabled = false;
+    canvas.setPointerCapture(event.pointerId);
+    return;
+  }
+  const hit = hitFace(ray);
+  if (!hit) { holdRest(false); return; } // orbit
+  controls.enabled = false;
+  canvas.setPointerCapture(event.pointerId);
+  const geometry = new THREE.BufferGeometry().setFromPoints([hit, hit]);
+  const line = new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: 0xffe080, depthTest: false }));
+  line.renderOrder = 13;
+  scene.add(line);
+  stroke = { plane: planeFacingCamera(hit), t0: performance.now(), samples: [{ t: 0, p: hit.toArray() }], pending: [], line };
+  api('POST', 'api/candidates', { point: hit.toArray(), frame: currentFrame() }).then((found) => showCandidates(found, false)).catch(() => {});
+});
+
+let hoverTimer = 0;
+canvas.addEventListener('pointermove', (event) => {
+  if (!stroke && !handles.dragging()) {
+    // The paper's users asked to see the targets before drawing: show them on hover.
+    if (event.pointerType !== 'touch' && isReady() && performance.now() - hoverTimer > 120) {
+      hoverTimer = performance.now();
+      const hit = atRest() ? hitFace(rayFrom(event)) : null;
+      if (hit) api('POST', 'api/candidates', { point: hit.toArray(), frame: currentFrame() }).then((f) => { if (!stroke) showCandidates(f, true); }).catch(() => {});
+      else clearGroup(candidateGroup);
+    }
+    return;
+  }
+  const events = event.getCoalescedEvents ? event.getCoalescedEvents() : [event];
+  const plane = stroke ? stroke.plane : handles.dragPlane();
+  for (const e of events.length ? events : [event]) {
+    const p = onPlane(rayFrom(e), plane);
+    if (!p) continue;
+    if (stroke) stroke.pending.push(p.toArray());
+    else handles.moveTo(p);
+  }
+  if (stroke) {
+    // Coalesced points of this event share its arrival time span: spread them evenly between
+    // the previous sample's time and now (event timestamps are not reliable across devices).
+    const now = (performance.now() - stroke.t0) / 1000;
+    const previous = stroke.samples[stroke.samples.length - 1].t;
+    stroke.pending.forEach((q, i) => stroke.samples.push({ t: previous + (now - previous) * (i + 1) / stroke.pending.length, p: q }));
+    stroke.pending = [];
+    const nearest = nearestCandidate(event.clientX, event.clientY);
+    showGhost(nearest && nearest.name);
+    stroke.line.geometry.dispose();
+    stroke.line.geometry = new THREE.BufferGeometry().setFromPoints(stroke.samples.map((s) => new THREE.Vector3(...s.p)));
+  }
+});
+
+/** Pixels within which a release counts as "on" a candidate sphere. */
+const SPHERE_PICK_PIXELS = 14;
+
+/**
+ * A stroke drawn on a screen has no depth of its own: it lies on the plane through its start
+ * facing the camera. When it is released on a candidate sphere, the user meant that sphere, so
+ * the stroke is carried along each sample's view ray, progressively (none at the start, all at
+ * the end), to end at the sphere's depth. On screen nothing moves.
+ */
+function aimAtReleasedSphere(samples) {
+  const found = shownCandidates();
+  if (!found || !found.candidates.length) return;
+  const last = samples[samples.length - 1].p;
+  const [lx, ly] = project(last);
+  let best = null, bestPixels = SPHERE_PICK_PIXELS;
+  for (const c of found.candidates) {
+    const [x, y] = project(c.position);
+    const pixels = Math.hypot(x - lx, y - ly);
+    if (pixels < bestPixels) { bestPixels = pixels; best = c; }
+  }
+  if (!best) return;
+  const eye = camera.position.clone();
+  const forward = new THREE.Vector3();
+  camera.getWorldDirection(forward);
+  const depthOf = (p) => new THREE.Vector3(...p).sub(eye).dot(forward);
+  const startDepth = depthOf(samples[0].p);
+  const endDepth = depthOf(best.position);
+  const lengths = [0];
+  for (let i = 1; i < samples.length; i++) lengths.push(lengths[i - 1] + new THREE.Vector3(...samples[i].p).distanceTo(new THREE.Vector3(...samples[i - 1].p)));
+  const total = lengths[lengths.length - 1] || 1;
+  samples.forEach((sample, i) => {
+    const p = new THREE.Vector3(...sample.p);
+    const ray = p.clone().sub(eye);
+    const depth = startDepth + (endDepth - startDepth) * (lengths[i] / total);
+    sample.p = eye.clone().add(ray.multiplyScalar(depth / ray.dot(forward))).toArray();
+  });
+}
+
+async function endDrag(event) {
+  holdRest(false);
+  controls.enabled = true;
+  try { canvas.releasePointerCapture(event.pointerId); } catch { /* already released */ }
+  if (handles.dragging()) { await handles.release(); return; }
+  if (!stroke) return;
+  const finished = stroke;
+  stroke = null;
+  showGhost(null);
+  scene.remove(finished.line);
+  finished.line.geometry.dispose();
+  clearGroup(candidateGroup);
+  if (finished.samples.length < 2) return;
+  const released = performance.now();
+  aimAtReleasedSphere(finished.samples);
+  try {
+    const state = await api('POST', 'api/strokes', { samples: finished.samples });
+    store.select(state.added);
+    store.setState(state, true);
+    // From release to the action drawn (arc, handles, timeline row); the bake for playback follows.
+    lastStrokeMs = performance.now() - released;
+    const rejected = state.rejected.find((r) => r.stroke === state.added);
+    showError(rejected ? `That stroke made no action: ${rejected.reason}` : '');
+  } catch (e) { showFailure(e); }
+}
+canvas.addEventListener('pointerup', endDrag);
+canvas.addEventListener('pointercancel', endDrag);

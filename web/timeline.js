@@ -1,0 +1,97 @@
+// The timeline (seed section 3.9): one row per action with its box (drag to move it, drag an
+// end to rescale it), the ruler that sets the current frame, and the playhead.
+
+import { currentFrame, lastFrame, onFrame, setFrame } from './playback.js';
+import * as store from './store.js';
+
+const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
+
+const timeline = $('timeline');
+const LABEL = 200, PX = 8; // label column width and pixels per frame
+function frameX(f) { return LABEL + f * PX; }
+function drawPlayhead() {
+  const head = timeline.querySelector('.playhead');
+  if (head) head.style.left = `${frameX(currentFrame())}px`;
+}
+/** Draws the ruler, the animated window, one row per action and the playhead. */
+export function drawTimeline() {
+  const state = store.state();
+  if (!state) return;
+  timeline.innerHTML = '';
+  const last = lastFrame() + 30;
+  const width = frameX(last) + 20;
+  const ruler = document.createElement('div');
+  ruler.className = 'ruler';
+  ruler.style.width = `${width}px`;
+  for (let f = 0; f <= last; f += 10) { const s = document.createElement('span'); s.style.left = `${frameX(f)}px`; s.textContent = String(f); ruler.appendChild(s); }
+  ruler.addEventListener('pointerdown', (e) => {
+    const scrub = (ev) => { const rect = ruler.getBoundingClientRect(); setFrame(Math.round((ev.clientX - rect.left - LABEL) / PX)); };
+    scrub(e);
+    ruler.setPointerCapture(e.pointerId);
+    ruler.onpointermove = scrub;
+    ruler.onpointerup = () => { ruler.onpointermove = null; };
+  });
+  timeline.appendChild(ruler);
+  // The temporal window: where animation exists.
+  const win = document.createElement('div');
+  win.className = 'window';
+  win.style.left = `${frameX(0)}px`; win.style.width = `${state.last_frame * PX}px`;
+  timeline.appendChild(win);
+  const chainColours = ['#4a7bd0', '#3fa36b', '#b0609c', '#c7843a', '#5aa8b8', '#9a8a3f'];
+  for (const action of state.actions) {
+    const row = document.createElement('div');
+    row.className = 'row';
+    row.style.width = `${width}px`;
+    row.dataset.stroke = String(action.stroke);
+    const label = document.createElement('div');
+    label.className = 'label';
+    label.textContent = action.name;
+    row.appendChild(label);
+    const box = document.createElement('div');
+    box.className = 'box' + (store.selection() === action.stroke ? ' selected' : '');
+    box.style.left = `${frameX(action.start_frame)}px`;
+    box.style.width = `${Math.max(4, (action.end_frame - action.start_frame) * PX)}px`;
+    box.style.background = chainColours[action.chain % chainColours.length];
+    box.title = `${action.name}: frames ${action.start_frame.toFixed(1)}–${action.end_frame.toFixed(1)}${action.previous !== null ? ' (continues the stroke before it)' : ''}${action.symmetric ? ' (with its mirror)' : ''}`;
+    if (action.previous !== null || action.symmetric) {
+      const link = document.createElement('span');
+      link.className = 'link';
+      link.textContent = action.symmetric ? '⇋' : '⛓';
+      box.appendChild(link);
+    }
+    for (const side of ['left', 'right']) { const g = document.createElement('div'); g.className = `grip ${side}`; g.dataset.grip = side; box.appendChild(g); }
+    box.addEventListener('pointerdown', (e) => timelineDrag(e, action, box));
+    row.appendChild(box);
+    timeline.appendChild(row);
+  }
+  const head = document.createElement('div');
+  head.className = 'playhead';
+  timeline.appendChild(head);
+  drawPlayhead();
+}
+function timelineDrag(event, action, box) {
+  event.stopPropagation();
+  store.select(action.stroke);
+  const grip = /** @type {HTMLElement} */ (event.target).dataset.grip;
+  const x0 = event.clientX;
+  const start = action.start_frame, duration = action.end_frame - action.start_frame;
+  box.setPointerCapture(event.pointerId);
+  let edit = null;
+  box.onpointermove = (e) => {
+    const df = (e.clientX - x0) / PX;
+    if (grip === 'left') { const s = Math.min(start + duration - 1, Math.max(0, start + df)); edit = { start_frame: s, duration: start + duration - s }; }
+    else if (grip === 'right') edit = { start_frame: start, duration: Math.max(1, duration + df) };
+    else edit = { start_frame: Math.max(0, start + df) };
+    box.style.left = `${frameX(edit.start_frame)}px`;
+    box.style.width = `${(edit.duration ?? duration) * PX}px`;
+  };
+  box.onpointerup = async () => {
+    box.onpointermove = null; box.onpointerup = null;
+    if (edit) await store.run('PATCH', `api/strokes/${action.stroke}`, edit);
+    else drawTimeline();
+  };
+}
+
+store.onState(() => drawTimeline());
+store.onSelection(() => drawTimeline());
+onFrame(() => drawPlayhead());
