@@ -7,7 +7,8 @@
 //   overlays.js  strokes, handles, candidates, ghost  strokes.js  pointer input and strokes
 //   handles.js   dragging the arrow and the sphere  timeline.js  the timeline
 //   settings.js  the settings panel                 commands.js  toolbar and keyboard
-//   capture.js   capture mode
+//   capture.js   capture mode: the take, its corrections, the frame diagram
+//   live.js      capture from the webcam in real time
 // The server owns the project and the engines; the page draws what the API describes. This
 // file starts the page and publishes `window.studio`, the read-only hook scripts and tests use
 // (crates/studio/API.md).

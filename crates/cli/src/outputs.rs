@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use faceanim_export::{Animation, Format};
+use faceanim_take::Session;
 
 /// The formats `paths` ask for, by their endings; the first name that asks for none is an
 /// error.
@@ -24,4 +25,30 @@ pub fn write(path: &Path, format: Format, animation: &Animation<'_>) -> anyhow::
     faceanim_files::write_atomic(path, &exported.bytes)?;
     eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// A take's session as an export of `character` (needed for a GLB only): its clip, the head
+/// turn on the root, the capture's ARKit weights for Live Link Face, and the session itself.
+pub fn take_animation<'a>(
+    character: Option<&'a faceanim_rig::Character>,
+    session: &'a Session,
+    name: &str,
+) -> anyhow::Result<Animation<'a>> {
+    if let Some(character) = character {
+        let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
+        anyhow::ensure!(
+            names == session.blendshapes,
+            "the session is for {} ({} blendshapes); give that character with --character",
+            session.character,
+            session.blendshapes.len()
+        );
+    }
+    let layered = faceanim_take::layer(&session.clip(), None, session.blendshapes.len(), name);
+    Ok(Animation {
+        character,
+        animation: layered.animation,
+        clip: layered.clip,
+        arkit: session.arkit_clip(),
+        session: Some(session),
+    })
 }

@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use faceanim_anim::filter::OneEuro;
-use faceanim_export::Animation;
 use faceanim_media::FrameSource;
 use faceanim_take::{ByName, Estimator, Filtering, Footage, Session, Take};
 use faceanim_track::{FaceModels, TrackingMode};
@@ -201,7 +200,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
 
     // Write.
     let clip = session.clip();
-    let animation = take_animation(Some(&character), session, &stem(&args.input))?;
+    let animation = crate::outputs::take_animation(Some(&character), session, &stem(&args.input))?;
     for (path, format) in args.outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation)?;
     }
@@ -262,32 +261,6 @@ fn estimator(
         );
     }
     Ok(Box::new(adapter))
-}
-
-/// A take's session as an export of `character` (needed for a GLB only): its clip, the head
-/// turn on the root, the capture's ARKit weights for Live Link Face, and the session itself.
-pub(crate) fn take_animation<'a>(
-    character: Option<&'a faceanim_rig::Character>,
-    session: &'a Session,
-    name: &str,
-) -> anyhow::Result<Animation<'a>> {
-    if let Some(character) = character {
-        let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
-        anyhow::ensure!(
-            names == session.blendshapes,
-            "the session is for {} ({} blendshapes); give that character with --character",
-            session.character,
-            session.blendshapes.len()
-        );
-    }
-    let layered = faceanim_take::layer(&session.clip(), None, session.blendshapes.len(), name);
-    Ok(Animation {
-        character,
-        animation: layered.animation,
-        clip: layered.clip,
-        arkit: session.arkit_clip(),
-        session: Some(session),
-    })
 }
 
 fn stem(path: &Path) -> String {
