@@ -2,7 +2,7 @@
 # Fails when a crate depends, directly or not, on what belongs to a layer above it. Two bands:
 #   - the pure core (character, animation, sketch, default head) knows no HTTP server, async
 #     runtime, video or neural network;
-#   - the middle band (face tracking, media, capture, the take layer, the exporter) may run
+#   - the middle band (face tracking, media, capture, the take layer, the exporter, VMC) may run
 #     MediaPipe's models with tract, but knows no HTTP server, async runtime or training library.
 # Keeps the core fast to build and usable anywhere, and the front ends thin.
 set -euo pipefail
@@ -23,6 +23,6 @@ check() {
 check "pure core" '^(tract-|axum|tokio|hyper|reqwest|burn|candle|ort|ffmpeg|rust-embed|tower)' \
   faceanim-rig faceanim-anim faceanim-sketch faceanim-head
 check "middle band" '^(axum|tokio|hyper|reqwest|burn|candle|rust-embed|tower)' \
-  faceanim-track faceanim-media faceanim-capture faceanim-take faceanim-export
+  faceanim-track faceanim-media faceanim-capture faceanim-take faceanim-export faceanim-live
 [ "$status" -eq 0 ] && echo "check-layers: the pure core and the middle band depend on nothing above them"
 exit "$status"

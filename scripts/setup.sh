@@ -3,7 +3,8 @@
 #   - Blender 3.4 and NumPy for its glTF importer (Debian packages), to open exports as users do;
 #   - Node.js and the Khronos glTF-Validator (npm, pinned in tools/package-lock.json);
 #   - ffmpeg, which faceanim uses to read video and the tests use to make videos;
-#   - Chromium (Debian) and playwright-core (npm), to test the studio in a real browser.
+#   - Chromium (Debian) and playwright-core (npm), to test the studio in a real browser;
+#   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to.
 # Safe to run again: it installs only what is not there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,4 +27,9 @@ fi
 if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
   echo "setup: installing the glTF-Validator and playwright-core (npm ci in tools/)"
   (cd tools && npm ci --no-audit --no-fund --loglevel=error)
+fi
+
+if ! python3 -c 'import pythonosc' >/dev/null 2>&1; then
+  echo "setup: installing python-osc (pip)"
+  python3 -m pip install --quiet --disable-pip-version-check python-osc==1.10.2
 fi

@@ -9,6 +9,7 @@
 //   settings.js  the settings panel                 commands.js  toolbar and keyboard
 //   capture.js   capture mode: the take, its corrections, the frame diagram
 //   live.js      capture from the webcam in real time
+//   vmc.js       VMC in: a phone tracker or another app drives the character
 // The server owns the project and the engines; the page draws what the API describes. This
 // file starts the page and publishes `window.studio`, the read-only hook scripts and tests use
 // (crates/studio/API.md).

@@ -12,6 +12,7 @@ import { showError, showFailure } from './status.js';
 import * as store from './store.js';
 import { drawTimeline } from './timeline.js';
 import { live } from './live.js';
+import { showControls as showVmcControls, vmc } from './vmc.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 const input = (id) => /** @type {HTMLInputElement} */ (document.getElementById(id));
@@ -128,6 +129,7 @@ export function apply(v) {
   /** @type {HTMLButtonElement} */ ($('clear-preference')).disabled = !take || !take.preference;
   for (const a2 of document.querySelectorAll('#capture-panel .exports a')) a2.classList.toggle('disabled', !take);
   buildSliders(v);
+  showVmcControls(v);
   notify();
   drawTimeline();
   setFrame(newTake ? 0 : currentFrame());
@@ -137,6 +139,7 @@ export function apply(v) {
  * being dragged shown at once). */
 function layer(frame) {
   if (live.running && live.weights) return live.weights;
+  if (vmc.running && vmc.weights) return vmc.weights;
   const take = view && view.take;
   if (!take) return null;
   const f = Math.min(Math.round(frame), take.frames - 1);
@@ -379,8 +382,8 @@ onFrame((frame) => {
   const take = view && view.take;
   if (!view) return;
   const f = take ? Math.min(Math.round(frame), take.frames - 1) : -1;
-  if (!live.running) turnHead(take ? take.head[f] : null);
-  if (take && !live.running && f !== shownFrame) {
+  if (!live.running && !vmc.running) turnHead(take ? take.head[f] : null);
+  if (take && !live.running && !vmc.running && f !== shownFrame) {
     shownFrame = f;
     if (f < take.previews) frameImage.src = `api/capture/frame/${f}.png?take=${take.id}`;
     else noPreview();

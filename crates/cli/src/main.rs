@@ -8,6 +8,7 @@ mod adapt;
 mod info;
 mod outputs;
 mod session;
+mod stream;
 mod track;
 
 use std::path::PathBuf;
@@ -96,6 +97,11 @@ enum Command {
     ///
     /// Example: faceanim session take.session.json correct 40 jawOpen=0.9
     Session(session::SessionArgs),
+    /// Stream a clip or a take live to a VMC marionette (VSeeFace, Warudo, VNyan, Unity or
+    /// Unreal's VMC receiver) over OSC/UDP, at a steady rate.
+    ///
+    /// Example: faceanim stream take.json --to 127.0.0.1:39539 --fps 60 --loop --names arkit
+    Stream(stream::StreamArgs),
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
     /// Example: faceanim eval take.json reference.json --json
@@ -120,6 +126,18 @@ struct StudioArgs {
     /// from the page.
     #[arg(long)]
     adapter: Option<PathBuf>,
+    /// Listen for VMC (a phone tracker such as iFacialMocap or Waidayo, or another performer)
+    /// on this UDP port, all interfaces, or on ADDR:PORT; the Capture tab's VMC button shows
+    /// it live and records takes from it. Without a value: 39539, VMC's default.
+    #[arg(long, num_args = 0..=1, default_missing_value = "39539", value_name = "[ADDR:]PORT")]
+    vmc_listen: Option<String>,
+    /// Send the live webcam face over VMC to a marionette (VSeeFace, Warudo, VNyan, Unity,
+    /// Unreal) at HOST:PORT.
+    #[arg(long, value_name = "HOST:PORT")]
+    vmc_send: Option<String>,
+    /// The names --vmc-send uses.
+    #[arg(long, value_enum, default_value_t = stream::NameChoice::Own)]
+    vmc_names: stream::NameChoice,
 }
 
 /// `faceanim info`'s arguments.
@@ -253,6 +271,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Track(args) => track::run(args),
         Command::Adapt(args) => adapt::run(args),
         Command::Session(args) => session::run(args),
+        Command::Stream(args) => stream::run(args),
         Command::Eval(args) => eval(&args),
     }
 }
@@ -434,7 +453,16 @@ fn studio(args: StudioArgs) -> anyhow::Result<()> {
         open,
         project,
         adapter,
+        vmc_listen,
+        vmc_send,
+        vmc_names,
     } = args;
+    let vmc = faceanim_studio::capture::VmcConfig {
+        listen: vmc_listen.map(|a| stream::listen_address(&a)).transpose()?,
+        send: vmc_send
+            .map(|a| stream::destination(&a).map(|d| (d, vmc_names.into())))
+            .transpose()?,
+    };
     let character = load_or_default(character_file.as_deref())?.character;
     let project_path = match project {
         Some(path) => path,
@@ -483,6 +511,7 @@ fn studio(args: StudioArgs) -> anyhow::Result<()> {
                 adapter_path,
                 character,
                 project_path,
+                vmc,
             },
             listener,
         )
@@ -523,7 +552,7 @@ pub(crate) fn load_or_default(
     }
 }
 
-fn load(path: &std::path::Path) -> anyhow::Result<faceanim_rig::import::Imported> {
+pub(crate) fn load(path: &std::path::Path) -> anyhow::Result<faceanim_rig::import::Imported> {
     let imported = faceanim_files::load_character(path)?;
     for warning in &imported.warnings {
         tracing::warn!("{}: {warning}", path.display());

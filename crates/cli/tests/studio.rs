@@ -492,3 +492,213 @@ fn capture_mode_in_a_real_browser() {
     // The adapter trained from the page was saved where the studio was told.
     assert!(adapter.exists());
 }
+
+/// VMC in: a phone tracker (an independent python-osc sender) plays 300 frames of ARKit
+/// weights and head turns at 60 Hz; the studio records them as a take whose frames are what
+/// was sent, with their arrival times, and that exports like a webcam take; then a flood of bad
+/// datagrams is counted and survived.
+#[test]
+fn a_phone_trackers_vmc_stream_becomes_a_take() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = support::free_udp_port();
+    let listen = format!("127.0.0.1:{port}");
+    let studio = start_with(
+        &dir.path().join("vmc.faceanim.json"),
+        &["--vmc-listen".as_ref(), listen.as_ref()],
+    );
+    let json = [("Content-Type", "application/json")];
+    let vmc = |studio: &Studio| -> serde_json::Value {
+        let (status, body) = request(studio.port, "GET", "/api/capture/vmc", &[], b"");
+        assert_eq!(status, 200, "{body}");
+        serde_json::from_str(&body).unwrap()
+    };
+    assert_eq!(vmc(&studio)["listening"], listen.as_str());
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/vmc/record",
+        &json,
+        br#"{"on": true}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let sent = support::vmc_send(port, 300, 60.0, 0, &dir.path().join("sent.json"));
+    for _ in 0..100 {
+        if vmc(&studio)["recording"] == 300 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/vmc/record",
+        &json,
+        br#"{"on": false}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let take = &state["take"];
+    assert_eq!(take["frames"], 300, "{}", state["vmc"]);
+    assert_eq!(take["estimator"], "received");
+    let names: Vec<&str> = state["blendshapes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    let column = |name: &str| names.iter().position(|n| *n == name).unwrap();
+    for (k, frame) in sent["frames"].as_array().unwrap().iter().enumerate() {
+        let estimate = &take["estimates"][k];
+        for (sent_name, own) in [
+            ("JawOpen", "jawOpen"),
+            ("EyeBlinkLeft", "eyeBlink_L"),
+            ("MouthSmileLeft", "mouthSmile_L"),
+        ] {
+            let want = frame["values"][sent_name].as_f64().unwrap();
+            let got = estimate[column(own)].as_f64().unwrap();
+            assert!(
+                (want - got).abs() < 1e-6,
+                "frame {k} {own}: sent {want}, took {got}"
+            );
+        }
+        let yaw = take["head"][k][0].as_f64().unwrap();
+        assert!(
+            (yaw - frame["yaw"].as_f64().unwrap()).abs() < 1e-2,
+            "frame {k}: yaw {yaw}"
+        );
+    }
+    // Arrival times, kept: 299 intervals of about 1/60 s, rising.
+    let (_, body) = request(studio.port, "GET", "/api/capture/session.json", &[], b"");
+    let session: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let times: Vec<f64> = session["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["time"].as_f64().unwrap())
+        .collect();
+    assert!(
+        times.windows(2).all(|w| w[1] >= w[0]),
+        "arrival times go back"
+    );
+    assert!(
+        (times[299] - 299.0 / 60.0).abs() < 1.0,
+        "300 frames at 60 Hz arrived over {} s",
+        times[299]
+    );
+    assert_eq!(session["fps"], 60.0);
+    // It exports like any take.
+    let (status, glb) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
+    assert_eq!(status, 200, "{glb}");
+    let glb_path = dir.path().join("vmc.glb");
+    let mut stream = std::net::TcpStream::connect(("127.0.0.1", studio.port)).unwrap();
+    write!(
+        stream,
+        "GET /api/capture/export.glb HTTP/1.1\r\nHost: 127.0.0.1:{}\r\nConnection: close\r\n\r\n",
+        studio.port
+    )
+    .unwrap();
+    let mut response = Vec::new();
+    stream.read_to_end(&mut response).unwrap();
+    let start = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap() + 4;
+    std::fs::write(&glb_path, &response[start..]).unwrap();
+    assert_valid_gltf(&glb_path);
+
+    // A flood of garbage: counted, dropped, and the next good frame still arrives.
+    let before = vmc(&studio);
+    support::vmc_send(port, 0, 60.0, 700, &dir.path().join("garbage.json"));
+    support::vmc_send(port, 1, 60.0, 0, &dir.path().join("one.json"));
+    let mut after = vmc(&studio);
+    for _ in 0..100 {
+        if after["frames"].as_u64() > before["frames"].as_u64() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        after = vmc(&studio);
+    }
+    assert_eq!(
+        after["frames"].as_u64().unwrap(),
+        before["frames"].as_u64().unwrap() + 1,
+        "{after}"
+    );
+    for counter in ["malformed", "unknown", "oversized"] {
+        assert!(
+            after[counter].as_u64().unwrap() > 0,
+            "no {counter} datagram was counted: {after}"
+        );
+    }
+    // Loopback may lose a datagram of a burst in the kernel; what arrived was counted.
+    let arrived = after["packets"].as_u64().unwrap() - before["packets"].as_u64().unwrap();
+    assert!(
+        arrived >= 630,
+        "only {arrived} of 701 datagrams were counted: {after}"
+    );
+    assert_eq!(request(studio.port, "GET", "/api/state", &[], b"").0, 200);
+}
+
+/// VMC out: with `--vmc-send`, each live webcam frame's face goes to the marionette (an
+/// independent python-osc receiver) as soon as it is tracked, in ARKit's names.
+#[test]
+fn the_live_webcam_face_goes_out_over_vmc() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("received.json");
+    let (mut peer, port) = support::vmc_receiver(3, 60.0, &report);
+    let to = format!("127.0.0.1:{port}");
+    let studio = start_with(
+        &dir.path().join("out.faceanim.json"),
+        &[
+            "--vmc-send".as_ref(),
+            to.as_ref(),
+            "--vmc-names".as_ref(),
+            "arkit".as_ref(),
+        ],
+    );
+    let open =
+        faceanim_media::read_image(&faceanim_testdata::shared("images/ict-face-jawopen.png"))
+            .unwrap();
+    let (status, body) = request(studio.port, "POST", "/api/capture/live/start", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    let (width, height) = (open.width.to_string(), open.height.to_string());
+    for _ in 0..3 {
+        let (status, body) = request(
+            studio.port,
+            "POST",
+            "/api/capture/live/frame",
+            &[
+                ("x-width", &width),
+                ("x-height", &height),
+                ("x-pixel-format", "RGBX"),
+            ],
+            &open
+                .rgb
+                .chunks(3)
+                .flat_map(|p| [p[0], p[1], p[2], 255])
+                .collect::<Vec<u8>>(),
+        );
+        assert_eq!(status, 200, "{body}");
+        let result: serde_json::Value = serde_json::from_str(&body).unwrap();
+        assert_eq!(result["found"], true, "{body}");
+    }
+    assert!(peer.wait().unwrap().success());
+    let received: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let datagrams = received["datagrams"].as_array().unwrap();
+    assert_eq!(datagrams.len(), 3, "{received}");
+    let jaw: Vec<f64> = datagrams[0]["messages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["address"] == "/VMC/Ext/Blend/Val" && m["args"][0][1] == "JawOpen")
+        .map(|m| m["args"][1][1].as_f64().unwrap())
+        .collect();
+    assert!(
+        jaw.len() == 1 && jaw[0] > 0.4,
+        "the open jaw went out as {jaw:?}"
+    );
+    assert!(
+        datagrams[0]["messages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|m| m["address"] == "/VMC/Ext/Bone/Pos")
+    );
+}

@@ -67,6 +67,8 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/live/start", post(live_start))
         .route("/api/capture/live/stop", post(live_stop))
         .route("/api/capture/live/record", post(live_record))
+        .route("/api/capture/vmc", get(vmc_view))
+        .route("/api/capture/vmc/record", post(vmc_record))
         .route(
             "/api/capture/session.json",
             get(|b: State<Both>| export(b, Format::Session)),
@@ -399,6 +401,21 @@ async fn live_record(State(both): State<Both>, body: Bytes) -> Answer<CaptureVie
     } else {
         let character = both.studio().character.clone();
         both.desk().stop_recording(&character)?;
+    }
+    Ok(state_of(&both))
+}
+
+async fn vmc_view(State(both): State<Both>) -> axum::Json<Option<crate::views::VmcView>> {
+    axum::Json(both.desk().vmc_view())
+}
+
+async fn vmc_record(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let Switch { on } = json_body(&body, "record")?;
+    if on {
+        both.desk().start_vmc_recording()?;
+    } else {
+        let character = both.studio().character.clone();
+        both.desk().stop_vmc_recording(&character)?;
     }
     Ok(state_of(&both))
 }

@@ -82,6 +82,9 @@ pub enum ApiError {
     /// The capture pipeline failed on a frame.
     #[error(transparent)]
     Capture(#[from] faceanim_capture::CaptureError),
+    /// A VMC socket could not be opened, or its names fit none of the character's.
+    #[error(transparent)]
+    Vmc(#[from] faceanim_live::LiveError),
     /// A worker thread ended without an answer (a bug; the log says where).
     #[error("internal error: {0}")]
     Internal(String),
@@ -108,6 +111,7 @@ impl ApiError {
             | ApiError::Models(_)
             | ApiError::Adapt(_)
             | ApiError::Capture(_)
+            | ApiError::Vmc(_)
             | ApiError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }

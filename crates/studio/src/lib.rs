@@ -54,6 +54,8 @@ pub struct Config {
     /// Where the character's adapter is read from and trained into (capture mode);
     /// characters uploaded later keep theirs beside the project file.
     pub adapter_path: PathBuf,
+    /// VMC in (a phone tracker drives the character) and out (the live face to VTuber apps).
+    pub vmc: capture::VmcConfig,
 }
 
 /// Why the studio could not start.
@@ -71,6 +73,9 @@ pub enum StudioError {
     /// The saved project or its autosave exists but cannot be used.
     #[error(transparent)]
     Project(ApiError),
+    /// A VMC port could not be opened.
+    #[error("VMC: {0}")]
+    Vmc(ApiError),
     /// The server stopped with an error.
     #[error("server: {0}")]
     Serve(std::io::Error),
@@ -98,7 +103,9 @@ pub async fn bind(port: u16) -> Result<(tokio::net::TcpListener, SocketAddr), St
 pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<(), StudioError> {
     let address = listener.local_addr().map_err(StudioError::Serve)?;
     let take_path = state::take_autosave_path(&config.project_path);
-    let desk = capture::CaptureDesk::new(&config.character, config.adapter_path, take_path);
+    let mut desk = capture::CaptureDesk::new(&config.character, config.adapter_path, take_path);
+    desk.open_vmc(config.vmc, &config.character)
+        .map_err(StudioError::Vmc)?;
     let studio =
         Studio::open(config.character, config.project_path).map_err(StudioError::Project)?;
     let both = capture_api::Both {

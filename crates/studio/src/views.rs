@@ -311,6 +311,54 @@ pub struct CaptureView {
     pub live: Option<LiveView>,
     /// The take, when one is open.
     pub take: Option<TakeView>,
+    /// VMC in and out, when the studio was started with them.
+    pub vmc: Option<VmcView>,
+}
+
+/// VMC in (`--vmc-listen`) and out (`--vmc-send`).
+#[derive(Debug, Serialize)]
+pub struct VmcView {
+    /// The address listened on, when listening.
+    pub listening: Option<String>,
+    /// Who sent the last datagram.
+    pub sender: Option<String>,
+    /// Datagrams received.
+    pub packets: u64,
+    /// Frames received (`/VMC/Ext/Blend/Apply`).
+    pub frames: u64,
+    /// Datagrams dropped as not OSC, truncated, or with wrong arguments.
+    pub malformed: u64,
+    /// Messages with addresses that are not VMC's.
+    pub unknown: u64,
+    /// Datagrams dropped as too large.
+    pub oversized: u64,
+    /// Values for names the character does not have.
+    pub unmatched: u64,
+    /// Datagrams in the last second.
+    pub rate: f32,
+    /// Milliseconds since the last datagram.
+    pub last_packet_ms: Option<f64>,
+    /// Frames recorded, while recording.
+    pub recording: Option<usize>,
+    /// The character's weights in the last frame.
+    pub weights: Option<Vec<f32>>,
+    /// The head pose in the last frame (yaw, pitch, roll in degrees).
+    pub head: Option<[f32; 3]>,
+    /// Sending, when the studio sends the live face.
+    pub sending: Option<VmcSendView>,
+}
+
+/// The live face going out over VMC.
+#[derive(Debug, Serialize)]
+pub struct VmcSendView {
+    /// The marionette's address.
+    pub to: String,
+    /// Frames sent.
+    pub frames: u64,
+    /// Frames the network refused.
+    pub dropped: u64,
+    /// The last refusal's reason.
+    pub last_error: Option<String>,
 }
 
 /// The ARKit family a blendshape belongs to.

@@ -21,6 +21,8 @@ pub enum EstimatorSource {
     Adapter,
     /// Unknown: the take was opened from a session file, which does not say.
     SessionFile,
+    /// None: the weights arrived as they are (a VMC stream from a phone or another app).
+    Received,
 }
 
 impl EstimatorSource {
@@ -31,6 +33,7 @@ impl EstimatorSource {
             EstimatorSource::ByName => "by-name mapping",
             EstimatorSource::Adapter => "adapter",
             EstimatorSource::SessionFile => "session file",
+            EstimatorSource::Received => "received stream",
         }
     }
 }

@@ -49,7 +49,7 @@ pub use expression::Expression;
 pub use fingerprint::Fingerprint;
 pub use layer::{Layered, layer};
 pub use session::{Correction, Edits, Filtering, Session, SessionFrame, peak_animation};
-pub use take::{Footage, Take};
+pub use take::{Footage, ReceivedFrame, Take, recorded_fps};
 
 /// Why a take or session refused a change, or a file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -27,6 +27,30 @@ pub struct Footage {
     pub still_frames: Option<usize>,
 }
 
+/// One frame that arrived as the character's own weights (a VMC stream): when, the weights in
+/// the character's order, and the head pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReceivedFrame {
+    /// Seconds, on any clock; a take counts from its first frame.
+    pub time: f64,
+    /// The character's weights.
+    pub weights: Vec<f32>,
+    /// Head yaw, pitch, roll in degrees.
+    pub head: Option<[f32; 3]>,
+}
+
+/// The rate of frames recorded as they arrived: frames per second over the recording, rounded,
+/// 1 to 120 (30 for a single frame).
+#[must_use]
+pub fn recorded_fps(first: f64, last: f64, frames: usize) -> f32 {
+    let duration = last - first;
+    if frames > 1 && duration > 0.0 {
+        (((frames - 1) as f64 / duration).round() as f32).clamp(1.0, 120.0)
+    } else {
+        30.0
+    }
+}
+
 /// A captured input being edited: its session, where the estimates came from, and the undo and
 /// redo stacks of the user's [`Edits`].
 #[derive(Debug, Clone)]
@@ -122,6 +146,62 @@ impl Take {
         session.edits.smoothing = filtering.smoothing;
         session.still_frames = still_frames;
         Ok(Take::new(session, estimator.source()))
+    }
+
+    /// A take of frames that arrived as `character`'s weights (named `source`), keeping their
+    /// arrival times; the frames are named `{source}_{n}`.
+    ///
+    /// # Errors
+    /// [`TakeError::Mismatch`] when a frame has another number of weights than the character
+    /// has blendshapes.
+    pub fn from_received(
+        character: &Character,
+        source: &str,
+        frames: Vec<ReceivedFrame>,
+        filtering: Filtering,
+    ) -> Result<Take, TakeError> {
+        let names: Vec<String> = character
+            .blendshapes()
+            .iter()
+            .map(|b| b.name().to_owned())
+            .collect();
+        if let Some(bad) = frames.iter().find(|f| f.weights.len() != names.len()) {
+            return Err(TakeError::Mismatch {
+                character: character.name().to_owned(),
+                reason: format!(
+                    "a frame has {} weights for {} blendshapes",
+                    bad.weights.len(),
+                    names.len()
+                ),
+            });
+        }
+        let first = frames.first().map_or(0.0, |f| f.time);
+        let last = frames.last().map_or(0.0, |f| f.time);
+        let fps = recorded_fps(first, last, frames.len());
+        let frames = frames
+            .into_iter()
+            .enumerate()
+            .map(|(k, f)| SessionFrame {
+                name: format!("{source}_{:06}", k + 1),
+                time: (f.time - first) as f32,
+                presence: 1.0,
+                head: f.head,
+                head_position: None,
+                expression: None,
+                estimate: f.weights,
+            })
+            .collect();
+        let mut session = Session::new(
+            source.to_owned(),
+            character.name().to_owned(),
+            names,
+            Fingerprint::of(character),
+            fps,
+            filtering.keyframe_every,
+            frames,
+        );
+        session.edits.smoothing = filtering.smoothing;
+        Ok(Take::new(session, EstimatorSource::Received))
     }
 
     /// Where the estimates came from.

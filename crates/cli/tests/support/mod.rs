@@ -108,3 +108,77 @@ pub fn encode_h264(path: &Path, size: u32, fps: u32, frames: &[Vec<u8>]) {
         frames.iter().map(Vec::as_slice),
     );
 }
+
+/// The independent VMC peer (`tools/vmc_peer.py`, PyPI's python-osc) receiving on a free
+/// loopback port until `count` frames arrived or `timeout` seconds passed: returns the running
+/// peer and its port; its JSON report goes to `out` when it ends.
+pub fn vmc_receiver(count: usize, timeout: f32, out: &Path) -> (std::process::Child, u16) {
+    use std::io::BufRead as _;
+    let mut child = Command::new("python3")
+        .arg(repo().join("tools/vmc_peer.py"))
+        .args([
+            "receive",
+            "--count",
+            &count.to_string(),
+            "--timeout",
+            &timeout.to_string(),
+            "--out",
+        ])
+        .arg(out)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("python3 with python-osc (scripts/setup.sh installs it)");
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let port = line
+        .trim()
+        .strip_prefix("PORT ")
+        .and_then(|p| p.parse().ok())
+        .unwrap_or_else(|| panic!("the VMC peer did not say its port: {line:?}"));
+    (child, port)
+}
+
+/// The independent VMC peer sending `frames` frames of known ARKit weights and head turns to
+/// 127.0.0.1:`port` at `fps`, then `garbage` bad datagrams; returns what it sent.
+pub fn vmc_send(
+    port: u16,
+    frames: usize,
+    fps: f32,
+    garbage: usize,
+    out: &Path,
+) -> serde_json::Value {
+    let run = Command::new("python3")
+        .arg(repo().join("tools/vmc_peer.py"))
+        .args([
+            "send",
+            "--to",
+            &port.to_string(),
+            "--frames",
+            &frames.to_string(),
+            "--fps",
+            &fps.to_string(),
+            "--garbage",
+            &garbage.to_string(),
+            "--out",
+        ])
+        .arg(out)
+        .output()
+        .expect("python3 with python-osc (scripts/setup.sh installs it)");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap()
+}
+
+/// A UDP port free on loopback just now.
+pub fn free_udp_port() -> u16 {
+    std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}

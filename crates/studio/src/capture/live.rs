@@ -25,6 +25,8 @@ pub(super) struct Live {
     filter: Option<OneEuroState>,
     recording: Option<Recording>,
     frames: usize,
+    /// Where each frame's face goes out over VMC, when the studio sends it.
+    performer: Option<Arc<Mutex<faceanim_live::Performer>>>,
 }
 
 impl Live {
@@ -89,6 +91,7 @@ impl CaptureDesk {
             filter: self.filtering.smoothing.map(OneEuroState::new),
             recording: None,
             frames: 0,
+            performer: self.vmc.performer.clone(),
         });
         Ok(())
     }
@@ -138,13 +141,9 @@ impl CaptureDesk {
         if recording.records.iter().all(|r| r.found.is_none()) {
             return Err(ApiError::Live("no face was seen while recording"));
         }
-        let duration = recording.records.last().map_or(0.0, |r| r.time);
         // The webcam's own rate, rounded: frames were recorded as they arrived.
-        let fps = if n > 1 && duration > 0.0 {
-            ((n - 1) as f32 / duration).round().clamp(1.0, 120.0)
-        } else {
-            30.0
-        };
+        let duration = recording.records.last().map_or(0.0, |r| r.time);
+        let fps = faceanim_take::recorded_fps(0.0, f64::from(duration), n);
         let names = (0..n).map(|i| format!("webcam_{:06}.png", i + 1)).collect();
         let take = self.take_of(
             character,
@@ -207,6 +206,10 @@ impl LiveHandle {
             filter.filter(time, &mut weights);
         }
         let head = record.head;
+        // Out at once: the frame's weights go to the marionette before anything else is done.
+        if let Some(performer) = &live.performer {
+            lock(performer).send(&weights, head, time);
+        }
         let recorded = match live.recording.as_mut() {
             Some(recording) => {
                 let start = *recording.started.get_or_insert(time);

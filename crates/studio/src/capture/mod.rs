@@ -8,6 +8,7 @@
 
 mod jobs;
 mod live;
+mod vmc;
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
@@ -28,6 +29,7 @@ use crate::views::{AdapterView, CaptureView, FilteringView, Group, JobView, Take
 pub use jobs::{start_capture, start_finetune, start_training};
 use live::Live;
 pub use live::{LiveHandle, LiveResult};
+pub use vmc::VmcConfig;
 
 /// Input previews are at most this tall: enough to judge an expression beside the character.
 const PREVIEW_HEIGHT: usize = 360;
@@ -280,6 +282,8 @@ pub struct CaptureDesk {
     /// The take's session is written here after every change and read back at start, so
     /// closing the studio loses no correction.
     take_path: PathBuf,
+    /// VMC in and out.
+    vmc: vmc::Vmc,
 }
 
 /// A shared capture desk.
@@ -309,6 +313,7 @@ impl CaptureDesk {
             live: Arc::new(Mutex::new(None)),
             filtering: Filtering::SEED,
             uploads: None,
+            vmc: vmc::Vmc::default(),
         };
         desk.load_adapter(character);
         desk.restore_take(character);
@@ -495,6 +500,10 @@ impl CaptureDesk {
         *lock(&self.live) = None;
         self.adapter_path = adapter_path;
         self.load_adapter(character);
+        // VMC names follow the character.
+        if let Err(e) = self.open_vmc(self.vmc.config(), character) {
+            tracing::warn!("VMC for {}: {e}", character.name());
+        }
     }
 
     /// The take, if one is open.
@@ -577,6 +586,7 @@ impl CaptureDesk {
                 default_smoothing: default_smoothing().into(),
             },
             live: lock(&self.live).as_ref().map(Live::view),
+            vmc: self.vmc_view(),
             take: self
                 .take
                 .as_ref()

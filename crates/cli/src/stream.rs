@@ -1,0 +1,179 @@
+//! `faceanim stream`: plays a clip or a take to a VMC marionette (VSeeFace, Warudo, VNyan,
+//! Unity's or Unreal's VMC receiver) at a steady rate.
+
+use std::net::{SocketAddr, ToSocketAddrs as _};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use faceanim_anim::Clip;
+use faceanim_live::{Names, Performer};
+
+/// Which names the stream uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum NameChoice {
+    /// The character's own blendshape names.
+    Own,
+    /// ARKit's 52 names (`EyeBlinkLeft`…), for perfect-sync avatars and phone-tracking setups.
+    Arkit,
+    /// VRM 0.x presets (A I U E O Blink Blink_L Blink_R Joy Angry Sorrow Fun).
+    Vrm,
+}
+
+impl From<NameChoice> for Names {
+    fn from(choice: NameChoice) -> Names {
+        match choice {
+            NameChoice::Own => Names::Own,
+            NameChoice::Arkit => Names::Arkit,
+            NameChoice::Vrm => Names::VrmPresets,
+        }
+    }
+}
+
+/// `faceanim stream`'s arguments.
+#[derive(Debug, clap::Args)]
+pub struct StreamArgs {
+    /// A clip (.json) or a session (.session.json, from the studio or `faceanim track`).
+    pub input: PathBuf,
+    /// Put the clip on this character first (its names are then the ones sent).
+    #[arg(long)]
+    pub character: Option<PathBuf>,
+    /// The marionette: HOST:PORT (VMC's default port is 39539).
+    #[arg(long)]
+    pub to: String,
+    /// Frames per second sent (default: the clip's own rate; at most 120).
+    #[arg(long)]
+    pub fps: Option<f32>,
+    /// Start again at the end, until stopped.
+    #[arg(long = "loop")]
+    pub repeat: bool,
+    /// The names sent.
+    #[arg(long, value_enum, default_value_t = NameChoice::Own)]
+    pub names: NameChoice,
+}
+
+pub fn run(args: StreamArgs) -> anyhow::Result<()> {
+    let bytes = faceanim_files::read_bytes(&args.input)?;
+    let clip = match Clip::from_json(&bytes) {
+        Ok(clip) => clip,
+        Err(clip_error) => faceanim_take::Session::from_json(&bytes)
+            .map(|session| session.clip())
+            .map_err(|session_error| {
+                anyhow::anyhow!(
+                    "{}: neither a clip ({clip_error}) nor a session ({session_error})",
+                    args.input.display()
+                )
+            })?,
+    };
+    let clip = match &args.character {
+        Some(path) => {
+            let character = crate::load(path)?.character;
+            faceanim_export::Animation::from_clip(&character, &clip, "stream")
+                .with_context(|| format!("putting {} on {}", args.input.display(), path.display()))?
+                .clip
+        }
+        None => clip,
+    };
+    anyhow::ensure!(
+        !clip.frames.is_empty(),
+        "{}: the clip has no frames",
+        args.input.display()
+    );
+    let fps = args.fps.unwrap_or(clip.fps);
+    anyhow::ensure!(
+        fps.is_finite() && fps > 0.0 && fps <= 120.0,
+        "--fps must be above 0 and at most 120, got {fps}"
+    );
+    let destination = destination(&args.to)?;
+    let mut performer = Performer::new(destination, &clip.blendshapes, args.names.into())?;
+
+    let duration = (clip.frames.len() - 1) as f32 / clip.fps.max(1e-3);
+    let frames = (duration * fps).round() as usize + 1;
+    eprintln!(
+        "streaming {} ({} frames at {fps} fps{}) to {destination}; Ctrl+C stops",
+        args.input.display(),
+        frames,
+        if args.repeat { ", looping" } else { "" }
+    );
+    let started = Instant::now();
+    let mut sending = Duration::ZERO;
+    let mut slowest = Duration::ZERO;
+    let mut k: u64 = 0;
+    loop {
+        let f = (k % frames as u64) as usize;
+        if f == 0 && k > 0 && !args.repeat {
+            break;
+        }
+        // Each frame on its own schedule, so time does not drift with the sending.
+        let due = started + Duration::from_secs_f64(k as f64 / f64::from(fps));
+        if let Some(wait) = due.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+        let (weights, head) = sample(&clip, f as f32 / fps);
+        let before = Instant::now();
+        performer.send(&weights, head, started.elapsed().as_secs_f32());
+        let took = before.elapsed();
+        sending += took;
+        slowest = slowest.max(took);
+        k += 1;
+    }
+    let stats = performer.stats();
+    let summary = serde_json::json!({
+        "frames": stats.frames,
+        "sent": stats.sent,
+        "dropped": stats.dropped,
+        "last_error": stats.last_error,
+        "seconds": started.elapsed().as_secs_f64(),
+        "fps": fps,
+        "send_ms_mean": sending.as_secs_f64() * 1000.0 / stats.frames.max(1) as f64,
+        "send_ms_max": slowest.as_secs_f64() * 1000.0,
+    });
+    println!("{summary}");
+    if stats.dropped > 0 {
+        eprintln!(
+            "warning: {} of {} frames were refused by the network ({}); is the marionette listening on {destination}?",
+            stats.dropped,
+            stats.frames,
+            stats.last_error.as_deref().unwrap_or("no reason given")
+        );
+    }
+    Ok(())
+}
+
+/// A marionette's address, `HOST:PORT`.
+pub fn destination(text: &str) -> anyhow::Result<SocketAddr> {
+    text.to_socket_addrs()
+        .with_context(|| format!("{text}: not a HOST:PORT"))?
+        .next()
+        .with_context(|| format!("{text}: no address"))
+}
+
+/// Where to listen for VMC: `PORT` (every interface: phones send over the local network) or
+/// `ADDR:PORT`.
+pub fn listen_address(text: &str) -> anyhow::Result<SocketAddr> {
+    if let Ok(port) = text.parse::<u16>() {
+        return Ok(SocketAddr::from(([0, 0, 0, 0], port)));
+    }
+    text.parse()
+        .with_context(|| format!("--vmc-listen {text}: give a PORT or ADDR:PORT"))
+}
+
+/// The clip's weights and head at `time` seconds, between its frames linearly.
+fn sample(clip: &Clip, time: f32) -> (Vec<f32>, Option<[f32; 3]>) {
+    let last = clip.frames.len() - 1;
+    let position = (time * clip.fps).clamp(0.0, last as f32);
+    let a = position.floor() as usize;
+    let b = (a + 1).min(last);
+    let u = position - a as f32;
+    let lerp = |x: f32, y: f32| x + (y - x) * u;
+    let weights = clip.frames[a]
+        .iter()
+        .zip(&clip.frames[b])
+        .map(|(&x, &y)| lerp(x, y))
+        .collect();
+    let head = clip.head.as_ref().and_then(|h| {
+        let (x, y) = (h.get(a)?, h.get(b)?);
+        Some([lerp(x[0], y[0]), lerp(x[1], y[1]), lerp(x[2], y[2])])
+    });
+    (weights, head)
+}

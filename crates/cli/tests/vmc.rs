@@ -1,0 +1,286 @@
+//! `faceanim stream`: a clip sent over VMC (OSC over UDP) as an independent implementation,
+//! PyPI's python-osc (`tools/vmc_peer.py`), decodes it: addresses, argument types, every
+//! blendshape value at its frame, the head turn in Unity's convention, one Apply per frame, at
+//! the requested rate, and a 60 Hz stream held for 30 seconds without loss. Loopback only.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    reason = "tests"
+)]
+
+mod support;
+
+use serde_json::Value;
+use support::{faceanim, faceanim_ok, output_dir, vmc_receiver};
+
+/// The frames of a receiver's report: per datagram, its messages and arrival time.
+fn bundles(report: &Value) -> Vec<(f64, Vec<Value>)> {
+    report["datagrams"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| {
+            assert!(
+                d["error"].is_null(),
+                "python-osc could not decode a datagram: {d}"
+            );
+            (
+                d["time"].as_f64().unwrap(),
+                d["messages"].as_array().unwrap().clone(),
+            )
+        })
+        .collect()
+}
+
+fn args_of(message: &Value) -> Vec<(String, Value)> {
+    message["args"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| (a[0].as_str().unwrap().to_owned(), a[1].clone()))
+        .collect()
+}
+
+#[test]
+fn a_streamed_clip_decodes_exactly_at_its_rate() {
+    let dir = output_dir("vmc");
+    let frames = 24;
+    let jaw: Vec<f32> = (0..frames)
+        .map(|k| k as f32 / (frames - 1) as f32)
+        .collect();
+    let blink: Vec<f32> = (0..frames)
+        .map(|k| if k % 8 < 4 { 0.0 } else { 1.0 })
+        .collect();
+    let yaw: Vec<f32> = (0..frames).map(|k| 2.5 * k as f32 - 20.0).collect();
+    let clip = serde_json::json!({
+        "fps": 30,
+        "blendshapes": ["jawOpen", "eyeBlink_L"],
+        "frames": (0..frames).map(|k| [jaw[k], blink[k]]).collect::<Vec<_>>(),
+        "head": yaw.iter().map(|y| [*y, 0.0, 0.0]).collect::<Vec<_>>(),
+    });
+    let clip_path = dir.join("turn.json");
+    std::fs::write(&clip_path, clip.to_string()).unwrap();
+    let report_path = dir.join("received.json");
+    let (mut peer, port) = vmc_receiver(frames, 20.0, &report_path);
+    let summary: Value = serde_json::from_str(&faceanim_ok(&[
+        "stream",
+        clip_path.to_str().unwrap(),
+        "--to",
+        &format!("127.0.0.1:{port}"),
+    ]))
+    .unwrap();
+    assert!(peer.wait().unwrap().success());
+    assert_eq!(summary["sent"], frames);
+    assert_eq!(summary["dropped"], 0);
+    let received: Value = serde_json::from_slice(&std::fs::read(&report_path).unwrap()).unwrap();
+    let bundles = bundles(&received);
+    assert_eq!(bundles.len(), frames, "one bundle per frame");
+    let mut values = std::collections::HashMap::new();
+    for (k, (_, messages)) in bundles.iter().enumerate() {
+        let addresses: Vec<&str> = messages
+            .iter()
+            .map(|m| m["address"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            addresses[..4],
+            [
+                "/VMC/Ext/OK",
+                "/VMC/Ext/T",
+                "/VMC/Ext/Root/Pos",
+                "/VMC/Ext/Bone/Pos"
+            ],
+            "frame {k}"
+        );
+        assert_eq!(addresses.last(), Some(&"/VMC/Ext/Blend/Apply"), "frame {k}");
+        assert_eq!(
+            addresses
+                .iter()
+                .filter(|a| **a == "/VMC/Ext/Blend/Apply")
+                .count(),
+            1
+        );
+        let ok = args_of(&messages[0]);
+        assert!(ok.iter().all(|(t, _)| t == "i") && ok[0].1 == 1, "{ok:?}");
+        assert_eq!(args_of(&messages[1])[0].0, "f");
+        // The head: bone name, position, rotation; all floats after the name.
+        let head = args_of(&messages[3]);
+        assert_eq!(head[0], ("s".to_owned(), Value::from("Head")));
+        assert!(head[1..].iter().all(|(t, _)| t == "f") && head.len() == 8);
+        let q: Vec<f64> = head[4..].iter().map(|(_, v)| v.as_f64().unwrap()).collect();
+        // Yaw alone, in Unity's left-handed frame (glTF's X mirrored): (0, −sin, 0, cos) of half.
+        let half = f64::from(yaw[k]).to_radians() / 2.0;
+        let expected = [0.0, -half.sin(), 0.0, half.cos()];
+        for (a, b) in q.iter().zip(expected) {
+            assert!(
+                (a - b).abs() < 1e-5,
+                "frame {k}: head {q:?}, expected {expected:?}"
+            );
+        }
+        for message in messages
+            .iter()
+            .filter(|m| m["address"] == "/VMC/Ext/Blend/Val")
+        {
+            let args = args_of(message);
+            assert_eq!((args[0].0.as_str(), args[1].0.as_str()), ("s", "f"));
+            values.insert(
+                args[0].1.as_str().unwrap().to_owned(),
+                args[1].1.as_f64().unwrap(),
+            );
+        }
+        // What the marionette holds after this frame's Apply is the clip's frame.
+        assert!(
+            (values["jawOpen"] - f64::from(jaw[k])).abs() < 1e-6,
+            "frame {k}"
+        );
+        assert!(
+            (values["eyeBlink_L"] - f64::from(blink[k])).abs() < 1e-6,
+            "frame {k}"
+        );
+    }
+    // At the clip's rate: 23 intervals of 1/30 s.
+    let span = bundles[frames - 1].0 - bundles[0].0;
+    assert!(
+        (span - 23.0 / 30.0).abs() < 0.15,
+        "the stream took {span} s"
+    );
+}
+
+#[test]
+fn vrm_presets_and_arkit_names_for_the_apps_that_want_them() {
+    let dir = output_dir("vmc");
+    let clip = r#"{"fps": 30, "blendshapes": ["jawOpen", "eyeBlinkLeft", "eyeBlinkRight"],
+        "frames": [[0.5, 1, 0], [1, 1, 1]]}"#;
+    let clip_path = dir.join("presets.json");
+    std::fs::write(&clip_path, clip).unwrap();
+    for (names, expected) in [
+        (
+            "vrm",
+            vec![
+                ("A", [0.5, 1.0]),
+                ("Blink", [0.0, 1.0]),
+                ("Blink_L", [1.0, 1.0]),
+                ("Blink_R", [0.0, 1.0]),
+            ],
+        ),
+        (
+            "arkit",
+            vec![
+                ("JawOpen", [0.5, 1.0]),
+                ("EyeBlinkLeft", [1.0, 1.0]),
+                ("EyeBlinkRight", [0.0, 1.0]),
+            ],
+        ),
+    ] {
+        let report_path = dir.join(format!("received-{names}.json"));
+        let (mut peer, port) = vmc_receiver(2, 20.0, &report_path);
+        faceanim_ok(&[
+            "stream",
+            clip_path.to_str().unwrap(),
+            "--to",
+            &format!("127.0.0.1:{port}"),
+            "--names",
+            names,
+        ]);
+        assert!(peer.wait().unwrap().success());
+        let received: Value =
+            serde_json::from_slice(&std::fs::read(&report_path).unwrap()).unwrap();
+        let mut values: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
+        for (_, messages) in bundles(&received) {
+            for m in messages
+                .iter()
+                .filter(|m| m["address"] == "/VMC/Ext/Blend/Val")
+            {
+                let args = args_of(m);
+                values
+                    .entry(args[0].1.as_str().unwrap().to_owned())
+                    .or_default()
+                    .push(args[1].1.as_f64().unwrap());
+            }
+        }
+        // Frame 0 sends every value; frame 1 the ones that moved.
+        let sent: Vec<&str> = values.keys().map(String::as_str).collect();
+        let mut wanted: Vec<&str> = expected.iter().map(|(n, _)| *n).collect();
+        wanted.sort_unstable();
+        assert_eq!(sent, wanted, "--names {names}");
+        for (name, [first, last]) in expected {
+            let got = &values[name];
+            assert!(
+                (got[0] - first).abs() < 1e-6 && (got.last().unwrap() - last).abs() < 1e-6,
+                "{name}: {got:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_sixty_hertz_stream_holds_for_thirty_seconds_without_loss() {
+    let dir = output_dir("vmc");
+    let frames = 1800;
+    let clip = serde_json::json!({
+        "fps": 60,
+        "blendshapes": ["jawOpen"],
+        "frames": (0..frames).map(|k| [((k as f32) * 0.05).sin().abs()]).collect::<Vec<_>>(),
+    });
+    let clip_path = dir.join("long.json");
+    std::fs::write(&clip_path, clip.to_string()).unwrap();
+    let report_path = dir.join("received-long.json");
+    let (mut peer, port) = vmc_receiver(frames, 45.0, &report_path);
+    faceanim_ok(&[
+        "stream",
+        clip_path.to_str().unwrap(),
+        "--to",
+        &format!("127.0.0.1:{port}"),
+        "--fps",
+        "60",
+    ]);
+    assert!(peer.wait().unwrap().success());
+    let received: Value = serde_json::from_slice(&std::fs::read(&report_path).unwrap()).unwrap();
+    let bundles = bundles(&received);
+    assert_eq!(bundles.len(), frames, "frames were lost on loopback");
+    let span = bundles[frames - 1].0 - bundles[0].0;
+    assert!(
+        (span - 1799.0 / 60.0).abs() < 1.0,
+        "1,800 frames at 60 Hz took {span} s"
+    );
+}
+
+#[test]
+fn nobody_listening_never_stalls_the_stream_and_bad_input_is_named() {
+    let dir = output_dir("vmc");
+    let clip_path = dir.join("nobody.json");
+    std::fs::write(
+        &clip_path,
+        r#"{"fps": 30, "blendshapes": ["jawOpen"], "frames": [[0], [0.5], [1], [0.5]]}"#,
+    )
+    .unwrap();
+    let port = support::free_udp_port();
+    let started = std::time::Instant::now();
+    faceanim_ok(&[
+        "stream",
+        clip_path.to_str().unwrap(),
+        "--to",
+        &format!("127.0.0.1:{port}"),
+    ]);
+    assert!(started.elapsed().as_secs_f32() < 5.0);
+    let not_clip = dir.join("notes.json");
+    std::fs::write(&not_clip, r#"{"title": "notes"}"#).unwrap();
+    let run = faceanim(&[
+        "stream",
+        not_clip.to_str().unwrap(),
+        "--to",
+        "127.0.0.1:39539",
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("notes.json") && stderr.contains("neither a clip"),
+        "{stderr}"
+    );
+    let run = faceanim(&[
+        "stream",
+        clip_path.to_str().unwrap(),
+        "--to",
+        "no port here",
+    ]);
+    assert!(String::from_utf8_lossy(&run.stderr).contains("no port here"));
+}

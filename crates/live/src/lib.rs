@@ -1,0 +1,107 @@
+//! # faceanim-live: the VMC protocol over OSC
+//!
+//! VTuber apps and engines (VSeeFace, Warudo, VNyan, VMagicMirror, Unity's and Unreal's VMC
+//! receivers) and phone face trackers (iFacialMocap, Waidayo) speak the [VMC
+//! protocol](https://protocol.vmc.info/): OSC messages in UDP datagrams, sent by a *performer*
+//! (which tracks) to a *marionette* (which shows the avatar), port 39539 by default.
+//!
+//! - [`Performer`] sends the character's face: one OSC bundle per frame with `/VMC/Ext/OK`,
+//!   `/VMC/Ext/T`, `/VMC/Ext/Root/Pos`, the head as `/VMC/Ext/Bone/Pos` (Unity's left-handed
+//!   convention, see [`unity_rotation`]), `/VMC/Ext/Blend/Val` for every blendshape that moved
+//!   (every one on every 30th frame, so a late marionette catches up) and
+//!   `/VMC/Ext/Blend/Apply`. Names are the character's own, ARKit's or VRM 0.x presets
+//!   ([`Names`]). Sending never blocks: a datagram the network refuses is counted and dropped.
+//! - [`Marionette`] listens on a UDP port on its own thread and turns what arrives into frames
+//!   of the character's weights with the head pose and the arrival time; malformed, truncated,
+//!   unknown and oversized datagrams are counted and dropped, never a panic.
+//!
+//! ```
+//! use faceanim_live::{Marionette, Names, Performer};
+//!
+//! let blendshapes: Vec<String> = ["jawOpen", "eyeBlinkLeft"].map(String::from).to_vec();
+//! let marionette = Marionette::listen("127.0.0.1:0".parse()?, &blendshapes)?;
+//! let mut performer = Performer::new(marionette.address(), &blendshapes, Names::Arkit)?;
+//! let weights = [0.75, 0.25];
+//! let jaw = 0;
+//! performer.send(&weights, Some([20.0, 0.0, 0.0]), 0.0);
+//! let frame = marionette.wait_for_frames(1, std::time::Duration::from_secs(5)).remove(0);
+//! assert_eq!(frame.weights[jaw], 0.75);
+//! let [yaw, _, _] = frame.head.unwrap_or_default();
+//! assert!((yaw - 20.0).abs() < 1e-3);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![deny(missing_docs)]
+
+mod marionette;
+mod names;
+mod performer;
+
+pub use marionette::{Marionette, ReceivedFrame, Traffic};
+pub use names::{Names, VRM_PRESETS};
+pub use performer::{Performer, SendStats};
+
+/// The VMC protocol's default port (the marionette's).
+pub const DEFAULT_PORT: u16 = 39539;
+
+/// Why a live link could not start.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LiveError {
+    /// The socket could not be opened or bound.
+    #[error("{address}: {source}")]
+    Socket {
+        /// The address.
+        address: std::net::SocketAddr,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The chosen names cover none of the character's blendshapes.
+    #[error("the character has no {what}: nothing would be sent")]
+    NoNames {
+        /// Which names.
+        what: &'static str,
+    },
+}
+
+/// The head pose `[yaw, pitch, roll]` (degrees, faceanim's convention: see
+/// `faceanim_anim::head_rotation`) as a rotation in Unity's left-handed frame, `[x, y, z, w]`, as
+/// VMC sends bones. glTF (right-handed, +X left of a character facing the viewer) and Unity
+/// (left-handed) differ by a mirror of the X axis, which keeps `x` and `w` and negates `y`
+/// and `z`.
+#[must_use]
+pub fn unity_rotation(head: [f32; 3]) -> [f32; 4] {
+    let [x, y, z, w] = faceanim_anim::head_rotation(head);
+    [x, -y, -z, w]
+}
+
+/// The inverse of [`unity_rotation`]: a Unity rotation `[x, y, z, w]` as `[yaw, pitch, roll]`
+/// in degrees; `None` for a rotation that is not a finite, non-zero quaternion.
+#[must_use]
+pub fn head_angles(unity: [f32; 4]) -> Option<[f32; 3]> {
+    let [x, y, z, w] = unity;
+    let q = glam::Quat::from_xyzw(x, -y, -z, w);
+    let length = q.length();
+    if !length.is_finite() || length < 1e-6 {
+        return None;
+    }
+    // R = Ry(yaw) · Rx(−pitch) · Rz(roll).
+    let (yaw, x_angle, roll) = (q / length).to_euler(glam::EulerRot::YXZ);
+    Some([yaw.to_degrees(), -x_angle.to_degrees(), roll.to_degrees()])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn head_angles_round_trip_through_unitys_convention() {
+        for head in [[20.0, 0.0, 0.0], [-15.0, 10.0, 5.0], [0.0, -20.0, 12.0]] {
+            let back = head_angles(unity_rotation(head)).unwrap_or_default();
+            for (a, b) in head.iter().zip(back) {
+                assert!((a - b).abs() < 1e-3, "{head:?} came back as {back:?}");
+            }
+        }
+        assert_eq!(head_angles([0.0; 4]), None);
+        assert_eq!(head_angles([f32::NAN, 0.0, 0.0, 1.0]), None);
+    }
+}

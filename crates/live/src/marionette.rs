@@ -1,0 +1,333 @@
+//! The marionette: VMC frames in from a phone tracker or another performer.
+
+use std::collections::{HashMap, VecDeque};
+use std::net::{SocketAddr, UdpSocket};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+use rosc::{OscMessage, OscPacket, OscType};
+
+use crate::{LiveError, head_angles};
+
+/// Datagrams larger than this are not VMC frames (a frame of 124 blendshapes is about 6 KiB).
+const MAX_DATAGRAM: usize = 32 * 1024;
+/// Bundles nested deeper than this are refused.
+const MAX_DEPTH: usize = 8;
+/// Frames kept for [`Marionette::wait_for_frames`].
+const HISTORY: usize = 1024;
+/// How often the receiving thread looks at its stop flag.
+const POLL: Duration = Duration::from_millis(50);
+
+/// One frame received: the character's weights (every blendshape, in its order, holding the
+/// last value sent), the head pose and when it arrived.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReceivedFrame {
+    /// Seconds from when the marionette started listening to the frame's arrival.
+    pub time: f64,
+    /// The character's weights.
+    pub weights: Vec<f32>,
+    /// Head yaw, pitch, roll in degrees, once a head pose arrived.
+    pub head: Option<[f32; 3]>,
+}
+
+/// What arrived so far.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Traffic {
+    /// Datagrams received.
+    pub packets: u64,
+    /// Frames completed (`/VMC/Ext/Blend/Apply`).
+    pub frames: u64,
+    /// Datagrams that are not OSC, truncated, or whose messages have the wrong arguments.
+    pub malformed: u64,
+    /// Messages with addresses the marionette does not know.
+    pub unknown: u64,
+    /// Datagrams too large to be a frame.
+    pub oversized: u64,
+    /// Blendshape values for names the character does not have.
+    pub unmatched: u64,
+    /// Who sent the last datagram.
+    pub sender: Option<SocketAddr>,
+    /// Datagrams in the last second.
+    pub rate: f32,
+    /// Milliseconds since the last datagram.
+    pub last_packet_ms: Option<f64>,
+}
+
+#[derive(Debug)]
+struct State {
+    started: Instant,
+    traffic: Traffic,
+    arrivals: VecDeque<Instant>,
+    last_arrival: Option<Instant>,
+    /// Blendshape name → the character's index (`None`: not the character's), as names arrive.
+    lookup: HashMap<String, Option<usize>>,
+    /// The character's ARKit-named shapes by their ARKit name (for other spellings).
+    arkit: HashMap<&'static str, usize>,
+    current: Vec<f32>,
+    head: Option<[f32; 3]>,
+    history: VecDeque<ReceivedFrame>,
+    recording: Option<Vec<ReceivedFrame>>,
+}
+
+/// Listens for VMC on a UDP port (see the crate docs). Stops listening when dropped.
+#[derive(Debug)]
+pub struct Marionette {
+    address: SocketAddr,
+    state: Arc<Mutex<State>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+fn lock(state: &Mutex<State>) -> MutexGuard<'_, State> {
+    state
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+impl Marionette {
+    /// Listens on `address` (port 0 picks a free one) for the face of a character whose
+    /// blendshapes are `blendshapes`: values named as they are, or in another ARKit spelling
+    /// for its ARKit-named shapes (`EyeBlinkLeft` for `eyeBlink_L`).
+    ///
+    /// # Errors
+    /// [`LiveError::Socket`] when the address cannot be bound.
+    pub fn listen(address: SocketAddr, blendshapes: &[String]) -> Result<Marionette, LiveError> {
+        let socket_error = |source| LiveError::Socket { address, source };
+        let socket = UdpSocket::bind(address).map_err(socket_error)?;
+        socket.set_read_timeout(Some(POLL)).map_err(socket_error)?;
+        let bound = socket.local_addr().map_err(socket_error)?;
+        let lookup = blendshapes
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.clone(), Some(i)))
+            .collect();
+        let arkit = blendshapes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, n)| Some((faceanim_rig::names::arkit_name(n)?, i)))
+            .collect();
+        let state = Arc::new(Mutex::new(State {
+            started: Instant::now(),
+            traffic: Traffic::default(),
+            arrivals: VecDeque::new(),
+            last_arrival: None,
+            lookup,
+            arkit,
+            current: vec![0.0; blendshapes.len()],
+            head: None,
+            history: VecDeque::new(),
+            recording: None,
+        }));
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread = {
+            let (state, stop) = (state.clone(), stop.clone());
+            std::thread::Builder::new()
+                .name(format!("vmc {bound}"))
+                .spawn(move || receive(&socket, &state, &stop))
+                .map_err(socket_error)?
+        };
+        tracing::info!("listening for VMC on {bound}");
+        Ok(Marionette {
+            address: bound,
+            state,
+            stop,
+            thread: Some(thread),
+        })
+    }
+
+    /// The address it listens on.
+    #[must_use]
+    pub fn address(&self) -> SocketAddr {
+        self.address
+    }
+
+    /// What arrived so far, with the packet rate and the last packet's age now.
+    #[must_use]
+    pub fn traffic(&self) -> Traffic {
+        let mut state = lock(&self.state);
+        let now = Instant::now();
+        forget_old(&mut state.arrivals, now);
+        let mut traffic = state.traffic.clone();
+        traffic.rate = state.arrivals.len() as f32;
+        traffic.last_packet_ms = state
+            .last_arrival
+            .map(|t| now.duration_since(t).as_secs_f64() * 1000.0);
+        traffic
+    }
+
+    /// The last frame received, if any.
+    #[must_use]
+    pub fn latest(&self) -> Option<ReceivedFrame> {
+        lock(&self.state).history.back().cloned()
+    }
+
+    /// Starts keeping every frame that arrives (a take being recorded).
+    pub fn start_recording(&self) {
+        lock(&self.state).recording = Some(Vec::new());
+    }
+
+    /// Frames recorded so far, while recording.
+    #[must_use]
+    pub fn recorded(&self) -> Option<usize> {
+        lock(&self.state).recording.as_ref().map(Vec::len)
+    }
+
+    /// Stops recording and returns the frames kept, or `None` when it was not recording.
+    #[must_use]
+    pub fn stop_recording(&self) -> Option<Vec<ReceivedFrame>> {
+        lock(&self.state).recording.take()
+    }
+
+    /// Waits up to `timeout` for `count` frames to have arrived and returns the first `count`
+    /// still kept (fewer when the time ran out).
+    #[must_use]
+    pub fn wait_for_frames(&self, count: usize, timeout: Duration) -> Vec<ReceivedFrame> {
+        let until = Instant::now() + timeout;
+        loop {
+            {
+                let state = lock(&self.state);
+                if state.history.len() >= count || Instant::now() >= until {
+                    return state.history.iter().take(count).cloned().collect();
+                }
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+}
+
+impl Drop for Marionette {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+fn forget_old(arrivals: &mut VecDeque<Instant>, now: Instant) {
+    while arrivals
+        .front()
+        .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
+    {
+        arrivals.pop_front();
+    }
+}
+
+/// The receiving thread: every datagram is counted, decoded and applied, or counted as dropped.
+fn receive(socket: &UdpSocket, state: &Mutex<State>, stop: &AtomicBool) {
+    // One byte more than the largest accepted datagram tells an oversized one from a full one.
+    let mut buffer = vec![0u8; MAX_DATAGRAM + 1];
+    while !stop.load(Ordering::Relaxed) {
+        let (length, sender) = match socket.recv_from(&mut buffer) {
+            Ok(received) => received,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                continue;
+            }
+            Err(e) => {
+                tracing::debug!("vmc: {e}");
+                continue;
+            }
+        };
+        let now = Instant::now();
+        let mut state = lock(state);
+        state.traffic.packets += 1;
+        state.traffic.sender = Some(sender);
+        state.last_arrival = Some(now);
+        state.arrivals.push_back(now);
+        forget_old(&mut state.arrivals, now);
+        if length > MAX_DATAGRAM {
+            state.traffic.oversized += 1;
+            continue;
+        }
+        match rosc::decoder::decode_udp(&buffer[..length]) {
+            Ok((_, packet)) => {
+                let time = now.duration_since(state.started).as_secs_f64();
+                if !apply(&mut state, &packet, time, 0) {
+                    state.traffic.malformed += 1;
+                }
+            }
+            Err(_) => state.traffic.malformed += 1,
+        }
+    }
+}
+
+/// Applies a packet; false when it is malformed (bad arguments, bundles nested too deep).
+fn apply(state: &mut State, packet: &OscPacket, time: f64, depth: usize) -> bool {
+    match packet {
+        OscPacket::Bundle(bundle) => {
+            depth < MAX_DEPTH
+                && bundle
+                    .content
+                    .iter()
+                    .all(|p| apply(state, p, time, depth + 1))
+        }
+        OscPacket::Message(message) => apply_message(state, message, time),
+    }
+}
+
+fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
+    let float = |arg: Option<&OscType>| match arg {
+        Some(OscType::Float(v)) if v.is_finite() => Some(*v),
+        Some(OscType::Double(v)) if v.is_finite() => Some(*v as f32),
+        _ => None,
+    };
+    match message.addr.as_str() {
+        "/VMC/Ext/Blend/Val" => {
+            let (Some(OscType::String(name)), Some(value)) =
+                (message.args.first(), float(message.args.get(1)))
+            else {
+                return false;
+            };
+            let arkit = &state.arkit;
+            let index = *state.lookup.entry(name.clone()).or_insert_with(|| {
+                faceanim_rig::names::arkit_name(name).and_then(|a| arkit.get(a).copied())
+            });
+            match index {
+                Some(i) => state.current[i] = value.clamp(0.0, 1.0),
+                None => state.traffic.unmatched += 1,
+            }
+            true
+        }
+        "/VMC/Ext/Blend/Apply" => {
+            state.traffic.frames += 1;
+            let frame = ReceivedFrame {
+                time,
+                weights: state.current.clone(),
+                head: state.head,
+            };
+            if let Some(recording) = state.recording.as_mut() {
+                recording.push(frame.clone());
+            }
+            if state.history.len() >= HISTORY {
+                state.history.pop_front();
+            }
+            state.history.push_back(frame);
+            true
+        }
+        "/VMC/Ext/Bone/Pos" => {
+            let Some(OscType::String(bone)) = message.args.first() else {
+                return false;
+            };
+            let values: Option<Vec<f32>> = (1..8).map(|k| float(message.args.get(k))).collect();
+            let Some(values) = values else {
+                return false;
+            };
+            if bone == "Head" {
+                state.head = head_angles([values[3], values[4], values[5], values[6]]);
+            }
+            true
+        }
+        "/VMC/Ext/OK" | "/VMC/Ext/T" | "/VMC/Ext/Root/Pos" | "/VMC/Ext/Blend/Apply/All" => true,
+        other if other.starts_with("/VMC/Ext/") => true,
+        _ => {
+            state.traffic.unknown += 1;
+            true
+        }
+    }
+}

@@ -1,0 +1,141 @@
+//! VMC in the studio: a marionette that phone trackers (iFacialMocap, Waidayo) or other
+//! performers drive live, recorded as takes like the webcam's; and a performer that sends the
+//! live webcam face out to VTuber apps and engines.
+
+use std::net::SocketAddr;
+use std::sync::{Arc, Mutex};
+
+use faceanim_live::{Marionette, Names, Performer};
+use faceanim_rig::Character;
+use faceanim_take::{ReceivedFrame, Take};
+
+use super::{CaptureDesk, Previews, lock};
+use crate::error::ApiError;
+use crate::views::{VmcSendView, VmcView, names};
+
+/// Where VMC goes in and out, as the studio was started.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct VmcConfig {
+    /// Listen for a performer here (`--vmc-listen`).
+    pub listen: Option<SocketAddr>,
+    /// Send the live face here under these names (`--vmc-send`, `--vmc-names`).
+    pub send: Option<(SocketAddr, Names)>,
+}
+
+/// The desk's VMC links.
+#[derive(Debug, Default)]
+pub(super) struct Vmc {
+    config: VmcConfig,
+    marionette: Option<Marionette>,
+    pub(super) performer: Option<Arc<Mutex<Performer>>>,
+}
+
+impl Vmc {
+    /// The links as the studio was started.
+    pub(super) fn config(&self) -> VmcConfig {
+        self.config
+    }
+}
+
+impl CaptureDesk {
+    /// Opens the VMC links of `config` for `character` (again, after the character changed).
+    ///
+    /// # Errors
+    /// [`ApiError::Vmc`] when the port cannot be bound or the names cover none of the
+    /// character's shapes.
+    pub fn open_vmc(&mut self, config: VmcConfig, character: &Character) -> Result<(), ApiError> {
+        // The old socket goes first: the new one binds the same port.
+        self.vmc = Vmc {
+            config,
+            ..Vmc::default()
+        };
+        let blendshapes = names(character);
+        if let Some(address) = config.listen {
+            self.vmc.marionette = Some(Marionette::listen(address, &blendshapes)?);
+        }
+        if let Some((destination, names)) = config.send {
+            let performer = Performer::new(destination, &blendshapes, names)?;
+            self.vmc.performer = Some(Arc::new(Mutex::new(performer)));
+        }
+        Ok(())
+    }
+
+    /// The VMC links' state, when there are any.
+    #[must_use]
+    pub fn vmc_view(&self) -> Option<VmcView> {
+        let sending = self.vmc.performer.as_ref().map(|p| {
+            let performer = lock(p);
+            let stats = performer.stats();
+            VmcSendView {
+                to: performer.destination().to_string(),
+                frames: stats.frames,
+                dropped: stats.dropped,
+                last_error: stats.last_error.clone(),
+            }
+        });
+        let marionette = self.vmc.marionette.as_ref();
+        if marionette.is_none() && sending.is_none() {
+            return None;
+        }
+        let traffic = marionette.map(Marionette::traffic).unwrap_or_default();
+        let latest = marionette.and_then(Marionette::latest);
+        Some(VmcView {
+            listening: marionette.map(|m| m.address().to_string()),
+            sender: traffic.sender.map(|s| s.to_string()),
+            packets: traffic.packets,
+            frames: traffic.frames,
+            malformed: traffic.malformed,
+            unknown: traffic.unknown,
+            oversized: traffic.oversized,
+            unmatched: traffic.unmatched,
+            rate: traffic.rate,
+            last_packet_ms: traffic.last_packet_ms,
+            recording: marionette.and_then(Marionette::recorded),
+            weights: latest.as_ref().map(|f| f.weights.clone()),
+            head: latest.and_then(|f| f.head),
+            sending,
+        })
+    }
+
+    fn marionette(&self) -> Result<&Marionette, ApiError> {
+        self.vmc.marionette.as_ref().ok_or(ApiError::Live(
+            "the studio is not listening for VMC: start it with --vmc-listen [PORT]",
+        ))
+    }
+
+    /// Starts recording the frames that arrive over VMC.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when the studio does not listen for VMC.
+    pub fn start_vmc_recording(&self) -> Result<(), ApiError> {
+        self.marionette()?.start_recording();
+        Ok(())
+    }
+
+    /// Stops recording and makes the frames the take (with their arrival times); returns their
+    /// count.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when it was not recording or nothing arrived.
+    pub fn stop_vmc_recording(&mut self, character: &Character) -> Result<usize, ApiError> {
+        let frames = self
+            .marionette()?
+            .stop_recording()
+            .ok_or(ApiError::Live("not recording VMC"))?;
+        if frames.is_empty() {
+            return Err(ApiError::Live("nothing arrived over VMC while recording"));
+        }
+        let count = frames.len();
+        let frames = frames
+            .into_iter()
+            .map(|f| ReceivedFrame {
+                time: f.time,
+                weights: f.weights,
+                head: f.head,
+            })
+            .collect();
+        let take = Take::from_received(character, "vmc", frames, self.filtering)?;
+        self.set_take(take, Previews::new());
+        Ok(count)
+    }
+}

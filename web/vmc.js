@@ -1,0 +1,74 @@
+// VMC in the Capture tab: when the studio listens for VMC (`--vmc-listen`), a phone tracker
+// (iFacialMocap, Waidayo) or another performer drives the character live, and Record makes a
+// take of what arrives, with its arrival times, edited and exported like any take.
+
+import { api } from './api.js';
+import { currentView, post, showTakeFrame, turnHead } from './capture.js';
+import { applyLayer, pause } from './playback.js';
+import { showError, showFailure } from './status.js';
+
+const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
+const button = (id) => /** @type {HTMLButtonElement} */ (document.getElementById(id));
+
+/** What arrives over VMC while shown live: the character's weights and the head pose. */
+export const vmc = {
+  running: false,
+  /** @type {number[]|null} */ weights: null,
+  /** @type {number[]|null} */ head: null,
+};
+
+/** Shows the VMC controls when the studio listens. */
+export function showControls(view) {
+  const listening = !!(view && view.vmc && view.vmc.listening);
+  $('vmc-row').hidden = !listening;
+  $('vmc-stats').hidden = !listening;
+  if (listening && !vmc.running) $('vmc-stats').textContent = `Listening for VMC on ${view.vmc.listening}.`;
+}
+
+/** Reads what arrived, over and over (one request at a time) while live. */
+async function poll() {
+  while (vmc.running) {
+    try {
+      const state = await api('GET', 'api/capture/vmc');
+      if (!vmc.running || !state) break;
+      vmc.weights = state.weights;
+      vmc.head = state.head;
+      if (state.head) turnHead(state.head);
+      applyLayer();
+      const age = state.last_packet_ms === null ? 'nothing yet' : `last ${state.last_packet_ms.toFixed(0)} ms ago`;
+      const dropped = state.malformed + state.oversized;
+      $('vmc-stats').textContent = `VMC on ${state.listening}${state.sender ? ` from ${state.sender}` : ''}: ${state.rate.toFixed(0)} packets/s, ${age}; ${state.frames} frames${dropped ? `, ${dropped} bad packets dropped` : ''}${state.unknown ? `, ${state.unknown} unknown messages` : ''}${state.recording !== null ? `; recording ${state.recording}` : ''}.`;
+      if (state.recording !== null) $('vmc-record').textContent = `Stop (${state.recording})`;
+    } catch (e) { showFailure(e); break; }
+    await new Promise((r) => requestAnimationFrame(r));
+  }
+}
+
+function start() {
+  showError('');
+  Object.assign(vmc, { running: true, weights: null, head: null });
+  pause();
+  $('vmc-live').textContent = 'Stop VMC';
+  button('vmc-record').disabled = false;
+  poll();
+}
+
+async function stop() {
+  vmc.running = false;
+  vmc.weights = null;
+  $('vmc-live').textContent = 'VMC (live)';
+  $('vmc-record').textContent = 'Record';
+  button('vmc-record').disabled = true;
+  showTakeFrame();
+}
+
+$('vmc-live').onclick = () => (vmc.running ? stop() : start());
+$('vmc-record').onclick = async () => {
+  const view = currentView();
+  const recording = view && view.vmc && view.vmc.recording !== null;
+  if (!recording) {
+    if (await post('api/capture/vmc/record', { on: true })) $('vmc-record').textContent = 'Stop (0)';
+  } else if (await post('api/capture/vmc/record', { on: false })) {
+    await stop();
+  }
+};
