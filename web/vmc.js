@@ -1,10 +1,13 @@
 // VMC in the Capture tab: when the studio listens for VMC (`--vmc-listen`), a phone tracker
 // (iFacialMocap, Waidayo) or another performer drives the character live, and Record makes a
-// take of what arrives, with its arrival times, edited and exported like any take.
+// take of what arrives, with its arrival times, edited and exported like any take. VMC out:
+// when the studio sends VMC (`--vmc-send`), what the viewport plays (a take, the sketch, both)
+// goes to the marionette frame by frame.
 
 import { api } from './api.js';
 import { currentView, post, showTakeFrame, turnHead } from './capture.js';
-import { applyLayer, pause } from './playback.js';
+import { applyLayer, characterMeshes, isPlaying, onFrame, pause } from './playback.js';
+import * as store from './store.js';
 import { showError, showFailure } from './status.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
@@ -72,3 +75,19 @@ $('vmc-record').onclick = async () => {
     await stop();
   }
 };
+
+// VMC out while playing: each frame the viewport shows, one request at a time (a slow one
+// skips frames rather than falling behind).
+let sending = false;
+onFrame((frame) => {
+  const view = currentView();
+  const character = store.character();
+  const mesh = characterMeshes()[0];
+  if (sending || !isPlaying() || !view || !view.vmc || !view.vmc.sending || !character || !mesh || !mesh.morphTargetInfluences) return;
+  const take = view.take;
+  const head = take && take.head.length ? take.head[Math.min(Math.round(frame), take.frames - 1)] : null;
+  sending = true;
+  api('POST', 'api/capture/vmc/send', { weights: Array.from(mesh.morphTargetInfluences.slice(0, character.blendshapes.length)), head })
+    .catch(showFailure)
+    .finally(() => { sending = false; });
+});

@@ -636,12 +636,13 @@ fn a_phone_trackers_vmc_stream_becomes_a_take() {
 }
 
 /// VMC out: with `--vmc-send`, each live webcam frame's face goes to the marionette (an
-/// independent python-osc receiver) as soon as it is tracked, in ARKit's names.
+/// independent python-osc receiver) as soon as it is tracked, in ARKit's names, and so does
+/// each frame the page plays.
 #[test]
 fn the_live_webcam_face_goes_out_over_vmc() {
     let dir = tempfile::tempdir().unwrap();
     let report = dir.path().join("received.json");
-    let (mut peer, port) = support::vmc_receiver(3, 60.0, &report);
+    let (mut peer, port) = support::vmc_receiver(4, 60.0, &report);
     let to = format!("127.0.0.1:{port}");
     let studio = start_with(
         &dir.path().join("out.faceanim.json"),
@@ -678,11 +679,48 @@ fn the_live_webcam_face_goes_out_over_vmc() {
         let result: serde_json::Value = serde_json::from_str(&body).unwrap();
         assert_eq!(result["found"], true, "{body}");
     }
+    // A frame the page plays: the ICT head's weights with jawOpen at 0.3, the head turned 10°.
+    let (_, body) = request(studio.port, "GET", "/api/character", &[], b"");
+    let character: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let names = character["blendshapes"].as_array().unwrap();
+    let mut weights = vec![0.0f32; names.len()];
+    weights[names.iter().position(|n| n == "jawOpen").unwrap()] = 0.3;
+    let json = [("Content-Type", "application/json")];
+    let frame = serde_json::json!({ "weights": weights, "head": [10.0, 0.0, 0.0] }).to_string();
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/vmc/send",
+        &json,
+        frame.as_bytes(),
+    );
+    assert_eq!(status, 200, "{body}");
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/vmc/send",
+        &json,
+        br#"{"weights": [0.5]}"#,
+    );
+    assert!(status == 400 && body.contains("weights"), "{status} {body}");
     assert!(peer.wait().unwrap().success());
     let received: serde_json::Value =
         serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
     let datagrams = received["datagrams"].as_array().unwrap();
-    assert_eq!(datagrams.len(), 3, "{received}");
+    assert_eq!(datagrams.len(), 4, "{received}");
+    let played = datagrams[3]["messages"].as_array().unwrap();
+    assert!(
+        played.iter().any(|m| m["address"] == "/VMC/Ext/Blend/Val"
+            && m["args"][0][1] == "JawOpen"
+            && (m["args"][1][1].as_f64().unwrap() - 0.3).abs() < 1e-6),
+        "{played:?}"
+    );
+    let head = played
+        .iter()
+        .find(|m| m["address"] == "/VMC/Ext/Bone/Pos")
+        .unwrap();
+    let qy = head["args"][5][1].as_f64().unwrap();
+    assert!((qy + 5f64.to_radians().sin()).abs() < 1e-5, "{head}");
     let jaw: Vec<f64> = datagrams[0]["messages"]
         .as_array()
         .unwrap()

@@ -69,6 +69,7 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/live/record", post(live_record))
         .route("/api/capture/vmc", get(vmc_view))
         .route("/api/capture/vmc/record", post(vmc_record))
+        .route("/api/capture/vmc/send", post(vmc_send))
         .route(
             "/api/capture/session.json",
             get(|b: State<Both>| export(b, Format::Session)),
@@ -418,6 +419,29 @@ async fn vmc_record(State(both): State<Both>, body: Bytes) -> Answer<CaptureView
         both.desk().stop_vmc_recording(&character)?;
     }
     Ok(state_of(&both))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VmcFrame {
+    weights: Vec<f32>,
+    #[serde(default)]
+    head: Option<[f32; 3]>,
+}
+
+/// What the send of one frame came to.
+#[derive(serde::Serialize)]
+struct VmcSent {
+    sent: bool,
+}
+
+async fn vmc_send(State(both): State<Both>, body: Bytes) -> Answer<VmcSent> {
+    let frame: VmcFrame = json_body(&body, "frame")?;
+    let blendshapes = both.studio().character.blendshapes().len();
+    let sent = both
+        .desk()
+        .send_vmc_frame(&frame.weights, frame.head, blendshapes)?;
+    Ok(axum::Json(VmcSent { sent }))
 }
 
 fn dimension(headers: &HeaderMap, name: &str) -> Result<usize, ApiError> {

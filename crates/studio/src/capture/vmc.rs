@@ -23,11 +23,24 @@ pub struct VmcConfig {
 }
 
 /// The desk's VMC links.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub(super) struct Vmc {
     config: VmcConfig,
     marionette: Option<Marionette>,
     pub(super) performer: Option<Arc<Mutex<Performer>>>,
+    /// The clock of the frames the page sends.
+    started: std::time::Instant,
+}
+
+impl Default for Vmc {
+    fn default() -> Vmc {
+        Vmc {
+            config: VmcConfig::default(),
+            marionette: None,
+            performer: None,
+            started: std::time::Instant::now(),
+        }
+    }
 }
 
 impl Vmc {
@@ -95,6 +108,37 @@ impl CaptureDesk {
             head: latest.and_then(|f| f.head),
             sending,
         })
+    }
+
+    /// Sends one frame of the character's face (what the page shows while playing a take or
+    /// the sketch) to the marionette; false when the network refused it.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when the studio does not send VMC, [`ApiError::Invalid`] for weights
+    /// that are not one finite number per blendshape.
+    pub fn send_vmc_frame(
+        &self,
+        weights: &[f32],
+        head: Option<[f32; 3]>,
+        blendshapes: usize,
+    ) -> Result<bool, ApiError> {
+        let performer = self.vmc.performer.as_ref().ok_or(ApiError::Live(
+            "the studio does not send VMC: start it with --vmc-send HOST:PORT",
+        ))?;
+        if weights.len() != blendshapes || weights.iter().any(|w| !w.is_finite()) {
+            return Err(ApiError::Invalid(format!(
+                "weights: one finite number per blendshape ({blendshapes}), got {} values",
+                weights.len()
+            )));
+        }
+        if head.is_some_and(|h| h.iter().any(|a| !a.is_finite())) {
+            return Err(ApiError::Invalid(
+                "head: three finite angles in degrees".into(),
+            ));
+        }
+        let mut performer = lock(performer);
+        let time = self.vmc.started.elapsed().as_secs_f32();
+        Ok(performer.send(weights, head, time))
     }
 
     fn marionette(&self) -> Result<&Marionette, ApiError> {
