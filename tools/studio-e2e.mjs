@@ -41,26 +41,39 @@ try {
   check(layout.viewport.width > layout.window * 0.6, `the viewport is squeezed in the Sketch tab: ${JSON.stringify(layout)}`);
   check(consoleErrors.length === 0, `page errors on open: ${consoleErrors.join('; ')}`);
 
-  // 1. A stroke from the left mouth corner towards the mouthSmile_L target.
+  // 1. The current frame typed as 45, then a stroke from the left mouth corner towards the
+  //    mouthSmile_L target: its action starts at frame 45, on whole frames.
   const anchors = await page.evaluate(() => fetch('api/character/anchors').then((r) => r.json()));
-  const smile = anchors.find((a) => a.name === 'mouthSmile_L');
-  check(smile && smile.vertex !== null, 'no mouthSmile_L anchor on this character');
-  const [sx, sy] = await page.evaluate((p) => window.studio.project(p), smile.rest);
-  // Aim as a user does: at the mouthSmile_L sphere the studio offers from where the stroke starts.
-  const startPoint = await page.evaluate(([x, y]) => window.studio.hit(x, y), [sx, sy]);
-  check(startPoint, 'the mouth corner is not under the pointer');
-  const offered = await page.evaluate((p) => fetch('api/candidates', { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ point: p, frame: 0 }) }).then((r) => r.json()), startPoint);
-  const sphere = offered && offered.candidates.find((c) => c.name === 'mouthSmile_L');
-  check(sphere, `no mouthSmile_L target from the mouth corner: ${JSON.stringify(offered && offered.candidates.map((c) => c.name))}`);
-  const [tx, ty] = await page.evaluate((p) => window.studio.project(p), sphere.position);
-  await page.mouse.move(sx, sy);
-  await page.mouse.down();
-  for (let i = 1; i <= 20; i++) {
-    await page.mouse.move(sx + (tx - sx) * i / 20, sy + (ty - sy) * i / 20);
-    await page.waitForTimeout(25);
-  }
+  await page.getByLabel('Current frame').fill('45');
+  await page.getByLabel('Current frame').press('Enter');
+  await page.waitForFunction(() => Math.round(window.studio.frame) === 45, null, { timeout: 10000 });
+  /** Drags the mouse from where `name` moves most towards its target sphere, as a user aims. */
+  const drawStroke = async (name) => {
+    const anchor = anchors.find((a) => a.name === name);
+    check(anchor && anchor.vertex !== null, `no ${name} anchor on this character`);
+    const [ax, ay] = await page.evaluate((p) => window.studio.project(p), anchor.rest);
+    const from = await page.evaluate(([x, y]) => window.studio.hit(x, y), [ax, ay]);
+    check(from, `the ${name} vertex is not under the pointer`);
+    const offered = await page.evaluate(([p, f]) => fetch('api/candidates', { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ point: p, frame: f }) }).then((r) => r.json()), [from, Math.round(await page.evaluate(() => window.studio.frame))]);
+    const target = offered && offered.candidates.find((c) => c.name === name);
+    check(target, `no ${name} target from its vertex: ${JSON.stringify(offered && offered.candidates.map((c) => c.name))}`);
+    const [bx, by] = await page.evaluate((p) => window.studio.project(p), target.position);
+    await page.mouse.move(ax, ay);
+    await page.mouse.down();
+    for (let i = 1; i <= 20; i++) {
+      await page.mouse.move(ax + (bx - ax) * i / 20, ay + (by - ay) * i / 20);
+      await page.waitForTimeout(25);
+      if (i === 14) await shot(`aiming-${name}`);
+    }
+    return async () => page.mouse.up();
+  };
+  const release = await drawStroke('mouthSmile_L');
+  // While drawing, the candidate under the cursor is named beside its sphere.
+  const named = await page.evaluate(() => { const l = document.getElementById('candidate-label'); return l && !l.hidden ? l.textContent : ''; });
+  check(named.startsWith('mouthSmile_L '), `the candidate under the cursor is labelled '${named}'`);
+  measurements.candidate_label = named;
   const released = Date.now();
-  await page.mouse.up();
+  await release();
   await page.waitForSelector('#timeline .row', { timeout: 10000 });
   measurements.release_to_timeline_row_ms = Date.now() - released;
   measurements.release_to_action_drawn_ms = await page.evaluate(() => window.studio.lastStrokeMs);
@@ -69,6 +82,9 @@ try {
   await shot('02-stroke');
   let s = await state();
   check(s.actions.length === 1, `expected one action, got ${JSON.stringify(s.actions.map((a) => a.name))}`);
+  check(s.actions[0].start_frame === 45 && Number.isInteger(s.actions[0].end_frame), `the stroke made frames ${s.actions[0].start_frame}–${s.actions[0].end_frame}, not from 45 on whole frames`);
+  const drawnProject = await page.evaluate(() => fetch('api/project').then((r) => r.json()));
+  check(drawnProject.strokes[0].symmetry === false, `the studio did not record the stroke's own mirror choice: ${JSON.stringify(drawnProject.strokes[0].symmetry)}`);
   const label = await page.textContent('#timeline .row .label');
   check(label.includes('mouthSmile_L'), `timeline shows '${label}', not mouthSmile_L`);
   let c = await clip();
@@ -92,6 +108,8 @@ try {
   s = await state();
   const weightDragged = s.actions[0].sides[0].weight;
   check(Math.abs(weightDragged - weightBefore) > 0.1, `dragging the arrow left the weight at ${weightDragged} (was ${weightBefore})`);
+  check(s.actions.length === 1, 'pressing on the arrow started a new stroke');
+  check(s.actions[0].sides[0].straight, 'moving the end of a straight stroke bent it');
   await shot('03-arrow-dragged');
   measurements.weight_before = weightBefore;
   measurements.weight_dragged = weightDragged;
@@ -107,8 +125,26 @@ try {
   check(Math.abs((await weightNow()) - weightDragged) < 1e-4, 'redo did not bring back the dragged weight');
   await shot('04-undo-redo');
 
-  // 4. Symmetry: the action gains its mirror (mouthSmile_R).
+  // 4. Mirroring as the seed has it: the switch mirrors the strokes drawn while it is on; the
+  //    one-sided smile stays one-sided, a stroke drawn now is mirrored, and each action keeps
+  //    its own choice (here turned on for the first one through its edit).
   await page.check('#symmetry');
+  await page.waitForFunction(() => window.studio.state.settings.symmetry === true, null, { timeout: 10000 });
+  s = await state();
+  check(s.actions[0].symmetric === false, 'ticking the mirror switch re-edited the one-sided smile');
+  const releaseMirrored = await drawStroke('mouthSmile_R');
+  await releaseMirrored();
+  await page.waitForFunction(() => window.studio.state.actions.length === 2, null, { timeout: 10000 });
+  s = await state();
+  const drawnAfter = s.actions.find((a) => a.stroke === 1);
+  check(drawnAfter && drawnAfter.symmetric, `a stroke drawn with the switch on is not mirrored: ${JSON.stringify(drawnAfter && drawnAfter.name)}`);
+  await shot('05-mirrored-stroke');
+  await page.locator('#viewport').focus();
+  await page.keyboard.press('Delete');
+  await page.waitForFunction(() => window.studio.state.actions.length === 1, null, { timeout: 10000 });
+  await page.evaluate(() => fetch('api/strokes/0', { method: 'PATCH', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ symmetry: true }) }));
+  await page.reload();
+  await ready();
   await page.waitForFunction(() => window.studio.state.actions[0]?.symmetric === true, null, { timeout: 10000 });
   await ready();
   s = await state();
@@ -138,7 +174,7 @@ try {
   // The drawn stroke lasts as long as the page took to handle the mouse (longer where the page
   // draws slowly), and the nine strokes below start on the face it poses: its length is pinned
   // so that they meet the same animation on any machine.
-  await page.evaluate(() => fetch('api/strokes/0', { method: 'PATCH', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ duration: 270 }) }).then((r) => { if (!r.ok) throw new Error(`PATCH: ${r.status}`); }));
+  await page.evaluate(() => fetch('api/strokes/0', { method: 'PATCH', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ start_frame: 0, duration: 270 }) }).then((r) => { if (!r.ok) throw new Error(`PATCH: ${r.status}`); }));
   const names = ['jawOpen', 'mouthSmile_R', 'eyeBlink_L', 'eyeBlink_R', 'browInnerUp_L', 'mouthFunnel', 'cheekPuff_L', 'browOuterUp_L', 'mouthPucker'];
   for (const [k, name] of names.entries()) {
     const a = anchors.find((x) => x.name === name);

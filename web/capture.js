@@ -190,13 +190,13 @@ export async function post(path, body) {
 }
 
 // ---------- adapter ----------
-$('train').onclick = () => post('api/capture/adapter/train', { samples: Math.max(100, Math.round(Number(input('train-samples').value) || 10000)) });
+$('train').onclick = () => post('api/capture/adapter/train', { samples: Math.round(Number(input('train-samples').value) || 10000) });
 $('finetune').onclick = () => post('api/capture/adapter/finetune');
 
 // ---------- smoothing ----------
 async function sendFiltering() {
   const body = {
-    keyframe_every: Math.max(1, Math.round(Number(input('keyframe-every').value) || 1)),
+    keyframe_every: Math.round(Number(input('keyframe-every').value)),
     smoothing: input('one-euro').checked ? { min_cutoff: Number(input('min-cutoff').value), beta: Number(input('beta').value) } : null,
   };
   try { showError(''); apply(await api('PUT', 'api/capture/filtering', body)); }

@@ -87,6 +87,11 @@ $('help-close').onclick = () => { $('help').hidden = true; };
 $('step-back').onclick = () => step(-1);
 $('step-forward').onclick = () => step(1);
 $('play-back').onclick = playBackwards;
+// Typing a frame number moves the playhead there (whole frames).
+$('current-frame').addEventListener('change', (e) => {
+  const typed = Number(/** @type {HTMLInputElement} */ (e.target).value);
+  if (Number.isFinite(typed)) { pause(); setFrame(Math.round(typed)); }
+});
 
 window.addEventListener('keydown', (e) => {
   if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;

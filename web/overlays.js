@@ -61,6 +61,7 @@ export const shownCandidates = () => shown;
  * hovering), or none. */
 export function showCandidates(found, faint) {
   shown = found;
+  if (enlarged) labelCandidate(null, 0);
   clearGroup(candidateGroup);
   if (!found) return;
   const r = store.character().diagonal / 220;
@@ -76,37 +77,94 @@ export function showCandidates(found, faint) {
 // ---------- ghost: the blendshape a stroke's end currently selects ----------
 /** @type {THREE.Mesh|null} */
 let ghost = null;
-/** Shows the blendshape `name` at full weight as a translucent copy of the face, or nothing. */
+/** Shows the region blendshape `name` moves, at full weight, tinted (fading out where it moves
+ * little, absent where it does not move, drawn just in front of the face so it never fights
+ * with it), or nothing. */
 export function showGhost(name) {
   invalidate();
   const base = characterMeshes()[0];
   const index = name && base && base.morphTargetDictionary ? base.morphTargetDictionary[name] : undefined;
   if (index === undefined) { if (ghost) ghost.visible = false; return; }
-  const cpu = base.userData.cpuMorph;
-  if (!ghost || ghost.userData.base !== base.geometry || (cpu && ghost.userData.index !== index)) {
-    if (ghost) { scene.remove(ghost); if (ghost.geometry !== base.geometry) ghost.geometry.dispose(); }
-    let geometry = base.geometry;
-    if (cpu) {
-      // Blended on the CPU (`?fast`): the ghost gets the target's own positions.
-      const positions = Float32Array.from(cpu.basePosition);
-      const target = cpu.targets[index].position;
-      if (target) for (let k = 0; k < target.indices.length; k++) { const o = target.indices[k] * 3; for (let c = 0; c < 3; c++) positions[o + c] += target.values[3 * k + c]; }
-      geometry = new THREE.BufferGeometry();
-      geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
-      if (base.geometry.index) geometry.setIndex(base.geometry.index);
-    }
-    ghost = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ color: 0x60d0ff, transparent: true, opacity: 0.22, depthWrite: false }));
+  if (!ghost || ghost.userData.base !== base.geometry || ghost.userData.index !== index) {
+    if (ghost) { scene.remove(ghost); ghost.geometry.dispose(); ghost.material.dispose(); }
+    ghost = new THREE.Mesh(ghostGeometry(base, index), new THREE.MeshBasicMaterial({
+      color: 0x60d0ff, vertexColors: true, transparent: true, depthWrite: false,
+      polygonOffset: true, polygonOffsetFactor: -2, polygonOffsetUnits: -2, side: THREE.DoubleSide,
+    }));
     ghost.userData = { base: base.geometry, index };
-    ghost.updateMorphTargets();
     ghost.matrixAutoUpdate = false;
     ghost.renderOrder = 5;
-    ghost.frustumCulled = !cpu;
+    ghost.frustumCulled = false;
     scene.add(ghost);
   }
   ghost.matrix.copy(base.matrixWorld);
   ghost.matrixWorldNeedsUpdate = true;
-  if (ghost.morphTargetInfluences) { ghost.morphTargetInfluences.fill(0); ghost.morphTargetInfluences[index] = 1; }
   ghost.visible = true;
+}
+
+/** The face with target `index` at weight 1, and per vertex an opacity that grows with how far
+ * the target moves it (none where it does not). */
+function ghostGeometry(base, index) {
+  const cpu = base.userData.cpuMorph;
+  const rest = cpu ? cpu.basePosition : base.geometry.attributes.position.array;
+  const positions = Float32Array.from(rest);
+  const moved = new Float32Array(positions.length / 3);
+  const add = (vertex, dx, dy, dz) => {
+    positions[3 * vertex] += dx; positions[3 * vertex + 1] += dy; positions[3 * vertex + 2] += dz;
+    moved[vertex] = Math.hypot(dx, dy, dz);
+  };
+  if (cpu) {
+    const target = cpu.targets[index].position;
+    if (target) for (let k = 0; k < target.indices.length; k++) add(target.indices[k], target.values[3 * k], target.values[3 * k + 1], target.values[3 * k + 2]);
+  } else {
+    const delta = base.geometry.morphAttributes.position[index];
+    for (let v = 0; v < delta.count; v++) add(v, delta.getX(v), delta.getY(v), delta.getZ(v));
+  }
+  const most = Math.max(1e-9, ...moved);
+  const colours = new Float32Array(moved.length * 4);
+  moved.forEach((m, v) => { colours.set([1, 1, 1, Math.min(1, 4 * m / most) * 0.55], 4 * v); });
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
+  geometry.setAttribute('color', new THREE.BufferAttribute(colours, 4));
+  if (base.geometry.index) geometry.setIndex(base.geometry.index);
+  return geometry;
+}
+
+// ---------- the candidate nearest the pointer, named ----------
+const label = document.createElement('div');
+label.id = 'candidate-label';
+label.hidden = true;
+document.getElementById('viewport').appendChild(label);
+/** The candidate whose sphere is drawn larger. */
+let enlarged = null;
+
+/** Names the candidate `c` beside its sphere (with the weight the stroke reaches so far) and
+ * draws it larger; `null` hides the label. */
+export function labelCandidate(c, weight) {
+  for (const sphere of candidateGroup.children) {
+    const on = c !== null && sphere.userData.name === c.name && sphere.position.distanceToSquared(new THREE.Vector3(...c.position)) < 1e-12;
+    sphere.scale.setScalar(on ? 1.8 : 1);
+  }
+  enlarged = c;
+  invalidate();
+  if (!c) { label.hidden = true; return; }
+  const [x, y] = project(c.position);
+  const rect = label.parentElement.getBoundingClientRect();
+  label.textContent = `${c.name ?? c.goal} ${weight.toFixed(2)}`;
+  label.style.left = `${x - rect.left + 12}px`;
+  label.style.top = `${y - rect.top - 10}px`;
+  label.hidden = false;
+}
+
+/** The weight a stroke from the reference vertex reaches towards candidate `c` when its end is
+ * at `point`: its projection on the way to the target, 0 to 1. */
+export function weightTowards(c, point) {
+  const found = shown;
+  if (!found) return 0;
+  const from = new THREE.Vector3(...found.reference_position);
+  const way = new THREE.Vector3(...c.position).sub(from);
+  const length = way.lengthSq();
+  return length > 0 ? Math.min(1, Math.max(0, point.clone().sub(from).dot(way) / length)) : 0;
 }
 
 /** The candidate sphere nearest the pointer on screen, if any is shown. */

@@ -105,10 +105,12 @@ export async function loadBaked() {
   setFrame(frame);
 }
 
-/** Shows `f` (clamped to the animation). */
+/** Shows frame `f` (0 or later). */
 export function setFrame(f) {
   const last = lastFrame();
-  frame = Math.min(Math.max(0, f), last);
+  // Beyond the last frame is allowed (the animator types where the next stroke starts); the
+  // animation holds its last pose there.
+  frame = Math.max(0, f);
   const state = store.state();
   const fps = state ? state.fps : 30;
   // The mixer writes a track only when its value changes, so the sketch's own values go back
@@ -124,7 +126,9 @@ export function setFrame(f) {
     if (influences) mesh.userData.sketch = players.length ? influences.slice() : influences.map(() => 0);
   }
   applyLayer();
-  $('frame-label').textContent = `frame ${frame.toFixed(0)} / ${last}`;
+  $('frame-label').textContent = `/ ${last}`;
+  const field = /** @type {HTMLInputElement} */ ($('current-frame'));
+  if (document.activeElement !== field) field.value = frame.toFixed(0);
   for (const listener of frameListeners) listener(frame);
 }
 

@@ -7,12 +7,12 @@ import * as THREE from 'three';
 import { api } from './api.js';
 import * as handles from './handles.js';
 import { atRest, hitFace, holdRest, currentFrame, isReady } from './playback.js';
-import { nearestCandidate, shownCandidates, showCandidates, showGhost } from './overlays.js';
+import { labelCandidate, nearestCandidate, shownCandidates, showCandidates, showGhost, weightTowards } from './overlays.js';
 import { camera, candidateGroup, clearGroup, controls, onPlane, planeFacingCamera, project, rayFrom, renderer, scene } from './scene.js';
 import { showError, showFailure } from './status.js';
 import * as store from './store.js';
 
-/** @type {null | {plane: THREE.Plane, t0: number, samples: any[], pending: number[][], line: THREE.Line}} */
+/** @type {null | {plane: THREE.Plane, t0: number, samples: any[], pending: number[][], line: THREE.Line, found: any, frame: number}} */
 let stroke = null;
 let lastStrokeMs = 0;
 /** Milliseconds from the release of the last stroke to its action drawn. */
@@ -44,8 +44,9 @@ canvas.addEventListener('pointerdown', (event) => {
   const line = new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: 0xffe080, depthTest: false }));
   line.renderOrder = 13;
   scene.add(line);
-  stroke = { plane: planeFacingCamera(hit), t0: performance.now(), samples: [{ t: 0, p: hit.toArray() }], pending: [], line };
-  api('POST', 'api/candidates', { point: hit.toArray(), frame: currentFrame() }).then((found) => showCandidates(found, false)).catch(() => {});
+  const drawing = { plane: planeFacingCamera(hit), t0: performance.now(), samples: [{ t: 0, p: hit.toArray() }], pending: [], line, found: null, frame: Math.round(currentFrame()) };
+  stroke = drawing;
+  api('POST', 'api/candidates', { point: hit.toArray(), frame: drawing.frame }).then((found) => { drawing.found = found; showCandidates(found, false); }).catch(() => {});
 });
 
 let hoverTimer = 0;
@@ -77,6 +78,8 @@ canvas.addEventListener('pointermove', (event) => {
     stroke.pending = [];
     const nearest = nearestCandidate(event.clientX, event.clientY);
     showGhost(nearest && nearest.name);
+    const last = stroke.samples[stroke.samples.length - 1].p;
+    labelCandidate(nearest, nearest ? weightTowards(nearest, new THREE.Vector3(...last)) : 0);
     stroke.line.geometry.dispose();
     stroke.line.geometry = new THREE.BufferGeometry().setFromPoints(stroke.samples.map((s) => new THREE.Vector3(...s.p)));
   }
@@ -129,6 +132,7 @@ async function endDrag(event) {
   const finished = stroke;
   stroke = null;
   showGhost(null);
+  labelCandidate(null, 0);
   scene.remove(finished.line);
   finished.line.geometry.dispose();
   clearGroup(candidateGroup);
@@ -136,7 +140,11 @@ async function endDrag(event) {
   const released = performance.now();
   aimAtReleasedSphere(finished.samples);
   try {
-    const state = await api('POST', 'api/strokes', { samples: finished.samples });
+    // A new chain starts at the playhead; a stroke from a chain's end starts where that ends.
+    // It is mirrored when the switch is on now, and stays so whatever the switch does later.
+    const continues = finished.found && finished.found.continues !== null && finished.found.continues !== undefined;
+    const settings = store.state().settings;
+    const state = await api('POST', 'api/strokes', { samples: finished.samples, start_frame: continues ? null : finished.frame, symmetry: !!settings.symmetry });
     store.select(state.added);
     store.setState(state, true);
     // From release to the action drawn (arc, handles, timeline row); the bake for playback follows.

@@ -7,6 +7,8 @@ import * as store from './store.js';
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 
 const timeline = $('timeline');
+/** The last frame the ruler shows. */
+let drawnTo = 0;
 const LABEL = 200, PX = 8; // label column width and pixels per frame
 function frameX(f) { return LABEL + f * PX; }
 function drawPlayhead() {
@@ -18,7 +20,8 @@ export function drawTimeline() {
   const state = store.state();
   if (!state) return;
   timeline.innerHTML = '';
-  const last = lastFrame() + 30;
+  const last = Math.max(lastFrame(), Math.ceil(currentFrame())) + 30;
+  drawnTo = last;
   const width = frameX(last) + 20;
   const ruler = document.createElement('div');
   ruler.className = 'ruler';
@@ -94,4 +97,5 @@ function timelineDrag(event, action, box) {
 
 store.onState(() => drawTimeline());
 store.onSelection(() => drawTimeline());
-onFrame(() => drawPlayhead());
+// A playhead typed or played past the ruler's end gets a longer ruler.
+onFrame((frame) => (frame > drawnTo - 5 ? drawTimeline() : drawPlayhead()));

@@ -33,6 +33,10 @@ pub use train::{FinetuneReport, TrainOptions, finetune, train};
 
 use std::path::{Path, PathBuf};
 
+/// The fewest samples a training set may have: fewer cannot be split into training,
+/// validation and test. The command line and the studio refuse fewer before rendering any.
+pub const MIN_SAMPLES: usize = 10;
+
 /// Where a character's adapter lives by default: `NAME.adapter.safetensors` in `folder` (the
 /// character file's folder), or in the current folder.
 #[must_use]

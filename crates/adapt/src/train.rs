@@ -256,15 +256,15 @@ fn adam(net: &Net, learning_rate: f64) -> Result<candle_nn::AdamW, AdaptError> {
 /// Trains an adapter on `dataset`; `control.progress` gets (epoch, max epochs).
 ///
 /// # Errors
-/// [`AdaptError::Training`] if candle fails, [`AdaptError::NotEnoughData`] for fewer than 10
-/// samples, [`AdaptError::Cancelled`] when cancelled.
+/// [`AdaptError::Training`] if candle fails, [`AdaptError::NotEnoughData`] for fewer than
+/// [`crate::MIN_SAMPLES`] samples, [`AdaptError::Cancelled`] when cancelled.
 pub fn train(
     dataset: &Dataset,
     options: &TrainOptions,
     control: Control<'_>,
 ) -> Result<Adapter, AdaptError> {
     let started = Instant::now();
-    if dataset.len() < 10 {
+    if dataset.len() < crate::MIN_SAMPLES {
         return Err(AdaptError::NotEnoughData(dataset.len()));
     }
     let features = options.architecture.features;

@@ -210,8 +210,9 @@ fn train_with_bar(dataset: &Dataset, options: &TrainOptions) -> anyhow::Result<A
 pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     anyhow::ensure!(
-        args.samples >= 10,
-        "--samples must be at least 10, got {}",
+        args.samples >= faceanim_adapt::MIN_SAMPLES,
+        "--samples must be at least {}, got {}",
+        faceanim_adapt::MIN_SAMPLES,
         args.samples
     );
     anyhow::ensure!(

@@ -452,7 +452,17 @@ impl<'c> Sketch<'c> {
         let from = previous.map(|(_, p)| p.to.clone()).unwrap_or_default();
         let a = stroke.start();
         let c = input.end.unwrap_or_else(|| stroke.end());
-        let b = input.mid.unwrap_or_else(|| stroke.middle());
+        // A moved end carries the middle with it: a straight stroke stays straight, a curved one
+        // keeps its bend relative to the chord.
+        let b = input.mid.unwrap_or_else(|| {
+            follow_end(
+                a,
+                stroke.middle(),
+                stroke.end(),
+                c,
+                self.resolved.snap_distance,
+            )
+        });
         let symmetric = input.symmetry.unwrap_or(self.resolved.symmetry);
 
         let mut sides = Vec::new();
@@ -605,12 +615,15 @@ impl<'c> Sketch<'c> {
             self.resolved.subsample,
             self.resolved.easing_exponent(ease),
         );
+        // Actions start and end on whole frames, where an animator can type them.
         let duration = input
             .duration
-            .unwrap_or((input.stroke.duration() * self.fps).max(1.0));
+            .unwrap_or(input.stroke.duration() * self.fps)
+            .round()
+            .max(1.0);
         let start_frame = input
             .start_frame
-            .unwrap_or_else(|| previous.map_or(0.0, |(_, p)| p.end_frame()));
+            .map_or_else(|| previous.map_or(0.0, |(_, p)| p.end_frame()), f32::round);
         let swing = self.swing(&from, &to, &sides);
         Ok(Action {
             chain: previous.map_or(ActionId(index), |(_, p)| p.chain),
@@ -738,4 +751,23 @@ fn distance_to_segment(q: Vec3, a: Vec3, b: Vec3) -> f32 {
         0.0
     };
     q.distance(a + t * ab)
+}
+
+/// Where the middle `b` of a stroke from `a` to `drawn_end` goes when its end moves to `end`:
+/// onto the new chord's midpoint when the stroke was straight (within `snap`), else carried by
+/// the rotation and scaling that take the old chord to the new one, keeping the bend.
+fn follow_end(a: Vec3, b: Vec3, drawn_end: Vec3, end: Vec3, snap: f32) -> Vec3 {
+    if end == drawn_end {
+        return b;
+    }
+    if Path::through(a, b, drawn_end, snap).is_straight() {
+        return (a + end) * 0.5;
+    }
+    let (from, to) = (drawn_end - a, end - a);
+    let (from_length, to_length) = (from.length(), to.length());
+    if from_length <= f32::EPSILON || to_length <= f32::EPSILON {
+        return b;
+    }
+    let turn = glam::Quat::from_rotation_arc(from / from_length, to / to_length);
+    a + turn * ((b - a) * (to_length / from_length))
 }

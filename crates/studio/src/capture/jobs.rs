@@ -164,9 +164,10 @@ pub fn start_training(
     samples: usize,
     seed: u64,
 ) -> Result<(), ApiError> {
-    if samples < 100 {
+    if samples < faceanim_adapt::MIN_SAMPLES {
         return Err(ApiError::Invalid(format!(
-            "samples: at least 100, got {samples}"
+            "samples: at least {}, got {samples}",
+            faceanim_adapt::MIN_SAMPLES
         )));
     }
     let exclusive = faceanim_adapt::sampling::exclusive_pairs(&character, &[])
