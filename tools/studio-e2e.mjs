@@ -125,6 +125,36 @@ try {
   check(Math.abs((await weightNow()) - weightDragged) < 1e-4, 'redo did not bring back the dragged weight');
   await shot('04-undo-redo');
 
+  // 3b. The Action inspector shows the selected action's numbers and edits them, each edit one
+  //     step of undo: duration, start, ease, weight; then all four undone.
+  await page.waitForSelector('#inspector-fields:not([hidden])', { timeout: 10000 });
+  s = await state();
+  const shownWeight = Number(await page.inputValue('#inspect-weight'));
+  check(Math.abs(shownWeight - s.actions[0].sides[0].weight) < 0.006, `the inspector shows weight ${shownWeight}, the action has ${s.actions[0].sides[0].weight}`);
+  check(Number(await page.inputValue('#inspect-start')) === s.actions[0].start_frame, 'the inspector does not show the start frame');
+  const inspected = { ease: s.actions[0].ease, duration: s.actions[0].end_frame - s.actions[0].start_frame };
+  const typeInto = async (label, value) => { const input = page.getByLabel(label, { exact: true }); await input.fill(String(value)); await input.press('Enter'); };
+  await typeInto('Duration in frames', 30);
+  await page.waitForFunction(() => { const a = window.studio.state.actions[0]; return a && a.end_frame - a.start_frame === 30; }, null, { timeout: 10000 });
+  await typeInto('Start frame', 12);
+  await page.waitForFunction(() => window.studio.state.actions[0]?.start_frame === 12, null, { timeout: 10000 });
+  await typeInto('Ease', 0.8);
+  await page.waitForFunction(() => Math.abs(window.studio.state.actions[0]?.ease - 0.8) < 1e-6, null, { timeout: 10000 });
+  await typeInto('Weight', 0.5);
+  await page.waitForFunction(() => Math.abs(window.studio.state.actions[0]?.sides[0].weight - 0.5) < 0.05, null, { timeout: 10000 });
+  s = await state();
+  check(s.actions.length === 1 && s.actions[0].start_frame === 12 && s.actions[0].end_frame === 42, `the inspector's edits gave ${JSON.stringify(s.actions.map((a) => [a.start_frame, a.end_frame]))}`);
+  await shot('04b-inspector');
+  await page.locator('#viewport').focus();
+  const undoUntil = async (condition, argument) => {
+    await page.keyboard.press('Control+z');
+    await page.waitForFunction(condition, argument, { timeout: 10000 });
+  };
+  await undoUntil((w) => Math.abs(window.studio.state.actions[0].sides[0].weight - w) < 1e-4, weightDragged);
+  await undoUntil((e) => Math.abs(window.studio.state.actions[0].ease - e) < 1e-6, inspected.ease);
+  await undoUntil(() => window.studio.state.actions[0].start_frame === 45, null);
+  await undoUntil((d) => window.studio.state.actions[0].end_frame - window.studio.state.actions[0].start_frame === d, inspected.duration);
+
   // 4. Mirroring as the seed has it: the switch mirrors the strokes drawn while it is on; the
   //    one-sided smile stays one-sided, a stroke drawn now is mirrored, and each action keeps
   //    its own choice (here turned on for the first one through its edit).

@@ -79,6 +79,9 @@ pub struct ActionView {
     pub end_frame: f32,
     /// The easing handle's position α.
     pub ease: f32,
+    /// How far the action has gone (0 to 1) at 17 evenly spaced moments from its start to its
+    /// end: its timing curve, drawing speed and easing together, as the engine plays it.
+    pub progress: Vec<f32>,
     /// Whether it has a mirrored side.
     pub symmetric: bool,
     /// The stroke's own side, then its mirror.
@@ -131,6 +134,9 @@ impl ActionView {
             start_frame: action.start_frame,
             end_frame: action.end_frame(),
             ease: action.ease,
+            progress: (0..=16)
+                .map(|k| action.progress(action.start_frame + action.duration * k as f32 / 16.0))
+                .collect(),
             symmetric: action.sides.len() > 1,
             sides: action
                 .sides
