@@ -237,6 +237,18 @@ try {
   const error = await page.textContent('#error');
   check(error.includes('broken.glb'), `the error does not name the file: ${error}`);
   await shot('07-broken-upload');
+  // 8. The blendshape list: at frame 100, a click on jawOpen adds its action there.
+  await page.click('#error');
+  const actionsBefore = (await state()).actions.length;
+  await page.getByLabel('Current frame').fill('100');
+  await page.getByLabel('Current frame').press('Enter');
+  await page.fill('#shape-search', 'jawOp');
+  await page.click('#shape-list li:has-text("jawOpen")');
+  await page.waitForFunction((n) => window.studio.state.actions.length === n + 1, actionsBefore, { timeout: 10000 });
+  s = await state();
+  const listed = s.actions[s.actions.length - 1];
+  check(listed.name.startsWith('jawOpen') && listed.start_frame === 100, `the list's jawOpen made ${listed.name} at frame ${listed.start_frame}`);
+  await shot('09-blendshape-list');
   const unexpected = consoleErrors.filter((e) => !e.includes('status of 400'));
   check(unexpected.length === 0, `page errors: ${unexpected.join('; ')}`);
   console.log(JSON.stringify(measurements));

@@ -7,7 +7,7 @@
 //   overlays.js  strokes, handles, candidates, ghost  strokes.js  pointer input and strokes
 //   handles.js   dragging the arrow and the sphere  timeline.js  the timeline
 //   settings.js  the settings panel                 commands.js  toolbar and keyboard
-//   inspector.js the selected action's numbers
+//   inspector.js the selected action's numbers   shapes.js    the blendshape list
 //   capture.js   capture mode: the take, its corrections, the frame diagram
 //   live.js      capture from the webcam in real time
 //   vmc.js       VMC in: a phone tracker or another app drives the character
@@ -22,6 +22,7 @@ import { characterMeshes, characterRoot, currentFrame, isPlaying, isReady } from
 import { drawStats, frameCamera, project } from './scene.js';
 import './inspector.js';
 import './settings.js';
+import './shapes.js';
 import { showFailure } from './status.js';
 import * as store from './store.js';
 import { faceAt, strokeLatency } from './strokes.js';

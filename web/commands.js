@@ -6,6 +6,8 @@ import { api } from './api.js';
 import * as capture from './capture.js';
 import { inCapture, onMode } from './mode.js';
 import { lastFrame, loadBaked, pause, play, playBackwards, setFrame, step } from './playback.js';
+import { toggleOverlays } from './overlays.js';
+import { fitTimeline } from './timeline.js';
 import { frameCamera } from './scene.js';
 import { showError, showFailure, showStatus } from './status.js';
 import * as store from './store.js';
@@ -106,8 +108,10 @@ window.addEventListener('keydown', (e) => {
   else if (e.key === 'j') playBackwards();
   else if (e.key === 'k') pause();
   else if (e.key === 'l') { pause(); play(); }
-  else if (e.key === 'Home') setFrame(0);
+  else if (e.key === 'Home' && e.shiftKey) setFrame(0);
+  else if (e.key === 'Home') fitTimeline();
   else if (e.key === 'End') setFrame(lastFrame());
+  else if (e.altKey && e.shiftKey && e.key.toLowerCase() === 'z') toggleOverlays();
   else if (e.key === '?') $('help').hidden = !$('help').hidden;
   else if (e.key === 'Escape') $('help').hidden = true;
 });

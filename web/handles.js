@@ -18,9 +18,13 @@ export const dragging = () => drag !== null;
 /** The plane the dragged handle moves on. */
 export const dragPlane = () => drag && drag.plane;
 
-/** Grabs the handle under `ray`, if there is one (`ease`: slide the sphere instead of bending). */
-export function grab(ray, ease) {
-  const handle = handleUnder(ray);
+/** Pixels from a handle's point within which a press grabs it. */
+const GRAB_PIXELS = 8;
+
+/** Grabs the handle under `ray`, or whose point is within a few pixels of the press at `(x, y)`,
+ * if there is one (`ease`: slide the sphere instead of bending). Handles win over new strokes. */
+export function grab(ray, x, y, ease) {
+  const handle = handleUnder(ray, x, y, GRAB_PIXELS);
   if (!handle) return false;
   store.select(handle.stroke);
   drag = {

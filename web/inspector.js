@@ -63,6 +63,32 @@ function drawCurve(progress) {
   g.stroke();
 }
 
+/** The runners-up of a stroke just drawn: `{stroke, candidates}`. */
+let alternatives = { stroke: -1, candidates: /** @type {any[]} */ ([]) };
+
+/** Offers `candidates` (the targets nearest the stroke's end after the one chosen) as one-click
+ * re-targets of stroke `stroke`. */
+export function offerAlternatives(stroke, candidates) {
+  alternatives = { stroke, candidates };
+  refresh();
+}
+
+function showAlternatives(action) {
+  const box = $('inspect-alternatives');
+  const offered = alternatives.stroke === action.stroke ? alternatives.candidates.filter((c) => c.name !== action.sides[0].target) : [];
+  box.hidden = offered.length === 0;
+  box.innerHTML = '';
+  if (!offered.length) return;
+  box.append('Or instead: ');
+  for (const c of offered) {
+    const choice = document.createElement('button');
+    choice.textContent = c.name;
+    choice.title = `Re-target this action to ${c.name} at full weight`;
+    choice.onclick = () => { alternatives = { stroke: -1, candidates: [] }; edit(() => ({ end: c.position })); };
+    box.appendChild(choice);
+  }
+}
+
 function refresh() {
   const action = selectedAction();
   $('inspector-empty').hidden = !!action;
@@ -80,6 +106,7 @@ function refresh() {
   field('inspect-mirrored').checked = action.symmetric;
   drawCurve(action.progress);
   fillTargets(action);
+  showAlternatives(action);
 }
 store.onState(refresh);
 store.onSelection(refresh);

@@ -4,7 +4,7 @@
 
 import * as THREE from 'three';
 import { candidateGroup, clearGroup, invalidate, overlay, project, scene } from './scene.js';
-import { characterMeshes } from './playback.js';
+import { characterMeshes, isPlaying, onPlaying } from './playback.js';
 import * as store from './store.js';
 
 /** The handle meshes (arrow, sphere) a ray can grab. */
@@ -26,7 +26,8 @@ export function drawOverlays() {
         new THREE.MeshBasicMaterial({ color: selected ? 0xffffff : 0x80c0ff, depthTest: false, transparent: true, opacity: sideIndex ? 0.5 : 0.9 }));
       tube.renderOrder = 10;
       overlay.add(tube);
-      if (sideIndex > 0) return;
+      // Handles only on the selected action's own side: the rest of the face stays visible.
+      if (sideIndex > 0 || !selected) return;
       // Red end arrow, pointing along the stroke's last direction.
       const end = points[points.length - 1];
       const dir = end.clone().sub(points[points.length - 2]).normalize();
@@ -34,23 +35,45 @@ export function drawOverlays() {
       cone.position.copy(end);
       cone.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), dir);
       cone.renderOrder = 11;
-      cone.userData = { handle: 'end', stroke: action.stroke };
+      cone.userData = { handle: 'end', stroke: action.stroke, point: end.toArray() };
       overlay.add(cone); handleTargets.push(cone);
       // Yellow middle sphere; green when the stroke is straight.
       const sphere = new THREE.Mesh(new THREE.SphereGeometry(d / 150, 16, 12), new THREE.MeshBasicMaterial({ color: side.straight ? 0x30d050 : 0xf0d020, depthTest: false }));
       sphere.position.set(...side.mid);
       sphere.renderOrder = 11;
-      sphere.userData = { handle: 'mid', stroke: action.stroke, path: side.path };
+      sphere.userData = { handle: 'mid', stroke: action.stroke, path: side.path, point: side.mid };
       overlay.add(sphere); handleTargets.push(sphere);
     });
   }
 }
 
-/** The handle under `ray` (`{handle: 'end'|'mid', stroke, path}` and its position), or null. */
-export function handleUnder(ray) {
+/** The handle under `ray`, or else the one whose point is within `pixels` of the screen
+ * position `(x, y)` (`{handle: 'end'|'mid', stroke, path}` and its position), or null. */
+export function handleUnder(ray, x, y, pixels) {
+  if (!overlay.visible) return null;
   const hit = ray.intersectObjects(handleTargets, false)[0];
-  return hit ? { ...hit.object.userData, position: hit.object.position.clone() } : null;
+  let object = hit ? hit.object : null;
+  if (!object) {
+    let best = pixels;
+    for (const handle of handleTargets) {
+      const [hx, hy] = project(handle.userData.point);
+      const distance = Math.hypot(hx - x, hy - y);
+      if (distance <= best) { best = distance; object = handle; }
+    }
+  }
+  return object ? { ...object.userData, position: new THREE.Vector3(...object.userData.point) } : null;
 }
+
+// ---------- showing and hiding overlays ----------
+let overlaysOn = true;
+/** Shows or hides every overlay (Alt+Shift+Z, as in Blender); they hide while playing too. */
+export function toggleOverlays() { overlaysOn = !overlaysOn; updateVisibility(); }
+function updateVisibility() {
+  overlay.visible = overlaysOn && !isPlaying();
+  candidateGroup.visible = overlay.visible;
+  invalidate();
+}
+onPlaying(updateVisibility);
 
 /** @type {any} The candidate targets last shown (what a stroke starting there can reach). */
 let shown = null;

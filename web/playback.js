@@ -177,11 +177,18 @@ export function hitFace(ray) {
   return hits.length ? hits[0].point : null;
 }
 
+/** @type {((playing: boolean) => void)[]} */
+const playingListeners = [];
+/** Calls `listener(playing)` when playback starts or stops. */
+export function onPlaying(listener) { playingListeners.push(listener); }
+
 function setPlaying(on, towards) {
+  const changed = playing !== on;
   playing = on;
   if (towards) direction = towards;
   $('play').textContent = playing ? 'Pause' : 'Play';
   lastTime = performance.now();
+  if (changed) for (const listener of playingListeners) listener(playing);
 }
 /** Plays forwards, or pauses when playing. */
 export function play() { setPlaying(!playing, 1); }

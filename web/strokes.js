@@ -10,11 +10,47 @@ import { atRest, hitFace, holdRest, currentFrame, isReady } from './playback.js'
 import { labelCandidate, nearestCandidate, shownCandidates, showCandidates, showGhost, weightTowards } from './overlays.js';
 import { camera, candidateGroup, clearGroup, controls, onPlane, planeFacingCamera, project, rayFrom, renderer, scene } from './scene.js';
 import { showError, showFailure } from './status.js';
+import { offerAlternatives } from './inspector.js';
 import * as store from './store.js';
+
+const canvas = renderer.domElement;
 
 /** @type {null | {plane: THREE.Plane, t0: number, samples: any[], pending: number[][], line: THREE.Line, found: any, frame: number}} */
 let stroke = null;
 let lastStrokeMs = 0;
+
+// ---------- timing of new strokes ----------
+const timingMode = /** @type {HTMLSelectElement} */ (document.getElementById('timing-mode'));
+const timingValue = /** @type {HTMLInputElement} */ (document.getElementById('timing-value'));
+timingMode.addEventListener('change', () => {
+  const mode = timingMode.value;
+  document.getElementById('timing-value-label').hidden = mode === 'speed';
+  document.getElementById('timing-value-name').textContent = mode === 'fixed' ? 'frames' : 'k';
+  timingValue.value = mode === 'fixed' ? '24' : '1';
+});
+
+/** The frames a stroke drawn over `seconds` lasts, by the timing chosen (whole frames). */
+function strokeFrames(seconds) {
+  const fps = store.state() ? store.state().fps : 30;
+  const value = Number(timingValue.value);
+  const frames = timingMode.value === 'fixed' ? value : seconds * fps * (timingMode.value === 'scaled' ? value : 1);
+  return Math.max(1, Math.round(Number.isFinite(frames) ? frames : seconds * fps));
+}
+
+/** The read-out beside the cursor while drawing: "0.8 s · 24 f". */
+const readout = document.createElement('div');
+readout.id = 'stroke-timing';
+readout.hidden = true;
+document.getElementById('viewport').appendChild(readout);
+function showReadout(event, seconds) {
+  const frames = strokeFrames(seconds);
+  const fps = store.state() ? store.state().fps : 30;
+  readout.textContent = `${(frames / fps).toFixed(1)} s · ${frames} f`;
+  const rect = canvas.getBoundingClientRect();
+  readout.style.left = `${event.clientX - rect.left + 14}px`;
+  readout.style.top = `${event.clientY - rect.top + 14}px`;
+  readout.hidden = false;
+}
 /** Milliseconds from the release of the last stroke to its action drawn. */
 export const strokeLatency = () => lastStrokeMs;
 
@@ -24,14 +60,13 @@ export function faceAt(x, y) {
   return p ? p.toArray() : null;
 }
 
-const canvas = renderer.domElement;
 
 canvas.addEventListener('pointerdown', (event) => {
   if (event.button !== 0 || !isReady()) return;
   // Strokes and handles live in the character's own space: draw on the face at rest.
   holdRest(true);
   const ray = rayFrom(event);
-  if (handles.grab(ray, event.shiftKey)) {
+  if (handles.grab(ray, event.clientX, event.clientY, event.shiftKey)) {
     controls.enabled = false;
     canvas.setPointerCapture(event.pointerId);
     return;
@@ -76,6 +111,7 @@ canvas.addEventListener('pointermove', (event) => {
     const previous = stroke.samples[stroke.samples.length - 1].t;
     stroke.pending.forEach((q, i) => stroke.samples.push({ t: previous + (now - previous) * (i + 1) / stroke.pending.length, p: q }));
     stroke.pending = [];
+    showReadout(event, now);
     const nearest = nearestCandidate(event.clientX, event.clientY);
     showGhost(nearest && nearest.name);
     const last = stroke.samples[stroke.samples.length - 1].p;
@@ -133,6 +169,7 @@ async function endDrag(event) {
   stroke = null;
   showGhost(null);
   labelCandidate(null, 0);
+  readout.hidden = true;
   scene.remove(finished.line);
   finished.line.geometry.dispose();
   clearGroup(candidateGroup);
@@ -144,13 +181,25 @@ async function endDrag(event) {
     // It is mirrored when the switch is on now, and stays so whatever the switch does later.
     const continues = finished.found && finished.found.continues !== null && finished.found.continues !== undefined;
     const settings = store.state().settings;
-    const state = await api('POST', 'api/strokes', { samples: finished.samples, start_frame: continues ? null : finished.frame, symmetry: !!settings.symmetry });
+    const seconds = finished.samples[finished.samples.length - 1].t;
+    const duration = timingMode.value === 'speed' ? null : strokeFrames(seconds);
+    const state = await api('POST', 'api/strokes', { samples: finished.samples, start_frame: continues ? null : finished.frame, duration, symmetry: !!settings.symmetry });
     store.select(state.added);
     store.setState(state, true);
     // From release to the action drawn (arc, handles, timeline row); the bake for playback follows.
     lastStrokeMs = performance.now() - released;
     const rejected = state.rejected.find((r) => r.stroke === state.added);
     showError(rejected ? `That stroke made no action: ${rejected.reason}` : '');
+    // The two next-nearest targets, one click away if the stroke picked the wrong one.
+    const action = state.actions.find((a) => a.stroke === state.added);
+    if (action && finished.found) {
+      const end = new THREE.Vector3(...action.sides[0].end);
+      const others = finished.found.candidates
+        .filter((c) => c.name && c.name !== action.sides[0].target)
+        .sort((a, b) => end.distanceToSquared(new THREE.Vector3(...a.position)) - end.distanceToSquared(new THREE.Vector3(...b.position)))
+        .slice(0, 2);
+      offerAlternatives(state.added, others);
+    }
   } catch (e) { showFailure(e); }
 }
 canvas.addEventListener('pointerup', endDrag);

@@ -1,7 +1,7 @@
 // The timeline (seed section 3.9): one row per action with its box (drag to move it, drag an
 // end to rescale it), the ruler that sets the current frame, and the playhead.
 
-import { currentFrame, lastFrame, onFrame, setFrame } from './playback.js';
+import { currentFrame, isPlaying, lastFrame, onFrame, setFrame } from './playback.js';
 import * as store from './store.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
@@ -9,12 +9,37 @@ const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 const timeline = $('timeline');
 /** The last frame the ruler shows. */
 let drawnTo = 0;
-const LABEL = 200, PX = 8; // label column width and pixels per frame
+const LABEL = 200; // label column width
+/** Pixels per frame: Ctrl+wheel zooms, Home fits everything. */
+let PX = 8;
 function frameX(f) { return LABEL + f * PX; }
 function drawPlayhead() {
   const head = timeline.querySelector('.playhead');
-  if (head) head.style.left = `${frameX(currentFrame())}px`;
+  const x = frameX(currentFrame());
+  if (head) head.style.left = `${x}px`;
+  // While playing, the view follows the playhead.
+  if (isPlaying() && (x > timeline.scrollLeft + timeline.clientWidth - 40 || x < timeline.scrollLeft + LABEL)) {
+    timeline.scrollLeft = Math.max(0, x - LABEL - 40);
+  }
 }
+
+/** Zooms the timeline so that every action fits its width. */
+export function fitTimeline() {
+  PX = Math.min(40, Math.max(0.5, (timeline.clientWidth - LABEL - 40) / Math.max(1, lastFrame())));
+  timeline.scrollLeft = 0;
+  drawTimeline();
+}
+
+// Ctrl+wheel zooms about the frame under the pointer.
+timeline.addEventListener('wheel', (e) => {
+  if (!e.ctrlKey) return;
+  e.preventDefault();
+  const rect = timeline.getBoundingClientRect();
+  const frameUnder = (e.clientX - rect.left + timeline.scrollLeft - LABEL) / PX;
+  PX = Math.min(40, Math.max(0.5, PX * Math.exp(-e.deltaY * 0.002)));
+  drawTimeline();
+  timeline.scrollLeft = Math.max(0, LABEL + frameUnder * PX - (e.clientX - rect.left));
+}, { passive: false });
 /** Draws the ruler, the animated window, one row per action and the playhead. */
 export function drawTimeline() {
   const state = store.state();
@@ -62,6 +87,16 @@ export function drawTimeline() {
       link.textContent = action.symmetric ? '⇋' : '⛓';
       box.appendChild(link);
     }
+    // The weight over the action's time, as the engine plays it.
+    const weight = action.sides[0].weight;
+    const curve = document.createElementNS('http://www.w3.org/2000/svg', 'svg');
+    curve.setAttribute('class', 'curve');
+    curve.setAttribute('viewBox', '0 0 100 100');
+    curve.setAttribute('preserveAspectRatio', 'none');
+    const line = document.createElementNS('http://www.w3.org/2000/svg', 'polyline');
+    line.setAttribute('points', action.progress.map((p, k) => `${100 * k / (action.progress.length - 1)},${100 - 90 * p * weight}`).join(' '));
+    curve.appendChild(line);
+    box.appendChild(curve);
     for (const side of ['left', 'right']) { const g = document.createElement('div'); g.className = `grip ${side}`; g.dataset.grip = side; box.appendChild(g); }
     box.addEventListener('pointerdown', (e) => timelineDrag(e, action, box));
     row.appendChild(box);
@@ -81,7 +116,7 @@ function timelineDrag(event, action, box) {
   box.setPointerCapture(event.pointerId);
   let edit = null;
   box.onpointermove = (e) => {
-    const df = (e.clientX - x0) / PX;
+    const df = Math.round((e.clientX - x0) / PX);
     if (grip === 'left') { const s = Math.min(start + duration - 1, Math.max(0, start + df)); edit = { start_frame: s, duration: start + duration - s }; }
     else if (grip === 'right') edit = { start_frame: start, duration: Math.max(1, duration + df) };
     else edit = { start_frame: Math.max(0, start + df) };
