@@ -112,6 +112,8 @@ try {
   await shot('03-video-read');
 
   // 2. Every frame a keyframe, so each frame keeps its own estimate (the smoothing panel).
+  const openSection = async (id) => { if (!(await page.evaluate((i) => document.getElementById(i).open, id))) await page.click(`#${id} > summary`); };
+  await openSection('smoothing-section');
   await page.fill('#keyframe-every', '1');
   await page.dispatchEvent('#keyframe-every', 'change');
   await page.waitForFunction(() => window.studio.capture.view.take.keyframe_every === 1);
@@ -188,6 +190,7 @@ try {
 
   // 6. Train the adapter from the page (few renders: the adapter tests check accuracy); the
   //    progress bar moves; then the take is estimated by the adapter.
+  await openSection('adapter-section');
   await page.fill('#train-samples', '300');
   await page.click('#train');
   await page.waitForFunction(() => { const j = window.studio.capture.view.job; return j && j.kind.includes('training') && j.running && j.done > 0; }, null, { timeout: 120000 });

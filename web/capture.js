@@ -146,7 +146,10 @@ function layer(frame) {
   const row = take.weights[f];
   if (!preview || preview.frame !== f) return row;
   const copy = row.slice();
-  copy[view.blendshapes.indexOf(preview.name)] = preview.value;
+  const index = view.blendshapes.indexOf(preview.name);
+  copy[index] = preview.value;
+  const partner = view.partners[index];
+  if (preview.linked && partner !== null && partner !== undefined) copy[partner] = preview.value;
   return copy;
 }
 
@@ -260,13 +263,13 @@ function buildSliders(v) {
         clear.textContent = '×';
         clear.title = `Remove the correction of ${name} on this frame`;
         range.addEventListener('input', () => {
-          preview = { frame: shownFrameIndex(), name, value: Number(range.value) };
+          preview = { frame: shownFrameIndex(), name, value: Number(range.value), linked: input('link-sides').checked };
           out.textContent = Number(range.value).toFixed(2);
           applyLayer();
         });
         range.addEventListener('change', async () => {
           const value = Number(range.value);
-          const ok = await post('api/capture/correct', { frame: shownFrameIndex(), name, value });
+          const ok = await post('api/capture/correct', { frame: shownFrameIndex(), name, value, mirror: input('link-sides').checked });
           preview = null;
           if (ok) { selectedName = name; markSelected(); drawDiagram(); }
         });

@@ -3,7 +3,7 @@
 // the ghost of the blendshape a stroke's end selects.
 
 import * as THREE from 'three';
-import { candidateGroup, clearGroup, invalidate, overlay, project, scene } from './scene.js';
+import { beforeDraw, camera, candidateGroup, clearGroup, invalidate, overlay, project, renderer, scene } from './scene.js';
 import { characterMeshes, isPlaying, onPlaying } from './playback.js';
 import * as store from './store.js';
 
@@ -28,24 +28,35 @@ export function drawOverlays() {
       overlay.add(tube);
       // Handles only on the selected action's own side: the rest of the face stays visible.
       if (sideIndex > 0 || !selected) return;
-      // Red end arrow, pointing along the stroke's last direction.
+      // Red end arrow, just beyond the stroke's end, pointing along its last direction; a few
+      // pixels long whatever the zoom (sized before each draw), so it never hides the mouth.
       const end = points[points.length - 1];
       const dir = end.clone().sub(points[points.length - 2]).normalize();
-      const cone = new THREE.Mesh(new THREE.ConeGeometry(d / 120, d / 40, 12), new THREE.MeshBasicMaterial({ color: 0xe03030, depthTest: false }));
+      const arrow = new THREE.ConeGeometry(0.3, 1, 12).translate(0, 0.5, 0);
+      const cone = new THREE.Mesh(arrow, new THREE.MeshBasicMaterial({ color: 0xe03030, depthTest: false }));
       cone.position.copy(end);
       cone.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), dir);
       cone.renderOrder = 11;
-      cone.userData = { handle: 'end', stroke: action.stroke, point: end.toArray() };
+      cone.userData = { handle: 'end', stroke: action.stroke, point: end.toArray(), pixels: 14 };
       overlay.add(cone); handleTargets.push(cone);
       // Yellow middle sphere; green when the stroke is straight.
-      const sphere = new THREE.Mesh(new THREE.SphereGeometry(d / 150, 16, 12), new THREE.MeshBasicMaterial({ color: side.straight ? 0x30d050 : 0xf0d020, depthTest: false }));
+      const sphere = new THREE.Mesh(new THREE.SphereGeometry(1, 16, 12), new THREE.MeshBasicMaterial({ color: side.straight ? 0x30d050 : 0xf0d020, depthTest: false }));
       sphere.position.set(...side.mid);
       sphere.renderOrder = 11;
-      sphere.userData = { handle: 'mid', stroke: action.stroke, path: side.path, point: side.mid };
+      sphere.userData = { handle: 'mid', stroke: action.stroke, path: side.path, point: side.mid, pixels: 5 };
       overlay.add(sphere); handleTargets.push(sphere);
     });
   }
 }
+
+// Handles keep their size on screen: before each draw, each is scaled to its `pixels`.
+beforeDraw(() => {
+  const height = Math.max(1, renderer.domElement.clientHeight);
+  const perPixel = 2 * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2) / height;
+  for (const handle of handleTargets) {
+    handle.scale.setScalar(handle.userData.pixels * perPixel * camera.position.distanceTo(handle.position));
+  }
+});
 
 /** The handle under `ray`, or else the one whose point is within `pixels` of the screen
  * position `(x, y)` (`{handle: 'end'|'mid', stroke, path}` and its position), or null. */

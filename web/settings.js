@@ -16,10 +16,16 @@ function fillSettings(state) {
   /** @type {HTMLInputElement} */ ($('subsample')).value = s.subsample;
   for (const f of numberFields) {
     const input = /** @type {HTMLInputElement} */ ($(f));
-    if (document.activeElement !== input) { input.value = s[f] ?? ''; input.placeholder = state.resolved[f].toPrecision(3); }
+    if (document.activeElement !== input) { input.value = s[f] === null || s[f] === undefined ? '' : percent(s[f]); input.placeholder = percent(state.resolved[f]); }
   }
-  $('resolved').textContent = `In use: candidate radius ${state.resolved.candidate_radius.toPrecision(3)}, pen ${state.resolved.pen_distance.toPrecision(3)}, editing ${state.resolved.edit_radius.toPrecision(3)}, hook ${state.resolved.hook_radius.toPrecision(3)}`;
+  const r = state.resolved;
+  $('resolved').textContent = `In use, in % of the character's size: candidate radius ${percent(r.candidate_radius)}, pen ${percent(r.pen_distance)}, editing ${percent(r.edit_radius)}, hook ${percent(r.hook_radius)}`;
 }
+/** The character's size (its bounding box's diagonal), which distances are shown relative to. */
+const size = () => Math.max(1e-9, store.character() ? store.character().diagonal : 1);
+/** A distance in the character's units as a percentage of its size, for display. */
+const percent = (distance) => String(Number((100 * distance / size()).toPrecision(3)));
+
 function settingsFromPanel() {
   const s = { ...store.state().settings };
   s.symmetry = /** @type {HTMLInputElement} */ ($('symmetry')).checked;
@@ -27,7 +33,7 @@ function settingsFromPanel() {
   s.mode = /** @type {HTMLSelectElement} */ ($('mode')).value;
   s.selection = /** @type {HTMLSelectElement} */ ($('selection')).value;
   s.subsample = Math.max(1, Math.round(Number(/** @type {HTMLInputElement} */ ($('subsample')).value) || 1));
-  for (const f of numberFields) { const v = /** @type {HTMLInputElement} */ ($(f)).value; s[f] = v === '' ? null : Number(v); }
+  for (const f of numberFields) { const v = /** @type {HTMLInputElement} */ ($(f)).value; s[f] = v === '' ? null : Number(v) / 100 * size(); }
   return s;
 }
 for (const id of ['symmetry', 'falloff', 'mode', 'selection', 'subsample', ...numberFields]) {

@@ -393,6 +393,26 @@ fn a_take_and_its_corrections_survive_closing_the_studio() {
         br#"{"frame": 3, "name": "jawOpen", "value": 0.875}"#,
     );
     assert_eq!(status, 200, "{body}");
+    // Linked left and right: one correction sets both sides, in one edit.
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/correct",
+        &json,
+        br#"{"frame": 5, "name": "mouthSmile_L", "value": 0.5, "mirror": true}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(
+        state["take"]["corrections"]["5"]["mouthSmile_R"], 0.5,
+        "{body}"
+    );
+    let (_, body) = request(studio.port, "POST", "/api/capture/undo", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert!(
+        state["take"]["corrections"]["5"].is_null(),
+        "one undo takes both sides back: {body}"
+    );
     drop(studio);
 
     // A new studio on the same project reopens the take with the correction.

@@ -229,14 +229,31 @@ struct Correction {
     frame: usize,
     name: String,
     value: f32,
+    /// Set the left/right partner of `name` (the character's symmetry pairs) to the same value,
+    /// in the same edit.
+    #[serde(default)]
+    mirror: bool,
 }
 
 async fn correct(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let c: Correction = json_body(&body, "correction")?;
-    {
-        both.desk()
-            .edit_take(|s| s.correct(c.frame, &c.name, c.value))?;
-    }
+    let partner = if c.mirror {
+        let character = both.studio().character.clone();
+        character
+            .find_blendshape(&c.name)
+            .and_then(|id| character.symmetry().partner(id))
+            .and_then(|id| character.blendshape(id))
+            .map(|b| b.name().to_owned())
+    } else {
+        None
+    };
+    both.desk().edit_take(|s| {
+        s.correct(c.frame, &c.name, c.value)?;
+        match &partner {
+            Some(other) => s.correct(c.frame, other, c.value),
+            None => Ok(()),
+        }
+    })?;
     Ok(state_of(&both))
 }
 

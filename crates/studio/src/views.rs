@@ -307,6 +307,8 @@ pub struct CaptureView {
     pub blendshapes: Vec<String>,
     /// Their ARKit families, for grouping the sliders.
     pub groups: Vec<Group>,
+    /// Each one's left/right partner (an index into `blendshapes`), where it has one.
+    pub partners: Vec<Option<usize>>,
     /// The adapter.
     pub adapter: AdapterView,
     /// The current or last long job.

@@ -572,6 +572,15 @@ impl CaptureDesk {
         let names = names(character);
         CaptureView {
             groups: names.iter().map(|n| Group::of(n)).collect(),
+            partners: character
+                .blendshapes()
+                .iter()
+                .enumerate()
+                .map(|(i, _)| {
+                    let id = faceanim_rig::BlendshapeId(i as u32);
+                    character.symmetry().partner(id).map(|p| p.index())
+                })
+                .collect(),
             blendshapes: names,
             adapter: AdapterView {
                 path: self.adapter_path.display().to_string(),
