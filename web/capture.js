@@ -82,7 +82,10 @@ export function apply(v) {
   const take = v.take;
   const newTake = take && take.id !== hadTake;
   if (newTake) shownFrame = -1;
-  setExtent(take ? take.frames - 1 : 0);
+  // A photo plays as its ramp (0 → peak → 0), which is what exports.
+  setExtent(take ? (take.ramp ? take.ramp.length : take.frames) - 1 : 0);
+  $('still-row').hidden = !(take && take.still);
+  if (take && take.still && document.activeElement !== $('still-frames')) input('still-frames').value = String(take.still);
   const sketch = store.state();
   if (newTake && sketch && Math.abs(sketch.fps - take.fps) > 1e-3) {
     // Strokes layered on the take count frames at the take's rate.
@@ -142,6 +145,7 @@ function layer(frame) {
   if (vmc.running && vmc.weights) return vmc.weights;
   const take = view && view.take;
   if (!take) return null;
+  if (take.ramp && !preview) return take.ramp[Math.min(Math.round(frame), take.ramp.length - 1)];
   const f = Math.min(Math.round(frame), take.frames - 1);
   const row = take.weights[f];
   if (!preview || preview.frame !== f) return row;
@@ -206,9 +210,17 @@ async function sendFiltering() {
   catch (e) { showError(String(e.message || e)); }
 }
 for (const id of ['one-euro', 'min-cutoff', 'beta', 'keyframe-every']) $(id).addEventListener('change', sendFiltering);
+input('still-frames').addEventListener('change', async () => {
+  try { showError(''); apply(await api('PUT', 'api/capture/still', { frames: Math.round(Number(input('still-frames').value)) })); }
+  catch (e) { showFailure(e); }
+});
 
 // ---------- the current frame: keyframes, corrections, preference ----------
-const shownFrameIndex = () => Math.round(currentFrame());
+/** The take's frame under the playhead (a photo has one, however long its ramp plays). */
+const shownFrameIndex = () => {
+  const take = view && view.take;
+  return take ? Math.min(Math.round(currentFrame()), take.frames - 1) : Math.round(currentFrame());
+};
 $('keyframe').onclick = () => {
   const take = view && view.take;
   if (!take) return;

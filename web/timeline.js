@@ -73,7 +73,16 @@ export function drawTimeline() {
     row.dataset.stroke = String(action.stroke);
     const label = document.createElement('div');
     label.className = 'label';
-    label.textContent = action.name;
+    // The action's own mirror, toggled here as in the inspector.
+    const mirror = document.createElement('button');
+    mirror.className = 'mirror' + (action.symmetric ? ' on' : '');
+    mirror.textContent = '⇋';
+    mirror.title = action.symmetric ? 'Mirrored: click for this side only' : 'One side: click to mirror it';
+    mirror.setAttribute('aria-label', `Mirror ${action.name}`);
+    mirror.setAttribute('aria-pressed', String(action.symmetric));
+    mirror.onclick = (e) => { e.stopPropagation(); store.run('PATCH', `api/strokes/${action.stroke}`, { symmetry: !action.symmetric }); };
+    label.append(mirror, action.name);
+    label.onclick = () => store.select(action.stroke);
     row.appendChild(label);
     const box = document.createElement('div');
     box.className = 'box' + (store.selection() === action.stroke ? ' selected' : '');

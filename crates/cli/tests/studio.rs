@@ -760,3 +760,54 @@ fn the_live_webcam_face_goes_out_over_vmc() {
             .any(|m| m["address"] == "/VMC/Ext/Bone/Pos")
     );
 }
+
+/// A photo becomes a take whose 0 → peak → 0 animation is what plays and exports, and its
+/// length is set before export (undoably).
+#[test]
+fn a_photos_ramp_is_shown_and_set_before_export() {
+    let dir = tempfile::tempdir().unwrap();
+    let studio = start(&dir.path().join("photo.faceanim.json"));
+    let json = [("Content-Type", "application/json")];
+    let photo = faceanim_testdata::shared("images/ict-face-jawopen.png");
+    let open = serde_json::json!({ "path": photo }).to_string();
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/open",
+        &json,
+        open.as_bytes(),
+    );
+    assert_eq!(status, 200, "{body}");
+    let state = settled(studio.port);
+    assert_eq!(state["take"]["frames"], 1, "{}", state["job"]);
+    assert_eq!(state["take"]["still"], 30);
+    assert_eq!(state["take"]["ramp"].as_array().unwrap().len(), 30);
+    let (status, body) = request(
+        studio.port,
+        "PUT",
+        "/api/capture/still",
+        &json,
+        br#"{"frames": 45}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["take"]["ramp"].as_array().unwrap().len(), 45);
+    let (_, body) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
+    let clip: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(
+        clip["frames"].as_array().unwrap().len(),
+        45,
+        "the export is what the page plays"
+    );
+    let (status, body) = request(
+        studio.port,
+        "PUT",
+        "/api/capture/still",
+        &json,
+        br#"{"frames": 0}"#,
+    );
+    assert!(status == 400 && body.contains("still_frames"), "{body}");
+    let (_, body) = request(studio.port, "POST", "/api/capture/undo", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["take"]["still"], 30, "{body}");
+}

@@ -62,6 +62,7 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/undo", post(undo))
         .route("/api/capture/redo", post(redo))
         .route("/api/capture/filtering", put(filtering))
+        .route("/api/capture/still", put(still))
         .route("/api/capture/adapter/train", post(train))
         .route("/api/capture/adapter/finetune", post(finetune))
         .route("/api/capture/live/start", post(live_start))
@@ -357,6 +358,18 @@ async fn filtering(State(both): State<Both>, body: Bytes) -> Answer<CaptureView>
     });
     both.desk()
         .set_filtering(Filtering::new(f.keyframe_every, smoothing)?)?;
+    Ok(state_of(&both))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Still {
+    frames: usize,
+}
+
+async fn still(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let Still { frames } = json_body(&body, "still")?;
+    both.desk().edit_take(|s| s.set_still_frames(frames))?;
     Ok(state_of(&both))
 }
 

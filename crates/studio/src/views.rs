@@ -505,8 +505,11 @@ pub struct TakeView {
     pub frames: usize,
     /// How many frames have an input preview.
     pub previews: usize,
-    /// Whether it is a single photo.
-    pub still: bool,
+    /// For a single photo: the frames of the 0 → peak → 0 animation it becomes (`null` for
+    /// video and sequences).
+    pub still: Option<usize>,
+    /// For a single photo: that animation's weights, one row per frame (what plays and exports).
+    pub ramp: Option<Vec<Vec<f32>>>,
     /// What estimated it.
     pub estimator: EstimatorSource,
     /// Per frame: its name.
@@ -559,7 +562,8 @@ impl TakeView {
             fps: session.fps,
             frames: session.frames.len(),
             previews,
-            still: session.still_frames.is_some(),
+            still: session.edits.still_frames,
+            ramp: session.edits.still_frames.map(|_| session.clip().frames),
             estimator: take.estimated_by(),
             names: session.frames.iter().map(|f| f.name.clone()).collect(),
             presence: session.frames.iter().map(|f| f.presence).collect(),

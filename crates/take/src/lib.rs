@@ -91,6 +91,12 @@ pub enum TakeError {
     /// A keyframe spacing outside 1 to 1000.
     #[error("keyframe_every: must be between 1 and 1000, got {0}")]
     KeyframeSpacing(usize),
+    /// Only a still image becomes a 0 → peak → 0 animation.
+    #[error("still_frames: the take is not of a single photo")]
+    NotStill,
+    /// A photo's animation length outside 1 to 10,000 frames.
+    #[error("still_frames: must be between 1 and 10000, got {0}")]
+    StillFrames(usize),
     /// One Euro settings that are not usable.
     #[error("smoothing: {0}")]
     Smoothing(String),

@@ -77,6 +77,8 @@ pub struct Edits {
     pub corrections: BTreeMap<usize, BTreeMap<String, f32>>,
     /// Per blendshape offsets, while the preference is applied.
     pub preference: Option<Vec<f32>>,
+    /// For a still image: the length in frames of the 0 → peak → 0 animation it becomes.
+    pub still_frames: Option<usize>,
 }
 
 impl Edits {
@@ -90,6 +92,7 @@ impl Edits {
             removed_keyframes: Vec::new(),
             corrections: BTreeMap::new(),
             preference: None,
+            still_frames: None,
         }
     }
 }
@@ -149,8 +152,6 @@ pub struct Session {
     pub fps: f32,
     /// The frames.
     pub frames: Vec<SessionFrame>,
-    /// For a still image: the length in frames of the 0 → peak → 0 animation it becomes.
-    pub still_frames: Option<usize>,
     /// What the user changed.
     pub edits: Edits,
 }
@@ -191,7 +192,6 @@ impl From<SessionFile> for Session {
             fingerprint: f.fingerprint,
             fps: f.fps,
             frames: f.frames,
-            still_frames: f.still_frames,
             edits: Edits {
                 keyframe_every: f.keyframe_every,
                 smoothing: f.smoothing,
@@ -199,6 +199,7 @@ impl From<SessionFile> for Session {
                 removed_keyframes: f.removed_keyframes,
                 corrections: f.corrections,
                 preference: f.preference,
+                still_frames: f.still_frames,
             },
         }
     }
@@ -220,7 +221,7 @@ impl From<Session> for SessionFile {
             removed_keyframes: s.edits.removed_keyframes,
             corrections: s.edits.corrections,
             preference: s.edits.preference,
-            still_frames: s.still_frames,
+            still_frames: s.edits.still_frames,
         }
     }
 }
@@ -255,7 +256,6 @@ impl Session {
             fingerprint,
             fps,
             frames,
-            still_frames: None,
             edits: Edits::new(keyframe_every),
         }
     }
@@ -440,6 +440,22 @@ impl Session {
         self.edits.smoothing = filtering.smoothing;
     }
 
+    /// Makes a still image's 0 → peak → 0 animation `frames` frames long.
+    ///
+    /// # Errors
+    /// [`TakeError::NotStill`] for a take of a video or sequence, [`TakeError::StillFrames`]
+    /// for a length outside 1 to 10,000.
+    pub fn set_still_frames(&mut self, frames: usize) -> Result<(), TakeError> {
+        if self.edits.still_frames.is_none() {
+            return Err(TakeError::NotStill);
+        }
+        if !(1..=10_000).contains(&frames) {
+            return Err(TakeError::StillFrames(frames));
+        }
+        self.edits.still_frames = Some(frames);
+        Ok(())
+    }
+
     /// The smoothing and keyframe spacing in use.
     #[must_use]
     pub fn filtering(&self) -> Filtering {
@@ -517,7 +533,7 @@ impl Session {
     /// A clip of `rows` (one per frame, in `names`' order) with the session's rate, head pose
     /// and presence; for a still image, the 0 → peak → 0 animation of the first row.
     fn clip_of(&self, names: Vec<String>, rows: Vec<Vec<f32>>) -> Clip {
-        if let Some(length) = self.still_frames {
+        if let Some(length) = self.edits.still_frames {
             let peak = rows.into_iter().next().unwrap_or_default();
             return peak_animation(&peak, names, self.fps, length);
         }

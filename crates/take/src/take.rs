@@ -144,7 +144,7 @@ impl Take {
             frames,
         );
         session.edits.smoothing = filtering.smoothing;
-        session.still_frames = still_frames;
+        session.edits.still_frames = still_frames;
         Ok(Take::new(session, estimator.source()))
     }
 
