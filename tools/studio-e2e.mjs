@@ -44,6 +44,16 @@ try {
   // 1. The current frame typed as 45, then a stroke from the left mouth corner towards the
   //    mouthSmile_L target: its action starts at frame 45, on whole frames.
   const anchors = await page.evaluate(() => fetch('api/character/anchors').then((r) => r.json()));
+  // The character's own name for an ARKit shape (`mouthSmile_L` or `mouthSmileLeft`), so the
+  // same session runs on any ARKit-named character; a one-sided name falls back to the shape
+  // without sides (`browInnerUp`).
+  const key = (n) => n.replace(/[_.]?L$/, 'Left').replace(/[_.]?R$/, 'Right').toLowerCase().replace(/[^a-z0-9]/g, '');
+  const own = (arkit) => {
+    const found = anchors.find((a) => key(a.name) === key(arkit)) || anchors.find((a) => key(a.name) === key(arkit).replace(/(left|right)$/, ''));
+    check(found, `the character has no ${arkit}`);
+    return found.name;
+  };
+  const SMILE_L = own('mouthSmileLeft'), SMILE_R = own('mouthSmileRight');
   await page.getByLabel('Current frame').fill('45');
   await page.getByLabel('Current frame').press('Enter');
   await page.waitForFunction(() => Math.round(window.studio.frame) === 45, null, { timeout: 10000 });
@@ -67,10 +77,10 @@ try {
     }
     return async () => page.mouse.up();
   };
-  const release = await drawStroke('mouthSmile_L');
+  const release = await drawStroke(SMILE_L);
   // While drawing, the candidate under the cursor is named beside its sphere.
   const named = await page.evaluate(() => { const l = document.getElementById('candidate-label'); return l && !l.hidden ? l.textContent : ''; });
-  check(named.startsWith('mouthSmile_L '), `the candidate under the cursor is labelled '${named}'`);
+  check(named.startsWith(`${SMILE_L} `), `the candidate under the cursor is labelled '${named}'`);
   measurements.candidate_label = named;
   const released = Date.now();
   await release();
@@ -86,10 +96,10 @@ try {
   const drawnProject = await page.evaluate(() => fetch('api/project').then((r) => r.json()));
   check(drawnProject.strokes[0].symmetry === false, `the studio did not record the stroke's own mirror choice: ${JSON.stringify(drawnProject.strokes[0].symmetry)}`);
   const label = await page.textContent('#timeline .row .label');
-  check(label.includes('mouthSmile_L'), `timeline shows '${label}', not mouthSmile_L`);
+  check(label.includes(SMILE_L), `timeline shows '${label}', not ${SMILE_L}`);
   let c = await clip();
-  const smileWeight = maxWeight(c, 'mouthSmile_L');
-  check(smileWeight > 0.5, `exported mouthSmile_L reaches only ${smileWeight}`);
+  const smileWeight = maxWeight(c, SMILE_L);
+  check(smileWeight > 0.5, `exported ${SMILE_L} reaches only ${smileWeight}`);
   measurements.smile_weight = smileWeight;
   const weightBefore = s.actions[0].sides[0].weight;
 
@@ -162,7 +172,7 @@ try {
   await page.waitForFunction(() => window.studio.state.settings.symmetry === true, null, { timeout: 10000 });
   s = await state();
   check(s.actions[0].symmetric === false, 'ticking the mirror switch re-edited the one-sided smile');
-  const releaseMirrored = await drawStroke('mouthSmile_R');
+  const releaseMirrored = await drawStroke(SMILE_R);
   await releaseMirrored();
   await page.waitForFunction(() => window.studio.state.actions.length === 2, null, { timeout: 10000 });
   s = await state();
@@ -179,7 +189,7 @@ try {
   await ready();
   s = await state();
   const mirrored = s.actions[0].sides.map((x) => x.target);
-  check(mirrored.includes('mouthSmile_R'), `the mirrored side targets ${mirrored}`);
+  check(mirrored.includes(SMILE_R), `the mirrored side targets ${mirrored}`);
   await page.waitForTimeout(500);
   await shot('05-symmetry');
 
@@ -205,7 +215,7 @@ try {
   // draws slowly), and the nine strokes below start on the face it poses: its length is pinned
   // so that they meet the same animation on any machine.
   await page.evaluate(() => fetch('api/strokes/0', { method: 'PATCH', headers: { 'content-type': 'application/json' }, body: JSON.stringify({ start_frame: 0, duration: 270 }) }).then((r) => { if (!r.ok) throw new Error(`PATCH: ${r.status}`); }));
-  const names = ['jawOpen', 'mouthSmile_R', 'eyeBlink_L', 'eyeBlink_R', 'browInnerUp_L', 'mouthFunnel', 'cheekPuff_L', 'browOuterUp_L', 'mouthPucker'];
+  const names = ['jawOpen', 'mouthSmileRight', 'eyeBlinkLeft', 'eyeBlinkRight', 'browInnerUpLeft', 'mouthFunnel', 'cheekPuffLeft', 'browOuterUpLeft', 'mouthPucker'].map(own);
   for (const [k, name] of names.entries()) {
     const a = anchors.find((x) => x.name === name);
     check(a && a.vertex !== null, `no anchor for ${name}`);

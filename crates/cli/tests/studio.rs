@@ -35,16 +35,23 @@ fn start(project: &std::path::Path) -> Studio {
 }
 
 fn start_with(project: &std::path::Path, more: &[&std::ffi::OsStr]) -> Studio {
+    start_on(
+        Some(&faceanim_testdata::shared("characters/ict-face.glb")),
+        project,
+        more,
+    )
+}
+
+/// A studio on `character` (the built-in head with `None`).
+fn start_on(
+    character: Option<&std::path::Path>,
+    project: &std::path::Path,
+    more: &[&std::ffi::OsStr],
+) -> Studio {
     let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
-        .args([
-            "studio",
-            faceanim_testdata::shared("characters/ict-face.glb")
-                .to_str()
-                .unwrap(),
-            "--port",
-            "0",
-            "--project",
-        ])
+        .arg("studio")
+        .args(character)
+        .args(["--port", "0", "--project"])
         .arg(project)
         .args(more)
         .stdout(Stdio::piped())
@@ -193,6 +200,22 @@ fn an_animator_session_in_a_real_browser() {
     assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
     // The project was saved where the studio was pointed, and nowhere else.
     assert!(dir.path().join("session.faceanim.json").exists());
+}
+
+/// The same session on the built-in head, whose names are ARKit's own (`mouthSmileLeft`), not
+/// the ICT head the page was developed on.
+#[test]
+fn an_animator_session_on_the_built_in_head() {
+    let dir = tempfile::tempdir().unwrap();
+    let studio = start_on(None, &dir.path().join("head.faceanim.json"), &[]);
+    let measured = browser_script(
+        "studio-e2e.mjs",
+        &studio,
+        "",
+        &output_dir("studio-head"),
+        &[],
+    );
+    assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
 }
 
 /// The same session in the viewport the README recommends without a GPU (`?fast`: morph
