@@ -239,6 +239,23 @@ try {
   Object.assign(measurements, { viewport_fps_10_actions: timing.fps, draw_calls: timing.drawCalls, meshes: timing.meshes, morph_targets: timing.morphTargets });
   await shot('08-ten-actions');
 
+  // 6b. Two actions selected with Shift+click move together by a drag on one of them, whole
+  //     frames, and one undo takes both back.
+  const startOf = async (k) => (await state()).actions.find((a) => a.stroke === k).start_frame;
+  const [s1, s2] = [await startOf(1), await startOf(2)];
+  await page.click('#timeline .row[data-stroke="1"] .box', { position: { x: 12, y: 8 } });
+  await page.click('#timeline .row[data-stroke="2"] .box', { modifiers: ['Shift'], position: { x: 12, y: 8 } });
+  const grab = await page.locator('#timeline .row[data-stroke="1"] .box').boundingBox();
+  await page.mouse.move(grab.x + 12, grab.y + 8);
+  await page.mouse.down();
+  for (let i = 1; i <= 10; i++) await page.mouse.move(grab.x + 12 + 8 * i, grab.y + 8);
+  await page.mouse.up();
+  await page.waitForFunction(([a, b]) => { const f = (k) => window.studio.state.actions.find((x) => x.stroke === k).start_frame; return f(1) === a + 10 && f(2) === b + 10; }, [s1, s2], { timeout: 10000 });
+  await shot('08b-two-moved');
+  await page.locator('#viewport').focus();
+  await page.keyboard.press('Control+z');
+  await page.waitForFunction(([a, b]) => { const f = (k) => window.studio.state.actions.find((x) => x.stroke === k).start_frame; return f(1) === a && f(2) === b; }, [s1, s2], { timeout: 10000 });
+
   // 7. A broken character upload shows the importer's error in the page (the browser logs the
   // refused request itself; that one is expected).
   check(consoleErrors.length === 0, `page errors: ${consoleErrors.join('; ')}`);

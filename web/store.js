@@ -8,6 +8,8 @@ import { showError, showFailure } from './status.js';
 let current = /** @type {any} */ (null);
 let characterView = /** @type {any} */ (null);
 let selected = /** @type {number|null} */ (null);
+/** Every selected action's stroke (the last one clicked is `selected`). */
+let group = /** @type {Set<number>} */ (new Set());
 /** @type {((state: any, rebake: boolean) => void)[]} */
 const stateListeners = [];
 /** @type {(() => void)[]} */
@@ -28,6 +30,10 @@ export function onSelection(listener) { selectionListeners.push(listener); }
 /** Takes a state the server answered with. */
 export function setState(next, rebake) {
   current = next;
+  // Strokes that no longer exist (deleted, undone) leave the selection.
+  const count = next && next.actions ? Math.max(-1, ...next.actions.map((a) => a.stroke)) + 1 : 0;
+  group = new Set([...group].filter((s) => s < count));
+  if (selected !== null && selected >= count) selected = null;
   for (const listener of stateListeners) listener(next, rebake);
 }
 
@@ -37,10 +43,20 @@ export async function loadCharacter() {
   return characterView;
 }
 
-/** Selects the action of stroke `index` (or none). */
-export function select(index) {
-  if (selected === index) return;
-  selected = index;
+/** The strokes of every selected action. */
+export const selectedGroup = () => group;
+
+/** Selects the action of stroke `index` (or none); with `add`, adds it to the selection (or
+ * takes it out again). */
+export function select(index, add = false) {
+  if (add && index !== null) {
+    if (group.has(index) && group.size > 1) { group.delete(index); selected = [...group][group.size - 1]; }
+    else { group.add(index); selected = index; }
+  } else {
+    if (selected === index && group.size <= 1) return;
+    selected = index;
+    group = new Set(index === null ? [] : [index]);
+  }
   for (const listener of selectionListeners) listener();
 }
 

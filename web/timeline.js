@@ -2,6 +2,8 @@
 // end to rescale it), the ruler that sets the current frame, and the playhead.
 
 import { currentFrame, isPlaying, lastFrame, onFrame, setFrame } from './playback.js';
+import { api } from './api.js';
+import { showError, showFailure } from './status.js';
 import * as store from './store.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
@@ -85,7 +87,7 @@ export function drawTimeline() {
     label.onclick = () => store.select(action.stroke);
     row.appendChild(label);
     const box = document.createElement('div');
-    box.className = 'box' + (store.selection() === action.stroke ? ' selected' : '');
+    box.className = 'box' + (store.selectedGroup().has(action.stroke) ? ' selected' : '');
     box.style.left = `${frameX(action.start_frame)}px`;
     box.style.width = `${Math.max(4, (action.end_frame - action.start_frame) * PX)}px`;
     box.style.background = chainColours[action.chain % chainColours.length];
@@ -118,28 +120,62 @@ export function drawTimeline() {
 }
 function timelineDrag(event, action, box) {
   event.stopPropagation();
-  store.select(action.stroke);
+  // No text selection or native drag may take the pointer away mid-drag.
+  event.preventDefault();
+  // Shift+click adds the action to the selection (or takes it out); a drag then moves, and a
+  // dragged end rescales, every selected action together, as one undo step.
+  if (event.shiftKey) { store.select(action.stroke, true); return; }
+  if (!store.selectedGroup().has(action.stroke)) store.select(action.stroke);
+  const state = store.state();
+  const moving = state.actions.filter((a) => store.selectedGroup().has(a.stroke));
+  const first = Math.min(...moving.map((a) => a.start_frame));
+  const last = Math.max(...moving.map((a) => a.end_frame));
   const grip = /** @type {HTMLElement} */ (event.target).dataset.grip;
   const x0 = event.clientX;
-  const start = action.start_frame, duration = action.end_frame - action.start_frame;
   box.setPointerCapture(event.pointerId);
-  let edit = null;
+  /** @type {Map<number, {start_frame: number, duration: number}>} */
+  let edits = new Map();
   box.onpointermove = (e) => {
     const df = Math.round((e.clientX - x0) / PX);
-    if (grip === 'left') { const s = Math.min(start + duration - 1, Math.max(0, start + df)); edit = { start_frame: s, duration: start + duration - s }; }
-    else if (grip === 'right') edit = { start_frame: start, duration: Math.max(1, duration + df) };
-    else edit = { start_frame: Math.max(0, start + df) };
-    box.style.left = `${frameX(edit.start_frame)}px`;
-    box.style.width = `${(edit.duration ?? duration) * PX}px`;
+    edits = new Map();
+    for (const a of moving) {
+      const start = a.start_frame, duration = a.end_frame - a.start_frame;
+      let edit;
+      if (grip === 'right') {
+        // Rescale about the first start: the whole group's span grows by df frames.
+        const factor = Math.max(1, last - first + df) / Math.max(1, last - first);
+        edit = { start_frame: Math.round(first + (start - first) * factor), duration: Math.max(1, Math.round(duration * factor)) };
+      } else if (grip === 'left' && moving.length === 1) {
+        const s = Math.min(start + duration - 1, Math.max(0, start + df));
+        edit = { start_frame: s, duration: start + duration - s };
+      } else {
+        edit = { start_frame: Math.max(0, start + Math.max(df, -first)), duration };
+      }
+      edits.set(a.stroke, edit);
+      const shown = timeline.querySelector(`.row[data-stroke="${a.stroke}"] .box`);
+      if (shown) { /** @type {HTMLElement} */ (shown).style.left = `${frameX(edit.start_frame)}px`; /** @type {HTMLElement} */ (shown).style.width = `${edit.duration * PX}px`; }
+    }
   };
   box.onpointerup = async () => {
     box.onpointermove = null; box.onpointerup = null;
-    if (edit) await store.run('PATCH', `api/strokes/${action.stroke}`, edit);
-    else drawTimeline();
+    if (!edits.size) { drawTimeline(); return; }
+    const gesture = `${Date.now()}-${Math.random()}`;
+    try {
+      let answer = null;
+      for (const [stroke, edit] of edits) answer = await api('PATCH', `api/strokes/${stroke}`, edit, { 'x-gesture': gesture });
+      store.setState(answer, true);
+      showError('');
+    } catch (e) { showFailure(e); drawTimeline(); }
   };
 }
 
 store.onState(() => drawTimeline());
-store.onSelection(() => drawTimeline());
+// A selection changes only the boxes' look: redrawing would replace the box being pressed.
+store.onSelection(() => {
+  for (const row of timeline.querySelectorAll('.row')) {
+    const stroke = Number(/** @type {HTMLElement} */ (row).dataset.stroke);
+    row.querySelector('.box')?.classList.toggle('selected', store.selectedGroup().has(stroke));
+  }
+});
 // A playhead typed or played past the ruler's end gets a longer ruler.
 onFrame((frame) => (frame > drawnTo - 5 ? drawTimeline() : drawPlayhead()));

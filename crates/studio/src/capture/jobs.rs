@@ -197,11 +197,10 @@ pub fn start_training(
             faceanim_adapt::train(&dataset, &train_options, control)
         })?;
         faceanim_files::write_atomic(&adapter_path, &adapter.to_bytes()?)?;
+        // Short: the adapter's path and report show beside it.
         let message = format!(
-            "trained on {} renders: test MAE {:.4}; saved {}",
-            adapter.report.samples,
-            adapter.report.mae_test,
-            adapter_path.display()
+            "trained on {} renders, test MAE {:.3}",
+            adapter.report.samples, adapter.report.mae_test
         );
         install_adapter(&desk, &character, &adapter_path, adapter)?;
         Ok(message)
@@ -253,13 +252,12 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
         faceanim_files::write_atomic(&adapter_path, &tuned.to_bytes()?)?;
         install_adapter(&desk, &character, &adapter_path, tuned)?;
         Ok(format!(
-            "fine-tuned on {} corrected frames: their error {:.4} → {:.4}, test {:.4} → {:.4}; saved {}",
+            "fine-tuned on {} corrected frames: their error {:.3} → {:.3}, test {:.3} → {:.3}",
             corrections.len(),
             report.corrected_before,
             report.corrected_after,
             report.test_before,
             report.test_after,
-            adapter_path.display()
         ))
     });
     Ok(())
