@@ -15,7 +15,7 @@ import * as store from './store.js';
 
 const canvas = renderer.domElement;
 
-/** @type {null | {plane: THREE.Plane, t0: number, samples: any[], pending: number[][], line: THREE.Line, found: any, frame: number}} */
+/** @type {null | {plane: THREE.Plane, t0: number, samples: any[], pending: number[][], line: THREE.Line, found: any, frame: number, asked?: Promise<void>}} */
 let stroke = null;
 let lastStrokeMs = 0;
 
@@ -81,7 +81,7 @@ canvas.addEventListener('pointerdown', (event) => {
   scene.add(line);
   const drawing = { plane: planeFacingCamera(hit), t0: performance.now(), samples: [{ t: 0, p: hit.toArray() }], pending: [], line, found: null, frame: Math.round(currentFrame()) };
   stroke = drawing;
-  api('POST', 'api/candidates', { point: hit.toArray(), frame: drawing.frame }).then((found) => { drawing.found = found; showCandidates(found, false); }).catch(() => {});
+  drawing.asked = api('POST', 'api/candidates', { point: hit.toArray(), frame: drawing.frame }).then((found) => { drawing.found = found; showCandidates(found, false); }).catch(() => {});
 });
 
 let hoverTimer = 0;
@@ -177,6 +177,9 @@ async function endDrag(event) {
   const released = performance.now();
   aimAtReleasedSphere(finished.samples);
   try {
+    // Whether it continues a chain is in its start's candidates: wait for them if a quick
+    // stroke ended first.
+    await finished.asked;
     // A new chain starts at the playhead; a stroke from a chain's end starts where that ends.
     // It is mirrored when the switch is on now, and stays so whatever the switch does later.
     const continues = finished.found && finished.found.continues !== null && finished.found.continues !== undefined;

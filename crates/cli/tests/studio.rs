@@ -388,6 +388,15 @@ fn settled(port: u16) -> serde_json::Value {
     panic!("the capture job did not end in a minute");
 }
 
+/// Opens `path` in capture mode, waits for it to be read and returns the capture state.
+fn open_and_settle(port: u16, path: &std::path::Path) -> serde_json::Value {
+    let open = serde_json::json!({ "path": path }).to_string();
+    let json = [("Content-Type", "application/json")];
+    let (status, body) = request(port, "POST", "/api/capture/open", &json, open.as_bytes());
+    assert_eq!(status, 200, "{body}");
+    settled(port)
+}
+
 #[test]
 fn a_take_and_its_corrections_survive_closing_the_studio() {
     let dir = tempfile::tempdir().unwrap();
@@ -397,16 +406,7 @@ fn a_take_and_its_corrections_survive_closing_the_studio() {
     let project = dir.path().join("take.faceanim.json");
     let json = [("Content-Type", "application/json")];
     let studio = start(&project);
-    let open = serde_json::json!({ "path": video }).to_string();
-    let (status, body) = request(
-        studio.port,
-        "POST",
-        "/api/capture/open",
-        &json,
-        open.as_bytes(),
-    );
-    assert_eq!(status, 200, "{body}");
-    let state = settled(studio.port);
+    let state = open_and_settle(studio.port, &video);
     assert_eq!(state["take"]["frames"], 12, "{}", state["job"]);
     let (status, body) = request(
         studio.port,
@@ -792,16 +792,7 @@ fn a_photos_ramp_is_shown_and_set_before_export() {
     let studio = start(&dir.path().join("photo.faceanim.json"));
     let json = [("Content-Type", "application/json")];
     let photo = faceanim_testdata::shared("images/ict-face-jawopen.png");
-    let open = serde_json::json!({ "path": photo }).to_string();
-    let (status, body) = request(
-        studio.port,
-        "POST",
-        "/api/capture/open",
-        &json,
-        open.as_bytes(),
-    );
-    assert_eq!(status, 200, "{body}");
-    let state = settled(studio.port);
+    let state = open_and_settle(studio.port, &photo);
     assert_eq!(state["take"]["frames"], 1, "{}", state["job"]);
     assert_eq!(state["take"]["still"], 30);
     assert_eq!(state["take"]["ramp"].as_array().unwrap().len(), 30);

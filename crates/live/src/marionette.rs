@@ -32,7 +32,7 @@ pub struct ReceivedFrame {
 }
 
 /// What arrived so far.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Traffic {
     /// Datagrams received.
     pub packets: u64,

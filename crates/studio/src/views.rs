@@ -328,24 +328,10 @@ pub struct CaptureView {
 pub struct VmcView {
     /// The address listened on, when listening.
     pub listening: Option<String>,
-    /// Who sent the last datagram.
-    pub sender: Option<String>,
-    /// Datagrams received.
-    pub packets: u64,
-    /// Frames received (`/VMC/Ext/Blend/Apply`).
-    pub frames: u64,
-    /// Datagrams dropped as not OSC, truncated, or with wrong arguments.
-    pub malformed: u64,
-    /// Messages with addresses that are not VMC's.
-    pub unknown: u64,
-    /// Datagrams dropped as too large.
-    pub oversized: u64,
-    /// Values for names the character does not have.
-    pub unmatched: u64,
-    /// Datagrams in the last second.
-    pub rate: f32,
-    /// Milliseconds since the last datagram.
-    pub last_packet_ms: Option<f64>,
+    /// What arrived: datagrams, frames, the dropped `malformed`, `unknown` and `oversized`
+    /// ones, `unmatched` names, the `sender`, the `rate` and the `last_packet_ms`.
+    #[serde(flatten)]
+    pub traffic: faceanim_live::Traffic,
     /// Frames recorded, while recording.
     pub recording: Option<usize>,
     /// The character's weights in the last frame.

@@ -134,16 +134,7 @@ impl Take {
                 SessionFrame::from_record(record, name, expression, estimate)
             })
             .collect();
-        let mut session = Session::new(
-            source,
-            character.name().to_owned(),
-            names,
-            Fingerprint::of(character),
-            fps,
-            filtering.keyframe_every,
-            frames,
-        );
-        session.edits.smoothing = filtering.smoothing;
+        let mut session = session_of(character, source, names, fps, frames, filtering);
         session.edits.still_frames = still_frames;
         Ok(Take::new(session, estimator.source()))
     }
@@ -191,16 +182,7 @@ impl Take {
                 estimate: f.weights,
             })
             .collect();
-        let mut session = Session::new(
-            source.to_owned(),
-            character.name().to_owned(),
-            names,
-            Fingerprint::of(character),
-            fps,
-            filtering.keyframe_every,
-            frames,
-        );
-        session.edits.smoothing = filtering.smoothing;
+        let session = session_of(character, source.to_owned(), names, fps, frames, filtering);
         Ok(Take::new(session, EstimatorSource::Received))
     }
 
@@ -265,6 +247,29 @@ impl Take {
         self.estimated_by = estimator.source();
         Ok(())
     }
+}
+
+/// A new session of `character` (its blendshapes `names`) over `frames`, filtered by
+/// `filtering`.
+fn session_of(
+    character: &Character,
+    source: String,
+    names: Vec<String>,
+    fps: f32,
+    frames: Vec<SessionFrame>,
+    filtering: Filtering,
+) -> Session {
+    let mut session = Session::new(
+        source,
+        character.name().to_owned(),
+        names,
+        Fingerprint::of(character),
+        fps,
+        filtering.keyframe_every,
+        frames,
+    );
+    session.set_filtering(filtering);
+    session
 }
 
 /// Moves the current edits onto `to` and makes the top of `from` current; false when `from` is

@@ -94,15 +94,7 @@ impl CaptureDesk {
         let latest = marionette.and_then(Marionette::latest);
         Some(VmcView {
             listening: marionette.map(|m| m.address().to_string()),
-            sender: traffic.sender.map(|s| s.to_string()),
-            packets: traffic.packets,
-            frames: traffic.frames,
-            malformed: traffic.malformed,
-            unknown: traffic.unknown,
-            oversized: traffic.oversized,
-            unmatched: traffic.unmatched,
-            rate: traffic.rate,
-            last_packet_ms: traffic.last_packet_ms,
+            traffic,
             recording: marionette.and_then(Marionette::recorded),
             weights: latest.as_ref().map(|f| f.weights.clone()),
             head: latest.and_then(|f| f.head),
