@@ -175,11 +175,11 @@ async function endDrag(event) {
   clearGroup(candidateGroup);
   if (finished.samples.length < 2) return;
   const released = performance.now();
+  // Its start's candidates (where it may end, whether it continues a chain): wait for them if
+  // a quick stroke ended first.
+  await finished.asked;
   aimAtReleasedSphere(finished.samples);
   try {
-    // Whether it continues a chain is in its start's candidates: wait for them if a quick
-    // stroke ended first.
-    await finished.asked;
     // A new chain starts at the playhead; a stroke from a chain's end starts where that ends.
     // It is mirrored when the switch is on now, and stays so whatever the switch does later.
     const continues = finished.found && finished.found.continues !== null && finished.found.continues !== undefined;
