@@ -1,11 +1,4 @@
 //! The ICT-FaceKit heads from `../shared`: import, symmetry, ARKit coverage, exact round trips.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::float_cmp,
-    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
-)]
 
 use faceanim_rig::export::{MorphAnimation, export_glb};
 use faceanim_rig::import::{NoExternalResources, import_gltf};

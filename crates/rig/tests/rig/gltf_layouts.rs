@@ -1,21 +1,12 @@
 //! The glTF layouts other tools write: external buffers, data URIs, sparse targets, several
 //! meshes and primitives under node transforms, skins, strips — all land on the same character.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::float_cmp,
-    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
-)]
-
-mod support;
 
 use std::collections::HashMap;
 
+use crate::support::{GltfBuilder, tiny_face, tiny_face_gltf};
 use faceanim_rig::import::{NoExternalResources, Resources, import_gltf};
 use glam::Vec3;
 use serde_json::json;
-use support::{GltfBuilder, tiny_face, tiny_face_gltf};
 
 struct Files(HashMap<String, Vec<u8>>);
 

@@ -1,23 +1,14 @@
 //! The four tasks of the paper's user study (section 4.2) on the ICT head, with strokes drawn
 //! in code; each baked clip is compared with the intended reference animation by DTW, and arcs
 //! and timing are checked where the task is about them.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::float_cmp,
-    reason = "tests"
-)]
 
-mod support;
-
+use crate::support::{
+    bow, draw, handle_vertex, ict, id, line, near, position, project, target_of, uniform,
+};
 use faceanim_anim::Clip;
 use faceanim_anim::metrics::compare;
 use faceanim_sketch::{Project, Settings, Sketch, Target};
 use glam::Vec3;
-use support::{
-    bow, draw, handle_vertex, ict, id, line, near, position, project, target_of, uniform,
-};
 
 fn sketch(project: &Project) -> Sketch<'static> {
     let (sketch, warnings) = Sketch::from_project(ict(), project);

@@ -2,20 +2,11 @@
 //!
 //! Each case here is also written to `tests/corpus/` (with FACEANIM_WRITE_CORPUS=1), the seed
 //! corpus that `fuzz_import.rs` replays and mutates.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::float_cmp,
-    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
-)]
 
-mod support;
-
+use crate::support::{GltfBuilder, tiny_face, tiny_face_gltf};
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_testdata::ict_bytes;
 use serde_json::json;
-use support::{GltfBuilder, tiny_face, tiny_face_gltf};
 
 fn error_of(name: &str, bytes: &[u8]) -> String {
     // Only small cases go into the corpus; the truncated 17 MB head stays out of git.

@@ -3,21 +3,13 @@
 //!
 //! Inputs are mutations of valid files (byte flips, truncations, JSON fields set to hostile
 //! numbers) and the seed corpus in `tests/corpus/` (broken files from `bad_input.rs`); proptest
-//! keeps any failing case in `proptest-regressions/` so it is replayed forever after.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::float_cmp,
-    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
-)]
+//! keeps any failing case in `fuzz_import.proptest-regressions` beside this file, so it is
+//! replayed forever after.
 
-mod support;
-
+use crate::support::{GltfBuilder, tiny_face, tiny_face_gltf};
 use faceanim_rig::import::{NoExternalResources, ObjSource, import_gltf, import_obj_set};
 use proptest::prelude::*;
 use serde_json::json;
-use support::{GltfBuilder, tiny_face, tiny_face_gltf};
 
 fn valid_glb(sparse: bool) -> Vec<u8> {
     let mut b = GltfBuilder::default();

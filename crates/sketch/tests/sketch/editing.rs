@@ -1,15 +1,9 @@
 //! Handles, exaggeration, layers, multi-blendshape strokes, path selection, warnings, and the
 //! glTF bake matching the engine at every frame.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::float_cmp,
-    reason = "tests"
-)]
 
-mod support;
-
+use crate::support::{
+    bow, draw, handle_vertex, ict, id, line, near, position, project, target_of, uniform,
+};
 use faceanim_rig::export::export_glb;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_sketch::bake::EXPORT_TOLERANCE;
@@ -17,9 +11,6 @@ use faceanim_sketch::engine::Input;
 use faceanim_sketch::settings::{Selection, StrokeMode};
 use faceanim_sketch::{Settings, Sketch, Target};
 use glam::Vec3;
-use support::{
-    bow, draw, handle_vertex, ict, id, line, near, position, project, target_of, uniform,
-};
 
 fn input(sketch: &Sketch<'_>, k: usize) -> Input {
     sketch.inputs()[k].clone().unwrap()

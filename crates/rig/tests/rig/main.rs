@@ -1,0 +1,17 @@
+//! faceanim-rig's integration tests, as one test binary: broken files and the importers'
+//! fuzzing, the glTF layouts other tools write, and the ICT-FaceKit heads.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::float_cmp,
+    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
+)]
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod bad_input;
+mod fuzz_import;
+mod gltf_layouts;
+mod ict;
