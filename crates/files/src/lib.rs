@@ -220,6 +220,37 @@ pub fn load_clip(path: &Path) -> Result<Clip, FileError> {
     })
 }
 
+/// What a write in progress is called until it replaces its file: `.NAME.XXXXXX` followed by
+/// this.
+pub const PARTIAL_SUFFIX: &str = ".faceanim-partial";
+
+/// Removes the partial writes ([`write_atomic`]'s temporary files) in `dir` that a killed
+/// process left behind: those older than `age` (younger ones may be another process's writes in
+/// progress). Returns the files removed; a folder that cannot be read removes nothing.
+#[must_use = "say what was cleaned up"]
+pub fn remove_stale_partials(dir: &Path, age: std::time::Duration) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let now = std::time::SystemTime::now();
+    entries
+        .flatten()
+        .filter(|e| {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            name.starts_with('.') && name.ends_with(PARTIAL_SUFFIX)
+        })
+        .filter(|e| {
+            e.metadata()
+                .and_then(|m| m.modified())
+                .ok()
+                .and_then(|t| now.duration_since(t).ok())
+                .is_some_and(|elapsed| elapsed >= age)
+        })
+        .filter_map(|e| std::fs::remove_file(e.path()).ok().map(|()| e.path()))
+        .collect()
+}
+
 /// Writes `bytes` to `path` atomically: readers see the old file or the new one, never a part.
 ///
 /// # Errors
@@ -233,7 +264,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => PathBuf::from("."),
     };
-    let mut temp = tempfile::NamedTempFile::new_in(&dir).map_err(io)?;
+    // Named after the file and recognisably ours, so that one left by a killed process is
+    // known for what it is and removed later ([`remove_stale_partials`]).
+    let name = path
+        .file_name()
+        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
+    let mut temp = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(PARTIAL_SUFFIX)
+        .tempfile_in(&dir)
+        .map_err(io)?;
     // Temporary files are private (0600); the result should be as readable as the file it
     // replaces, or as an ordinary new file.
     let permissions = match std::fs::metadata(path) {
@@ -277,6 +317,30 @@ mod tests {
         assert_eq!(
             std::fs::read_dir(dir.path()).map(|d| d.count()).ok(),
             Some(1)
+        );
+    }
+
+    #[test]
+    fn partial_writes_a_killed_process_left_are_recognised_and_removed() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        // What a write in progress looks like (the process is killed before it ends).
+        let temp = tempfile::Builder::new()
+            .prefix(".take.json.")
+            .suffix(PARTIAL_SUFFIX)
+            .tempfile_in(dir.path())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let (_, left) = temp.keep().unwrap_or_else(|e| panic!("{e}"));
+        let mine = dir.path().join("notes.faceanim-partial.txt");
+        std::fs::write(&mine, b"the user's").unwrap_or_else(|e| panic!("{e}"));
+        // Young partial writes may be another process's: kept.
+        assert!(remove_stale_partials(dir.path(), std::time::Duration::from_secs(60)).is_empty());
+        assert_eq!(
+            remove_stale_partials(dir.path(), std::time::Duration::ZERO),
+            vec![left.clone()]
+        );
+        assert!(
+            !left.exists() && mine.exists(),
+            "only faceanim's partial write goes"
         );
     }
 

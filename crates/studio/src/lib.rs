@@ -102,6 +102,19 @@ pub async fn bind(port: u16) -> Result<(tokio::net::TcpListener, SocketAddr), St
 /// [`StudioError`] if the project cannot be opened or the server fails.
 pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<(), StudioError> {
     let address = listener.local_addr().map_err(StudioError::Serve)?;
+    // Saves interrupted by a crash or a kill leave partial writes beside the project: gone now.
+    if let Some(folder) = config.project_path.parent() {
+        let folder = if folder.as_os_str().is_empty() {
+            std::path::Path::new(".")
+        } else {
+            folder
+        };
+        for stale in
+            faceanim_files::remove_stale_partials(folder, std::time::Duration::from_secs(60))
+        {
+            tracing::info!("removed {}, a save that was interrupted", stale.display());
+        }
+    }
     let take_path = state::take_autosave_path(&config.project_path);
     let mut desk = capture::CaptureDesk::new(&config.character, config.adapter_path, take_path);
     desk.open_vmc(config.vmc, &config.character)
