@@ -54,6 +54,7 @@ fn import(
         )));
     }
     check_position_indices(&root)?;
+    check_embedded_images(&root)?;
     let document = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(problems) => ImportErrorKind::InvalidJson(
             problems
@@ -88,6 +89,20 @@ fn check_position_indices(root: &gltf::json::Root) -> Result<(), ImportErrorKind
                     root.accessors.len()
                 )));
             }
+        }
+    }
+    Ok(())
+}
+
+/// gltf 1.4's `Image::source` unwraps the `mimeType` of an image stored in a buffer view, which
+/// the schema requires but a broken file may lack (a panic found by fuzzing a full-body
+/// avatar); refuse it first, naming the image.
+fn check_embedded_images(root: &gltf::json::Root) -> Result<(), ImportErrorKind> {
+    for (i, image) in root.images.iter().enumerate() {
+        if image.buffer_view.is_some() && image.mime_type.is_none() {
+            return Err(ImportErrorKind::InvalidJson(format!(
+                "images[{i}].mimeType: an image stored in a buffer view needs its mimeType (image/png or image/jpeg)"
+            )));
         }
     }
     Ok(())

@@ -177,6 +177,18 @@ fn schema_errors_and_cycles() {
         error_of("gltf1.glb", &bytes),
         "gltf1.glb: unsupported: glTF version 1.0 (faceanim reads glTF 2.0)"
     );
+    // An embedded image without its mimeType (gltf's own accessor would panic on it).
+    let bytes = tiny(|root, b| {
+        let view = b.view(&[0x89, b'P', b'N', b'G']);
+        root["images"] = json!([{"bufferView": view}]);
+        root["textures"] = json!([{"source": 0}]);
+        root["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+        root["meshes"][0]["primitives"][0]["material"] = json!(0);
+    });
+    assert_eq!(
+        error_of("no-mime.glb", &bytes),
+        "no-mime.glb: invalid glTF JSON: images[0].mimeType: an image stored in a buffer view needs its mimeType (image/png or image/jpeg)"
+    );
     let mut v1 = ict_bytes()[..64].to_vec();
     v1[4] = 1;
     assert_eq!(
