@@ -104,6 +104,8 @@ function refresh() {
   show('inspect-start', String(Math.round(action.start_frame)));
   show('inspect-duration', String(Math.round(action.end_frame - action.start_frame)));
   field('inspect-mirrored').checked = action.symmetric;
+  $('inspect-unmirrored').hidden = !action.unmirrored;
+  $('inspect-unmirrored').textContent = action.unmirrored || '';
   drawCurve(action.progress);
   fillTargets(action);
   showAlternatives(action);

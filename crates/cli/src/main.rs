@@ -422,6 +422,15 @@ fn sketch(args: &SketchArgs) -> anyhow::Result<()> {
     let name = strokes
         .file_stem()
         .map_or_else(|| "sketch".to_owned(), |s| s.to_string_lossy().into_owned());
+    for (index, result) in sketch.results().iter().enumerate() {
+        if let Ok(faceanim_sketch::Action {
+            unmirrored: Some(why),
+            ..
+        }) = result
+        {
+            eprintln!("warning: {}: strokes[{index}]: {why}", strokes.display());
+        }
+    }
     let baked = sketch.bake(&name)?;
     let extra = baked.character.blendshapes().len() - character.blendshapes().len();
     let animation = faceanim_export::Animation {

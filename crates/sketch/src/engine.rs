@@ -111,6 +111,9 @@ pub struct Action {
     pub swing: Vec<(u32, f32, u8)>,
     /// The easing handle's α.
     pub ease: f32,
+    /// Why an action that asked to be mirrored is not (no symmetry plane, no partner for its
+    /// blendshape, no mirror of its vertex); `None` when it is, or did not ask.
+    pub unmirrored: Option<String>,
 }
 
 impl Action {
@@ -466,6 +469,7 @@ impl<'c> Sketch<'c> {
         let symmetric = input.symmetry.unwrap_or(self.resolved.symmetry);
 
         let mut sides = Vec::new();
+        let mut unmirrored = None;
         let mut to = Layer::default();
         let mut offsets: Vec<(u32, Vec3)> = Vec::new();
         let start_position = found.reference_position;
@@ -511,14 +515,18 @@ impl<'c> Sketch<'c> {
                         .map(Target::Blendshape),
                     other => Some(other),
                 };
+                let mirror_ref = self
+                    .character
+                    .symmetry()
+                    .mirror_vertex(found.reference)
+                    .filter(|&m| m != found.reference);
+                if symmetric {
+                    unmirrored = self.why_unmirrored(target, partner, mirror_ref);
+                }
                 if symmetric
                     && let (Some(plane), Some(partner)) =
                         (self.character.symmetry().plane(), partner)
-                    && let Some(mirror_ref) = self
-                        .character
-                        .symmetry()
-                        .mirror_vertex(found.reference)
-                        .filter(|&m| m != found.reference)
+                    && let Some(mirror_ref) = mirror_ref
                 {
                     let mirror_exaggeration = plane.reflect_vector(exaggeration);
                     let mirror_target_position = match partner {
@@ -562,6 +570,9 @@ impl<'c> Sketch<'c> {
                     .symmetry()
                     .mirror_vertex(found.reference)
                     .filter(|&m| m != found.reference);
+                if symmetric {
+                    unmirrored = self.why_unmirrored(Target::Multi, Some(Target::Multi), mirror);
+                }
                 if symmetric && let (Some(plane), Some(m)) = (plane, mirror) {
                     pins.push((m, plane.reflect_point(found.base), plane.reflect_point(c)));
                 }
@@ -636,6 +647,57 @@ impl<'c> Sketch<'c> {
             timing,
             swing,
             ease,
+            unmirrored,
+        })
+    }
+
+    /// Whether `shape` moves the middle of the face (its displacement's centre lies near the
+    /// symmetry plane, within a tenth of how far across it its moved vertices spread).
+    fn is_central(&self, shape: &faceanim_rig::Blendshape) -> bool {
+        let Some(plane) = self.character.symmetry().plane() else {
+            return false;
+        };
+        let positions = self.character.positions();
+        let (mut sum, mut weight, mut spread) = (0.0f32, 0.0f32, 0.0f32);
+        for (&vertex, delta) in shape.indices().iter().zip(shape.deltas()) {
+            let across = plane.side_of(positions[vertex as usize]);
+            let w = delta.length();
+            sum += w * across;
+            weight += w;
+            spread = spread.max(across.abs());
+        }
+        weight > 0.0 && (sum / weight).abs() <= 0.1 * spread.max(f32::EPSILON)
+    }
+
+    /// Why a stroke that asked to be mirrored cannot be: the character has no symmetry plane, its
+    /// blendshape `target` has no left/right `partner`, or its vertex no mirror image.
+    fn why_unmirrored(
+        &self,
+        target: Target,
+        partner: Option<Target>,
+        mirror_vertex: Option<u32>,
+    ) -> Option<String> {
+        if self.character.symmetry().plane().is_none() {
+            return Some(format!(
+                "not mirrored: {} has no symmetry plane",
+                self.character.name()
+            ));
+        }
+        if let Target::Blendshape(id) = target {
+            let shape = self.character.blendshape(id)?;
+            // A shape in the middle of the face (jawOpen) is its own mirror: nothing is missing.
+            if self.is_central(shape) {
+                return None;
+            }
+            if partner.is_none() {
+                return Some(format!(
+                    "not mirrored: {} has no partner on the other side (by name or by shape)",
+                    shape.name()
+                ));
+            }
+        }
+        mirror_vertex.is_none().then(|| {
+            "not mirrored: the stroke starts where the face has no mirror image".to_owned()
         })
     }
 

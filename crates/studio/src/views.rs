@@ -84,6 +84,8 @@ pub struct ActionView {
     pub progress: Vec<f32>,
     /// Whether it has a mirrored side.
     pub symmetric: bool,
+    /// Why it is not mirrored although it asked to be.
+    pub unmirrored: Option<String>,
     /// The stroke's own side, then its mirror.
     pub sides: Vec<SideView>,
 }
@@ -138,6 +140,7 @@ impl ActionView {
                 .map(|k| action.progress(action.start_frame + action.duration * k as f32 / 16.0))
                 .collect(),
             symmetric: action.sides.len() > 1,
+            unmirrored: action.unmirrored.clone(),
             sides: action
                 .sides
                 .iter()

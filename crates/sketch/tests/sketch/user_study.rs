@@ -271,3 +271,56 @@ fn task_4_chain_neutral_smile_sad() {
     let c = compare(&clip, &expected);
     assert!(c.dtw_per_frame < 0.1, "{c:?}");
 }
+
+/// A stroke drawn with symmetry on says why it is one-sided when it has to be: a blendshape
+/// without a partner on the other side (here the ICT head without mouthSmile_R); a shape in
+/// the middle of the face (jawOpen) is its own mirror, and a paired one is mirrored.
+#[test]
+fn a_stroke_that_cannot_be_mirrored_says_why() {
+    let settings = Settings {
+        symmetry: true,
+        ..Settings::default()
+    };
+    let stroke = |name: &str| {
+        let v = handle_vertex(name);
+        draw(0.5, line(near(v), target_of(name, v)), uniform)
+    };
+    let sketch = sketch(&project(
+        settings.clone(),
+        vec![stroke("jawOpen"), stroke("mouthSmile_L")],
+    ));
+    let actions: Vec<_> = sketch.actions().map(|(_, a)| a).collect();
+    assert_eq!(actions.len(), 2);
+    assert_eq!(actions[0].unmirrored, None, "jawOpen is its own mirror");
+    assert_eq!(
+        (actions[1].sides.len(), actions[1].unmirrored.as_deref()),
+        (2, None)
+    );
+
+    // The same head without mouthSmile_R: the left smile stays one-sided, and says so.
+    let head = ict();
+    let without = faceanim_rig::Character::new(faceanim_rig::CharacterParts {
+        name: "ict without mouthSmile_R".into(),
+        positions: head.positions().to_vec(),
+        normals: None,
+        uvs: None,
+        colors: None,
+        triangles: head.triangles().to_vec(),
+        materials: Vec::new(),
+        parts: Vec::new(),
+        blendshapes: head
+            .blendshapes()
+            .iter()
+            .filter(|b| b.name() != "mouthSmile_R")
+            .cloned()
+            .collect(),
+        normal_deltas: None,
+    })
+    .unwrap();
+    let project = project(settings, vec![stroke("mouthSmile_L")]);
+    let (one_sided, _) = Sketch::from_project(&without, &project);
+    let action = one_sided.actions().next().unwrap().1;
+    assert_eq!(action.sides.len(), 1);
+    let why = action.unmirrored.as_deref().unwrap_or_default();
+    assert!(why.contains("mouthSmile_L has no partner"), "{why}");
+}
