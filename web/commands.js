@@ -5,7 +5,7 @@
 import { api } from './api.js';
 import * as capture from './capture.js';
 import { inCapture, onMode } from './mode.js';
-import { lastFrame, loadBaked, pause, play, playBackwards, setFrame, step } from './playback.js';
+import { lastFrame, pause, play, playBackwards, setFrame, step } from './playback.js';
 import { toggleOverlays } from './overlays.js';
 import { fitTimeline } from './timeline.js';
 import { frameCamera } from './scene.js';
@@ -48,7 +48,6 @@ store.onState((state) => {
 store.onSelection(refreshButtons);
 onMode(refreshButtons);
 capture.onChange(refreshButtons);
-store.onState((_, rebake) => { if (rebake) loadBaked().catch(showFailure); });
 
 $('undo').onclick = undo;
 $('redo').onclick = redo;

@@ -8,6 +8,7 @@ import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { FAST, beforeDraw, invalidate, onTick, scene } from './scene.js';
 import { blendNow, blendOnCpu, vertexLitMaterial } from './fastview.js';
+import { showFailure } from './status.js';
 import * as store from './store.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
@@ -220,3 +221,6 @@ export function atRest() {
   const q = root ? root.quaternion : null;
   return !q || (q.x === 0 && q.y === 0 && q.z === 0);
 }
+
+// A change of the animation (a new stroke, an edit, undo) is played from its new export.
+store.onState((_, rebake) => { if (rebake) loadBaked().catch(showFailure); });
