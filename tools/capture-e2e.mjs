@@ -212,6 +212,8 @@ try {
 
   // 8. Fine-tune from the correction (the seed's offline mode), then every frame is re-estimated.
   await page.click('#finetune');
+  // The click's request answers with the new job; only then is there a job to wait for.
+  await page.waitForFunction(() => window.studio.capture.view.job?.kind === 'fine_tuning', null, { timeout: 30000 });
   const tuned = await settled();
   check(tuned && !tuned.error && tuned.result.includes('fine-tuned'), `fine-tuning failed: ${JSON.stringify(tuned)}`);
   measurements.finetune = tuned.result;
