@@ -79,12 +79,15 @@ $('vmc-record').onclick = async () => {
 // VMC out while playing: each frame the viewport shows, one request at a time (a slow one
 // skips frames rather than falling behind).
 let sending = false;
+/** Whether the studio sends VMC (`--vmc-send`), asked once: the Sketch tab plays to it too. */
+let sendsVmc = false;
+api('GET', 'api/capture/vmc').then((state) => { sendsVmc = !!(state && state.sending); }).catch(() => {});
 onFrame((frame) => {
-  const view = currentView();
   const character = store.character();
   const mesh = characterMeshes()[0];
-  if (sending || !isPlaying() || !view || !view.vmc || !view.vmc.sending || !character || !mesh || !mesh.morphTargetInfluences) return;
-  const take = view.take;
+  if (sending || !sendsVmc || !isPlaying() || !character || !mesh || !mesh.morphTargetInfluences) return;
+  const view = currentView();
+  const take = view && view.take;
   const head = take && take.head.length ? take.head[Math.min(Math.round(frame), take.frames - 1)] : null;
   sending = true;
   api('POST', 'api/capture/vmc/send', { weights: Array.from(mesh.morphTargetInfluences.slice(0, character.blendshapes.length)), head })

@@ -825,3 +825,69 @@ fn a_photos_ramp_is_shown_and_set_before_export() {
     let state: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert_eq!(state["take"]["still"], 30, "{body}");
 }
+
+/// VMC out from playback: the page plays the sketch and the studio sends each shown frame to the
+/// marionette (an independent python-osc receiver).
+#[test]
+fn the_page_plays_its_animation_out_over_vmc() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = dir.path().join("played.json");
+    let (mut peer, port) = support::vmc_receiver(5, 90.0, &report);
+    let to = format!("127.0.0.1:{port}");
+    let studio = start_on(
+        None,
+        &dir.path().join("play.faceanim.json"),
+        &["--vmc-send".as_ref(), to.as_ref()],
+    );
+    // A jawOpen stroke of the built-in head, from the vertex it moves most to its target.
+    let (_, body) = request(studio.port, "GET", "/api/character/anchors", &[], b"");
+    let anchors: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let jaw = anchors
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["name"] == "jawOpen")
+        .unwrap();
+    let point = |k: usize, i: usize| {
+        let (rest, target) = (
+            jaw["rest"][k].as_f64().unwrap(),
+            jaw["target"][k].as_f64().unwrap(),
+        );
+        rest + (target - rest) * i as f64 / 10.0
+    };
+    let samples: Vec<serde_json::Value> = (0..=10)
+        .map(|i| serde_json::json!({ "t": i as f64 * 0.1, "p": [point(0, i), point(1, i), point(2, i)] }))
+        .collect();
+    let stroke = serde_json::json!({ "samples": samples }).to_string();
+    let json = [("Content-Type", "application/json")];
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/strokes",
+        &json,
+        stroke.as_bytes(),
+    );
+    assert_eq!(status, 200, "{body}");
+    browser_script(
+        "vmc-play-e2e.mjs",
+        &studio,
+        "",
+        &output_dir("vmc-play"),
+        &[],
+    );
+    assert!(peer.wait().unwrap().success());
+    let received: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let datagrams = received["datagrams"].as_array().unwrap();
+    assert!(datagrams.len() >= 5, "{received}");
+    let jaw_values: Vec<f64> = datagrams
+        .iter()
+        .flat_map(|d| d["messages"].as_array().unwrap().iter())
+        .filter(|m| m["address"] == "/VMC/Ext/Blend/Val" && m["args"][0][1] == "jawOpen")
+        .map(|m| m["args"][1][1].as_f64().unwrap())
+        .collect();
+    assert!(
+        jaw_values.iter().any(|&w| w > 0.05),
+        "the played jawOpen never went out: {jaw_values:?}"
+    );
+}

@@ -1,0 +1,39 @@
+// The studio's page playing its animation while the studio sends VMC (`--vmc-send`): each
+// frame the viewport shows goes out. Draws nothing itself: the caller posted the strokes.
+// Usage: node vmc-play-e2e.mjs URL OUTPUT_DIR
+// Prints one JSON line of measurements; exits non-zero with a message on the first failure.
+import { chromium } from 'playwright-core';
+import fs from 'node:fs';
+import path from 'node:path';
+
+const [url, out] = process.argv.slice(2);
+fs.mkdirSync(out, { recursive: true });
+const fail = (message) => { console.error(`vmc-play-e2e: ${message}`); process.exit(1); };
+
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+});
+try {
+  const page = await browser.newPage({ viewport: { width: 1200, height: 800 } });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  await page.goto(`${url}?fast`);
+  await page.waitForFunction(() => window.studio && window.studio.bakedReady && window.studio.state && window.studio.state.actions.length > 0, null, { timeout: 60000 });
+  // Play until the studio has sent a few frames.
+  await page.click('#play');
+  const sentSoFar = () => page.evaluate(() => fetch('api/capture/vmc').then((r) => r.json()).then((s) => s.sending.frames));
+  // Each check waits for the viewport's next drawn frame (bounded), not for a clock.
+  for (let k = 0; k < 600 && (await sentSoFar()) < 6; k++) {
+    const drawn = await page.evaluate(() => window.studio.frameCount);
+    await page.waitForFunction((f) => window.studio.frameCount > f, drawn, { timeout: 10000 });
+  }
+  await page.click('#play');
+  const sent = await page.evaluate(() => fetch('api/capture/vmc').then((r) => r.json()));
+  await page.screenshot({ path: path.join(out, 'playing-out.png') });
+  if (errors.length) fail(`page errors: ${errors.join('; ')}`);
+  console.log(JSON.stringify({ frames_sent: sent.sending.frames, dropped: sent.sending.dropped }));
+} finally {
+  await browser.close();
+}
