@@ -165,18 +165,23 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         return Ok(());
     }
 
-    // The take.
+    // The take: the records move into it (a long video's landmarks are not copied).
     let started = Instant::now();
-    let frames = result.frames.len();
+    let (frames, fps, found, detector_runs) = (
+        result.frames.len(),
+        result.fps,
+        result.faces_found(),
+        result.detector_runs,
+    );
     let footage = Footage {
         source: args.input.display().to_string(),
-        fps: result.fps,
+        fps,
         frame_names: result
             .frames
             .iter()
             .map(|f| source.frame_name(f.index))
             .collect(),
-        records: result.frames.clone(),
+        records: result.frames,
         still_frames: args
             .image_frames
             .filter(|_| source.is_still())
@@ -199,7 +204,6 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     }
 
     // Write.
-    let clip = session.clip();
     let animation = crate::outputs::take_animation(Some(&character), session, &stem(&args.input))?;
     for (path, format) in args.outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation)?;
@@ -210,12 +214,11 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         variant.set_filtering(args.filtering(choice)?);
         Ok(faceanim_anim::metrics::jitter(&variant.clip().frames))
     };
-    let found = result.faces_found();
     let summary = serde_json::json!({
         "frames": frames,
-        "fps": result.fps,
+        "fps": fps,
         "faces_found": found,
-        "detector_runs": result.detector_runs,
+        "detector_runs": detector_runs,
         "seconds": capture_seconds + estimate_seconds,
         "frames_per_second": frames as f64 / capture_seconds.max(1e-9),
         "estimator": take.estimated_by(),
@@ -225,12 +228,12 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         "blendshapes": character.blendshapes().len(),
         "filter": format!("{:?}", args.filter),
         "keyframes": session.keyframes().len(),
-        "animation_frames": clip.frames.len(),
+        "animation_frames": animation.clip.frames.len(),
         "jitter": {
             "raw": jitter(FilterChoice::None)?,
             "one_euro": jitter(FilterChoice::OneEuro)?,
             "keyframes": jitter(FilterChoice::Keyframes)?,
-            "chosen": faceanim_anim::metrics::jitter(&clip.frames),
+            "chosen": faceanim_anim::metrics::jitter(&animation.clip.frames),
         },
     });
     println!("{summary}");

@@ -18,7 +18,7 @@ use glam::Vec3;
 use serde::{Deserialize, Deserializer};
 
 use crate::capture_api::Both;
-use crate::error::ApiError;
+use crate::error::{Answer, ApiError};
 use crate::views::{AnchorView, CandidatesView, CharacterView, SavedView, StateView, UploadView};
 use crate::{Studio, lock};
 
@@ -28,7 +28,6 @@ use crate::{Studio, lock};
 struct Page;
 
 type Shared = Arc<Mutex<Studio>>;
-type Answer<T> = Result<axum::Json<T>, ApiError>;
 
 /// JSON requests (projects, strokes) may be this large.
 const JSON_LIMIT: usize = 16 * 1024 * 1024;

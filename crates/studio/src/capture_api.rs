@@ -17,11 +17,9 @@ use serde::Deserialize;
 
 use crate::api::{download, json_body, uploaded_name};
 use crate::capture::{self, CaptureDesk, SharedDesk};
-use crate::error::ApiError;
+use crate::error::{Answer, ApiError};
 use crate::views::CaptureView;
 use crate::{Studio, lock};
-
-type Answer<T> = Result<axum::Json<T>, ApiError>;
 
 /// `400` with `message`: a request that names a wrong field or file.
 fn bad(message: impl Into<String>) -> ApiError {
@@ -555,10 +553,18 @@ async fn live_frame(
 /// the GLB carries the strokes' baked arcs and exaggerations and the captured head turn; the
 /// seed's CSV and the session are the take's own.
 async fn export(State(both): State<Both>, format: Format) -> Result<Response, ApiError> {
-    let (session, name) = {
+    // What the export needs of the take, read under the desk's lock (the session itself only
+    // for the formats that are the session's own).
+    let (take_clip, arkit, session, name) = {
         let desk = both.desk();
         let open = desk.open_take()?;
-        (open.take.session.clone(), open.name())
+        let session = &open.take.session;
+        (
+            session.clip(),
+            session.arkit_clip(),
+            format.needs_session().then(|| session.clone()),
+            open.name(),
+        )
     };
     let studio = both.studio();
     let (sketch, _) = studio.sketch();
@@ -578,7 +584,7 @@ async fn export(State(both): State<Both>, format: Format) -> Result<Response, Ap
         (Some(weights), None)
     };
     let layered = faceanim_take::layer(
-        &session.clip(),
+        &take_clip,
         sketch_animation.as_ref(),
         studio.character.blendshapes().len(),
         &name,
@@ -590,8 +596,8 @@ async fn export(State(both): State<Both>, format: Format) -> Result<Response, Ap
             character: Some(character),
             animation: layered.animation,
             clip: layered.clip,
-            arkit: session.arkit_clip(),
-            session: Some(&session),
+            arkit,
+            session: session.as_ref(),
         },
     )?;
     Ok(download(format, &name, exported))

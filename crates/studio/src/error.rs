@@ -7,6 +7,9 @@ use faceanim_take::TakeError;
 
 use crate::capture::JobKind;
 
+/// A handler's answer: a JSON view, or the error.
+pub(crate) type Answer<T> = Result<axum::Json<T>, ApiError>;
+
 /// Why a request was refused or failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
