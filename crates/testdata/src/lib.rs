@@ -177,3 +177,51 @@ pub fn renamed_and_shuffled(character: &Character, seed: u64) -> (Character, Vec
         order,
     )
 }
+
+/// Runs npm `gltfpack` (installed in `tools/` by `scripts/setup.sh`) on `input` with `args`
+/// and returns the bytes it wrote, as the compressed avatars people download are made.
+///
+/// # Panics
+/// When node or gltfpack is missing or gltfpack fails, with its output.
+#[must_use]
+#[expect(
+    clippy::panic,
+    reason = "test support: a missing tool must stop the test loudly"
+)]
+pub fn gltfpack(input: &[u8], args: &[&str]) -> Vec<u8> {
+    let cli =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/node_modules/gltfpack/cli.js");
+    if !cli.exists() {
+        panic!(
+            "{} is missing: run scripts/setup.sh (npm ci in tools/)",
+            cli.display()
+        );
+    }
+    static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("faceanim-gltfpack-{}-{n}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let (src, out) = (dir.join("in.glb"), dir.join("out.glb"));
+    if let Err(e) = std::fs::write(&src, input) {
+        panic!("cannot write {}: {e}", src.display());
+    }
+    let result = std::process::Command::new("node")
+        .arg(&cli)
+        .arg("-i")
+        .arg(&src)
+        .arg("-o")
+        .arg(&out)
+        .args(args)
+        .output();
+    let bytes = match result {
+        Ok(o) if o.status.success() => std::fs::read(&out).ok(),
+        Ok(o) => panic!(
+            "gltfpack {args:?} failed: {}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        ),
+        Err(e) => panic!("cannot run node for gltfpack: {e}"),
+    };
+    let _ = std::fs::remove_dir_all(&dir);
+    bytes.unwrap_or_else(|| panic!("gltfpack {args:?} wrote no file"))
+}

@@ -45,8 +45,8 @@ fn import(
     resources: &dyn Resources,
 ) -> Result<Imported, ImportErrorKind> {
     let (json, bin) = split_container(bytes)?;
-    let root = gltf::json::Root::from_slice(json)
-        .map_err(|e| ImportErrorKind::InvalidJson(e.to_string()))?;
+    let prepared = super::extensions::prepare(json, bin, resources)?;
+    let root = prepared.root;
     if !root.asset.version.starts_with("2.") {
         return Err(ImportErrorKind::Unsupported(format!(
             "glTF version {} (faceanim reads glTF 2.0)",
@@ -66,9 +66,29 @@ fn import(
         ),
         other => ImportErrorKind::InvalidJson(other.to_string()),
     })?;
-    let buffers = load_buffers(&document, bin, resources)?;
+    let buffers = prepared.buffers;
+    if buffers.0.len() != document.buffers().len() {
+        return Err(ImportErrorKind::InvalidJson(format!(
+            "{} buffers were loaded for {} declared",
+            buffers.0.len(),
+            document.buffers().len()
+        )));
+    }
     let mut builder = Builder::new(source_name);
+    builder.warnings = prepared.warnings;
+    builder.uv_transforms = prepared.uv_transforms;
+    if prepared
+        .vrm
+        .as_ref()
+        .is_some_and(|v| v.version == super::vrm::Version::V0)
+    {
+        // VRM 0.x avatars face −Z; faceanim's characters face +Z (as VRM 1.0's do).
+        builder.root_transform = Mat4::from_rotation_y(std::f32::consts::PI);
+    }
     builder.read_scene(&document, &buffers, resources)?;
+    if let Some(vrm) = &prepared.vrm {
+        builder.add_expressions(vrm)?;
+    }
     builder.finish()
 }
 
@@ -184,46 +204,7 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKi
     )))
 }
 
-fn load_buffers<'a>(
-    document: &gltf::Document,
-    bin: Option<&'a [u8]>,
-    resources: &dyn Resources,
-) -> Result<Buffers<'a>, ImportErrorKind> {
-    let mut out = Vec::new();
-    for buffer in document.buffers() {
-        let index = buffer.index();
-        let (data, uri) = match buffer.source() {
-            gltf::buffer::Source::Bin => {
-                let data = bin.ok_or_else(|| ImportErrorKind::MissingBuffer {
-                    index,
-                    uri: "GLB BIN chunk".into(),
-                    reason: "the file has no binary chunk".into(),
-                })?;
-                (std::borrow::Cow::Borrowed(data), "GLB BIN chunk".to_owned())
-            }
-            gltf::buffer::Source::Uri(uri) => {
-                let data =
-                    load_uri(uri, resources).map_err(|reason| ImportErrorKind::MissingBuffer {
-                        index,
-                        uri: shorten(uri),
-                        reason,
-                    })?;
-                (std::borrow::Cow::Owned(data), shorten(uri))
-            }
-        };
-        if data.len() < buffer.length() {
-            return Err(ImportErrorKind::Truncated(format!(
-                "buffer {index} ('{uri}') has {} bytes but the file declares {}",
-                data.len(),
-                buffer.length()
-            )));
-        }
-        out.push(data);
-    }
-    Ok(Buffers(out))
-}
-
-fn shorten(uri: &str) -> String {
+pub(super) fn shorten(uri: &str) -> String {
     if uri.len() > 60 {
         format!(
             "{}…",
@@ -235,7 +216,7 @@ fn shorten(uri: &str) -> String {
 }
 
 /// Loads a `data:` URI or, through `resources`, a relative one (percent-decoded).
-fn load_uri(uri: &str, resources: &dyn Resources) -> Result<Vec<u8>, String> {
+pub(super) fn load_uri(uri: &str, resources: &dyn Resources) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, payload) = rest
             .split_once(";base64,")
@@ -311,6 +292,12 @@ struct Builder {
     shape_deltas: Vec<Vec<Vec3>>,
     warnings: Vec<String>,
     saw_targets: bool,
+    /// `KHR_texture_transform` of a material's base-colour texture, baked into the UVs.
+    uv_transforms: HashMap<usize, super::extensions::UvTransform>,
+    /// Applied before every node's own transform (VRM 0.x's turn to face +Z).
+    root_transform: Mat4,
+    /// Each mesh's morph targets as blendshape slots, by mesh index (for VRM bindings).
+    mesh_slots: HashMap<usize, Vec<usize>>,
 }
 
 impl Builder {
@@ -337,6 +324,9 @@ impl Builder {
             shape_deltas: Vec::new(),
             warnings: Vec::new(),
             saw_targets: false,
+            uv_transforms: HashMap::new(),
+            root_transform: Mat4::IDENTITY,
+            mesh_slots: HashMap::new(),
         }
     }
 
@@ -346,7 +336,10 @@ impl Builder {
         buffers: &Buffers<'_>,
         resources: &dyn Resources,
     ) -> Result<(), ImportErrorKind> {
-        let world = world_matrices(doc)?;
+        let world: Vec<Mat4> = world_matrices(doc)?
+            .into_iter()
+            .map(|m| self.root_transform * m)
+            .collect();
         let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
             Some(scene) => scene.nodes().map(|n| n.index()).collect(),
             None => {
@@ -383,7 +376,12 @@ impl Builder {
         if instances.is_empty() {
             // Meshes that no node places: take them as they are.
             for mesh in doc.meshes() {
-                self.read_mesh(&mesh, &Placement::Rigid(Mat4::IDENTITY), buffers, resources)?;
+                self.read_mesh(
+                    &mesh,
+                    &Placement::Rigid(self.root_transform),
+                    buffers,
+                    resources,
+                )?;
             }
         }
         for (node, mesh) in instances {
@@ -412,6 +410,11 @@ impl Builder {
             .next()
             .map_or(0, |p| p.morph_targets().count());
         let target_names = self.resolved_target_names(mesh, &mesh_label, target_count_hint);
+        let slots = target_names
+            .iter()
+            .map(|name| self.shape_slot(name))
+            .collect::<Result<Vec<_>, _>>()?;
+        self.mesh_slots.insert(mesh.index(), slots);
         let mut target_count: Option<usize> = None;
         // Primitives that share attribute accessors share vertices (faceanim's own exports do).
         let mut shared: HashMap<Vec<usize>, u32> = HashMap::new();
@@ -560,7 +563,14 @@ impl Builder {
                     .map_err(with_role(role("TEXCOORD_0")))?;
                 check_finite(&raw, 2, &role("TEXCOORD_0"))?;
                 self.any_uv = true;
-                self.uvs.extend(raw.chunks_exact(2).map(|c| [c[0], c[1]]));
+                let transform = primitive
+                    .material()
+                    .index()
+                    .and_then(|m| self.uv_transforms.get(&m).copied());
+                self.uvs.extend(raw.chunks_exact(2).map(|c| {
+                    let uv = [c[0], c[1]];
+                    transform.map_or(uv, |t| t.apply(uv))
+                }));
             }
             None => self.uvs.extend(std::iter::repeat_n([0.0, 0.0], count)),
         }
@@ -775,6 +785,53 @@ impl Builder {
         });
         self.material_map.insert(key, id);
         id
+    }
+
+    /// Adds each VRM expression as a blendshape: the weighted sum of the morph targets it
+    /// binds. An expression that binds nothing (a material-only or bone-driven one) is skipped
+    /// with a warning; one whose name a raw morph target already has gets ` (VRM)` appended.
+    fn add_expressions(&mut self, vrm: &super::vrm::Vrm) -> Result<(), ImportErrorKind> {
+        for expression in &vrm.expressions {
+            let mut sum: HashMap<u32, Vec3> = HashMap::new();
+            for bind in &expression.binds {
+                let Some(&slot) = self
+                    .mesh_slots
+                    .get(&bind.mesh)
+                    .and_then(|slots| slots.get(bind.target))
+                else {
+                    continue;
+                };
+                for (&v, &d) in self.shape_indices[slot]
+                    .iter()
+                    .zip(&self.shape_deltas[slot])
+                {
+                    *sum.entry(v).or_insert(Vec3::ZERO) += d * bind.weight;
+                }
+            }
+            if sum.is_empty() {
+                if expression.name != "neutral" {
+                    self.warnings.push(format!(
+                        "VRM expression '{}' moves no morph target (material or bone only); not a blendshape",
+                        expression.name
+                    ));
+                }
+                continue;
+            }
+            let mut name = expression.name.clone();
+            if self.shape_index.contains_key(&name) {
+                name = format!("{name} (VRM)");
+                if self.shape_index.contains_key(&name) {
+                    continue;
+                }
+            }
+            let slot = self.shape_slot(&name)?;
+            let mut entries: Vec<(u32, Vec3)> = sum.into_iter().collect();
+            entries.sort_unstable_by_key(|(v, _)| *v);
+            for (v, d) in entries {
+                self.push_delta(slot, v, d);
+            }
+        }
+        Ok(())
     }
 
     fn finish(self) -> Result<Imported, ImportErrorKind> {
@@ -1021,13 +1078,17 @@ fn load_image(
         Some("image/png")
     } else if bytes.starts_with(&[0xFF, 0xD8]) {
         Some("image/jpeg")
+    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
+        Some("image/webp")
     } else {
         None
     };
-    let mime_type = sniffed
-        .map(str::to_owned)
-        .or(declared)
-        .ok_or("not a PNG or JPEG image")?;
+    let mime_type = sniffed.map(str::to_owned).ok_or_else(|| match declared {
+        Some(declared) => {
+            format!("its {declared} image is not one faceanim shows (PNG, JPEG or WebP)")
+        }
+        None => "not a PNG, JPEG or WebP image".to_owned(),
+    })?;
     Ok(Texture {
         mime_type,
         bytes: Arc::from(bytes),

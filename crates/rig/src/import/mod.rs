@@ -7,8 +7,10 @@
 //! bad input, which the proptest fuzzer in `tests/fuzz_import.rs` checks.
 
 mod accessor;
+mod extensions;
 mod gltf;
 mod obj;
+mod vrm;
 
 pub use self::gltf::import_gltf;
 pub use self::obj::{ObjSource, import_obj_set};

@@ -12,6 +12,7 @@
 mod support;
 
 mod bad_input;
+mod compressed;
 mod fuzz_import;
 mod gltf_layouts;
 mod ict;

@@ -1,0 +1,223 @@
+//! VRM avatars (`.vrm`, a GLB with a VRM extension): their expressions.
+//!
+//! A VRM expression ("blink", "aa", "happy", or a custom one) is a named set of morph-target
+//! bindings with weights. faceanim makes each one a blendshape of the character beside the raw
+//! morph targets, so a stroke or a capture can pick "blink" as it would pick `Fcl_EYE_Close`.
+//!
+//! - VRM 0.x: `extensions.VRM.blendShapeMaster.blendShapeGroups[]`, each with `name`,
+//!   `presetName` and `binds[]` of `{mesh, index, weight}`, weights 0–100; the model faces −Z.
+//! - VRM 1.0: `extensions.VRMC_vrm.expressions.{preset,custom}.NAME.morphTargetBinds[]` of
+//!   `{node, index, weight}`, weights 0–1; the model faces +Z.
+//!
+//! Presets keep VRM 1.0's names in both versions (0.x `a` is `aa`, `joy` is `happy`,
+//! `blink_l` is `blinkLeft`, …), so the same avatar made for either version has the same
+//! blendshape names.
+
+use serde_json::Value;
+
+/// Which VRM specification the file follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Version {
+    /// VRM 0.x: faces −Z, weights 0–100.
+    V0,
+    /// VRM 1.0: faces +Z, weights 0–1.
+    V1,
+}
+
+/// One morph target of one mesh, with its weight in the expression (0–1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Bind {
+    pub mesh: usize,
+    pub target: usize,
+    pub weight: f32,
+}
+
+/// A named expression.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Expression {
+    pub name: String,
+    pub binds: Vec<Bind>,
+}
+
+/// What faceanim reads of a VRM file.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Vrm {
+    pub version: Version,
+    pub expressions: Vec<Expression>,
+}
+
+/// VRM 0.x preset names and their VRM 1.0 spelling.
+const V0_PRESETS: &[(&str, &str)] = &[
+    ("a", "aa"),
+    ("i", "ih"),
+    ("u", "ou"),
+    ("e", "ee"),
+    ("o", "oh"),
+    ("blink", "blink"),
+    ("blink_l", "blinkLeft"),
+    ("blink_r", "blinkRight"),
+    ("joy", "happy"),
+    ("angry", "angry"),
+    ("sorrow", "sad"),
+    ("fun", "relaxed"),
+    ("surprised", "surprised"),
+    ("lookup", "lookUp"),
+    ("lookdown", "lookDown"),
+    ("lookleft", "lookLeft"),
+    ("lookright", "lookRight"),
+    ("neutral", "neutral"),
+];
+
+/// Reads the VRM extension of a glTF JSON, if there is one.
+pub(crate) fn read(value: &Value, warnings: &mut Vec<String>) -> Option<Vrm> {
+    let extensions = value.get("extensions");
+    if let Some(v1) = extensions.and_then(|e| e.get("VRMC_vrm")) {
+        return Some(read_v1(value, v1, warnings));
+    }
+    if let Some(v0) = extensions.and_then(|e| e.get("VRM")) {
+        return Some(read_v0(value, v0, warnings));
+    }
+    None
+}
+
+fn mesh_target_count(value: &Value, mesh: usize) -> Option<usize> {
+    let primitive = value.pointer(&format!("/meshes/{mesh}/primitives/0"))?;
+    Some(
+        primitive
+            .get("targets")
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len),
+    )
+}
+
+/// Checks a binding against the file's meshes; a wrong one is a warning, not an error, since
+/// the raw morph targets still import.
+fn checked_bind(
+    value: &Value,
+    mesh: Option<usize>,
+    target: Option<usize>,
+    weight: Option<f64>,
+    scale: f64,
+    at: &str,
+    warnings: &mut Vec<String>,
+) -> Option<Bind> {
+    let (Some(mesh), Some(target)) = (mesh, target) else {
+        warnings.push(format!(
+            "{at}: a binding without its mesh and index was skipped"
+        ));
+        return None;
+    };
+    let count = mesh_target_count(value, mesh);
+    if count.is_none_or(|c| target >= c) {
+        warnings.push(format!(
+            "{at}: binds morph target {target} of mesh {mesh}, which does not exist; skipped"
+        ));
+        return None;
+    }
+    let weight = (weight.unwrap_or(scale) / scale) as f32;
+    (weight.is_finite() && weight != 0.0).then_some(Bind {
+        mesh,
+        target,
+        weight,
+    })
+}
+
+fn as_index(v: Option<&Value>) -> Option<usize> {
+    v.and_then(Value::as_u64)
+        .and_then(|n| usize::try_from(n).ok())
+}
+
+fn read_v0(value: &Value, vrm: &Value, warnings: &mut Vec<String>) -> Vrm {
+    let groups = vrm
+        .pointer("/blendShapeMaster/blendShapeGroups")
+        .and_then(Value::as_array)
+        .map_or(&[][..], Vec::as_slice);
+    let mut expressions = Vec::new();
+    for (g, group) in groups.iter().enumerate() {
+        let at = format!("extensions.VRM.blendShapeMaster.blendShapeGroups[{g}]");
+        let preset = group
+            .get("presetName")
+            .and_then(Value::as_str)
+            .unwrap_or("unknown");
+        let name = V0_PRESETS
+            .iter()
+            .find(|(v0, _)| v0.eq_ignore_ascii_case(preset))
+            .map(|(_, v1)| (*v1).to_owned())
+            .or_else(|| group.get("name").and_then(Value::as_str).map(str::to_owned))
+            .unwrap_or_else(|| format!("expression_{g}"));
+        let binds: Vec<Bind> = group
+            .get("binds")
+            .and_then(Value::as_array)
+            .map_or(&[][..], Vec::as_slice)
+            .iter()
+            .enumerate()
+            .filter_map(|(b, bind)| {
+                checked_bind(
+                    value,
+                    as_index(bind.get("mesh")),
+                    as_index(bind.get("index")),
+                    bind.get("weight").and_then(Value::as_f64),
+                    100.0,
+                    &format!("{at}.binds[{b}]"),
+                    warnings,
+                )
+            })
+            .collect();
+        expressions.push(Expression { name, binds });
+    }
+    Vrm {
+        version: Version::V0,
+        expressions,
+    }
+}
+
+fn read_v1(value: &Value, vrm: &Value, warnings: &mut Vec<String>) -> Vrm {
+    let mut expressions = Vec::new();
+    for kind in ["preset", "custom"] {
+        let Some(map) = vrm
+            .pointer(&format!("/expressions/{kind}"))
+            .and_then(Value::as_object)
+        else {
+            continue;
+        };
+        for (name, expression) in map {
+            let at = format!("extensions.VRMC_vrm.expressions.{kind}.{name}");
+            let binds = expression
+                .get("morphTargetBinds")
+                .and_then(Value::as_array)
+                .map_or(&[][..], Vec::as_slice)
+                .iter()
+                .enumerate()
+                .filter_map(|(b, bind)| {
+                    let node = as_index(bind.get("node"));
+                    let mesh =
+                        node.and_then(|n| as_index(value.pointer(&format!("/nodes/{n}/mesh"))));
+                    if node.is_some() && mesh.is_none() {
+                        warnings.push(format!(
+                            "{at}.morphTargetBinds[{b}]: node {} has no mesh; skipped",
+                            node.unwrap_or_default()
+                        ));
+                        return None;
+                    }
+                    checked_bind(
+                        value,
+                        mesh,
+                        as_index(bind.get("index")),
+                        bind.get("weight").and_then(Value::as_f64),
+                        1.0,
+                        &format!("{at}.morphTargetBinds[{b}]"),
+                        warnings,
+                    )
+                })
+                .collect();
+            expressions.push(Expression {
+                name: name.clone(),
+                binds,
+            });
+        }
+    }
+    Vrm {
+        version: Version::V1,
+        expressions,
+    }
+}
