@@ -55,7 +55,7 @@ window.studio = Object.freeze({
   try {
     const character = await store.loadCharacter();
     document.getElementById('character-name').textContent = character.name;
-    frameCamera(character.bounds);
+    frameCamera(character.head);
     await store.run('GET', 'api/state');
   } catch (e) { showFailure(e); }
   // Open in capture mode with `#capture` in the address.

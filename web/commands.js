@@ -72,7 +72,7 @@ async function uploadCharacter(file) {
     const result = await api('POST', 'api/character/upload', await file.arrayBuffer(), { 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') });
     const character = await store.loadCharacter();
     $('character-name').textContent = character.name;
-    frameCamera(character.bounds);
+    frameCamera(character.head);
     store.setState(result.state, true);
     if (result.warnings.length) showError(result.warnings.join('\n'));
   } catch (err) { showFailure(err); showStatus(`Could not open ${file.name}; still on ${store.character().name}.`); }
@@ -111,6 +111,8 @@ window.addEventListener('keydown', (e) => {
   else if (e.key === 'Home') fitTimeline();
   else if (e.key === 'End') setFrame(lastFrame());
   else if (e.altKey && e.shiftKey && e.key.toLowerCase() === 'z') toggleOverlays();
+  else if (e.key === 'f') frameCamera(store.character().head);
+  else if (e.key === 'F') frameCamera(store.character().bounds);
   else if (e.key === '?') $('help').hidden = !$('help').hidden;
   else if (e.key === 'Escape') $('help').hidden = true;
 });

@@ -51,7 +51,7 @@ impl FaceCamera {
     /// [`AdaptError::Model`] if a network fails.
     pub fn frame(character: &Character, models: &FaceModels) -> Result<FaceCamera, AdaptError> {
         let appearance = Appearance::of(character);
-        let camera = Camera::front(&character.bounds(), 0.75);
+        let camera = Camera::front(&character.head_bounds(), 0.75);
         let neutral = character.pose(&[]);
         let image = faceanim_render::render(character, &neutral, &camera, &appearance, CALIBRATION);
         let frame = Frame {

@@ -361,7 +361,7 @@ fn render(args: &RenderArgs) -> anyhow::Result<()> {
             w[id.index()] = value;
         }
         let pose = character.pose(&w);
-        let camera = faceanim_render::Camera::front(&character.bounds(), 0.75);
+        let camera = faceanim_render::Camera::front(&character.head_bounds(), 0.75);
         let appearance = faceanim_render::Appearance::of(&character);
         for warning in appearance.warnings() {
             eprintln!("warning: {warning}");

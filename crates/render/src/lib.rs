@@ -415,7 +415,7 @@ pub fn contact_sheet(character: &Character, cell: u32) -> Image {
     let rows = (count as u32).div_ceil(columns);
     let label_height = 20;
     let mut sheet = Image::filled(columns * cell, rows * (cell + label_height), [24, 25, 28]);
-    let camera = Camera::front(&character.bounds(), 0.75);
+    let camera = Camera::front(&character.head_bounds(), 0.75);
     let appearance = Appearance::of(character);
     let mut weights = vec![0.0; character.blendshapes().len()];
     let mut pose = Pose::default();

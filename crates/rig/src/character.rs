@@ -229,6 +229,48 @@ impl Aabb {
     }
 }
 
+/// A character whose bounds are at least this many times its face region's diagonal is
+/// framed on a head-sized box around its face instead of on its whole bounds.
+const FULL_BODY_RATIO: f32 = 1.6;
+/// How far the head box reaches beyond the face region on each side, as a fraction of the
+/// face region's diagonal (on a scanned head the face region spans about 0.83 of the head's
+/// diagonal; this margin gives the head's size back).
+const HEAD_MARGIN: f32 = 0.06;
+
+/// The face region and the head box (see [`Character::face_bounds`] and
+/// [`Character::head_bounds`]).
+fn face_and_head(positions: &[Vec3], blendshapes: &[Blendshape], whole: &Aabb) -> (Aabb, Aabb) {
+    let mut moved = vec![0.0f32; positions.len()];
+    for shape in blendshapes {
+        for (&i, d) in shape.indices().iter().zip(shape.deltas()) {
+            if let Some(m) = moved.get_mut(i as usize) {
+                *m = m.max(d.length());
+            }
+        }
+    }
+    let largest = moved.iter().copied().fold(0.0f32, f32::max);
+    if largest <= 0.0 {
+        return (*whole, *whole);
+    }
+    let face_points: Vec<Vec3> = positions
+        .iter()
+        .zip(&moved)
+        .filter(|&(_, &m)| m > 0.02 * largest)
+        .map(|(p, _)| *p)
+        .collect();
+    let face = Aabb::around(&face_points);
+    let face_size = face.diagonal();
+    if face_size <= 0.0 || whole.diagonal() < FULL_BODY_RATIO * face_size {
+        return (face, *whole);
+    }
+    let margin = Vec3::splat(HEAD_MARGIN * face_size);
+    let head = Aabb {
+        min: (face.min - margin).max(whole.min),
+        max: (face.max + margin).min(whole.max),
+    };
+    (face, head)
+}
+
 /// Everything needed to build a [`Character`]; [`Character::new`] validates it.
 #[derive(Debug, Clone, Default)]
 pub struct CharacterParts {
@@ -326,6 +368,8 @@ pub struct Character {
     blendshapes: Vec<Blendshape>,
     normal_deltas: Vec<NormalDeltas>,
     bounds: Aabb,
+    face: Aabb,
+    head: Aabb,
     graph: EdgeGraph,
     symmetry: Symmetry,
     runs: EvaluationRuns,
@@ -452,7 +496,8 @@ impl Character {
             }
             _ => normals::blendshape_normal_deltas(&positions, &triangles, &graph, &blendshapes),
         };
-        let symmetry = Symmetry::detect(&positions, &bounds, &blendshapes);
+        let (face, head) = face_and_head(&positions, &blendshapes, &bounds);
+        let symmetry = Symmetry::detect(&positions, &head, &blendshapes);
         let runs = EvaluationRuns {
             positions: blendshapes
                 .iter()
@@ -476,6 +521,8 @@ impl Character {
             blendshapes,
             normal_deltas,
             bounds,
+            face,
+            head,
             graph,
             symmetry,
             runs,
@@ -579,10 +626,28 @@ impl Character {
         self.bounds
     }
 
-    /// The character's size `D`: the diagonal of its bounding box.
+    /// The face region: the box around the vertices the blendshapes move (by more than 2 % of
+    /// the largest motion of any vertex), eyes, teeth and tongue included.
+    #[must_use]
+    pub fn face_bounds(&self) -> Aabb {
+        self.face
+    }
+
+    /// The head: the box that framing (the studio's camera, renders, the adapter's training
+    /// pictures) and default distances are measured on. For a bare head it is the whole
+    /// [`Character::bounds`]; for a character much larger than its face (a full-body avatar) it
+    /// is a head-sized box around the face region.
+    #[must_use]
+    pub fn head_bounds(&self) -> Aabb {
+        self.head
+    }
+
+    /// The character's size `D`, that default distances scale with: the diagonal of
+    /// [`Character::head_bounds`] (so a full-body avatar gets the same stroke radii as its
+    /// head alone would).
     #[must_use]
     pub fn size(&self) -> f32 {
-        self.bounds.diagonal()
+        self.head.diagonal()
     }
 
     /// Vertex adjacency, with coincident vertices (UV seams) joined.

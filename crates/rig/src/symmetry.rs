@@ -1,9 +1,13 @@
 //! Left/right symmetry: the mirror plane, each vertex's mirror partner, and blendshape pairs.
 //!
 //! The plane is found from the geometry (the axis-aligned plane through the mesh's middle that
-//! maps the most vertices onto other vertices). Blendshape partners come first from names
-//! (see [`crate::names::sided`]) and, for blendshapes whose names say nothing, from geometry: a
-//! blendshape whose deltas, mirrored across the plane, match another blendshape's deltas.
+//! maps the most vertices onto other vertices), as a robust fit: real faces are never exactly
+//! symmetric, so the match tolerance grows from 0.2 % of the size (a mirrored model) to 2.5 %
+//! (a scanned or sculpted face, a few millimetres on a head) until most vertices find a partner,
+//! and the plane's offset is the median of the matched pairs' midpoints. Blendshape partners
+//! come first from names (see [`crate::names::sided`]) and, for blendshapes whose names say
+//! nothing, from geometry: two blendshapes that are each other's best mirror, and mirror onto
+//! each other better than either mirrors onto itself.
 //!
 //! Orientation: glTF characters face +Z with +Y up, so the character's left is +X. For a plane
 //! on another axis, "left" is the positive side of that axis.
@@ -14,14 +18,17 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use crate::character::{Aabb, Blendshape, BlendshapeId};
 use crate::names::{self, Side};
 
-/// Vertices closer than this fraction of the size to a mirrored vertex count as its partner.
-/// Scanned and sculpted heads are symmetric to about a millimetre, not to float precision.
-const MIRROR_TOLERANCE: f32 = 2e-3;
+/// Vertices closer than one of these fractions of the size to a mirrored vertex count as its
+/// partner: the first at which the plane is found is used. A mirrored model matches at the
+/// first; scanned and sculpted heads are symmetric to a few millimetres, not to float precision.
+const MIRROR_TOLERANCES: [f32; 4] = [2e-3, 6e-3, 1.2e-2, 2.5e-2];
 /// A plane is a symmetry plane when at least this fraction of vertices have a partner.
 const MIN_MIRRORED_FRACTION: f32 = 0.6;
-/// Two blendshapes are geometric partners when the mirrored deltas of one differ from the other's
-/// by less than this fraction of their magnitude (sum of squares).
-const PAIR_RELATIVE_ERROR: f32 = 0.05;
+/// Two blendshapes can be geometric partners when the mirrored deltas of one differ from the
+/// other's by less than this fraction of their magnitude (sum of squares); a sculpted face's
+/// left and right shapes differ in strength and extent, so this is loose, and the pairing also
+/// asks that each is the other's best mirror and that neither mirrors onto itself as well.
+const PAIR_RELATIVE_ERROR: f32 = 0.35;
 
 /// A coordinate axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -115,14 +122,20 @@ pub struct Symmetry {
 
 impl Symmetry {
     /// Finds the plane, the vertex partners and the blendshape pairs.
+    ///
+    /// `bounds` is the region the size is measured on (the head of a full-body character).
     #[must_use]
     pub fn detect(positions: &[Vec3], bounds: &Aabb, shapes: &[Blendshape]) -> Symmetry {
-        let tolerance = MIRROR_TOLERANCE * bounds.diagonal().max(f32::MIN_POSITIVE);
         let points: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();
         let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&points);
-        let plane = find_plane(positions, bounds, &tree, tolerance);
-        let mirror = match plane {
-            Some(plane) => mirror_map(positions, &tree, plane, tolerance),
+        let size = bounds.diagonal().max(f32::MIN_POSITIVE);
+        let found = MIRROR_TOLERANCES.iter().find_map(|fraction| {
+            let tolerance = fraction * size;
+            find_plane(positions, bounds, &tree, tolerance).map(|plane| (plane, tolerance))
+        });
+        let plane = found.map(|(plane, _)| plane);
+        let mirror = match found {
+            Some((plane, tolerance)) => mirror_map(positions, &tree, plane, tolerance),
             None => vec![None; positions.len()],
         };
         let mut pairs = pairs_by_name(shapes);
@@ -276,36 +289,37 @@ fn pairs_by_geometry(
             .iter()
             .any(|p| p.left.index() == i || p.right.index() == i)
     };
-    // Only shapes without a partner by name, and not symmetric in themselves (jawOpen mirrors
-    // onto itself and must not pair with a look-alike).
+    // Only shapes without a partner by name that move something.
     let mut dense = vec![Vec3::ZERO; positions.len()];
     let candidates: Vec<usize> = (0..shapes.len())
         .filter(|&i| !paired(i) && shapes[i].moved() > 0)
-        .filter(|&i| {
-            shapes[i].write_dense(&mut dense);
-            mirrored_error(&shapes[i], &dense, plane, mirror) > PAIR_RELATIVE_ERROR
-        })
         .collect();
+    // error[a][b]: a mirrored against b; the diagonal is how well a mirrors onto itself (jawOpen
+    // does, and must not pair with a look-alike).
+    let n = candidates.len();
+    let mut error = vec![f32::INFINITY; n * n];
+    for (kb, &b) in candidates.iter().enumerate() {
+        shapes[b].write_dense(&mut dense);
+        let norm_b: f32 = shapes[b].deltas().iter().map(|d| d.length_squared()).sum();
+        for (ka, &a) in candidates.iter().enumerate() {
+            error[ka * n + kb] = mirrored_error(&shapes[a], &dense, norm_b, plane, mirror);
+        }
+    }
+    // Symmetrised, so that a pair's error does not depend on which one is mirrored.
+    let pair_error = |ka: usize, kb: usize| 0.5 * (error[ka * n + kb] + error[kb * n + ka]);
+    let best_of = |ka: usize| {
+        (0..n)
+            .filter(|&kb| kb != ka)
+            .map(|kb| (pair_error(ka, kb), kb))
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+    };
     let mut pairs = Vec::new();
-    let mut used = vec![false; shapes.len()];
-    for (k, &a) in candidates.iter().enumerate() {
-        if used[a] {
-            continue;
-        }
-        let mut best: Option<(f32, usize)> = None;
-        for &b in &candidates[k + 1..] {
-            if used[b] {
-                continue;
-            }
-            shapes[b].write_dense(&mut dense);
-            let error = mirrored_error(&shapes[a], &dense, plane, mirror);
-            if error < PAIR_RELATIVE_ERROR && best.is_none_or(|(e, _)| error < e) {
-                best = Some((error, b));
-            }
-        }
-        if let Some((_, b)) = best {
-            used[a] = true;
-            used[b] = true;
+    for ka in 0..n {
+        let Some((e, kb)) = best_of(ka) else { continue };
+        let mutual = best_of(kb).is_some_and(|(_, back)| back == ka);
+        let beats_self = e < error[ka * n + ka] && e < error[kb * n + kb];
+        if ka < kb && mutual && beats_self && e < PAIR_RELATIVE_ERROR {
+            let (a, b) = (candidates[ka], candidates[kb]);
             let (left, right) = if motion_side(positions, &shapes[a], plane) >= 0.0 {
                 (a, b)
             } else {
@@ -321,9 +335,15 @@ fn pairs_by_geometry(
     pairs
 }
 
-/// Relative squared error between `a` mirrored across the plane and the dense deltas `b`.
-fn mirrored_error(a: &Blendshape, b: &[Vec3], plane: MirrorPlane, mirror: &[Option<u32>]) -> f32 {
-    let norm_b: f32 = b.iter().map(|d| d.length_squared()).sum();
+/// Relative squared error between `a` mirrored across the plane and the dense deltas `b`, whose
+/// sum of squares is `norm_b`.
+fn mirrored_error(
+    a: &Blendshape,
+    b: &[Vec3],
+    norm_b: f32,
+    plane: MirrorPlane,
+    mirror: &[Option<u32>],
+) -> f32 {
     let norm_a: f32 = a.deltas().iter().map(|d| d.length_squared()).sum();
     let scale = norm_a.max(norm_b);
     if scale <= 0.0 {

@@ -227,9 +227,12 @@ pub struct CharacterView {
     pub vertices: usize,
     /// Blendshape names, in order.
     pub blendshapes: Vec<String>,
-    /// Bounding box.
+    /// Bounding box of the whole character.
     pub bounds: BoundsView,
-    /// The bounding box's diagonal.
+    /// The head: the box the camera frames first (the whole character for a bare head, a
+    /// head-sized box around the face on a full-body avatar).
+    pub head: BoundsView,
+    /// The character's size `D` (the head box's diagonal), that default distances scale with.
     pub diagonal: f32,
 }
 
@@ -246,16 +249,17 @@ impl CharacterView {
     /// The view of `character`.
     #[must_use]
     pub fn of(character: &Character) -> CharacterView {
-        let bounds = character.bounds();
+        let view = |b: faceanim_rig::Aabb| BoundsView {
+            min: b.min.to_array(),
+            max: b.max.to_array(),
+        };
         CharacterView {
             name: character.name().to_owned(),
             vertices: character.vertex_count(),
             blendshapes: names(character),
-            bounds: BoundsView {
-                min: bounds.min.to_array(),
-                max: bounds.max.to_array(),
-            },
-            diagonal: (bounds.max - bounds.min).length(),
+            bounds: view(character.bounds()),
+            head: view(character.head_bounds()),
+            diagonal: character.size(),
         }
     }
 }

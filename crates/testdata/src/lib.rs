@@ -5,6 +5,8 @@
 //! when they are missing, and caches the parsed ICT head so a test binary imports it once.
 #![deny(missing_docs)]
 
+pub mod avatar;
+
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
