@@ -47,7 +47,7 @@ struct Writer {
 
 impl Writer {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut view =
@@ -517,11 +517,11 @@ pub fn full_body_glb(head: &Character, vrm: VrmKind, expressions: &[Expression<'
 /// Packs JSON and a binary chunk into a GLB.
 fn glb(root: &Value, bin: &[u8]) -> Vec<u8> {
     let mut json = serde_json::to_vec(root).unwrap_or_default();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();

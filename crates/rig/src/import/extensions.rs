@@ -286,15 +286,15 @@ fn decode_meshopt(
             ImportErrorKind::InvalidJson(format!("bufferViews[{v}] (meshopt {mode}): {problem}"))
         })?;
         debug_assert_eq!(bytes.len(), total);
-        while decoded.len() % 16 != 0 {
+        while !decoded.len().is_multiple_of(16) {
             decoded.push(0);
         }
         let at = decoded.len();
         decoded.extend_from_slice(&bytes);
-        if extensions.is_empty() {
-            if let Some(object) = view.as_object_mut() {
-                object.remove("extensions");
-            }
+        if extensions.is_empty()
+            && let Some(object) = view.as_object_mut()
+        {
+            object.remove("extensions");
         }
         view["buffer"] = Value::from(new_index);
         view["byteOffset"] = Value::from(at);
@@ -374,7 +374,7 @@ fn decode_view(
         }
         other => return Err(format!("unknown mode '{other}'")),
     };
-    if mode == "TRIANGLES" && count % 3 != 0 {
+    if mode == "TRIANGLES" && !count.is_multiple_of(3) {
         return Err(format!("TRIANGLES count {count} is not a multiple of 3"));
     }
     apply_filter(&mut bytes, stride, filter)?;

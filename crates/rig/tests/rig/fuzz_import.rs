@@ -55,6 +55,64 @@ fn the_seed_corpus_imports_without_panicking() {
     );
 }
 
+/// A small full-body avatar around the tiny face: skinned, textured, the face split into
+/// meshes sharing target names, sparse targets, with a VRM 0.x or 1.0 extension or none,
+/// optionally meshopt-compressed and quantized by gltfpack (made once per kind).
+fn avatar(kind: u8) -> &'static [u8] {
+    use faceanim_testdata::avatar::{Expression, VrmKind, full_body_glb};
+    static MADE: std::sync::OnceLock<Vec<Vec<u8>>> = std::sync::OnceLock::new();
+    let made = MADE.get_or_init(|| {
+        let face = import_gltf(&valid_glb(false), "tiny.glb", &NoExternalResources)
+            .unwrap()
+            .character;
+        let first = face.blendshapes()[0].name().to_owned();
+        let binds = [first.as_str()];
+        let expressions = [Expression {
+            name: "blink",
+            v0_preset: "blink",
+            binds: &binds,
+        }];
+        let v0 = full_body_glb(&face, VrmKind::V0, &expressions);
+        let v1 = full_body_glb(&face, VrmKind::V1, &expressions);
+        let packed = faceanim_testdata::gltfpack(&v1, &["-cc", "-kn"]);
+        vec![v0, v1, packed]
+    });
+    &made[usize::from(kind) % made.len()]
+}
+
+/// The JSON chunk of a GLB, parsed, and its BIN chunk.
+fn glb_parts(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+    let json = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+    (json, glb[20 + len + 8..].to_vec())
+}
+
+fn glb_from(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut j = serde_json::to_vec(json).unwrap();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let total = 12 + 8 + j.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&j);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(bin);
+    out
+}
+
+#[test]
+fn the_avatars_import_before_mutation() {
+    for kind in 0..3 {
+        import_gltf(avatar(kind), "avatar.glb", &NoExternalResources).unwrap();
+    }
+}
+
 const HOSTILE: [i64; 10] = [0, 1, 3, 4, 5121, 5126, -1, 65_535, 4_294_967_295, 1 << 40];
 
 proptest! {
@@ -68,6 +126,53 @@ proptest! {
             bytes[i] = value;
         }
         import_must_not_panic(&bytes);
+    }
+
+    #[test]
+    fn avatar_byte_flips(kind in 0u8..3, flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..8)) {
+        let mut bytes = avatar(kind).to_vec();
+        for (at, value) in flips {
+            let i = at.index(bytes.len());
+            bytes[i] = value;
+        }
+        import_must_not_panic(&bytes);
+    }
+
+    #[test]
+    fn avatar_hostile_fields(
+        kind in 0u8..3,
+        edits in prop::collection::vec((0usize..10, 0usize..64, prop::sample::select(&HOSTILE[..])), 1..4),
+    ) {
+        let (mut root, bin) = glb_parts(avatar(kind));
+        for (field, which, value) in edits {
+            let (array, pointer) = match field {
+                0 => ("bufferViews", "/extensions/EXT_meshopt_compression/count"),
+                1 => ("bufferViews", "/extensions/EXT_meshopt_compression/byteStride"),
+                2 => ("bufferViews", "/extensions/EXT_meshopt_compression/byteLength"),
+                3 => ("bufferViews", "/extensions/EXT_meshopt_compression/byteOffset"),
+                4 => ("bufferViews", "/extensions/EXT_meshopt_compression/buffer"),
+                5 => ("skins", "/joints/0"),
+                6 => ("skins", "/inverseBindMatrices"),
+                7 => ("nodes", "/skin"),
+                8 => ("accessors", "/count"),
+                _ => ("meshes", "/primitives/0/targets/0/POSITION"),
+            };
+            if let Some(items) = root[array].as_array_mut()
+                && !items.is_empty() {
+                    let n = items.len();
+                    if let Some(slot) = items[which % n].pointer_mut(pointer) {
+                        *slot = json!(value);
+                    }
+                }
+            // The VRM extensions' bindings too.
+            if let Some(bind) = root.pointer_mut("/extensions/VRM/blendShapeMaster/blendShapeGroups/0/binds/0/index") {
+                *bind = json!(value);
+            }
+            if let Some(bind) = root.pointer_mut("/extensions/VRMC_vrm/expressions/preset/blink/morphTargetBinds/0/node") {
+                *bind = json!(value);
+            }
+        }
+        import_must_not_panic(&glb_from(&root, &bin));
     }
 
     #[test]

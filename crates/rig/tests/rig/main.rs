@@ -11,6 +11,7 @@
 #[path = "../support/mod.rs"]
 mod support;
 
+mod asymmetric;
 mod avatars;
 mod bad_input;
 mod compressed;

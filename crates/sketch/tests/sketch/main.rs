@@ -11,5 +11,6 @@
 #[path = "../support/mod.rs"]
 mod support;
 
+mod any_face;
 mod editing;
 mod user_study;
