@@ -1,5 +1,6 @@
-// The character and its animation: loads what the export writes (GET /api/export.glb: the
-// character, the baked corrective targets of arcs and exaggerations, the weight tracks) and
+// The character and its animation: loads the studio's view of the export (GET /api/view.glb:
+// the character as one mesh, the baked corrective targets of arcs and exaggerations, the same
+// weight tracks as the GLB download writes into the user's own file) and
 // plays it, so the viewport shows exactly what Blender or an engine will play. Owns the current
 // frame, playing, the layer under the sketch (a captured take or the live face) and the
 // character's turn.
@@ -68,7 +69,7 @@ let bakeGeneration = 0;
 /** Loads the export and plays it (a newer call wins over one still loading). */
 export async function loadBaked() {
   const generation = ++bakeGeneration;
-  const response = await fetch('api/export.glb');
+  const response = await fetch('api/view.glb');
   if (!response.ok) throw new Error(await response.text());
   const buffer = await response.arrayBuffer();
   if (generation !== bakeGeneration) return;

@@ -6,9 +6,11 @@
 //! by name or by a file's extension; the command line writes the bytes to files, the studio
 //! sends them as downloads. The rules that belong to a format live here once:
 //!
-//! - **GLB** — the character (with the sketch's baked corrective targets for arcs and
-//!   exaggerations, when there are any) and one morph-weight animation, the head turn on the
-//!   root node: what Blender, Unity, Unreal and three.js play.
+//! - **GLB** — the user's own file with one morph-weight animation added (every node, skin,
+//!   material and texture kept; the sketch's baked corrective targets for arcs and
+//!   exaggerations appended to the meshes they move; the head turn on the head bone): what
+//!   Blender, Unity, Unreal and three.js play. A character made in code or from OBJ files is
+//!   written as one mesh, as is the studio's own view ([`view_glb`]).
 //! - **Live Link Face CSV** speaks ARKit: it gets the character's own weights when the
 //!   character has ARKit-named shapes, else the capture's own ARKit weights when a capture made
 //!   the animation (with a note saying so), else zero curves (with a warning).
@@ -233,11 +235,30 @@ pub fn export(format: Format, animation: &Animation<'_>) -> Result<Exported, Exp
     Ok(Exported { bytes, notes })
 }
 
-/// The GLB writer: `character` with `animation` (when given), as a binary glTF.
+/// The GLB writer: `character` with `animation` (when given), as a binary glTF: the user's
+/// own file with the animation added when the character came from a glTF file, else the
+/// character as one mesh.
 ///
 /// # Errors
 /// [`ExportError::Glb`] when the animation does not fit the character.
 pub fn glb(
+    character: &Character,
+    animation: Option<&MorphAnimation>,
+) -> Result<Vec<u8>, ExportError> {
+    let animations = animation.map(std::slice::from_ref).unwrap_or_default();
+    Ok(match character.source() {
+        Some(_) => faceanim_rig::export::export_into_source(character, animations)?,
+        None => faceanim_rig::export::export_glb(character, animations)?,
+    })
+}
+
+/// The character as faceanim sees it, as one mesh whose targets are the character's own in
+/// order, with `animation`: what the studio's page plays and picks on (its vertex and target
+/// indices are the character's), whatever file the character came from.
+///
+/// # Errors
+/// [`ExportError::Glb`] when the animation does not fit the character.
+pub fn view_glb(
     character: &Character,
     animation: Option<&MorphAnimation>,
 ) -> Result<Vec<u8>, ExportError> {

@@ -370,6 +370,7 @@ pub struct Character {
     bounds: Aabb,
     face: Aabb,
     head: Aabb,
+    source: Option<crate::source::SharedSource>,
     graph: EdgeGraph,
     symmetry: Symmetry,
     runs: EvaluationRuns,
@@ -523,6 +524,7 @@ impl Character {
             bounds,
             face,
             head,
+            source: None,
             graph,
             symmetry,
             runs,
@@ -640,6 +642,20 @@ impl Character {
     #[must_use]
     pub fn head_bounds(&self) -> Aabb {
         self.head
+    }
+
+    /// The user's glTF file this character was imported from, kept so that exports can be
+    /// that file with the animation added; `None` for OBJ sets and characters made in code.
+    #[must_use]
+    pub fn source(&self) -> Option<&crate::source::GltfSource> {
+        self.source.as_deref()
+    }
+
+    /// This character with the file it came from (the importer's job).
+    #[must_use]
+    pub(crate) fn with_source(mut self, source: crate::source::GltfSource) -> Character {
+        self.source = Some(std::sync::Arc::new(source));
+        self
     }
 
     /// The character's size `D`, that default distances scale with: the diagonal of

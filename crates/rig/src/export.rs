@@ -278,6 +278,10 @@ pub fn export_glb(
     if !animations_json.is_empty() {
         root["animations"] = json!(animations_json);
     }
+    if textures.iter().any(|t| t.get("extensions").is_some()) {
+        root["extensionsUsed"] = json!(["EXT_texture_webp"]);
+        root["extensionsRequired"] = json!(["EXT_texture_webp"]);
+    }
     if !images.is_empty() {
         root["images"] = json!(images);
         root["textures"] = json!(textures);
@@ -357,7 +361,11 @@ fn materials_json(character: &Character, bin: &mut Bin) -> (Vec<Value>, Vec<Valu
             if let Some(texture) = &m.base_color_texture {
                 let view = bin.view(&texture.bytes, None);
                 images.push(json!({ "bufferView": view, "mimeType": texture.mime_type }));
-                textures.push(json!({ "source": images.len() - 1, "sampler": 0 }));
+                textures.push(if texture.mime_type == "image/webp" {
+                    json!({ "sampler": 0, "extensions": { "EXT_texture_webp": { "source": images.len() - 1 } } })
+                } else {
+                    json!({ "source": images.len() - 1, "sampler": 0 })
+                });
                 pbr["baseColorTexture"] = json!({ "index": textures.len() - 1 });
             }
             let mut material = json!({ "pbrMetallicRoughness": pbr });
@@ -410,4 +418,265 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
     out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
     out.extend_from_slice(&bin);
     Ok(out)
+}
+
+/// Writes `animations` into the user's own file: every node, mesh, skin, material, texture,
+/// image, sampler, camera, extension and `extras` of the file stays as it was (same counts,
+/// names and order; animations already there are kept); the weight channels go on each node
+/// whose mesh carries an animated target (all meshes that share a target name move together;
+/// a VRM expression moves its bindings); blendshapes the character has beyond the file's own
+/// (the sketch's baked corrective targets) are appended as morph targets to the meshes whose
+/// vertices they move, with `targetNames` extended; a head turn goes on the head bone (or the
+/// scene's root node). Meshopt-compressed input is written decompressed.
+///
+/// # Errors
+/// [`ExportError::BadAnimation`] when the character has no source file or an animation does
+/// not fit, [`ExportError::TooLarge`] past 4 GiB.
+#[expect(clippy::too_many_lines, reason = "one document, amended top to bottom")]
+pub fn export_into_source(
+    character: &Character,
+    animations: &[MorphAnimation],
+) -> Result<Vec<u8>, ExportError> {
+    let Some(source) = character.source() else {
+        return Err(ExportError::BadAnimation {
+            name: character.name().to_owned(),
+            problem: "the character was not imported from a glTF file".into(),
+        });
+    };
+    let shape_count = character.blendshapes().len();
+    for animation in animations {
+        check_animation(animation, shape_count)?;
+    }
+    let mut doc = source.document.clone();
+    let mut take_array = |key: &str| match doc.get_mut(key).map(Value::take) {
+        Some(Value::Array(items)) => items,
+        _ => Vec::new(),
+    };
+    let mut bin = Bin {
+        bytes: source.bin.to_vec(),
+        views: take_array("bufferViews"),
+        accessors: take_array("accessors"),
+    };
+    let mut meshes = take_array("meshes");
+    let mut nodes = take_array("nodes");
+    let own = source.shapes().len().min(shape_count);
+
+    // Per mesh: each of its targets as (character blendshape, weight) contributions.
+    let mut contributions: std::collections::BTreeMap<usize, Vec<Vec<(usize, f32)>>> =
+        std::collections::BTreeMap::new();
+    let target_count = |mesh: &Value| {
+        mesh.pointer("/primitives/0/targets")
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len)
+    };
+    for (shape, bindings) in source.shapes()[..own].iter().enumerate() {
+        for b in bindings {
+            let (m, t) = (b.mesh as usize, b.target as usize);
+            let Some(mesh) = meshes.get(m) else { continue };
+            let slots = contributions
+                .entry(m)
+                .or_insert_with(|| vec![Vec::new(); target_count(mesh)]);
+            if let Some(slot) = slots.get_mut(t) {
+                slot.push((shape, b.weight));
+            }
+        }
+    }
+
+    // The corrective targets, appended to the meshes whose vertices they move.
+    for extra in own..shape_count {
+        let shape = &character.blendshapes()[extra];
+        // (mesh, position accessor) → local index → local delta.
+        let mut moved: std::collections::BTreeMap<(usize, usize), Vec<(u32, Vec3)>> =
+            std::collections::BTreeMap::new();
+        let mut seen = std::collections::HashSet::new();
+        for (&v, &d) in shape.indices().iter().zip(shape.deltas()) {
+            let Some(Some(origin)) = source.origins().get(v as usize) else {
+                continue;
+            };
+            if !seen.insert((origin.mesh, origin.accessor, origin.local)) {
+                continue;
+            }
+            let local = origin.to_local * d;
+            if local.is_finite() {
+                moved
+                    .entry((origin.mesh as usize, origin.accessor as usize))
+                    .or_default()
+                    .push((origin.local, local));
+            }
+        }
+        let touched: std::collections::BTreeSet<usize> = moved.keys().map(|(m, _)| *m).collect();
+        for m in touched {
+            let Some(mesh) = meshes.get_mut(m) else {
+                continue;
+            };
+            let before = target_count(mesh);
+            let slots = contributions
+                .entry(m)
+                .or_insert_with(|| vec![Vec::new(); before]);
+            slots.push(vec![(extra, 1.0)]);
+            let mut made: std::collections::HashMap<usize, Value> =
+                std::collections::HashMap::new();
+            let Some(primitives) = mesh.get_mut("primitives").and_then(Value::as_array_mut) else {
+                continue;
+            };
+            for primitive in primitives.iter_mut() {
+                let Some(accessor) = primitive
+                    .pointer("/attributes/POSITION")
+                    .and_then(Value::as_u64)
+                    .map(|a| a as usize)
+                else {
+                    continue;
+                };
+                let target = match made.get(&accessor) {
+                    Some(target) => target.clone(),
+                    None => {
+                        let count = bin
+                            .accessors
+                            .get(accessor)
+                            .and_then(|a| a.get("count"))
+                            .and_then(Value::as_u64)
+                            .unwrap_or(0) as usize;
+                        let mut entries = moved.get(&(m, accessor)).cloned().unwrap_or_default();
+                        entries.sort_unstable_by_key(|(i, _)| *i);
+                        entries.retain(|(i, _)| (*i as usize) < count);
+                        let (indices, deltas): (Vec<u32>, Vec<Vec3>) = entries.into_iter().unzip();
+                        let position = bin.sparse_vec3(count, &indices, &deltas, true);
+                        // Every target of a primitive has the same attributes: the others zero.
+                        let mut target = json!({ "POSITION": position });
+                        let first = primitive
+                            .pointer("/targets/0")
+                            .cloned()
+                            .unwrap_or(Value::Null);
+                        for attribute in ["NORMAL", "TANGENT"] {
+                            if first.get(attribute).is_some() {
+                                target[attribute] = json!(bin.sparse_vec3(count, &[], &[], false));
+                            }
+                        }
+                        made.insert(accessor, target.clone());
+                        target
+                    }
+                };
+                match primitive.get_mut("targets").and_then(Value::as_array_mut) {
+                    Some(targets) => targets.push(target),
+                    None => primitive["targets"] = json!([target]),
+                }
+            }
+            let after = before + 1;
+            if let Some(weights) = mesh.get_mut("weights").and_then(Value::as_array_mut) {
+                weights.resize(after, json!(0.0));
+            }
+            let mut names: Vec<Value> = mesh
+                .pointer("/extras/targetNames")
+                .and_then(Value::as_array)
+                .cloned()
+                .unwrap_or_default();
+            names.resize_with(before, || Value::Null);
+            for (k, name) in names.iter_mut().enumerate() {
+                if name.is_null() {
+                    *name = json!(format!("target_{k}"));
+                }
+            }
+            names.push(json!(shape.name()));
+            if !mesh.get("extras").is_some_and(Value::is_object) {
+                mesh["extras"] = json!({});
+            }
+            mesh["extras"]["targetNames"] = json!(names);
+        }
+    }
+
+    // The nodes that show each animated mesh.
+    let mut channels_for: Vec<(usize, usize)> = Vec::new();
+    for (n, node) in nodes.iter().enumerate() {
+        if let Some(m) = node.get("mesh").and_then(Value::as_u64).map(|m| m as usize)
+            && contributions
+                .get(&m)
+                .is_some_and(|slots| slots.iter().any(|s| !s.is_empty()))
+        {
+            channels_for.push((n, m));
+        }
+    }
+    // The node that turns with the head, as TRS (an animated node may not have a matrix).
+    let turn_node = source.head_node().or_else(|| {
+        let scene = doc.get("scene").and_then(Value::as_u64).unwrap_or(0) as usize;
+        doc.pointer(&format!("/scenes/{scene}/nodes/0"))
+            .and_then(Value::as_u64)
+            .map(|n| n as usize)
+    });
+    let wants_turn = animations.iter().any(|a| a.rotations.is_some());
+    let turn = turn_node
+        .filter(|&n| wants_turn && n < nodes.len())
+        .map(|n| {
+            let local = crate::source::local_matrix(&nodes[n]);
+            let (scale, rotation, translation) = local.to_scale_rotation_translation();
+            if let Some(object) = nodes[n].as_object_mut() {
+                object.remove("matrix");
+            }
+            nodes[n]["translation"] = exact(&translation.to_array());
+            nodes[n]["rotation"] = exact(&rotation.normalize().to_array());
+            nodes[n]["scale"] = exact(&scale.to_array());
+            // The parent's rotation in character space: a turn q of the head in character space
+            // is the local rotation P⁻¹ q P R.
+            let node_world = source.world_rotation(n);
+            let parent = node_world * rotation.normalize().inverse();
+            (n, parent, rotation.normalize())
+        });
+
+    let mut new_animations = Vec::new();
+    for animation in animations {
+        let input = bin.floats(
+            &animation.times,
+            "SCALAR",
+            None,
+            Some((
+                vec![animation.times[0]],
+                vec![animation.times[animation.times.len() - 1]],
+            )),
+        );
+        let mut samplers = Vec::new();
+        let mut channels = Vec::new();
+        for &(node, mesh) in &channels_for {
+            let slots = &contributions[&mesh];
+            let mut flat = Vec::with_capacity(animation.weights.len() * slots.len());
+            for key in &animation.weights {
+                for slot in slots {
+                    flat.push(slot.iter().map(|&(shape, w)| key[shape] * w).sum::<f32>());
+                }
+            }
+            let output = bin.floats(&flat, "SCALAR", None, None);
+            samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
+            channels.push(json!({ "sampler": samplers.len() - 1, "target": { "node": node, "path": "weights" } }));
+        }
+        if let (Some(rotations), Some((node, parent, rest))) = (&animation.rotations, turn) {
+            let flat: Vec<f32> = rotations
+                .iter()
+                .flat_map(|q| {
+                    let q = glam::Quat::from_array(*q);
+                    (parent.inverse() * q * parent * rest)
+                        .normalize()
+                        .to_array()
+                })
+                .collect();
+            let output = bin.floats(&flat, "VEC4", None, None);
+            samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
+            channels.push(json!({ "sampler": samplers.len() - 1, "target": { "node": node, "path": "rotation" } }));
+        }
+        if !channels.is_empty() {
+            new_animations.push(
+                json!({ "name": animation.name, "samplers": samplers, "channels": channels }),
+            );
+        }
+    }
+
+    doc["meshes"] = json!(meshes);
+    doc["nodes"] = json!(nodes);
+    doc["accessors"] = json!(bin.accessors);
+    doc["bufferViews"] = json!(bin.views);
+    doc["buffers"] = json!([{ "byteLength": bin.bytes.len() }]);
+    if !new_animations.is_empty() {
+        match doc.get_mut("animations").and_then(Value::as_array_mut) {
+            Some(list) => list.extend(new_animations),
+            None => doc["animations"] = json!(new_animations),
+        }
+    }
+    glb(&doc, bin.bytes)
 }

@@ -41,6 +41,7 @@ pub mod import;
 pub mod names;
 pub mod normals;
 mod pose;
+pub mod source;
 pub mod symmetry;
 
 pub use character::{

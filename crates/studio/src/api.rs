@@ -66,6 +66,7 @@ pub fn router(both: Both, port: u16) -> Router {
             "/api/export.glb",
             get(|s: State<Shared>| export(s, Format::Glb)),
         )
+        .route("/api/view.glb", get(view))
         .route(
             "/api/export.json",
             get(|s: State<Shared>| export(s, Format::ClipJson)),
@@ -411,6 +412,24 @@ fn file_stem(studio: &Studio) -> String {
         || "faceanim".to_owned(),
         |s| s.to_string_lossy().replace('"', ""),
     )
+}
+
+/// What the page plays: the character as faceanim sees it (one mesh, the character's own
+/// vertex and target order) with the baked corrective targets and the animation, the same
+/// weights as the GLB download writes into the user's own file.
+async fn view(State(shared): State<Shared>) -> Result<Response, ApiError> {
+    let studio = lock(&shared);
+    let (sketch, _) = studio.sketch();
+    let name = file_stem(&studio);
+    let baked = sketch.bake(&name)?;
+    let bytes = faceanim_export::view_glb(&baked.character, Some(&baked.animation))?;
+    let mut headers = HeaderMap::new();
+    headers.insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static(Format::Glb.mime()),
+    );
+    headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    Ok((headers, bytes).into_response())
 }
 
 /// The sketch in `format`: the GLB carries the baked corrective targets of arcs and

@@ -49,6 +49,9 @@ pub(crate) struct Prepared<'a> {
     pub uv_transforms: HashMap<usize, UvTransform>,
     /// The VRM extension's expressions and facing, if the file is a VRM.
     pub vrm: Option<super::vrm::Vrm>,
+    /// The file as it will be written back: its JSON (meshopt views decoded, one buffer,
+    /// images embedded) and that buffer's bytes.
+    pub kept: (Value, Vec<u8>),
     /// What was worked around, one sentence each.
     pub warnings: Vec<String>,
 }
@@ -91,6 +94,7 @@ pub(crate) fn prepare<'a>(
     let mut warnings = Vec::new();
     let mut buffers = load_buffers(&value, bin, resources)?;
     decode_meshopt(&mut value, &mut buffers)?;
+    let kept = keep(&value, &buffers, resources, &mut warnings);
     resolve_texture_sources(&mut value, &mut warnings);
     let uv_transforms = uv_transforms(&value);
     let vrm = super::vrm::read(&value, &mut warnings);
@@ -107,8 +111,114 @@ pub(crate) fn prepare<'a>(
         buffers: Buffers(buffers),
         uv_transforms,
         vrm,
+        kept,
         warnings,
     })
+}
+
+/// The file rewritten to be written back as one GLB: every buffer's bytes in one, the views
+/// moved onto it, external and data-URI images embedded, the meshopt extension dropped (its
+/// views are decoded).
+fn keep(
+    value: &Value,
+    buffers: &[Cow<'_, [u8]>],
+    resources: &dyn super::Resources,
+    warnings: &mut Vec<String>,
+) -> (Value, Vec<u8>) {
+    let mut doc = value.clone();
+    let mut bin: Vec<u8> = Vec::new();
+    let mut base = Vec::with_capacity(buffers.len());
+    for data in buffers {
+        while !bin.len().is_multiple_of(16) {
+            bin.push(0);
+        }
+        base.push(bin.len());
+        bin.extend_from_slice(data);
+    }
+    if let Some(Value::Array(views)) = doc.get_mut("bufferViews") {
+        for view in views {
+            let buffer = view
+                .get("buffer")
+                .and_then(Value::as_u64)
+                .and_then(|b| usize::try_from(b).ok());
+            let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
+            if let Some(&start) = buffer.and_then(|b| base.get(b)) {
+                view["buffer"] = Value::from(0);
+                view["byteOffset"] = Value::from(start as u64 + offset);
+            }
+        }
+    }
+    let mut new_views = Vec::new();
+    if let Some(Value::Array(images)) = doc.get_mut("images") {
+        for (i, image) in images.iter_mut().enumerate() {
+            let Some(uri) = image.get("uri").and_then(Value::as_str).map(str::to_owned) else {
+                continue;
+            };
+            match super::gltf::load_uri(&uri, resources) {
+                Ok(bytes) => {
+                    while !bin.len().is_multiple_of(4) {
+                        bin.push(0);
+                    }
+                    new_views.push(serde_json::json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len() }));
+                    bin.extend_from_slice(&bytes);
+                    let mime = super::gltf::sniff_image(&bytes)
+                        .map(str::to_owned)
+                        .or_else(|| {
+                            image
+                                .get("mimeType")
+                                .and_then(Value::as_str)
+                                .map(str::to_owned)
+                        })
+                        .unwrap_or_else(|| "image/png".to_owned());
+                    if let Some(object) = image.as_object_mut() {
+                        object.remove("uri");
+                        object.insert("mimeType".into(), Value::from(mime));
+                        object.insert("bufferView".into(), Value::Null);
+                    }
+                }
+                Err(reason) => warnings.push(format!(
+                    "image {i} ('{}') cannot be embedded in exports: {reason}",
+                    super::gltf::shorten(&uri)
+                )),
+            }
+        }
+    }
+    if !new_views.is_empty() {
+        let first = doc
+            .get("bufferViews")
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len);
+        let mut next = first;
+        if let Some(Value::Array(images)) = doc.get_mut("images") {
+            for image in images
+                .iter_mut()
+                .filter(|i| i.get("bufferView") == Some(&Value::Null))
+            {
+                image["bufferView"] = Value::from(next);
+                next += 1;
+            }
+        }
+        match doc.get_mut("bufferViews") {
+            Some(Value::Array(views)) => views.extend(new_views),
+            _ => doc["bufferViews"] = Value::Array(new_views),
+        }
+    }
+    doc["buffers"] = serde_json::json!([{ "byteLength": bin.len() }]);
+    for list in ["extensionsRequired", "extensionsUsed"] {
+        if let Some(Value::Array(names)) = doc.get_mut(list) {
+            names.retain(|n| {
+                n.as_str().is_none_or(|n| {
+                    n != "EXT_meshopt_compression" && n != "KHR_meshopt_compression"
+                })
+            });
+            if names.is_empty()
+                && let Some(object) = doc.as_object_mut()
+            {
+                object.remove(list);
+            }
+        }
+    }
+    (doc, bin)
 }
 
 /// Refuses a file that requires an extension faceanim does not read, naming it.

@@ -75,6 +75,8 @@ fn import(
         )));
     }
     let mut builder = Builder::new(source_name);
+    builder.head_node = head_node(&prepared.kept.0);
+    builder.kept = Some(prepared.kept);
     builder.warnings = prepared.warnings;
     builder.uv_transforms = prepared.uv_transforms;
     if prepared
@@ -298,6 +300,13 @@ struct Builder {
     root_transform: Mat4,
     /// Each mesh's morph targets as blendshape slots, by mesh index (for VRM bindings).
     mesh_slots: HashMap<usize, Vec<usize>>,
+    /// Where each vertex came from in the file.
+    origins: Vec<Option<crate::source::Origin>>,
+    /// The VRM expressions' bindings, by blendshape slot.
+    expression_binds: Vec<(usize, Vec<crate::source::Binding>)>,
+    /// The file to write back, and the node a head pose turns.
+    kept: Option<(serde_json::Value, Vec<u8>)>,
+    head_node: Option<usize>,
 }
 
 impl Builder {
@@ -327,6 +336,10 @@ impl Builder {
             uv_transforms: HashMap::new(),
             root_transform: Mat4::IDENTITY,
             mesh_slots: HashMap::new(),
+            origins: Vec::new(),
+            expression_binds: Vec::new(),
+            kept: None,
+            head_node: None,
         }
     }
 
@@ -467,6 +480,7 @@ impl Builder {
                 Some(&base) => base,
                 None => {
                     let base = self.read_vertices(
+                        mesh.index(),
                         &primitive,
                         &label,
                         &targets,
@@ -492,8 +506,10 @@ impl Builder {
     }
 
     /// Appends a primitive's vertices and morph-target deltas; returns the first vertex index.
+    #[expect(clippy::too_many_arguments, reason = "one primitive's whole context")]
     fn read_vertices(
         &mut self,
+        mesh_index: usize,
         primitive: &gltf::Primitive<'_>,
         label: &str,
         targets: &[gltf::mesh::MorphTarget<'_>],
@@ -534,6 +550,14 @@ impl Builder {
         for (i, p) in local.iter().enumerate() {
             self.positions
                 .push(placement.matrix(i).transform_point3(*p));
+            let to_local = placement.linear(i).inverse();
+            self.origins
+                .push(to_local.is_finite().then_some(crate::source::Origin {
+                    mesh: mesh_index as u32,
+                    accessor: position_accessor.index() as u32,
+                    local: i as u32,
+                    to_local,
+                }));
         }
 
         let normals = match primitive.get(&gltf::Semantic::Normals) {
@@ -825,6 +849,18 @@ impl Builder {
                 }
             }
             let slot = self.shape_slot(&name)?;
+            self.expression_binds.push((
+                slot,
+                expression
+                    .binds
+                    .iter()
+                    .map(|b| crate::source::Binding {
+                        mesh: b.mesh as u32,
+                        target: b.target as u32,
+                        weight: b.weight,
+                    })
+                    .collect(),
+            ));
             let mut entries: Vec<(u32, Vec3)> = sum.into_iter().collect();
             entries.sort_unstable_by_key(|(v, _)| *v);
             for (v, d) in entries {
@@ -874,11 +910,88 @@ impl Builder {
             blendshapes,
             normal_deltas: None,
         })?;
+        let character = match self.kept {
+            Some((document, bin)) => {
+                let mut shapes = vec![Vec::new(); self.shape_names.len()];
+                let mut meshes: Vec<_> = self.mesh_slots.into_iter().collect();
+                meshes.sort_unstable_by_key(|(m, _)| *m);
+                for (mesh, slots) in meshes {
+                    for (target, slot) in slots.into_iter().enumerate() {
+                        if let Some(list) = shapes.get_mut(slot) {
+                            list.push(crate::source::Binding {
+                                mesh: mesh as u32,
+                                target: target as u32,
+                                weight: 1.0,
+                            });
+                        }
+                    }
+                }
+                for (slot, binds) in self.expression_binds {
+                    if let Some(list) = shapes.get_mut(slot) {
+                        *list = binds;
+                    }
+                }
+                character.with_source(crate::source::GltfSource {
+                    document,
+                    bin: bin.into(),
+                    shapes,
+                    vertices: self.origins,
+                    head_node: self.head_node,
+                    root_transform: self.root_transform,
+                })
+            }
+            None => character,
+        };
         Ok(Imported {
             character,
             warnings: self.warnings,
         })
     }
+}
+
+/// The node a captured head pose turns: the VRM humanoid's head bone, else a skin joint whose
+/// name ends in "head" (`Head`, `mixamorig:Head`, `J_Bip_C_Head`, `CC_Base_Head`).
+fn head_node(doc: &serde_json::Value) -> Option<usize> {
+    let index = |v: Option<&serde_json::Value>| {
+        v.and_then(serde_json::Value::as_u64)
+            .and_then(|n| usize::try_from(n).ok())
+    };
+    let nodes = doc.get("nodes").and_then(serde_json::Value::as_array)?;
+    let valid = |n: usize| (n < nodes.len()).then_some(n);
+    if let Some(n) = index(doc.pointer("/extensions/VRMC_vrm/humanoid/humanBones/head/node")) {
+        return valid(n);
+    }
+    if let Some(bones) = doc
+        .pointer("/extensions/VRM/humanoid/humanBones")
+        .and_then(serde_json::Value::as_array)
+        && let Some(n) = bones
+            .iter()
+            .find(|b| b.get("bone").and_then(serde_json::Value::as_str) == Some("head"))
+            .and_then(|b| index(b.get("node")))
+    {
+        return valid(n);
+    }
+    let joints: std::collections::HashSet<usize> = doc
+        .get("skins")
+        .and_then(serde_json::Value::as_array)
+        .into_iter()
+        .flatten()
+        .flat_map(|s| {
+            s.get("joints")
+                .and_then(serde_json::Value::as_array)
+                .into_iter()
+                .flatten()
+        })
+        .filter_map(|j| index(Some(j)))
+        .collect();
+    let mut candidates: Vec<usize> = joints.into_iter().collect();
+    candidates.sort_unstable();
+    candidates.into_iter().find(|&j| {
+        nodes[j]
+            .get("name")
+            .and_then(serde_json::Value::as_str)
+            .is_some_and(|name| name.to_ascii_lowercase().ends_with("head"))
+    })
 }
 
 fn target_names(mesh: &gltf::Mesh<'_>) -> Vec<Option<String>> {
@@ -1048,6 +1161,19 @@ fn skin_placement(
     Ok(Placement::Skinned(per_vertex))
 }
 
+/// The media type of PNG, JPEG and WebP images, from their first bytes.
+pub(super) fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
+    if bytes.starts_with(b"\x89PNG") {
+        Some("image/png")
+    } else if bytes.starts_with(&[0xFF, 0xD8]) {
+        Some("image/jpeg")
+    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
+        Some("image/webp")
+    } else {
+        None
+    }
+}
+
 /// Loads a glTF image's encoded bytes (from a buffer view, a data URI or an external file).
 fn load_image(
     image: &gltf::Image<'_>,
@@ -1074,15 +1200,7 @@ fn load_image(
             (load_uri(uri, resources)?, mime_type.map(str::to_owned))
         }
     };
-    let sniffed = if bytes.starts_with(b"\x89PNG") {
-        Some("image/png")
-    } else if bytes.starts_with(&[0xFF, 0xD8]) {
-        Some("image/jpeg")
-    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
-        Some("image/webp")
-    } else {
-        None
-    };
+    let sniffed = sniff_image(&bytes);
     let mime_type = sniffed.map(str::to_owned).ok_or_else(|| match declared {
         Some(declared) => {
             format!("its {declared} image is not one faceanim shows (PNG, JPEG or WebP)")

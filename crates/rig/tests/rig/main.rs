@@ -18,3 +18,4 @@ mod compressed;
 mod fuzz_import;
 mod gltf_layouts;
 mod ict;
+mod source_export;

@@ -1,0 +1,167 @@
+//! The user's own glTF file, kept beside the character so that an export can be that file with
+//! the animation added (see [`crate::export::export_into_source`]).
+//!
+//! faceanim works on one merged mesh ([`crate::Character`]); the user's file has many nodes,
+//! meshes, skins and materials. [`GltfSource`] keeps the file's JSON and its one binary buffer
+//! (meshopt-compressed views decoded, external buffers and images embedded), and how the
+//! character maps onto it: which morph targets of which meshes each blendshape drives (a raw
+//! target name shared by several meshes drives all of them; a VRM expression drives its
+//! bindings with their weights), where each vertex came from (mesh, position accessor, index,
+//! and the transform that placed it), and which node turns with a captured head pose.
+
+use std::sync::Arc;
+
+use glam::{Mat3, Mat4, Quat};
+use serde_json::Value;
+
+/// One morph target a blendshape drives, with its weight (1 for a raw target; a VRM binding's
+/// weight for an expression).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Binding {
+    /// The mesh's index in the file.
+    pub mesh: u32,
+    /// The morph target's index in that mesh.
+    pub target: u32,
+    /// How much of it the blendshape at weight 1 applies.
+    pub weight: f32,
+}
+
+/// Where a character vertex came from in the file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Origin {
+    /// The mesh's index.
+    pub mesh: u32,
+    /// The `POSITION` accessor of the primitive(s) holding it.
+    pub accessor: u32,
+    /// Its index in that accessor.
+    pub local: u32,
+    /// Maps a displacement in character space back into the mesh's own space (the inverse of
+    /// the node transform or rest-pose skinning that placed it).
+    pub to_local: Mat3,
+}
+
+/// The user's file and how the character maps onto it. See the module docs.
+#[derive(Clone, PartialEq)]
+pub struct GltfSource {
+    pub(crate) document: Value,
+    pub(crate) bin: Arc<[u8]>,
+    pub(crate) shapes: Vec<Vec<Binding>>,
+    pub(crate) vertices: Vec<Option<Origin>>,
+    pub(crate) head_node: Option<usize>,
+    /// Applied by the importer before the file's own transforms (VRM 0.x's half turn).
+    pub(crate) root_transform: Mat4,
+}
+
+impl std::fmt::Debug for GltfSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GltfSource")
+            .field("nodes", &self.count("nodes"))
+            .field("meshes", &self.count("meshes"))
+            .field("bin_bytes", &self.bin.len())
+            .field("shapes", &self.shapes.len())
+            .field("head_node", &self.head_node)
+            .finish_non_exhaustive()
+    }
+}
+
+impl GltfSource {
+    /// How many entries the file's top-level array `key` (`nodes`, `meshes`, `skins`, …) has.
+    #[must_use]
+    pub fn count(&self, key: &str) -> usize {
+        self.document
+            .get(key)
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len)
+    }
+
+    /// The morph targets each of the file's own blendshapes drives, in the character's order
+    /// (blendshapes after these are ones faceanim added, such as baked corrective targets).
+    #[must_use]
+    pub fn shapes(&self) -> &[Vec<Binding>] {
+        &self.shapes
+    }
+
+    /// Where each character vertex came from.
+    #[must_use]
+    pub fn origins(&self) -> &[Option<Origin>] {
+        &self.vertices
+    }
+
+    /// The node that turns with a captured head pose: the VRM humanoid's head, else a skin
+    /// joint named like a head bone, else none (the scene's root turns instead).
+    #[must_use]
+    pub fn head_node(&self) -> Option<usize> {
+        self.head_node
+    }
+
+    /// Whether the file is a VRM (0.x or 1.0).
+    #[must_use]
+    pub fn is_vrm(&self) -> bool {
+        let ext = self.document.get("extensions");
+        ext.is_some_and(|e| e.get("VRM").is_some() || e.get("VRMC_vrm").is_some())
+    }
+
+    /// The rotation of `node` in character space (its world rotation, after the importer's
+    /// root transform), from the file's rest pose.
+    pub(crate) fn world_rotation(&self, node: usize) -> Quat {
+        let nodes = self.document.get("nodes").and_then(Value::as_array);
+        let Some(nodes) = nodes else {
+            return Quat::IDENTITY;
+        };
+        let mut parent = vec![None; nodes.len()];
+        for (i, n) in nodes.iter().enumerate() {
+            for c in n
+                .get("children")
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+            {
+                if let Some(c) = c.as_u64().and_then(|c| usize::try_from(c).ok())
+                    && c < parent.len()
+                {
+                    parent[c] = Some(i);
+                }
+            }
+        }
+        let mut chain = Vec::new();
+        let mut at = Some(node);
+        while let Some(i) = at {
+            if chain.len() > nodes.len() {
+                break;
+            }
+            chain.push(i);
+            at = parent[i];
+        }
+        let mut world = self.root_transform;
+        for &i in chain.iter().rev() {
+            world *= local_matrix(&nodes[i]);
+        }
+        let (_, rotation, _) = world.to_scale_rotation_translation();
+        if rotation.is_finite() {
+            rotation.normalize()
+        } else {
+            Quat::IDENTITY
+        }
+    }
+}
+
+/// A node's local transform from its `matrix` or TRS.
+pub(crate) fn local_matrix(node: &Value) -> Mat4 {
+    let floats = |key: &str, n: usize| -> Option<Vec<f32>> {
+        let a = node.get(key)?.as_array()?;
+        (a.len() == n).then(|| a.iter().map(|v| v.as_f64().unwrap_or(0.0) as f32).collect())
+    };
+    if let Some(m) = floats("matrix", 16) {
+        return Mat4::from_cols_slice(&m);
+    }
+    let t =
+        floats("translation", 3).map_or(glam::Vec3::ZERO, |v| glam::Vec3::new(v[0], v[1], v[2]));
+    let r =
+        floats("rotation", 4).map_or(Quat::IDENTITY, |v| Quat::from_xyzw(v[0], v[1], v[2], v[3]));
+    let s = floats("scale", 3).map_or(glam::Vec3::ONE, |v| glam::Vec3::new(v[0], v[1], v[2]));
+    let m = Mat4::from_scale_rotation_translation(s, r, t);
+    if m.is_finite() { m } else { Mat4::IDENTITY }
+}
+
+/// Shared, so that cloning a character (every baked export does) does not copy the file.
+pub(crate) type SharedSource = Arc<GltfSource>;

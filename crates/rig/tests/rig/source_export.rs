@@ -1,0 +1,228 @@
+//! Exports into the user's own file: a full-body avatar (built in code from the ICT head) keeps
+//! every node, mesh, skin, material, texture and image with its name; the animation drives
+//! every mesh that carries the animated targets; a baked corrective target lands on the meshes
+//! it moves; a VRM stays a VRM; a meshopt-compressed avatar is written decompressed.
+
+use faceanim_rig::Blendshape;
+use faceanim_rig::export::{MorphAnimation, export_into_source};
+use faceanim_rig::glam::Vec3;
+use faceanim_rig::import::{NoExternalResources, import_gltf};
+use faceanim_testdata::avatar::{Expression, VrmKind, full_body_glb};
+use faceanim_testdata::{gltfpack, ict};
+use serde_json::Value;
+
+fn json_of(glb: &[u8]) -> Value {
+    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+    serde_json::from_slice(&glb[20..20 + len]).unwrap()
+}
+
+fn names(doc: &Value, key: &str) -> Vec<Value> {
+    doc[key]
+        .as_array()
+        .map(|a| a.iter().map(|x| x["name"].clone()).collect())
+        .unwrap_or_default()
+}
+
+/// The same things, with the same names, in the same order.
+fn assert_kept(input: &Value, output: &Value) {
+    for key in [
+        "nodes",
+        "meshes",
+        "skins",
+        "materials",
+        "textures",
+        "images",
+        "samplers",
+        "scenes",
+    ] {
+        assert_eq!(names(input, key), names(output, key), "{key}");
+    }
+    for (a, b) in input["skins"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(output["skins"].as_array().unwrap())
+    {
+        assert_eq!(a["joints"], b["joints"]);
+    }
+    assert_eq!(
+        input["extensions"], output["extensions"],
+        "extensions kept (VRM included)"
+    );
+}
+
+fn animation(shapes: usize, frames: usize, drive: &[usize]) -> MorphAnimation {
+    MorphAnimation {
+        name: "take".into(),
+        times: (0..frames).map(|f| f as f32 / 30.0).collect(),
+        weights: (0..frames)
+            .map(|f| {
+                let mut w = vec![0.0; shapes];
+                for &s in drive {
+                    w[s] = (f as f32 / (frames - 1) as f32).min(1.0);
+                }
+                w
+            })
+            .collect(),
+        rotations: Some(
+            (0..frames)
+                .map(|f| glam::Quat::from_rotation_y(0.3 * f as f32 / frames as f32).to_array())
+                .collect(),
+        ),
+    }
+}
+
+#[test]
+fn the_users_avatar_comes_back_whole_with_the_animation() {
+    let input = full_body_glb(ict(), VrmKind::None, &[]);
+    let c = import_gltf(&input, "avatar.glb", &NoExternalResources)
+        .unwrap()
+        .character;
+    let jaw = c.find_blendshape("jawOpen").unwrap().index();
+    let out = export_into_source(&c, &[animation(c.blendshapes().len(), 300, &[jaw])]).unwrap();
+    let (before, after) = (json_of(&input), json_of(&out));
+    assert_kept(&before, &after);
+    let animations = after["animations"].as_array().unwrap();
+    assert_eq!(animations.len(), 1);
+    let channels = animations[0]["channels"].as_array().unwrap();
+    let weights: Vec<_> = channels
+        .iter()
+        .filter(|c| c["target"]["path"] == "weights")
+        .collect();
+    // Every head piece carries jawOpen's target (some with zero deltas): all four move together.
+    assert_eq!(weights.len(), 4, "{channels:?}");
+    let head = channels
+        .iter()
+        .find(|c| c["target"]["path"] == "rotation")
+        .expect("the head turns");
+    let node = &after["nodes"][head["target"]["node"].as_u64().unwrap() as usize];
+    assert_eq!(node["name"], "Head", "the head bone turns");
+    // Read back: the same character, blendshapes and all.
+    let back = import_gltf(&out, "back.glb", &NoExternalResources)
+        .unwrap()
+        .character;
+    assert_eq!(back.vertex_count(), c.vertex_count());
+    assert_eq!(back.blendshapes().len(), c.blendshapes().len());
+}
+
+#[test]
+fn a_baked_corrective_target_lands_on_the_meshes_it_moves() {
+    let input = full_body_glb(ict(), VrmKind::None, &[]);
+    let c = import_gltf(&input, "avatar.glb", &NoExternalResources)
+        .unwrap()
+        .character;
+    // A corrective moving the lip-corner region a little, as an exaggeration bakes.
+    let smile = c
+        .blendshape(c.find_blendshape("mouthSmile_L").unwrap())
+        .unwrap();
+    let deltas: Vec<Vec3> = smile
+        .deltas()
+        .iter()
+        .map(|d| *d * 0.5 + Vec3::new(0.0, 0.001, 0.0))
+        .collect();
+    let extra = Blendshape::from_sparse(
+        "faceanim_arc_0",
+        smile.indices().to_vec(),
+        deltas.clone(),
+    );
+    let baked = c.with_extra_blendshapes(vec![extra]).unwrap();
+    let n = baked.blendshapes().len();
+    let out = export_into_source(&baked, &[animation(n, 30, &[n - 1])]).unwrap();
+    let after = json_of(&out);
+    let head = after["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == "Head")
+        .unwrap();
+    let names = head["extras"]["targetNames"].as_array().unwrap();
+    assert_eq!(names.len(), n);
+    assert_eq!(names[n - 1], "faceanim_arc_0");
+    assert_eq!(
+        head["primitives"][0]["targets"].as_array().unwrap().len(),
+        n
+    );
+    // Read back, the corrective moves the same vertices by the same amounts in character space.
+    let back = import_gltf(&out, "back.glb", &NoExternalResources)
+        .unwrap()
+        .character;
+    let id = back
+        .find_blendshape("faceanim_arc_0")
+        .expect("the corrective is a target");
+    let mut got = vec![Vec3::ZERO; back.vertex_count()];
+    back.blendshapes()[id.index()].write_dense(&mut got);
+    for (&v, d) in smile.indices().iter().zip(&deltas) {
+        assert!(
+            (got[v as usize] - *d).length() < 1e-5,
+            "vertex {v}: {} vs {d}",
+            got[v as usize]
+        );
+    }
+}
+
+#[test]
+fn a_vrm_stays_a_vrm_and_its_expressions_drive_their_bindings() {
+    let expressions = [Expression {
+        name: "blink",
+        v0_preset: "blink",
+        binds: &["eyeBlink_L", "eyeBlink_R"],
+    }];
+    for kind in [VrmKind::V0, VrmKind::V1] {
+        let input = full_body_glb(ict(), kind, &expressions);
+        let c = import_gltf(&input, "avatar.vrm", &NoExternalResources)
+            .unwrap()
+            .character;
+        let blink = c.find_blendshape("blink").unwrap().index();
+        let out =
+            export_into_source(&c, &[animation(c.blendshapes().len(), 31, &[blink])]).unwrap();
+        let after = json_of(&out);
+        assert_kept(&json_of(&input), &after);
+        // The last key of the head's channel has eyeBlink_L and eyeBlink_R at 1, nothing else.
+        let back = import_gltf(&out, "back.vrm", &NoExternalResources)
+            .unwrap()
+            .character;
+        assert!(back.find_blendshape("blink").is_some(), "{kind:?}");
+        let head_node = after["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|n| n["name"] == "Head" && n.get("mesh").is_some())
+            .unwrap();
+        let channel = after["animations"][0]["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["target"]["node"] == head_node)
+            .unwrap()
+            .clone();
+        let sampler =
+            &after["animations"][0]["samplers"][channel["sampler"].as_u64().unwrap() as usize];
+        let output = &after["accessors"][sampler["output"].as_u64().unwrap() as usize];
+        assert_eq!(
+            output["count"].as_u64().unwrap() as usize,
+            31 * ict().blendshapes().len(),
+            "{kind:?}"
+        );
+    }
+}
+
+#[test]
+fn a_meshopt_avatar_is_written_decompressed() {
+    let input = gltfpack(&full_body_glb(ict(), VrmKind::None, &[]), &["-cc", "-kn"]);
+    let c = import_gltf(&input, "avatar-meshopt.glb", &NoExternalResources)
+        .unwrap()
+        .character;
+    let out = export_into_source(&c, &[animation(c.blendshapes().len(), 30, &[0])]).unwrap();
+    let (before, after) = (json_of(&input), json_of(&out));
+    assert_kept(&before, &after);
+    let used = after["extensionsUsed"].to_string();
+    assert!(!used.contains("meshopt"), "{used}");
+    assert!(
+        used.contains("KHR_mesh_quantization"),
+        "still quantized: {used}"
+    );
+    let back = import_gltf(&out, "back.glb", &NoExternalResources)
+        .unwrap()
+        .character;
+    assert_eq!(back.vertex_count(), c.vertex_count());
+}
