@@ -1,7 +1,8 @@
 # Imports a glTF/GLB into Blender (run headless: blender -b --factory-startup --python tools/blender_shape_keys.py -- FILE)
 # and prints one line "FACEANIM_REPORT {json}" describing every mesh object's shape keys:
 # name and largest displacement from the basis (in glTF metres; Blender's axis swap does not
-# change lengths), plus vertex count and the animation actions found.
+# change lengths), plus vertex count, the armatures (with their bone counts) and the animation
+# actions found.
 import json
 import sys
 
@@ -17,8 +18,10 @@ path = sys.argv[sys.argv.index("--") + 1]
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.import_scene.gltf(filepath=path)
 
-report = {"blender": bpy.app.version_string, "objects": [], "actions": []}
+report = {"blender": bpy.app.version_string, "objects": [], "armatures": [], "actions": []}
 for obj in bpy.data.objects:
+    if obj.type == "ARMATURE":
+        report["armatures"].append({"name": obj.name, "bones": len(obj.data.bones)})
     if obj.type != "MESH":
         continue
     mesh = obj.data

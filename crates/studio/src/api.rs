@@ -66,7 +66,7 @@ pub fn router(both: Both, port: u16) -> Router {
             "/api/export.glb",
             get(|s: State<Shared>| export(s, Format::Glb)),
         )
-        .route("/api/view.glb", get(view))
+        .route("/api/view.glb", get(view_glb))
         .route(
             "/api/export.json",
             get(|s: State<Shared>| export(s, Format::ClipJson)),
@@ -417,7 +417,7 @@ fn file_stem(studio: &Studio) -> String {
 /// What the page plays: the character as faceanim sees it (one mesh, the character's own
 /// vertex and target order) with the baked corrective targets and the animation, the same
 /// weights as the GLB download writes into the user's own file.
-async fn view(State(shared): State<Shared>) -> Result<Response, ApiError> {
+async fn view_glb(State(shared): State<Shared>) -> Result<Response, ApiError> {
     let studio = lock(&shared);
     let (sketch, _) = studio.sketch();
     let name = file_stem(&studio);

@@ -44,7 +44,7 @@ pub mod layer;
 pub mod session;
 pub mod take;
 
-pub use estimator::{ByName, Estimator, EstimatorSource};
+pub use estimator::{ByName, Estimator, EstimatorSource, VrmPreset};
 pub use expression::Expression;
 pub use fingerprint::Fingerprint;
 pub use layer::{Layered, layer};

@@ -88,8 +88,23 @@ impl Writer {
             .collect();
         let iv = self.view(&indices, None);
         let vv = self.view(&values, None);
+        let mut lo = if entries.len() < count {
+            Vec3::ZERO
+        } else {
+            Vec3::splat(f32::MAX)
+        };
+        let mut hi = if entries.len() < count {
+            Vec3::ZERO
+        } else {
+            Vec3::splat(f32::MIN)
+        };
+        for (_, d) in entries {
+            lo = lo.min(*d);
+            hi = hi.max(*d);
+        }
         self.accessors.push(json!({
             "componentType": 5126, "count": count, "type": "VEC3",
+            "min": lo.to_array(), "max": hi.to_array(),
             "sparse": { "count": entries.len(),
                         "indices": { "bufferView": iv, "componentType": 5125 },
                         "values": { "bufferView": vv } }
@@ -368,7 +383,7 @@ pub fn full_body_glb(head: &Character, vrm: VrmKind, expressions: &[Expression<'
                 for (l, d) in entries {
                     dense[l as usize] = d;
                 }
-                w.vec3(&dense, false)
+                w.vec3(&dense, true)
             };
             targets.push(json!({ "POSITION": accessor }));
         }

@@ -120,11 +120,7 @@ fn a_baked_corrective_target_lands_on_the_meshes_it_moves() {
         .iter()
         .map(|d| *d * 0.5 + Vec3::new(0.0, 0.001, 0.0))
         .collect();
-    let extra = Blendshape::from_sparse(
-        "faceanim_arc_0",
-        smile.indices().to_vec(),
-        deltas.clone(),
-    );
+    let extra = Blendshape::from_sparse("faceanim_arc_0", smile.indices().to_vec(), deltas.clone());
     let baked = c.with_extra_blendshapes(vec![extra]).unwrap();
     let n = baked.blendshapes().len();
     let out = export_into_source(&baked, &[animation(n, 30, &[n - 1])]).unwrap();

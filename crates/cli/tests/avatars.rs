@@ -1,0 +1,259 @@
+//! Full-body avatars, as animators have them, through the command line: built in code from the
+//! ICT head (a skinned, textured body; head, teeth and eyes as meshes sharing target names),
+//! as plain glTF, VRM 0.x, VRM 1.0 and gltfpack's meshopt compression. `faceanim info` lists
+//! their blendshapes and VRM expressions; `faceanim export --clip` writes the user's own file
+//! with the animation added, which the Khronos validator passes with no errors, which keeps
+//! every node, mesh, skin, material, texture and image by name, and which Blender 3.4 and
+//! three.js open with the armature, the shape keys, the texture and the moving face.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    reason = "tests panic to fail"
+)]
+
+mod support;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use faceanim_testdata::avatar::{Expression, VrmKind, full_body_glb};
+use faceanim_testdata::{gltfpack, ict};
+use serde_json::Value;
+use support::{assert_valid_gltf, faceanim_ok, output_dir, repo};
+
+const EXPRESSIONS: &[Expression<'static>] = &[
+    Expression {
+        name: "blink",
+        v0_preset: "blink",
+        binds: &["eyeBlink_L", "eyeBlink_R"],
+    },
+    Expression {
+        name: "aa",
+        v0_preset: "a",
+        binds: &["jawOpen"],
+    },
+    Expression {
+        name: "happy",
+        v0_preset: "joy",
+        binds: &["mouthSmile_L", "mouthSmile_R"],
+    },
+];
+
+/// The four avatars, written once per test into `dir`.
+fn avatars(dir: &Path) -> Vec<PathBuf> {
+    let plain = full_body_glb(ict(), VrmKind::None, &[]);
+    let files = [
+        ("avatar.glb", plain.clone()),
+        (
+            "avatar-0.vrm",
+            full_body_glb(ict(), VrmKind::V0, EXPRESSIONS),
+        ),
+        (
+            "avatar-1.vrm",
+            full_body_glb(ict(), VrmKind::V1, EXPRESSIONS),
+        ),
+        ("avatar-meshopt.glb", gltfpack(&plain, &["-cc", "-kn"])),
+    ];
+    files
+        .into_iter()
+        .map(|(name, bytes)| {
+            let path = dir.join(name);
+            std::fs::write(&path, bytes).unwrap();
+            path
+        })
+        .collect()
+}
+
+fn json_chunk(file: &Path) -> Value {
+    let glb = std::fs::read(file).unwrap();
+    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+    serde_json::from_slice(&glb[20..20 + len]).unwrap()
+}
+
+fn names(doc: &Value, key: &str) -> Vec<Value> {
+    doc[key]
+        .as_array()
+        .map(|a| a.iter().map(|x| x["name"].clone()).collect())
+        .unwrap_or_default()
+}
+
+/// A ten-second clip: the jaw opens and closes, the left smile rises, the eyes blink (VRM
+/// `blink` where the avatar has it).
+fn clip(dir: &Path) -> PathBuf {
+    let mut frames = String::new();
+    for f in 0..300 {
+        let t = f as f32 / 30.0;
+        let jaw = (0.5 - 0.5 * (t * 1.3).cos()).clamp(0.0, 1.0);
+        let blink = if (t % 3.0) < 0.2 { 1.0 } else { 0.0 };
+        let _ = write!(
+            frames,
+            "{}[{jaw}, {}, {blink}, {blink}]",
+            if f > 0 { "," } else { "" },
+            t / 10.0
+        );
+    }
+    let path = dir.join("ten-seconds.json");
+    std::fs::write(
+        &path,
+        format!(r#"{{"fps": 30, "blendshapes": ["jawOpen", "mouthSmileLeft", "eyeBlinkLeft", "eyeBlinkRight"], "frames": [{frames}]}}"#),
+    )
+    .unwrap();
+    path
+}
+
+#[test]
+fn info_lists_the_blendshapes_and_vrm_expressions() {
+    let dir = output_dir("avatars-info");
+    for file in avatars(&dir) {
+        let report: Value =
+            serde_json::from_str(&faceanim_ok(&["info", file.to_str().unwrap(), "--json"]))
+                .unwrap();
+        let listed: Vec<&str> = report["blendshapes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b["name"].as_str().unwrap())
+            .collect();
+        for shape in ict().blendshapes() {
+            assert!(
+                listed.contains(&shape.name()),
+                "{}: {} missing",
+                file.display(),
+                shape.name()
+            );
+        }
+        if file.extension().is_some_and(|e| e == "vrm") {
+            for e in EXPRESSIONS {
+                assert!(
+                    listed.contains(&e.name),
+                    "{}: expression {} missing",
+                    file.display(),
+                    e.name
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn exports_are_the_users_file_with_the_animation_and_open_everywhere() {
+    let dir = output_dir("avatars-export");
+    let clip = clip(&dir);
+    let mut outputs = Vec::new();
+    for file in avatars(&dir) {
+        let stem = file.file_stem().unwrap().to_string_lossy().into_owned();
+        let ext = file.extension().unwrap().to_string_lossy().into_owned();
+        // The test avatars are valid glTF themselves.
+        let input = dir.join(format!("{stem}-input-{ext}.glb"));
+        std::fs::copy(&file, &input).unwrap();
+        assert_valid_gltf(&input);
+        let out = dir.join(format!("{stem}-animated.{ext}"));
+        faceanim_ok(&[
+            "export",
+            file.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--clip",
+            clip.to_str().unwrap(),
+        ]);
+        // The validator reads .glb; a .vrm is a GLB by another name.
+        let checked = dir.join(format!("{stem}-animated-{ext}.glb"));
+        std::fs::copy(&out, &checked).unwrap();
+        let report = assert_valid_gltf(&checked);
+        assert_eq!(report["info"]["animationCount"], 1, "{}", out.display());
+        let (before, after) = (json_chunk(&file), json_chunk(&out));
+        for key in [
+            "nodes",
+            "meshes",
+            "skins",
+            "materials",
+            "textures",
+            "images",
+            "samplers",
+        ] {
+            assert_eq!(
+                names(&before, key),
+                names(&after, key),
+                "{}: {key}",
+                out.display()
+            );
+        }
+        assert_eq!(
+            before["extensions"],
+            after["extensions"],
+            "{}: a VRM stays a VRM",
+            out.display()
+        );
+        outputs.push(checked);
+    }
+
+    // Blender 3.4 opens the plain avatar's export with its armature and its shape keys.
+    let out = Command::new("blender")
+        .args(["-b", "--factory-startup", "--python"])
+        .arg(repo().join("tools/blender_shape_keys.py"))
+        .arg("--")
+        .arg(&outputs[0])
+        .output()
+        .expect("Blender is needed for this test: run scripts/setup.sh");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("FACEANIM_REPORT "))
+        .unwrap_or_else(|| {
+            panic!(
+                "Blender printed no report:\n{stdout}\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+    let report: Value = serde_json::from_str(line).unwrap();
+    let armatures = report["armatures"].as_array().unwrap();
+    assert_eq!(armatures.len(), 1, "{report}");
+    assert_eq!(armatures[0]["bones"], 5, "{report}");
+    let objects = report["objects"].as_array().unwrap();
+    let head = objects
+        .iter()
+        .find(|o| o["name"] == "Head")
+        .unwrap_or_else(|| panic!("{report}"));
+    assert_eq!(
+        head["shape_keys"].as_array().unwrap().len(),
+        ict().blendshapes().len()
+    );
+    assert!(objects.iter().any(|o| o["name"] == "Body"), "{report}");
+    assert!(
+        !report["actions"].as_array().unwrap().is_empty(),
+        "{report}"
+    );
+
+    // three.js (the studio's own copy) in Chromium: the textured, skinned avatar with its face
+    // moving at second 5 of the clip (the jaw is open there).
+    for file in [&outputs[0], &outputs[2]] {
+        let shot = file.with_extension("png");
+        let out = Command::new("node")
+            .arg(repo().join("tools/threejs-render.mjs"))
+            .arg(file)
+            .arg(&shot)
+            .arg("2.4")
+            .output()
+            .expect("node is needed for this test");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert!(report.get("pageErrors").is_none(), "{report}");
+        assert!(report["skinnedMeshes"].as_u64().unwrap() >= 5, "{report}");
+        assert_eq!(report["bones"], 5, "{report}");
+        assert!(
+            report["texturedMaterials"].as_u64().unwrap() >= 1,
+            "{report}"
+        );
+        assert!(report["maxInfluence"].as_f64().unwrap() > 0.5, "{report}");
+        assert!(
+            report["pixels"]["nonBackground"].as_u64().unwrap() > 10_000,
+            "{report}"
+        );
+    }
+}
