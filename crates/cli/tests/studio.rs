@@ -891,3 +891,93 @@ fn the_page_plays_its_animation_out_over_vmc() {
         "the played jawOpen never went out: {jaw_values:?}"
     );
 }
+
+/// A full-body avatar in the studio (the ICT head on a skinned, textured body, built in code):
+/// the default distances come from its head, so a stroke drawn through the API from the vertex
+/// each of four blendshapes moves most to where weight 1 takes it picks that blendshape at
+/// full weight, as on the bare head; the camera's box is the head; the GLB download is the
+/// user's own file (every node kept) with the animation, while the page's view is one mesh.
+#[test]
+fn a_full_body_avatar_in_the_studio_api() {
+    let dir = tempfile::tempdir().unwrap();
+    let avatar = dir.path().join("avatar.glb");
+    let bytes = faceanim_testdata::avatar::full_body_glb(
+        faceanim_testdata::ict(),
+        faceanim_testdata::avatar::VrmKind::None,
+        &[],
+    );
+    std::fs::write(&avatar, &bytes).unwrap();
+    let studio = start_on(Some(&avatar), &dir.path().join("avatar.faceanim.json"), &[]);
+    let port = studio.port;
+    let (_, body) = request(port, "GET", "/api/character", &[], b"");
+    let character: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let height =
+        |b: &serde_json::Value| b["max"][1].as_f64().unwrap() - b["min"][1].as_f64().unwrap();
+    assert!(height(&character["bounds"]) > 1.5, "{character}");
+    assert!(
+        height(&character["head"]) < 0.5,
+        "the camera frames the head: {character}"
+    );
+    let (_, body) = request(port, "GET", "/api/character/anchors", &[], b"");
+    let anchors: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let json = [("Content-Type", "application/json")];
+    for (k, name) in ["jawOpen", "eyeBlink_L", "mouthSmile_L", "browInnerUp_L"]
+        .iter()
+        .enumerate()
+    {
+        let anchor = anchors
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|a| a["name"] == *name)
+            .unwrap();
+        let point = |c: usize, i: usize| {
+            let (rest, target) = (
+                anchor["rest"][c].as_f64().unwrap(),
+                anchor["target"][c].as_f64().unwrap(),
+            );
+            rest + (target - rest) * i as f64 / 20.0
+        };
+        let samples: Vec<serde_json::Value> = (0..=20)
+            .map(|i| serde_json::json!({ "t": i as f64 * 0.025, "p": [point(0, i), point(1, i), point(2, i)] }))
+            .collect();
+        let stroke = serde_json::json!({ "samples": samples, "start_frame": 40 * k }).to_string();
+        let (status, body) = request(port, "POST", "/api/strokes", &json, stroke.as_bytes());
+        assert_eq!(status, 200, "{name}: {body}");
+        let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+        let action = state["actions"].as_array().unwrap().last().unwrap();
+        assert_eq!(action["sides"][0]["target"], *name, "{name}: {action}");
+        assert!(
+            action["sides"][0]["weight"].as_f64().unwrap() >= 0.8,
+            "{name}: {action}"
+        );
+    }
+    let download = get_bytes(port, "/api/export.glb");
+    let nodes_in = |glb: &[u8]| {
+        let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+        let json: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+        json["nodes"].as_array().unwrap().len()
+    };
+    assert_eq!(
+        nodes_in(&download),
+        nodes_in(&bytes),
+        "the download is the user's file"
+    );
+    let view = get_bytes(port, "/api/view.glb");
+    assert_eq!(nodes_in(&view), 1, "the page's view is one mesh");
+}
+
+/// The body of a `GET` as bytes (a GLB is not text), failing on any status but 200.
+fn get_bytes(port: u16, path: &str) -> Vec<u8> {
+    let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    let head =
+        format!("GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n");
+    stream.write_all(head.as_bytes()).unwrap();
+    let mut response = Vec::new();
+    stream.read_to_end(&mut response).unwrap();
+    let split = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let status = String::from_utf8_lossy(&response[..split]).into_owned();
+    assert!(status.starts_with("HTTP/1.1 200"), "{path}: {status}");
+    // The studio answers with a Content-Length body (no chunking).
+    response[split + 4..].to_vec()
+}
