@@ -183,18 +183,25 @@ fn pieces(character: &Character) -> Vec<(&'static str, Vec<usize>)> {
         .collect()
 }
 
-/// A 16×16 checker PNG for the body's texture.
-fn checker_png() -> Vec<u8> {
-    let mut pixels = Vec::with_capacity(16 * 16 * 3);
-    for y in 0..16 {
-        for x in 0..16 {
-            let on = (x / 4 + y / 4) % 2 == 0;
-            pixels.extend_from_slice(if on { &[40, 90, 160] } else { &[220, 220, 230] });
+/// A `side`×`side` checker PNG for the body's texture (4×4 squares), with a little
+/// deterministic grain, so a large one weighs what a real outfit texture does.
+fn checker_png(side: u32) -> Vec<u8> {
+    let mut pixels = Vec::with_capacity((side * side * 3) as usize);
+    let mut state: u32 = 0x1234_5678;
+    for y in 0..side {
+        for x in 0..side {
+            let on = (x * 4 / side + y * 4 / side) % 2 == 0;
+            let base: [u8; 3] = if on { [40, 90, 160] } else { [220, 220, 230] };
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            let grain = if side > 16 { (state % 128) as u8 } else { 0 };
+            pixels.extend(base.iter().map(|c| c.saturating_sub(grain)));
         }
     }
     let mut out = Vec::new();
     {
-        let mut encoder = png::Encoder::new(&mut out, 16, 16);
+        let mut encoder = png::Encoder::new(&mut out, side, side);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         if let Ok(mut writer) = encoder.write_header() {
@@ -244,11 +251,24 @@ fn cuboid(
 /// The avatar as GLB bytes: `head` on a skinned, textured body; with `vrm`, the VRM extension
 /// and `expressions`.
 #[must_use]
+pub fn full_body_glb(head: &Character, vrm: VrmKind, expressions: &[Expression<'_>]) -> Vec<u8> {
+    full_body_glb_textured(head, vrm, expressions, 16)
+}
+
+/// [`full_body_glb`] with an outfit texture `texture`×`texture` pixels large, grainy enough
+/// that PNG keeps it at about 1.6·`texture`² bytes (1152 makes a 3 MB avatar once gltfpack
+/// has compressed the ICT head).
+#[must_use]
 #[expect(
     clippy::too_many_lines,
     reason = "one glTF document, written top to bottom"
 )]
-pub fn full_body_glb(head: &Character, vrm: VrmKind, expressions: &[Expression<'_>]) -> Vec<u8> {
+pub fn full_body_glb_textured(
+    head: &Character,
+    vrm: VrmKind,
+    expressions: &[Expression<'_>],
+    texture: u32,
+) -> Vec<u8> {
     let mut w = Writer {
         bin: Vec::new(),
         views: Vec::new(),
@@ -396,7 +416,7 @@ pub fn full_body_glb(head: &Character, vrm: VrmKind, expressions: &[Expression<'
         }));
     }
 
-    let png = checker_png();
+    let png = checker_png(texture.max(1));
     let image_view = w.view(&png, None);
     // Inverse bind matrices: the inverse of each joint's rest translation.
     let ibm: Vec<u8> = heights
