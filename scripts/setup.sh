@@ -4,6 +4,8 @@
 #   - Node.js and the Khronos glTF-Validator (npm, pinned in tools/package-lock.json);
 #   - ffmpeg, which faceanim uses to read video and the tests use to make videos;
 #   - Chromium (Debian) and playwright-core (npm), to test the studio in a real browser;
+#   - gltfpack and @gltf-transform/cli (npm), which compress the tests' avatars as people's
+#     downloads are (meshopt, quantization, Draco);
 #   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to.
 # Safe to run again: it installs only what is not there.
 set -euo pipefail
@@ -24,8 +26,8 @@ if ((${#packages[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${packages[@]}" >/dev/null
 fi
 
-if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
-  echo "setup: installing the glTF-Validator and playwright-core (npm ci in tools/)"
+if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
+  echo "setup: installing the glTF-Validator, playwright-core, gltfpack and gltf-transform (npm ci in tools/)"
   (cd tools && npm ci --no-audit --no-fund --loglevel=error)
 fi
 

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use faceanim_testdata::avatar::{Expression, VrmKind, full_body_glb};
-use faceanim_testdata::{gltfpack, ict};
+use faceanim_testdata::{gltf_transform, gltfpack, ict};
 use serde_json::Value;
 use support::{assert_valid_gltf, faceanim_ok, output_dir, repo};
 
@@ -256,4 +256,43 @@ fn exports_are_the_users_file_with_the_animation_and_open_everywhere() {
             "{report}"
         );
     }
+}
+
+/// A Draco-compressed avatar is refused with the extension's name and the one-line conversion;
+/// the conversion it names (run here with the copy of @gltf-transform/cli in tools/) gives a
+/// file that imports with every blendshape.
+#[test]
+fn draco_is_refused_with_a_conversion_that_works() {
+    let dir = output_dir("avatars-draco");
+    let draco = dir.join("avatar-draco.glb");
+    std::fs::write(
+        &draco,
+        gltf_transform(&full_body_glb(ict(), VrmKind::None, &[]), "draco"),
+    )
+    .unwrap();
+    let out = support::faceanim(&["info", draco.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let message = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(message.contains(draco.to_str().unwrap()), "{message}");
+    assert!(message.contains("KHR_draco_mesh_compression"), "{message}");
+    assert!(
+        message.contains("@gltf-transform/cli meshopt IN.glb OUT.glb"),
+        "{message}"
+    );
+    let converted = dir.join("avatar-converted.glb");
+    std::fs::write(
+        &converted,
+        gltf_transform(&std::fs::read(&draco).unwrap(), "meshopt"),
+    )
+    .unwrap();
+    let report: Value = serde_json::from_str(&faceanim_ok(&[
+        "info",
+        converted.to_str().unwrap(),
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(
+        report["blendshapes"].as_array().unwrap().len(),
+        ict().blendshapes().len()
+    );
 }

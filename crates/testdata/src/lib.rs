@@ -275,3 +275,53 @@ pub fn asymmetric(character: &Character) -> Character {
     parts.name = format!("{} (asymmetric)", character.name());
     Character::new(parts).expect("an asymmetric character is valid")
 }
+
+/// Runs npm `@gltf-transform/cli` (installed in `tools/` by `scripts/setup.sh`) as
+/// `gltf-transform COMMAND in.glb out.glb` on `input` and returns the bytes it wrote
+/// (`draco` makes a Draco-compressed file, `meshopt` a meshopt-compressed one).
+///
+/// # Panics
+/// When node or the tool is missing or it fails, with its output.
+#[must_use]
+#[expect(
+    clippy::panic,
+    reason = "test support: a missing tool must stop the test loudly"
+)]
+pub fn gltf_transform(input: &[u8], command: &str) -> Vec<u8> {
+    let cli = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tools/node_modules/@gltf-transform/cli/bin/cli.js");
+    if !cli.exists() {
+        panic!(
+            "{} is missing: run scripts/setup.sh (npm ci in tools/)",
+            cli.display()
+        );
+    }
+    static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!(
+        "faceanim-gltf-transform-{}-{n}",
+        std::process::id()
+    ));
+    let _ = std::fs::create_dir_all(&dir);
+    let (src, out) = (dir.join("in.glb"), dir.join("out.glb"));
+    if let Err(e) = std::fs::write(&src, input) {
+        panic!("cannot write {}: {e}", src.display());
+    }
+    let result = std::process::Command::new("node")
+        .arg(&cli)
+        .arg(command)
+        .arg(&src)
+        .arg(&out)
+        .output();
+    let bytes = match result {
+        Ok(o) if o.status.success() => std::fs::read(&out).ok(),
+        Ok(o) => panic!(
+            "gltf-transform {command} failed: {}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        ),
+        Err(e) => panic!("cannot run node for gltf-transform: {e}"),
+    };
+    let _ = std::fs::remove_dir_all(&dir);
+    bytes.unwrap_or_else(|| panic!("gltf-transform {command} wrote no file"))
+}
