@@ -112,7 +112,7 @@ window.addEventListener('keydown', (e) => {
   else if (e.key === 'End') setFrame(lastFrame());
   else if (e.altKey && e.shiftKey && e.key.toLowerCase() === 'z') toggleOverlays();
   else if (e.key === 'f') frameCamera(store.character().head);
-  else if (e.key === 'F') frameCamera(store.character().bounds);
+  else if (e.key === 'F') frameCamera(store.character().bounds, 0.5, 0.9);
   else if (e.key === '?') $('help').hidden = !$('help').hidden;
   else if (e.key === 'Escape') $('help').hidden = true;
 });

@@ -58,12 +58,14 @@ function resize() {
 }
 new ResizeObserver(resize).observe(viewport);
 
-/** Frames the camera on a bounding box (`{min, max}`), looking at the face's height. */
-export function frameCamera(bounds) {
+/** Frames the camera on a bounding box (`{min, max}`), looking at `height` of it (0.58: the
+ * eyes of a head; 0.5: the middle of a whole body), the box's larger side filling `fill` of
+ * the view's height (below 1 crops a head close; above 1 leaves a margin round a body). */
+export function frameCamera(bounds, height = 0.58, fill = 1.25) {
   const min = new THREE.Vector3(...bounds.min), max = new THREE.Vector3(...bounds.max);
   const size = max.clone().sub(min);
-  const target = new THREE.Vector3((min.x + max.x) / 2, min.y + 0.58 * size.y, (min.z + max.z) / 2);
-  const distance = 0.5 * Math.max(size.x, size.y) * 0.8 / Math.tan(THREE.MathUtils.degToRad(15)) + 0.5 * size.z;
+  const target = new THREE.Vector3((min.x + max.x) / 2, min.y + height * size.y, (min.z + max.z) / 2);
+  const distance = 0.5 * Math.max(size.x, size.y) / fill / Math.tan(THREE.MathUtils.degToRad(15)) + 0.5 * size.z;
   camera.near = distance * 0.01; camera.far = distance * 20; camera.updateProjectionMatrix();
   camera.position.copy(target).add(new THREE.Vector3(0, 0, distance));
   controls.target.copy(target);

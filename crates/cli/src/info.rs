@@ -12,8 +12,24 @@ pub struct Report {
     pairs: Vec<[String; 2]>,
     arkit: Vec<String>,
     bbox: BboxReport,
+    /// Where the blendshapes move vertices.
+    face: BboxReport,
+    /// The head box that framing and default distances use (the whole box for a bare head).
+    head: BboxReport,
     size: f32,
     symmetry_plane: Option<PlaneReport>,
+    /// The user's file, when the character came from glTF: what an export keeps.
+    file: Option<FileReport>,
+}
+
+#[derive(Debug, Serialize)]
+struct FileReport {
+    nodes: usize,
+    meshes: usize,
+    skins: usize,
+    materials: usize,
+    textures: usize,
+    vrm: bool,
 }
 
 #[derive(Debug, Serialize)]
@@ -27,6 +43,15 @@ struct BlendshapeReport {
 struct BboxReport {
     min: [f32; 3],
     max: [f32; 3],
+}
+
+impl BboxReport {
+    fn of(b: faceanim_rig::Aabb) -> BboxReport {
+        BboxReport {
+            min: b.min.to_array(),
+            max: b.max.to_array(),
+        }
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -64,11 +89,18 @@ impl Report {
                 .into_iter()
                 .map(|(id, _)| names(id))
                 .collect(),
-            bbox: BboxReport {
-                min: character.bounds().min.to_array(),
-                max: character.bounds().max.to_array(),
-            },
+            bbox: BboxReport::of(character.bounds()),
+            face: BboxReport::of(character.face_bounds()),
+            head: BboxReport::of(character.head_bounds()),
             size: character.size(),
+            file: character.source().map(|s| FileReport {
+                nodes: s.count("nodes"),
+                meshes: s.count("meshes"),
+                skins: s.count("skins"),
+                materials: s.count("materials"),
+                textures: s.count("textures"),
+                vrm: s.is_vrm(),
+            }),
             symmetry_plane: symmetry.plane().map(|p| PlaneReport {
                 axis: match p.axis {
                     faceanim_rig::symmetry::Axis::X => "x",
@@ -99,6 +131,30 @@ impl Report {
             self.bbox.max[2],
             self.size
         );
+        if self.head.min != self.bbox.min || self.head.max != self.bbox.max {
+            let _ = writeln!(
+                out,
+                "  head         [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}] (framing and default distances)",
+                self.head.min[0],
+                self.head.min[1],
+                self.head.min[2],
+                self.head.max[0],
+                self.head.max[1],
+                self.head.max[2],
+            );
+        }
+        if let Some(f) = &self.file {
+            let _ = writeln!(
+                out,
+                "  file         {} nodes, {} meshes, {} skins, {} materials, {} textures{} (kept in exports)",
+                f.nodes,
+                f.meshes,
+                f.skins,
+                f.materials,
+                f.textures,
+                if f.vrm { ", VRM" } else { "" }
+            );
+        }
         match &self.symmetry_plane {
             Some(p) => {
                 let _ = writeln!(
