@@ -16,6 +16,8 @@ pub struct Report {
     face: BboxReport,
     /// The head box that framing and default distances use (the whole box for a bare head).
     head: BboxReport,
+    #[serde(skip)]
+    full_body: bool,
     size: f32,
     symmetry_plane: Option<PlaneReport>,
     /// The user's file, when the character came from glTF: what an export keeps.
@@ -92,6 +94,7 @@ impl Report {
             bbox: BboxReport::of(character.bounds()),
             face: BboxReport::of(character.face_bounds()),
             head: BboxReport::of(character.head_bounds()),
+            full_body: character.head_bounds() != character.bounds(),
             size: character.size(),
             file: character.source().map(|s| FileReport {
                 nodes: s.count("nodes"),
@@ -131,7 +134,7 @@ impl Report {
             self.bbox.max[2],
             self.size
         );
-        if self.head.min != self.bbox.min || self.head.max != self.bbox.max {
+        if self.full_body {
             let _ = writeln!(
                 out,
                 "  head         [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}] (framing and default distances)",

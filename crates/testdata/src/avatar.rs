@@ -190,7 +190,7 @@ fn checker_png(side: u32) -> Vec<u8> {
     let mut state: u32 = 0x1234_5678;
     for y in 0..side {
         for x in 0..side {
-            let on = (x * 4 / side + y * 4 / side) % 2 == 0;
+            let on = (x * 4 / side + y * 4 / side).is_multiple_of(2);
             let base: [u8; 3] = if on { [40, 90, 160] } else { [220, 220, 230] };
             state ^= state << 13;
             state ^= state >> 17;
