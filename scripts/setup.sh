@@ -3,7 +3,8 @@
 #   - Blender 3.4 and NumPy for its glTF importer (Debian packages), to open exports as users do;
 #   - Node.js and the Khronos glTF-Validator (npm, pinned in tools/package-lock.json);
 #   - ffmpeg, which faceanim uses to read video and the tests use to make videos;
-#   - Chromium (Debian) and playwright-core (npm), to test the studio in a real browser;
+#   - Chromium (Debian) and playwright-core (npm), to test the studio in a real browser, and iwer
+#     (npm), the emulated Meta Quest 3 its VR test runs in;
 #   - gltfpack and @gltf-transform/cli (npm), which compress the tests' avatars as people's
 #     downloads are (meshopt, quantization, Draco);
 #   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to.
@@ -26,7 +27,7 @@ if ((${#packages[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${packages[@]}" >/dev/null
 fi
 
-if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
+if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ ! -d tools/node_modules/iwer ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
   echo "setup: installing the glTF-Validator, playwright-core, gltfpack and gltf-transform (npm ci in tools/)"
   (cd tools && npm ci --no-audit --no-fund --loglevel=error)
 fi

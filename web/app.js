@@ -11,6 +11,7 @@
 //   capture.js   capture mode: the take, its corrections, the frame diagram
 //   live.js      capture from the webcam in real time
 //   vmc.js       VMC in: a phone tracker or another app drives the character
+//   xr.js        immersive sketching in a headset (WebXR): pens, the seed's states, navigation
 // The server owns the project and the engines; the page draws what the API describes. This
 // file starts the page and publishes `window.studio`, the read-only hook scripts and tests use
 // (crates/studio/API.md).
@@ -28,6 +29,7 @@ import * as store from './store.js';
 import { faceAt, strokeLatency } from './strokes.js';
 import './timeline.js';
 import { drawOverlays } from './overlays.js';
+import { xrHook } from './xr.js';
 
 store.onState(() => drawOverlays());
 store.onSelection(() => drawOverlays());
@@ -48,6 +50,8 @@ window.studio = Object.freeze({
   get lastStrokeMs() { return strokeLatency(); },
   get frameCount() { return drawStats().frameCount; },
   get drawCalls() { return drawStats().drawCalls; },
+  /** The VR session and its state (xr.js). */
+  xr: xrHook,
   capture,
 });
 

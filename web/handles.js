@@ -5,7 +5,7 @@
 import * as THREE from 'three';
 import { api } from './api.js';
 import { loadBaked } from './playback.js';
-import { handleUnder, showGhost } from './overlays.js';
+import { handleNear, handleUnder, showGhost } from './overlays.js';
 import { planeFacingCamera } from './scene.js';
 import { showError, showFailure } from './status.js';
 import * as store from './store.js';
@@ -24,7 +24,31 @@ const GRAB_PIXELS = 8;
 /** Grabs the handle under `ray`, or whose point is within a few pixels of the press at `(x, y)`,
  * if there is one (`ease`: slide the sphere instead of bending). Handles win over new strokes. */
 export function grab(ray, x, y, ease) {
-  const handle = handleUnder(ray, x, y, GRAB_PIXELS);
+  return start(handleUnder(ray, x, y, GRAB_PIXELS), ease);
+}
+
+/** Grabs the handle (of `kind`, or either) nearest `point` in character space within `radius`
+ * (a VR pen tip), if there is one: the selected action's first, else any action's, which is
+ * then selected (its handles are drawn at once, by the selection's listener). */
+export function grabNear(point, radius, ease, kind = null) {
+  if (start(handleNear(point, radius, kind), ease)) return true;
+  const state = store.state();
+  if (!state) return false;
+  let best = radius, stroke = null;
+  for (const action of state.actions) {
+    const side = action.sides[0];
+    for (const [name, p] of [['end', side.end], ['mid', side.mid]]) {
+      if (kind && kind !== name) continue;
+      const distance = Math.hypot(p[0] - point.x, p[1] - point.y, p[2] - point.z);
+      if (distance <= best) { best = distance; stroke = action.stroke; }
+    }
+  }
+  if (stroke === null) return false;
+  store.select(stroke);
+  return start(handleNear(point, radius, kind), ease);
+}
+
+function start(handle, ease) {
   if (!handle) return false;
   store.select(handle.stroke);
   drag = {

@@ -3,7 +3,7 @@
 // the ghost of the blendshape a stroke's end selects.
 
 import * as THREE from 'three';
-import { beforeDraw, camera, candidateGroup, clearGroup, invalidate, overlay, project, renderer, scene } from './scene.js';
+import { beforeDraw, camera, candidateGroup, clearGroup, invalidate, overlay, project, renderer, world } from './scene.js';
 import { characterMeshes, isPlaying, onPlaying } from './playback.js';
 import * as store from './store.js';
 
@@ -75,6 +75,20 @@ export function handleUnder(ray, x, y, pixels) {
   return object ? { ...object.userData, position: new THREE.Vector3(...object.userData.point) } : null;
 }
 
+/** The handle (of `kind` `'end'` or `'mid'`, or either) whose point is nearest `point` in
+ * character space, within `radius`, or null: how a VR controller's pen tip finds one. */
+export function handleNear(point, radius, kind = null) {
+  if (!overlay.visible) return null;
+  let best = radius, object = null;
+  for (const handle of handleTargets) {
+    if (kind && handle.userData.handle !== kind) continue;
+    const [x, y, z] = handle.userData.point;
+    const distance = Math.hypot(x - point.x, y - point.y, z - point.z);
+    if (distance <= best) { best = distance; object = handle; }
+  }
+  return object ? { ...object.userData, position: new THREE.Vector3(...object.userData.point) } : null;
+}
+
 // ---------- showing and hiding overlays ----------
 let overlaysOn = true;
 /** Shows or hides every overlay (Alt+Shift+Z, as in Blender); they hide while playing too. */
@@ -120,7 +134,7 @@ export function showGhost(name) {
   const index = name && base && base.morphTargetDictionary ? base.morphTargetDictionary[name] : undefined;
   if (index === undefined) { if (ghost) ghost.visible = false; return; }
   if (!ghost || ghost.userData.base !== base.geometry || ghost.userData.index !== index) {
-    if (ghost) { scene.remove(ghost); ghost.geometry.dispose(); ghost.material.dispose(); }
+    if (ghost) { world.remove(ghost); ghost.geometry.dispose(); ghost.material.dispose(); }
     ghost = new THREE.Mesh(ghostGeometry(base, index), new THREE.MeshBasicMaterial({
       color: 0x60d0ff, vertexColors: true, transparent: true, depthWrite: false,
       polygonOffset: true, polygonOffsetFactor: -2, polygonOffsetUnits: -2, side: THREE.DoubleSide,
@@ -129,7 +143,7 @@ export function showGhost(name) {
     ghost.matrixAutoUpdate = false;
     ghost.renderOrder = 5;
     ghost.frustumCulled = false;
-    scene.add(ghost);
+    world.add(ghost);
   }
   ghost.matrix.copy(base.matrixWorld);
   ghost.matrixWorldNeedsUpdate = true;

@@ -7,7 +7,7 @@
 
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
-import { FAST, beforeDraw, invalidate, onTick, scene } from './scene.js';
+import { FAST, beforeDraw, invalidate, onTick, world } from './scene.js';
 import { blendNow, blendOnCpu, vertexLitMaterial } from './fastview.js';
 import { showFailure } from './status.js';
 import * as store from './store.js';
@@ -75,7 +75,7 @@ export async function loadBaked() {
   if (generation !== bakeGeneration) return;
   const gltf = await loader.parseAsync(buffer, '');
   if (generation !== bakeGeneration) return;
-  if (root) { scene.remove(root); root.traverse((o) => { if (o.isMesh) o.geometry.dispose(); }); }
+  if (root) { world.remove(root); root.traverse((o) => { if (o.isMesh) o.geometry.dispose(); }); }
   meshes = [];
   root = gltf.scene;
   root.traverse((o) => {
@@ -84,7 +84,7 @@ export async function loadBaked() {
     o.material.side = THREE.DoubleSide;
     meshes.push(o);
   });
-  scene.add(root);
+  world.add(root);
   if (gltf.animations.length && meshes.length) {
     // The clip targets the node by name; bind its weight tracks to each mesh (primitive) directly.
     const clip = gltf.animations[0];

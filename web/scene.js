@@ -21,12 +21,18 @@ scene.add(hemisphere);
 export const key = new THREE.DirectionalLight(0xffffff, 1.6);
 key.position.set(-1, 1.2, 2);
 scene.add(key);
+/** The character's own space: the character, its strokes and handles live here. On the desktop
+ * it is the scene's; in VR (xr.js) it is placed life size in front of the user and moved by
+ * navigation. */
+export const world = new THREE.Group();
+world.name = 'character space';
+scene.add(world);
 /** Strokes and handles. */
 export const overlay = new THREE.Group();
-scene.add(overlay);
+world.add(overlay);
 /** The candidate targets of a stroke. */
 export const candidateGroup = new THREE.Group();
-scene.add(candidateGroup);
+world.add(candidateGroup);
 
 let dirty = true;
 /** Asks for the viewport to be drawn again. */
@@ -44,6 +50,10 @@ export function onTick(tick) { ticks.push(tick); }
 const beforeDraws = [];
 /** Calls `listener()` just before every draw. */
 export function beforeDraw(listener) { beforeDraws.push(listener); }
+/** @type {((now: number, frame: XRFrame) => void)[]} */
+const xrFrames = [];
+/** Calls `listener(now, xrFrame)` on every XR frame, before drawing (xr.js). */
+export function onXRFrame(listener) { xrFrames.push(listener); }
 /** @type {(() => void)[]} */
 const renders = [];
 /** Calls `listener()` after every draw. */
@@ -117,10 +127,12 @@ export function clearGroup(group) {
 controls.addEventListener('change', invalidate);
 for (const type of ['pointerdown', 'pointermove', 'pointerup', 'wheel', 'keydown']) viewport.addEventListener(type, invalidate, { passive: true });
 window.addEventListener('keydown', invalidate);
-renderer.setAnimationLoop((now) => {
+renderer.setAnimationLoop((now, xrFrame) => {
   let animating = false;
   for (const tick of ticks) animating = tick(now) || animating;
-  if (!dirty && !animating) return;
+  // A headset needs a picture every frame, whatever changed.
+  if (xrFrame) for (const listener of xrFrames) listener(now, xrFrame);
+  if (!dirty && !animating && !xrFrame) return;
   dirty = false;
   for (const listener of beforeDraws) listener();
   renderer.render(scene, camera);

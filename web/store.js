@@ -27,8 +27,12 @@ export function onState(listener) { stateListeners.push(listener); }
 /** Calls `listener()` when the selection changes. */
 export function onSelection(listener) { selectionListeners.push(listener); }
 
+/** Counts the states taken, so that a poll answered after a newer state is dropped. */
+let taken = 0;
+
 /** Takes a state the server answered with. */
 export function setState(next, rebake) {
+  taken++;
   current = next;
   // Strokes that no longer exist (deleted, undone) leave the selection.
   const count = next && next.actions ? Math.max(-1, ...next.actions.map((a) => a.stroke)) + 1 : 0;
@@ -66,3 +70,19 @@ export async function run(method, path, body) {
   try { const next = await api(method, path, body); setState(next, true); showError(''); return next; }
   catch (e) { showFailure(e); return null; }
 }
+
+// Another page of the same studio (a headset, a second desktop) may change the project: look
+// for a different state every second while this page is visible, and take it when it differs.
+const FOLLOW_MS = 1000;
+setInterval(async () => {
+  if (document.hidden || !current) return;
+  const before = taken;
+  try {
+    const next = await api('GET', 'api/state');
+    if (before !== taken) return;
+    const changed = JSON.stringify(next.actions) !== JSON.stringify(current.actions)
+      || JSON.stringify(next.settings) !== JSON.stringify(current.settings)
+      || next.fps !== current.fps || next.can_undo !== current.can_undo || next.can_redo !== current.can_redo;
+    if (changed) setState(next, true);
+  } catch { /* the server is away: the next poll tries again */ }
+}, FOLLOW_MS);

@@ -8,7 +8,7 @@ import { api } from './api.js';
 import * as handles from './handles.js';
 import { atRest, hitFace, holdRest, currentFrame, isReady } from './playback.js';
 import { labelCandidate, nearestCandidate, shownCandidates, showCandidates, showGhost, weightTowards } from './overlays.js';
-import { camera, candidateGroup, clearGroup, controls, onPlane, planeFacingCamera, project, rayFrom, renderer, scene } from './scene.js';
+import { camera, candidateGroup, clearGroup, controls, onPlane, planeFacingCamera, project, rayFrom, renderer, world } from './scene.js';
 import { showError, showFailure } from './status.js';
 import { offerAlternatives } from './inspector.js';
 import * as store from './store.js';
@@ -78,7 +78,7 @@ canvas.addEventListener('pointerdown', (event) => {
   const geometry = new THREE.BufferGeometry().setFromPoints([hit, hit]);
   const line = new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: 0xffe080, depthTest: false }));
   line.renderOrder = 13;
-  scene.add(line);
+  world.add(line);
   const drawing = { plane: planeFacingCamera(hit), t0: performance.now(), samples: [{ t: 0, p: hit.toArray() }], pending: [], line, found: null, frame: Math.round(currentFrame()) };
   stroke = drawing;
   drawing.asked = api('POST', 'api/candidates', { point: hit.toArray(), frame: drawing.frame }).then((found) => { drawing.found = found; showCandidates(found, false); }).catch(() => {});
@@ -170,7 +170,7 @@ async function endDrag(event) {
   showGhost(null);
   labelCandidate(null, 0);
   readout.hidden = true;
-  scene.remove(finished.line);
+  world.remove(finished.line);
   finished.line.geometry.dispose();
   clearGroup(candidateGroup);
   if (finished.samples.length < 2) return;
