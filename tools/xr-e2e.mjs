@@ -179,6 +179,29 @@ try {
     measured.strokeAfterNavigation = action.sides[0].weight;
   }
 
+  // 7. The timeline panel: point the left hand's ray at the first action's orange start handle,
+  // press the trigger and move the ray along the panel: the action starts later.
+  {
+    const s = await state();
+    const action = s.actions[0];
+    const aim = await vr.evaluate((stroke) => window.studio.xr.panelHandle(stroke, 'start'), action.stroke);
+    if (!aim) fail('the timeline panel does not show the first action');
+    const pose = (shift) => vr.evaluate(([aim, shift]) => {
+      const c = window.__xrDevice.controllers.left;
+      const p = aim.point.map((v, i) => v + 0.2 * aim.normal[i] + shift * aim.along[i]);
+      c.position.set(p[0], p[1], p[2]);
+      c.quaternion.set(aim.quaternion[0], aim.quaternion[1], aim.quaternion[2], aim.quaternion[3]);
+    }, [aim, shift]);
+    await pose(0); await frames(2);
+    await button('left', 'trigger', 1); await frames(2);
+    for (let i = 1; i <= 4; i++) { await pose(0.02 * i); await frames(1); }
+    await button('left', 'trigger', 0); await frames(2);
+    await vr.waitForFunction(([stroke, start]) => { const a = window.studio.state.actions.find((x) => x.stroke === stroke); return a && a.start_frame > start; }, [action.stroke, action.start_frame], { timeout: 15000 });
+    const after = (await state()).actions.find((x) => x.stroke === action.stroke);
+    measured.timelineStart = [action.start_frame, after.start_frame];
+    await vr.screenshot({ path: path.join(out, 'xr-timeline.png') });
+  }
+
   measured.frames = await vr.evaluate(() => window.studio.xr.frames);
   measured.frameMs = await vr.evaluate(() => window.studio.xr.frameMs);
   await vr.screenshot({ path: path.join(out, 'xr-view.png') });

@@ -14,7 +14,8 @@
 // the last stroke": a stroke just drawn goes), right redoes (it comes back), down toggles
 // symmetry, up enters or leaves the timeline. Undo is the project's one history, the desktop's.
 //
-// The frame loop allocates nothing: vectors and matrices are kept here and reused; candidate
+// The timeline panel (xrpanel.js) stands to the left; the other hand's ray points at it and its
+// trigger clicks. The frame loop keeps its vectors and matrices here and reuses them; candidate
 // queries go to the server once per stroke, asynchronously.
 
 import * as THREE from 'three';
@@ -25,6 +26,7 @@ import { currentFrame, lastFrame, setFrame, holdRest } from './playback.js';
 import { candidateGroup, clearGroup, frameCamera, invalidate, onXRFrame, renderer, scene, world } from './scene.js';
 import { showFailure } from './status.js';
 import * as store from './store.js';
+import { panelHandle, pointPanel, refreshPanel, timelinePanel } from './xrpanel.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 
@@ -153,6 +155,10 @@ enter.addEventListener('click', async () => {
     frames = 0;
     frameTimes.fill(0);
     place(floor);
+    // The timeline panel, to the left and facing the animator (seed figure 9).
+    timelinePanel.position.set(-0.42, floor ? 1.3 : -0.3, -0.6);
+    timelinePanel.rotation.set(-0.2, Math.PI / 5, 0, 'YXZ');
+    scene.add(timelinePanel);
     // The character stands at rest in VR: strokes live in its own space.
     holdRest(true);
     enter.textContent = 'Exit VR';
@@ -163,6 +169,7 @@ enter.addEventListener('click', async () => {
 
 function leave() {
   session = null;
+  scene.remove(timelinePanel);
   setMode('waiting');
   endStroke(false);
   world.position.set(0, 0, 0);
@@ -315,6 +322,8 @@ function navigation(leftSqueeze, rightSqueeze) {
 }
 
 // ---------- the frame ----------
+const rayOrigin = new THREE.Vector3();
+const rayDirection = new THREE.Vector3();
 const pressed = (hand, i) => {
   const gamepad = hand.source && hand.source.gamepad;
   return !!(gamepad && gamepad.buttons[i] && gamepad.buttons[i].pressed);
@@ -329,6 +338,11 @@ onXRFrame((now) => {
   const trigger = pressed(main, 0), squeeze = pressed(main, 1);
   const wasTrigger = main.buttons[0], wasSqueeze = main.buttons[1];
   const offY = pressed(off, 5), wasOffY = off.buttons[5];
+  // The other hand's ray on a panel: its trigger is the panel's.
+  off.controller.getWorldPosition(rayOrigin);
+  off.controller.getWorldDirection(rayDirection).negate();
+  pointPanel(rayOrigin, rayDirection, pressed(off, 0), off.buttons[0]);
+  refreshPanel();
   // Y/B on the other hand: navigation on or off.
   if (offY && !wasOffY) setMode(mode === 'navigation' ? 'waiting' : 'navigation');
 
@@ -394,4 +408,13 @@ export const xrHook = Object.freeze({
   toWorld(p) { return world.localToWorld(new THREE.Vector3(p[0], p[1], p[2])).toArray(); },
   /** The pen tip of a hand in the reference space (metres). */
   tip(hand) { return tipOf(hands[hand === 'left' ? 'left' : 'right'], new THREE.Vector3()).toArray(); },
+  /** Where the timeline panel shows an action's `'start'` or `'end'` handle (reference space),
+   * and the panel's facing direction, or null. */
+  panelHandle(stroke, part) {
+    const p = panelHandle(stroke, part);
+    if (!p) return null;
+    const normal = new THREE.Vector3(0, 0, 1).applyQuaternion(timelinePanel.getWorldQuaternion(new THREE.Quaternion()));
+    const along = new THREE.Vector3(1, 0, 0).applyQuaternion(timelinePanel.getWorldQuaternion(new THREE.Quaternion()));
+    return { point: p.toArray(), normal: normal.toArray(), along: along.toArray(), quaternion: timelinePanel.getWorldQuaternion(new THREE.Quaternion()).toArray() };
+  },
 });

@@ -986,8 +986,9 @@ fn get_bytes(port: u16, path: &str) -> Vec<u8> {
 /// on the ICT head (not the head the page is tuned on), draws strokes in the air with the right
 /// trigger from the vertex each of three blendshapes moves most to its target (each picks that
 /// blendshape at full weight and lasts as long as it was drawn, by the XRFrame clock), flicks
-/// the left thumbstick four ways, grabs and moves the arrow, slides the sphere, navigates, and a
-/// second, desktop page of the studio sees the strokes; no console errors.
+/// the left thumbstick four ways, grabs and moves the arrow, slides the sphere, navigates, drags
+/// an action's start handle on the timeline panel, and a second, desktop page of the studio
+/// sees the strokes; no console errors.
 #[test]
 fn immersive_sketching_in_an_emulated_headset() {
     assert!(
