@@ -1024,6 +1024,9 @@ fn immersive_sketching_in_an_emulated_headset() {
         (measured["navigated"].as_f64().unwrap() - 0.1).abs() < 0.02,
         "{measured}"
     );
+    // Dragging the first action's start handle on the timeline panel moved its start.
+    let moved = measured["timelineStart"].as_array().unwrap();
+    assert!(moved[1].as_f64() > moved[0].as_f64(), "{measured}");
     assert!(
         measured["errors"].as_array().unwrap().is_empty(),
         "{measured}"
