@@ -296,3 +296,63 @@ fn draco_is_refused_with_a_conversion_that_works() {
         ict().blendshapes().len()
     );
 }
+
+/// An avatar packed as VRoid Studio ships them: WebP textures (`EXT_texture_webp`, made by
+/// gltf-transform) and meshopt compression with quantization (gltfpack), all three required.
+/// It imports with its WebP texture, exports valid, and the studio's own view of it declares
+/// the WebP extension so browsers show the texture.
+#[test]
+fn a_webp_meshopt_quantized_avatar_like_vroids() {
+    let dir = output_dir("avatars-webp");
+    let webp = gltf_transform(&full_body_glb(ict(), VrmKind::None, &[]), "webp");
+    let packed = gltfpack(&webp, &["-cc", "-kn"]);
+    let file = dir.join("avatar-webp-meshopt.glb");
+    std::fs::write(&file, &packed).unwrap();
+    let required = json_chunk(&file)["extensionsRequired"].to_string();
+    for ext in [
+        "EXT_texture_webp",
+        "EXT_meshopt_compression",
+        "KHR_mesh_quantization",
+    ] {
+        assert!(required.contains(ext), "{required}");
+    }
+    let character = faceanim_rig::import::import_gltf(
+        &packed,
+        "avatar-webp-meshopt.glb",
+        &faceanim_rig::import::NoExternalResources,
+    )
+    .unwrap()
+    .character;
+    assert!(
+        character.materials().iter().any(|m| m
+            .base_color_texture
+            .as_ref()
+            .is_some_and(|t| t.mime_type == "image/webp")),
+        "the WebP texture is kept"
+    );
+    let view = dir.join("view.glb");
+    std::fs::write(&view, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
+    let report = assert_valid_gltf(&view);
+    assert!(
+        report["info"]["extensionsRequired"]
+            .to_string()
+            .contains("EXT_texture_webp"),
+        "{report}"
+    );
+    let clip = clip(&dir);
+    let out = dir.join("animated.glb");
+    faceanim_ok(&[
+        "export",
+        file.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--clip",
+        clip.to_str().unwrap(),
+    ]);
+    assert_valid_gltf(&out);
+    let after = json_chunk(&out)["extensionsRequired"].to_string();
+    assert!(
+        after.contains("EXT_texture_webp") && !after.contains("meshopt"),
+        "{after}"
+    );
+}
