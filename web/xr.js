@@ -163,7 +163,6 @@ enter.addEventListener('click', async () => {
     holdRest(true);
     enter.textContent = 'Exit VR';
     next.addEventListener('end', leave);
-    hands[other()].controller.add(label);
   } catch (e) { showFailure(e); }
 });
 
@@ -335,6 +334,8 @@ onXRFrame((now) => {
   frames++;
   updatePens();
   const main = hands[dominant()], off = hands[other()];
+  // The state's label rides the other hand (whichever controller that turned out to be).
+  if (label.parent !== off.controller) off.controller.add(label);
   const trigger = pressed(main, 0), squeeze = pressed(main, 1);
   const wasTrigger = main.buttons[0], wasSqueeze = main.buttons[1];
   const offY = pressed(off, 5), wasOffY = off.buttons[5];

@@ -1,6 +1,9 @@
-//! Writing a character (and optional morph-weight animations) as a binary glTF 2.0 file.
+//! Writing a character (and optional morph-weight animations) as a binary glTF 2.0 file, two
+//! ways: [`export_into_source`] writes the user's own file back with the animation added (see
+//! there), and [`export_glb`] writes the character as faceanim sees it, one mesh.
 //!
-//! Layout choices, each for interchange with Blender, Unity, Unreal and three.js:
+//! Layout choices of the one-mesh file, each for interchange with Blender, Unity, Unreal and
+//! three.js:
 //! - one node, one mesh, one primitive per material part; all primitives share the same vertex
 //!   accessors, so vertex order and count survive a round trip exactly;
 //! - morph targets as *sparse* accessors holding only moved vertices (compact, and read by all
@@ -43,6 +46,9 @@ pub enum ExportError {
     /// The binary chunk would exceed the 4 GiB a GLB can address.
     #[error("the file would exceed 4 GiB")]
     TooLarge,
+    /// Writing into the user's file, for a character that did not come from one.
+    #[error("{0} was not imported from a glTF file, so there is no file of its own to write into")]
+    NoSource(String),
 }
 
 const ARRAY_BUFFER: u32 = 34962;
@@ -430,18 +436,16 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
 /// scene's root node). Meshopt-compressed input is written decompressed.
 ///
 /// # Errors
-/// [`ExportError::BadAnimation`] when the character has no source file or an animation does
-/// not fit, [`ExportError::TooLarge`] past 4 GiB.
+/// [`ExportError::NoSource`] for a character made in code or from OBJ files,
+/// [`ExportError::BadAnimation`] when an animation does not fit, [`ExportError::TooLarge`] past
+/// 4 GiB.
 #[expect(clippy::too_many_lines, reason = "one document, amended top to bottom")]
 pub fn export_into_source(
     character: &Character,
     animations: &[MorphAnimation],
 ) -> Result<Vec<u8>, ExportError> {
     let Some(source) = character.source() else {
-        return Err(ExportError::BadAnimation {
-            name: character.name().to_owned(),
-            problem: "the character was not imported from a glTF file".into(),
-        });
+        return Err(ExportError::NoSource(character.name().to_owned()));
     };
     let shape_count = character.blendshapes().len();
     for animation in animations {

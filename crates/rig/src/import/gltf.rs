@@ -987,8 +987,9 @@ fn head_node(doc: &serde_json::Value) -> Option<usize> {
     let mut candidates: Vec<usize> = joints.into_iter().collect();
     candidates.sort_unstable();
     candidates.into_iter().find(|&j| {
-        nodes[j]
-            .get("name")
+        nodes
+            .get(j)
+            .and_then(|n| n.get("name"))
             .and_then(serde_json::Value::as_str)
             .is_some_and(|name| name.to_ascii_lowercase().ends_with("head"))
     })
