@@ -202,6 +202,29 @@ try {
     await vr.screenshot({ path: path.join(out, 'xr-timeline.png') });
   }
 
+  // 8. The settings panel: slide the pen distance, then press Save.
+  {
+    const aimAt = (where) => vr.evaluate(([key, at]) => window.studio.xr.settingsPoint(key, at), where);
+    const pose = (aim) => vr.evaluate((aim) => {
+      const c = window.__xrDevice.controllers.left;
+      const p = aim.point.map((v, i) => v + 0.2 * aim.normal[i]);
+      c.position.set(p[0], p[1], p[2]);
+      c.quaternion.set(aim.quaternion[0], aim.quaternion[1], aim.quaternion[2], aim.quaternion[3]);
+    }, aim);
+    const before = (await state()).settings.pen_distance;
+    await pose(await aimAt(['pen_distance', 0.5])); await frames(2);
+    await button('left', 'trigger', 1); await frames(2);
+    for (const s of [0.55, 0.6, 0.65]) { await pose(await aimAt(['pen_distance', s])); await frames(1); }
+    await button('left', 'trigger', 0); await frames(2);
+    await vr.waitForFunction((before) => window.studio.state.settings.pen_distance !== null && window.studio.state.settings.pen_distance !== before, before, { timeout: 15000 });
+    measured.penDistance = [before, (await state()).settings.pen_distance];
+    await pose(await aimAt(['save'])); await frames(2);
+    await button('left', 'trigger', 1); await frames(2); await button('left', 'trigger', 0); await frames(2);
+    await vr.waitForFunction(() => /Saved/.test(document.getElementById('status').textContent), null, { timeout: 15000 });
+    measured.saved = true;
+    await vr.screenshot({ path: path.join(out, 'xr-settings.png') });
+  }
+
   measured.frames = await vr.evaluate(() => window.studio.xr.frames);
   measured.frameMs = await vr.evaluate(() => window.studio.xr.frameMs);
   await vr.screenshot({ path: path.join(out, 'xr-view.png') });

@@ -12,7 +12,7 @@
 //   live.js      capture from the webcam in real time
 //   vmc.js       VMC in: a phone tracker or another app drives the character
 //   xr.js        immersive sketching in a headset (WebXR): pens, the seed's states, navigation
-//   xrpanel.js   the timeline as a panel in the VR world
+//   xrpanel.js   the VR world's panels: the timeline and the settings
 // The server owns the project and the engines; the page draws what the API describes. This
 // file starts the page and publishes `window.studio`, the read-only hook scripts and tests use
 // (crates/studio/API.md).

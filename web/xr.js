@@ -26,7 +26,7 @@ import { currentFrame, lastFrame, setFrame, holdRest } from './playback.js';
 import { candidateGroup, clearGroup, frameCamera, invalidate, onXRFrame, renderer, scene, world } from './scene.js';
 import { showFailure } from './status.js';
 import * as store from './store.js';
-import { panelHandle, pointPanel, refreshPanel, timelinePanel } from './xrpanel.js';
+import { panelHandle, pointPanel, refreshPanel, refreshSettings, settingsPanel, settingsPoint, timelinePanel } from './xrpanel.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 
@@ -159,6 +159,10 @@ enter.addEventListener('click', async () => {
     timelinePanel.position.set(-0.42, floor ? 1.3 : -0.3, -0.6);
     timelinePanel.rotation.set(-0.2, Math.PI / 5, 0, 'YXZ');
     scene.add(timelinePanel);
+    // The settings (seed figure 11), to the right.
+    settingsPanel.position.set(0.42, floor ? 1.3 : -0.3, -0.6);
+    settingsPanel.rotation.set(-0.2, -Math.PI / 5, 0, 'YXZ');
+    scene.add(settingsPanel);
     // The character stands at rest in VR: strokes live in its own space.
     holdRest(true);
     enter.textContent = 'Exit VR';
@@ -169,6 +173,7 @@ enter.addEventListener('click', async () => {
 function leave() {
   session = null;
   scene.remove(timelinePanel);
+  scene.remove(settingsPanel);
   setMode('waiting');
   endStroke(false);
   world.position.set(0, 0, 0);
@@ -344,6 +349,7 @@ onXRFrame((now) => {
   off.controller.getWorldDirection(rayDirection).negate();
   pointPanel(rayOrigin, rayDirection, pressed(off, 0), off.buttons[0]);
   refreshPanel();
+  refreshSettings();
   // Y/B on the other hand: navigation on or off.
   if (offY && !wasOffY) setMode(mode === 'navigation' ? 'waiting' : 'navigation');
 
@@ -399,6 +405,18 @@ function frameMs() {
   return used[100 - n + Math.floor(n / 2)];
 }
 
+/** A point on a panel with the panel's facing (`normal`), its left-to-right direction and its
+ * turn: what pointing a ray at it needs. */
+function aimAt(panel, point) {
+  const turn = panel.getWorldQuaternion(new THREE.Quaternion());
+  return {
+    point: point.toArray(),
+    normal: new THREE.Vector3(0, 0, 1).applyQuaternion(turn).toArray(),
+    along: new THREE.Vector3(1, 0, 0).applyQuaternion(turn).toArray(),
+    quaternion: turn.toArray(),
+  };
+}
+
 /** The hook scripts and tests use: `window.studio.xr` (crates/studio/API.md). */
 export const xrHook = Object.freeze({
   get session() { return session; },
@@ -413,9 +431,9 @@ export const xrHook = Object.freeze({
    * and the panel's facing direction, or null. */
   panelHandle(stroke, part) {
     const p = panelHandle(stroke, part);
-    if (!p) return null;
-    const normal = new THREE.Vector3(0, 0, 1).applyQuaternion(timelinePanel.getWorldQuaternion(new THREE.Quaternion()));
-    const along = new THREE.Vector3(1, 0, 0).applyQuaternion(timelinePanel.getWorldQuaternion(new THREE.Quaternion()));
-    return { point: p.toArray(), normal: normal.toArray(), along: along.toArray(), quaternion: timelinePanel.getWorldQuaternion(new THREE.Quaternion()).toArray() };
+    return p ? aimAt(timelinePanel, p) : null;
   },
+  /** Where the settings panel shows a slider (`'pen_distance'`…) at position `s` in [0, 1], or a
+   * button (`'symmetry'`, `'save'`, `'export'`), with the panel's facing. */
+  settingsPoint(key, s) { return aimAt(settingsPanel, settingsPoint(key, s)); },
 });

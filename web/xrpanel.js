@@ -1,14 +1,18 @@
-// The timeline of seed section 3.9 as a panel in the VR world, pointed at with the other hand's
-// ray and clicked with its trigger: one box per action with its name, orange start and end
-// handles (drag the start: the action starts later or earlier and keeps its end; drag the end:
-// it lasts longer or shorter), the body moves it whole; the current-frame bar (click the ruler
-// to set the frame; in the Timeline state the thumbstick scrubs it); Play/Pause; ▲ ▼ scroll
-// through many actions. Drawn on a canvas texture, again only when the state or frame changed.
+// The panels of the VR world, pointed at with the other hand's ray and clicked with its trigger,
+// drawn on canvas textures again only when what they show changed:
+// - the timeline of seed section 3.9: one box per action with its name, orange start and end
+//   handles (drag the start: the action starts later or earlier and keeps its end; drag the
+//   end: it lasts longer or shorter), the body moves it whole; the current-frame bar (click the
+//   ruler to set the frame; in the Timeline state the thumbstick scrubs it); Play/Pause; ▲ ▼
+//   scroll through many actions;
+// - the settings of seed figure 11: stroke thickness, candidate radius, pen distance, edit radius
+//   and hook radius as sliders (in % of the character's size, as the desktop panel shows them),
+//   subsampling, symmetry, and Save and Export GLB.
 
 import * as THREE from 'three';
 import { api } from './api.js';
 import { currentFrame, isPlaying, lastFrame, onFrame, play, setFrame } from './playback.js';
-import { showFailure } from './status.js';
+import { showFailure, showStatus } from './status.js';
 import * as store from './store.js';
 
 // 1024 × 512 pixels on 0.64 m × 0.32 m: 1.6 px per mm; 28 px text is 17 mm high, legible at
@@ -94,6 +98,7 @@ function pixelOf(origin, direction) {
 /** The other hand's ray, each XR frame: hover, and a trigger `press` (edge) or `held`. Returns
  * whether the ray is on the panel (then the trigger is the panel's). */
 export function pointPanel(origin, direction, pressed, wasPressed) {
+  if (pointSettings(origin, direction, pressed, wasPressed)) return true;
   const p = pixelOf(origin, direction);
   const moved = p ? Math.abs(p.x - hover.x) + Math.abs(p.y - hover.y) > 2 : hover.x >= 0;
   hover = p || { x: -1, y: -1 };
@@ -152,4 +157,142 @@ export function panelHandle(stroke, part) {
   const y = TOP + i * ROW + ROW / 2;
   timelinePanel.updateMatrixWorld(true);
   return timelinePanel.localToWorld(new THREE.Vector3((x / W - 0.5) * WIDTH_M, (0.5 - y / H) * HEIGHT_M, 0));
+}
+
+// ---------- the settings panel ----------
+const SW = 768, SH = 640, SWIDTH_M = 0.42, SHEIGHT_M = 0.35;
+const settingsCanvas = document.createElement('canvas');
+settingsCanvas.width = SW; settingsCanvas.height = SH;
+const settingsTexture = new THREE.CanvasTexture(settingsCanvas);
+settingsTexture.colorSpace = THREE.SRGBColorSpace;
+/** The settings panel, placed by xr.js in the reference space. */
+export const settingsPanel = new THREE.Mesh(new THREE.PlaneGeometry(SWIDTH_M, SHEIGHT_M), new THREE.MeshBasicMaterial({ map: settingsTexture, side: THREE.DoubleSide }));
+settingsPanel.name = 'settings panel';
+let settingsDirty = true;
+store.onState(() => { settingsDirty = true; });
+
+/** The sliders: a setting, its label, and its range in % of the character's size. */
+const SLIDERS = [
+  ['stroke_thickness', 'Stroke thickness'],
+  ['candidate_radius', 'Candidate radius'],
+  ['pen_distance', 'Pen distance'],
+  ['edit_radius', 'Edit radius'],
+  ['hook_radius', 'Hook radius'],
+];
+const MAX_PERCENT = 25;
+const SLIDER_LEFT = 380, SLIDER_RIGHT = SW - 40, ROW_H = 70, FIRST = 40;
+const characterSize = () => Math.max(1e-9, store.character() ? store.character().diagonal : 1);
+/** A distance as the slider's position in [0, 1] (square-root scale: fine near zero). */
+const toSlider = (distance) => Math.sqrt(Math.min(1, Math.max(0, 100 * distance / characterSize() / MAX_PERCENT)));
+const fromSlider = (s) => MAX_PERCENT / 100 * characterSize() * s * s;
+/** The value a setting has now (its own, or what the character's size gives). */
+function valueOf(state, key) {
+  const own = state.settings[key];
+  return own === null || own === undefined ? state.resolved[key] ?? 0 : own;
+}
+/** @type {null | {key: string}} */
+let sliding = null;
+/** A setting being changed, shown before the server has answered. */
+let pendingSetting = null;
+
+/** Redraws the settings panel when the state changed. */
+export function refreshSettings() {
+  if (!settingsDirty) return;
+  settingsDirty = false;
+  const state = store.state();
+  const g = /** @type {CanvasRenderingContext2D} */ (settingsCanvas.getContext('2d'));
+  g.fillStyle = '#1d2026'; g.fillRect(0, 0, SW, SH);
+  if (!state) return;
+  g.textBaseline = 'middle';
+  SLIDERS.forEach(([key, name], i) => {
+    const y = FIRST + i * ROW_H;
+    const value = pendingSetting && pendingSetting.key === key ? pendingSetting.value : valueOf(state, key);
+    g.fillStyle = '#e8e8e8'; g.font = '26px sans-serif';
+    g.fillText(name, 20, y);
+    g.fillStyle = '#9aa0aa'; g.font = '24px sans-serif';
+    g.fillText(`${(100 * value / characterSize()).toPrecision(2)} %`, 250, y);
+    g.fillStyle = '#3a4050'; g.fillRect(SLIDER_LEFT, y - 6, SLIDER_RIGHT - SLIDER_LEFT, 12);
+    const x = SLIDER_LEFT + toSlider(value) * (SLIDER_RIGHT - SLIDER_LEFT);
+    g.fillStyle = '#ff9a2e'; g.beginPath(); g.arc(x, y, 16, 0, 2 * Math.PI); g.fill();
+  });
+  const y = FIRST + SLIDERS.length * ROW_H;
+  g.fillStyle = '#e8e8e8'; g.font = '28px sans-serif';
+  g.fillText(`Subsampling  ${state.settings.subsample}`, 20, y);
+  g.fillStyle = '#3a4050'; g.fillRect(SLIDER_LEFT, y - 26, 80, 52); g.fillRect(SLIDER_LEFT + 100, y - 26, 80, 52);
+  g.fillStyle = '#f0f0f0'; g.fillText('−', SLIDER_LEFT + 30, y); g.fillText('+', SLIDER_LEFT + 130, y);
+  const buttons = FIRST + (SLIDERS.length + 1) * ROW_H;
+  const button = (x, w, text, on) => { g.fillStyle = on ? '#4a6fa5' : '#3a4050'; g.fillRect(x, buttons - 28, w, 56); g.fillStyle = '#f0f0f0'; g.fillText(text, x + 16, buttons); };
+  button(20, 220, `Symmetry ${state.settings.symmetry ? 'on' : 'off'}`, !!state.settings.symmetry);
+  button(260, 140, 'Save', false);
+  button(420, 220, 'Export GLB', false);
+  settingsTexture.needsUpdate = true;
+}
+
+const settingsRay = new THREE.Raycaster();
+function settingsPixel(origin, direction) {
+  settingsRay.set(origin, direction);
+  const hit = settingsRay.intersectObject(settingsPanel, false)[0];
+  return hit && hit.uv ? { x: hit.uv.x * SW, y: (1 - hit.uv.y) * SH } : null;
+}
+
+/** The other hand's ray on the settings panel: returns whether it is on it. */
+function pointSettings(origin, direction, pressed, wasPressed) {
+  if (!settingsPanel.parent) return false;
+  const p = settingsPixel(origin, direction);
+  const state = store.state();
+  if (sliding && !pressed) { finishSlide(); return !!p; }
+  if (!p || !state) return false;
+  if (sliding) {
+    const s = Math.min(1, Math.max(0, (p.x - SLIDER_LEFT) / (SLIDER_RIGHT - SLIDER_LEFT)));
+    pendingSetting = { key: sliding.key, value: fromSlider(s) };
+    settingsDirty = true;
+    return true;
+  }
+  if (!pressed || wasPressed) return true;
+  const row = Math.round((p.y - FIRST) / ROW_H);
+  if (row < SLIDERS.length && p.x >= SLIDER_LEFT - 20) {
+    sliding = { key: SLIDERS[row][0] };
+    return pointSettings(origin, direction, pressed, false);
+  }
+  const settings = { ...state.settings };
+  if (row === SLIDERS.length) {
+    if (p.x >= SLIDER_LEFT && p.x < SLIDER_LEFT + 80) settings.subsample = Math.max(1, settings.subsample - 1);
+    else if (p.x >= SLIDER_LEFT + 100 && p.x < SLIDER_LEFT + 180) settings.subsample = settings.subsample + 1;
+    else return true;
+    store.run('PUT', 'api/settings', settings);
+  } else if (row === SLIDERS.length + 1) {
+    if (p.x < 240) store.run('PUT', 'api/settings', { ...settings, symmetry: !settings.symmetry });
+    else if (p.x < 400) api('POST', 'api/project/save').then((r) => showStatus(`Saved ${r.saved}`)).catch(showFailure);
+    else if (p.x < 640) {
+      const link = document.createElement('a');
+      link.href = 'api/export.glb';
+      link.download = '';
+      link.click();
+    }
+  }
+  return true;
+}
+
+async function finishSlide() {
+  const done = pendingSetting;
+  sliding = null;
+  pendingSetting = null;
+  settingsDirty = true;
+  const state = store.state();
+  if (!done || !state) return;
+  await store.run('PUT', 'api/settings', { ...state.settings, [done.key]: done.value });
+}
+
+/** Where the settings panel shows a slider's `key` at position `s` in [0, 1], or a button
+ * (`'save'`, `'export'`, `'symmetry'`), in the reference space: where a test points. */
+export function settingsPoint(key, s = 0.5) {
+  let x, y;
+  const slider = SLIDERS.findIndex(([k]) => k === key);
+  if (slider >= 0) { x = SLIDER_LEFT + s * (SLIDER_RIGHT - SLIDER_LEFT); y = FIRST + slider * ROW_H; }
+  else {
+    y = FIRST + (SLIDERS.length + 1) * ROW_H;
+    x = key === 'symmetry' ? 130 : key === 'save' ? 330 : 530;
+  }
+  settingsPanel.updateMatrixWorld(true);
+  return settingsPanel.localToWorld(new THREE.Vector3((x / SW - 0.5) * SWIDTH_M, (0.5 - y / SH) * SHEIGHT_M, 0));
 }

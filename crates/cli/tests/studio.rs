@@ -987,8 +987,8 @@ fn get_bytes(port: u16, path: &str) -> Vec<u8> {
 /// trigger from the vertex each of three blendshapes moves most to its target (each picks that
 /// blendshape at full weight and lasts as long as it was drawn, by the XRFrame clock), flicks
 /// the left thumbstick four ways, grabs and moves the arrow, slides the sphere, navigates, drags
-/// an action's start handle on the timeline panel, and a second, desktop page of the studio
-/// sees the strokes; no console errors.
+/// an action's start handle on the timeline panel, slides a setting and saves on the settings
+/// panel, and a second, desktop page of the studio sees the strokes; no console errors.
 #[test]
 fn immersive_sketching_in_an_emulated_headset() {
     assert!(
@@ -1027,6 +1027,11 @@ fn immersive_sketching_in_an_emulated_headset() {
     // Dragging the first action's start handle on the timeline panel moved its start.
     let moved = measured["timelineStart"].as_array().unwrap();
     assert!(moved[1].as_f64() > moved[0].as_f64(), "{measured}");
+    // The settings panel's pen-distance slider set the setting, and its Save wrote the project.
+    let pen = measured["penDistance"].as_array().unwrap();
+    assert!(pen[1].as_f64().is_some() && pen[1] != pen[0], "{measured}");
+    assert_eq!(measured["saved"], true, "{measured}");
+    assert!(dir.path().join("vr.faceanim.json").exists());
     assert!(
         measured["errors"].as_array().unwrap().is_empty(),
         "{measured}"
