@@ -153,3 +153,48 @@ fn vrm_expressions_become_blendshapes_in_both_versions() {
         }
     }
 }
+
+/// `KHR_texture_transform` on a base-colour texture is baked into the UVs: the outfit's UVs of
+/// an avatar whose material scales its texture by 2 and shifts it by ½ are the plain ones so
+/// transformed.
+#[test]
+fn a_texture_transform_is_baked_into_the_uvs() {
+    let glb = full_body_glb(ict(), VrmKind::None, &[]);
+    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+    let bin = glb[20 + len + 8..].to_vec();
+    json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = serde_json::json!({ "KHR_texture_transform": { "scale": [2.0, 2.0], "offset": [0.5, 0.0] } });
+    json["extensionsUsed"] = serde_json::json!(["KHR_texture_transform"]);
+    let mut text = serde_json::to_vec(&json).unwrap();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let mut transformed = Vec::new();
+    let total = 12 + 8 + text.len() + 8 + bin.len();
+    transformed.extend_from_slice(b"glTF");
+    transformed.extend_from_slice(&2u32.to_le_bytes());
+    transformed.extend_from_slice(&(total as u32).to_le_bytes());
+    transformed.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    transformed.extend_from_slice(b"JSON");
+    transformed.extend_from_slice(&text);
+    transformed.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    transformed.extend_from_slice(b"BIN\0");
+    transformed.extend_from_slice(&bin);
+    let (plain, _) = import(&glb, "avatar.glb");
+    let (moved, _) = import(&transformed, "avatar-transformed.glb");
+    let (a, b) = (plain.uvs().unwrap(), moved.uvs().unwrap());
+    // The body comes first in the file; its UVs are the ones the outfit's material transforms.
+    let body = plain.vertex_count() - ict().vertex_count();
+    assert!(body > 0);
+    for v in 0..body {
+        let want = [2.0 * a[v][0] + 0.5, 2.0 * a[v][1]];
+        assert!(
+            (b[v][0] - want[0]).abs() < 1e-6 && (b[v][1] - want[1]).abs() < 1e-6,
+            "vertex {v}: {:?} for {:?}",
+            b[v],
+            a[v]
+        );
+    }
+    // The head's material has no transform: its UVs stay.
+    assert_eq!(a[body..], b[body..]);
+}
