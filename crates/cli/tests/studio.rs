@@ -1041,3 +1041,41 @@ fn immersive_sketching_in_an_emulated_headset() {
         measured["frames"], measured["frameMs"]
     );
 }
+
+/// A VRM avatar's GLB download is its own VRM file with the animation, and is named `.vrm` (VRM
+/// apps look for that ending); it keeps the VRM extension.
+#[test]
+fn a_vrm_avatars_download_is_a_vrm() {
+    let dir = tempfile::tempdir().unwrap();
+    let avatar = dir.path().join("avatar.vrm");
+    let expressions = [faceanim_testdata::avatar::Expression {
+        name: "blink",
+        v0_preset: "blink",
+        binds: &["eyeBlink_L", "eyeBlink_R"],
+    }];
+    std::fs::write(
+        &avatar,
+        faceanim_testdata::avatar::full_body_glb(
+            faceanim_testdata::ict(),
+            faceanim_testdata::avatar::VrmKind::V1,
+            &expressions,
+        ),
+    )
+    .unwrap();
+    let studio = start_on(Some(&avatar), &dir.path().join("vrm.faceanim.json"), &[]);
+    let mut stream = TcpStream::connect(("127.0.0.1", studio.port)).unwrap();
+    let head = format!(
+        "GET /api/export.glb HTTP/1.1\r\nHost: 127.0.0.1:{}\r\nConnection: close\r\n\r\n",
+        studio.port
+    );
+    stream.write_all(head.as_bytes()).unwrap();
+    let mut response = Vec::new();
+    stream.read_to_end(&mut response).unwrap();
+    let split = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let headers = String::from_utf8_lossy(&response[..split]).to_ascii_lowercase();
+    assert!(headers.contains(".vrm\"\r\n"), "{headers}");
+    let body = &response[split + 4..];
+    let len = u32::from_le_bytes([body[12], body[13], body[14], body[15]]) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&body[20..20 + len]).unwrap();
+    assert!(json["extensions"]["VRMC_vrm"].is_object(), "still a VRM");
+}

@@ -103,6 +103,16 @@ impl Format {
         }
     }
 
+    /// The ending for `character`'s file in this format: a GLB written into a VRM avatar's own
+    /// file is a VRM, and VRM apps look for `.vrm`; otherwise [`Format::extension`].
+    #[must_use]
+    pub fn extension_for(self, character: Option<&Character>) -> &'static str {
+        match (self, character.and_then(Character::source)) {
+            (Format::Glb, Some(source)) if source.is_vrm() => "vrm",
+            _ => self.extension(),
+        }
+    }
+
     /// The media type of a file in this format.
     #[must_use]
     pub fn mime(self) -> &'static str {

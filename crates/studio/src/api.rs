@@ -367,15 +367,20 @@ async fn redo(State(shared): State<Shared>) -> axum::Json<StateView> {
     axum::Json(studio.view())
 }
 
-/// An export the browser saves as `NAME.EXTENSION` (its notes go to the log).
-pub(crate) fn download(format: Format, name: &str, exported: Exported) -> Response {
+/// An export the browser saves as `NAME.EXTENSION` (its notes go to the log); `extension` is
+/// the format's for this character ([`Format::extension_for`]: a VRM stays `.vrm`).
+pub(crate) fn download(
+    format: Format,
+    extension: &str,
+    name: &str,
+    exported: Exported,
+) -> Response {
     for note in &exported.notes {
-        tracing::info!("{name}.{}: {note}", format.extension());
+        tracing::info!("{name}.{extension}: {note}");
     }
     let disposition = format!(
-        "attachment; filename=\"{}.{}\"",
-        name.replace('"', ""),
-        format.extension()
+        "attachment; filename=\"{}.{extension}\"",
+        name.replace('"', "")
     );
     let mut headers = HeaderMap::new();
     headers.insert(
@@ -457,5 +462,6 @@ async fn export(State(shared): State<Shared>, format: Format) -> Result<Response
             &Animation::from_clip(&studio.character, &clip, &name)?,
         )?
     };
-    Ok(download(format, &name, exported))
+    let extension = format.extension_for(Some(&studio.character));
+    Ok(download(format, extension, &name, exported))
 }

@@ -600,5 +600,6 @@ async fn export(State(both): State<Both>, format: Format) -> Result<Response, Ap
             session: session.as_ref(),
         },
     )?;
-    Ok(download(format, &name, exported))
+    let extension = format.extension_for(Some(&studio.character));
+    Ok(download(format, extension, &name, exported))
 }
