@@ -62,6 +62,14 @@ try {
   const state = () => vr.evaluate(() => window.studio.state);
   const now = () => vr.evaluate(() => performance.now());
   const lerp = (a, b, s) => a.map((v, i) => v + (b[i] - v) * s);
+  /** Points the left controller's ray at a panel point (`{point, normal, along, quaternion}`
+   * from the xr hook) from 0.2 m in front of it, moved `shift` metres along the panel. */
+  const pointLeftAt = (aim, shift = 0) => vr.evaluate(([aim, shift]) => {
+    const c = window.__xrDevice.controllers.left;
+    const p = aim.point.map((v, i) => v + 0.2 * aim.normal[i] + shift * aim.along[i]);
+    c.position.set(p[0], p[1], p[2]);
+    c.quaternion.set(aim.quaternion[0], aim.quaternion[1], aim.quaternion[2], aim.quaternion[3]);
+  }, [aim, shift]);
   // The pen tip's first placement moves the controller; let a frame pass so tip() follows.
   const anchors = await vr.evaluate(() => fetch('api/character/anchors').then((r) => r.json()));
 
@@ -186,12 +194,7 @@ try {
     const action = s.actions[0];
     const aim = await vr.evaluate((stroke) => window.studio.xr.panelHandle(stroke, 'start'), action.stroke);
     if (!aim) fail('the timeline panel does not show the first action');
-    const pose = (shift) => vr.evaluate(([aim, shift]) => {
-      const c = window.__xrDevice.controllers.left;
-      const p = aim.point.map((v, i) => v + 0.2 * aim.normal[i] + shift * aim.along[i]);
-      c.position.set(p[0], p[1], p[2]);
-      c.quaternion.set(aim.quaternion[0], aim.quaternion[1], aim.quaternion[2], aim.quaternion[3]);
-    }, [aim, shift]);
+    const pose = (shift) => pointLeftAt(aim, shift);
     await pose(0); await frames(2);
     await button('left', 'trigger', 1); await frames(2);
     for (let i = 1; i <= 4; i++) { await pose(0.02 * i); await frames(1); }
@@ -205,12 +208,7 @@ try {
   // 8. The settings panel: slide the pen distance, then press Save.
   {
     const aimAt = (where) => vr.evaluate(([key, at]) => window.studio.xr.settingsPoint(key, at), where);
-    const pose = (aim) => vr.evaluate((aim) => {
-      const c = window.__xrDevice.controllers.left;
-      const p = aim.point.map((v, i) => v + 0.2 * aim.normal[i]);
-      c.position.set(p[0], p[1], p[2]);
-      c.quaternion.set(aim.quaternion[0], aim.quaternion[1], aim.quaternion[2], aim.quaternion[3]);
-    }, aim);
+    const pose = (aim) => pointLeftAt(aim);
     const before = (await state()).settings.pen_distance;
     await pose(await aimAt(['pen_distance', 0.5])); await frames(2);
     await button('left', 'trigger', 1); await frames(2);

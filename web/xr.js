@@ -197,6 +197,13 @@ function tipOf(hand, out) {
   return hand.tip.getWorldPosition(out);
 }
 
+/** The pen tip of `hand` in the character's own space (the one shared vector, reused). */
+function tipInCharacter(hand) {
+  tipOf(hand, tipWorld);
+  inverse.copy(world.matrixWorld).invert();
+  return tipLocal.copy(tipWorld).applyMatrix4(inverse);
+}
+
 /** Resolved distances (character units) from the state, with VR-friendly floors in metres. */
 function resolved(name) {
   const state = store.state();
@@ -217,9 +224,6 @@ let stroke = null;
 const MAX_SAMPLES = 4096;
 
 function beginStroke(now) {
-  tipOf(hands[dominant()], tipWorld);
-  inverse.copy(world.matrixWorld).invert();
-  tipLocal.copy(tipWorld).applyMatrix4(inverse);
   const positions = new Float32Array(MAX_SAMPLES * 3);
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
@@ -232,7 +236,7 @@ function beginStroke(now) {
   const drawing = { t0: now, samples: [], line, positions, frame, found: null, asked: Promise.resolve() };
   stroke = drawing;
   addSample(now);
-  const point = tipLocal.toArray();
+  const point = drawing.samples[0].p;
   // The candidate targets reachable from the start, as red spheres (once, asynchronously).
   drawing.asked = api('POST', 'api/candidates', { point, frame }).then((found) => { drawing.found = found; if (stroke === drawing) showCandidates(found, false); }).catch(() => {});
   setMode('interaction');
@@ -240,12 +244,10 @@ function beginStroke(now) {
 
 function addSample(now) {
   if (!stroke || stroke.samples.length >= MAX_SAMPLES) return;
-  tipOf(hands[dominant()], tipWorld);
-  inverse.copy(world.matrixWorld).invert();
-  tipLocal.copy(tipWorld).applyMatrix4(inverse);
+  const tip = tipInCharacter(hands[dominant()]);
   const k = stroke.samples.length;
-  stroke.positions[3 * k] = tipLocal.x; stroke.positions[3 * k + 1] = tipLocal.y; stroke.positions[3 * k + 2] = tipLocal.z;
-  stroke.samples.push({ t: (now - stroke.t0) / 1000, p: [tipLocal.x, tipLocal.y, tipLocal.z] });
+  stroke.positions[3 * k] = tip.x; stroke.positions[3 * k + 1] = tip.y; stroke.positions[3 * k + 2] = tip.z;
+  stroke.samples.push({ t: (now - stroke.t0) / 1000, p: [tip.x, tip.y, tip.z] });
   stroke.line.geometry.setDrawRange(0, k + 1);
   stroke.line.geometry.attributes.position.needsUpdate = true;
 }
@@ -360,17 +362,14 @@ onXRFrame((now) => {
     // trigger elsewhere draws.
     const radius = Math.max(resolved('hook_radius'), 0.015 / world.scale.x);
     if (squeeze && !wasSqueeze && !stroke && !handles.dragging()) {
-      tipOf(main, tipWorld); inverse.copy(world.matrixWorld).invert(); tipLocal.copy(tipWorld).applyMatrix4(inverse);
-      if (handles.grabNear(tipLocal, radius, false)) setMode('interaction');
+      if (handles.grabNear(tipInCharacter(main), radius, false)) setMode('interaction');
     }
     if (trigger && !wasTrigger && !stroke && !handles.dragging()) {
-      tipOf(main, tipWorld); inverse.copy(world.matrixWorld).invert(); tipLocal.copy(tipWorld).applyMatrix4(inverse);
-      if (handles.grabNear(tipLocal, radius, true, 'mid')) setMode('interaction');
+      if (handles.grabNear(tipInCharacter(main), radius, true, 'mid')) setMode('interaction');
       else beginStroke(now);
     } else if (trigger && stroke) addSample(now);
     if (handles.dragging()) {
-      tipOf(main, tipWorld); inverse.copy(world.matrixWorld).invert(); tipLocal.copy(tipWorld).applyMatrix4(inverse);
-      handles.moveTo(tipLocal.clone());
+      handles.moveTo(tipInCharacter(main).clone());
       if (!trigger && !squeeze) { handles.release(); setMode('waiting'); }
     }
     if (!trigger && wasTrigger && stroke) { addSample(now); endStroke(true); }

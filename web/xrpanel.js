@@ -15,17 +15,40 @@ import { currentFrame, isPlaying, lastFrame, onFrame, play, setFrame } from './p
 import { showFailure, showStatus } from './status.js';
 import * as store from './store.js';
 
+const raycaster = new THREE.Raycaster();
+
+/** A panel: a `w`×`h` canvas shown on a `widthM`×`heightM` plane (metres), with the canvas
+ * pixel a ray points at (`pixelAt`, or null) and the reference-space point of a pixel
+ * (`pointAt`). */
+function makePanel(name, w, h, widthM, heightM) {
+  const canvas = document.createElement('canvas');
+  canvas.width = w; canvas.height = h;
+  const texture = new THREE.CanvasTexture(canvas);
+  texture.colorSpace = THREE.SRGBColorSpace;
+  const mesh = new THREE.Mesh(new THREE.PlaneGeometry(widthM, heightM), new THREE.MeshBasicMaterial({ map: texture, side: THREE.DoubleSide }));
+  mesh.name = name;
+  return {
+    canvas, texture, mesh,
+    pixelAt(origin, direction) {
+      raycaster.set(origin, direction);
+      const hit = raycaster.intersectObject(mesh, false)[0];
+      return hit && hit.uv ? { x: hit.uv.x * w, y: (1 - hit.uv.y) * h } : null;
+    },
+    pointAt(x, y) {
+      mesh.updateMatrixWorld(true);
+      return mesh.localToWorld(new THREE.Vector3((x / w - 0.5) * widthM, (0.5 - y / h) * heightM, 0));
+    },
+  };
+}
+
 // 1024 × 512 pixels on 0.64 m × 0.32 m: 1.6 px per mm; 28 px text is 17 mm high, legible at
 // a metre (well over 20 px of a headset's view).
 const W = 1024, H = 512, WIDTH_M = 0.64, HEIGHT_M = 0.32;
 const ROW = 56, TOP = 84, LEFT = 190, RIGHT = 24, ROWS = 7;
-const canvas = document.createElement('canvas');
-canvas.width = W; canvas.height = H;
-const texture = new THREE.CanvasTexture(canvas);
-texture.colorSpace = THREE.SRGBColorSpace;
+const timeline = makePanel('timeline panel', W, H, WIDTH_M, HEIGHT_M);
+const canvas = timeline.canvas, texture = timeline.texture;
 /** The panel, placed by xr.js in the reference space. */
-export const timelinePanel = new THREE.Mesh(new THREE.PlaneGeometry(WIDTH_M, HEIGHT_M), new THREE.MeshBasicMaterial({ map: texture, side: THREE.DoubleSide }));
-timelinePanel.name = 'timeline panel';
+export const timelinePanel = timeline.mesh;
 let scroll = 0;
 let dirty = true;
 /** @type {null | {stroke: number, part: 'start' | 'end' | 'body', grabFrame: number, start: number, duration: number, edit: any}} */
@@ -86,20 +109,11 @@ export function refreshPanel() {
   texture.needsUpdate = true;
 }
 
-const raycaster = new THREE.Raycaster();
-/** The panel pixel a ray points at, or null. */
-function pixelOf(origin, direction) {
-  raycaster.set(origin, direction);
-  const hit = raycaster.intersectObject(timelinePanel, false)[0];
-  if (!hit || !hit.uv) return null;
-  return { x: hit.uv.x * W, y: (1 - hit.uv.y) * H };
-}
-
 /** The other hand's ray, each XR frame: hover, and a trigger `press` (edge) or `held`. Returns
  * whether the ray is on the panel (then the trigger is the panel's). */
 export function pointPanel(origin, direction, pressed, wasPressed) {
   if (pointSettings(origin, direction, pressed, wasPressed)) return true;
-  const p = pixelOf(origin, direction);
+  const p = timeline.pixelAt(origin, direction);
   const moved = p ? Math.abs(p.x - hover.x) + Math.abs(p.y - hover.y) > 2 : hover.x >= 0;
   hover = p || { x: -1, y: -1 };
   if (moved) dirty = true;
@@ -154,20 +168,15 @@ export function panelHandle(stroke, part) {
   if (i < 0) return null;
   const action = actions[i];
   const x = part === 'end' ? Math.max(frameX(action.start_frame) + 8, frameX(action.end_frame)) : frameX(action.start_frame);
-  const y = TOP + i * ROW + ROW / 2;
-  timelinePanel.updateMatrixWorld(true);
-  return timelinePanel.localToWorld(new THREE.Vector3((x / W - 0.5) * WIDTH_M, (0.5 - y / H) * HEIGHT_M, 0));
+  return timeline.pointAt(x, TOP + i * ROW + ROW / 2);
 }
 
 // ---------- the settings panel ----------
 const SW = 768, SH = 640, SWIDTH_M = 0.42, SHEIGHT_M = 0.35;
-const settingsCanvas = document.createElement('canvas');
-settingsCanvas.width = SW; settingsCanvas.height = SH;
-const settingsTexture = new THREE.CanvasTexture(settingsCanvas);
-settingsTexture.colorSpace = THREE.SRGBColorSpace;
+const settingsBoard = makePanel('settings panel', SW, SH, SWIDTH_M, SHEIGHT_M);
+const settingsCanvas = settingsBoard.canvas, settingsTexture = settingsBoard.texture;
 /** The settings panel, placed by xr.js in the reference space. */
-export const settingsPanel = new THREE.Mesh(new THREE.PlaneGeometry(SWIDTH_M, SHEIGHT_M), new THREE.MeshBasicMaterial({ map: settingsTexture, side: THREE.DoubleSide }));
-settingsPanel.name = 'settings panel';
+export const settingsPanel = settingsBoard.mesh;
 let settingsDirty = true;
 store.onState(() => { settingsDirty = true; });
 
@@ -228,17 +237,10 @@ export function refreshSettings() {
   settingsTexture.needsUpdate = true;
 }
 
-const settingsRay = new THREE.Raycaster();
-function settingsPixel(origin, direction) {
-  settingsRay.set(origin, direction);
-  const hit = settingsRay.intersectObject(settingsPanel, false)[0];
-  return hit && hit.uv ? { x: hit.uv.x * SW, y: (1 - hit.uv.y) * SH } : null;
-}
-
 /** The other hand's ray on the settings panel: returns whether it is on it. */
 function pointSettings(origin, direction, pressed, wasPressed) {
   if (!settingsPanel.parent) return false;
-  const p = settingsPixel(origin, direction);
+  const p = settingsBoard.pixelAt(origin, direction);
   const state = store.state();
   if (sliding && !pressed) { finishSlide(); return !!p; }
   if (!p || !state) return false;
@@ -293,6 +295,5 @@ export function settingsPoint(key, s = 0.5) {
     y = FIRST + (SLIDERS.length + 1) * ROW_H;
     x = key === 'symmetry' ? 130 : key === 'save' ? 330 : 530;
   }
-  settingsPanel.updateMatrixWorld(true);
-  return settingsPanel.localToWorld(new THREE.Vector3((x / SW - 0.5) * SWIDTH_M, (0.5 - y / SH) * SHEIGHT_M, 0));
+  return settingsBoard.pointAt(x, y);
 }

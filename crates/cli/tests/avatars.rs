@@ -18,28 +18,11 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use faceanim_testdata::avatar::{Expression, VrmKind, full_body_glb};
+use faceanim_testdata::avatar::{ICT_EXPRESSIONS, VrmKind, full_body_glb};
+use faceanim_testdata::glb::names;
 use faceanim_testdata::{gltf_transform, gltfpack, ict};
 use serde_json::Value;
-use support::{assert_valid_gltf, faceanim_ok, output_dir, repo};
-
-const EXPRESSIONS: &[Expression<'static>] = &[
-    Expression {
-        name: "blink",
-        v0_preset: "blink",
-        binds: &["eyeBlink_L", "eyeBlink_R"],
-    },
-    Expression {
-        name: "aa",
-        v0_preset: "a",
-        binds: &["jawOpen"],
-    },
-    Expression {
-        name: "happy",
-        v0_preset: "joy",
-        binds: &["mouthSmile_L", "mouthSmile_R"],
-    },
-];
+use support::{assert_valid_gltf, blender_report, faceanim_ok, output_dir, repo};
 
 /// The four avatars, written once per test into `dir`.
 fn avatars(dir: &Path) -> Vec<PathBuf> {
@@ -48,11 +31,11 @@ fn avatars(dir: &Path) -> Vec<PathBuf> {
         ("avatar.glb", plain.clone()),
         (
             "avatar-0.vrm",
-            full_body_glb(ict(), VrmKind::V0, EXPRESSIONS),
+            full_body_glb(ict(), VrmKind::V0, ICT_EXPRESSIONS),
         ),
         (
             "avatar-1.vrm",
-            full_body_glb(ict(), VrmKind::V1, EXPRESSIONS),
+            full_body_glb(ict(), VrmKind::V1, ICT_EXPRESSIONS),
         ),
         ("avatar-meshopt.glb", gltfpack(&plain, &["-cc", "-kn"])),
     ];
@@ -66,17 +49,21 @@ fn avatars(dir: &Path) -> Vec<PathBuf> {
         .collect()
 }
 
+/// The JSON chunk of a GLB or VRM file.
 fn json_chunk(file: &Path) -> Value {
-    let glb = std::fs::read(file).unwrap();
-    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
-    serde_json::from_slice(&glb[20..20 + len]).unwrap()
+    faceanim_testdata::glb::json(&std::fs::read(file).unwrap())
 }
 
-fn names(doc: &Value, key: &str) -> Vec<Value> {
-    doc[key]
-        .as_array()
-        .map(|a| a.iter().map(|x| x["name"].clone()).collect())
-        .unwrap_or_default()
+/// `faceanim export FILE -o OUT --clip CLIP`.
+fn export_with_clip(file: &Path, out: &Path, clip: &Path) {
+    faceanim_ok(&[
+        "export",
+        file.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--clip",
+        clip.to_str().unwrap(),
+    ]);
 }
 
 /// A ten-second clip: the jaw opens and closes, the left smile rises, the eyes blink (VRM
@@ -125,7 +112,7 @@ fn info_lists_the_blendshapes_and_vrm_expressions() {
             );
         }
         if file.extension().is_some_and(|e| e == "vrm") {
-            for e in EXPRESSIONS {
+            for e in ICT_EXPRESSIONS {
                 assert!(
                     listed.contains(&e.name),
                     "{}: expression {} missing",
@@ -150,14 +137,7 @@ fn exports_are_the_users_file_with_the_animation_and_open_everywhere() {
         std::fs::copy(&file, &input).unwrap();
         assert_valid_gltf(&input);
         let out = dir.join(format!("{stem}-animated.{ext}"));
-        faceanim_ok(&[
-            "export",
-            file.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--clip",
-            clip.to_str().unwrap(),
-        ]);
+        export_with_clip(&file, &out, &clip);
         // The validator reads .glb; a .vrm is a GLB by another name.
         let checked = dir.join(format!("{stem}-animated-{ext}.glb"));
         std::fs::copy(&out, &checked).unwrap();
@@ -190,24 +170,7 @@ fn exports_are_the_users_file_with_the_animation_and_open_everywhere() {
     }
 
     // Blender 3.4 opens the plain avatar's export with its armature and its shape keys.
-    let out = Command::new("blender")
-        .args(["-b", "--factory-startup", "--python"])
-        .arg(repo().join("tools/blender_shape_keys.py"))
-        .arg("--")
-        .arg(&outputs[0])
-        .output()
-        .expect("Blender is needed for this test: run scripts/setup.sh");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let line = stdout
-        .lines()
-        .find_map(|l| l.strip_prefix("FACEANIM_REPORT "))
-        .unwrap_or_else(|| {
-            panic!(
-                "Blender printed no report:\n{stdout}\n{}",
-                String::from_utf8_lossy(&out.stderr)
-            )
-        });
-    let report: Value = serde_json::from_str(line).unwrap();
+    let report = blender_report(&outputs[0]);
     let armatures = report["armatures"].as_array().unwrap();
     assert_eq!(armatures.len(), 1, "{report}");
     assert_eq!(armatures[0]["bones"], 5, "{report}");
@@ -341,14 +304,7 @@ fn a_webp_meshopt_quantized_avatar_like_vroids() {
     );
     let clip = clip(&dir);
     let out = dir.join("animated.glb");
-    faceanim_ok(&[
-        "export",
-        file.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--clip",
-        clip.to_str().unwrap(),
-    ]);
+    export_with_clip(&file, &out, &clip);
     assert_valid_gltf(&out);
     let after = json_chunk(&out)["extensionsRequired"].to_string();
     assert!(

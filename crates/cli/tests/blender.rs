@@ -10,11 +10,9 @@
 
 mod support;
 
-use std::process::Command;
-
 use faceanim_testdata::shared;
 use serde_json::Value;
-use support::{faceanim_ok, output_dir, repo};
+use support::{blender_report, faceanim_ok, output_dir};
 
 #[test]
 fn blender_opens_an_animated_export_with_all_shape_keys() {
@@ -32,24 +30,7 @@ fn blender_opens_an_animated_export_with_all_shape_keys() {
         clip.to_str().unwrap(),
     ]);
 
-    let out = Command::new("blender")
-        .args(["-b", "--factory-startup", "--python"])
-        .arg(repo().join("tools/blender_shape_keys.py"))
-        .arg("--")
-        .arg(&glb)
-        .output()
-        .expect("Blender is needed for this test: run scripts/setup.sh (apt-get install blender python3-numpy)");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let line = stdout
-        .lines()
-        .find_map(|l| l.strip_prefix("FACEANIM_REPORT "))
-        .unwrap_or_else(|| {
-            panic!(
-                "Blender printed no report:\n{stdout}\n{}",
-                String::from_utf8_lossy(&out.stderr)
-            )
-        });
-    let report: Value = serde_json::from_str(line).unwrap();
+    let report = blender_report(&glb);
     assert!(
         report["blender"].as_str().unwrap().starts_with("3."),
         "{}",

@@ -633,17 +633,8 @@ fn a_phone_trackers_vmc_stream_becomes_a_take() {
     let (status, glb) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
     assert_eq!(status, 200, "{glb}");
     let glb_path = dir.path().join("vmc.glb");
-    let mut stream = std::net::TcpStream::connect(("127.0.0.1", studio.port)).unwrap();
-    write!(
-        stream,
-        "GET /api/capture/export.glb HTTP/1.1\r\nHost: 127.0.0.1:{}\r\nConnection: close\r\n\r\n",
-        studio.port
-    )
-    .unwrap();
-    let mut response = Vec::new();
-    stream.read_to_end(&mut response).unwrap();
-    let start = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap() + 4;
-    std::fs::write(&glb_path, &response[start..]).unwrap();
+    let (_, glb) = get_bytes(studio.port, "/api/capture/export.glb");
+    std::fs::write(&glb_path, glb).unwrap();
     assert_valid_gltf(&glb_path);
 
     // A flood of garbage: counted, dropped, and the next good frame still arrives.
@@ -952,23 +943,25 @@ fn a_full_body_avatar_in_the_studio_api() {
             "{name}: {action}"
         );
     }
-    let download = get_bytes(port, "/api/export.glb");
+    let (_, download) = get_bytes(port, "/api/export.glb");
     let nodes_in = |glb: &[u8]| {
-        let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
-        let json: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
-        json["nodes"].as_array().unwrap().len()
+        faceanim_testdata::glb::json(glb)["nodes"]
+            .as_array()
+            .unwrap()
+            .len()
     };
     assert_eq!(
         nodes_in(&download),
         nodes_in(&bytes),
         "the download is the user's file"
     );
-    let view = get_bytes(port, "/api/view.glb");
+    let (_, view) = get_bytes(port, "/api/view.glb");
     assert_eq!(nodes_in(&view), 1, "the page's view is one mesh");
 }
 
-/// The body of a `GET` as bytes (a GLB is not text), failing on any status but 200.
-fn get_bytes(port: u16, path: &str) -> Vec<u8> {
+/// A `GET`'s head (status line and headers) and its body as bytes (a GLB is not text), failing
+/// on any status but 200.
+fn get_bytes(port: u16, path: &str) -> (String, Vec<u8>) {
     let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
     let head =
         format!("GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n");
@@ -976,10 +969,10 @@ fn get_bytes(port: u16, path: &str) -> Vec<u8> {
     let mut response = Vec::new();
     stream.read_to_end(&mut response).unwrap();
     let split = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
-    let status = String::from_utf8_lossy(&response[..split]).into_owned();
-    assert!(status.starts_with("HTTP/1.1 200"), "{path}: {status}");
+    let head = String::from_utf8_lossy(&response[..split]).into_owned();
+    assert!(head.starts_with("HTTP/1.1 200"), "{path}: {head}");
     // The studio answers with a Content-Length body (no chunking).
-    response[split + 4..].to_vec()
+    (head, response[split + 4..].to_vec())
 }
 
 /// The seed's own setting: an emulated Meta Quest 3 (npm iwer) in headless Chromium enters VR
@@ -1048,34 +1041,19 @@ fn immersive_sketching_in_an_emulated_headset() {
 fn a_vrm_avatars_download_is_a_vrm() {
     let dir = tempfile::tempdir().unwrap();
     let avatar = dir.path().join("avatar.vrm");
-    let expressions = [faceanim_testdata::avatar::Expression {
-        name: "blink",
-        v0_preset: "blink",
-        binds: &["eyeBlink_L", "eyeBlink_R"],
-    }];
     std::fs::write(
         &avatar,
         faceanim_testdata::avatar::full_body_glb(
             faceanim_testdata::ict(),
             faceanim_testdata::avatar::VrmKind::V1,
-            &expressions,
+            faceanim_testdata::avatar::ICT_EXPRESSIONS,
         ),
     )
     .unwrap();
     let studio = start_on(Some(&avatar), &dir.path().join("vrm.faceanim.json"), &[]);
-    let mut stream = TcpStream::connect(("127.0.0.1", studio.port)).unwrap();
-    let head = format!(
-        "GET /api/export.glb HTTP/1.1\r\nHost: 127.0.0.1:{}\r\nConnection: close\r\n\r\n",
-        studio.port
-    );
-    stream.write_all(head.as_bytes()).unwrap();
-    let mut response = Vec::new();
-    stream.read_to_end(&mut response).unwrap();
-    let split = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
-    let headers = String::from_utf8_lossy(&response[..split]).to_ascii_lowercase();
+    let (head, body) = get_bytes(studio.port, "/api/export.glb");
+    let headers = head.to_ascii_lowercase();
     assert!(headers.contains(".vrm\"\r\n"), "{headers}");
-    let body = &response[split + 4..];
-    let len = u32::from_le_bytes([body[12], body[13], body[14], body[15]]) as usize;
-    let json: serde_json::Value = serde_json::from_slice(&body[20..20 + len]).unwrap();
+    let json = faceanim_testdata::glb::json(&body);
     assert!(json["extensions"]["VRMC_vrm"].is_object(), "still a VRM");
 }

@@ -255,11 +255,13 @@ pub fn glb(
     character: &Character,
     animation: Option<&MorphAnimation>,
 ) -> Result<Vec<u8>, ExportError> {
-    let animations = animation.map(std::slice::from_ref).unwrap_or_default();
-    Ok(match character.source() {
-        Some(_) => faceanim_rig::export::export_into_source(character, animations)?,
-        None => faceanim_rig::export::export_glb(character, animations)?,
-    })
+    match character.source() {
+        Some(_) => Ok(faceanim_rig::export::export_into_source(
+            character,
+            animation.map(std::slice::from_ref).unwrap_or_default(),
+        )?),
+        None => view_glb(character, animation),
+    }
 }
 
 /// The character as faceanim sees it, as one mesh whose targets are the character's own in

@@ -107,6 +107,13 @@ impl Bin {
         self.accessor(accessor)
     }
 
+    /// An animation's key times (checked non-empty and increasing), with the min and max an
+    /// animation sampler's input needs.
+    fn key_times(&mut self, times: &[f32]) -> usize {
+        let (first, last) = (times[0], times[times.len() - 1]);
+        self.floats(times, "SCALAR", None, Some((vec![first], vec![last])))
+    }
+
     /// A VEC3 accessor of `count` elements, zero except at `indices`; min/max when asked.
     fn sparse_vec3(
         &mut self,
@@ -244,15 +251,7 @@ pub fn export_glb(
     let animations_json: Vec<Value> = animations
         .iter()
         .map(|animation| {
-            let input = bin.floats(
-                &animation.times,
-                "SCALAR",
-                None,
-                Some((
-                    vec![animation.times[0]],
-                    vec![animation.times[animation.times.len() - 1]],
-                )),
-            );
+            let input = bin.key_times(&animation.times);
             let flat: Vec<f32> = animation.weights.iter().flatten().copied().collect();
             let output = bin.floats(&flat, "SCALAR", None, None);
             let mut samplers =
@@ -627,15 +626,7 @@ pub fn export_into_source(
 
     let mut new_animations = Vec::new();
     for animation in animations {
-        let input = bin.floats(
-            &animation.times,
-            "SCALAR",
-            None,
-            Some((
-                vec![animation.times[0]],
-                vec![animation.times[animation.times.len() - 1]],
-            )),
-        );
+        let input = bin.key_times(&animation.times);
         let mut samplers = Vec::new();
         let mut channels = Vec::new();
         for &(node, mesh) in &channels_for {

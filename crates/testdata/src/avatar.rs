@@ -39,6 +39,31 @@ pub struct Expression<'a> {
     pub binds: &'a [&'a str],
 }
 
+/// Expressions over the ICT head's blendshapes, as a VRM avatar made from it has them: three
+/// presets (`blink`, `aa`, `happy`) and a custom one (`smirk`).
+pub const ICT_EXPRESSIONS: &[Expression<'static>] = &[
+    Expression {
+        name: "blink",
+        v0_preset: "blink",
+        binds: &["eyeBlink_L", "eyeBlink_R"],
+    },
+    Expression {
+        name: "aa",
+        v0_preset: "a",
+        binds: &["jawOpen"],
+    },
+    Expression {
+        name: "happy",
+        v0_preset: "joy",
+        binds: &["mouthSmile_L", "mouthSmile_R"],
+    },
+    Expression {
+        name: "smirk",
+        v0_preset: "unknown",
+        binds: &["mouthSmile_L"],
+    },
+];
+
 struct Writer {
     bin: Vec<u8>,
     views: Vec<Value>,
@@ -546,29 +571,5 @@ pub fn full_body_glb_textured(
                 "expressions": { "preset": preset, "custom": custom } } });
         }
     }
-    glb(&root, &w.bin)
-}
-
-/// Packs JSON and a binary chunk into a GLB.
-fn glb(root: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut json = serde_json::to_vec(root).unwrap_or_default();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut bin = bin.to_vec();
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
-    out.extend_from_slice(&bin);
-    out
+    crate::glb::assemble(&root, &w.bin)
 }

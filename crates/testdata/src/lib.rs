@@ -6,6 +6,7 @@
 #![deny(missing_docs)]
 
 pub mod avatar;
+pub mod glb;
 
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -186,13 +187,47 @@ pub fn renamed_and_shuffled(character: &Character, seed: u64) -> (Character, Vec
 /// # Panics
 /// When node or gltfpack is missing or gltfpack fails, with its output.
 #[must_use]
+pub fn gltfpack(input: &[u8], args: &[&str]) -> Vec<u8> {
+    node_tool("gltfpack/cli.js", "gltfpack", input, |src, out| {
+        let mut all: Vec<std::ffi::OsString> =
+            vec!["-i".into(), src.into(), "-o".into(), out.into()];
+        all.extend(args.iter().map(Into::into));
+        all
+    })
+}
+
+/// Runs npm `@gltf-transform/cli` (installed in `tools/` by `scripts/setup.sh`) as
+/// `gltf-transform COMMAND in.glb out.glb` on `input` and returns the bytes it wrote
+/// (`draco` makes a Draco-compressed file, `meshopt` a meshopt-compressed one, `webp` WebP
+/// textures).
+///
+/// # Panics
+/// When node or the tool is missing or it fails, with its output.
+#[must_use]
+pub fn gltf_transform(input: &[u8], command: &str) -> Vec<u8> {
+    node_tool(
+        "@gltf-transform/cli/bin/cli.js",
+        "gltf-transform",
+        input,
+        |src, out| vec![command.into(), src.into(), out.into()],
+    )
+}
+
+/// Runs the npm tool at `tools/node_modules/SCRIPT` with node on `input`, written to a
+/// temporary `in.glb`, with the arguments `args(in, out)`; returns what it wrote to `out.glb`.
 #[expect(
     clippy::panic,
     reason = "test support: a missing tool must stop the test loudly"
 )]
-pub fn gltfpack(input: &[u8], args: &[&str]) -> Vec<u8> {
-    let cli =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/node_modules/gltfpack/cli.js");
+fn node_tool(
+    script: &str,
+    name: &str,
+    input: &[u8],
+    args: impl FnOnce(&std::path::Path, &std::path::Path) -> Vec<std::ffi::OsString>,
+) -> Vec<u8> {
+    let cli = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tools/node_modules")
+        .join(script);
     if !cli.exists() {
         panic!(
             "{} is missing: run scripts/setup.sh (npm ci in tools/)",
@@ -201,31 +236,28 @@ pub fn gltfpack(input: &[u8], args: &[&str]) -> Vec<u8> {
     }
     static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("faceanim-gltfpack-{}-{n}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("faceanim-{name}-{}-{n}", std::process::id()));
     let _ = std::fs::create_dir_all(&dir);
     let (src, out) = (dir.join("in.glb"), dir.join("out.glb"));
     if let Err(e) = std::fs::write(&src, input) {
         panic!("cannot write {}: {e}", src.display());
     }
+    let args = args(&src, &out);
     let result = std::process::Command::new("node")
         .arg(&cli)
-        .arg("-i")
-        .arg(&src)
-        .arg("-o")
-        .arg(&out)
-        .args(args)
+        .args(&args)
         .output();
     let bytes = match result {
         Ok(o) if o.status.success() => std::fs::read(&out).ok(),
         Ok(o) => panic!(
-            "gltfpack {args:?} failed: {}{}",
+            "{name} {args:?} failed: {}{}",
             String::from_utf8_lossy(&o.stdout),
             String::from_utf8_lossy(&o.stderr)
         ),
-        Err(e) => panic!("cannot run node for gltfpack: {e}"),
+        Err(e) => panic!("cannot run node for {name}: {e}"),
     };
     let _ = std::fs::remove_dir_all(&dir);
-    bytes.unwrap_or_else(|| panic!("gltfpack {args:?} wrote no file"))
+    bytes.unwrap_or_else(|| panic!("{name} {args:?} wrote no file"))
 }
 
 /// `character` made as asymmetric as a scanned face: every vertex moved by a smooth field that
@@ -274,54 +306,4 @@ pub fn asymmetric(character: &Character) -> Character {
     parts.normal_deltas = None;
     parts.name = format!("{} (asymmetric)", character.name());
     Character::new(parts).expect("an asymmetric character is valid")
-}
-
-/// Runs npm `@gltf-transform/cli` (installed in `tools/` by `scripts/setup.sh`) as
-/// `gltf-transform COMMAND in.glb out.glb` on `input` and returns the bytes it wrote
-/// (`draco` makes a Draco-compressed file, `meshopt` a meshopt-compressed one).
-///
-/// # Panics
-/// When node or the tool is missing or it fails, with its output.
-#[must_use]
-#[expect(
-    clippy::panic,
-    reason = "test support: a missing tool must stop the test loudly"
-)]
-pub fn gltf_transform(input: &[u8], command: &str) -> Vec<u8> {
-    let cli = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tools/node_modules/@gltf-transform/cli/bin/cli.js");
-    if !cli.exists() {
-        panic!(
-            "{} is missing: run scripts/setup.sh (npm ci in tools/)",
-            cli.display()
-        );
-    }
-    static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!(
-        "faceanim-gltf-transform-{}-{n}",
-        std::process::id()
-    ));
-    let _ = std::fs::create_dir_all(&dir);
-    let (src, out) = (dir.join("in.glb"), dir.join("out.glb"));
-    if let Err(e) = std::fs::write(&src, input) {
-        panic!("cannot write {}: {e}", src.display());
-    }
-    let result = std::process::Command::new("node")
-        .arg(&cli)
-        .arg(command)
-        .arg(&src)
-        .arg(&out)
-        .output();
-    let bytes = match result {
-        Ok(o) if o.status.success() => std::fs::read(&out).ok(),
-        Ok(o) => panic!(
-            "gltf-transform {command} failed: {}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-        Err(e) => panic!("cannot run node for gltf-transform: {e}"),
-    };
-    let _ = std::fs::remove_dir_all(&dir);
-    bytes.unwrap_or_else(|| panic!("gltf-transform {command} wrote no file"))
 }

@@ -60,6 +60,30 @@ pub fn validate_gltf(file: &Path) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
+/// Opens `file` in real Blender (Debian's 3.4, headless) with `tools/blender_shape_keys.py` and
+/// returns its report: the Blender version, each mesh object with its shape keys, the armatures
+/// and the actions.
+pub fn blender_report(file: &Path) -> serde_json::Value {
+    let out = Command::new("blender")
+        .args(["-b", "--factory-startup", "--python"])
+        .arg(repo().join("tools/blender_shape_keys.py"))
+        .arg("--")
+        .arg(file)
+        .output()
+        .expect("Blender is needed for this test: run scripts/setup.sh (apt-get install blender python3-numpy)");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("FACEANIM_REPORT "))
+        .unwrap_or_else(|| {
+            panic!(
+                "Blender printed no report:\n{stdout}\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            )
+        });
+    serde_json::from_str(line).unwrap()
+}
+
 /// Asserts the validator reports no errors, printing the first messages if it does.
 pub fn assert_valid_gltf(file: &Path) -> serde_json::Value {
     let report = validate_gltf(file);

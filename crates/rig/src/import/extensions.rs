@@ -99,11 +99,7 @@ pub(crate) fn prepare<'a>(
     let uv_transforms = uv_transforms(&value);
     let vrm = super::vrm::read(&value, &mut warnings);
     // What is handled here must not reach the `gltf` crate's extension check.
-    for list in ["extensionsRequired", "extensionsUsed"] {
-        if let Some(Value::Array(names)) = value.get_mut(list) {
-            names.retain(|n| n.as_str().is_none_or(|n| !UNDERSTOOD.contains(&n)));
-        }
-    }
+    drop_extensions(&mut value, |name| UNDERSTOOD.contains(&name));
     let root: gltf::json::Root =
         serde_json::from_value(value).map_err(|e| ImportErrorKind::InvalidJson(e.to_string()))?;
     Ok(Prepared {
@@ -204,13 +200,18 @@ fn keep(
         }
     }
     doc["buffers"] = serde_json::json!([{ "byteLength": bin.len() }]);
+    drop_extensions(&mut doc, |name| {
+        name == "EXT_meshopt_compression" || name == "KHR_meshopt_compression"
+    });
+    (doc, bin)
+}
+
+/// Takes the extensions `drop` says from `extensionsRequired` and `extensionsUsed`, removing a
+/// list that ends up empty.
+fn drop_extensions(doc: &mut Value, drop: impl Fn(&str) -> bool) {
     for list in ["extensionsRequired", "extensionsUsed"] {
         if let Some(Value::Array(names)) = doc.get_mut(list) {
-            names.retain(|n| {
-                n.as_str().is_none_or(|n| {
-                    n != "EXT_meshopt_compression" && n != "KHR_meshopt_compression"
-                })
-            });
+            names.retain(|n| n.as_str().is_none_or(|n| !drop(n)));
             if names.is_empty()
                 && let Some(object) = doc.as_object_mut()
             {
@@ -218,7 +219,6 @@ fn keep(
             }
         }
     }
-    (doc, bin)
 }
 
 /// Refuses a file that requires an extension faceanim does not read, naming it.
@@ -459,26 +459,20 @@ fn decode_view(
                 184 188 192 196 200 204 208 212 216 220 224 228 232 236 240 244 248 252 256)
         }
         "TRIANGLES" | "INDICES" => {
-            let sequence = mode == "INDICES";
+            // Decoded as 32-bit indices, then written at the view's width (a 16-bit view's
+            // indices fit 16 bits; meshopt keeps the low bits the same way).
+            let out: Vec<u32> = if mode == "INDICES" {
+                meshopt::encoding::decode_index_sequence(source, count)
+            } else {
+                meshopt::encoding::decode_index_buffer(source, count)
+            }
+            .map_err(|e| e.to_string())?;
             match stride {
-                2 => {
-                    let out: Vec<u16> = if sequence {
-                        meshopt::encoding::decode_index_sequence(source, count)
-                    } else {
-                        meshopt::encoding::decode_index_buffer(source, count)
-                    }
-                    .map_err(|e| e.to_string())?;
-                    out.into_iter().flat_map(u16::to_le_bytes).collect()
-                }
-                4 => {
-                    let out: Vec<u32> = if sequence {
-                        meshopt::encoding::decode_index_sequence(source, count)
-                    } else {
-                        meshopt::encoding::decode_index_buffer(source, count)
-                    }
-                    .map_err(|e| e.to_string())?;
-                    out.into_iter().flat_map(u32::to_le_bytes).collect()
-                }
+                2 => out
+                    .into_iter()
+                    .flat_map(|i| (i as u16).to_le_bytes())
+                    .collect(),
+                4 => out.into_iter().flat_map(u32::to_le_bytes).collect(),
                 other => return Err(format!("index byteStride {other} (2 or 4 expected)")),
             }
         }

@@ -6,31 +6,8 @@
 
 use faceanim_rig::Character;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
-use faceanim_testdata::avatar::{Expression, HEAD_HEIGHT, VrmKind, full_body_glb};
+use faceanim_testdata::avatar::{HEAD_HEIGHT, ICT_EXPRESSIONS, VrmKind, full_body_glb};
 use faceanim_testdata::{gltfpack, ict};
-
-const EXPRESSIONS: &[Expression<'static>] = &[
-    Expression {
-        name: "blink",
-        v0_preset: "blink",
-        binds: &["eyeBlink_L", "eyeBlink_R"],
-    },
-    Expression {
-        name: "aa",
-        v0_preset: "a",
-        binds: &["jawOpen"],
-    },
-    Expression {
-        name: "happy",
-        v0_preset: "joy",
-        binds: &["mouthSmile_L", "mouthSmile_R"],
-    },
-    Expression {
-        name: "smirk",
-        v0_preset: "unknown",
-        binds: &["mouthSmile_L"],
-    },
-];
 
 fn import(bytes: &[u8], name: &str) -> (Character, Vec<String>) {
     let imported =
@@ -119,10 +96,10 @@ fn a_compressed_full_body_avatar_imports() {
 #[test]
 fn vrm_expressions_become_blendshapes_in_both_versions() {
     for (kind, file) in [(VrmKind::V0, "avatar-0.vrm"), (VrmKind::V1, "avatar-1.vrm")] {
-        let bytes = full_body_glb(ict(), kind, EXPRESSIONS);
+        let bytes = full_body_glb(ict(), kind, ICT_EXPRESSIONS);
         let (c, warnings) = import(&bytes, file);
         assert_avatar(&c, file);
-        for e in EXPRESSIONS {
+        for e in ICT_EXPRESSIONS {
             let id = c
                 .find_blendshape(e.name)
                 .unwrap_or_else(|| panic!("{file}: expression {} missing ({warnings:?})", e.name));
@@ -160,26 +137,10 @@ fn vrm_expressions_become_blendshapes_in_both_versions() {
 #[test]
 fn a_texture_transform_is_baked_into_the_uvs() {
     let glb = full_body_glb(ict(), VrmKind::None, &[]);
-    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
-    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
-    let bin = glb[20 + len + 8..].to_vec();
+    let (mut json, bin) = faceanim_testdata::glb::parts(&glb);
     json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = serde_json::json!({ "KHR_texture_transform": { "scale": [2.0, 2.0], "offset": [0.5, 0.0] } });
     json["extensionsUsed"] = serde_json::json!(["KHR_texture_transform"]);
-    let mut text = serde_json::to_vec(&json).unwrap();
-    while !text.len().is_multiple_of(4) {
-        text.push(b' ');
-    }
-    let mut transformed = Vec::new();
-    let total = 12 + 8 + text.len() + 8 + bin.len();
-    transformed.extend_from_slice(b"glTF");
-    transformed.extend_from_slice(&2u32.to_le_bytes());
-    transformed.extend_from_slice(&(total as u32).to_le_bytes());
-    transformed.extend_from_slice(&(text.len() as u32).to_le_bytes());
-    transformed.extend_from_slice(b"JSON");
-    transformed.extend_from_slice(&text);
-    transformed.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    transformed.extend_from_slice(b"BIN\0");
-    transformed.extend_from_slice(&bin);
+    let transformed = faceanim_testdata::glb::assemble(&json, &bin);
     let (plain, _) = import(&glb, "avatar.glb");
     let (moved, _) = import(&transformed, "avatar-transformed.glb");
     let (a, b) = (plain.uvs().unwrap(), moved.uvs().unwrap());

@@ -80,32 +80,6 @@ fn avatar(kind: u8) -> &'static [u8] {
     &made[usize::from(kind) % made.len()]
 }
 
-/// The JSON chunk of a GLB, parsed, and its BIN chunk.
-fn glb_parts(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
-    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
-    let json = serde_json::from_slice(&glb[20..20 + len]).unwrap();
-    (json, glb[20 + len + 8..].to_vec())
-}
-
-fn glb_from(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    let mut j = serde_json::to_vec(json).unwrap();
-    while !j.len().is_multiple_of(4) {
-        j.push(b' ');
-    }
-    let total = 12 + 8 + j.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&j);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(bin);
-    out
-}
-
 #[test]
 fn the_avatars_import_before_mutation() {
     for kind in 0..3 {
@@ -143,7 +117,7 @@ proptest! {
         kind in 0u8..3,
         edits in prop::collection::vec((0usize..10, 0usize..64, prop::sample::select(&HOSTILE[..])), 1..4),
     ) {
-        let (mut root, bin) = glb_parts(avatar(kind));
+        let (mut root, bin) = faceanim_testdata::glb::parts(avatar(kind));
         for (field, which, value) in edits {
             let (array, pointer) = match field {
                 0 => ("bufferViews", "/extensions/EXT_meshopt_compression/count"),
@@ -172,7 +146,7 @@ proptest! {
                 *bind = json!(value);
             }
         }
-        import_must_not_panic(&glb_from(&root, &bin));
+        import_must_not_panic(&faceanim_testdata::glb::assemble(&root, &bin));
     }
 
     #[test]

@@ -8,20 +8,9 @@ use faceanim_rig::export::{MorphAnimation, export_into_source};
 use faceanim_rig::glam::Vec3;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_testdata::avatar::{Expression, VrmKind, full_body_glb};
+use faceanim_testdata::glb::{json, names};
 use faceanim_testdata::{gltfpack, ict};
 use serde_json::Value;
-
-fn json_of(glb: &[u8]) -> Value {
-    let len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
-    serde_json::from_slice(&glb[20..20 + len]).unwrap()
-}
-
-fn names(doc: &Value, key: &str) -> Vec<Value> {
-    doc[key]
-        .as_array()
-        .map(|a| a.iter().map(|x| x["name"].clone()).collect())
-        .unwrap_or_default()
-}
 
 /// The same things, with the same names, in the same order.
 fn assert_kept(input: &Value, output: &Value) {
@@ -80,7 +69,7 @@ fn the_users_avatar_comes_back_whole_with_the_animation() {
         .character;
     let jaw = c.find_blendshape("jawOpen").unwrap().index();
     let out = export_into_source(&c, &[animation(c.blendshapes().len(), 300, &[jaw])]).unwrap();
-    let (before, after) = (json_of(&input), json_of(&out));
+    let (before, after) = (json(&input), json(&out));
     assert_kept(&before, &after);
     let animations = after["animations"].as_array().unwrap();
     assert_eq!(animations.len(), 1);
@@ -124,7 +113,7 @@ fn a_baked_corrective_target_lands_on_the_meshes_it_moves() {
     let baked = c.with_extra_blendshapes(vec![extra]).unwrap();
     let n = baked.blendshapes().len();
     let out = export_into_source(&baked, &[animation(n, 30, &[n - 1])]).unwrap();
-    let after = json_of(&out);
+    let after = json(&out);
     let head = after["meshes"]
         .as_array()
         .unwrap()
@@ -171,8 +160,8 @@ fn a_vrm_stays_a_vrm_and_its_expressions_drive_their_bindings() {
         let blink = c.find_blendshape("blink").unwrap().index();
         let out =
             export_into_source(&c, &[animation(c.blendshapes().len(), 31, &[blink])]).unwrap();
-        let after = json_of(&out);
-        assert_kept(&json_of(&input), &after);
+        let after = json(&out);
+        assert_kept(&json(&input), &after);
         // The last key of the head's channel has eyeBlink_L and eyeBlink_R at 1, nothing else.
         let back = import_gltf(&out, "back.vrm", &NoExternalResources)
             .unwrap()
@@ -209,7 +198,7 @@ fn a_meshopt_avatar_is_written_decompressed() {
         .unwrap()
         .character;
     let out = export_into_source(&c, &[animation(c.blendshapes().len(), 30, &[0])]).unwrap();
-    let (before, after) = (json_of(&input), json_of(&out));
+    let (before, after) = (json(&input), json(&out));
     assert_kept(&before, &after);
     let used = after["extensionsUsed"].to_string();
     assert!(!used.contains("meshopt"), "{used}");

@@ -151,26 +151,7 @@ impl GltfBuilder {
 
     pub fn glb(self, mut root: Value) -> Vec<u8> {
         self.attach(&mut root, json!({"byteLength": self.bin.len()}));
-        let mut json = serde_json::to_vec(&root).unwrap();
-        while !json.len().is_multiple_of(4) {
-            json.push(b' ');
-        }
-        let mut bin = self.bin;
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-        let total = 28 + json.len() + bin.len();
-        let mut out = Vec::new();
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json);
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-        out
+        faceanim_testdata::glb::assemble(&root, &self.bin)
     }
 
     /// JSON with the buffer at `uri` (the caller serves `self.bin` under that name).

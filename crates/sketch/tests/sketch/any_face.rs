@@ -5,10 +5,11 @@
 
 use std::sync::OnceLock;
 
+use crate::support::{draw, line, most_moved, project, uniform};
 use faceanim_rig::Character;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
-use faceanim_sketch::project::{SampleFile, StrokeFile};
-use faceanim_sketch::{Project, ProjectFile, Settings, Sketch, Target};
+use faceanim_sketch::project::StrokeFile;
+use faceanim_sketch::{Settings, Sketch, Target};
 use faceanim_testdata::avatar::{VrmKind, full_body_glb};
 use faceanim_testdata::{asymmetric, ict};
 use glam::Vec3;
@@ -33,52 +34,25 @@ fn id(c: &Character, name: &str) -> faceanim_rig::BlendshapeId {
         .unwrap_or_else(|| panic!("no {name}"))
 }
 
-/// The vertex `name` moves most, and where weight 1 takes it.
+/// Just off the vertex `name` moves most, and where weight 1 takes that vertex.
 fn handle(c: &Character, name: &str) -> (Vec3, Vec3) {
-    let shape = c.blendshape(id(c, name)).unwrap();
-    let k = (0..shape.moved())
-        .max_by(|&a, &b| {
-            shape.deltas()[a]
-                .length()
-                .total_cmp(&shape.deltas()[b].length())
-        })
-        .unwrap();
-    let v = shape.indices()[k] as usize;
-    let start = c.positions()[v] + c.normals()[v] * 0.001;
-    (start, c.positions()[v] + shape.deltas()[k])
+    let v = most_moved(c, name);
+    let p = c.positions()[v as usize];
+    let target = p + c.blendshape(id(c, name)).unwrap().delta_of(v);
+    (p + c.normals()[v as usize] * 0.001, target)
 }
 
 /// A straight stroke from `a` to `b` drawn at 90 Hz over `seconds`.
 fn stroke(a: Vec3, b: Vec3, seconds: f32) -> StrokeFile {
-    let n = (seconds * 90.0).round() as usize;
-    StrokeFile {
-        samples: (0..=n)
-            .map(|i| SampleFile {
-                t: i as f32 / 90.0,
-                p: a.lerp(b, i as f32 / n as f32).to_array(),
-            })
-            .collect(),
-        start_frame: None,
-        duration: None,
-        end: None,
-        mid: None,
-        ease: None,
-        symmetry: None,
-    }
+    draw(seconds, line(a, b), uniform)
 }
 
 fn sketch(c: &'static Character, symmetry: bool, strokes: Vec<StrokeFile>) -> Sketch<'static> {
-    let project = Project::from_file(ProjectFile {
-        version: 1,
-        fps: 30.0,
-        settings: Settings {
-            symmetry,
-            ..Settings::default()
-        },
-        strokes,
-    })
-    .unwrap();
-    let (sketch, warnings) = Sketch::from_project(c, &project);
+    let settings = Settings {
+        symmetry,
+        ..Settings::default()
+    };
+    let (sketch, warnings) = Sketch::from_project(c, &project(settings, strokes));
     assert!(warnings.is_empty(), "{warnings:?}");
     sketch
 }
@@ -113,48 +87,45 @@ fn last(s: &Sketch<'_>, c: &Character, name: &str) -> f32 {
     clip.frames.last().unwrap()[id(c, name).index()]
 }
 
+/// Every one of `names` ends above 0.9 in the sketch of `task`.
+fn all_full(task: &str, s: &Sketch<'_>, c: &Character, names: &[&str]) {
+    let clip = s.bake_clip();
+    let end = clip.frames.last().unwrap();
+    for name in names {
+        let w = end[id(c, name).index()];
+        assert!(w > 0.9, "{task}: {name} {w}");
+    }
+}
+
 #[test]
 fn the_papers_tasks_with_symmetry_animate_both_sides_of_a_roughly_symmetric_head() {
     let c = lopsided();
     // Task 1: the left eye closes with symmetry on: both eyes close.
     let (a, b) = handle(c, "eyeBlink_L");
     let s = sketch(c, true, vec![stroke(a, b, 0.3)]);
-    for name in ["eyeBlink_L", "eyeBlink_R"] {
-        assert!(
-            last(&s, c, name) > 0.9,
-            "task 1: {name} {}",
-            last(&s, c, name)
-        );
-    }
+    all_full("task 1", &s, c, &["eyeBlink_L", "eyeBlink_R"]);
     // Task 2: smile and outer brows.
     let (a, b) = handle(c, "mouthSmile_L");
     let (p, q) = handle(c, "browOuterUp_L");
     let s = sketch(c, true, vec![stroke(a, b, 0.6), stroke(p, q, 0.5)]);
-    for name in [
-        "mouthSmile_L",
-        "mouthSmile_R",
-        "browOuterUp_L",
-        "browOuterUp_R",
-    ] {
-        assert!(
-            last(&s, c, name) > 0.9,
-            "task 2: {name} {}",
-            last(&s, c, name)
-        );
-    }
+    all_full(
+        "task 2",
+        &s,
+        c,
+        &[
+            "mouthSmile_L",
+            "mouthSmile_R",
+            "browOuterUp_L",
+            "browOuterUp_R",
+        ],
+    );
     // Task 3: the jaw opens (its own mirror).
     let (a, b) = handle(c, "jawOpen");
     let s = sketch(c, true, vec![stroke(a, b, 0.8)]);
-    assert!(last(&s, c, "jawOpen") > 0.9);
+    all_full("task 3", &s, c, &["jawOpen"]);
     // Task 4: neutral to smile to sad, chained, on both sides.
     let (a, smile) = handle(c, "mouthSmile_L");
-    let corner = {
-        let s = c.blendshape(id(c, "mouthSmile_L")).unwrap();
-        let k = (0..s.moved())
-            .max_by(|&x, &y| s.deltas()[x].length().total_cmp(&s.deltas()[y].length()))
-            .unwrap();
-        s.indices()[k]
-    };
+    let corner = most_moved(c, "mouthSmile_L");
     let frown = c.positions()[corner as usize]
         + c.blendshape(id(c, "mouthFrown_L"))
             .unwrap()
@@ -164,18 +135,9 @@ fn the_papers_tasks_with_symmetry_animate_both_sides_of_a_roughly_symmetric_head
         true,
         vec![stroke(a, smile, 0.5), stroke(smile, frown, 0.5)],
     );
-    for name in ["mouthFrown_L", "mouthFrown_R"] {
-        assert!(
-            last(&s, c, name) > 0.9,
-            "task 4: {name} {}",
-            last(&s, c, name)
-        );
-    }
+    all_full("task 4", &s, c, &["mouthFrown_L", "mouthFrown_R"]);
     for name in ["mouthSmile_L", "mouthSmile_R"] {
-        assert!(
-            last(&s, c, name) < 0.1,
-            "task 4: {name} {}",
-            last(&s, c, name)
-        );
+        let w = last(&s, c, name);
+        assert!(w < 0.1, "task 4: {name} {w}");
     }
 }

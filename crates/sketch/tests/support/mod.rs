@@ -19,9 +19,18 @@ pub fn id(name: &str) -> BlendshapeId {
         .unwrap_or_else(|| panic!("no blendshape {name}"))
 }
 
-/// The vertex a blendshape moves most: the natural place to grab it (lip corner for a smile).
+/// The vertex a blendshape moves most on the ICT head: the natural place to grab it (lip corner
+/// for a smile).
 pub fn handle_vertex(name: &str) -> u32 {
-    let shape = ict().blendshape(id(name)).unwrap();
+    most_moved(ict(), name)
+}
+
+/// The vertex blendshape `name` moves most on `character`.
+pub fn most_moved(character: &faceanim_rig::Character, name: &str) -> u32 {
+    let id = character
+        .find_blendshape(name)
+        .unwrap_or_else(|| panic!("no blendshape {name}"));
+    let shape = character.blendshape(id).unwrap();
     let k = (0..shape.moved())
         .max_by(|&a, &b| {
             shape.deltas()[a]
