@@ -1,6 +1,6 @@
 //! Reading and writing the GLB container in tests: the JSON chunk parsed, a document packed
 //! back with its binary chunk, and the names of a document's nodes, meshes, skins… to compare
-//! a file before and after faceanim wrote it.
+//! a file before and after faceanim wrote it ([`assert_kept`]).
 
 use serde_json::Value;
 
@@ -64,4 +64,39 @@ pub fn names(doc: &Value, key: &str) -> Vec<Value> {
         .as_array()
         .map(|a| a.iter().map(|x| x["name"].clone()).collect())
         .unwrap_or_default()
+}
+
+/// Asserts that `output` keeps what the user's file `input` had: the same nodes, meshes, skins,
+/// materials, textures, images, samplers and scenes with the same names in the same order, each
+/// skin's joints, and the top-level extensions (a VRM stays a VRM). `what` names the file in
+/// the messages.
+///
+/// # Panics
+/// On the first difference, naming it.
+#[expect(clippy::panic, reason = "test support: an assertion")]
+pub fn assert_kept(input: &Value, output: &Value, what: &str) {
+    for key in [
+        "nodes",
+        "meshes",
+        "skins",
+        "materials",
+        "textures",
+        "images",
+        "samplers",
+        "scenes",
+    ] {
+        let (a, b) = (names(input, key), names(output, key));
+        if a != b {
+            panic!("{what}: {key} were {a:?}, now {b:?}");
+        }
+    }
+    let skins = |doc: &Value| doc["skins"].as_array().cloned().unwrap_or_default();
+    for (k, (a, b)) in skins(input).iter().zip(&skins(output)).enumerate() {
+        if a["joints"] != b["joints"] {
+            panic!("{what}: skin {k}'s joints changed");
+        }
+    }
+    if input["extensions"] != output["extensions"] {
+        panic!("{what}: the extensions changed (a VRM must stay a VRM)");
+    }
 }
