@@ -116,11 +116,16 @@ fn check_position_indices(root: &gltf::json::Root) -> Result<(), ImportErrorKind
     Ok(())
 }
 
-/// gltf 1.4's `Image::source` unwraps the `mimeType` of an image stored in a buffer view, which
-/// the schema requires but a broken file may lack (a panic found by fuzzing a full-body
-/// avatar); refuse it first, naming the image.
+/// gltf 1.4's `Image::source` unwraps the `mimeType` of an image stored in a buffer view, and
+/// the `uri` of one that is not, which the schema requires but a broken file may lack (panics
+/// found by fuzzing full-body avatars); refuse such an image first, naming it.
 fn check_embedded_images(root: &gltf::json::Root) -> Result<(), ImportErrorKind> {
     for (i, image) in root.images.iter().enumerate() {
+        if image.buffer_view.is_none() && image.uri.is_none() {
+            return Err(ImportErrorKind::InvalidJson(format!(
+                "images[{i}]: an image needs a uri or a bufferView, and it has neither"
+            )));
+        }
         if image.buffer_view.is_some() && image.mime_type.is_none() {
             return Err(ImportErrorKind::InvalidJson(format!(
                 "images[{i}].mimeType: an image stored in a buffer view needs its mimeType (image/png or image/jpeg)"

@@ -189,6 +189,17 @@ fn schema_errors_and_cycles() {
         error_of("no-mime.glb", &bytes),
         "no-mime.glb: invalid glTF JSON: images[0].mimeType: an image stored in a buffer view needs its mimeType (image/png or image/jpeg)"
     );
+    // An image with neither a uri nor a buffer view (gltf's accessor would panic on it too).
+    let bytes = tiny(|root, _| {
+        root["images"] = json!([{"mimeType": "image/png"}]);
+        root["textures"] = json!([{"source": 0}]);
+        root["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+        root["meshes"][0]["primitives"][0]["material"] = json!(0);
+    });
+    assert_eq!(
+        error_of("no-source.glb", &bytes),
+        "no-source.glb: invalid glTF JSON: images[0]: an image needs a uri or a bufferView, and it has neither"
+    );
     let mut v1 = ict_bytes()[..64].to_vec();
     v1[4] = 1;
     assert_eq!(
