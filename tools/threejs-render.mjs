@@ -5,21 +5,17 @@
 // Report: {meshes, skinnedMeshes, bones, morphMeshes, maxInfluence, texturedMaterials,
 //          animations, channels, pixels: {nonBackground}}; exit 1 on a load error.
 import { readFile } from 'node:fs/promises';
-import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { IMPORT_MAP, withThreePage } from './three-page.mjs';
 
 const [file, out, time] = process.argv.slice(2);
 if (!file || !out) {
   console.error('usage: node threejs-render.mjs FILE OUT.png [TIME]');
   process.exit(2);
 }
-const here = path.dirname(fileURLToPath(import.meta.url));
-const three = path.join(here, '../web/vendor/three');
 const model = await readFile(file);
 
 const page_html = `<!doctype html><html><head><style>body{margin:0;background:#202428}</style>
-<script type="importmap">{ "imports": { "three": "/three/three.module.min.js", "three/addons/": "/three/addons/" } }</script>
+${IMPORT_MAP}
 </head><body><script type="module">
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -69,35 +65,13 @@ try {
 } catch (e) { window.report = { error: String(e && e.stack || e) }; }
 </script></body></html>`;
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
 let status = 0;
-try {
-  const page = await browser.newPage({ viewport: { width: 480, height: 640 } });
-  const errors = [];
-  page.on('pageerror', (e) => errors.push(String(e)));
-  await page.route('http://viewer.test/**', async (route) => {
-    const url = new URL(route.request().url());
-    if (url.pathname === '/') return route.fulfill({ body: page_html, contentType: 'text/html' });
-    if (url.pathname === '/model.glb') return route.fulfill({ body: model, contentType: 'model/gltf-binary' });
-    if (url.pathname.startsWith('/three/')) {
-      const local = path.join(three, url.pathname.slice('/three/'.length));
-      if (!local.startsWith(three)) return route.fulfill({ status: 404 });
-      try { return route.fulfill({ body: await readFile(local), contentType: 'text/javascript' }); } catch { return route.fulfill({ status: 404 }); }
-    }
-    return route.fulfill({ status: 404 });
-  });
-  await page.goto('http://viewer.test/');
+await withThreePage({ html: page_html, model, width: 480, height: 640 }, async (page, errors) => {
   await page.waitForFunction(() => window.report !== undefined, null, { timeout: 120000 });
   const report = await page.evaluate(() => window.report);
   await page.screenshot({ path: out });
   if (errors.length) report.pageErrors = errors;
   console.log(JSON.stringify(report));
   if (report.error) status = 1;
-} finally {
-  await browser.close();
-}
+});
 process.exit(status);

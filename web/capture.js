@@ -129,6 +129,7 @@ export function apply(v) {
   if (!take) $('capture-input-note').textContent = 'Open a video, photos, a session or the webcam (right).';
   $('capture-input-note').hidden = (!!take && !frameImage.hidden) || live.running;
   for (const id of ['keyframe', 'uncorrect-frame', 'apply-preference', 'clear-preference']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !take;
+  showNeutralFrame(v);
   /** @type {HTMLButtonElement} */ ($('clear-preference')).disabled = !take || !take.preference;
   for (const a2 of document.querySelectorAll('#capture-panel .exports a')) a2.classList.toggle('disabled', !take);
   buildSliders(v);
@@ -228,6 +229,17 @@ $('keyframe').onclick = () => {
   post('api/capture/keyframe', { frame: f, on: !take.keyframes.includes(f) });
 };
 $('uncorrect-frame').onclick = () => post('api/capture/uncorrect', { frame: shownFrameIndex() });
+/** Which frame the take is read against; the buttons matter only for a calibrated adapter. */
+function showNeutralFrame(v) {
+  const take = v.take, calibrated = v.adapter.calibrated && take && take.estimator === 'adapter';
+  for (const id of ['neutral-frame', 'neutral-auto']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !calibrated;
+  $('neutral-info').textContent = !take || !take.neutral ? ''
+    : calibrated
+      ? `Neutral face: frame ${take.neutral.frame} (${take.neutral.chosen === 'user' ? 'yours' : 'the least expressive'}); the adapter reads every frame relative to it.`
+      : `Neutral face: frame ${take.neutral.frame} (unused: this estimate does not read faces relative to a neutral one).`;
+}
+$('neutral-frame').onclick = () => post('api/capture/neutral', { frame: shownFrameIndex() });
+$('neutral-auto').onclick = () => post('api/capture/neutral', { frame: null });
 $('apply-preference').onclick = () => post('api/capture/preference', { on: true });
 $('clear-preference').onclick = () => post('api/capture/preference', { on: false });
 

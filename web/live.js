@@ -21,6 +21,9 @@ export const live = {
   /** The pixel format frames are sent in (the camera's own YUV when the browser gives it). */
   format: '',
   /** @type {number|null} frames recorded so far */ recorded: null,
+  /** Who chose the neutral face frames are read against: 'user' (Calibrate), 'automatic'
+   * (held still) or null (none yet). */
+  neutral: /** @type {string|null} */ (null),
   /** @type {number[]|null} */ weights: null,
   latencies: /** @type {number[]} */ ([]),
   /** Frames sent to the server and not yet answered, at most: a newer camera frame waits
@@ -52,6 +55,9 @@ async function startLive() {
   fpsWindow = { start: performance.now(), count: 0 };
   $('live').textContent = 'Stop webcam';
   /** @type {HTMLButtonElement} */ ($('record')).disabled = false;
+  /** @type {HTMLButtonElement} */ ($('calibrate')).disabled = false;
+  live.neutral = null;
+  showNeutral();
   pause();
   const track = stream.getVideoTracks()[0];
   const Processor = /** @type {any} */ (window).MediaStreamTrackProcessor;
@@ -188,6 +194,8 @@ function send(pixels, width, height, format, captured, sent) {
       pendingShown = { captured, sent, received: performance.now() };
       applyLayer();
       live.recorded = result.recorded ?? null;
+      live.neutral = result.neutral ?? null;
+      showNeutral();
       if (result.recorded !== null && result.recorded !== undefined) $('record').textContent = `Stop (${result.recorded})`;
     })
     .catch((e) => { if (live.running) showError(String(e.message || e)); })
@@ -227,10 +235,29 @@ async function stopLive() {
   $('live').textContent = 'Webcam (live)';
   $('record').textContent = 'Record';
   /** @type {HTMLButtonElement} */ ($('record')).disabled = true;
+  /** @type {HTMLButtonElement} */ ($('calibrate')).disabled = true;
+  $('live-neutral').textContent = '';
   try { apply(await api('POST', 'api/capture/live/stop')); } catch { /* the server may be gone */ }
   showTakeFrame();
 }
 $('live').onclick = () => (live.running ? stopLive() : startLive());
+
+const NEUTRAL_TEXT = {
+  user: 'Neutral: calibrated.',
+  automatic: 'Neutral: taken while you held still (Calibrate to choose it).',
+};
+/** Says which neutral face the live frames are read against. */
+function showNeutral() {
+  if (!live.running) return;
+  const view = currentView();
+  const waiting = view && view.live && view.live.calibrating;
+  $('live-neutral').textContent = waiting ? 'Calibrating: relax your face…'
+    : live.neutral ? NEUTRAL_TEXT[live.neutral] || ''
+      : 'No neutral yet: relax and hold still, or press Calibrate.';
+}
+$('calibrate').onclick = async () => {
+  if (await post('api/capture/live/calibrate', {})) showNeutral();
+};
 $('record').onclick = async () => {
   const view = currentView();
   const recording = view && view.live && view.live.recording !== null && view.live.recording !== undefined;

@@ -6,6 +6,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use faceanim_adapt::augment::{Condition, Jitter};
 use faceanim_adapt::sampling::{WeightSampler, exclusive_pairs};
 use faceanim_adapt::{Control, Dataset, DatasetOptions, FaceCamera, TrainOptions, train};
 use faceanim_track::FaceModels;
@@ -31,6 +32,38 @@ fn benches(c: &mut Criterion) {
             )
         });
     });
+    // A randomised sample: its condition's camera, light and picture quality, then the
+    // models (the neutral of its group adds one such read per eight samples).
+    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(5);
+    let conditions: Vec<Condition> = (0..64).map(|_| Condition::draw(&mut rng)).collect();
+    group.bench_function(
+        "randomised training sample (pose, render, degrade, models)",
+        |b| {
+            b.iter(|| {
+                k = (k + 1) % draws.len();
+                ict.pose_into(&draws[k], &mut pose);
+                let picture = camera.picture(ict, &pose, &conditions[k], Jitter::NONE, &mut rng);
+                black_box(
+                    models
+                        .face_in_region(
+                            &faceanim_track::Frame {
+                                width: 256,
+                                height: 256,
+                                rgb: &picture.rgb,
+                            },
+                            faceanim_track::Region {
+                                cx: 128.0,
+                                cy: 128.0,
+                                size: 256.0,
+                                rotation: 0.0,
+                            },
+                            1.0,
+                        )
+                        .unwrap(),
+                )
+            });
+        },
+    );
     group.bench_function("render 256x256 crop", |b| {
         ict.pose_into(&draws[0], &mut pose);
         b.iter(|| black_box(camera.crop(ict, &pose)));
@@ -40,6 +73,7 @@ fn benches(c: &mut Criterion) {
         samples: 1000,
         seed: 1,
         exclusive: pairs,
+        augmentation: faceanim_adapt::Augmentation::Randomised,
     };
     let dataset = Dataset::generate(ict, &models, &camera, &options, Control::silent()).unwrap();
     group.sample_size(10);
@@ -55,7 +89,7 @@ fn benches(c: &mut Criterion) {
     let adapter = train(&dataset, &TrainOptions::default(), Control::silent()).unwrap();
     group.sample_size(100);
     let mut out = vec![0.0; adapter.blendshapes.len()];
-    let input = adapter.architecture.features.input(&dataset.expressions[0]);
+    let input = adapter.input(&dataset.expressions[0], Some(dataset.neutral(0)));
     group.bench_function("adapter inference per frame", |b| {
         b.iter(|| adapter.predict_into(black_box(&input), &mut out));
     });

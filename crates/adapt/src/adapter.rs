@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use faceanim_rig::Character;
 use serde::{Deserialize, Serialize};
 
-use crate::features::{Expression, FeatureSet};
+use crate::features::{Calibration, Expression, FeatureSet};
 use crate::{AdaptError, Fingerprint};
 
 /// The nonlinearity between the two layers.
@@ -48,17 +48,22 @@ pub struct Architecture {
     pub activation: Activation,
     /// Whether outputs are clamped to [0, 1] (in training too).
     pub clamp: bool,
+    /// Whether it reads faces relative to a neutral one (adapters from before calibration
+    /// existed read them as they are).
+    #[serde(default)]
+    pub calibration: Calibration,
 }
 
 impl Default for Architecture {
     /// The seed's best: Linear → LeakyReLU → Linear → Clamp, hidden 256, over both feature
-    /// sets.
+    /// sets, relative to a neutral face.
     fn default() -> Architecture {
         Architecture {
             features: FeatureSet::Both,
             hidden: 256,
             activation: Activation::LeakyRelu,
             clamp: true,
+            calibration: Calibration::Neutral,
         }
     }
 }
@@ -81,6 +86,10 @@ pub struct TrainingReport {
     /// Corrected frames it was fine-tuned on (0 for plain training).
     #[serde(default)]
     pub corrections: usize,
+    /// Mean absolute error on the test split's front renders (the studio's light, full
+    /// quality): the project's plain renders, also when training varied them.
+    #[serde(default)]
+    pub mae_test_front: Option<f32>,
 }
 
 /// How a character relates to an adapter that passed [`Adapter::check`].
@@ -103,6 +112,9 @@ pub struct Adapter {
     pub architecture: Architecture,
     /// How training went.
     pub report: TrainingReport,
+    /// The neutral face's input, used when a face comes without its own neutral (the mean of
+    /// the training set's neutral faces; unused without calibration).
+    pub(crate) reference_neutral: Vec<f32>,
     /// Per input: subtracted before the first layer (the training set's mean).
     pub(crate) input_mean: Vec<f32>,
     /// Per input: multiplied after subtracting (1 / the training set's deviation).
@@ -123,8 +135,12 @@ impl faceanim_take::Estimator for Adapter {
         &self.blendshapes
     }
 
-    fn estimate(&self, expression: &Expression) -> Vec<f32> {
-        self.predict(expression)
+    fn estimate(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
+        self.predict(expression, neutral)
+    }
+
+    fn calibrated(&self) -> bool {
+        self.architecture.calibration == Calibration::Neutral
     }
 
     fn source(&self) -> faceanim_take::EstimatorSource {
@@ -167,20 +183,63 @@ impl Adapter {
         }
     }
 
-    /// The character's weights for `expression`.
+    /// The input vector for `expression`, relative to `neutral` when the adapter is
+    /// calibrated (to the training set's typical neutral face when `neutral` is `None`).
     #[must_use]
-    pub fn predict(&self, expression: &Expression) -> Vec<f32> {
+    pub fn input(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
+        let features = self.architecture.features;
+        let own = neutral.map(|n| features.input(n));
+        let neutral = own.as_deref().unwrap_or(&self.reference_neutral);
+        self.architecture
+            .calibration
+            .input(features, expression, neutral)
+    }
+
+    /// The character's weights for `expression` (see [`Adapter::input`] for `neutral`).
+    #[must_use]
+    pub fn predict(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
         let mut out = vec![0.0; self.blendshapes.len()];
-        self.predict_into(&self.architecture.features.input(expression), &mut out);
+        self.predict_into(&self.input(expression, neutral), &mut out);
         out
     }
 
-    /// Mean absolute error over every sample of `dataset` (outputs against rendered weights).
+    /// Mean absolute error over every sample of `dataset` (outputs against rendered weights),
+    /// each read relative to its own neutral.
     #[must_use]
     pub fn mean_absolute_error(&self, dataset: &crate::Dataset) -> f32 {
+        self.mean_absolute_error_over(dataset, 0..dataset.len())
+    }
+
+    /// [`Adapter::mean_absolute_error`] over the samples of `range` only (a split's test part,
+    /// say).
+    #[must_use]
+    pub fn mean_absolute_error_over(
+        &self,
+        dataset: &crate::Dataset,
+        range: std::ops::Range<usize>,
+    ) -> f32 {
+        self.mean_absolute_error_of(dataset, range)
+    }
+
+    /// [`Adapter::mean_absolute_error`] over the samples `indices`.
+    #[must_use]
+    pub fn mean_absolute_error_of(
+        &self,
+        dataset: &crate::Dataset,
+        indices: impl IntoIterator<Item = usize>,
+    ) -> f32 {
         let (mut sum, mut count) = (0.0f64, 0usize);
-        for (expression, target) in dataset.expressions.iter().zip(&dataset.targets) {
-            for (p, t) in self.predict(expression).iter().zip(target) {
+        for k in indices {
+            let (Some(expression), Some(target)) =
+                (dataset.expressions.get(k), dataset.targets.get(k))
+            else {
+                continue;
+            };
+            for (p, t) in self
+                .predict(expression, Some(dataset.neutral(k)))
+                .iter()
+                .zip(target)
+            {
                 sum += f64::from((p - t).abs());
                 count += 1;
             }
@@ -261,6 +320,7 @@ impl Adapter {
         );
         crate::tensors::write(
             &[
+                ("reference_neutral", &self.reference_neutral, &[inputs]),
                 ("input_mean", &self.input_mean, &[inputs]),
                 ("input_scale", &self.input_scale, &[inputs]),
                 ("hidden.weight", &self.hidden_weight, &[hidden, inputs]),
@@ -282,6 +342,13 @@ impl Adapter {
         let blendshapes: Vec<String> = file.metadata_json("blendshapes")?;
         let architecture: Architecture = file.metadata_json("architecture")?;
         let input_mean = file.vector("input_mean")?;
+        // Adapters from before calibration have none; they never read it.
+        let reference_neutral = match architecture.calibration {
+            Calibration::Neutral => file.vector("reference_neutral")?,
+            Calibration::None => file
+                .vector("reference_neutral")
+                .unwrap_or_else(|_| vec![0.0; input_mean.len()]),
+        };
         let input_scale = file.vector("input_scale")?;
         let (hidden_weight, [h, i]) = file.matrix("hidden.weight")?;
         let hidden_bias = file.vector("hidden.bias")?;
@@ -289,6 +356,7 @@ impl Adapter {
         let output_bias = file.vector("output.bias")?;
         let inputs = architecture.features.len();
         let consistent = input_mean.len() == inputs
+            && reference_neutral.len() == inputs
             && input_scale.len() == inputs
             && i == inputs
             && h == architecture.hidden
@@ -310,6 +378,7 @@ impl Adapter {
             fingerprint: file.metadata_json("fingerprint")?,
             architecture,
             report: file.metadata_json("report")?,
+            reference_neutral,
             input_mean,
             input_scale,
             hidden_weight,

@@ -1,10 +1,14 @@
-//! The character's own training set: random weight vectors, each rendered from a fixed front
-//! camera and run through the capture pipeline, giving (expression, weights) pairs.
+//! The character's own training set: random weight vectors, each rendered and run through the
+//! capture pipeline, giving (expression, weights) pairs, with the neutral face of the same
+//! camera and light for each.
 //!
 //! The crop comes from the known camera, not from the detector: the neutral face is found once
-//! (detector, then the tracker's rule for the region, so training sees the crops tracking will
-//! give at run time), and every sample is rendered straight into that square at the landmark
-//! network's 256×256. Samples render and run in parallel, one per core.
+//! in a front render (detector, then the tracker's rule for the region, so training sees the
+//! crops tracking will give at run time) and kept as a [`FaceFrame`] in the world. Samples come
+//! in groups of [`augment::GROUP`] sharing a [`Condition`] (camera, light, skin, background,
+//! picture quality — see [`augment`]); each group's neutral is rendered under its condition,
+//! and each sample straight into its jittered crop at the landmark network's 256×256. Groups
+//! render and run in parallel, one per core.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -12,9 +16,11 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use faceanim_render::{Appearance, Camera};
 use faceanim_rig::{Character, Pose};
 use faceanim_track::{FaceModels, Frame, Region};
+use rand::SeedableRng as _;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::augment::{self, Augmentation, Condition, FaceFrame, Jitter};
 use crate::features::{Expression, LANDMARK_COORDINATES, SCORES};
 use crate::sampling::{ExclusivePair, WeightSampler};
 use crate::{AdaptError, Fingerprint};
@@ -34,24 +40,25 @@ pub enum Framing {
     Assumed,
 }
 
-/// The fixed camera every sample is rendered with.
+/// Where the character's face is, and how the character looks to the renderer.
 #[derive(Debug, Clone)]
 pub struct FaceCamera {
-    camera: Camera,
+    face: FaceFrame,
     appearance: Appearance,
     /// How the crop was found.
     pub framing: Framing,
 }
 
 impl FaceCamera {
-    /// Frames the character's face: renders it neutral, finds the face, and narrows the camera
-    /// to the tracker's crop around it.
+    /// Frames the character's face: renders it neutral from the front, finds the face, and
+    /// keeps the tracker's crop around it as a square in the world.
     ///
     /// # Errors
     /// [`AdaptError::Model`] if a network fails.
     pub fn frame(character: &Character, models: &FaceModels) -> Result<FaceCamera, AdaptError> {
         let appearance = Appearance::of(character);
-        let camera = Camera::front(&character.head_bounds(), 0.75);
+        let bounds = character.head_bounds();
+        let camera = Camera::front(&bounds, 0.75);
         let neutral = character.pose(&[]);
         let image = faceanim_render::render(character, &neutral, &camera, &appearance, CALIBRATION);
         let frame = Frame {
@@ -75,17 +82,74 @@ impl FaceCamera {
                 Framing::Assumed,
             ),
         };
+        // The crop's square on the plane of the face (a little behind the tip of the nose).
+        let extent = bounds.max - bounds.min;
+        let plane = glam::Vec3::new(
+            bounds.center().x,
+            bounds.center().y,
+            bounds.max.z - 0.15 * extent.z,
+        );
+        let on_face = |x: f32, y: f32| camera.unproject(size, x, y, plane);
+        let half = region.size / 2.0;
+        let face = match (
+            on_face(region.cx, region.cy),
+            on_face(region.cx - half, region.cy),
+            on_face(region.cx + half, region.cy),
+        ) {
+            (Some(centre), Some(left), Some(right)) => FaceFrame {
+                centre,
+                side: left.distance(right),
+                distance: camera.eye.distance(centre),
+                depth: centre.z - bounds.min.z,
+            },
+            _ => {
+                return Err(AdaptError::Training(
+                    "the front camera cannot be inverted".into(),
+                ));
+            }
+        };
         Ok(FaceCamera {
-            camera: camera.cropped(size, region.cx, region.cy, region.size, region.rotation),
+            face,
             appearance,
             framing,
         })
     }
 
-    /// The 256×256 face crop of `pose`, as the landmark network gets it.
+    /// Where the face is in the world.
+    #[must_use]
+    pub fn face(&self) -> FaceFrame {
+        self.face
+    }
+
+    /// The 256×256 face crop of `pose` from the front in the studio's light, as the landmark
+    /// network gets it.
     #[must_use]
     pub fn crop(&self, character: &Character, pose: &Pose) -> faceanim_render::Image {
-        faceanim_render::render(character, pose, &self.camera, &self.appearance, CROP)
+        let camera = Condition::canonical().camera(&self.face, Jitter::NONE);
+        faceanim_render::render(character, pose, &camera, &self.appearance, CROP)
+    }
+
+    /// The 256×256 crop of `pose` under `condition`, its crop placed by `jitter`, degraded as
+    /// the condition says (`rng` draws the noise).
+    #[must_use]
+    pub fn picture(
+        &self,
+        character: &Character,
+        pose: &Pose,
+        condition: &Condition,
+        jitter: Jitter,
+        rng: &mut impl rand::Rng,
+    ) -> faceanim_render::Image {
+        let camera = condition.camera(&self.face, jitter);
+        let image = faceanim_render::render_shaded(
+            character,
+            pose,
+            &camera,
+            &self.appearance,
+            &condition.shading,
+            condition.resolution.min(CROP),
+        );
+        condition.degrade(image, CROP, rng)
     }
 
     /// Textures the renderer could not use.
@@ -94,8 +158,8 @@ impl FaceCamera {
         self.appearance.warnings()
     }
 
-    /// The expression the capture pipeline reads from `character` at `weights`, and the face
-    /// presence; `None` when the landmarks are degenerate.
+    /// The expression the capture pipeline reads from `character` at `weights`, from the front
+    /// in the studio's light, and the face presence; `None` when the landmarks are degenerate.
     ///
     /// # Errors
     /// [`AdaptError::Model`] if a network fails.
@@ -108,25 +172,34 @@ impl FaceCamera {
     ) -> Result<(Option<Expression>, f32), AdaptError> {
         character.pose_into(weights, pose);
         let image = self.crop(character, pose);
-        let frame = Frame {
-            width: CROP as usize,
-            height: CROP as usize,
-            rgb: &image.rgb,
-        };
-        let whole = Region {
-            cx: CROP as f32 / 2.0,
-            cy: CROP as f32 / 2.0,
-            size: CROP as f32,
-            rotation: 0.0,
-        };
-        let face = models.face_in_region(&frame, whole, 1.0)?;
-        let scores: Vec<f32> = face.scores.iter().map(|s| s.1).collect();
-        let head = face.pose.map(|p| [p.yaw, p.pitch, p.roll]);
-        Ok((
-            Expression::from_face(&scores, &face.landmarks, head),
-            face.presence,
-        ))
+        read(models, &image)
     }
+}
+
+/// What the capture pipeline reads from a 256×256 crop: the expression (`None` when the
+/// landmarks are degenerate) and the face presence.
+fn read(
+    models: &FaceModels,
+    image: &faceanim_render::Image,
+) -> Result<(Option<Expression>, f32), AdaptError> {
+    let frame = Frame {
+        width: CROP as usize,
+        height: CROP as usize,
+        rgb: &image.rgb,
+    };
+    let whole = Region {
+        cx: CROP as f32 / 2.0,
+        cy: CROP as f32 / 2.0,
+        size: CROP as f32,
+        rotation: 0.0,
+    };
+    let face = models.face_in_region(&frame, whole, 1.0)?;
+    let scores: Vec<f32> = face.scores.iter().map(|s| s.1).collect();
+    let head = face.pose.map(|p| [p.yaw, p.pitch, p.roll]);
+    Ok((
+        Expression::from_face(&scores, &face.landmarks, head),
+        face.presence,
+    ))
 }
 
 /// What to generate.
@@ -138,6 +211,8 @@ pub struct DatasetOptions {
     pub seed: u64,
     /// Shapes never active together.
     pub exclusive: Vec<ExclusivePair>,
+    /// Whether camera, light and picture vary.
+    pub augmentation: Augmentation,
 }
 
 /// Callbacks for long work: progress (done, total) and a flag that stops it.
@@ -190,8 +265,18 @@ pub struct Dataset {
     pub expressions: Vec<Expression>,
     /// Face presence of each render.
     pub presence: Vec<f32>,
+    /// The neutral face of each group's condition.
+    pub neutrals: Vec<Expression>,
+    /// Per sample, its neutral in [`Dataset::neutrals`].
+    pub neutral_of: Vec<usize>,
+    /// Per group (one per neutral): whether it was rendered from the front in the studio's
+    /// light at full quality — every group without augmentation, one in
+    /// [`augment::FRONT_EVERY`] with it, so a set always measures the project's plain renders.
+    pub front: Vec<bool>,
     /// The exclusive pairs used.
     pub exclusive: Vec<ExclusivePair>,
+    /// Whether camera, light and picture varied.
+    pub augmentation: Augmentation,
 }
 
 /// Indices of the training, validation and test samples: the seed's 80/10/10 split, in draw
@@ -238,15 +323,65 @@ impl Dataset {
         let draws = sampler.draw(options.samples, options.seed);
         let done = AtomicUsize::new(0);
         let total = draws.len();
-        let read: Vec<(Option<Expression>, f32)> = draws
-            .par_iter()
-            .map_init(Pose::default, |pose, weights| {
+        // The canonical condition's neutral is the same for every group: read it once.
+        let canonical_neutral = match options.augmentation {
+            Augmentation::None => {
+                let pose = character.pose(&[]);
+                read(models, &camera.crop(character, &pose))?.0
+            }
+            Augmentation::Randomised => None,
+        };
+        let groups: Vec<Group> = draws
+            .par_chunks(augment::GROUP)
+            .enumerate()
+            .map_init(Pose::default, |pose, (index, weights)| {
                 if control.cancelled() {
                     return Err(AdaptError::Cancelled);
                 }
-                let out = camera.expression(character, models, weights, pose)?;
-                (control.progress)(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-                Ok(out)
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
+                    options.seed ^ (index as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+                );
+                let group = match options.augmentation {
+                    Augmentation::None => Group {
+                        front: true,
+                        neutral: canonical_neutral.clone(),
+                        samples: weights
+                            .iter()
+                            .map(|w| camera.expression(character, models, w, pose))
+                            .collect::<Result<_, _>>()?,
+                    },
+                    Augmentation::Randomised => {
+                        let front = index % augment::FRONT_EVERY == 0;
+                        let condition = if front {
+                            Condition::canonical()
+                        } else {
+                            Condition::draw(&mut rng)
+                        };
+                        let mut at =
+                            |w: &[f32], jitter: Jitter, rng: &mut rand_chacha::ChaCha8Rng| {
+                                character.pose_into(w, pose);
+                                let picture =
+                                    camera.picture(character, pose, &condition, jitter, rng);
+                                read(models, &picture)
+                            };
+                        let neutral = at(&[], Jitter::NONE, &mut rng)?.0;
+                        let mut samples = Vec::with_capacity(weights.len());
+                        for w in weights {
+                            let jitter = Jitter::draw(&mut rng);
+                            samples.push(at(w, jitter, &mut rng)?);
+                        }
+                        Group {
+                            front,
+                            neutral,
+                            samples,
+                        }
+                    }
+                };
+                (control.progress)(
+                    done.fetch_add(weights.len(), Ordering::Relaxed) + weights.len(),
+                    total,
+                );
+                Ok(group)
             })
             .collect::<Result<_, AdaptError>>()?;
         let mut dataset = Dataset {
@@ -261,13 +396,27 @@ impl Dataset {
             targets: Vec::with_capacity(total),
             expressions: Vec::with_capacity(total),
             presence: Vec::with_capacity(total),
+            neutrals: Vec::with_capacity(groups.len()),
+            neutral_of: Vec::with_capacity(total),
+            front: Vec::with_capacity(groups.len()),
             exclusive: options.exclusive.clone(),
+            augmentation: options.augmentation,
         };
-        for (weights, (expression, presence)) in draws.into_iter().zip(read) {
-            if let Some(expression) = expression {
-                dataset.targets.push(weights);
-                dataset.expressions.push(expression);
-                dataset.presence.push(presence);
+        for (weights, group) in draws.chunks(augment::GROUP).zip(groups) {
+            // A group whose neutral face was not read cannot be calibrated: it is left out.
+            let Some(neutral) = group.neutral else {
+                continue;
+            };
+            let index = dataset.neutrals.len();
+            dataset.neutrals.push(neutral);
+            dataset.front.push(group.front);
+            for (weights, (expression, presence)) in weights.iter().zip(group.samples) {
+                if let Some(expression) = expression {
+                    dataset.targets.push(weights.clone());
+                    dataset.expressions.push(expression);
+                    dataset.presence.push(presence);
+                    dataset.neutral_of.push(index);
+                }
             }
         }
         Ok(dataset)
@@ -282,6 +431,19 @@ impl Dataset {
             && self.seed == options.seed
             && self.drawn == options.samples
             && self.exclusive == options.exclusive
+            && self.augmentation == options.augmentation
+    }
+
+    /// Whether sample `index` was rendered from the front in the studio's light.
+    #[must_use]
+    pub fn is_front(&self, index: usize) -> bool {
+        self.front[self.neutral_of[index]]
+    }
+
+    /// The neutral face of sample `index`'s camera and light.
+    #[must_use]
+    pub fn neutral(&self, index: usize) -> &Expression {
+        &self.neutrals[self.neutral_of[index]]
     }
 
     /// Number of samples kept.
@@ -321,9 +483,24 @@ impl Dataset {
             .iter()
             .flat_map(|e| e.landmarks.iter().copied())
             .collect();
+        let neutral_scores: Vec<f32> = self
+            .neutrals
+            .iter()
+            .flat_map(|e| e.scores.iter().copied())
+            .collect();
+        let neutral_landmarks: Vec<f32> = self
+            .neutrals
+            .iter()
+            .flat_map(|e| e.landmarks.iter().copied())
+            .collect();
+        // Indices are far below 2^24, where f32 holds every integer.
+        let neutral_of: Vec<f32> = self.neutral_of.iter().map(|&i| i as f32).collect();
+        let front: Vec<f32> = self.front.iter().map(|&f| f32::from(u8::from(f))).collect();
+        let groups = self.neutrals.len();
         use crate::tensors::json;
         let mut metadata = HashMap::new();
         metadata.insert("format".to_owned(), DATASET_FORMAT.to_owned());
+        metadata.insert("augmentation".to_owned(), json(&self.augmentation)?);
         metadata.insert("blendshapes".to_owned(), json(&self.blendshapes)?);
         metadata.insert("fingerprint".to_owned(), json(&self.fingerprint)?);
         metadata.insert("seed".to_owned(), self.seed.to_string());
@@ -335,6 +512,14 @@ impl Dataset {
                 ("scores", &scores, &[n, SCORES]),
                 ("landmarks", &landmarks, &[n, LANDMARK_COORDINATES]),
                 ("presence", &self.presence, &[n]),
+                ("neutral_scores", &neutral_scores, &[groups, SCORES]),
+                (
+                    "neutral_landmarks",
+                    &neutral_landmarks,
+                    &[groups, LANDMARK_COORDINATES],
+                ),
+                ("neutral_of", &neutral_of, &[n]),
+                ("front", &front, &[groups]),
             ],
             metadata,
         )
@@ -358,29 +543,67 @@ impl Dataset {
         let (scores, [ns, s]) = file.matrix("scores")?;
         let (landmarks, [nl, l]) = file.matrix("landmarks")?;
         let presence = file.vector("presence")?;
-        if ns != n || nl != n || presence.len() != n || s != SCORES || l != LANDMARK_COORDINATES {
+        let (neutral_scores, [g, gs]) = file.matrix("neutral_scores")?;
+        let (neutral_landmarks, [gl, gll]) = file.matrix("neutral_landmarks")?;
+        let neutral_of = file.vector("neutral_of")?;
+        let front = file.vector("front")?;
+        if ns != n
+            || nl != n
+            || presence.len() != n
+            || neutral_of.len() != n
+            || front.len() != g
+            || s != SCORES
+            || l != LANDMARK_COORDINATES
+            || gs != SCORES
+            || gl != g
+            || gll != LANDMARK_COORDINATES
+        {
             return Err(AdaptError::Format(
                 "the tensors disagree on the number of samples or features".into(),
             ));
         }
-        Ok(Dataset {
-            blendshapes,
-            fingerprint: file.metadata_json("fingerprint")?,
-            seed: file.metadata_json("seed")?,
-            drawn: file.metadata_json("drawn")?,
-            targets: targets.chunks(b.max(1)).map(<[f32]>::to_vec).collect(),
-            expressions: scores
+        let neutral_of: Vec<usize> = neutral_of
+            .iter()
+            .map(|&i| {
+                (i >= 0.0 && i.fract() == 0.0 && (i as usize) < g)
+                    .then_some(i as usize)
+                    .ok_or_else(|| {
+                        AdaptError::Format(format!("neutral_of holds {i}, not one of {g} groups"))
+                    })
+            })
+            .collect::<Result<_, _>>()?;
+        let expressions = |scores: &[f32], landmarks: &[f32]| -> Vec<Expression> {
+            scores
                 .chunks(SCORES)
                 .zip(landmarks.chunks(LANDMARK_COORDINATES))
                 .map(|(s, l)| Expression {
                     scores: s.to_vec(),
                     landmarks: l.to_vec(),
                 })
-                .collect(),
+                .collect()
+        };
+        Ok(Dataset {
+            blendshapes,
+            fingerprint: file.metadata_json("fingerprint")?,
+            seed: file.metadata_json("seed")?,
+            drawn: file.metadata_json("drawn")?,
+            targets: targets.chunks(b.max(1)).map(<[f32]>::to_vec).collect(),
+            expressions: expressions(&scores, &landmarks),
             presence,
+            neutrals: expressions(&neutral_scores, &neutral_landmarks),
+            neutral_of,
+            front: front.iter().map(|&f| f > 0.5).collect(),
             exclusive: file.metadata_json("exclusive")?,
+            augmentation: file.metadata_json("augmentation")?,
         })
     }
 }
 
-const DATASET_FORMAT: &str = "faceanim-dataset-1";
+const DATASET_FORMAT: &str = "faceanim-dataset-3";
+
+/// One group's reads: its neutral and its samples.
+struct Group {
+    front: bool,
+    neutral: Option<Expression>,
+    samples: Vec<(Option<Expression>, f32)>,
+}

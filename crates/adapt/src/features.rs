@@ -1,5 +1,6 @@
 //! What the adapter sees of a face: the 52 expression scores, the landmarks with the head pose
-//! taken out, or both.
+//! taken out, or both; absolute, or relative to a neutral face of the same source
+//! ([`Calibration`]).
 //!
 //! The scores alone are blind to what MediaPipe's blendshape model was not trained to name
 //! (a character's own shapes, asymmetries, tongue or cheek shapes); the landmarks carry the
@@ -68,5 +69,43 @@ impl FeatureSet {
     #[must_use]
     pub fn input(self, expression: &Expression) -> Vec<f32> {
         self.assemble(&expression.scores, &expression.landmarks)
+    }
+}
+
+/// Whether the adapter reads a face as it is or relative to a neutral face of the same source.
+///
+/// The seed's expression space is relative to a neutral face; MediaPipe's features are not:
+/// a camera, a lens, a light or a face's own build shift them all by a constant. Subtracting
+/// the features of a neutral frame taken under the same conditions (a calibration frame of a
+/// take, or the neutral render of each training sample's camera and light) removes the shift.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Calibration {
+    /// Features as captured (adapters trained before calibration existed).
+    #[default]
+    None,
+    /// Features minus the neutral face's.
+    Neutral,
+}
+
+impl Calibration {
+    /// The name used on the command line and in reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Calibration::None => "none",
+            Calibration::Neutral => "neutral",
+        }
+    }
+
+    /// The adapter's input for `expression` read relative to `neutral` (as is without
+    /// calibration).
+    #[must_use]
+    pub fn input(self, features: FeatureSet, expression: &Expression, neutral: &[f32]) -> Vec<f32> {
+        let mut input = features.input(expression);
+        if self == Calibration::Neutral {
+            input.iter_mut().zip(neutral).for_each(|(v, n)| *v -= n);
+        }
+        input
     }
 }

@@ -6,9 +6,13 @@
 //! generic expression into the character's own weights.
 //!
 //! - [`sampling`]: random weight vectors in the seed's groups, exclusive pairs zeroed.
-//! - [`dataset`]: each vector rendered from a fixed camera and read back by the capture
-//!   pipeline ([`FaceCamera`], [`Dataset`]).
-//! - [`features`]: what the adapter sees (scores, pose-normalised landmarks, or both).
+//! - [`dataset`]: each vector rendered and read back by the capture pipeline, with the neutral
+//!   face of the same camera and light ([`FaceCamera`], [`Dataset`]).
+//! - [`augment`]: domain randomisation of those renders (camera, light, skin, background,
+//!   picture quality), so the adapter transfers to pictures it never saw.
+//! - [`features`]: what the adapter sees (scores, pose-normalised landmarks, or both), as
+//!   captured or relative to a neutral face ([`Calibration`]).
+//! - [`heldout`]: the adapter measured on stills of the character from another renderer.
 //! - [`train`] (candle): MSE and Adam with early stopping; fine-tuning from corrections.
 //! - [`adapter`]: inference in plain Rust and the safetensors file, bound to its character;
 //!   an [`Adapter`] is a [`faceanim_take::Estimator`], so takes and live tracking use it like
@@ -19,16 +23,19 @@
 #![deny(missing_docs)]
 
 pub mod adapter;
+pub mod augment;
 pub mod dataset;
 pub mod features;
+pub mod heldout;
 pub mod sampling;
 mod tensors;
 pub mod train;
 
 pub use adapter::{Activation, Adapter, Architecture, Fit, TrainingReport};
+pub use augment::Augmentation;
 pub use dataset::{Control, Dataset, DatasetOptions, FaceCamera, Framing, Split};
 pub use faceanim_take::{Correction, Fingerprint};
-pub use features::{Expression, FeatureSet};
+pub use features::{Calibration, Expression, FeatureSet};
 pub use train::{FinetuneReport, TrainOptions, finetune, train};
 
 use std::path::{Path, PathBuf};

@@ -23,6 +23,9 @@ impl From<candle_core::Error> for AdaptError {
     }
 }
 
+/// In fine-tuning, the corrections' loss beside each batch's of the training set.
+const CORRECTION_WEIGHT: f64 = 0.25;
+
 /// How to train.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrainOptions {
@@ -116,6 +119,16 @@ impl Net {
 
     /// Standardised inputs (rows) to outputs (rows).
     fn forward(&self, x: &Tensor) -> Result<Tensor, AdaptError> {
+        let y = self.raw(x)?;
+        Ok(if self.architecture.clamp {
+            y.clamp(0f32, 1f32)?
+        } else {
+            y
+        })
+    }
+
+    /// The outputs before the clamp.
+    fn raw(&self, x: &Tensor) -> Result<Tensor, AdaptError> {
         let h = x
             .matmul(&self.hidden_weight.as_tensor().t()?)?
             .broadcast_add(self.hidden_bias.as_tensor())?;
@@ -126,14 +139,8 @@ impl Net {
                 f64::from(self.architecture.activation.negative_slope()),
             )?,
         };
-        let y = h
-            .matmul(&self.output_weight.as_tensor().t()?)?
-            .broadcast_add(self.output_bias.as_tensor())?;
-        Ok(if self.architecture.clamp {
-            y.clamp(0f32, 1f32)?
-        } else {
-            y
-        })
+        Ok(h.matmul(&self.output_weight.as_tensor().t()?)?
+            .broadcast_add(self.output_bias.as_tensor())?)
     }
 
     fn mae(&self, x: &Tensor, y: &Tensor) -> Result<f32, AdaptError> {
@@ -219,11 +226,13 @@ fn standardisation(rows: &[Vec<f32>], inputs: usize) -> (Vec<f32>, Vec<f32>) {
     (mean.iter().map(|m| *m as f32).collect(), scale)
 }
 
-/// One pass over `train` in random batches.
+/// One pass over `train` in random batches; with `corrections`, every step also fits them
+/// (fine-tuning).
 fn epoch(
     net: &Net,
     optimizer: &mut candle_nn::AdamW,
     train: &Examples,
+    corrections: Option<&Examples>,
     batch_size: usize,
     rng: &mut rand_chacha::ChaCha8Rng,
 ) -> Result<(), AdaptError> {
@@ -236,7 +245,13 @@ fn epoch(
         let index = Tensor::from_slice(batch, batch.len(), &Device::Cpu)?;
         let x = train.x.index_select(&index, 0)?;
         let y = train.y.index_select(&index, 0)?;
-        let loss = candle_nn::loss::mse(&net.forward(&x)?, &y)?;
+        let mut loss = candle_nn::loss::mse(&net.forward(&x)?, &y)?;
+        if let Some(corrected) = corrections {
+            // Before the clamp: a shape the adapter reads far below 0 (clamped to 0, so no
+            // gradient there) must still be pulled up to the user's value.
+            let raw = candle_nn::loss::mse(&net.raw(&corrected.x)?, &corrected.y)?;
+            loss = (loss + (raw * CORRECTION_WEIGHT)?)?;
+        }
         optimizer.backward_step(&loss)?;
     }
     Ok(())
@@ -268,10 +283,27 @@ pub fn train(
         return Err(AdaptError::NotEnoughData(dataset.len()));
     }
     let features = options.architecture.features;
+    let neutral_inputs: Vec<Vec<f32>> =
+        dataset.neutrals.iter().map(|n| features.input(n)).collect();
+    let mut reference_neutral = vec![0.0f32; features.len()];
+    for n in &neutral_inputs {
+        reference_neutral
+            .iter_mut()
+            .zip(n)
+            .for_each(|(r, v)| *r += v);
+    }
+    let groups = neutral_inputs.len().max(1) as f32;
+    reference_neutral.iter_mut().for_each(|r| *r /= groups);
     let inputs: Vec<Vec<f32>> = dataset
         .expressions
         .iter()
-        .map(|e| features.input(e))
+        .zip(&dataset.neutral_of)
+        .map(|(e, &n)| {
+            options
+                .architecture
+                .calibration
+                .input(features, e, &neutral_inputs[n])
+        })
         .collect();
     let split = dataset.split();
     let (mean, scale) = standardisation(&inputs[split.train.clone()], features.len());
@@ -306,6 +338,7 @@ pub fn train(
             &net,
             &mut optimizer,
             &train_set,
+            None,
             options.batch_size,
             &mut rng,
         )?;
@@ -328,6 +361,7 @@ pub fn train(
         fingerprint: dataset.fingerprint.clone(),
         architecture: options.architecture,
         report: TrainingReport::default(),
+        reference_neutral,
         input_mean: mean,
         input_scale: scale,
         hidden_weight,
@@ -344,7 +378,12 @@ pub fn train(
         best_epoch: best.1,
         seconds: started.elapsed().as_secs_f64(),
         corrections: 0,
+        mae_test_front: None,
     };
+    let front: Vec<usize> = split.test.filter(|&k| dataset.is_front(k)).collect();
+    if !front.is_empty() {
+        adapter.report.mae_test_front = Some(adapter.mean_absolute_error_of(dataset, front));
+    }
     Ok(adapter)
 }
 
@@ -364,9 +403,11 @@ pub struct FinetuneReport {
 }
 
 /// Fine-tunes `adapter` on `corrections` (the offline mode), mixed with its training set so it
-/// does not forget the character: corrected frames are repeated to make up about a fifth of
-/// each epoch, the step is a third of training's, and the kept epoch is the one that fits the
-/// corrections best while the validation MAE stays within 5% of where it started.
+/// does not forget the character: every step fits a batch of the training split and, at a
+/// quarter of its weight, the corrected frames — their loss taken before the output clamp, so a
+/// shape the adapter reads far below 0 is still pulled up —, the step is a third of
+/// training's, and the kept epoch is the one that fits the corrections best while the
+/// validation MAE stays within 5% of where it started.
 ///
 /// # Errors
 /// [`AdaptError::Mismatch`] when `dataset` is another character's,
@@ -397,13 +438,13 @@ pub fn finetune(
             adapter.blendshapes.len()
         )));
     }
-    let features = adapter.architecture.features;
     let (mean, scale) = (&adapter.input_mean, &adapter.input_scale);
     let split = dataset.split();
     let inputs: Vec<Vec<f32>> = dataset
         .expressions
         .iter()
-        .map(|e| features.input(e))
+        .enumerate()
+        .map(|(k, e)| adapter.input(e, Some(dataset.neutral(k))))
         .collect();
     let part = |range: std::ops::Range<usize>| {
         Examples::new(&inputs[range.clone()], &dataset.targets[range], mean, scale)
@@ -411,19 +452,12 @@ pub fn finetune(
     let (validation, test) = (part(split.validation.clone())?, part(split.test.clone())?);
     let corrected_inputs: Vec<Vec<f32>> = corrections
         .iter()
-        .map(|c| features.input(&c.expression))
+        .map(|c| adapter.input(&c.expression, c.neutral.as_ref()))
         .collect();
     let corrected_targets: Vec<Vec<f32>> = corrections.iter().map(|c| c.target.clone()).collect();
     let corrected = Examples::new(&corrected_inputs, &corrected_targets, mean, scale)?;
     // The training split plus the corrections, repeated.
-    let repeats = (split.train.len() / 4 / corrections.len()).max(1);
-    let mut mixed_inputs = inputs[split.train.clone()].to_vec();
-    let mut mixed_targets = dataset.targets[split.train.clone()].to_vec();
-    for _ in 0..repeats {
-        mixed_inputs.extend(corrected_inputs.iter().cloned());
-        mixed_targets.extend(corrected_targets.iter().cloned());
-    }
-    let mixed = Examples::new(&mixed_inputs, &mixed_targets, mean, scale)?;
+    let replay = part(split.train.clone())?;
 
     let net = Net::from_adapter(adapter)?;
     let validation_before = net.mae(&validation.x, &validation.y)?;
@@ -438,7 +472,14 @@ pub fn finetune(
         if control.cancelled() {
             return Err(AdaptError::Cancelled);
         }
-        epoch(&net, &mut optimizer, &mixed, options.batch_size, &mut rng)?;
+        epoch(
+            &net,
+            &mut optimizer,
+            &replay,
+            Some(&corrected),
+            options.batch_size,
+            &mut rng,
+        )?;
         epochs = e;
         let fit = net.mae(&corrected.x, &corrected.y)?;
         let kept_generality = net.mae(&validation.x, &validation.y)? <= validation_before * 1.05;
@@ -466,5 +507,8 @@ pub fn finetune(
     tuned.report.mae_test = report.test_after;
     tuned.report.mae_val = kept.mae(&validation.x, &validation.y)?;
     tuned.report.corrections += corrections.len();
+    let front: Vec<usize> = split.test.filter(|&k| dataset.is_front(k)).collect();
+    tuned.report.mae_test_front =
+        (!front.is_empty()).then(|| tuned.mean_absolute_error_of(dataset, front));
     Ok((tuned, report))
 }

@@ -5,8 +5,8 @@
 
 use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
 use faceanim_adapt::{
-    Adapter, Control, Correction, Dataset, DatasetOptions, FaceCamera, Fit, Framing, TrainOptions,
-    finetune, train,
+    Adapter, Augmentation, Control, Correction, Dataset, DatasetOptions, FaceCamera, Fit, Framing,
+    TrainOptions, finetune, train,
 };
 use faceanim_rig::Character;
 use faceanim_track::FaceModels;
@@ -21,6 +21,7 @@ fn dataset(character: &Character, models: &FaceModels, samples: usize, seed: u64
         samples,
         seed,
         exclusive: exclusive_pairs(character, &[]).unwrap(),
+        augmentation: Augmentation::Randomised,
     };
     Dataset::generate(character, models, &camera, &options, Control::silent()).unwrap()
 }
@@ -57,7 +58,10 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
     let adapter = train(&data, &TrainOptions::default(), Control::silent()).unwrap();
     let report = adapter.report.clone();
     eprintln!("ICT, {SAMPLES} samples: {report:?}");
-    assert!(report.mae_test < 0.07, "test MAE {}", report.mae_test);
+    // Randomised renders are harder than the front ones, measured on their own.
+    assert!(report.mae_test < 0.1, "test MAE {}", report.mae_test);
+    let front = report.mae_test_front.unwrap();
+    assert!(front < 0.07, "test MAE on the front renders {front}");
     assert!(report.best_epoch > 1 && report.best_epoch <= report.epochs);
 
     // The file keeps everything and is bound to its character.
@@ -83,7 +87,11 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
         .expression(ict, &models, &weights, &mut faceanim_rig::Pose::default())
         .unwrap();
     assert!(presence > 0.5);
-    let estimate = adapter.predict(&expression.unwrap());
+    let neutral = camera
+        .expression(ict, &models, &[], &mut faceanim_rig::Pose::default())
+        .unwrap()
+        .0;
+    let estimate = adapter.predict(&expression.unwrap(), neutral.as_ref());
     assert!(
         (estimate[jaw] - 0.7).abs() < 0.2,
         "jawOpen {}",
@@ -115,9 +123,11 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
         .expressions
         .iter()
         .zip(&id7_data.targets)
+        .enumerate()
         .take(30)
-        .map(|(e, t)| Correction {
+        .map(|(k, (e, t))| Correction {
             expression: e.clone(),
+            neutral: Some(id7_data.neutral(k).clone()),
             target: t.clone(),
         })
         .collect();
@@ -206,11 +216,12 @@ fn a_full_body_rig_whose_names_say_nothing_adapts_as_well() {
         "renamed and shuffled ICT on a full body, {SAMPLES} samples: {:?}",
         adapter.report
     );
-    assert!(
-        adapter.report.mae_test < 0.07,
-        "test MAE {}",
-        adapter.report.mae_test
-    );
+    // Randomised renders (other cameras, lights, picture quality) are harder than the front
+    // ones, which are measured on their own.
+    let report = &adapter.report;
+    assert!(report.mae_test < 0.1, "test MAE {}", report.mae_test);
+    let front = report.mae_test_front.unwrap();
+    assert!(front < 0.075, "test MAE on the front renders {front}");
     assert_eq!(adapter.blendshapes[0], "shape_1");
     assert_eq!(adapter.check(&shuffled).unwrap(), Fit::Exact);
     // The ICT adapter's names are not these: refused, naming the difference.

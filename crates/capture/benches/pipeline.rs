@@ -1,5 +1,6 @@
 //! The whole capture pipeline on a 640×480 video: frames per second with one and two
-//! threads, detector on every frame versus tracking; and the stages the models' own benchmark
+//! threads (inside the models, or two frames at once as `faceanim track` does), detector on
+//! every frame versus tracking; and the stages the models' own benchmark
 //! (crates/track/benches/models.rs) does not cover: cropping with landmarks, and the head pose.
 #![allow(missing_docs, clippy::unwrap_used, clippy::expect_used)]
 
@@ -52,8 +53,46 @@ fn run(models: &FaceModels, frames: &[Vec<u8>], mode: TrackingMode) -> usize {
     found
 }
 
+/// Tracking `at_once` frames together, one per thread.
+fn run_at_once(models: &FaceModels, frames: &[Vec<u8>], at_once: usize) -> usize {
+    let mut tracker = Tracker::new(models, TrackingMode::Track);
+    let mut found = 0;
+    for chunk in frames.chunks(at_once) {
+        let batch: Vec<Frame<'_>> = chunk
+            .iter()
+            .map(|rgb| Frame {
+                width: 640,
+                height: 480,
+                rgb,
+            })
+            .collect();
+        found += tracker
+            .next_frames(&batch)
+            .unwrap()
+            .iter()
+            .filter(|f| f.is_some())
+            .count();
+    }
+    found
+}
+
 fn benches(c: &mut Criterion) {
     let frames = video();
+    {
+        let models = FaceModels::load().unwrap();
+        assert_eq!(
+            run_at_once(&models, &frames, 2),
+            FRAMES,
+            "the face must be found"
+        );
+        let mut group = c.benchmark_group("capture 640x480, two frames at once");
+        group.throughput(Throughput::Elements(FRAMES as u64));
+        group.sample_size(10);
+        group.bench_function("tracking", |b| {
+            b.iter(|| black_box(run_at_once(&models, &frames, 2)));
+        });
+        group.finish();
+    }
     for threads in [1, 2] {
         let models = FaceModels::load_with_threads(threads).unwrap();
         assert_eq!(

@@ -140,32 +140,72 @@ pub fn capture_frame(
 /// Captures every frame of `source`; `progress` is called after each frame with the number
 /// done.
 ///
+/// The stages overlap: a thread reads (decodes) frames ahead while `frames_at_once` frames are
+/// tracked together, one per thread ([`Tracker::next_frames`]); 1 tracks one frame at a time.
+///
 /// # Errors
 /// A [`CaptureError`] for unreadable input or a failing model.
 pub fn capture(
     models: &FaceModels,
     source: &mut FrameSource,
     mode: TrackingMode,
+    frames_at_once: usize,
     mut progress: impl FnMut(usize),
 ) -> Result<Capture, CaptureError> {
     let info = source.info();
     let mut tracker = Tracker::new(models, mode);
     let mut frames = Vec::with_capacity(info.frames.unwrap_or(0));
-    while let Some(image) = source.next_frame()? {
-        let index = frames.len();
-        let frame = Frame {
-            width: image.width,
-            height: image.height,
-            rgb: &image.rgb,
-        };
-        frames.push(capture_frame(
-            &mut tracker,
-            index,
-            index as f32 / info.fps,
-            &frame,
-        )?);
-        progress(index + 1);
-    }
+    let batch = frames_at_once.max(1);
+    std::thread::scope(|scope| -> Result<(), CaptureError> {
+        // Decoded frames wait here for the trackers: a few ahead, no more.
+        let (send, receive) = std::sync::mpsc::sync_channel(2 * batch);
+        scope.spawn(move || {
+            loop {
+                let next = source.next_frame();
+                let end = !matches!(next, Ok(Some(_)));
+                if send.send(next).is_err() || end {
+                    break;
+                }
+            }
+        });
+        let mut images = Vec::with_capacity(batch);
+        let mut done = false;
+        while !done {
+            images.clear();
+            while images.len() < batch {
+                match receive.recv() {
+                    Ok(Ok(Some(image))) => images.push(image),
+                    Ok(Ok(None)) | Err(_) => {
+                        done = true;
+                        break;
+                    }
+                    Ok(Err(e)) => return Err(e.into()),
+                }
+            }
+            let batch_frames: Vec<Frame<'_>> = images
+                .iter()
+                .map(|image| Frame {
+                    width: image.width,
+                    height: image.height,
+                    rgb: &image.rgb,
+                })
+                .collect();
+            let first = frames.len();
+            let faces =
+                tracker
+                    .next_frames(&batch_frames)
+                    .map_err(|source| CaptureError::Model {
+                        frame: first,
+                        source,
+                    })?;
+            for face in faces {
+                let index = frames.len();
+                frames.push(FrameRecord::from_face(index, index as f32 / info.fps, face));
+                progress(index + 1);
+            }
+        }
+        Ok(())
+    })?;
     if frames.is_empty() {
         return Err(CaptureError::Empty);
     }

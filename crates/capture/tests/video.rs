@@ -38,7 +38,11 @@ fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
     let models = FaceModels::load().unwrap();
     let mut source = FrameSource::open(&path, 30.0).unwrap();
     let mut reported = 0;
-    let result = capture(&models, &mut source, TrackingMode::Track, |n| reported = n).unwrap();
+    // Two frames at once (what `faceanim track` does on two cores).
+    let result = capture(&models, &mut source, TrackingMode::Track, 2, |n| {
+        reported = n
+    })
+    .unwrap();
     assert_eq!(result.frames.len(), STORY.len());
     assert_eq!(reported, STORY.len());
     assert_eq!(result.fps, FPS as f32);
@@ -75,10 +79,26 @@ fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
         &models,
         &mut FrameSource::open(&path, 30.0).unwrap(),
         TrackingMode::DetectEveryFrame,
+        1,
         |_| {},
     )
     .unwrap();
     assert_eq!(every.detector_runs, STORY.len());
+    // Frame by frame, each frame's region from the one before: the same story, the same
+    // detector runs as two at a time.
+    let single = capture(
+        &models,
+        &mut FrameSource::open(&path, 30.0).unwrap(),
+        TrackingMode::Track,
+        1,
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(single.detector_runs, result.detector_runs);
+    let single_clip = single.clip(Filtering::default()).unwrap();
+    for (a, b) in clip.frames.iter().zip(&single_clip.frames) {
+        assert!((a[jaw] - b[jaw]).abs() < 0.05, "{} vs {}", a[jaw], b[jaw]);
+    }
     // Both modes agree on the expression.
     let every_clip = every.clip(Filtering::default()).unwrap();
     for (a, b) in clip.frames.iter().zip(&every_clip.frames) {
@@ -102,6 +122,7 @@ fn keyframes_every_five_are_interpolated_and_smoothing_is_separate() {
         &models,
         &mut FrameSource::open(&path, 30.0).unwrap(),
         TrackingMode::Track,
+        2,
         |_| {},
     )
     .unwrap();

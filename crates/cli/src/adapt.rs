@@ -6,10 +6,11 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use anyhow::Context as _;
+use faceanim_adapt::heldout::{Evaluation, HeldOut};
 use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
 use faceanim_adapt::{
-    Activation, Adapter, Architecture, Control, Dataset, DatasetOptions, FaceCamera, FeatureSet,
-    TrainOptions,
+    Activation, Adapter, Architecture, Augmentation, Calibration, Control, Dataset, DatasetOptions,
+    FaceCamera, FeatureSet, TrainOptions,
 };
 use faceanim_rig::Character;
 use faceanim_take::Session;
@@ -29,9 +30,23 @@ pub struct AdaptArgs {
     /// Random seed (expressions, initial weights, batch order).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Print {"mae_test", "mae_val", "samples", "seconds"} as JSON at the end.
+    /// Print {"mae_test", "mae_val", "samples", "seconds", "heldout": [...]} as JSON at the
+    /// end.
     #[arg(long)]
     pub json: bool,
+    /// Whether the training renders vary camera, light, skin, background and picture quality
+    /// (randomised) or all come from one front camera in one light (none).
+    #[arg(long, value_enum, default_value_t = AugmentationChoice::Randomised)]
+    pub augmentation: AugmentationChoice,
+    /// Whether the adapter reads faces relative to a neutral face of the same source
+    /// (neutral) or as they are (none).
+    #[arg(long, value_enum, default_value_t = CalibrationChoice::Neutral)]
+    pub calibration: CalibrationChoice,
+    /// Also measure the adapter on stills from another renderer: a folder with pictures and
+    /// `truth.json` (`{"neutral": "n.png", "frames": [{"image": "a.png", "weights": {"name":
+    /// 0.5}}]}`); repeatable.
+    #[arg(long = "eval-dir", value_name = "DIR")]
+    pub eval_dirs: Vec<PathBuf>,
     /// What the adapter reads.
     #[arg(long, value_enum, default_value_t = FeatureChoice::Both)]
     pub features: FeatureChoice,
@@ -81,6 +96,42 @@ pub enum FeatureChoice {
     Both,
 }
 
+/// The command line's names for [`Augmentation`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AugmentationChoice {
+    /// One front camera, one light.
+    None,
+    /// Camera, light, skin, background and picture quality drawn per group of samples.
+    Randomised,
+}
+
+impl From<AugmentationChoice> for Augmentation {
+    fn from(choice: AugmentationChoice) -> Augmentation {
+        match choice {
+            AugmentationChoice::None => Augmentation::None,
+            AugmentationChoice::Randomised => Augmentation::Randomised,
+        }
+    }
+}
+
+/// The command line's names for [`Calibration`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CalibrationChoice {
+    /// Faces as captured.
+    None,
+    /// Faces relative to a neutral face of the same source.
+    Neutral,
+}
+
+impl From<CalibrationChoice> for Calibration {
+    fn from(choice: CalibrationChoice) -> Calibration {
+        match choice {
+            CalibrationChoice::None => Calibration::None,
+            CalibrationChoice::Neutral => Calibration::Neutral,
+        }
+    }
+}
+
 impl From<FeatureChoice> for FeatureSet {
     fn from(choice: FeatureChoice) -> FeatureSet {
         match choice {
@@ -103,8 +154,52 @@ impl AdaptArgs {
                 Activation::LeakyRelu
             },
             clamp: !self.no_clamp,
+            calibration: self.calibration.into(),
         }
     }
+}
+
+/// Reads every `--eval-dir` for `character`'s blendshapes.
+fn held_out(dirs: &[PathBuf], character: &Character) -> anyhow::Result<Vec<HeldOut>> {
+    let names: Vec<String> = character
+        .blendshapes()
+        .iter()
+        .map(|b| b.name().to_owned())
+        .collect();
+    dirs.iter()
+        .map(|dir| Ok(HeldOut::read(dir, &names)?))
+        .collect()
+}
+
+/// `adapter` on each held-out folder, each result printed as it comes.
+fn evaluate_held_out(adapter: &Adapter, folders: &[HeldOut]) -> anyhow::Result<Vec<Evaluation>> {
+    if folders.is_empty() {
+        return Ok(Vec::new());
+    }
+    let models = FaceModels::load_with_threads(1).context("loading the face models")?;
+    folders
+        .iter()
+        .map(|folder| {
+            let e = folder.evaluate(adapter, &models)?;
+            eprintln!(
+                "held out {}: MAE {:.4} on {} of {} stills (predicting the mean: {:.4}, zeros: {:.4}; neutral: {:?}); worst: {}",
+                e.dir.display(),
+                e.mae,
+                e.faces,
+                e.stills,
+                e.mae_mean_baseline,
+                e.mae_zero_baseline,
+                e.neutral,
+                e.worst
+                    .iter()
+                    .take(4)
+                    .map(|(n, mae, bias)| format!("{n} {mae:.2} (bias {bias:+.2})"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            Ok(e)
+        })
+        .collect()
 }
 
 /// The adapter file next to a character: `NAME.adapter.safetensors`.
@@ -251,13 +346,17 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         samples: args.samples,
         seed: args.seed,
         exclusive,
+        augmentation: args.augmentation.into(),
     };
+    let folders = held_out(&args.eval_dirs, &character)?;
 
     if !args.finetune.is_empty() {
-        return finetune(&args, &character, &options, &cache, &output, started);
+        return finetune(
+            &args, &character, &options, &cache, &output, started, &folders,
+        );
     }
     if let Some(path) = &args.evaluate {
-        return evaluate(path, &character, &options, &cache, args.fresh);
+        return evaluate(path, &character, &options, &cache, args.fresh, &folders);
     }
 
     let (dataset, _) = dataset(&character, &options, &cache, args.fresh)?;
@@ -268,16 +367,28 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         ..TrainOptions::default()
     };
     if args.ablation {
-        return ablation(&dataset, &train_options, args.json);
+        return ablation(
+            &character,
+            &options,
+            &cache,
+            &dataset,
+            &train_options,
+            &folders,
+            args.json,
+        );
     }
     let adapter = train_with_bar(&dataset, &train_options)?;
     faceanim_files::write_atomic(&output, &adapter.to_bytes()?)?;
     let seconds = started.elapsed().as_secs_f64();
+    let heldout = evaluate_held_out(&adapter, &folders)?;
     let report = &adapter.report;
     eprintln!(
-        "wrote {} — test MAE {:.4}, validation MAE {:.4}, {} samples, best epoch {} of {}; {:.1} s ({:.1} s for the training set, {:.1} s training)",
+        "wrote {} — test MAE {:.4} ({} on the front renders), validation MAE {:.4}, {} samples, best epoch {} of {}; {:.1} s ({:.1} s for the training set, {:.1} s training)",
         output.display(),
         report.mae_test,
+        report
+            .mae_test_front
+            .map_or_else(|| "–".to_owned(), |m| format!("{m:.4}")),
         report.mae_val,
         report.samples,
         report.best_epoch,
@@ -291,28 +402,56 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
             "{}",
             serde_json::json!({
                 "mae_test": report.mae_test,
+                "mae_test_front": report.mae_test_front,
                 "mae_val": report.mae_val,
                 "samples": report.samples,
                 "seconds": seconds,
+                "seconds_dataset": dataset_seconds,
+                "seconds_training": report.seconds,
+                "augmentation": args.augmentation_name(),
+                "calibration": adapter.architecture.calibration.name(),
+                "heldout": heldout,
             })
         );
     }
     Ok(())
 }
 
-/// The seed's Table 1 on this character: one row per setting, test MAE.
-fn ablation(dataset: &Dataset, base: &TrainOptions, json: bool) -> anyhow::Result<()> {
+impl AdaptArgs {
+    fn augmentation_name(&self) -> &'static str {
+        Augmentation::from(self.augmentation).name()
+    }
+}
+
+/// The seed's Table 1 on this character, extended: features × calibration × augmentation,
+/// then the seed's architecture rows on the default setting. Each row: its own test MAE, and
+/// the MAE on every held-out folder.
+fn ablation(
+    character: &Character,
+    options: &DatasetOptions,
+    cache: &Path,
+    dataset_given: &Dataset,
+    base: &TrainOptions,
+    folders: &[HeldOut],
+    json: bool,
+) -> anyhow::Result<()> {
     let default = Architecture::default();
-    let rows = [
-        Architecture {
-            features: FeatureSet::Scores,
-            ..default
-        },
-        Architecture {
-            features: FeatureSet::Landmarks,
-            ..default
-        },
-        default,
+    let mut rows: Vec<(Augmentation, Architecture)> = Vec::new();
+    for augmentation in [Augmentation::None, Augmentation::Randomised] {
+        for features in [FeatureSet::Scores, FeatureSet::Landmarks, FeatureSet::Both] {
+            for calibration in [Calibration::None, Calibration::Neutral] {
+                rows.push((
+                    augmentation,
+                    Architecture {
+                        features,
+                        calibration,
+                        ..default
+                    },
+                ));
+            }
+        }
+    }
+    for architecture in [
         Architecture {
             hidden: 100,
             ..default
@@ -334,54 +473,97 @@ fn ablation(dataset: &Dataset, base: &TrainOptions, json: bool) -> anyhow::Resul
             clamp: false,
             ..default
         },
-    ];
+    ] {
+        rows.push((Augmentation::Randomised, architecture));
+    }
+    // The other augmentation's training set is cached beside the given one.
+    let other = |augmentation: Augmentation| -> anyhow::Result<Dataset> {
+        let options = DatasetOptions {
+            augmentation,
+            ..options.clone()
+        };
+        let name = cache
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        let path = cache.with_file_name(format!("{}.{name}", augmentation.name()));
+        Ok(dataset(character, &options, &path, false)?.0)
+    };
+    let mut datasets: Vec<(Augmentation, Dataset)> =
+        vec![(options.augmentation, dataset_given.clone())];
     let mut results = Vec::new();
-    for architecture in rows {
+    for (augmentation, architecture) in rows {
+        if !datasets.iter().any(|(a, _)| *a == augmentation) {
+            datasets.push((augmentation, other(augmentation)?));
+        }
+        let Some((_, data)) = datasets.iter().find(|(a, _)| *a == augmentation) else {
+            continue;
+        };
         let adapter = train_with_bar(
-            dataset,
+            data,
             &TrainOptions {
                 architecture,
                 ..*base
             },
         )?;
+        let heldout = evaluate_held_out(&adapter, folders)?;
+        // Every row on the front renders' test split too (the project's renders without
+        // augmentation), once they exist.
+        let front = datasets
+            .iter()
+            .find(|(a, _)| *a == Augmentation::None)
+            .map(|(_, d)| adapter.mean_absolute_error_over(d, d.split().test));
         eprintln!(
-            "{} {} {:?} clamp={}: test MAE {:.4}",
+            "{} {} {} {} {:?} clamp={}: test MAE {:.4}",
+            augmentation.name(),
             architecture.features.name(),
+            architecture.calibration.name(),
             architecture.hidden,
             architecture.activation,
             architecture.clamp,
             adapter.report.mae_test
         );
-        results.push((architecture, adapter.report));
+        results.push((augmentation, architecture, adapter.report, front, heldout));
     }
     if json {
         let rows: Vec<_> = results
             .iter()
-            .map(|(a, r)| {
+            .map(|(g, a, r, f, h)| {
                 serde_json::json!({
-                    "features": a.features.name(), "hidden": a.hidden,
+                    "augmentation": g.name(), "features": a.features.name(),
+                    "calibration": a.calibration.name(), "hidden": a.hidden,
                     "activation": a.activation, "clamp": a.clamp,
                     "mae_test": r.mae_test, "mae_val": r.mae_val,
+                    "mae_front_test": f,
                     "epochs": r.best_epoch, "seconds": r.seconds,
+                    "heldout": h,
                 })
             })
             .collect();
         println!("{}", serde_json::Value::Array(rows));
     } else {
-        println!("| features | layers | hidden | test MAE | val MAE | best epoch | seconds |");
-        println!("| --- | --- | --- | --- | --- | --- | --- |");
-        for (a, r) in &results {
+        let heldout_columns: String = folders
+            .iter()
+            .map(|f| format!(" held-out MAE ({}) |", f.dir.display()))
+            .collect();
+        println!(
+            "| augmentation | features | calibration | layers | hidden | test MAE (own renders) | test MAE (front renders) |{heldout_columns} best epoch | seconds |"
+        );
+        println!("|{}", " --- |".repeat(9 + folders.len()));
+        for (g, a, r, f, h) in &results {
             let activation = match a.activation {
                 Activation::Relu => "ReLU",
                 Activation::LeakyRelu => "LeakyReLU",
             };
             let clamp = if a.clamp { " → Clamp" } else { "" };
+            let heldout: String = h.iter().map(|e| format!(" {:.4} |", e.mae)).collect();
+            let front = f.map_or_else(|| "–".to_owned(), |m| format!("{m:.4}"));
             println!(
-                "| {} | Linear → {activation} → Linear{clamp} | {} | {:.4} | {:.4} | {} | {:.1} |",
+                "| {} | {} | {} | Linear → {activation} → Linear{clamp} | {} | {:.4} | {front} |{heldout} {} | {:.1} |",
+                g.name(),
                 a.features.name(),
+                a.calibration.name(),
                 a.hidden,
                 r.mae_test,
-                r.mae_val,
                 r.best_epoch,
                 r.seconds
             );
@@ -398,6 +580,7 @@ fn finetune(
     cache: &Path,
     output: &Path,
     started: Instant,
+    folders: &[HeldOut],
 ) -> anyhow::Result<()> {
     let from = args.from.clone().unwrap_or_else(|| output.to_owned());
     let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(&from)?)
@@ -443,6 +626,7 @@ fn finetune(
     })?;
     faceanim_files::write_atomic(output, &tuned.to_bytes()?)?;
     let seconds = started.elapsed().as_secs_f64();
+    let heldout = evaluate_held_out(&tuned, folders)?;
     eprintln!(
         "wrote {}: MAE on the {} corrected frames {:.4} → {:.4}; test MAE {:.4} → {:.4}",
         output.display(),
@@ -464,6 +648,7 @@ fn finetune(
                 "mae_corrected_before": outcome.corrected_before,
                 "mae_corrected_after": outcome.corrected_after,
                 "mae_test_before": outcome.test_before,
+                "heldout": heldout,
             })
         );
     }
@@ -477,6 +662,7 @@ fn evaluate(
     options: &DatasetOptions,
     cache: &Path,
     fresh: bool,
+    folders: &[HeldOut],
 ) -> anyhow::Result<()> {
     let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(path)?)
         .with_context(|| format!("reading the adapter {}", path.display()))?;
@@ -485,6 +671,12 @@ fn evaluate(
             "{} was trained on another shape of this rig: measuring how well it transfers",
             path.display()
         );
+    }
+    // Held-out folders alone need no renders.
+    if !folders.is_empty() {
+        let heldout = evaluate_held_out(&adapter, folders)?;
+        println!("{}", serde_json::json!({ "heldout": heldout }));
+        return Ok(());
     }
     let (dataset, _) = dataset(character, options, cache, fresh)?;
     let mae = adapter.mean_absolute_error(&dataset);

@@ -57,6 +57,15 @@ pub enum SessionAction {
     ApplyPreference,
     /// Take the preference off again.
     ClearPreference,
+    /// Say which frame shows the neutral face (relaxed, mouth closed), or `auto` for the least
+    /// expressive one, and estimate every frame again relative to it.
+    Neutral {
+        /// The frame (from 0), or `auto`.
+        frame: NeutralFrame,
+        /// The adapter that estimated the session.
+        #[arg(long)]
+        adapter: PathBuf,
+    },
     /// Estimate every frame again with an adapter (after `faceanim adapt --finetune`).
     Reestimate {
         /// The adapter.
@@ -73,6 +82,28 @@ pub enum SessionAction {
         #[arg(long)]
         character: Option<PathBuf>,
     },
+}
+
+/// A frame number or `auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NeutralFrame {
+    /// The least expressive frame.
+    Auto,
+    /// This frame.
+    Frame(usize),
+}
+
+impl std::str::FromStr for NeutralFrame {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<NeutralFrame, String> {
+        if text.eq_ignore_ascii_case("auto") {
+            return Ok(NeutralFrame::Auto);
+        }
+        text.parse()
+            .map(NeutralFrame::Frame)
+            .map_err(|_| format!("'{text}' is neither a frame number nor 'auto'"))
+    }
 }
 
 fn load(path: &Path) -> anyhow::Result<Session> {
@@ -102,6 +133,7 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
                 "corrections": session.edits.corrections,
                 "corrected_values": corrections,
                 "preference": session.edits.preference,
+                "neutral": session.neutral(),
             });
             if json {
                 println!("{summary}");
@@ -116,6 +148,9 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
                     session.blendshapes.len()
                 );
                 println!("keyframes: {:?}", session.keyframes());
+                if let Some(n) = session.neutral() {
+                    println!("neutral: frame {} ({:?})", n.frame, n.chosen);
+                }
                 for (frame, values) in &session.edits.corrections {
                     let list: Vec<String> =
                         values.iter().map(|(n, v)| format!("{n}={v:.3}")).collect();
@@ -151,6 +186,15 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
         SessionAction::RemoveKeyframe { frame } => session.remove_keyframe(frame).map_err(edit)?,
         SessionAction::ApplyPreference => session.apply_preference(),
         SessionAction::ClearPreference => session.clear_preference(),
+        SessionAction::Neutral { frame, adapter } => {
+            let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(&adapter)?)
+                .with_context(|| format!("reading the adapter {}", adapter.display()))?;
+            let frame = match frame {
+                NeutralFrame::Auto => None,
+                NeutralFrame::Frame(k) => Some(k),
+            };
+            session.set_neutral(frame, &adapter).map_err(edit)?;
+        }
         SessionAction::Reestimate { adapter } => {
             let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(&adapter)?)
                 .with_context(|| format!("reading the adapter {}", adapter.display()))?;

@@ -57,9 +57,10 @@ pub struct TrackArgs {
     /// Frame rate given to a still image or an image folder (videos carry their own).
     #[arg(long, default_value_t = 30.0)]
     pub fps: f32,
-    /// Threads for the face models.
-    #[arg(long, default_value_t = 1)]
-    pub threads: usize,
+    /// Video frames tracked at once, one per thread, while another thread decodes ahead
+    /// (default: the number of cores; 1 tracks frame by frame).
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Drive the character through its adapter (from `faceanim adapt`) instead of by name.
     #[arg(long)]
     pub adapter: Option<PathBuf>,
@@ -67,6 +68,10 @@ pub struct TrackArgs {
     /// session`.
     #[arg(long)]
     pub session: Option<PathBuf>,
+    /// The frame of a neutral face (relaxed, mouth closed, looking ahead) that the adapter
+    /// reads every other frame relative to; without it, the frame with the least expression.
+    #[arg(long)]
+    pub neutral_frame: Option<usize>,
     /// A frame to keep as a keyframe besides every --keyframe-every-th; repeatable.
     #[arg(long = "keyframe")]
     pub keyframes: Vec<usize>,
@@ -109,10 +114,12 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         "--fps must be a positive number, got {}",
         args.fps
     );
+    let threads = args.threads.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    });
     anyhow::ensure!(
-        (1..=64).contains(&args.threads),
-        "--threads must be between 1 and 64, got {}",
-        args.threads
+        (1..=64).contains(&threads),
+        "--threads must be between 1 and 64, got {threads}"
     );
     let filtering = args.filtering(args.filter)?;
     // Load the character and its estimator first: a bad one should fail before minutes of
@@ -130,7 +137,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     // Open and capture.
     let mut source = FrameSource::open(&args.input, args.fps)?;
     let info = source.info();
-    let models = FaceModels::load_with_threads(args.threads).context("loading the face models")?;
+    let models = FaceModels::load().context("loading the face models")?;
     let mode = if args.detect_every_frame {
         TrackingMode::DetectEveryFrame
     } else {
@@ -148,9 +155,10 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         .progress_chars("=> "),
     );
     let started = Instant::now();
-    let result =
-        faceanim_capture::capture(&models, &mut source, mode, |n| bar.set_position(n as u64))
-            .with_context(|| format!("capturing {}", args.input.display()))?;
+    let result = faceanim_capture::capture(&models, &mut source, mode, threads, |n| {
+        bar.set_position(n as u64)
+    })
+    .with_context(|| format!("capturing {}", args.input.display()))?;
     bar.finish_and_clear();
     let capture_seconds = started.elapsed().as_secs_f64();
     if let Some(raw) = &args.raw {
@@ -188,6 +196,29 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
             .map(|n| n.max(1)),
     };
     let mut take = Take::from_capture(&character, estimator.as_ref(), footage, filtering)?;
+    if args.neutral_frame.is_some() {
+        take.session
+            .set_neutral(args.neutral_frame, estimator.as_ref())
+            .map_err(|e| anyhow::anyhow!("--neutral-frame: {e}"))?;
+    }
+    let neutral = take.session.neutral();
+    if estimator.calibrated()
+        && let Some(n) = neutral
+    {
+        eprintln!(
+            "neutral face: frame {} ({}){}",
+            n.frame,
+            match n.chosen {
+                faceanim_take::NeutralChoice::User => "--neutral-frame",
+                faceanim_take::NeutralChoice::Automatic => "the least expressive",
+            },
+            if n.chosen == faceanim_take::NeutralChoice::Automatic {
+                "; give --neutral-frame N if another frame is more neutral"
+            } else {
+                ""
+            }
+        );
+    }
     let estimate_seconds = started.elapsed().as_secs_f64();
     for &k in &args.keyframes {
         take.session
@@ -222,6 +253,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         "seconds": capture_seconds + estimate_seconds,
         "frames_per_second": frames as f64 / capture_seconds.max(1e-9),
         "estimator": take.estimated_by(),
+        "neutral": neutral,
         "adapter_ms_per_frame": 1000.0 * estimate_seconds / frames.max(1) as f64,
         "character": character.name(),
         "blendshapes_driven": estimator.driven(),

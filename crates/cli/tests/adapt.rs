@@ -37,6 +37,11 @@ fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
+/// `faceanim session SESSION show --json`.
+fn show(session: &str) -> serde_json::Value {
+    serde_json::from_str(faceanim_ok(&["session", session, "show", "--json"]).trim()).unwrap()
+}
+
 fn column(clip: &serde_json::Value, name: &str) -> Vec<f64> {
     let names = clip["blendshapes"].as_array().unwrap();
     let k = names.iter().position(|n| n == name).unwrap();
@@ -92,6 +97,8 @@ fn adapt_then_track_correct_and_fine_tune() {
         session.to_str().unwrap(),
         "--keyframe",
         "7",
+        "--neutral-frame",
+        "0",
         "-o",
         clip_path.to_str().unwrap(),
         "-o",
@@ -103,6 +110,10 @@ fn adapt_then_track_correct_and_fine_tune() {
     ]);
     let printed: serde_json::Value = serde_json::from_str(printed.trim()).unwrap();
     assert_eq!(printed["frames"], 24);
+    assert_eq!(
+        printed["neutral"],
+        serde_json::json!({"frame": 0, "chosen": "user"})
+    );
     assert!(printed["adapter_ms_per_frame"].as_f64().unwrap() < 5.0);
     let clip = read_json(&clip_path);
     assert_eq!(clip["blendshapes"].as_array().unwrap().len(), 53);
@@ -133,10 +144,8 @@ fn adapt_then_track_correct_and_fine_tune() {
     assert_valid_gltf(&glb);
 
     // The session: frame 7 is a keyframe (asked for), and so are 0, 5, 10, 15, 20 and 23.
-    let shown: serde_json::Value = serde_json::from_str(
-        faceanim_ok(&["session", session.to_str().unwrap(), "show", "--json"]).trim(),
-    )
-    .unwrap();
+    let session_arg = session.to_str().unwrap();
+    let shown = show(session_arg);
     let keys: Vec<u64> = shown["keyframes"]
         .as_array()
         .unwrap()
@@ -144,6 +153,61 @@ fn adapt_then_track_correct_and_fine_tune() {
         .map(|k| k.as_u64().unwrap())
         .collect();
     assert_eq!(keys, vec![0, 5, 7, 10, 15, 20, 23]);
+    assert_eq!(
+        shown["neutral"],
+        serde_json::json!({"frame": 0, "chosen": "user"})
+    );
+    // Saying the open-mouthed frame 11 is neutral reads every other frame against it: frame
+    // 11 itself becomes rest. `auto` goes back to the least expressive frame, a shut one.
+    faceanim_ok(&[
+        "session",
+        session_arg,
+        "neutral",
+        "11",
+        "--adapter",
+        adapter_arg,
+    ]);
+    let shown = show(session_arg);
+    assert_eq!(
+        shown["neutral"],
+        serde_json::json!({"frame": 11, "chosen": "user"})
+    );
+    let against_open = dir.path().join("against-open.json");
+    faceanim_ok(&[
+        "session",
+        session_arg,
+        "export",
+        "-o",
+        against_open.to_str().unwrap(),
+    ]);
+    let against_open = column(&read_json(&against_open), "jawOpen");
+    assert!(against_open[11] < 0.2, "{against_open:?}");
+    faceanim_ok(&[
+        "session",
+        session_arg,
+        "neutral",
+        "auto",
+        "--adapter",
+        adapter_arg,
+    ]);
+    let shown = show(session_arg);
+    assert_eq!(shown["neutral"]["chosen"], "automatic", "{shown}");
+    let auto_frame = shown["neutral"]["frame"].as_u64().unwrap() as usize;
+    assert!(jaw_curve(auto_frame) < 0.1, "{shown}");
+    let refused = faceanim(&[
+        "session",
+        session_arg,
+        "neutral",
+        "99",
+        "--adapter",
+        adapter_arg,
+    ]);
+    assert!(!refused.status.success());
+    assert!(
+        String::from_utf8_lossy(&refused.stderr).contains("frame 99 is past the end"),
+        "{}",
+        String::from_utf8_lossy(&refused.stderr)
+    );
 
     // Correct jawOpen on frame 20, apply the preference: every other frame shifts by the same
     // amount (clamped to 0..1), and the corrected frame holds the value set.

@@ -1057,3 +1057,94 @@ fn a_vrm_avatars_download_is_a_vrm() {
     let json = faceanim_testdata::glb::json(&body);
     assert!(json["extensions"]["VRMC_vrm"].is_object(), "still a VRM");
 }
+
+/// The neutral face: a take's is its least expressive frame until the user says which is
+/// neutral (kept with the take); live, Calibrate takes the next face, and a face held still
+/// becomes the neutral on its own.
+#[test]
+fn the_neutral_face_of_a_take_and_of_the_live_webcam() {
+    let dir = tempfile::tempdir().unwrap();
+    let video = dir.path().join("jaw.mp4");
+    // Open, then shut: the shut frames are the least expressive.
+    let jaw: Vec<f32> = (0..10).map(|i| 0.8 * (1.0 - i as f32 / 9.0)).collect();
+    support::encode_h264(&video, 256, 24, &support::ict_jaw_frames(&jaw, 256));
+    let project = dir.path().join("neutral.faceanim.json");
+    let json = [("Content-Type", "application/json")];
+    let studio = start(&project);
+    let state = open_and_settle(studio.port, &video);
+    let neutral = &state["take"]["neutral"];
+    assert_eq!(neutral["chosen"], "automatic", "{neutral}");
+    assert!(neutral["frame"].as_u64().unwrap() >= 7, "{neutral}");
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/neutral",
+        &json,
+        br#"{"frame": 40}"#,
+    );
+    assert_eq!(status, 400);
+    assert!(body.contains("frame 40 is past the end"), "{body}");
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/neutral",
+        &json,
+        br#"{"frame": 6}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(
+        state["take"]["neutral"],
+        serde_json::json!({"frame": 6, "chosen": "user"})
+    );
+    drop(studio);
+    let studio = start(&project);
+    let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["take"]["neutral"]["frame"], 6, "kept with the take");
+
+    // Live: the same still picture again and again is a face held still.
+    let face = support::ict_jaw_frames(&[0.0], 256).remove(0);
+    let rgbx: Vec<u8> = face
+        .chunks(3)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    let frame = |port: u16| -> serde_json::Value {
+        let (status, body) = request(
+            port,
+            "POST",
+            "/api/capture/live/frame",
+            &[
+                ("x-width", "256"),
+                ("x-height", "256"),
+                ("x-pixel-format", "RGBX"),
+            ],
+            &rgbx,
+        );
+        assert_eq!(status, 200, "{body}");
+        serde_json::from_str(&body).unwrap()
+    };
+    let (status, _) = request(studio.port, "POST", "/api/capture/live/calibrate", &[], b"");
+    assert_eq!(status, 400, "calibrating needs live mode");
+    request(studio.port, "POST", "/api/capture/live/start", &[], b"");
+    let first = frame(studio.port);
+    assert_eq!(first["found"], true, "{first}");
+    assert!(first["neutral"].is_null(), "{first}");
+    let mut automatic = None;
+    // At most 400 frames: the face must stay still for 1.5 s of the studio's clock.
+    for k in 0..400 {
+        if frame(studio.port)["neutral"] == "automatic" {
+            automatic = Some(k);
+            break;
+        }
+    }
+    assert!(automatic.is_some(), "a still face never became the neutral");
+    let (_, body) = request(studio.port, "POST", "/api/capture/live/calibrate", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["live"]["calibrating"], true, "{body}");
+    assert_eq!(frame(studio.port)["neutral"], "user");
+    let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["live"]["calibrating"], false, "{body}");
+    assert_eq!(state["live"]["neutral"], "user", "{body}");
+}

@@ -66,6 +66,8 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/live/start", post(live_start))
         .route("/api/capture/live/stop", post(live_stop))
         .route("/api/capture/live/record", post(live_record))
+        .route("/api/capture/live/calibrate", post(live_calibrate))
+        .route("/api/capture/neutral", post(neutral))
         .route("/api/capture/vmc", get(vmc_view))
         .route("/api/capture/vmc/record", post(vmc_record))
         .route("/api/capture/vmc/send", post(vmc_send))
@@ -314,6 +316,25 @@ async fn preference(State(both): State<Both>, body: Bytes) -> Answer<CaptureView
             Ok(())
         })?;
     }
+    Ok(state_of(&both))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NeutralFrame {
+    /// The frame, or `null` for the least expressive one.
+    frame: Option<usize>,
+}
+
+async fn neutral(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let NeutralFrame { frame } = json_body(&body, "neutral")?;
+    let character = both.studio().character.clone();
+    both.desk().set_neutral(&character, frame)?;
+    Ok(state_of(&both))
+}
+
+async fn live_calibrate(State(both): State<Both>) -> Answer<CaptureView> {
+    both.desk().calibrate_live()?;
     Ok(state_of(&both))
 }
 

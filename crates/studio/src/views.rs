@@ -417,6 +417,9 @@ pub struct AdapterView {
     pub note: Option<String>,
     /// How its training went.
     pub report: Option<faceanim_adapt::TrainingReport>,
+    /// Whether it reads faces relative to a neutral one (then the take's neutral frame and
+    /// live calibration matter).
+    pub calibrated: bool,
 }
 
 /// A long job.
@@ -483,6 +486,10 @@ pub struct LiveView {
     pub frames: usize,
     /// Frames recorded, while recording.
     pub recording: Option<usize>,
+    /// Who chose the performer's neutral face (`null`: none yet; hold still or calibrate).
+    pub neutral: Option<faceanim_take::NeutralChoice>,
+    /// Calibrate was pressed and the next face will be the neutral.
+    pub calibrating: bool,
 }
 
 /// The take.
@@ -537,6 +544,8 @@ pub struct TakeView {
     pub can_undo: bool,
     /// Whether redo has something to redo.
     pub can_redo: bool,
+    /// The frame faces are read relative to, and who chose it.
+    pub neutral: Option<faceanim_take::Neutral>,
 }
 
 impl TakeView {
@@ -574,6 +583,7 @@ impl TakeView {
             keyframe_every: session.edits.keyframe_every,
             can_undo: take.can_undo(),
             can_redo: take.can_redo(),
+            neutral: session.neutral(),
         }
     }
 }

@@ -42,8 +42,14 @@ impl EstimatorSource {
 pub trait Estimator: Send + Sync {
     /// The character's blendshapes, in the order of the weights it returns.
     fn blendshapes(&self) -> &[String];
-    /// The weights for `expression`, one per blendshape.
-    fn estimate(&self, expression: &Expression) -> Vec<f32>;
+    /// The weights for `expression`, one per blendshape; `neutral` is a neutral face of the
+    /// same source (the same person, camera and light), when one is known.
+    fn estimate(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32>;
+    /// Whether estimates are read relative to the neutral face (so choosing another neutral
+    /// frame changes them).
+    fn calibrated(&self) -> bool {
+        false
+    }
     /// Which kind of estimator it is.
     fn source(&self) -> EstimatorSource;
     /// How many of the character's shapes it can move (none for a by-name mapping onto a rig
@@ -207,7 +213,9 @@ impl Estimator for ByName {
         &self.names
     }
 
-    fn estimate(&self, expression: &Expression) -> Vec<f32> {
+    /// MediaPipe's scores are trained to read a neutral face as zeros: the neutral frame is
+    /// not used.
+    fn estimate(&self, expression: &Expression, _neutral: Option<&Expression>) -> Vec<f32> {
         let mut row = vec![0.0; self.names.len()];
         for (score, column) in expression.scores.iter().zip(&self.columns) {
             if let Some(c) = column {
@@ -300,10 +308,13 @@ mod tests {
         set(&mut scores, "mouthSmileRight", 0.4);
         set(&mut scores, "eyeLookOutLeft", 0.7);
         set(&mut scores, "eyeLookInRight", 0.5);
-        let row = by_name.estimate(&Expression {
-            scores,
-            landmarks: vec![0.0; LANDMARK_COORDINATES],
-        });
+        let row = by_name.estimate(
+            &Expression {
+                scores,
+                landmarks: vec![0.0; LANDMARK_COORDINATES],
+            },
+            None,
+        );
         let at = |n: &str| row[names.iter().position(|m| *m == n).unwrap_or_default()];
         assert_eq!(at("Fcl_EYE_Close"), 0.0);
         assert_eq!(
@@ -336,10 +347,13 @@ mod tests {
             .unwrap_or_default();
         scores[jaw] = 0.625;
         scores[0] = 0.9; // `_neutral` drives nothing
-        let row = by_name.estimate(&Expression {
-            scores,
-            landmarks: vec![0.0; LANDMARK_COORDINATES],
-        });
+        let row = by_name.estimate(
+            &Expression {
+                scores,
+                landmarks: vec![0.0; LANDMARK_COORDINATES],
+            },
+            None,
+        );
         let column = character
             .find_blendshape("jawOpen")
             .map(|id| id.index())

@@ -42,12 +42,31 @@ impl Expression {
         })
     }
 
+    /// How far the face is from rest: the sum of its 51 ARKit scores (MediaPipe's `_neutral`
+    /// left out). A relaxed face scores near 0.
+    #[must_use]
+    pub fn energy(&self) -> f32 {
+        self.scores.iter().skip(1).map(|s| s.clamp(0.0, 1.0)).sum()
+    }
+
     /// From one frame capture recorded (see [`Expression::from_face`]).
     #[must_use]
     pub fn from_record(record: &faceanim_capture::FrameRecord) -> Option<Expression> {
         let scores: Vec<f32> = record.scores.iter().map(|s| s.1).collect();
         Expression::from_face(&scores, &record.landmarks, record.head)
     }
+}
+
+/// The frame whose face is nearest to rest (least [`Expression::energy`]), the automatic
+/// neutral of a take; `None` when no frame has a face.
+#[must_use]
+pub fn least_expressive(expressions: &[Option<&Expression>]) -> Option<usize> {
+    expressions
+        .iter()
+        .enumerate()
+        .filter_map(|(k, e)| e.map(|e| (k, e.energy())))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k)
 }
 
 /// The blendshape model's landmarks with the pose removed: into a y-up frame, centred on the

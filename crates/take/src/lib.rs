@@ -10,6 +10,9 @@
 //! - [`session`]: one input's frames and estimates with the user's [`Edits`] (keyframes,
 //!   corrections, preference, smoothing), kept in a JSON file; the animation is derived.
 //! - [`take`]: a session being edited with undo and redo, and [`Take::from_capture`].
+//! - [`calibration`]: a live performer's neutral face (Calibrate, or a face held still); a
+//!   take's is its least expressive frame or the one the user names
+//!   ([`Session::set_neutral`]).
 //! - [`layer`]: the one rule that puts a sketch over a take.
 //!
 //! ```
@@ -37,6 +40,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod calibration;
 pub mod estimator;
 pub mod expression;
 mod fingerprint;
@@ -48,7 +52,9 @@ pub use estimator::{ByName, Estimator, EstimatorSource, VrmPreset};
 pub use expression::Expression;
 pub use fingerprint::Fingerprint;
 pub use layer::{Layered, layer};
-pub use session::{Correction, Edits, Filtering, Session, SessionFrame, peak_animation};
+pub use session::{
+    Correction, Edits, Filtering, Neutral, NeutralChoice, Session, SessionFrame, peak_animation,
+};
 pub use take::{Footage, ReceivedFrame, Take, recorded_fps};
 
 /// Why a take or session refused a change, or a file.
@@ -121,4 +127,10 @@ pub enum TakeError {
     /// A session file that is malformed.
     #[error("{0}")]
     Format(String),
+    /// A frame without a face cannot be the neutral one.
+    #[error("frame {frame} has no face, so it cannot be the neutral frame")]
+    NoFace {
+        /// The frame.
+        frame: usize,
+    },
 }

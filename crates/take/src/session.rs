@@ -152,8 +152,30 @@ pub struct Session {
     pub fps: f32,
     /// The frames.
     pub frames: Vec<SessionFrame>,
+    /// The frame the user said is neutral (`None`: the least expressive one, see
+    /// [`Session::neutral`]).
+    pub neutral: Option<usize>,
     /// What the user changed.
     pub edits: Edits,
+}
+
+/// Who chose a take's neutral frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NeutralChoice {
+    /// The frame with the least expression energy.
+    Automatic,
+    /// The user.
+    User,
+}
+
+/// The frame a take's faces are read relative to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Neutral {
+    /// Its index.
+    pub frame: usize,
+    /// Who chose it.
+    pub chosen: NeutralChoice,
 }
 
 /// The session file as written (version 1): the session's fields with its edits inline.
@@ -170,6 +192,8 @@ struct SessionFile {
     #[serde(default)]
     smoothing: Option<OneEuro>,
     frames: Vec<SessionFrame>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    neutral: Option<usize>,
     #[serde(default)]
     added_keyframes: Vec<usize>,
     #[serde(default)]
@@ -192,6 +216,7 @@ impl From<SessionFile> for Session {
             fingerprint: f.fingerprint,
             fps: f.fps,
             frames: f.frames,
+            neutral: f.neutral,
             edits: Edits {
                 keyframe_every: f.keyframe_every,
                 smoothing: f.smoothing,
@@ -217,6 +242,7 @@ impl From<Session> for SessionFile {
             keyframe_every: s.edits.keyframe_every,
             smoothing: s.edits.smoothing,
             frames: s.frames,
+            neutral: s.neutral,
             added_keyframes: s.edits.added_keyframes,
             removed_keyframes: s.edits.removed_keyframes,
             corrections: s.edits.corrections,
@@ -232,6 +258,8 @@ impl From<Session> for SessionFile {
 pub struct Correction {
     /// The frame's expression.
     pub expression: Expression,
+    /// The take's neutral face, when it has one.
+    pub neutral: Option<Expression>,
     /// The wanted weights, one per blendshape (the estimate, with the user's changes).
     pub target: Vec<f32>,
 }
@@ -256,8 +284,56 @@ impl Session {
             fingerprint,
             fps,
             frames,
+            neutral: None,
             edits: Edits::new(keyframe_every),
         }
+    }
+
+    /// The frame faces are read relative to: the user's, else the least expressive frame
+    /// with a face; `None` when no frame has one.
+    #[must_use]
+    pub fn neutral(&self) -> Option<Neutral> {
+        if let Some(frame) = self.neutral {
+            return Some(Neutral {
+                frame,
+                chosen: NeutralChoice::User,
+            });
+        }
+        let expressions: Vec<Option<&Expression>> =
+            self.frames.iter().map(|f| f.expression.as_ref()).collect();
+        crate::expression::least_expressive(&expressions).map(|frame| Neutral {
+            frame,
+            chosen: NeutralChoice::Automatic,
+        })
+    }
+
+    /// The neutral frame's expression.
+    #[must_use]
+    pub fn neutral_expression(&self) -> Option<&Expression> {
+        self.frames.get(self.neutral()?.frame)?.expression.as_ref()
+    }
+
+    /// Makes `frame` the neutral one (`None`: back to the automatic choice) and estimates
+    /// every frame again with `estimator` relative to it.
+    ///
+    /// # Errors
+    /// [`TakeError::PastTheEnd`] for a frame past the end, [`TakeError::NoFace`] for a frame
+    /// without a face, [`TakeError::Mismatch`] for another character's estimator.
+    pub fn set_neutral(
+        &mut self,
+        frame: Option<usize>,
+        estimator: &dyn Estimator,
+    ) -> Result<(), TakeError> {
+        if let Some(frame) = frame {
+            let frame = self.frame_index(frame)?;
+            if self.frames[frame].expression.is_none() {
+                return Err(TakeError::NoFace { frame });
+            }
+        }
+        let before = self.neutral;
+        self.neutral = frame;
+        self.reestimate(estimator)
+            .inspect_err(|_| self.neutral = before)
     }
 
     fn frame_index(&self, frame: usize) -> Result<usize, TakeError> {
@@ -580,7 +656,11 @@ impl Session {
                     let b = self.blendshape_index(name).ok()?;
                     target[b] = value;
                 }
-                Some(Correction { expression, target })
+                Some(Correction {
+                    expression,
+                    neutral: self.neutral_expression().cloned(),
+                    target,
+                })
             })
             .collect()
     }
@@ -602,7 +682,7 @@ impl Session {
         }
         let expressions: Vec<Option<&Expression>> =
             self.frames.iter().map(|f| f.expression.as_ref()).collect();
-        let estimates = estimate_frames(&expressions, estimator);
+        let estimates = estimate_frames(&expressions, estimator, self.neutral_expression());
         for (frame, estimate) in self.frames.iter_mut().zip(estimates) {
             frame.estimate = estimate;
         }
@@ -643,6 +723,16 @@ impl Session {
             if frame.estimate.iter().any(|w| !w.is_finite()) {
                 return bad(format!("frames[{k}].estimate is not finite"));
             }
+        }
+        if let Some(frame) = session.neutral
+            && session
+                .frames
+                .get(frame)
+                .is_none_or(|f| f.expression.is_none())
+        {
+            return bad(format!(
+                "neutral: frame {frame} is past the end or has no face"
+            ));
         }
         for (&frame, values) in &session.edits.corrections {
             if frame >= session.frames.len() {
@@ -687,17 +777,19 @@ impl Session {
     }
 }
 
-/// Per frame, the estimator's weights for its expression; frames without an expression take
-/// values interpolated from their neighbours (all zeros when no frame has a face).
+/// Per frame, the estimator's weights for its expression relative to `neutral`; frames without
+/// an expression take values interpolated from their neighbours (all zeros when no frame has a
+/// face).
 #[must_use]
 pub fn estimate_frames(
     expressions: &[Option<&Expression>],
     estimator: &dyn Estimator,
+    neutral: Option<&Expression>,
 ) -> Vec<Vec<f32>> {
     let width = estimator.blendshapes().len();
     let mut rows: Vec<Vec<f32>> = expressions
         .iter()
-        .map(|e| e.map_or_else(|| vec![0.0; width], |e| estimator.estimate(e)))
+        .map(|e| e.map_or_else(|| vec![0.0; width], |e| estimator.estimate(e, neutral)))
         .collect();
     let known: Vec<bool> = expressions.iter().map(Option::is_some).collect();
     faceanim_anim::filter::fill_gaps_rows(&mut rows, &known);
@@ -835,6 +927,69 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(error.contains("fps"), "{error}");
+    }
+
+    /// Reads "a" as the first score relative to the neutral's, "b" as the first score itself.
+    struct Relative;
+
+    impl Estimator for Relative {
+        fn blendshapes(&self) -> &[String] {
+            static NAMES: std::sync::LazyLock<Vec<String>> =
+                std::sync::LazyLock::new(|| vec!["a".to_owned(), "b".to_owned()]);
+            &NAMES
+        }
+        fn estimate(&self, e: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
+            let rest = neutral.map_or(0.0, |n| n.scores[1]);
+            vec![(e.scores[1] - rest).clamp(0.0, 1.0), e.scores[1]]
+        }
+        fn source(&self) -> crate::EstimatorSource {
+            crate::EstimatorSource::Adapter
+        }
+        fn calibrated(&self) -> bool {
+            true
+        }
+    }
+
+    #[test]
+    fn the_neutral_frame_is_the_least_expressive_until_the_user_names_one() {
+        // Frame i's face has its first ARKit score at |i − 3| / 10: frame 3 is at rest;
+        // frame 5 has no face.
+        let mut s = session(8);
+        for (i, frame) in s.frames.iter_mut().enumerate() {
+            let mut scores = vec![0.0; crate::expression::SCORES];
+            scores[1] = (i as f32 - 3.0).abs() / 10.0;
+            frame.expression = (i != 5).then(|| Expression {
+                scores,
+                landmarks: vec![0.0; crate::expression::LANDMARK_COORDINATES],
+            });
+        }
+        let automatic = s.neutral().unwrap();
+        assert_eq!(
+            (automatic.frame, automatic.chosen),
+            (3, NeutralChoice::Automatic)
+        );
+        s.set_neutral(Some(7), &Relative).unwrap();
+        assert_eq!(s.neutral().unwrap().chosen, NeutralChoice::User);
+        // Frame 0 (0.3) against frame 7 (0.4): below rest, so 0; frame 7 against itself: 0.
+        assert_eq!(s.frames[0].estimate, vec![0.0, 0.3]);
+        s.set_neutral(None, &Relative).unwrap();
+        assert!((s.frames[0].estimate[0] - 0.3).abs() < 1e-6);
+        // A frame without a face or past the end is refused, and nothing changes.
+        assert!(matches!(
+            s.set_neutral(Some(5), &Relative),
+            Err(TakeError::NoFace { frame: 5 })
+        ));
+        assert!(s.set_neutral(Some(8), &Relative).is_err());
+        assert_eq!(s.neutral().unwrap().frame, 3);
+        // Kept in the file, and checked when read.
+        s.set_neutral(Some(6), &Relative).unwrap();
+        let back = Session::from_json(s.to_json().as_bytes()).unwrap();
+        assert_eq!(back.neutral().unwrap().frame, 6);
+        let broken = s.to_json().replace("\"neutral\":6", "\"neutral\":5");
+        let error = Session::from_json(broken.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("neutral: frame 5"), "{error}");
     }
 
     #[test]

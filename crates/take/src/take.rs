@@ -121,10 +121,10 @@ impl Take {
         } = footage;
         let expressions: Vec<Option<Expression>> =
             records.iter().map(Expression::from_record).collect();
-        let estimates = estimate_frames(
-            &expressions.iter().map(Option::as_ref).collect::<Vec<_>>(),
-            estimator,
-        );
+        let faces: Vec<Option<&Expression>> = expressions.iter().map(Option::as_ref).collect();
+        // A new take is read relative to its least expressive frame until the user picks one.
+        let neutral = crate::expression::least_expressive(&faces).and_then(|k| faces[k]);
+        let estimates = estimate_frames(&faces, estimator, neutral);
         let frames = records
             .iter()
             .zip(expressions)

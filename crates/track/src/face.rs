@@ -119,6 +119,41 @@ fn sample(frame: &Frame<'_>, x: f32, y: f32) -> [f32; 3] {
     out
 }
 
+/// The 256×256 crop of `region`, bilinear, values 0..1, appended to `out`: [`sample`] at each
+/// crop pixel's centre, with the four taps read directly where they are all inside the frame
+/// (nearly everywhere; this is most of a tracked frame's work outside the networks).
+fn crop_into(frame: &Frame<'_>, region: &Region, out: &mut Vec<f32>) {
+    let (sin, cos) = region.rotation.sin_cos();
+    let step = region.size / 256.0;
+    let half = region.size / 2.0;
+    let (w, h) = (frame.width as isize, frame.height as isize);
+    let row_bytes = frame.width * 3;
+    for j in 0..256 {
+        let dy = (j as f32 + 0.5) * step - half;
+        for i in 0..256 {
+            let dx = (i as f32 + 0.5) * step - half;
+            let x = region.cx + dx * cos - dy * sin;
+            let y = region.cy + dx * sin + dy * cos;
+            let (sx, sy) = (x - 0.5, y - 0.5);
+            let (x0, y0) = (sx.floor(), sy.floor());
+            let (xi, yi) = (x0 as isize, y0 as isize);
+            if xi < 0 || yi < 0 || xi + 1 >= w || yi + 1 >= h {
+                out.extend(sample(frame, x, y).map(|v| v / 255.0));
+                continue;
+            }
+            let (fx, fy) = (sx - x0, sy - y0);
+            let top = yi as usize * row_bytes + xi as usize * 3;
+            let bottom = top + row_bytes;
+            let p = &frame.rgb;
+            for c in 0..3 {
+                let a = f32::from(p[top + c]) * (1.0 - fx) + f32::from(p[top + 3 + c]) * fx;
+                let b = f32::from(p[bottom + c]) * (1.0 - fx) + f32::from(p[bottom + 3 + c]) * fx;
+                out.push((a * (1.0 - fy) + b * fy) / 255.0);
+            }
+        }
+    }
+}
+
 impl FaceModels {
     /// The most confident face in `frame`, or `None` when there is none.
     ///
@@ -239,13 +274,21 @@ impl FaceModels {
             )
         };
         let mut crop = Vec::with_capacity(256 * 256 * 3);
-        for j in 0..256 {
-            for i in 0..256 {
-                let (x, y) = to_image(i as f32 + 0.5, j as f32 + 0.5);
-                crop.extend(sample(frame, x, y).map(|v| v / 255.0));
-            }
+        // Exactly the whole of a 256×256 frame (not nearly: then it is resampled).
+        const WHOLE: Region = Region {
+            cx: 128.0,
+            cy: 128.0,
+            size: 256.0,
+            rotation: 0.0,
+        };
+        let identity = frame.width == 256 && frame.height == 256 && region == WHOLE;
+        if identity {
+            // The frame is the crop (a render made for the network): no resampling.
+            crop.extend(frame.rgb.iter().map(|&v| f32::from(v) / 255.0));
+        } else {
+            crop_into(frame, &region, &mut crop);
         }
-        let out = self.landmarks(&crop)?;
+        let out = self.landmarks_of(crop)?;
         let scale = region.size / 256.0;
         let landmarks: Vec<[f32; 3]> = out
             .points

@@ -228,7 +228,12 @@ impl FaceModels {
     /// # Errors
     /// [`ModelError::Runtime`] if tract fails.
     pub fn landmarks(&self, rgb: &[f32]) -> Result<LandmarkOutput, ModelError> {
-        let input = tensor_from("face landmarks", &[1, 256, 256, 3], rgb)?;
+        self.landmarks_of(rgb.to_vec())
+    }
+
+    /// [`FaceModels::landmarks`] on a crop it may keep (no copy of the 786 KB input).
+    pub(crate) fn landmarks_of(&self, rgb: Vec<f32>) -> Result<LandmarkOutput, ModelError> {
+        let input = tensor_owned("face landmarks", &[1, 256, 256, 3], rgb)?;
         let out = Self::run("face landmarks", &self.landmarks, input)?;
         let flat = to_vec("face landmarks", &out[0])?;
         let logit = to_vec("face landmarks", &out[1])?
@@ -280,11 +285,20 @@ impl FaceModels {
 }
 
 fn tensor_from(model: &'static str, shape: &[usize], data: &[f32]) -> Result<Tensor, ModelError> {
-    tract_ndarray::Array::from_shape_vec(shape, data.to_vec())
+    tensor_owned(model, shape, data.to_vec())
+}
+
+fn tensor_owned(
+    model: &'static str,
+    shape: &[usize],
+    data: Vec<f32>,
+) -> Result<Tensor, ModelError> {
+    let count = data.len();
+    tract_ndarray::Array::from_shape_vec(shape, data)
         .map(Tensor::from)
         .map_err(|e| ModelError::Runtime {
             model,
-            message: format!("input of {} values for shape {shape:?}: {e}", data.len()),
+            message: format!("input of {count} values for shape {shape:?}: {e}"),
         })
 }
 

@@ -2,6 +2,10 @@
 //! Landmarker does in its video mode: the landmarks of one frame give the region of the next,
 //! and the detector runs only on the first frame and whenever the landmark network says the
 //! face is gone (presence below [`MIN_PRESENCE`]).
+//!
+//! [`Tracker::next_frames`] follows several frames at once, one per thread: they share the
+//! region of the last frame done (a frame or two older than MediaPipe's, well inside the
+//! region's margin at video rates), and a frame where the face is lost is done again alone.
 
 use crate::face::{REGION_SCALE, level_rotation};
 use crate::{Face, FaceModels, Frame, ModelError, Region};
@@ -98,6 +102,64 @@ impl<'m> Tracker<'m> {
                 Ok(None)
             }
         }
+    }
+}
+
+impl Tracker<'_> {
+    /// The faces in `frames` (consecutive frames of one video), tracked in parallel, one
+    /// thread per frame, from the region of the last frame done; the same as calling
+    /// [`Tracker::next_frame`] on each when there is no face to follow yet or it is lost.
+    ///
+    /// # Errors
+    /// [`ModelError`] if a frame is malformed or a model fails.
+    pub fn next_frames(
+        &mut self,
+        frames: &[Frame<'_>],
+    ) -> Result<Vec<Option<(Face, Found)>>, ModelError> {
+        let shared = match (self.mode, self.previous) {
+            (TrackingMode::Track, Some(previous)) if frames.len() > 1 => previous,
+            _ => return frames.iter().map(|f| self.next_frame(f)).collect(),
+        };
+        let (region, score) = shared;
+        let models = self.models;
+        let faces: Vec<Result<Face, ModelError>> = std::thread::scope(|scope| {
+            let others: Vec<_> = frames[1..]
+                .iter()
+                .map(|frame| scope.spawn(move || models.face_in_region(frame, region, score)))
+                .collect();
+            let mut faces = vec![models.face_in_region(&frames[0], region, score)];
+            faces.extend(others.into_iter().map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err(ModelError::Runtime {
+                        model: "face landmarks",
+                        message: "a tracking thread panicked".into(),
+                    })
+                })
+            }));
+            faces
+        });
+        let mut out = Vec::with_capacity(frames.len());
+        let mut shared_valid = true;
+        for (frame, face) in frames.iter().zip(faces) {
+            if shared_valid {
+                let face = face?;
+                if face.presence >= MIN_PRESENCE {
+                    self.stats.frames += 1;
+                    self.previous = Some((region_from_landmarks(&face.landmarks), score));
+                    out.push(Some((face, Found::Tracked)));
+                    continue;
+                }
+                // Lost: the frames from here are done one by one. When the shared region
+                // itself failed, this frame goes straight to the detector; otherwise an
+                // earlier frame of this batch gave a newer region, tried first.
+                shared_valid = false;
+                if self.previous == Some(shared) {
+                    self.previous = None;
+                }
+            }
+            out.push(self.next_frame(frame)?);
+        }
+        Ok(out)
     }
 }
 

@@ -176,6 +176,7 @@ pub fn start_training(
         samples,
         seed,
         exclusive,
+        augmentation: faceanim_adapt::Augmentation::default(),
     };
     let job = Job::new(JobKind::TrainingAdapter);
     let adapter_path = {
@@ -239,6 +240,7 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
             seed: 1,
             exclusive: faceanim_adapt::sampling::exclusive_pairs(&character, &[])
                 .map_err(|e| ApiError::Invalid(e.to_string()))?,
+            augmentation: faceanim_adapt::Augmentation::default(),
         };
         let dataset = dataset_for(job, &character, &options, &cache, false)?;
         let options = TrainOptions {

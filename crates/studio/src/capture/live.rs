@@ -8,7 +8,8 @@ use faceanim_anim::filter::{OneEuro, OneEuroState};
 use faceanim_capture::FrameRecord;
 use faceanim_media::Image;
 use faceanim_rig::Character;
-use faceanim_take::{Estimator, Expression, Footage};
+use faceanim_take::calibration::LiveNeutral;
+use faceanim_take::{Estimator, Expression, Footage, NeutralChoice};
 use faceanim_track::{Frame, Tracker, TrackingMode};
 
 use super::{CaptureDesk, LIVE_PREVIEW_HEIGHT, Previews, face_models, lock};
@@ -23,6 +24,8 @@ pub(super) struct Live {
     pub(super) estimator: Box<dyn Estimator>,
     started: Instant,
     filter: Option<OneEuroState>,
+    /// The performer's neutral face (Calibrate, or held still).
+    neutral: LiveNeutral,
     recording: Option<Recording>,
     frames: usize,
     /// Where each frame's face goes out over VMC, when the studio sends it.
@@ -40,6 +43,8 @@ impl Live {
         LiveView {
             frames: self.frames,
             recording: self.recording.as_ref().map(|r| r.records.len()),
+            neutral: self.neutral.chosen(),
+            calibrating: self.neutral.pending(),
         }
     }
 }
@@ -75,6 +80,8 @@ pub struct LiveResult {
     pub server_ms: f64,
     /// Frames recorded so far, while recording.
     pub recorded: Option<usize>,
+    /// Who chose the neutral face the frame was read against (`null`: none yet).
+    pub neutral: Option<NeutralChoice>,
 }
 
 impl CaptureDesk {
@@ -89,10 +96,24 @@ impl CaptureDesk {
             estimator: self.estimator(character),
             started: Instant::now(),
             filter: self.filtering.smoothing.map(OneEuroState::new),
+            neutral: LiveNeutral::default(),
             recording: None,
             frames: 0,
             performer: self.vmc.performer.clone(),
         });
+        Ok(())
+    }
+
+    /// Takes the next live frame with a face as the neutral one (the performer's Calibrate).
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when live tracking is off.
+    pub fn calibrate_live(&mut self) -> Result<(), ApiError> {
+        let mut live = lock(&self.live);
+        live.as_mut()
+            .ok_or(ApiError::Live("start live mode first"))?
+            .neutral
+            .calibrate();
         Ok(())
     }
 
@@ -181,6 +202,7 @@ impl LiveHandle {
                 head: None,
                 server_ms: started.elapsed().as_secs_f64() * 1000.0,
                 recorded: None,
+                neutral: None,
             });
         };
         let time = live.started.elapsed().as_secs_f32();
@@ -198,8 +220,9 @@ impl LiveHandle {
         live.frames += 1;
         let found = record.found.is_some();
         let expression = found.then(|| Expression::from_record(&record)).flatten();
+        live.neutral.observe(time, expression.as_ref());
         let mut weights = match &expression {
-            Some(e) => live.estimator.estimate(e),
+            Some(e) => live.estimator.estimate(e, live.neutral.neutral()),
             None => vec![0.0; character.blendshapes().len()],
         };
         if found && let Some(filter) = live.filter.as_mut() {
@@ -229,6 +252,7 @@ impl LiveHandle {
             head,
             server_ms: started.elapsed().as_secs_f64() * 1000.0,
             recorded,
+            neutral: live.neutral.chosen(),
         })
     }
 }

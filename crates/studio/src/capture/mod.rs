@@ -444,6 +444,26 @@ impl CaptureDesk {
         Ok(())
     }
 
+    /// Makes `frame` the take's neutral one (`None`: the least expressive) and estimates every
+    /// frame again relative to it with the desk's estimator.
+    ///
+    /// # Errors
+    /// [`ApiError::NoTake`] when no take is open, or the take's refusal (a frame past the end
+    /// or without a face).
+    pub fn set_neutral(
+        &mut self,
+        character: &Character,
+        frame: Option<usize>,
+    ) -> Result<(), ApiError> {
+        let estimator = self.estimator(character);
+        self.take_mut()?
+            .take
+            .session
+            .set_neutral(frame, estimator.as_ref())?;
+        self.save_take();
+        Ok(())
+    }
+
     /// Undoes (`back`) or redoes one edit of the take; false when there was none.
     ///
     /// # Errors
@@ -587,6 +607,10 @@ impl CaptureDesk {
                 loaded: self.adapter.is_some(),
                 note: self.adapter_note.clone(),
                 report: self.adapter.as_ref().map(|a| a.report.clone()),
+                calibrated: self
+                    .adapter
+                    .as_ref()
+                    .is_some_and(faceanim_take::Estimator::calibrated),
             },
             job: self.job.as_ref().map(|j| j.view()),
             filtering: FilteringView {

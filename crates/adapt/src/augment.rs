@@ -1,0 +1,417 @@
+//! Domain randomisation of the training renders, so the adapter learns the expression rather
+//! than one camera's and one light's landmarks.
+//!
+//! Samples come in small groups that share one [`Condition`]: a camera (distance 0.7–2.5×
+//! the front camera's, so the field of view that frames the face goes with it; yaw, pitch and
+//! roll up to ±25°), a light rig (key and fill direction, intensity and colour, ambient level,
+//! rim), the skin's albedo, textures on or off, a background (a colour or a gradient) and the
+//! picture's degradation (the face 100–256 pixels across, blur up to 1 pixel, noise, JPEG at
+//! quality 50–95). One group in [`FRONT_EVERY`] is the plain front render instead. The group's
+//! neutral face is rendered under the same condition, for neutral calibration. Within a group,
+//! each sample's crop is jittered (position and scale) as a tracker's crop from the previous
+//! frame's landmarks would be. The crop is levelled by the eyes, as MediaPipe's region is, so
+//! the camera's roll leaves a residual tilt of a few degrees in the crop.
+//!
+//! Everything is drawn from a seeded generator: a seed gives the same pictures every time.
+
+use faceanim_render::{Background, Camera, Image, Light, Shading};
+use glam::{Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// Whether training renders vary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Augmentation {
+    /// Every sample from the one front camera in the studio's light (the first version).
+    None,
+    /// Camera, light, skin, background and picture quality drawn per group of samples (the
+    /// default).
+    #[default]
+    Randomised,
+}
+
+impl Augmentation {
+    /// The name used on the command line and in reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Augmentation::None => "none",
+            Augmentation::Randomised => "randomised",
+        }
+    }
+}
+
+/// Samples that share one condition (and one neutral render).
+pub const GROUP: usize = 8;
+
+/// One group in this many is rendered from the front in the studio's light at full quality
+/// (the first version's pictures): the adapter keeps learning them, and every training set can
+/// say how it does on them.
+pub const FRONT_EVERY: usize = 8;
+
+/// Where the face is in the world: the centre of the tracker's crop on the face, and the
+/// crop's side, both measured on the character's neutral front render.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FaceFrame {
+    /// Centre of the crop, on the plane of the face.
+    pub centre: Vec3,
+    /// Side of the crop, world units.
+    pub side: f32,
+    /// Distance of the front camera from `centre`.
+    pub distance: f32,
+    /// How far the head reaches behind `centre`.
+    pub depth: f32,
+}
+
+/// One group's camera, light and picture quality.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Condition {
+    /// Unit vector from the face towards the camera.
+    pub direction: Vec3,
+    /// Camera distance, as a multiple of the front camera's.
+    pub distance: f32,
+    /// Tilt left in the crop after levelling, radians.
+    pub tilt: f32,
+    /// Light, background, albedo, textures.
+    pub shading: Shading,
+    /// Pixels the face is rendered at before being scaled to the network's 256.
+    pub resolution: u32,
+    /// Gaussian blur, pixels (of the 256 crop).
+    pub blur: f32,
+    /// Gaussian noise, in 0..255 units.
+    pub noise: f32,
+    /// JPEG quality, when the picture is compressed.
+    pub jpeg: Option<u8>,
+}
+
+/// Per sample: where the crop sits around the face.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Jitter {
+    /// Offset of the crop's centre, as fractions of its side (right, up).
+    pub offset: [f32; 2],
+    /// Crop side, as a multiple of the face's.
+    pub scale: f32,
+}
+
+impl Jitter {
+    /// No jitter: the crop the neutral face gets.
+    pub const NONE: Jitter = Jitter {
+        offset: [0.0, 0.0],
+        scale: 1.0,
+    };
+
+    /// A tracker's crop: a few percent off centre and in size.
+    pub fn draw(rng: &mut impl rand::Rng) -> Jitter {
+        Jitter {
+            offset: [rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05)],
+            scale: rng.random_range(0.92..1.1),
+        }
+    }
+}
+
+fn degrees(rng: &mut impl rand::Rng, limit: f32) -> f32 {
+    rng.random_range(-limit..limit).to_radians()
+}
+
+fn colour(rng: &mut impl rand::Rng, lo: f32, hi: f32) -> Vec3 {
+    Vec3::new(
+        rng.random_range(lo..hi),
+        rng.random_range(lo..hi),
+        rng.random_range(lo..hi),
+    )
+}
+
+/// A light's colour: white warmed or cooled, times an intensity drawn from `intensity`.
+fn temperature(rng: &mut impl rand::Rng, intensity: std::ops::Range<f32>) -> Vec3 {
+    let intensity = rng.random_range(intensity);
+    let t = rng.random_range(-1.0f32..1.0);
+    Vec3::new(1.0 + 0.18 * t, 1.0, 1.0 - 0.18 * t) * intensity
+}
+
+/// A direction from the face: `azimuth` to the right of the camera axis, `elevation` up.
+fn direction(azimuth: f32, elevation: f32) -> Vec3 {
+    Vec3::new(
+        azimuth.sin() * elevation.cos(),
+        elevation.sin(),
+        azimuth.cos() * elevation.cos(),
+    )
+}
+
+impl Condition {
+    /// The front camera in the studio's light, at full quality.
+    #[must_use]
+    pub fn canonical() -> Condition {
+        Condition {
+            direction: Vec3::Z,
+            distance: 1.0,
+            tilt: 0.0,
+            shading: Shading::default(),
+            resolution: 256,
+            blur: 0.0,
+            noise: 0.0,
+            jpeg: None,
+        }
+    }
+
+    /// A random condition (see the module docs for the ranges).
+    pub fn draw(rng: &mut impl rand::Rng) -> Condition {
+        let (yaw, pitch, roll) = (degrees(rng, 25.0), degrees(rng, 25.0), degrees(rng, 25.0));
+        // The crop is levelled by the eyes: of the roll, a few degrees stay.
+        let tilt = roll * 0.15 + degrees(rng, 3.0);
+        let key = Light {
+            direction: direction(
+                degrees(rng, 75.0),
+                rng.random_range(-25f32..65.0).to_radians(),
+            ),
+            colour: temperature(rng, 0.3..1.0),
+        };
+        let fill = Light {
+            direction: direction(degrees(rng, 120.0), degrees(rng, 40.0)),
+            colour: temperature(rng, 0.0..0.4),
+        };
+        let ambient = temperature(rng, 0.06..0.4);
+        let background = if rng.random_bool(0.5) {
+            Background::Solid(colour(rng, 0.0, 1.0))
+        } else {
+            Background::Gradient {
+                top: colour(rng, 0.0, 1.0),
+                bottom: colour(rng, 0.0, 1.0),
+            }
+        };
+        // Lighter and darker skin, a little redder or yellower.
+        let albedo = Vec3::new(1.0, rng.random_range(0.82..1.0), rng.random_range(0.7..1.0))
+            * rng.random_range(0.45f32..1.15);
+        let resolution = if rng.random_bool(0.4) {
+            256
+        } else {
+            rng.random_range(100..256)
+        };
+        Condition {
+            direction: Quat::from_rotation_y(yaw) * Quat::from_rotation_x(-pitch) * Vec3::Z,
+            distance: rng.random_range(0.7f32.ln()..2.5f32.ln()).exp(),
+            tilt,
+            shading: Shading {
+                key,
+                fill,
+                ambient,
+                rim: rng.random_range(0.0..0.4),
+                background,
+                albedo,
+                textures: rng.random_bool(0.75),
+                // Small renders are scaled up, where aliasing would show; large ones are
+                // softened by the scaling, blur and compression anyway.
+                supersample: if resolution >= 160 { 1 } else { 2 },
+            },
+            resolution,
+            blur: if rng.random_bool(0.4) {
+                rng.random_range(0.3..1.0)
+            } else {
+                0.0
+            },
+            noise: rng.random_range(0.0..4.0),
+            jpeg: rng.random_bool(0.5).then(|| rng.random_range(50..95)),
+        }
+    }
+
+    /// The camera that renders the crop of `face` under this condition with `jitter`: the
+    /// face's crop fills the picture, seen from this condition's direction and distance.
+    #[must_use]
+    pub fn camera(&self, face: &FaceFrame, jitter: Jitter) -> Camera {
+        let distance = face.distance * self.distance;
+        let direction = self.direction.normalize_or(Vec3::Z);
+        // Up is the world's, tilted about the viewing axis.
+        let right = Vec3::Y.cross(direction).normalize_or(Vec3::X);
+        let up = direction.cross(right);
+        let up = Quat::from_axis_angle(direction, self.tilt) * up;
+        let right = up.cross(direction);
+        let side = face.side * jitter.scale;
+        let target = face.centre + (right * jitter.offset[0] + up * jitter.offset[1]) * face.side;
+        let eye = target + direction * distance;
+        let fov = 2.0 * (0.5 * side / distance).atan();
+        Camera::looking_at(eye, target, up, fov, face.depth + face.side)
+    }
+
+    /// The picture as the network gets it: rendered at this condition's resolution, scaled to
+    /// `size`, blurred, noised and JPEG-compressed as drawn; `rng` draws the noise.
+    #[must_use]
+    pub fn degrade(&self, image: Image, size: u32, rng: &mut impl rand::Rng) -> Image {
+        let mut image = if image.width == size {
+            image
+        } else {
+            resize(&image, size)
+        };
+        if self.blur > 0.0 {
+            blur(&mut image, self.blur);
+        }
+        if self.noise > 0.0 {
+            for v in &mut image.rgb {
+                // Nearly normal: the sum of four uniform numbers (one 64-bit draw), centred and
+                // scaled to unit deviation — far cheaper than Box–Muller per channel.
+                let bits: u64 = rng.random();
+                let sum: f32 = (0..4)
+                    .map(|k| f32::from((bits >> (16 * k)) as u16) / 65535.0)
+                    .sum();
+                let n = (sum - 2.0) * 3f32.sqrt();
+                *v = to_byte(f32::from(*v) + n * self.noise);
+            }
+        }
+        if let Some(quality) = self.jpeg
+            && let Some(decoded) = jpeg_round_trip(&image, quality)
+        {
+            image = decoded;
+        }
+        image
+    }
+}
+
+/// A channel value rounded and clamped to a byte.
+fn to_byte(v: f32) -> u8 {
+    // `as` saturates: negative values give 0, large ones 255.
+    (v + 0.5) as u8
+}
+
+/// Bilinear scaling of a square picture to `size`×`size`.
+#[must_use]
+pub fn resize(image: &Image, size: u32) -> Image {
+    let (w, h) = (image.width as usize, image.height as usize);
+    let mut rgb = Vec::with_capacity((size * size * 3) as usize);
+    let (sx, sy) = (w as f32 / size as f32, h as f32 / size as f32);
+    for y in 0..size as usize {
+        let fy = ((y as f32 + 0.5) * sy - 0.5).clamp(0.0, (h - 1) as f32);
+        let (y0, ty) = (fy.floor() as usize, fy.fract());
+        let y1 = (y0 + 1).min(h - 1);
+        for x in 0..size as usize {
+            let fx = ((x as f32 + 0.5) * sx - 0.5).clamp(0.0, (w - 1) as f32);
+            let (x0, tx) = (fx.floor() as usize, fx.fract());
+            let x1 = (x0 + 1).min(w - 1);
+            for c in 0..3 {
+                let at = |xx: usize, yy: usize| f32::from(image.rgb[(yy * w + xx) * 3 + c]);
+                let top = at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx;
+                let bottom = at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx;
+                rgb.push(to_byte(top * (1.0 - ty) + bottom * ty));
+            }
+        }
+    }
+    Image {
+        width: size,
+        height: size,
+        rgb,
+    }
+}
+
+/// Separable Gaussian blur of standard deviation `sigma` pixels, edges clamped.
+pub fn blur(image: &mut Image, sigma: f32) {
+    let radius = (2.0 * sigma).ceil() as i64;
+    let kernel: Vec<f32> = (-radius..=radius)
+        .map(|k| (-(k * k) as f32 / (2.0 * sigma * sigma)).exp())
+        .collect();
+    let total: f32 = kernel.iter().sum();
+    let (w, h) = (image.width as i64, image.height as i64);
+    let pass = |source: &[u8], horizontal: bool| -> Vec<u8> {
+        let mut out = vec![0u8; source.len()];
+        for y in 0..h {
+            for x in 0..w {
+                for c in 0..3 {
+                    let mut sum = 0.0;
+                    for (k, weight) in (-radius..=radius).zip(&kernel) {
+                        let (xx, yy) = if horizontal {
+                            ((x + k).clamp(0, w - 1), y)
+                        } else {
+                            (x, (y + k).clamp(0, h - 1))
+                        };
+                        sum += weight * f32::from(source[((yy * w + xx) * 3 + c) as usize]);
+                    }
+                    out[((y * w + x) * 3 + c) as usize] = to_byte(sum / total);
+                }
+            }
+        }
+        out
+    };
+    let across = pass(&image.rgb, true);
+    image.rgb = pass(&across, false);
+}
+
+/// The picture after a JPEG encoding at `quality` and decoding; `None` if either fails.
+fn jpeg_round_trip(image: &Image, quality: u8) -> Option<Image> {
+    let mut bytes = Vec::new();
+    jpeg_encoder::Encoder::new(&mut bytes, quality)
+        .encode(
+            &image.rgb,
+            u16::try_from(image.width).ok()?,
+            u16::try_from(image.height).ok()?,
+            jpeg_encoder::ColorType::Rgb,
+        )
+        .ok()?;
+    let decoded =
+        faceanim_media::decode_image(std::path::Path::new("augmented.jpg"), &bytes).ok()?;
+    (decoded.width == image.width as usize && decoded.height == image.height as usize).then_some(
+        Image {
+            width: image.width,
+            height: image.height,
+            rgb: decoded.rgb,
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng as _;
+
+    #[test]
+    fn conditions_stay_in_their_ranges() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..500 {
+            let c = Condition::draw(&mut rng);
+            let off_axis = c.direction.angle_between(Vec3::Z).to_degrees();
+            assert!(off_axis <= 36.0, "{off_axis}");
+            assert!((0.7..=2.5).contains(&c.distance));
+            assert!(c.tilt.abs().to_degrees() <= 7.0);
+            assert!((100..=256).contains(&c.resolution));
+        }
+    }
+
+    #[test]
+    fn the_crop_camera_centres_the_face() {
+        let face = FaceFrame {
+            centre: Vec3::new(0.1, 1.6, 0.05),
+            side: 0.25,
+            distance: 0.8,
+            depth: 0.2,
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..50 {
+            let c = Condition::draw(&mut rng);
+            let camera = c.camera(&face, Jitter::NONE);
+            let centre = camera.view_projection.project_point3(face.centre);
+            assert!(centre.x.abs() < 1e-3 && centre.y.abs() < 1e-3, "{centre}");
+        }
+    }
+
+    #[test]
+    fn degrading_keeps_the_size_and_roughly_the_picture() {
+        let mut image = Image::filled(120, 120, [200, 120, 80]);
+        image.rgb[3 * (60 * 120 + 60)] = 0;
+        let condition = Condition {
+            resolution: 120,
+            blur: 1.0,
+            noise: 3.0,
+            jpeg: Some(60),
+            ..Condition::canonical()
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let out = condition.degrade(image, 256, &mut rng);
+        assert_eq!(
+            (out.width, out.height, out.rgb.len()),
+            (256, 256, 256 * 256 * 3)
+        );
+        let mean_red = out
+            .rgb
+            .iter()
+            .step_by(3)
+            .map(|&v| f32::from(v))
+            .sum::<f32>()
+            / (256.0 * 256.0);
+        assert!((mean_red - 200.0).abs() < 6.0, "{mean_red}");
+    }
+}
