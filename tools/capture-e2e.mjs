@@ -200,6 +200,15 @@ try {
   state = await captureState();
   check(state.adapter.loaded && state.take.estimator === 'adapter', 'the take was not re-estimated by the new adapter');
   measurements.adapter_test_mae_300 = state.adapter.report.mae_test;
+  // The adapter reads faces against the take's neutral frame: the least expressive until the
+  // animator names one, here the frame under the playhead.
+  check(state.adapter.calibrated && state.take.neutral && state.take.neutral.chosen === 'automatic', `no automatic neutral frame: ${JSON.stringify(state.take.neutral)}`);
+  await page.click('#neutral-frame');
+  await page.waitForFunction(() => window.studio.capture.view.take.neutral.chosen === 'user', null, { timeout: 30000 });
+  const named = (await captureState()).take.neutral.frame;
+  check((await page.textContent('#neutral-info')).includes(`frame ${named} (yours)`), 'the page does not say which frame is neutral');
+  await page.click('#neutral-auto');
+  await page.waitForFunction(() => window.studio.capture.view.take.neutral.chosen === 'automatic', null, { timeout: 30000 });
 
   // 7. A training can be cancelled.
   await page.fill('#train-samples', '20000');
@@ -236,6 +245,10 @@ try {
   Object.assign(measurements, { live_max_jaw_open: live.max, live_min_jaw_open: live.min, live_fps: live.fps, live_latency_ms: live.latency, live_server_ms: live.server });
   check(live.max > 0.4, `live mode never opened the jaw past 0.4 (max ${live.max})`);
   check(live.min < 0.2, `live mode never shut the jaw (min ${live.min})`);
+  // Calibrate: the next face is the performer's neutral, and the page says so.
+  await page.click('#calibrate');
+  await page.waitForFunction(() => window.studio.capture.live.neutral === 'user', null, { timeout: 30000 });
+  check((await page.textContent('#live-neutral')).includes('calibrated'), 'the page does not say the neutral is calibrated');
   await shot('08-live');
 
   // 10. Record a take from the webcam into the timeline.

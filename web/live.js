@@ -57,6 +57,7 @@ async function startLive() {
   /** @type {HTMLButtonElement} */ ($('record')).disabled = false;
   /** @type {HTMLButtonElement} */ ($('calibrate')).disabled = false;
   live.neutral = null;
+  calibrating = false;
   showNeutral();
   pause();
   const track = stream.getVideoTracks()[0];
@@ -195,6 +196,7 @@ function send(pixels, width, height, format, captured, sent) {
       applyLayer();
       live.recorded = result.recorded ?? null;
       live.neutral = result.neutral ?? null;
+      if (live.neutral === 'user') calibrating = false;
       showNeutral();
       if (result.recorded !== null && result.recorded !== undefined) $('record').textContent = `Stop (${result.recorded})`;
     })
@@ -246,17 +248,17 @@ const NEUTRAL_TEXT = {
   user: 'Neutral: calibrated.',
   automatic: 'Neutral: taken while you held still (Calibrate to choose it).',
 };
+/** Calibrate was pressed and no frame has come back since. */
+let calibrating = false;
 /** Says which neutral face the live frames are read against. */
 function showNeutral() {
   if (!live.running) return;
-  const view = currentView();
-  const waiting = view && view.live && view.live.calibrating;
-  $('live-neutral').textContent = waiting ? 'Calibrating: relax your face…'
+  $('live-neutral').textContent = calibrating ? 'Calibrating: relax your face…'
     : live.neutral ? NEUTRAL_TEXT[live.neutral] || ''
       : 'No neutral yet: relax and hold still, or press Calibrate.';
 }
 $('calibrate').onclick = async () => {
-  if (await post('api/capture/live/calibrate', {})) showNeutral();
+  if (await post('api/capture/live/calibrate', {})) { calibrating = true; showNeutral(); }
 };
 $('record').onclick = async () => {
   const view = currentView();

@@ -59,7 +59,7 @@ pub enum NeutralSource {
     Given,
     /// The least expressive still.
     LeastExpressive,
-    /// None was found (no face anywhere); the adapter's typical neutral was used.
+    /// Fewer than two stills had a face: the adapter's typical neutral was used.
     Typical,
 }
 

@@ -25,6 +25,8 @@ impl From<candle_core::Error> for AdaptError {
 
 /// In fine-tuning, the corrections' loss beside each batch's of the training set.
 const CORRECTION_WEIGHT: f64 = 0.25;
+/// In fine-tuning, the slope of the corrections' output outside [0, 1].
+const LEAK: f64 = 0.1;
 
 /// How to train.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -247,10 +249,14 @@ fn epoch(
         let y = train.y.index_select(&index, 0)?;
         let mut loss = candle_nn::loss::mse(&net.forward(&x)?, &y)?;
         if let Some(corrected) = corrections {
-            // Before the clamp: a shape the adapter reads far below 0 (clamped to 0, so no
-            // gradient there) must still be pulled up to the user's value.
-            let raw = candle_nn::loss::mse(&net.raw(&corrected.x)?, &corrected.y)?;
-            loss = (loss + (raw * CORRECTION_WEIGHT)?)?;
+            // Through a leaky clamp: a shape the adapter reads far below 0 (clamped to 0, so
+            // no gradient there) must still be pulled up to the user's value, while the shapes
+            // at rest, also far below 0, are only nudged.
+            let raw = net.raw(&corrected.x)?;
+            let clamped = raw.clamp(0f32, 1f32)?;
+            let leaky = (&clamped + ((raw - &clamped)? * LEAK)?)?;
+            let fit = candle_nn::loss::mse(&leaky, &corrected.y)?;
+            loss = (loss + (fit * CORRECTION_WEIGHT)?)?;
         }
         optimizer.backward_step(&loss)?;
     }
@@ -404,7 +410,7 @@ pub struct FinetuneReport {
 
 /// Fine-tunes `adapter` on `corrections` (the offline mode), mixed with its training set so it
 /// does not forget the character: every step fits a batch of the training split and, at a
-/// quarter of its weight, the corrected frames — their loss taken before the output clamp, so a
+/// quarter of its weight, the corrected frames — their outputs through a leaky clamp, so a
 /// shape the adapter reads far below 0 is still pulled up —, the step is a third of
 /// training's, and the kept epoch is the one that fits the corrections best while the
 /// validation MAE stays within 5% of where it started.

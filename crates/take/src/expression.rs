@@ -58,13 +58,20 @@ impl Expression {
 }
 
 /// The frame whose face is nearest to rest (least [`Expression::energy`]), the automatic
-/// neutral of a take; `None` when no frame has a face.
+/// neutral of a take; `None` when fewer than two frames have a face (a single picture is not
+/// read against itself: an adapter then uses the neutral face typical of its training).
 #[must_use]
 pub fn least_expressive(expressions: &[Option<&Expression>]) -> Option<usize> {
-    expressions
+    let faces: Vec<(usize, f32)> = expressions
         .iter()
         .enumerate()
         .filter_map(|(k, e)| e.map(|e| (k, e.energy())))
+        .collect();
+    if faces.len() < 2 {
+        return None;
+    }
+    faces
+        .into_iter()
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(k, _)| k)
 }
