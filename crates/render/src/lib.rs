@@ -592,3 +592,39 @@ pub fn contact_sheet(character: &Character, cell: u32) -> Image {
     }
     sheet
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_gamma_table_is_powf_within_a_hair() {
+        for k in 1..=4000 {
+            let x = k as f32 / 1000.0;
+            let exact = x.powf(1.0 / 2.2);
+            assert!(
+                (display(x) - exact).abs() < 2e-4,
+                "{x}: {} vs {exact}",
+                display(x)
+            );
+        }
+        assert!(display(-1.0).abs() < 1e-9);
+        assert!((display(9.0) - GAMMA_RANGE.powf(1.0 / 2.2)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn unprojecting_a_projected_point_finds_it_again() {
+        let camera = Camera::looking_at(
+            Vec3::new(0.3, 1.7, 0.9),
+            Vec3::new(0.0, 1.6, 0.0),
+            Vec3::Y,
+            40f32.to_radians(),
+            0.5,
+        );
+        let point = Vec3::new(0.05, 1.63, 0.02);
+        let ndc = camera.view_projection.project_point3(point);
+        let (x, y) = ((ndc.x + 1.0) * 128.0, (1.0 - ndc.y) * 128.0);
+        let found = camera.unproject(256.0, x, y, point).unwrap();
+        assert!(found.distance(point) < 1e-4, "{found} vs {point}");
+    }
+}
