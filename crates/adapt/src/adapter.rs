@@ -87,7 +87,8 @@ pub struct TrainingReport {
     #[serde(default)]
     pub corrections: usize,
     /// Mean absolute error on the test split's front renders (the studio's light, full
-    /// quality): the project's plain renders, also when training varied them.
+    /// quality): the project's plain renders, also when training varied them
+    /// ([`Adapter::front_test_error`]).
     #[serde(default)]
     pub mae_test_front: Option<f32>,
 }
@@ -207,21 +208,10 @@ impl Adapter {
     /// each read relative to its own neutral.
     #[must_use]
     pub fn mean_absolute_error(&self, dataset: &crate::Dataset) -> f32 {
-        self.mean_absolute_error_over(dataset, 0..dataset.len())
+        self.mean_absolute_error_of(dataset, 0..dataset.len())
     }
 
-    /// [`Adapter::mean_absolute_error`] over the samples of `range` only (a split's test part,
-    /// say).
-    #[must_use]
-    pub fn mean_absolute_error_over(
-        &self,
-        dataset: &crate::Dataset,
-        range: std::ops::Range<usize>,
-    ) -> f32 {
-        self.mean_absolute_error_of(dataset, range)
-    }
-
-    /// [`Adapter::mean_absolute_error`] over the samples `indices`.
+    /// [`Adapter::mean_absolute_error`] over the samples `indices` (a split's test part, say).
     #[must_use]
     pub fn mean_absolute_error_of(
         &self,
@@ -245,6 +235,18 @@ impl Adapter {
             }
         }
         (sum / count.max(1) as f64) as f32
+    }
+
+    /// [`Adapter::mean_absolute_error`] over the front renders of `dataset`'s test split;
+    /// `None` when it has none.
+    #[must_use]
+    pub fn front_test_error(&self, dataset: &crate::Dataset) -> Option<f32> {
+        let front: Vec<usize> = dataset
+            .split()
+            .test
+            .filter(|&k| dataset.is_front(k))
+            .collect();
+        (!front.is_empty()).then(|| self.mean_absolute_error_of(dataset, front))
     }
 
     /// Whether this adapter can drive `character`: the same blendshape names in the same

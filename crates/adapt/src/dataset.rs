@@ -323,14 +323,9 @@ impl Dataset {
         let draws = sampler.draw(options.samples, options.seed);
         let done = AtomicUsize::new(0);
         let total = draws.len();
-        // The canonical condition's neutral is the same for every group: read it once.
-        let canonical_neutral = match options.augmentation {
-            Augmentation::None => {
-                let pose = character.pose(&[]);
-                read(models, &camera.crop(character, &pose))?.0
-            }
-            Augmentation::Randomised => None,
-        };
+        // The front render's neutral is the same for every front group: read it once.
+        let front_neutral = read(models, &camera.crop(character, &character.pose(&[])))?.0;
+        let varied = options.augmentation == Augmentation::Randomised;
         let groups: Vec<Group> = draws
             .par_chunks(augment::GROUP)
             .enumerate()
@@ -341,41 +336,37 @@ impl Dataset {
                 let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
                     options.seed ^ (index as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
                 );
-                let group = match options.augmentation {
-                    Augmentation::None => Group {
-                        front: true,
-                        neutral: canonical_neutral.clone(),
-                        samples: weights
-                            .iter()
-                            .map(|w| camera.expression(character, models, w, pose))
-                            .collect::<Result<_, _>>()?,
-                    },
-                    Augmentation::Randomised => {
-                        let front = index % augment::FRONT_EVERY == 0;
-                        let condition = if front {
-                            Condition::canonical()
-                        } else {
-                            Condition::draw(&mut rng)
-                        };
-                        let mut at =
-                            |w: &[f32], jitter: Jitter, rng: &mut rand_chacha::ChaCha8Rng| {
-                                character.pose_into(w, pose);
-                                let picture =
-                                    camera.picture(character, pose, &condition, jitter, rng);
-                                read(models, &picture)
-                            };
-                        let neutral = at(&[], Jitter::NONE, &mut rng)?.0;
-                        let mut samples = Vec::with_capacity(weights.len());
-                        for w in weights {
-                            let jitter = Jitter::draw(&mut rng);
-                            samples.push(at(w, jitter, &mut rng)?);
-                        }
-                        Group {
-                            front,
-                            neutral,
-                            samples,
-                        }
-                    }
+                let front = !varied || index % augment::FRONT_EVERY == 0;
+                let condition = if front {
+                    Condition::canonical()
+                } else {
+                    Condition::draw(&mut rng)
+                };
+                let mut at = |w: &[f32], jitter: Jitter, rng: &mut rand_chacha::ChaCha8Rng| {
+                    character.pose_into(w, pose);
+                    read(
+                        models,
+                        &camera.picture(character, pose, &condition, jitter, rng),
+                    )
+                };
+                let neutral = if front {
+                    front_neutral.clone()
+                } else {
+                    at(&[], Jitter::NONE, &mut rng)?.0
+                };
+                let mut samples = Vec::with_capacity(weights.len());
+                for w in weights {
+                    let jitter = if varied {
+                        Jitter::draw(&mut rng)
+                    } else {
+                        Jitter::NONE
+                    };
+                    samples.push(at(w, jitter, &mut rng)?);
+                }
+                let group = Group {
+                    front,
+                    neutral,
+                    samples,
                 };
                 (control.progress)(
                     done.fetch_add(weights.len(), Ordering::Relaxed) + weights.len(),
@@ -473,26 +464,8 @@ impl Dataset {
     pub fn to_bytes(&self) -> Result<Vec<u8>, AdaptError> {
         let n = self.len();
         let targets: Vec<f32> = self.targets.concat();
-        let scores: Vec<f32> = self
-            .expressions
-            .iter()
-            .flat_map(|e| e.scores.iter().copied())
-            .collect();
-        let landmarks: Vec<f32> = self
-            .expressions
-            .iter()
-            .flat_map(|e| e.landmarks.iter().copied())
-            .collect();
-        let neutral_scores: Vec<f32> = self
-            .neutrals
-            .iter()
-            .flat_map(|e| e.scores.iter().copied())
-            .collect();
-        let neutral_landmarks: Vec<f32> = self
-            .neutrals
-            .iter()
-            .flat_map(|e| e.landmarks.iter().copied())
-            .collect();
+        let (scores, landmarks) = columns(&self.expressions);
+        let (neutral_scores, neutral_landmarks) = columns(&self.neutrals);
         // Indices are far below 2^24, where f32 holds every integer.
         let neutral_of: Vec<f32> = self.neutral_of.iter().map(|&i| i as f32).collect();
         let front: Vec<f32> = self.front.iter().map(|&f| f32::from(u8::from(f))).collect();
@@ -600,6 +573,13 @@ impl Dataset {
 }
 
 const DATASET_FORMAT: &str = "faceanim-dataset-3";
+
+/// The scores and the landmarks of `expressions`, each as one row-major matrix.
+fn columns(expressions: &[Expression]) -> (Vec<f32>, Vec<f32>) {
+    let scores = expressions.iter().flat_map(|e| e.scores.iter().copied());
+    let landmarks = expressions.iter().flat_map(|e| e.landmarks.iter().copied());
+    (scores.collect(), landmarks.collect())
+}
 
 /// One group's reads: its neutral and its samples.
 struct Group {

@@ -386,10 +386,7 @@ pub fn train(
         corrections: 0,
         mae_test_front: None,
     };
-    let front: Vec<usize> = split.test.filter(|&k| dataset.is_front(k)).collect();
-    if !front.is_empty() {
-        adapter.report.mae_test_front = Some(adapter.mean_absolute_error_of(dataset, front));
-    }
+    adapter.report.mae_test_front = adapter.front_test_error(dataset);
     Ok(adapter)
 }
 
@@ -513,8 +510,6 @@ pub fn finetune(
     tuned.report.mae_test = report.test_after;
     tuned.report.mae_val = kept.mae(&validation.x, &validation.y)?;
     tuned.report.corrections += corrections.len();
-    let front: Vec<usize> = split.test.filter(|&k| dataset.is_front(k)).collect();
-    tuned.report.mae_test_front =
-        (!front.is_empty()).then(|| tuned.mean_absolute_error_of(dataset, front));
+    tuned.report.mae_test_front = tuned.front_test_error(dataset);
     Ok((tuned, report))
 }

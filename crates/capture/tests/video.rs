@@ -30,6 +30,17 @@ fn make_video(path: &std::path::Path) {
     faceanim_testdata::encode_video(path, (width, height), FPS, &codec, frames);
 }
 
+/// Captures the video at `path`, `at_once` frames together.
+fn capture_file(
+    models: &FaceModels,
+    path: &std::path::Path,
+    mode: TrackingMode,
+    at_once: usize,
+) -> faceanim_capture::Capture {
+    let mut source = FrameSource::open(path, 30.0).unwrap();
+    capture(models, &mut source, mode, at_once, |_| {}).unwrap()
+}
+
 #[test]
 fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
     let dir = tempfile::tempdir().unwrap();
@@ -75,25 +86,11 @@ fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
         "{} detector runs",
         result.detector_runs
     );
-    let every = capture(
-        &models,
-        &mut FrameSource::open(&path, 30.0).unwrap(),
-        TrackingMode::DetectEveryFrame,
-        1,
-        |_| {},
-    )
-    .unwrap();
+    let every = capture_file(&models, &path, TrackingMode::DetectEveryFrame, 1);
     assert_eq!(every.detector_runs, STORY.len());
     // Frame by frame, each frame's region from the one before: the same story, the same
     // detector runs as two at a time.
-    let single = capture(
-        &models,
-        &mut FrameSource::open(&path, 30.0).unwrap(),
-        TrackingMode::Track,
-        1,
-        |_| {},
-    )
-    .unwrap();
+    let single = capture_file(&models, &path, TrackingMode::Track, 1);
     assert_eq!(single.detector_runs, result.detector_runs);
     let single_clip = single.clip(Filtering::default()).unwrap();
     for (a, b) in clip.frames.iter().zip(&single_clip.frames) {
@@ -118,14 +115,7 @@ fn keyframes_every_five_are_interpolated_and_smoothing_is_separate() {
     let path = dir.path().join("ict.mp4");
     make_video(&path);
     let models = FaceModels::load().unwrap();
-    let result = capture(
-        &models,
-        &mut FrameSource::open(&path, 30.0).unwrap(),
-        TrackingMode::Track,
-        2,
-        |_| {},
-    )
-    .unwrap();
+    let result = capture_file(&models, &path, TrackingMode::Track, 2);
     let raw = result.clip(Filtering::default()).unwrap();
     let keyed = result
         .clip(Filtering {

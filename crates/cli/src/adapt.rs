@@ -171,16 +171,27 @@ fn held_out(dirs: &[PathBuf], character: &Character) -> anyhow::Result<Vec<HeldO
         .collect()
 }
 
+/// The face models, loaded on first use and kept: the ablation renders two training sets and
+/// measures every row on the held-out folders.
+fn face_models() -> anyhow::Result<&'static FaceModels> {
+    static MODELS: std::sync::OnceLock<FaceModels> = std::sync::OnceLock::new();
+    if let Some(models) = MODELS.get() {
+        return Ok(models);
+    }
+    let loaded = FaceModels::load_with_threads(1).context("loading the face models")?;
+    Ok(MODELS.get_or_init(|| loaded))
+}
+
 /// `adapter` on each held-out folder, each result printed as it comes.
 fn evaluate_held_out(adapter: &Adapter, folders: &[HeldOut]) -> anyhow::Result<Vec<Evaluation>> {
     if folders.is_empty() {
         return Ok(Vec::new());
     }
-    let models = FaceModels::load_with_threads(1).context("loading the face models")?;
+    let models = face_models()?;
     folders
         .iter()
         .map(|folder| {
-            let e = folder.evaluate(adapter, &models)?;
+            let e = folder.evaluate(adapter, models)?;
             eprintln!(
                 "held out {}: MAE {:.4} on {} of {} stills (predicting the mean: {:.4}, zeros: {:.4}; neutral: {:?}); worst: {}",
                 e.dir.display(),
@@ -274,8 +285,8 @@ fn dataset(
             Err(e) => eprintln!("{}: {e}; rendering a new one", cache.display()),
         }
     }
-    let models = FaceModels::load_with_threads(1).context("loading the face models")?;
-    let camera = FaceCamera::frame(character, &models)?;
+    let models = face_models()?;
+    let camera = FaceCamera::frame(character, models)?;
     for warning in camera.warnings() {
         eprintln!("warning: {warning}");
     }
@@ -286,7 +297,7 @@ fn dataset(
         );
     }
     let dataset = with_bar(options.samples, "rendering", |control| {
-        Dataset::generate(character, &models, &camera, options, control)
+        Dataset::generate(character, models, &camera, options, control)
     })?;
     let dropped = options.samples - dataset.len();
     if dropped > 0 {
@@ -408,19 +419,13 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
                 "seconds": seconds,
                 "seconds_dataset": dataset_seconds,
                 "seconds_training": report.seconds,
-                "augmentation": args.augmentation_name(),
+                "augmentation": Augmentation::from(args.augmentation).name(),
                 "calibration": adapter.architecture.calibration.name(),
                 "heldout": heldout,
             })
         );
     }
     Ok(())
-}
-
-impl AdaptArgs {
-    fn augmentation_name(&self) -> &'static str {
-        Augmentation::from(self.augmentation).name()
-    }
 }
 
 /// The seed's Table 1 on this character, extended: features × calibration × augmentation,
@@ -511,7 +516,7 @@ fn ablation(
         let front = datasets
             .iter()
             .find(|(a, _)| *a == Augmentation::None)
-            .map(|(_, d)| adapter.mean_absolute_error_over(d, d.split().test));
+            .map(|(_, d)| adapter.mean_absolute_error_of(d, d.split().test));
         eprintln!(
             "{} {} {} {} {:?} clamp={}: test MAE {:.4}",
             augmentation.name(),
@@ -533,7 +538,7 @@ fn ablation(
                     "calibration": a.calibration.name(), "hidden": a.hidden,
                     "activation": a.activation, "clamp": a.clamp,
                     "mae_test": r.mae_test, "mae_val": r.mae_val,
-                    "mae_front_test": f,
+                    "mae_front_renders_test": f,
                     "epochs": r.best_epoch, "seconds": r.seconds,
                     "heldout": h,
                 })
