@@ -6,8 +6,15 @@
 //!   and six keypoints; scores pass a sigmoid; overlapping boxes (IoU > 0.3) are merged by a
 //!   score-weighted mean, as MediaPipe's weighted non-maximum suppression does.
 //! - The face region is the box, turned so the eyes (keypoints 0 and 1) are level and enlarged
-//!   1.5×; it is resampled (bilinear) into the 256×256 landmark crop, and the landmarks are
-//!   mapped back into image pixels.
+//!   1.5× (MediaPipe enlarges width and height apart; BlazeFace's boxes are square to 1 part in
+//!   10⁵, so the region is kept square); it is resampled into the 256×256 landmark crop, and the
+//!   landmarks are mapped back into image pixels.
+//! - Both resamplings follow MediaPipe's CPU preprocessing to the pixel (OpenCV's warp: its
+//!   pixel-centre convention, positions rounded to 1/32 px, bilinear, the result rounded to 8
+//!   bits; black outside the frame for the detector, the edge repeated for the crop). Half a
+//!   pixel's difference here moved scores by up to 0.22; now landmarks agree with MediaPipe's
+//!   own runtime within 0.01 px and scores within 0.001 on the same pixels
+//!   (`tests/mediapipe_stills.rs`).
 
 use crate::{FaceModels, HeadPose, ModelError};
 
@@ -95,33 +102,79 @@ pub(crate) fn level_rotation(a: [f32; 2], b: [f32; 2]) -> f32 {
     -(-(b[1] - a[1])).atan2(b[0] - a[0])
 }
 
-/// Bilinear sample of `frame` at (x, y) pixels; outside the image is black.
-fn sample(frame: &Frame<'_>, x: f32, y: f32) -> [f32; 3] {
-    let (x, y) = (x - 0.5, y - 0.5);
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
+/// What a sample outside the frame reads, as MediaPipe's preprocessing has it: black for the
+/// detector's letterbox (`BORDER_ZERO`), the nearest edge pixel for the landmark crop
+/// (`BORDER_REPLICATE`, its default).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Border {
+    Zero,
+    Replicate,
+}
+
+/// Positions are rounded to 1/2^this of a pixel, as OpenCV's warps do (`INTER_BITS`).
+const SUBPIXEL_BITS: i32 = 5;
+
+/// The nearest integer, ties to even (OpenCV's `cvRound`), for |t| < 2^22, without the libm
+/// call `f32::round` is on x86-64's baseline (this runs a few hundred thousand times a frame).
+#[inline]
+fn round_even(t: f32) -> f32 {
+    const MAGIC: f32 = 12_582_912.0; // 1.5 × 2^23
+    (t + MAGIC) - MAGIC
+}
+
+/// A position rounded to 1/32 pixel: the pixel at or before it and the fraction past it.
+#[inline]
+fn subpixel(x: f32) -> (isize, f32) {
+    let q = round_even(x * (1 << SUBPIXEL_BITS) as f32) as i32;
+    (
+        (q >> SUBPIXEL_BITS) as isize,
+        (q & ((1 << SUBPIXEL_BITS) - 1)) as f32 / (1 << SUBPIXEL_BITS) as f32,
+    )
+}
+
+/// The pixel at (x, y) of `frame` read as MediaPipe's `ImageToTensorCalculator` reads it on
+/// the CPU (`cv::warpPerspective`, `INTER_LINEAR`): (x, y) in OpenCV's convention (pixel i's
+/// centre at i), rounded to 1/32 pixel; bilinear between the four pixels around it; rounded
+/// to 8 bits ([`round_half_up`]), as the warp's output image is before it becomes a tensor.
+fn sample(frame: &Frame<'_>, x: f32, y: f32, border: Border) -> [f32; 3] {
+    let ((x0, fx), (y0, fy)) = (subpixel(x), subpixel(y));
+    let (w, h) = (frame.width as isize, frame.height as isize);
     let mut out = [0.0; 3];
-    for (dx, dy, w) in [
-        (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
-        (1.0, 0.0, fx * (1.0 - fy)),
-        (0.0, 1.0, (1.0 - fx) * fy),
-        (1.0, 1.0, fx * fy),
+    for (dx, dy, weight) in [
+        (0, 0, (1.0 - fx) * (1.0 - fy)),
+        (1, 0, fx * (1.0 - fy)),
+        (0, 1, (1.0 - fx) * fy),
+        (1, 1, fx * fy),
     ] {
-        let (px, py) = (x0 + dx, y0 + dy);
-        if px < 0.0 || py < 0.0 || px >= frame.width as f32 || py >= frame.height as f32 {
-            continue;
+        let (mut px, mut py) = (x0 + dx, y0 + dy);
+        if px < 0 || py < 0 || px >= w || py >= h {
+            match border {
+                Border::Zero => continue,
+                Border::Replicate => (px, py) = (px.clamp(0, w - 1), py.clamp(0, h - 1)),
+            }
         }
         let i = (py as usize * frame.width + px as usize) * 3;
         for (o, &v) in out.iter_mut().zip(&frame.rgb[i..i + 3]) {
-            *o += w * f32::from(v);
+            *o += weight * f32::from(v);
         }
     }
-    out
+    out.map(round_half_up)
 }
 
-/// The 256×256 crop of `region`, bilinear, values 0..1, appended to `out`: [`sample`] at each
-/// crop pixel's centre, with the four taps read directly where they are all inside the frame
-/// (nearly everywhere; this is most of a tracked frame's work outside the networks).
+/// A bilinear value (0..=255) to 8 bits as OpenCV's fixed-point interpolation rounds it: halves
+/// up (`(sum + 2^14) >> 15`), not to even; a warp that halves an image meets halves on every
+/// other pixel.
+#[inline]
+fn round_half_up(v: f32) -> f32 {
+    (v + 0.5) as u32 as f32
+}
+
+/// The 256×256 landmark crop of `region`, values 0..1, appended to `out`. As MediaPipe's
+/// preprocessing maps it: crop pixel (i, j) reads the image at the region's centre plus the
+/// turned offset ((i/256 − ½)·size, (j/256 − ½)·size), in OpenCV's pixel convention, by
+/// [`sample`]. Where all four pixels around a position are inside the frame (nearly
+/// everywhere; this is most of a tracked frame's work outside the networks) they are read
+/// directly, without the border checks.
 fn crop_into(frame: &Frame<'_>, region: &Region, out: &mut Vec<f32>) {
     let (sin, cos) = region.rotation.sin_cos();
     let step = region.size / 256.0;
@@ -129,26 +182,23 @@ fn crop_into(frame: &Frame<'_>, region: &Region, out: &mut Vec<f32>) {
     let (w, h) = (frame.width as isize, frame.height as isize);
     let row_bytes = frame.width * 3;
     for j in 0..256 {
-        let dy = (j as f32 + 0.5) * step - half;
+        let dy = j as f32 * step - half;
         for i in 0..256 {
-            let dx = (i as f32 + 0.5) * step - half;
+            let dx = i as f32 * step - half;
             let x = region.cx + dx * cos - dy * sin;
             let y = region.cy + dx * sin + dy * cos;
-            let (sx, sy) = (x - 0.5, y - 0.5);
-            let (x0, y0) = (sx.floor(), sy.floor());
-            let (xi, yi) = (x0 as isize, y0 as isize);
+            let ((xi, fx), (yi, fy)) = (subpixel(x), subpixel(y));
             if xi < 0 || yi < 0 || xi + 1 >= w || yi + 1 >= h {
-                out.extend(sample(frame, x, y).map(|v| v / 255.0));
+                out.extend(sample(frame, x, y, Border::Replicate).map(|v| v / 255.0));
                 continue;
             }
-            let (fx, fy) = (sx - x0, sy - y0);
             let top = yi as usize * row_bytes + xi as usize * 3;
             let bottom = top + row_bytes;
             let p = &frame.rgb;
             for c in 0..3 {
                 let a = f32::from(p[top + c]) * (1.0 - fx) + f32::from(p[top + 3 + c]) * fx;
                 let b = f32::from(p[bottom + c]) * (1.0 - fx) + f32::from(p[bottom + 3 + c]) * fx;
-                out.push((a * (1.0 - fy) + b * fy) / 255.0);
+                out.push(round_half_up(a * (1.0 - fy) + b * fy) / 255.0);
             }
         }
     }
@@ -182,11 +232,13 @@ impl FaceModels {
             (side - frame.height as f32) / 2.0,
         );
         let mut input = Vec::with_capacity(128 * 128 * 3);
+        // MediaPipe's mapping of the letterboxed square onto the 128×128 input: input pixel
+        // (i, j) reads the square at (i, j)·side/128 in OpenCV's pixel convention.
         for j in 0..128 {
             for i in 0..128 {
-                let x = (i as f32 + 0.5) * side / 128.0 - pad_x;
-                let y = (j as f32 + 0.5) * side / 128.0 - pad_y;
-                input.extend(sample(frame, x, y).map(|v| v / 127.5 - 1.0));
+                let x = i as f32 * side / 128.0 - pad_x;
+                let y = j as f32 * side / 128.0 - pad_y;
+                input.extend(sample(frame, x, y, Border::Zero).map(|v| v / 127.5 - 1.0));
             }
         }
         let (regressors, logits) = self.detect(&input)?;

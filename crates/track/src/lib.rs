@@ -4,7 +4,9 @@
 //! binary so nothing is downloaded) run on the CPU with tract: the BlazeFace short-range
 //! detector, Face Mesh V2 (478 landmarks from a 256×256 crop) and the blendshape head (146
 //! landmarks to 52 scores). This module loads and runs the three networks; their outputs are
-//! tested against the reference runtime (LiteRT) in `tests/reference.rs`.
+//! tested against the reference runtime (LiteRT) in `tests/reference.rs`, and the whole
+//! per-frame pipeline against MediaPipe's own on the same pictures in
+//! `tests/mediapipe_stills.rs`.
 #![deny(missing_docs)]
 
 mod face;

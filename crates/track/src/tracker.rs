@@ -163,28 +163,23 @@ impl Tracker<'_> {
     }
 }
 
-/// The region for the next frame: turned so the outer eye corners (landmarks 33 and 263) are
-/// level, centred on the landmarks' box in that turned frame, its longer side enlarged as the
-/// detector's region is.
+/// The region for the next frame, as MediaPipe's video mode makes it from the landmarks:
+/// centred on their box in the image (upright, not turned with the face), its longer side
+/// enlarged as the detector's region is, and turned so the outer eye corners (landmarks 33 and
+/// 263) are level in the crop.
 #[must_use]
 pub fn region_from_landmarks(landmarks: &[[f32; 3]]) -> Region {
     let (a, b) = (landmarks[33], landmarks[263]);
-    let rotation = level_rotation([a[0], a[1]], [b[0], b[1]]);
-    let (sin, cos) = rotation.sin_cos();
-    // Into the face-aligned frame (inverse rotation), box there, centre back to the image.
     let (mut lo, mut hi) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
     for p in landmarks {
-        let u = p[0] * cos + p[1] * sin;
-        let v = -p[0] * sin + p[1] * cos;
-        lo = [lo[0].min(u), lo[1].min(v)];
-        hi = [hi[0].max(u), hi[1].max(v)];
+        lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+        hi = [hi[0].max(p[0]), hi[1].max(p[1])];
     }
-    let (u, v) = ((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0);
     Region {
-        cx: u * cos - v * sin,
-        cy: u * sin + v * cos,
+        cx: (lo[0] + hi[0]) / 2.0,
+        cy: (lo[1] + hi[1]) / 2.0,
         size: (hi[0] - lo[0]).max(hi[1] - lo[1]) * REGION_SCALE,
-        rotation,
+        rotation: level_rotation([a[0], a[1]], [b[0], b[1]]),
     }
 }
 
@@ -215,7 +210,9 @@ mod tests {
             (region.cx - 200.0).abs() < 0.5 && (region.cy - 150.0).abs() < 3.0,
             "{region:?}"
         );
-        // The grid spans 105 × 105 (22 columns, 22 rows): enlarged 1.5×.
-        assert!((region.size - 105.0 * 1.5).abs() < 1.0, "{}", region.size);
+        // The grid spans 105 × 105 (22 columns, 22 rows), turned 30°: its upright box in the
+        // image is 105 (cos 30° + sin 30°) across, enlarged 1.5×.
+        let across = 105.0 * (angle.cos() + angle.sin());
+        assert!((region.size - across * 1.5).abs() < 1.0, "{}", region.size);
     }
 }
