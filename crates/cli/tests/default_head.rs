@@ -95,3 +95,72 @@ fn render_writes_a_contact_sheet_and_single_poses() {
             .contains("'wiggleEars' is not a blendshape of faceanim-default")
     );
 }
+
+/// The face model reads the built-in head's shapes when another renderer draws them (issue 17,
+/// item 6): three.js in Chromium (`tools/heldout-stills.mjs`, its own lens, lights and PBR
+/// materials, a face about 100 px across) renders the neutral head and each of the 51 shapes
+/// MediaPipe names at weight 1, front on; `faceanim track` reads every still on its own (the
+/// detector each time, no filter); a shape counts when its own score rises by at least 0.15 over
+/// the neutral still's. Measured 21 of 51 (the head before this issue: 15; the realistic ICT
+/// head: 17 of 49); a newer Chromium may draw a few pixels differently, hence 19.
+#[test]
+fn the_face_model_reads_the_default_heads_shapes_in_another_renderer() {
+    let dir = output_dir("default-head-legible");
+    let model = dir.join("head.glb");
+    faceanim_ok(&["export-default", "-o", model.to_str().unwrap()]);
+    let names: Vec<&str> = faceanim_track::BLENDSHAPE_NAMES[1..].to_vec();
+    let mut frames = vec![serde_json::json!({ "image": "00-neutral.png", "weights": {} })];
+    for (k, name) in names.iter().enumerate() {
+        frames.push(serde_json::json!({
+            "image": format!("{:02}-{name}.png", k + 1),
+            "weights": { *name: 1.0 },
+        }));
+    }
+    let stills = dir.join("stills");
+    let poses = dir.join("poses.json");
+    std::fs::write(
+        &poses,
+        serde_json::json!({ "frames": frames, "view": { "yaw": 0, "pitch": 0 } }).to_string(),
+    )
+    .unwrap();
+    let out = std::process::Command::new("node")
+        .arg(support::repo().join("tools/heldout-stills.mjs"))
+        .args([&model, &poses, &stills])
+        .output()
+        .expect("node runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    let raw = dir.join("raw.json");
+    faceanim_ok(&[
+        "track",
+        stills.to_str().unwrap(),
+        "--detect-every-frame",
+        "--filter",
+        "none",
+        "--raw",
+        raw.to_str().unwrap(),
+        "-o",
+        dir.join("clip.json").to_str().unwrap(),
+    ]);
+    let raw: Value = serde_json::from_slice(&std::fs::read(&raw).unwrap()).unwrap();
+    let read = |frame: usize, name: &str| -> f64 {
+        let scores = raw["frames"][frame]["scores"]
+            .as_array()
+            .unwrap_or_else(|| panic!("still {frame}: no face"));
+        scores
+            .iter()
+            .find(|pair| pair[0] == name)
+            .and_then(|pair| pair[1].as_f64())
+            .unwrap()
+    };
+    assert_eq!(raw["frames"].as_array().unwrap().len(), 52);
+    let mut report = Vec::new();
+    let mut legible = 0;
+    for (k, name) in names.iter().enumerate() {
+        let rise = read(k + 1, name) - read(0, name);
+        report.push(format!("{name} {rise:+.2}"));
+        legible += usize::from(rise >= 0.15);
+    }
+    eprintln!("{legible} of 51 legible: {}", report.join(", "));
+    assert!(legible >= 19, "only {legible} of 51: {}", report.join(", "));
+}

@@ -115,8 +115,8 @@ pub fn eye_point(u: f32, v: f32, r: f32) -> Vec3 {
 pub fn lid_lines(u: f32) -> (f32, f32) {
     let t = (u.abs() / EYE_HALF_WIDTH).min(1.0);
     let tilt = 0.10 * (u / EYE_HALF_WIDTH).clamp(-1.0, 1.0);
-    let upper = 0.42 * (1.0 - t * t).powf(0.6) + 0.02 + tilt;
-    let lower = -0.30 * (1.0 - t * t).powf(0.8) + 0.02 + tilt;
+    let upper = 0.42 * (1.0 - t * t).powf(0.6) - 0.07 + tilt;
+    let lower = -0.30 * (1.0 - t * t).powf(0.8) - 0.07 + tilt;
     (upper, lower)
 }
 
@@ -563,8 +563,8 @@ fn colour(v: &Vertex) -> [f32; 4] {
                 .acos();
             if theta < 0.17 {
                 Vec3::splat(0.015)
-            } else if theta < 0.39 {
-                let t = (theta - 0.17) / 0.22;
+            } else if theta < 0.50 {
+                let t = (theta - 0.17) / 0.33;
                 Vec3::new(0.10, 0.28, 0.36).lerp(Vec3::new(0.05, 0.14, 0.20), t)
             } else {
                 Vec3::new(0.86, 0.83, 0.80)
@@ -616,7 +616,7 @@ fn brow_mask(p: Vec3) -> f32 {
         return 0.0;
     }
     let s = (p.x - 0.008) / 0.054;
-    let centre = 0.0325 + 0.0055 * (PI * s.powf(0.8)).sin();
+    let centre = 0.0285 + 0.0055 * (PI * s.powf(0.8)).sin();
     let half_thickness = 0.0032 * (1.0 - 0.6 * s);
     let ends = smoothstep(0.0, 0.08, s) * (1.0 - smoothstep(0.85, 1.0, s));
     ends * (1.0

@@ -158,10 +158,10 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     });
     let eye_look_down =
         field(&|i, _| c.gaze(i, Quat::from_rotation_x(0.65)) + c.lids(i, |_| -0.36, |_| -0.10));
-    let eye_look_in = field(&|i, _| c.gaze(i, Quat::from_rotation_y(-0.62)));
-    let eye_look_out = field(&|i, _| c.gaze(i, Quat::from_rotation_y(0.62)));
+    let eye_look_in = field(&|i, _| c.gaze(i, Quat::from_rotation_y(-0.70)));
+    let eye_look_out = field(&|i, _| c.gaze(i, Quat::from_rotation_y(0.70)));
     let eye_look_up =
-        field(&|i, _| c.gaze(i, Quat::from_rotation_x(-0.62)) + c.lids(i, |_| 0.30, |_| 0.10));
+        field(&|i, _| c.gaze(i, Quat::from_rotation_x(-0.75)) + c.lids(i, |_| 0.55, |_| 0.18));
     let eye_squint = field(&|i, p| {
         let cheek = skin(
             i,
@@ -174,12 +174,12 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
         );
         c.lids(
             i,
-            |u| 0.30 * (meet(u) - lid_lines(u).0),
-            |u| 0.80 * (meet(u) - lid_lines(u).1),
+            |u| 0.40 * (meet(u) - lid_lines(u).0),
+            |u| 1.00 * (meet(u) - lid_lines(u).1),
         ) + cheek
     });
-    let eye_wide = field(&|i, _| c.lids(i, |_| 0.35, |_| -0.10));
-    let jaw_left = field(&|i, _| Vec3::new(0.012, 0.0, 0.0) * c.jaw[i]);
+    let eye_wide = field(&|i, _| c.lids(i, |_| 0.50, |_| -0.15));
+    let jaw_left = field(&|i, _| Vec3::new(0.016, 0.0, 0.0) * c.jaw[i]);
     let corner = |p: Vec3, radii: Vec3| bump(p, c.corner, radii);
     let mouth_smile = field(&|i, p| {
         skin(
@@ -196,7 +196,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let mouth_frown = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.002, -0.013, -0.001) * corner(p, Vec3::new(0.020, 0.018, 0.025)),
+            Vec3::new(0.002, -0.016, -0.001) * corner(p, Vec3::new(0.020, 0.018, 0.025)),
         )
     });
     let mouth_dimple = field(&|i, p| {
@@ -208,16 +208,16 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let mouth_stretch = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.012, -0.006, -0.004) * corner(p, Vec3::new(0.026, 0.022, 0.030))
+            Vec3::new(0.014, -0.007, -0.004) * corner(p, Vec3::new(0.026, 0.022, 0.030))
                 + Vec3::new(0.0, -0.0015, 0.0) * c.lower_lip[i] * side(p),
         )
     });
     let mouth_press = field(&|i, p| {
         let lips = (c.upper_lip[i] + c.lower_lip[i]) * side(p);
-        Vec3::new(0.0, -0.7 * (p.y - mouth_line(p.x.abs())), -0.0025) * lips
+        Vec3::new(0.0, -0.9 * (p.y - mouth_line(p.x.abs())), -0.004) * lips
     });
-    let mouth_lower_down = field(&|i, p| Vec3::new(0.0, -0.008, 0.0008) * c.lower_lip[i] * side(p));
-    let mouth_upper_up = field(&|i, p| Vec3::new(0.0, 0.011, 0.001) * c.upper_lip[i] * side(p));
+    let mouth_lower_down = field(&|i, p| Vec3::new(0.0, -0.014, 0.0008) * c.lower_lip[i] * side(p));
+    let mouth_upper_up = field(&|i, p| Vec3::new(0.0, 0.013, 0.001) * c.upper_lip[i] * side(p));
     let mouth_left = field(&|i, p| {
         skin(
             i,
@@ -232,7 +232,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let brow_down = field(&|i, p| {
         skin(
             i,
-            Vec3::new(-0.002, -0.009, 0.001)
+            Vec3::new(-0.004, -0.013, 0.001)
                 * bump(
                     p,
                     Vec3::new(0.028, 0.030, 0.080),
@@ -243,7 +243,7 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
     let brow_outer_up = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.0, 0.011, 0.0)
+            Vec3::new(0.0, 0.014, 0.0)
                 * bump(
                     p,
                     Vec3::new(0.046, 0.034, 0.077),
@@ -303,8 +303,8 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
             0.013 * lips,
         )
     });
-    let mouth_roll_lower = field(&|i, _| Vec3::new(0.0, 0.004, -0.008) * c.lower_lip[i]);
-    let mouth_roll_upper = field(&|i, _| Vec3::new(0.0, -0.0035, -0.008) * c.upper_lip[i]);
+    let mouth_roll_lower = field(&|i, _| Vec3::new(0.0, 0.006, -0.014) * c.lower_lip[i]);
+    let mouth_roll_upper = field(&|i, _| Vec3::new(0.0, -0.0055, -0.014) * c.upper_lip[i]);
     let mouth_shrug_lower = field(&|i, p| {
         let chin = skin(
             i,
@@ -315,13 +315,13 @@ pub fn blendshapes(mesh: &Mesh) -> Vec<(&'static str, Vec<Vec3>)> {
                     Vec3::new(0.025, 0.020, 0.025),
                 ),
         );
-        Vec3::new(0.0, 0.004, 0.003) * (c.lower_lip[i] + chin.x)
+        Vec3::new(0.0, 0.010, 0.005) * (c.lower_lip[i] + chin.x)
     });
-    let mouth_shrug_upper = field(&|i, _| Vec3::new(0.0, 0.005, 0.003) * c.upper_lip[i]);
+    let mouth_shrug_upper = field(&|i, _| Vec3::new(0.0, 0.009, 0.005) * c.upper_lip[i]);
     let brow_inner_up = field(&|i, p| {
         skin(
             i,
-            Vec3::new(0.0, 0.008, 0.0)
+            Vec3::new(0.0, 0.011, 0.0)
                 * bump(
                     left(p),
                     Vec3::new(0.012, 0.032, 0.082),

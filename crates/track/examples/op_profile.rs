@@ -1,10 +1,11 @@
-//! Time spent per operator type in the landmark network (tract), to find what to optimise:
-//! `cargo run --release -p faceanim-track --example op_profile`.
+//! Time spent per operator type in a face model (tract), to find what to optimise:
+//! `cargo run --release -p faceanim-track --example op_profile [landmarks|blendshapes|detector]`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 use std::collections::HashMap;
 use std::io::Read as _;
 use std::time::Instant;
 use tract_tflite::internal::*;
+use tract_tflite::prelude::tract_ndarray::Dimension as _;
 
 fn main() {
     let bundle = std::fs::read(concat!(
@@ -14,8 +15,14 @@ fn main() {
     .unwrap();
     let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bundle)).unwrap();
     let mut bytes = Vec::new();
+    let which = std::env::args().nth(1).unwrap_or_else(|| "landmarks".into());
+    let (file, shape): (&str, &[usize]) = match which.as_str() {
+        "blendshapes" => ("face_blendshapes.tflite", &[1, 146, 2]),
+        "detector" => ("face_detector.tflite", &[1, 128, 128, 3]),
+        _ => ("face_landmarks_detector.tflite", &[1, 256, 256, 3]),
+    };
     archive
-        .by_name("face_landmarks_detector.tflite")
+        .by_name(file)
         .unwrap()
         .read_to_end(&mut bytes)
         .unwrap();
@@ -25,11 +32,10 @@ fn main() {
         .into_optimized()
         .unwrap();
     let plan = model.into_runnable().unwrap();
-    let input: Tensor =
-        tract_ndarray::Array4::<f32>::from_shape_fn((1, 256, 256, 3), |(_, y, x, c)| {
-            ((x + y + c) % 251) as f32 / 251.0
-        })
-        .into();
+    let input: Tensor = tract_ndarray::ArrayD::<f32>::from_shape_fn(shape, |index| {
+        (index.slice().iter().sum::<usize>() % 251) as f32 / 251.0 * 100.0
+    })
+    .into();
     let mut state = SimpleState::new(&plan).unwrap();
     let mut times: HashMap<String, (f64, usize)> = HashMap::new();
     for round in 0..30 {
