@@ -10,6 +10,8 @@ scripts/setup.sh
 cargo clippy --workspace --all-targets --locked -- -D warnings
 scripts/check-layers.sh
 cargo test --workspace --doc --locked
+# The kernel faceanim adds to its vendored tract-tflite, against its contract in scalar code.
+cargo test -p tract-tflite --lib --locked faceanim
 # Last, so that the run ends on the summary of every test.
 if cargo nextest --version >/dev/null 2>&1; then
   cargo nextest run --workspace --locked --no-fail-fast

@@ -274,21 +274,28 @@ fn to_byte(v: f32) -> u8 {
 #[must_use]
 pub fn resize(image: &Image, size: u32) -> Image {
     let (w, h) = (image.width as usize, image.height as usize);
+    // Where each output column and row reads: the two source pixels and the blend between them
+    // (the same for every row and column, so worked out once).
+    let taps = |n: usize| -> Vec<(usize, usize, f32)> {
+        let scale = n as f32 / size as f32;
+        (0..size as usize)
+            .map(|i| {
+                let f = ((i as f32 + 0.5) * scale - 0.5).clamp(0.0, (n - 1) as f32);
+                let i0 = f as usize; // not negative: truncation is the floor
+                (i0, (i0 + 1).min(n - 1), f - i0 as f32)
+            })
+            .collect()
+    };
+    let (columns, rows) = (taps(w), taps(h));
     let mut rgb = Vec::with_capacity((size * size * 3) as usize);
-    let (sx, sy) = (w as f32 / size as f32, h as f32 / size as f32);
-    for y in 0..size as usize {
-        let fy = ((y as f32 + 0.5) * sy - 0.5).clamp(0.0, (h - 1) as f32);
-        let (y0, ty) = (fy.floor() as usize, fy.fract());
-        let y1 = (y0 + 1).min(h - 1);
-        for x in 0..size as usize {
-            let fx = ((x as f32 + 0.5) * sx - 0.5).clamp(0.0, (w - 1) as f32);
-            let (x0, tx) = (fx.floor() as usize, fx.fract());
-            let x1 = (x0 + 1).min(w - 1);
+    for &(y0, y1, ty) in &rows {
+        let (top, bottom) = (&image.rgb[y0 * w * 3..], &image.rgb[y1 * w * 3..]);
+        for &(x0, x1, tx) in &columns {
             for c in 0..3 {
-                let at = |xx: usize, yy: usize| f32::from(image.rgb[(yy * w + xx) * 3 + c]);
-                let top = at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx;
-                let bottom = at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx;
-                rgb.push(to_byte(top * (1.0 - ty) + bottom * ty));
+                let at = |row: &[u8], x: usize| f32::from(row[x * 3 + c]);
+                let upper = at(top, x0) * (1.0 - tx) + at(top, x1) * tx;
+                let lower = at(bottom, x0) * (1.0 - tx) + at(bottom, x1) * tx;
+                rgb.push(to_byte(upper * (1.0 - ty) + lower * ty));
             }
         }
     }
@@ -301,34 +308,55 @@ pub fn resize(image: &Image, size: u32) -> Image {
 
 /// Separable Gaussian blur of standard deviation `sigma` pixels, edges clamped.
 pub fn blur(image: &mut Image, sigma: f32) {
-    let radius = (2.0 * sigma).ceil() as i64;
-    let kernel: Vec<f32> = (-radius..=radius)
-        .map(|k| (-(k * k) as f32 / (2.0 * sigma * sigma)).exp())
+    let radius = (2.0 * sigma).ceil() as usize;
+    let mut kernel: Vec<f32> = (0..=2 * radius)
+        .map(|k| {
+            let d = k as f32 - radius as f32;
+            (-d * d / (2.0 * sigma * sigma)).exp()
+        })
         .collect();
     let total: f32 = kernel.iter().sum();
-    let (w, h) = (image.width as i64, image.height as i64);
-    let pass = |source: &[u8], horizontal: bool| -> Vec<u8> {
-        let mut out = vec![0u8; source.len()];
-        for y in 0..h {
-            for x in 0..w {
-                for c in 0..3 {
-                    let mut sum = 0.0;
-                    for (k, weight) in (-radius..=radius).zip(&kernel) {
-                        let (xx, yy) = if horizontal {
-                            ((x + k).clamp(0, w - 1), y)
-                        } else {
-                            (x, (y + k).clamp(0, h - 1))
-                        };
-                        sum += weight * f32::from(source[((yy * w + xx) * 3 + c) as usize]);
-                    }
-                    out[((y * w + x) * 3 + c) as usize] = to_byte(sum / total);
-                }
+    kernel.iter_mut().for_each(|k| *k /= total);
+    let (w, h) = (image.width as usize, image.height as usize);
+    let row_len = w * 3;
+    // Across: each row, padded with its edge pixels, convolved.
+    let mut across = vec![0.0f32; w * h * 3];
+    let mut padded = vec![0.0f32; (w + 2 * radius) * 3];
+    for y in 0..h {
+        let row = &image.rgb[y * row_len..(y + 1) * row_len];
+        for (x, p) in padded.chunks_exact_mut(3).enumerate() {
+            let source = x.saturating_sub(radius).min(w - 1) * 3;
+            for c in 0..3 {
+                p[c] = f32::from(row[source + c]);
             }
         }
-        out
-    };
-    let across = pass(&image.rgb, true);
-    image.rgb = pass(&across, false);
+        let out = &mut across[y * row_len..(y + 1) * row_len];
+        for (k, &weight) in kernel.iter().enumerate() {
+            for (o, &v) in out.iter_mut().zip(&padded[k * 3..]) {
+                *o += weight * v;
+            }
+        }
+    }
+    // Down: each output row a weighted sum of whole rows, the edge rows repeated.
+    let mut row = vec![0.0f32; row_len];
+    for y in 0..h {
+        row.iter_mut().for_each(|v| *v = 0.0);
+        for (k, &weight) in kernel.iter().enumerate() {
+            let source = (y + k).saturating_sub(radius).min(h - 1);
+            for (o, &v) in row
+                .iter_mut()
+                .zip(&across[source * row_len..(source + 1) * row_len])
+            {
+                *o += weight * v;
+            }
+        }
+        for (out, &v) in image.rgb[y * row_len..(y + 1) * row_len]
+            .iter_mut()
+            .zip(&row)
+        {
+            *out = to_byte(v);
+        }
+    }
 }
 
 /// The picture after a JPEG encoding at `quality` and decoding; `None` if either fails.

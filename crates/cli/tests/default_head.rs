@@ -128,7 +128,11 @@ fn the_face_model_reads_the_default_heads_shapes_in_another_renderer() {
         .args([&model, &poses, &stills])
         .output()
         .expect("node runs");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     let raw = dir.join("raw.json");
     faceanim_ok(&[

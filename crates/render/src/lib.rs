@@ -405,6 +405,20 @@ fn display(linear: f32) -> f32 {
     TABLE[k] * (1.0 - t) + TABLE[k + 1] * t
 }
 
+/// The first and last of `count` pixels whose centres (i + ½) lie in `[low, high]`, or `None`
+/// when there are none. Casts, not `floor`/`ceil` (library calls on x86-64's baseline): `as`
+/// saturates, and truncation is the floor of a value that is not negative.
+fn centres_between(low: f32, high: f32, count: u32) -> Option<(u32, u32)> {
+    let (low, high) = (low - 0.5, high - 0.5);
+    if high < 0.0 || low.is_nan() || high.is_nan() {
+        return None;
+    }
+    let low = low.max(0.0);
+    let first = low as u32 + u32::from((low as u32 as f32) < low);
+    let last = (high as u32).min(count - 1);
+    (first <= last).then_some((first, last))
+}
+
 /// Renders `pose` of `character` at `size`×`size` pixels, in the studio's light.
 #[must_use]
 pub fn render(
@@ -504,19 +518,38 @@ pub fn render_shaded(
             .and_then(Option::as_ref)
             .filter(|_| shading.textures)
             .zip(uvs);
-        let min_x = pa.x.min(pb.x).min(pc.x).floor().max(0.0) as u32;
-        let max_x = pa.x.max(pb.x).max(pc.x).ceil().min(s as f32 - 1.0) as u32;
-        let min_y = pa.y.min(pb.y).min(pc.y).floor().max(0.0) as u32;
-        let max_y = pa.y.max(pb.y).max(pc.y).ceil().min(s as f32 - 1.0) as u32;
+        // The pixels whose centres lie in the triangle's box; most triangles of a detailed
+        // head are smaller than a pixel and have none.
+        let Some((min_x, max_x)) =
+            centres_between(pa.x.min(pb.x).min(pc.x), pa.x.max(pb.x).max(pc.x), s)
+        else {
+            continue;
+        };
+        let Some((min_y, max_y)) =
+            centres_between(pa.y.min(pb.y).min(pc.y), pa.y.max(pb.y).max(pc.y), s)
+        else {
+            continue;
+        };
+        // Barycentric weights step by a constant from one pixel to the next in a row.
+        let (step0, step1) = ((pb.y - pc.y) * inverse_area, (pc.y - pa.y) * inverse_area);
         for y in min_y..=max_y {
+            let (px, py) = (min_x as f32 + 0.5, y as f32 + 0.5);
+            let mut w0 = ((pb.x - px) * (pc.y - py) - (pb.y - py) * (pc.x - px)) * inverse_area;
+            let mut w1 = ((pc.x - px) * (pa.y - py) - (pc.y - py) * (pa.x - px)) * inverse_area;
+            let mut entered = false;
             for x in min_x..=max_x {
-                let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
-                let w0 = ((pb.x - px) * (pc.y - py) - (pb.y - py) * (pc.x - px)) * inverse_area;
-                let w1 = ((pc.x - px) * (pa.y - py) - (pc.y - py) * (pa.x - px)) * inverse_area;
-                let w2 = 1.0 - w0 - w1;
-                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                let (u0, u1) = (w0, w1);
+                w0 += step0;
+                w1 += step1;
+                let w2 = 1.0 - u0 - u1;
+                if u0 < 0.0 || u1 < 0.0 || w2 < 0.0 {
+                    if entered {
+                        break; // a triangle's row is one run of pixels
+                    }
                     continue;
                 }
+                entered = true;
+                let (w0, w1) = (u0, u1);
                 let z = w0 * pa.z + w1 * pb.z + w2 * pc.z;
                 let i = (y * s + x) as usize;
                 if z < depth[i] {
@@ -548,8 +581,10 @@ pub fn render_shaded(
                     sum += colour[((y * supersample + dy) * s + x * supersample + dx) as usize];
                 }
             }
-            let c = (sum / (supersample * supersample) as f32).clamp(Vec3::ZERO, Vec3::ONE) * 255.0;
-            rgb.extend_from_slice(&[c.x.round() as u8, c.y.round() as u8, c.z.round() as u8]);
+            let c = (sum / (supersample * supersample) as f32).clamp(Vec3::ZERO, Vec3::ONE) * 255.0
+                + Vec3::splat(0.5);
+            // Rounded by truncating the value plus a half (it is not negative): no libm call.
+            rgb.extend_from_slice(&[c.x as u8, c.y as u8, c.z as u8]);
         }
     }
     Image {

@@ -1,5 +1,6 @@
 //! Time spent per operator type in a face model (tract), to find what to optimise:
-//! `cargo run --release -p faceanim-track --example op_profile [landmarks|blendshapes|detector]`.
+//! `cargo run --release -p faceanim-track --example op_profile [landmarks|blendshapes|detector]`;
+//! with `BY_NODE=1` each node apart, with its shape and tract's choice of kernel.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 use std::collections::HashMap;
 use std::io::Read as _;
@@ -15,7 +16,9 @@ fn main() {
     .unwrap();
     let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bundle)).unwrap();
     let mut bytes = Vec::new();
-    let which = std::env::args().nth(1).unwrap_or_else(|| "landmarks".into());
+    let which = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "landmarks".into());
     let (file, shape): (&str, &[usize]) = match which.as_str() {
         "blendshapes" => ("face_blendshapes.tflite", &[1, 146, 2]),
         "detector" => ("face_detector.tflite", &[1, 128, 128, 3]),
@@ -36,6 +39,7 @@ fn main() {
         (index.slice().iter().sum::<usize>() % 251) as f32 / 251.0 * 100.0
     })
     .into();
+    let by_node = std::env::var_os("BY_NODE").is_some();
     let mut state = SimpleState::new(&plan).unwrap();
     let mut times: HashMap<String, (f64, usize)> = HashMap::new();
     for round in 0..30 {
@@ -44,7 +48,17 @@ fn main() {
                 let t = Instant::now();
                 let r = tract_core::plan::eval(ctx, st, node, inputs);
                 if round >= 10 {
-                    let e = times.entry(node.op().name().to_string()).or_default();
+                    let key = if by_node {
+                        format!(
+                            "{} {:?} {}",
+                            node.op().name(),
+                            node.outputs[0].fact.shape,
+                            node.op().info().unwrap_or_default().join(" ")
+                        )
+                    } else {
+                        node.op().name().to_string()
+                    };
+                    let e = times.entry(key).or_default();
                     e.0 += t.elapsed().as_secs_f64() * 1000.0 / 20.0;
                     e.1 += 1;
                 }

@@ -81,7 +81,10 @@ fn landmarks_and_scores_match_mediapipe_on_the_same_pixels() {
         "largest differences: landmark {worst_point:.4} px, score {:.4} ({})",
         worst_score.0, worst_score.1
     );
-    assert!(worst_point < 0.1, "a landmark {worst_point} px from MediaPipe's");
+    assert!(
+        worst_point < 0.1,
+        "a landmark {worst_point} px from MediaPipe's"
+    );
     assert!(
         worst_score.0 < 0.01,
         "{} differs from MediaPipe by {}",

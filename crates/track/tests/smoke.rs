@@ -11,3 +11,25 @@ fn models_load_and_run() {
     let scores = models.blendshapes(&vec![[128.0, 128.0]; 146]).unwrap();
     assert_eq!(scores.len(), 52);
 }
+
+/// On an x86-64 host with AVX2 and FMA, tract runs the models' depthwise convolutions with
+/// faceanim's vectorised channels-last kernel (`vendor/tract-tflite/src/faceanim_kernels.rs`),
+/// not its scalar fallback: the landmark network is a fifth faster with it. Its numbers are
+/// checked by `reference.rs` and `mediapipe_stills.rs`, which run through it.
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn tract_runs_the_vectorised_depthwise_kernel() {
+    use tract_linalg::isa::{Isa, native};
+    use tract_linalg::routines::{Func, best_for};
+    let isa = native();
+    if !(isa.has(Isa::X86_64Avx2) && isa.has(Isa::X86_64Fma)) {
+        return;
+    }
+    let routine = best_for(
+        Func::DepthwiseC,
+        tract_tflite::prelude::DatumType::F32,
+        &isa,
+    )
+    .unwrap();
+    assert_eq!(routine.name(), "faceanim_x86_64_avx2_fma_depthwise_c_f32");
+}

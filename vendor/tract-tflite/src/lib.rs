@@ -2,6 +2,8 @@
 #[macro_use]
 extern crate derive_new;
 
+// faceanim patch: an AVX2/FMA channels-last depthwise kernel for tract on x86-64.
+mod faceanim_kernels;
 mod model;
 mod ops;
 mod registry;
