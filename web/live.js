@@ -87,7 +87,9 @@ $('capture-input').appendChild(shownCanvas);
 let waiting = /** @type {{frame: any, captured: number}|null} */ (null);
 
 async function readTrack(reader) {
-  while (live.running) {
+  // Read until the track ends (stopLive stops it), closing what comes after Stop: a frame left
+  // in the stream unread is garbage collected unclosed, which stalls the camera.
+  for (;;) {
     const { value: frame, done } = await reader.read();
     if (done || !frame) break;
     if (!live.running) { frame.close(); continue; }
