@@ -1,5 +1,6 @@
-//! faceanim patch: a kernel tract lacks on x86-64, registered with tract-linalg's routine table so that tract
-//! picks it wherever it runs: the channels-last depthwise convolution (`DepthwiseC`).
+//! faceanim patch: a kernel tract lacks on x86-64, registered with tract-linalg's routine table
+//! so that tract picks it wherever it runs: the channels-last depthwise convolution
+//! (`DepthwiseC`).
 //!
 //! MediaPipe's TFLite models keep channels last (NHWC). tract-linalg 0.23.9 writes a vectorised
 //! channels-last depthwise kernel for Arm and WebAssembly only; on x86-64 tract falls back to a
