@@ -11,24 +11,14 @@ use std::collections::HashMap;
 
 use faceanim_track::{FaceModels, Frame};
 
-fn decode(name: &str) -> (usize, usize, Vec<u8>) {
+/// A shared image, decoded as capture decodes pictures.
+fn decode(name: &str) -> faceanim_media::Image {
     let path = faceanim_testdata::shared(&format!("images/{name}"));
-    let mut reader = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()))
-        .read_info()
-        .unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let channels = info.color_type.samples();
-    let rgb = buf
-        .chunks(channels)
-        .take((info.width * info.height) as usize)
-        .flat_map(|p| [p[0], p[1], p[2]])
-        .collect();
-    (info.width as usize, info.height as usize, rgb)
+    faceanim_media::decode_image(&path, &std::fs::read(&path).unwrap()).unwrap()
 }
 
 fn scores(models: &FaceModels, name: &str) -> HashMap<&'static str, f32> {
-    let (width, height, rgb) = decode(name);
+    let faceanim_media::Image { width, height, rgb } = decode(name);
     let face = models
         .find_face(&Frame {
             width,

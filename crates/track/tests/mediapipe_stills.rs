@@ -21,22 +21,6 @@ fn stills() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference/stills")
 }
 
-fn decode(path: &Path) -> (usize, usize, Vec<u8>) {
-    let file = std::fs::File::open(path).unwrap();
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-        .read_info()
-        .unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let channels = info.color_type.samples();
-    let rgb = buf
-        .chunks(channels)
-        .take((info.width * info.height) as usize)
-        .flat_map(|p| [p[0], p[1], p[2]])
-        .collect();
-    (info.width as usize, info.height as usize, rgb)
-}
-
 #[test]
 fn landmarks_and_scores_match_mediapipe_on_the_same_pixels() {
     let models = FaceModels::load().unwrap();
@@ -46,7 +30,9 @@ fn landmarks_and_scores_match_mediapipe_on_the_same_pixels() {
     assert_eq!(recorded.len(), 10);
     let (mut worst_point, mut worst_score) = (0.0f32, (0.0f32, String::new()));
     for (name, theirs) in recorded {
-        let (width, height, rgb) = decode(&stills().join(name));
+        let path = stills().join(name);
+        let faceanim_media::Image { width, height, rgb } =
+            faceanim_media::decode_image(&path, &std::fs::read(&path).unwrap()).unwrap();
         assert_eq!(
             (width, height),
             (
