@@ -9,7 +9,7 @@
 mod support;
 
 use serde_json::Value;
-use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir};
+use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir, three_js_stills};
 
 #[test]
 fn export_default_is_valid_and_deterministic() {
@@ -117,21 +117,10 @@ fn the_face_model_reads_the_default_heads_shapes_in_another_renderer() {
         }));
     }
     let stills = dir.join("stills");
-    let poses = dir.join("poses.json");
-    std::fs::write(
-        &poses,
-        serde_json::json!({ "frames": frames, "view": { "yaw": 0, "pitch": 0 } }).to_string(),
-    )
-    .unwrap();
-    let out = std::process::Command::new("node")
-        .arg(support::repo().join("tools/heldout-stills.mjs"))
-        .args([&model, &poses, &stills])
-        .output()
-        .expect("node runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    three_js_stills(
+        &model,
+        &serde_json::json!({ "frames": frames, "view": { "yaw": 0, "pitch": 0 } }),
+        &stills,
     );
 
     let raw = dir.join("raw.json");

@@ -11,35 +11,13 @@
 
 mod support;
 
-use std::path::Path;
-
 use faceanim_adapt::sampling::{WeightSampler, exclusive_pairs};
-use support::{faceanim_ok, output_dir};
+use support::{faceanim_ok, output_dir, three_js_stills};
 
 /// Training samples: the product's default is 10,000; fewer keep the suite's time.
 const SAMPLES: &str = "4000";
 /// Held-out stills.
 const STILLS: usize = 60;
-
-/// Renders `poses` of `model` with three.js into `dir` (stills and truth.json).
-fn three_js_stills(model: &Path, poses: &serde_json::Value, dir: &Path) {
-    let poses_path = dir.with_extension("poses.json");
-    std::fs::write(&poses_path, poses.to_string()).unwrap();
-    let tool = support::repo().join("tools/heldout-stills.mjs");
-    let out = std::process::Command::new("node")
-        .arg(&tool)
-        .arg(model)
-        .arg(&poses_path)
-        .arg(dir)
-        .output()
-        .expect("node runs");
-    assert!(
-        out.status.success(),
-        "{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
 
 #[test]
 fn an_adapter_reads_stills_from_a_renderer_it_never_saw() {

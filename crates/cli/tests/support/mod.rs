@@ -22,6 +22,27 @@ pub fn output_dir(test: &str) -> PathBuf {
     dir
 }
 
+/// Renders `poses` of `model` with three.js (`tools/heldout-stills.mjs`) into `dir`: the stills
+/// and truth.json.
+pub fn three_js_stills(model: &Path, poses: &serde_json::Value, dir: &Path) {
+    let poses_path = dir.with_extension("poses.json");
+    std::fs::write(&poses_path, poses.to_string()).unwrap();
+    let tool = repo().join("tools/heldout-stills.mjs");
+    let out = Command::new("node")
+        .arg(&tool)
+        .arg(model)
+        .arg(&poses_path)
+        .arg(dir)
+        .output()
+        .expect("node runs");
+    assert!(
+        out.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 pub fn faceanim(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_faceanim"))
         .args(args)
