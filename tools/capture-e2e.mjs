@@ -200,6 +200,13 @@ try {
   state = await captureState();
   check(state.adapter.loaded && state.take.estimator === 'adapter', 'the take was not re-estimated by the new adapter');
   measurements.adapter_test_mae_300 = state.adapter.report.mae_test;
+  // Every shape was shown alone and read back; the page names the ones capture cannot drive.
+  const shapes = state.adapter.report.shapes;
+  check(shapes.length > 40 && shapes.every((r) => ['read', 'weak', 'unseen'].includes(r.reading)), `no shape readings: ${JSON.stringify(shapes).slice(0, 300)}`);
+  check(JSON.stringify(state.adapter.unseen) === JSON.stringify(shapes.filter((r) => r.reading === 'unseen').map((r) => r.name)), 'the view\'s unseen shapes are not the readings\'');
+  measurements.adapter_shapes_read_300 = shapes.filter((r) => r.reading === 'read').length;
+  const info = await page.textContent('#adapter-info');
+  check(state.adapter.unseen.length ? info.includes(`Capture cannot drive ${state.adapter.unseen.length} of ${shapes.length} shapes`) && info.includes(state.adapter.unseen[0]) : !info.includes('cannot drive'), `the page does not say which shapes capture cannot drive: ${info}`);
   // The adapter reads faces against the take's neutral frame: the least expressive until the
   // animator names one, here the frame under the playhead.
   check(state.adapter.calibrated && state.take.neutral && state.take.neutral.chosen === 'automatic', `no automatic neutral frame: ${JSON.stringify(state.take.neutral)}`);

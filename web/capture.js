@@ -112,7 +112,7 @@ export function apply(v) {
   // Adapter.
   const a = v.adapter;
   $('adapter-info').textContent = a.loaded
-    ? `Adapter: ${a.path}${a.report ? ` (test MAE ${a.report.mae_test.toFixed(4)}, ${a.report.samples} renders)` : ''}.${a.note ? ` ${a.note}` : ''}`
+    ? `Adapter: ${a.path}${a.report ? ` (test MAE ${a.report.mae_test.toFixed(4)}, ${a.report.samples} renders)` : ''}.${a.note ? ` ${a.note}` : ''}${a.unseen.length ? ` Capture cannot drive ${a.unseen.length} of ${a.report ? a.report.shapes.length : '?'} shapes, each shown alone: ${a.unseen.join(', ')}. Sketch them or correct frames.` : ''}`
     : `No adapter yet: estimating by ARKit name.${a.note ? ` ${a.note}` : ''} Train one to drive every shape of this character.`;
   /** @type {HTMLButtonElement} */ ($('finetune')).disabled = running || !a.loaded || !take || !take.corrected.length;
   // Filtering.

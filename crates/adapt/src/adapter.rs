@@ -13,6 +13,7 @@ use faceanim_rig::Character;
 use serde::{Deserialize, Serialize};
 
 use crate::features::{Calibration, Expression, FeatureSet};
+use crate::readings::ShapeReading;
 use crate::{AdaptError, Fingerprint};
 
 /// The nonlinearity between the two layers.
@@ -91,6 +92,10 @@ pub struct TrainingReport {
     /// ([`Adapter::front_test_error`]).
     #[serde(default)]
     pub mae_test_front: Option<f32>,
+    /// How it reads each shape shown alone ([`FaceCamera::readings`](crate::FaceCamera::readings)),
+    /// filled where the character is at hand; empty in adapters from before.
+    #[serde(default)]
+    pub shapes: Vec<ShapeReading>,
 }
 
 /// How a character relates to an adapter that passed [`Adapter::check`].

@@ -13,7 +13,9 @@
 //! - [`features`]: what the adapter sees (scores, pose-normalised landmarks, or both), as
 //!   captured or relative to a neutral face ([`Calibration`]).
 //! - [`heldout`]: the adapter measured on stills of the character from another renderer.
-//! - [`train`] (candle): MSE and Adam with early stopping; fine-tuning from corrections.
+//! - [`readings`]: which shapes capture can drive, each shown alone and read back.
+//! - [`mod@train`] (candle): Adam on a censored absolute error ([`Loss`]; the seed's squared
+//!   error on request) with early stopping; fine-tuning from corrections.
 //! - [`adapter`]: inference in plain Rust and the safetensors file, bound to its character;
 //!   an [`Adapter`] is a [`faceanim_take::Estimator`], so takes and live tracking use it like
 //!   the by-name mapping.
@@ -27,6 +29,7 @@ pub mod augment;
 pub mod dataset;
 pub mod features;
 pub mod heldout;
+pub mod readings;
 pub mod sampling;
 mod tensors;
 pub mod train;
@@ -36,7 +39,8 @@ pub use augment::Augmentation;
 pub use dataset::{Control, Dataset, DatasetOptions, FaceCamera, Framing, Split};
 pub use faceanim_take::{Correction, Fingerprint};
 pub use features::{Calibration, Expression, FeatureSet};
-pub use train::{FinetuneReport, TrainOptions, finetune, train};
+pub use readings::{Reading, ShapeReading};
+pub use train::{FinetuneReport, Loss, TrainOptions, finetune, train};
 
 use std::path::{Path, PathBuf};
 

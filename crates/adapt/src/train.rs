@@ -1,7 +1,8 @@
-//! Training the adapter with candle: MSE and Adam on the character's renders, the step halved
-//! whenever the validation MAE stalls for a third of the patience, early stopping on the
-//! validation split, the MAE on the test split; and fine-tuning from a user's corrections
-//! (the seed's offline mode).
+//! Training the adapter with candle: Adam on the character's renders, minimising a censored
+//! absolute error ([`Loss`]) or the seed's squared error; the step halved whenever the
+//! validation MAE stalls for a third of the patience, early stopping on the validation split,
+//! the MAE on the test split; and fine-tuning from a user's corrections (the seed's offline
+//! mode).
 //!
 //! Weights are initialised from our own seeded generator (PyTorch's uniform ±1/√fan-in), so a
 //! seed gives the same adapter every time.
@@ -11,6 +12,7 @@ use std::time::Instant;
 use candle_core::{Device, Tensor, Var};
 use candle_nn::Optimizer as _;
 use rand::{Rng as _, SeedableRng as _};
+use serde::{Deserialize, Serialize};
 
 use crate::AdaptError;
 use crate::adapter::{Adapter, Architecture, TrainingReport};
@@ -28,11 +30,46 @@ const CORRECTION_WEIGHT: f64 = 0.25;
 /// In fine-tuning, the slope of the corrections' output outside [0, 1].
 const LEAK: f64 = 0.1;
 
+/// What training minimises.
+///
+/// The seed trains with the squared error of the clamped outputs. The clamp is flat outside
+/// [0, 1], so an output that has gone below 0 gets no gradient from any sample, even one where
+/// its shape is active: it stays at 0 for good. On a randomised training set of the ICT head
+/// (53 shapes, 10,000 samples), 33 shapes were not read when shown alone at full weight
+/// ([`crate::readings`]); 23 with the censored absolute error, which keeps every gradient,
+/// minimises what the seed reports (MAE), and lowers the test MAE from 0.0673 to 0.0657.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Loss {
+    /// The absolute error of the outputs before the clamp, where a target at a bound (0 or 1)
+    /// only counts an output beyond it on the wrong side: a shape at rest costs nothing for
+    /// any output ≤ 0. Its optimum is the median of what the picture could mean, so a shape
+    /// the picture cannot show stays at 0 while the shapes it does show are read (the default).
+    #[default]
+    CensoredAbsolute,
+    /// The seed's: the squared error of the clamped outputs (of the outputs themselves for a
+    /// network without the clamp).
+    SquaredClamped,
+}
+
+impl Loss {
+    /// The name used on the command line and in reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Loss::CensoredAbsolute => "censored_absolute",
+            Loss::SquaredClamped => "squared_clamped",
+        }
+    }
+}
+
 /// How to train.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrainOptions {
     /// The network.
     pub architecture: Architecture,
+    /// What training minimises.
+    pub loss: Loss,
     /// Adam's step size.
     pub learning_rate: f64,
     /// Samples per step.
@@ -50,6 +87,7 @@ impl Default for TrainOptions {
     fn default() -> TrainOptions {
         TrainOptions {
             architecture: Architecture::default(),
+            loss: Loss::default(),
             learning_rate: 1e-3,
             batch_size: 128,
             max_epochs: 400,
@@ -145,6 +183,23 @@ impl Net {
             .broadcast_add(self.output_bias.as_tensor())?)
     }
 
+    /// `loss` of the rows `index` of `examples`.
+    fn loss(&self, loss: Loss, examples: &Examples, index: &Tensor) -> Result<Tensor, AdaptError> {
+        let x = examples.x.index_select(index, 0)?;
+        Ok(match loss {
+            Loss::SquaredClamped => {
+                let y = examples.y.index_select(index, 0)?;
+                candle_nn::loss::mse(&self.forward(&x)?, &y)?
+            }
+            Loss::CensoredAbsolute => {
+                let raw = self.raw(&x)?;
+                let below = (examples.lower.index_select(index, 0)? - &raw)?.relu()?;
+                let above = (raw - examples.upper.index_select(index, 0)?)?.relu()?;
+                (below + above)?.mean_all()?
+            }
+        })
+    }
+
     fn mae(&self, x: &Tensor, y: &Tensor) -> Result<f32, AdaptError> {
         if x.dim(0)? == 0 {
             return Ok(0.0);
@@ -171,7 +226,14 @@ impl Net {
 struct Examples {
     x: Tensor,
     y: Tensor,
+    /// The target, or far below it where the target is 0 (any output ≤ 0 is right there).
+    lower: Tensor,
+    /// The target, or far above it where the target is 1.
+    upper: Tensor,
 }
+
+/// Stands for an unbounded side of a censored target (finite, so no ∞ − ∞ in the loss).
+const UNBOUNDED: f32 = 1e4;
 
 impl Examples {
     fn new(
@@ -187,9 +249,20 @@ impl Examples {
             .flat_map(|r| r.iter().zip(mean).zip(scale).map(|((v, m), s)| (v - m) * s))
             .collect();
         let y: Vec<f32> = targets.concat();
+        let lower: Vec<f32> = y
+            .iter()
+            .map(|&t| if t <= 0.0 { -UNBOUNDED } else { t })
+            .collect();
+        let upper: Vec<f32> = y
+            .iter()
+            .map(|&t| if t >= 1.0 { UNBOUNDED } else { t })
+            .collect();
+        let shape = (targets.len(), outputs);
         Ok(Examples {
             x: Tensor::from_vec(x, (rows.len(), inputs), &Device::Cpu)?,
-            y: Tensor::from_vec(y, (targets.len(), outputs), &Device::Cpu)?,
+            y: Tensor::from_vec(y, shape, &Device::Cpu)?,
+            lower: Tensor::from_vec(lower, shape, &Device::Cpu)?,
+            upper: Tensor::from_vec(upper, shape, &Device::Cpu)?,
         })
     }
 
@@ -235,7 +308,7 @@ fn epoch(
     optimizer: &mut candle_nn::AdamW,
     train: &Examples,
     corrections: Option<&Examples>,
-    batch_size: usize,
+    options: &TrainOptions,
     rng: &mut rand_chacha::ChaCha8Rng,
 ) -> Result<(), AdaptError> {
     let n = train.len();
@@ -243,19 +316,27 @@ fn epoch(
     for k in (1..n).rev() {
         order.swap(k, rng.random_range(0..=k));
     }
-    for batch in order.chunks(batch_size.max(1)) {
+    for batch in order.chunks(options.batch_size.max(1)) {
         let index = Tensor::from_slice(batch, batch.len(), &Device::Cpu)?;
-        let x = train.x.index_select(&index, 0)?;
-        let y = train.y.index_select(&index, 0)?;
-        let mut loss = candle_nn::loss::mse(&net.forward(&x)?, &y)?;
+        let mut loss = net.loss(options.loss, train, &index)?;
         if let Some(corrected) = corrections {
-            // Through a leaky clamp: a shape the adapter reads far below 0 (clamped to 0, so
-            // no gradient there) must still be pulled up to the user's value, while the shapes
-            // at rest, also far below 0, are only nudged.
-            let raw = net.raw(&corrected.x)?;
-            let clamped = raw.clamp(0f32, 1f32)?;
-            let leaky = (&clamped + ((raw - &clamped)? * LEAK)?)?;
-            let fit = candle_nn::loss::mse(&leaky, &corrected.y)?;
+            let fit = match options.loss {
+                // The censored error already pulls a shape read below 0 up to the user's value
+                // and leaves the shapes at rest below 0 alone.
+                Loss::CensoredAbsolute => {
+                    let all = Tensor::arange(0u32, corrected.len() as u32, &Device::Cpu)?;
+                    net.loss(Loss::CensoredAbsolute, corrected, &all)?
+                }
+                // Through a leaky clamp: a shape the adapter reads far below 0 (clamped to 0,
+                // so no gradient there) must still be pulled up to the user's value, while the
+                // shapes at rest, also far below 0, are only nudged.
+                Loss::SquaredClamped => {
+                    let raw = net.raw(&corrected.x)?;
+                    let clamped = raw.clamp(0f32, 1f32)?;
+                    let leaky = (&clamped + ((raw - &clamped)? * LEAK)?)?;
+                    candle_nn::loss::mse(&leaky, &corrected.y)?
+                }
+            };
             loss = (loss + (fit * CORRECTION_WEIGHT)?)?;
         }
         optimizer.backward_step(&loss)?;
@@ -345,7 +426,7 @@ pub fn train(
             &mut optimizer,
             &train_set,
             None,
-            options.batch_size,
+            options,
             &mut rng,
         )?;
         epochs = e;
@@ -385,6 +466,7 @@ pub fn train(
         seconds: started.elapsed().as_secs_f64(),
         corrections: 0,
         mae_test_front: None,
+        shapes: Vec::new(),
     };
     adapter.report.mae_test_front = adapter.front_test_error(dataset);
     Ok(adapter)
@@ -407,10 +489,10 @@ pub struct FinetuneReport {
 
 /// Fine-tunes `adapter` on `corrections` (the offline mode), mixed with its training set so it
 /// does not forget the character: every step fits a batch of the training split and, at a
-/// quarter of its weight, the corrected frames — their outputs through a leaky clamp, so a
-/// shape the adapter reads far below 0 is still pulled up —, the step is a third of
-/// training's, and the kept epoch is the one that fits the corrections best while the
-/// validation MAE stays within 5% of where it started.
+/// quarter of its weight, the corrected frames (with the seed's squared error, their outputs
+/// through a leaky clamp, so that a shape the adapter reads far below 0 is still pulled up),
+/// the step is a third of training's, and the kept epoch is the one that fits the corrections
+/// best while the validation MAE stays within 5% of where it started.
 ///
 /// # Errors
 /// [`AdaptError::Mismatch`] when `dataset` is another character's,
@@ -480,7 +562,7 @@ pub fn finetune(
             &mut optimizer,
             &replay,
             Some(&corrected),
-            options.batch_size,
+            options,
             &mut rng,
         )?;
         epochs = e;
@@ -511,5 +593,7 @@ pub fn finetune(
     tuned.report.mae_val = kept.mae(&validation.x, &validation.y)?;
     tuned.report.corrections += corrections.len();
     tuned.report.mae_test_front = tuned.front_test_error(dataset);
+    // Measured for the adapter before tuning; the caller reads the tuned one again.
+    tuned.report.shapes.clear();
     Ok((tuned, report))
 }

@@ -6,7 +6,7 @@
 use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
 use faceanim_adapt::{
     Adapter, Augmentation, Control, Correction, Dataset, DatasetOptions, FaceCamera, Fit, Framing,
-    TrainOptions, finetune, train,
+    Loss, Reading, TrainOptions, finetune, train,
 };
 use faceanim_rig::Character;
 use faceanim_track::FaceModels;
@@ -107,6 +107,41 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
     assert!(
         others < 0.1,
         "the other shapes average {others}: {estimate:?}"
+    );
+
+    // Every shape shown alone and read back: the jaw is read, and the seed's squared error
+    // through the clamp, trained on the same set, leaves more shapes that capture never drives
+    // (an output below 0 gets no gradient through the clamp, even where its shape is active).
+    let readings = camera.readings(ict, &models, &adapter).unwrap();
+    assert_eq!(readings.len(), ict.blendshapes().len());
+    assert!(
+        readings
+            .iter()
+            .all(|r| r.reading == Reading::of(r.at_full) && (0.0..=1.0).contains(&r.at_half))
+    );
+    assert_eq!(readings[jaw].name, "jawOpen");
+    assert_eq!(readings[jaw].reading, Reading::Read, "{:?}", readings[jaw]);
+    let seed_loss = train(
+        &data,
+        &TrainOptions {
+            loss: Loss::SquaredClamped,
+            ..TrainOptions::default()
+        },
+        Control::silent(),
+    )
+    .unwrap();
+    let seed_readings = camera.readings(ict, &models, &seed_loss).unwrap();
+    let unseen = |r: &[faceanim_adapt::ShapeReading]| faceanim_adapt::readings::unseen(r).len();
+    eprintln!(
+        "shapes capture cannot drive: {} with the censored loss, {} with the seed's (test MAE {:.4} and {:.4})",
+        unseen(&readings),
+        unseen(&seed_readings),
+        adapter.report.mae_test,
+        seed_loss.report.mae_test
+    );
+    assert!(
+        unseen(&readings) < unseen(&seed_readings),
+        "censored: {readings:?}\nseed's: {seed_readings:?}"
     );
 
     // Another identity of the same rig: the adapter is accepted with a warning, and works.

@@ -10,7 +10,7 @@ use faceanim_adapt::heldout::{Evaluation, HeldOut};
 use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
 use faceanim_adapt::{
     Activation, Adapter, Architecture, Augmentation, Calibration, Control, Dataset, DatasetOptions,
-    FaceCamera, FeatureSet, TrainOptions,
+    FaceCamera, FeatureSet, Loss, ShapeReading, TrainOptions,
 };
 use faceanim_rig::Character;
 use faceanim_take::Session;
@@ -30,8 +30,8 @@ pub struct AdaptArgs {
     /// Random seed (expressions, initial weights, batch order).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Print {"mae_test", "mae_val", "samples", "seconds", "heldout": [...]} as JSON at the
-    /// end.
+    /// Print {"mae_test", "mae_val", "samples", "seconds", "shapes": [...], "heldout": [...]}
+    /// as JSON at the end.
     #[arg(long)]
     pub json: bool,
     /// Whether the training renders vary camera, light, skin, background and picture quality
@@ -59,6 +59,9 @@ pub struct AdaptArgs {
     /// Do not clamp the outputs to [0, 1].
     #[arg(long)]
     pub no_clamp: bool,
+    /// What training minimises.
+    #[arg(long, value_enum, default_value_t = LossChoice::CensoredAbsolute)]
+    pub loss: LossChoice,
     /// Two blendshapes never active together in the training set, `A,B`; repeatable
     /// (opposites such as jawLeft/jawRight are found on their own).
     #[arg(long)]
@@ -110,6 +113,24 @@ impl From<AugmentationChoice> for Augmentation {
         match choice {
             AugmentationChoice::None => Augmentation::None,
             AugmentationChoice::Randomised => Augmentation::Randomised,
+        }
+    }
+}
+
+/// The command line's names for [`Loss`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LossChoice {
+    /// Absolute error before the clamp, a target at 0 or 1 counting only outputs beyond it.
+    CensoredAbsolute,
+    /// The seed's: squared error of the clamped outputs.
+    SquaredClamped,
+}
+
+impl From<LossChoice> for Loss {
+    fn from(choice: LossChoice) -> Loss {
+        match choice {
+            LossChoice::CensoredAbsolute => Loss::CensoredAbsolute,
+            LossChoice::SquaredClamped => Loss::SquaredClamped,
         }
     }
 }
@@ -374,6 +395,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
     let dataset_seconds = started.elapsed().as_secs_f64();
     let train_options = TrainOptions {
         architecture: args.architecture(),
+        loss: args.loss.into(),
         seed: args.seed,
         ..TrainOptions::default()
     };
@@ -388,7 +410,8 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
             args.json,
         );
     }
-    let adapter = train_with_bar(&dataset, &train_options)?;
+    let mut adapter = train_with_bar(&dataset, &train_options)?;
+    adapter.report.shapes = readings(&character, &adapter)?;
     faceanim_files::write_atomic(&output, &adapter.to_bytes()?)?;
     let seconds = started.elapsed().as_secs_f64();
     let heldout = evaluate_held_out(&adapter, &folders)?;
@@ -409,28 +432,80 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         report.seconds
     );
     if args.json {
-        println!(
-            "{}",
-            serde_json::json!({
-                "mae_test": report.mae_test,
-                "mae_test_front": report.mae_test_front,
-                "mae_val": report.mae_val,
-                "samples": report.samples,
-                "seconds": seconds,
-                "seconds_dataset": dataset_seconds,
-                "seconds_training": report.seconds,
-                "augmentation": Augmentation::from(args.augmentation).name(),
-                "calibration": adapter.architecture.calibration.name(),
-                "heldout": heldout,
-            })
-        );
+        let summary = TrainingSummary {
+            mae_test: report.mae_test,
+            mae_test_front: report.mae_test_front,
+            mae_val: report.mae_val,
+            samples: report.samples,
+            best_epoch: report.best_epoch,
+            epochs: report.epochs,
+            seconds,
+            seconds_dataset: dataset_seconds,
+            seconds_training: report.seconds,
+            augmentation: args.augmentation.into(),
+            calibration: adapter.architecture.calibration,
+            loss: train_options.loss,
+            shapes: &report.shapes,
+            heldout: &heldout,
+        };
+        println!("{}", serde_json::to_string(&summary)?);
     }
     Ok(())
 }
 
+/// What `faceanim adapt --json` prints after training.
+#[derive(serde::Serialize)]
+struct TrainingSummary<'a> {
+    mae_test: f32,
+    /// On the test split's front renders.
+    mae_test_front: Option<f32>,
+    mae_val: f32,
+    samples: usize,
+    best_epoch: usize,
+    epochs: usize,
+    /// Wall-clock seconds from the start to the written adapter (training set, training and
+    /// the shape readings).
+    seconds: f64,
+    /// Of which rendering and reading the training set (or loading it when cached).
+    seconds_dataset: f64,
+    /// Of which training.
+    seconds_training: f64,
+    augmentation: Augmentation,
+    calibration: Calibration,
+    loss: Loss,
+    /// Each shape shown alone and read back.
+    shapes: &'a [ShapeReading],
+    heldout: &'a [Evaluation],
+}
+
+/// Each of `character`'s shapes shown alone and read by `adapter`; the ones capture cannot
+/// drive are printed.
+fn readings(character: &Character, adapter: &Adapter) -> anyhow::Result<Vec<ShapeReading>> {
+    let models = face_models()?;
+    let camera = FaceCamera::frame(character, models)?;
+    let readings = camera.readings(character, models, adapter)?;
+    let count = |r: faceanim_adapt::Reading| readings.iter().filter(|s| s.reading == r).count();
+    let unseen = faceanim_adapt::readings::unseen(&readings);
+    eprintln!(
+        "shown alone from the front, {} of {} shapes are read ({} more weakly){}",
+        count(faceanim_adapt::Reading::Read),
+        readings.len(),
+        count(faceanim_adapt::Reading::Weak),
+        if unseen.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; capture cannot drive {}: sketch them or correct frames",
+                unseen.join(", ")
+            )
+        }
+    );
+    Ok(readings)
+}
+
 /// The seed's Table 1 on this character, extended: features × calibration × augmentation,
-/// then the seed's architecture rows on the default setting. Each row: its own test MAE, and
-/// the MAE on every held-out folder.
+/// then the seed's architecture rows and its loss on the default setting. Each row: its own
+/// test MAE, and the MAE on every held-out folder.
 fn ablation(
     character: &Character,
     options: &DatasetOptions,
@@ -441,7 +516,7 @@ fn ablation(
     json: bool,
 ) -> anyhow::Result<()> {
     let default = Architecture::default();
-    let mut rows: Vec<(Augmentation, Architecture)> = Vec::new();
+    let mut rows: Vec<(Augmentation, Architecture, Loss)> = Vec::new();
     for augmentation in [Augmentation::None, Augmentation::Randomised] {
         for features in [FeatureSet::Scores, FeatureSet::Landmarks, FeatureSet::Both] {
             for calibration in [Calibration::None, Calibration::Neutral] {
@@ -452,6 +527,7 @@ fn ablation(
                         calibration,
                         ..default
                     },
+                    base.loss,
                 ));
             }
         }
@@ -479,7 +555,17 @@ fn ablation(
             ..default
         },
     ] {
-        rows.push((Augmentation::Randomised, architecture));
+        // The censored loss knows the outputs end in [0, 1]: the seed's rows without the
+        // clamp are trained as the seed trains them.
+        let loss = if architecture.clamp {
+            base.loss
+        } else {
+            Loss::SquaredClamped
+        };
+        rows.push((Augmentation::Randomised, architecture, loss));
+    }
+    if base.loss != Loss::SquaredClamped {
+        rows.push((Augmentation::Randomised, default, Loss::SquaredClamped));
     }
     // The other augmentation's training set is cached beside the given one.
     let other = |augmentation: Augmentation| -> anyhow::Result<Dataset> {
@@ -496,7 +582,7 @@ fn ablation(
     let mut datasets: Vec<(Augmentation, Dataset)> =
         vec![(options.augmentation, dataset_given.clone())];
     let mut results = Vec::new();
-    for (augmentation, architecture) in rows {
+    for (augmentation, architecture, loss) in rows {
         if !datasets.iter().any(|(a, _)| *a == augmentation) {
             datasets.push((augmentation, other(augmentation)?));
         }
@@ -507,6 +593,7 @@ fn ablation(
             data,
             &TrainOptions {
                 architecture,
+                loss,
                 ..*base
             },
         )?;
@@ -518,63 +605,87 @@ fn ablation(
             .find(|(a, _)| *a == Augmentation::None)
             .map(|(_, d)| adapter.mean_absolute_error_of(d, d.split().test));
         eprintln!(
-            "{} {} {} {} {:?} clamp={}: test MAE {:.4}",
+            "{} {} {} {} {:?} clamp={} {}: test MAE {:.4}",
             augmentation.name(),
             architecture.features.name(),
             architecture.calibration.name(),
             architecture.hidden,
             architecture.activation,
             architecture.clamp,
+            loss.name(),
             adapter.report.mae_test
         );
-        results.push((augmentation, architecture, adapter.report, front, heldout));
+        results.push(AblationRow {
+            augmentation,
+            features: architecture.features,
+            calibration: architecture.calibration,
+            hidden: architecture.hidden,
+            activation: architecture.activation,
+            clamp: architecture.clamp,
+            loss,
+            mae_test: adapter.report.mae_test,
+            mae_val: adapter.report.mae_val,
+            mae_front_renders_test: front,
+            epochs: adapter.report.best_epoch,
+            seconds: adapter.report.seconds,
+            heldout,
+        });
     }
     if json {
-        let rows: Vec<_> = results
-            .iter()
-            .map(|(g, a, r, f, h)| {
-                serde_json::json!({
-                    "augmentation": g.name(), "features": a.features.name(),
-                    "calibration": a.calibration.name(), "hidden": a.hidden,
-                    "activation": a.activation, "clamp": a.clamp,
-                    "mae_test": r.mae_test, "mae_val": r.mae_val,
-                    "mae_front_renders_test": f,
-                    "epochs": r.best_epoch, "seconds": r.seconds,
-                    "heldout": h,
-                })
-            })
-            .collect();
-        println!("{}", serde_json::Value::Array(rows));
+        println!("{}", serde_json::to_string(&results)?);
     } else {
         let heldout_columns: String = folders
             .iter()
             .map(|f| format!(" held-out MAE ({}) |", f.dir.display()))
             .collect();
         println!(
-            "| augmentation | features | calibration | layers | hidden | test MAE (own renders) | test MAE (front renders) |{heldout_columns} best epoch | seconds |"
+            "| augmentation | features | calibration | layers | hidden | loss | test MAE (own renders) | test MAE (front renders) |{heldout_columns} best epoch | seconds |"
         );
-        println!("|{}", " --- |".repeat(9 + folders.len()));
-        for (g, a, r, f, h) in &results {
-            let activation = match a.activation {
+        println!("|{}", " --- |".repeat(10 + folders.len()));
+        for r in &results {
+            let activation = match r.activation {
                 Activation::Relu => "ReLU",
                 Activation::LeakyRelu => "LeakyReLU",
             };
-            let clamp = if a.clamp { " → Clamp" } else { "" };
-            let heldout: String = h.iter().map(|e| format!(" {:.4} |", e.mae)).collect();
-            let front = f.map_or_else(|| "–".to_owned(), |m| format!("{m:.4}"));
+            let clamp = if r.clamp { " → Clamp" } else { "" };
+            let heldout: String = r.heldout.iter().map(|e| format!(" {:.4} |", e.mae)).collect();
+            let front = r
+                .mae_front_renders_test
+                .map_or_else(|| "–".to_owned(), |m| format!("{m:.4}"));
             println!(
-                "| {} | {} | {} | Linear → {activation} → Linear{clamp} | {} | {:.4} | {front} |{heldout} {} | {:.1} |",
-                g.name(),
-                a.features.name(),
-                a.calibration.name(),
-                a.hidden,
+                "| {} | {} | {} | Linear → {activation} → Linear{clamp} | {} | {} | {:.4} | {front} |{heldout} {} | {:.1} |",
+                r.augmentation.name(),
+                r.features.name(),
+                r.calibration.name(),
+                r.hidden,
+                r.loss.name(),
                 r.mae_test,
-                r.best_epoch,
+                r.epochs,
                 r.seconds
             );
         }
     }
     Ok(())
+}
+
+/// One row of the ablation table, as `--ablation --json` prints it.
+#[derive(serde::Serialize)]
+struct AblationRow {
+    augmentation: Augmentation,
+    features: FeatureSet,
+    calibration: Calibration,
+    hidden: usize,
+    activation: Activation,
+    clamp: bool,
+    loss: Loss,
+    mae_test: f32,
+    mae_val: f32,
+    /// The row's adapter on the test split of the front renders (once that set exists).
+    mae_front_renders_test: Option<f32>,
+    /// The epoch whose weights were kept.
+    epochs: usize,
+    seconds: f64,
+    heldout: Vec<Evaluation>,
 }
 
 /// The seed's offline mode: the corrections recorded in sessions fine-tune the adapter.
@@ -623,12 +734,14 @@ fn finetune(
     };
     let train_options = TrainOptions {
         architecture: adapter.architecture,
+        loss: args.loss.into(),
         seed: args.seed,
         ..TrainOptions::default()
     };
-    let (tuned, outcome) = with_bar(40, "fine-tuning epoch", |control| {
+    let (mut tuned, outcome) = with_bar(40, "fine-tuning epoch", |control| {
         faceanim_adapt::finetune(&adapter, &dataset, &corrections, &train_options, control)
     })?;
+    tuned.report.shapes = readings(character, &tuned)?;
     faceanim_files::write_atomic(output, &tuned.to_bytes()?)?;
     let seconds = started.elapsed().as_secs_f64();
     let heldout = evaluate_held_out(&tuned, folders)?;
@@ -642,22 +755,37 @@ fn finetune(
         outcome.test_after
     );
     if args.json {
-        println!(
-            "{}",
-            serde_json::json!({
-                "mae_test": tuned.report.mae_test,
-                "mae_val": tuned.report.mae_val,
-                "samples": tuned.report.samples,
-                "seconds": seconds,
-                "corrected_frames": corrections.len(),
-                "mae_corrected_before": outcome.corrected_before,
-                "mae_corrected_after": outcome.corrected_after,
-                "mae_test_before": outcome.test_before,
-                "heldout": heldout,
-            })
-        );
+        let summary = FinetuneSummary {
+            mae_test: tuned.report.mae_test,
+            mae_val: tuned.report.mae_val,
+            samples: tuned.report.samples,
+            seconds,
+            corrected_frames: corrections.len(),
+            mae_corrected_before: outcome.corrected_before,
+            mae_corrected_after: outcome.corrected_after,
+            mae_test_before: outcome.test_before,
+            shapes: &tuned.report.shapes,
+            heldout: &heldout,
+        };
+        println!("{}", serde_json::to_string(&summary)?);
     }
     Ok(())
+}
+
+/// What `faceanim adapt --finetune … --json` prints.
+#[derive(serde::Serialize)]
+struct FinetuneSummary<'a> {
+    /// Test MAE after fine-tuning.
+    mae_test: f32,
+    mae_val: f32,
+    samples: usize,
+    seconds: f64,
+    corrected_frames: usize,
+    mae_corrected_before: f32,
+    mae_corrected_after: f32,
+    mae_test_before: f32,
+    shapes: &'a [ShapeReading],
+    heldout: &'a [Evaluation],
 }
 
 /// MAE of an existing adapter on renders of `character` (another identity of its rig, say).
@@ -680,7 +808,10 @@ fn evaluate(
     // Held-out folders alone need no renders.
     if !folders.is_empty() {
         let heldout = evaluate_held_out(&adapter, folders)?;
-        println!("{}", serde_json::json!({ "heldout": heldout }));
+        println!(
+            "{}",
+            serde_json::to_string(&Measured::HeldOut { heldout })?
+        );
         return Ok(());
     }
     let (dataset, _) = dataset(character, options, cache, fresh)?;
@@ -693,7 +824,20 @@ fn evaluate(
     );
     println!(
         "{}",
-        serde_json::json!({ "mae": mae, "samples": dataset.len() })
+        serde_json::to_string(&Measured::Renders {
+            mae,
+            samples: dataset.len(),
+        })?
     );
     Ok(())
+}
+
+/// What `faceanim adapt --evaluate` prints.
+#[derive(serde::Serialize)]
+#[serde(untagged)]
+enum Measured {
+    /// On the held-out folders.
+    HeldOut { heldout: Vec<Evaluation> },
+    /// On renders of the character.
+    Renders { mae: f32, samples: usize },
 }

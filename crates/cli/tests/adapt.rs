@@ -76,6 +76,12 @@ fn adapt_then_track_correct_and_fine_tune() {
     }
     assert!(summary["samples"].as_u64().unwrap() >= 990);
     assert!(summary["mae_test"].as_f64().unwrap() < 0.15, "{summary}");
+    assert_eq!(summary["loss"], "censored_absolute", "{summary}");
+    // Every shape shown alone and read back; the jaw is driven.
+    let shapes = summary["shapes"].as_array().unwrap();
+    assert_eq!(shapes.len(), 53, "{summary}");
+    let jaw = shapes.iter().find(|s| s["name"] == "jawOpen").unwrap();
+    assert_eq!(jaw["reading"], "read", "{jaw}");
     assert!(dir.path().join("ict.dataset.safetensors").exists());
 
     // Track a video through the adapter, with a session and a user keyframe.

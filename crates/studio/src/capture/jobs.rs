@@ -194,9 +194,10 @@ pub fn start_training(
             ..TrainOptions::default()
         };
         job.stage("training", train_options.max_epochs);
-        let adapter = with_control(job, |control| {
+        let mut adapter = with_control(job, |control| {
             faceanim_adapt::train(&dataset, &train_options, control)
         })?;
+        adapter.report.shapes = readings(job, &character, &adapter)?;
         faceanim_files::write_atomic(&adapter_path, &adapter.to_bytes()?)?;
         // Short: the adapter's path and report show beside it.
         let message = format!(
@@ -248,9 +249,10 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
             ..TrainOptions::default()
         };
         job.stage("fine-tuning", options.max_epochs);
-        let (tuned, report) = with_control(job, |control| {
+        let (mut tuned, report) = with_control(job, |control| {
             faceanim_adapt::finetune(&adapter, &dataset, &corrections, &options, control)
         })?;
+        tuned.report.shapes = readings(job, &character, &tuned)?;
         faceanim_files::write_atomic(&adapter_path, &tuned.to_bytes()?)?;
         install_adapter(&desk, &character, &adapter_path, tuned)?;
         Ok(format!(
@@ -326,6 +328,19 @@ fn dataset_for(
         tracing::warn!("could not cache the training set: {e}");
     }
     Ok(dataset)
+}
+
+/// Each of `character`'s shapes shown alone and read by `adapter`, for the page to say which
+/// ones capture cannot drive.
+fn readings(
+    job: &Job,
+    character: &Character,
+    adapter: &Adapter,
+) -> Result<Vec<faceanim_adapt::ShapeReading>, ApiError> {
+    job.stage("reading each shape alone", 1);
+    let models = face_models()?;
+    let camera = FaceCamera::frame(character, models)?;
+    Ok(camera.readings(character, models, adapter)?)
 }
 
 /// Makes `adapter` the desk's and re-estimates the open take with it.

@@ -611,6 +611,12 @@ impl CaptureDesk {
                     .adapter
                     .as_ref()
                     .is_some_and(faceanim_take::Estimator::calibrated),
+                unseen: self.adapter.as_ref().map_or_else(Vec::new, |a| {
+                    faceanim_adapt::readings::unseen(&a.report.shapes)
+                        .into_iter()
+                        .map(str::to_owned)
+                        .collect()
+                }),
             },
             job: self.job.as_ref().map(|j| j.view()),
             filtering: FilteringView {
