@@ -96,6 +96,10 @@ pub enum AdaptError {
     /// Too few samples to split into training, validation and test.
     #[error("{0} samples are too few to train on")]
     NotEnoughData(usize),
+    /// The face model found no face in the character's neutral front render, so its shapes
+    /// cannot be read one by one.
+    #[error("the face model reads no face in the character's neutral front render")]
+    NoNeutralFace,
     /// The user stopped the work.
     #[error("cancelled")]
     Cancelled,

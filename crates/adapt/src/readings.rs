@@ -80,8 +80,8 @@ impl FaceCamera {
     /// parallel.
     ///
     /// # Errors
-    /// [`AdaptError::Model`] if a network fails, [`AdaptError::Training`] when the neutral
-    /// render has no face to read.
+    /// [`AdaptError::Model`] if a network fails, [`AdaptError::NoNeutralFace`] when the
+    /// neutral render has no face to read.
     pub fn readings(
         &self,
         character: &Character,
@@ -94,9 +94,7 @@ impl FaceCamera {
             .expression(character, models, &[], &mut Pose::default())?
             .0
         else {
-            return Err(AdaptError::Training(
-                "no face was read in the character's neutral front render".into(),
-            ));
+            return Err(AdaptError::NoNeutralFace);
         };
         (0..count)
             .into_par_iter()

@@ -479,11 +479,19 @@ struct TrainingSummary<'a> {
 }
 
 /// Each of `character`'s shapes shown alone and read by `adapter`; the ones capture cannot
-/// drive are printed.
+/// drive are printed. A character whose neutral face is not read gets none (said on the
+/// terminal): the adapter is still written.
 fn readings(character: &Character, adapter: &Adapter) -> anyhow::Result<Vec<ShapeReading>> {
     let models = face_models()?;
     let camera = FaceCamera::frame(character, models)?;
-    let readings = camera.readings(character, models, adapter)?;
+    let readings = match camera.readings(character, models, adapter) {
+        Ok(readings) => readings,
+        Err(e @ faceanim_adapt::AdaptError::NoNeutralFace) => {
+            eprintln!("the shapes were not read one by one: {e}");
+            return Ok(Vec::new());
+        }
+        Err(e) => return Err(e.into()),
+    };
     let count = |r: faceanim_adapt::Reading| readings.iter().filter(|s| s.reading == r).count();
     let unseen = faceanim_adapt::readings::unseen(&readings);
     eprintln!(

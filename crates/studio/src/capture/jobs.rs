@@ -331,7 +331,8 @@ fn dataset_for(
 }
 
 /// Each of `character`'s shapes shown alone and read by `adapter`, for the page to say which
-/// ones capture cannot drive.
+/// ones capture cannot drive; none when the character's neutral face is not read (the
+/// adapter is still saved).
 fn readings(
     job: &Job,
     character: &Character,
@@ -340,7 +341,13 @@ fn readings(
     job.stage("reading each shape alone", 1);
     let models = face_models()?;
     let camera = FaceCamera::frame(character, models)?;
-    Ok(camera.readings(character, models, adapter)?)
+    match camera.readings(character, models, adapter) {
+        Err(e @ faceanim_adapt::AdaptError::NoNeutralFace) => {
+            tracing::warn!("the shapes were not read one by one: {e}");
+            Ok(Vec::new())
+        }
+        other => Ok(other?),
+    }
 }
 
 /// Makes `adapter` the desk's and re-estimates the open take with it.
