@@ -80,14 +80,16 @@ impl FaceCamera {
     /// parallel.
     ///
     /// # Errors
-    /// [`AdaptError::Model`] if a network fails, [`AdaptError::NoNeutralFace`] when the
-    /// neutral render has no face to read.
+    /// [`AdaptError::Mismatch`] when `adapter` is not for `character`, [`AdaptError::Model`]
+    /// if a network fails, [`AdaptError::NoNeutralFace`] when the neutral render has no face
+    /// to read.
     pub fn readings(
         &self,
         character: &Character,
         models: &FaceModels,
         adapter: &Adapter,
     ) -> Result<Vec<ShapeReading>, AdaptError> {
+        adapter.check(character)?;
         let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
         let count = names.len();
         let Some(neutral) = self

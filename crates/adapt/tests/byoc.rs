@@ -120,6 +120,14 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
             .all(|r| r.reading == Reading::of(r.at_full) && (0.0..=1.0).contains(&r.at_half))
     );
     assert_eq!(readings[jaw].name, "jawOpen");
+    // Another character's shapes are refused, not read through this adapter.
+    let refused = camera
+        .readings(&faceanim_head::default_character(), &models, &adapter)
+        .unwrap_err();
+    assert!(
+        matches!(refused, faceanim_adapt::AdaptError::Mismatch { .. }),
+        "{refused}"
+    );
     assert_eq!(readings[jaw].reading, Reading::Read, "{:?}", readings[jaw]);
     let seed_loss = train(
         &data,
