@@ -86,26 +86,43 @@ $('capture-input').appendChild(shownCanvas);
  * an answer comes back instead of when the camera next delivers. */
 let waiting = /** @type {{frame: any, captured: number}|null} */ (null);
 
+/** Frames being read or sent, closed with the page if it goes first. */
+const held = new Set();
+
 async function readTrack(reader) {
   // Read until the track ends (stopLive stops it), closing what comes after Stop: a frame left
   // in the stream unread is garbage collected unclosed, which stalls the camera.
-  for (;;) {
-    const { value: frame, done } = await reader.read();
-    if (done || !frame) break;
-    if (!live.running) { frame.close(); continue; }
-    if (waiting) waiting.frame.close();
-    waiting = { frame, captured: performance.now() };
-    sendWaiting();
+  try {
+    for (;;) {
+      const { value: frame, done } = await reader.read();
+      if (done || !frame) break;
+      if (!live.running) { frame.close(); continue; }
+      if (waiting) waiting.frame.close();
+      waiting = { frame, captured: performance.now() };
+      sendWaiting();
+    }
+  } catch { /* the stream failed with its track: nothing more will come */ } finally {
+    if (waiting) { waiting.frame.close(); waiting = null; }
+    reader.releaseLock();
   }
-  if (waiting) { waiting.frame.close(); waiting = null; }
-  reader.releaseLock();
 }
+
+// Leaving or reloading the page with the webcam on: let the camera go, and close the frames
+// the page holds (their reads would never finish, and unclosed frames stall the camera).
+window.addEventListener('pagehide', () => {
+  live.running = false;
+  if (waiting) { waiting.frame.close(); waiting = null; }
+  for (const frame of held) frame.close();
+  held.clear();
+  if (stream) for (const t of stream.getTracks()) t.stop();
+});
 
 /** Sends the waiting frame if a slot with the server is free. */
 async function sendWaiting() {
   if (!waiting || !live.running || inFlight >= live.maxInFlight) return;
   const { frame, captured } = waiting;
   waiting = null;
+  held.add(frame);
   inFlight++; // the slot is taken while the frame is read, too
   try {
     const { pixels, width, height, format } = await frameBytes(frame);
@@ -115,7 +132,7 @@ async function sendWaiting() {
   } catch (e) {
     inFlight--;
     if (live.running) showError(`The webcam frame could not be read: ${e.message || e}`);
-  } finally { frame.close(); }
+  } finally { held.delete(frame); frame.close(); }
 }
 
 /** Pixel-format headers of a frame the page converted to RGBA itself. */
