@@ -33,7 +33,19 @@ export const live = {
    * 14 % more median latency and 27 % more at the 90th percentile; with a GPU the server is
    * the limit and a queued frame adds latency only. */
   maxInFlight: 1,
+  /** Camera frames the page has received and not closed yet (a frame left unclosed stalls
+   * the camera): at most the waiting one and those being read. */
+  open_frames: 0,
 };
+
+/** The camera frames received and not yet released. */
+const open = new Set();
+/** Closes a camera frame the page received, once. */
+function release(/** @type {any} */ frame) {
+  if (!open.delete(frame)) return;
+  frame.close();
+  live.open_frames = open.size;
+}
 
 const video = /** @type {HTMLVideoElement} */ ($('capture-video'));
 const grab = document.createElement('canvas');
@@ -86,9 +98,6 @@ $('capture-input').appendChild(shownCanvas);
  * an answer comes back instead of when the camera next delivers. */
 let waiting = /** @type {{frame: any, captured: number}|null} */ (null);
 
-/** Frames being read or sent, closed with the page if it goes first. */
-const held = new Set();
-
 async function readTrack(reader) {
   // Read until the track ends (stopLive stops it), closing what comes after Stop: a frame left
   // in the stream unread is garbage collected unclosed, which stalls the camera.
@@ -96,13 +105,15 @@ async function readTrack(reader) {
     for (;;) {
       const { value: frame, done } = await reader.read();
       if (done || !frame) break;
-      if (!live.running) { frame.close(); continue; }
-      if (waiting) waiting.frame.close();
+      open.add(frame);
+      live.open_frames = open.size;
+      if (!live.running) { release(frame); continue; }
+      if (waiting) release(waiting.frame);
       waiting = { frame, captured: performance.now() };
       sendWaiting();
     }
   } catch { /* the stream failed with its track: nothing more will come */ } finally {
-    if (waiting) { waiting.frame.close(); waiting = null; }
+    if (waiting) { release(waiting.frame); waiting = null; }
     reader.releaseLock();
   }
 }
@@ -111,9 +122,8 @@ async function readTrack(reader) {
 // the page holds (their reads would never finish, and unclosed frames stall the camera).
 window.addEventListener('pagehide', () => {
   live.running = false;
-  if (waiting) { waiting.frame.close(); waiting = null; }
-  for (const frame of held) frame.close();
-  held.clear();
+  waiting = null;
+  for (const frame of [...open]) release(frame);
   if (stream) for (const t of stream.getTracks()) t.stop();
 });
 
@@ -122,7 +132,6 @@ async function sendWaiting() {
   if (!waiting || !live.running || inFlight >= live.maxInFlight) return;
   const { frame, captured } = waiting;
   waiting = null;
-  held.add(frame);
   inFlight++; // the slot is taken while the frame is read, too
   try {
     const { pixels, width, height, format } = await frameBytes(frame);
@@ -132,7 +141,7 @@ async function sendWaiting() {
   } catch (e) {
     inFlight--;
     if (live.running) showError(`The webcam frame could not be read: ${e.message || e}`);
-  } finally { held.delete(frame); frame.close(); }
+  } finally { release(frame); }
 }
 
 /** Pixel-format headers of a frame the page converted to RGBA itself. */
