@@ -191,13 +191,21 @@ impl Net {
                 let y = examples.y.index_select(index, 0)?;
                 candle_nn::loss::mse(&self.forward(&x)?, &y)?
             }
-            Loss::CensoredAbsolute => {
-                let raw = self.raw(&x)?;
-                let below = (examples.lower.index_select(index, 0)? - &raw)?.relu()?;
-                let above = (raw - examples.upper.index_select(index, 0)?)?.relu()?;
-                (below + above)?.mean_all()?
-            }
+            Loss::CensoredAbsolute => self.censored(
+                &x,
+                &examples.lower.index_select(index, 0)?,
+                &examples.upper.index_select(index, 0)?,
+            )?,
         })
+    }
+
+    /// The censored absolute error of the outputs for `x` against the bounds of its targets
+    /// ([`Loss::CensoredAbsolute`]).
+    fn censored(&self, x: &Tensor, lower: &Tensor, upper: &Tensor) -> Result<Tensor, AdaptError> {
+        let raw = self.raw(x)?;
+        let below = (lower - &raw)?.relu()?;
+        let above = (raw - upper)?.relu()?;
+        Ok((below + above)?.mean_all()?)
     }
 
     fn mae(&self, x: &Tensor, y: &Tensor) -> Result<f32, AdaptError> {
@@ -324,8 +332,7 @@ fn epoch(
                 // The censored error already pulls a shape read below 0 up to the user's value
                 // and leaves the shapes at rest below 0 alone.
                 Loss::CensoredAbsolute => {
-                    let all = Tensor::arange(0u32, corrected.len() as u32, &Device::Cpu)?;
-                    net.loss(Loss::CensoredAbsolute, corrected, &all)?
+                    net.censored(&corrected.x, &corrected.lower, &corrected.upper)?
                 }
                 // Through a leaky clamp: a shape the adapter reads far below 0 (clamped to 0,
                 // so no gradient there) must still be pulled up to the user's value, while the
