@@ -35,7 +35,7 @@ export const live = {
   maxInFlight: 1,
   /** Camera frames the page has received and not closed yet (a frame left unclosed stalls
    * the camera): at most the waiting one and those being read. */
-  open_frames: 0,
+  get open_frames() { return open.size; },
 };
 
 /** The camera frames received and not yet released. */
@@ -44,7 +44,6 @@ const open = new Set();
 function release(/** @type {any} */ frame) {
   if (!open.delete(frame)) return;
   frame.close();
-  live.open_frames = open.size;
 }
 
 const video = /** @type {HTMLVideoElement} */ ($('capture-video'));
@@ -106,7 +105,6 @@ async function readTrack(reader) {
       const { value: frame, done } = await reader.read();
       if (done || !frame) break;
       open.add(frame);
-      live.open_frames = open.size;
       if (!live.running) { release(frame); continue; }
       if (waiting) release(waiting.frame);
       waiting = { frame, captured: performance.now() };
