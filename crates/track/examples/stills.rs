@@ -1,8 +1,9 @@
 //! The whole per-frame pipeline (detector, region, landmarks, scores) on still pictures (PNG or
 //! JPEG, decoded as capture decodes them), as JSON: `{path: {width, height, landmarks:
-//! [[x, y, z]…] (image pixels), scores: {name: score}, region}}`, `null` where no face was found: for looking into a difference from MediaPipe's
-//! own runtime on some pictures (`tools/record_mediapipe_stills.py` records what it finds;
-//! `tests/mediapipe_stills.rs` compares).
+//! [[x, y, z]…] (image pixels), scores: {name: score}, region}}`, `null` where no face was
+//! found: for looking into a difference from MediaPipe's own runtime on some pictures
+//! (`tools/record_mediapipe_stills.py` records what it finds; `tests/mediapipe_stills.rs`
+//! compares).
 //!
 //! `cargo run --release -p faceanim-track --example stills -- A.png B.png …`
 #![allow(clippy::print_stdout, reason = "an example that prints its result")]
