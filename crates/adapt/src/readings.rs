@@ -104,11 +104,13 @@ impl FaceCamera {
                 let mut read_at = |weight: f32| -> Result<Vec<f32>, AdaptError> {
                     let mut weights = vec![0.0; count];
                     weights[shape] = weight;
-                    Ok(match self.expression(character, models, &weights, pose)?.0 {
-                        Some(expression) => adapter.predict(&expression, Some(&neutral)),
-                        // Landmarks too degenerate to use: capture gives nothing either.
-                        None => vec![0.0; count],
-                    })
+                    Ok(
+                        match self.expression(character, models, &weights, pose)?.0 {
+                            Some(expression) => adapter.predict(&expression, Some(&neutral)),
+                            // Landmarks too degenerate to use: capture gives nothing either.
+                            None => vec![0.0; count],
+                        },
+                    )
                 };
                 let half = read_at(0.5)?;
                 let full = read_at(1.0)?;

@@ -428,14 +428,7 @@ pub fn train(
         if control.cancelled() {
             return Err(AdaptError::Cancelled);
         }
-        epoch(
-            &net,
-            &mut optimizer,
-            &train_set,
-            None,
-            options,
-            &mut rng,
-        )?;
+        epoch(&net, &mut optimizer, &train_set, None, options, &mut rng)?;
         epochs = e;
         let mae = net.mae(&validation.x, &validation.y)?;
         tracing::debug!(epoch = e, mae_val = mae, "trained");

@@ -656,7 +656,11 @@ fn ablation(
                 Activation::LeakyRelu => "LeakyReLU",
             };
             let clamp = if r.clamp { " → Clamp" } else { "" };
-            let heldout: String = r.heldout.iter().map(|e| format!(" {:.4} |", e.mae)).collect();
+            let heldout: String = r
+                .heldout
+                .iter()
+                .map(|e| format!(" {:.4} |", e.mae))
+                .collect();
             let front = r
                 .mae_front_renders_test
                 .map_or_else(|| "–".to_owned(), |m| format!("{m:.4}"));
@@ -816,10 +820,7 @@ fn evaluate(
     // Held-out folders alone need no renders.
     if !folders.is_empty() {
         let heldout = evaluate_held_out(&adapter, folders)?;
-        println!(
-            "{}",
-            serde_json::to_string(&Measured::HeldOut { heldout })?
-        );
+        println!("{}", serde_json::to_string(&Measured::HeldOut { heldout })?);
         return Ok(());
     }
     let (dataset, _) = dataset(character, options, cache, fresh)?;

@@ -58,8 +58,13 @@ impl BboxReport {
 
 #[derive(Debug, Serialize)]
 struct PlaneReport {
+    /// The coordinate axis nearest the plane's normal.
     axis: &'static str,
+    /// The unit normal (towards the character's left) and the offset along it.
+    normal: [f32; 3],
     offset: f32,
+    /// How far the normal leans from `axis`.
+    tilt_degrees: f32,
     mirrored_vertices: f32,
 }
 
@@ -105,12 +110,14 @@ impl Report {
                 vrm: s.is_vrm(),
             }),
             symmetry_plane: symmetry.plane().map(|p| PlaneReport {
-                axis: match p.axis {
+                axis: match p.axis() {
                     faceanim_rig::symmetry::Axis::X => "x",
                     faceanim_rig::symmetry::Axis::Y => "y",
                     faceanim_rig::symmetry::Axis::Z => "z",
                 },
+                normal: p.normal.to_array(),
                 offset: p.offset,
+                tilt_degrees: p.tilt_degrees(),
                 mirrored_vertices: symmetry.mirrored_fraction(),
             }),
         }
@@ -162,9 +169,10 @@ impl Report {
             Some(p) => {
                 let _ = writeln!(
                     out,
-                    "  symmetry     {} = {:.5} ({:.0}% of vertices mirrored)",
+                    "  symmetry     {} = {:.5}, tilted {:.1}° ({:.0}% of vertices mirrored)",
                     p.axis,
                     p.offset,
+                    p.tilt_degrees,
                     100.0 * p.mirrored_vertices
                 );
             }

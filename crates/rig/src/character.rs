@@ -682,6 +682,48 @@ impl Character {
         &self.symmetry
     }
 
+    /// For each blendshape that is a VRM expression, the blendshapes whose morph targets it
+    /// binds (empty for the file's own targets and for characters not read from a file).
+    #[must_use]
+    pub fn expression_parts(&self) -> Vec<Vec<usize>> {
+        let Some(source) = self.source() else {
+            return vec![Vec::new(); self.blendshapes.len()];
+        };
+        let mut owner: std::collections::HashMap<(u32, u32), usize> =
+            std::collections::HashMap::new();
+        for (slot, bindings) in source.shapes().iter().enumerate() {
+            for b in bindings {
+                owner.entry((b.mesh, b.target)).or_insert(slot);
+            }
+        }
+        (0..self.blendshapes.len())
+            .map(|slot| {
+                let mut parts: Vec<usize> = source
+                    .shapes()
+                    .get(slot)
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|b| owner.get(&(b.mesh, b.target)).copied())
+                    .filter(|&p| p != slot)
+                    .collect();
+                parts.sort_unstable();
+                parts.dedup();
+                parts
+            })
+            .collect()
+    }
+
+    /// Which blendshapes ARKit's channels drive by name (see [`crate::name_map`]).
+    #[must_use]
+    pub fn name_map(&self) -> crate::name_map::NameMap {
+        let names: Vec<String> = self
+            .blendshapes
+            .iter()
+            .map(|b| b.name().to_owned())
+            .collect();
+        crate::name_map::NameMap::from_names(&names, &self.expression_parts())
+    }
+
     /// The blendshapes whose names are ARKit names, with the canonical name each one spells.
     #[must_use]
     pub fn arkit_coverage(&self) -> Vec<(BlendshapeId, &'static str)> {

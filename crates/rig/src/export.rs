@@ -462,6 +462,12 @@ pub fn export_into_source(
     };
     let mut meshes = take_array("meshes");
     let mut nodes = take_array("nodes");
+    // A primitive that its exporter left without the targets its siblings have (which the
+    // importer reads as not moving) gets zero targets, so that the file written is valid.
+    for mesh in &mut meshes {
+        pad_missing_targets(mesh, &mut bin);
+    }
+
     let own = source.shapes().len().min(shape_count);
 
     // Per mesh: each of its targets as (character blendshape, weight) contributions.
@@ -674,4 +680,34 @@ pub fn export_into_source(
         }
     }
     glb(&doc, bin.bytes)
+}
+
+/// Gives each primitive of `mesh` that has no morph targets as many all-zero ones as its
+/// siblings have (glTF asks every primitive of a mesh for the same targets).
+fn pad_missing_targets(mesh: &mut Value, bin: &mut Bin) {
+    let Some(primitives) = mesh.get_mut("primitives").and_then(Value::as_array_mut) else {
+        return;
+    };
+    let count_of = |p: &Value| {
+        p.get("targets")
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len)
+    };
+    let wanted = primitives.iter().map(count_of).max().unwrap_or(0);
+    for primitive in primitives.iter_mut().filter(|p| count_of(p) == 0) {
+        if wanted == 0 {
+            break;
+        }
+        let Some(vertices) = primitive
+            .pointer("/attributes/POSITION")
+            .and_then(Value::as_u64)
+            .and_then(|a| bin.accessors.get(a as usize))
+            .and_then(|a| a.get("count"))
+            .and_then(Value::as_u64)
+        else {
+            continue;
+        };
+        let zero = bin.sparse_vec3(vertices as usize, &[], &[], true);
+        primitive["targets"] = json!(vec![json!({ "POSITION": zero }); wanted]);
+    }
 }

@@ -38,6 +38,7 @@ mod character;
 pub mod export;
 mod graph;
 pub mod import;
+pub mod name_map;
 pub mod names;
 pub mod normals;
 mod pose;

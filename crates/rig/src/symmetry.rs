@@ -1,16 +1,28 @@
 //! Left/right symmetry: the mirror plane, each vertex's mirror partner, and blendshape pairs.
 //!
-//! The plane is found from the geometry (the axis-aligned plane through the mesh's middle that
-//! maps the most vertices onto other vertices), as a robust fit: real faces are never exactly
-//! symmetric, so the match tolerance grows from 0.2 % of the size (a mirrored model) to 2.5 %
-//! (a scanned or sculpted face, a few millimetres on a head) until most vertices find a partner,
-//! and the plane's offset is the median of the matched pairs' midpoints. Blendshape partners
-//! come first from names (see [`crate::names::sided`]) and, for blendshapes whose names say
-//! nothing, from geometry: two blendshapes that are each other's best mirror, and mirror onto
-//! each other better than either mirrors onto itself.
+//! Real faces are never exactly symmetric, so everything here is approximate and robust:
 //!
-//! Orientation: glTF characters face +Z with +Y up, so the character's left is +X. For a plane
-//! on another axis, "left" is the positive side of that axis.
+//! - **The plane.** The three axis planes through the head's middle are tried first; one that
+//!   maps nearly every vertex onto another within 0.2 % of the size (a mirrored model) is kept
+//!   as it is. Otherwise the best of them is refined by *reflective iterative closest points*:
+//!   reflect a sample of vertices, take each one's nearest vertex, drop the worst fifth of the
+//!   pairs, and fit the plane that maps the rest onto each other (its normal from the pairs'
+//!   differences, its offset the median of their midpoints), until it settles. A tilted scan
+//!   or a face a few millimetres lopsided gets the plane that fits it best.
+//! - **The correspondence.** Each vertex's mirror is the vertex nearest its reflection, kept
+//!   when it is within a tolerance grown from the fit's own residuals (four times their median,
+//!   between 0.5 % and 5 % of the size): a real face's counterpart is found even where it is a
+//!   few millimetres off, while parts with no counterpart (an asymmetric accessory) get none.
+//! - **Blendshape pairs** come first from names (see [`crate::names::sided`]); for the others,
+//!   from their displacement fields: one shape's field reflected across the plane and read at
+//!   the mirrored vertices is compared with the other's, blurred over a few millimetres, by
+//!   normalised correlation, so that a left smile that is stronger, a little wider or a little
+//!   higher than the right one still matches it. Pairs are made one to one, strongest first,
+//!   from matches that are strong enough and better than either shape's match with itself
+//!   (`jawOpen` mirrors onto itself and pairs with nothing).
+//!
+//! Orientation: glTF characters face +Z with +Y up, so the character's left is +X. The plane's
+//! normal points to the character's left (the positive side of its dominant axis).
 
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -18,17 +30,82 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use crate::character::{Aabb, Blendshape, BlendshapeId};
 use crate::names::{self, Side};
 
-/// Vertices closer than one of these fractions of the size to a mirrored vertex count as its
-/// partner: the first at which the plane is found is used. A mirrored model matches at the
-/// first; scanned and sculpted heads are symmetric to a few millimetres, not to float precision.
-const MIRROR_TOLERANCES: [f32; 4] = [2e-3, 6e-3, 1.2e-2, 2.5e-2];
-/// A plane is a symmetry plane when at least this fraction of vertices have a partner.
+/// An axis plane that maps this fraction of the vertices onto other vertices within
+/// [`EXACT_TOLERANCE`] of the size is an exact mirror plane and is kept as it is.
+const EXACT_FRACTION: f32 = 0.9;
+/// The tolerance of an exactly mirrored model, as a fraction of the size.
+const EXACT_TOLERANCE: f32 = 2e-3;
+/// A plane is a symmetry plane when at least this fraction of the sampled vertices mirror onto
+/// another vertex within [`MAX_TOLERANCE`].
 const MIN_MIRRORED_FRACTION: f32 = 0.6;
-/// Two blendshapes can be geometric partners when the mirrored deltas of one differ from the
-/// other's by less than this fraction of their magnitude (sum of squares); a sculpted face's
-/// left and right shapes differ in strength and extent, so this is loose, and the pairing also
-/// asks that each is the other's best mirror and that neither mirrors onto itself as well.
-const PAIR_RELATIVE_ERROR: f32 = 0.35;
+/// The largest and smallest distance, as a fraction of the size, at which a vertex's mirror
+/// counts as its partner.
+const MAX_TOLERANCE: f32 = 0.05;
+const MIN_TOLERANCE: f32 = 0.005;
+/// The fraction of the worst pairs the plane fit ignores at each step.
+const TRIM: f32 = 0.2;
+/// Two blendshapes can be geometric partners when one's reflected field correlates with the
+/// other's at least this well (1 is a perfect mirror; a real face's blink pair scores about 0.5).
+const PAIR_CORRELATION: f32 = 0.35;
+/// The radius, as a fraction of the size, over which a field is blurred before it is compared
+/// with another's mirror image (about 5 mm on a head).
+const BLUR: f32 = 0.012;
+/// At most this many vertices make one blurred value.
+const BLUR_NEIGHBOURS: usize = 24;
+
+/// Averages a dense field over each mirrored vertex's neighbourhood, for the vertices that some
+/// candidate's moved vertex mirrors onto.
+struct Blur {
+    /// For each mirrored vertex, the vertices within the radius (itself included).
+    neighbourhoods: Vec<(u32, Vec<u32>)>,
+}
+
+impl Blur {
+    fn new(
+        positions: &[Vec3],
+        shapes: &[Blendshape],
+        candidates: &[usize],
+        mirror: &[Option<u32>],
+        radius: f32,
+    ) -> Blur {
+        let mut targets: Vec<u32> = candidates
+            .iter()
+            .flat_map(|&c| shapes[c].indices().iter())
+            .filter_map(|&v| mirror.get(v as usize).copied().flatten())
+            .collect();
+        targets.sort_unstable();
+        targets.dedup();
+        let points: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();
+        let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&points);
+        let neighbourhoods = targets
+            .into_iter()
+            .map(|t| {
+                let near = tree
+                    .nearest_n::<SquaredEuclidean>(
+                        &points[t as usize],
+                        std::num::NonZero::new(BLUR_NEIGHBOURS)
+                            .unwrap_or(std::num::NonZero::<usize>::MIN),
+                    )
+                    .into_iter()
+                    .filter(|n| n.distance <= radius * radius)
+                    .map(|n| n.item as u32)
+                    .collect();
+                (t, near)
+            })
+            .collect();
+        Blur { neighbourhoods }
+    }
+
+    fn apply(&self, dense: &[Vec3]) -> std::collections::HashMap<u32, Vec3> {
+        self.neighbourhoods
+            .iter()
+            .map(|(t, near)| {
+                let sum: Vec3 = near.iter().map(|&v| dense[v as usize]).sum();
+                (*t, sum / near.len().max(1) as f32)
+            })
+            .collect()
+    }
+}
 
 /// A coordinate axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,46 +126,82 @@ impl Axis {
             Axis::Z => 2,
         }
     }
+
+    fn unit(self) -> Vec3 {
+        match self {
+            Axis::X => Vec3::X,
+            Axis::Y => Vec3::Y,
+            Axis::Z => Vec3::Z,
+        }
+    }
 }
 
-/// The mirror plane `p[axis] = offset`.
+/// The mirror plane `normal · p = offset`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MirrorPlane {
-    /// The plane's normal axis.
-    pub axis: Axis,
-    /// Where it cuts that axis.
+    /// The plane's unit normal, pointing to the character's left (the positive side of its
+    /// dominant axis).
+    pub normal: Vec3,
+    /// Where it cuts the normal's line through the origin.
     pub offset: f32,
 }
 
 impl MirrorPlane {
+    /// The plane `p[axis] = offset`.
+    #[must_use]
+    pub fn axis_aligned(axis: Axis, offset: f32) -> MirrorPlane {
+        MirrorPlane {
+            normal: axis.unit(),
+            offset,
+        }
+    }
+
+    /// The coordinate axis closest to the normal.
+    #[must_use]
+    pub fn axis(&self) -> Axis {
+        let a = self.normal.abs();
+        if a.x >= a.y && a.x >= a.z {
+            Axis::X
+        } else if a.y >= a.z {
+            Axis::Y
+        } else {
+            Axis::Z
+        }
+    }
+
+    /// How far the normal leans from [`MirrorPlane::axis`], in degrees.
+    #[must_use]
+    pub fn tilt_degrees(&self) -> f32 {
+        self.normal
+            .dot(self.axis().unit())
+            .abs()
+            .min(1.0)
+            .acos()
+            .to_degrees()
+    }
+
     /// Mirrors a point across the plane.
     #[must_use]
     pub fn reflect_point(&self, p: Vec3) -> Vec3 {
-        let mut q = p;
-        let i = self.axis.index();
-        q[i] = 2.0 * self.offset - p[i];
-        q
+        p - 2.0 * (self.normal.dot(p) - self.offset) * self.normal
     }
 
     /// Mirrors a direction (a delta) across the plane.
     #[must_use]
     pub fn reflect_vector(&self, v: Vec3) -> Vec3 {
-        let mut q = v;
-        let i = self.axis.index();
-        q[i] = -v[i];
-        q
+        v - 2.0 * self.normal.dot(v) * self.normal
     }
 
     /// The component of a direction across the plane, positive towards the character's left.
     #[must_use]
     pub fn across(&self, v: Vec3) -> f32 {
-        v[self.axis.index()]
+        self.normal.dot(v)
     }
 
     /// Signed distance of `p` from the plane, positive on the character's left.
     #[must_use]
     pub fn side_of(&self, p: Vec3) -> f32 {
-        p[self.axis.index()] - self.offset
+        self.normal.dot(p) - self.offset
     }
 }
 
@@ -129,18 +242,18 @@ impl Symmetry {
         let points: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();
         let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&points);
         let size = bounds.diagonal().max(f32::MIN_POSITIVE);
-        let found = MIRROR_TOLERANCES.iter().find_map(|fraction| {
-            let tolerance = fraction * size;
-            find_plane(positions, bounds, &tree, tolerance).map(|plane| (plane, tolerance))
-        });
-        let plane = found.map(|(plane, _)| plane);
-        let mirror = match found {
-            Some((plane, tolerance)) => mirror_map(positions, &tree, plane, tolerance),
+        let sample = sample_near(positions, bounds);
+        let fit = find_plane(positions, &sample, bounds, &tree, size);
+        let plane = fit.map(|f| f.plane);
+        let mirror = match fit {
+            Some(fit) => mirror_map(positions, &tree, fit.plane, fit.tolerance),
             None => vec![None; positions.len()],
         };
         let mut pairs = pairs_by_name(shapes);
         if let Some(plane) = plane {
-            pairs.extend(pairs_by_geometry(positions, shapes, &pairs, plane, &mirror));
+            pairs.extend(pairs_by_geometry(
+                positions, shapes, &pairs, plane, &mirror, size,
+            ));
         }
         pairs.sort_by_key(|p| p.left.min(p.right));
         Symmetry {
@@ -192,29 +305,80 @@ impl Symmetry {
     }
 }
 
-/// Tries the three axis planes through the middle on a sample of vertices, refines the best
-/// plane's offset from the matched pairs, and keeps it if enough vertices mirror.
+/// A fitted plane and the distance within which a vertex's mirror counts as its partner.
+#[derive(Debug, Clone, Copy)]
+struct Fit {
+    plane: MirrorPlane,
+    tolerance: f32,
+}
+
+/// Up to about 4,000 vertices inside the head box (all of them when none is), evenly spread.
+/// The whole head, not only the parts that move: its shape holds the plane steady where a
+/// real face's features are lopsided.
+fn sample_near(positions: &[Vec3], bounds: &Aabb) -> Vec<Vec3> {
+    let margin = 0.05 * bounds.diagonal();
+    let inside: Vec<Vec3> = positions
+        .iter()
+        .copied()
+        .filter(|p| {
+            p.cmpge(bounds.min - Vec3::splat(margin)).all()
+                && p.cmple(bounds.max + Vec3::splat(margin)).all()
+        })
+        .collect();
+    let pool = if inside.is_empty() {
+        positions.to_vec()
+    } else {
+        inside
+    };
+    let step = (pool.len() / 4000).max(1);
+    pool.into_iter().step_by(step).collect()
+}
+
+/// The distance from each sample's reflection to its nearest vertex.
+fn residuals(sample: &[Vec3], tree: &ImmutableKdTree<f32, 3>, plane: MirrorPlane) -> Vec<f32> {
+    sample
+        .iter()
+        .map(|&p| {
+            tree.nearest_one::<SquaredEuclidean>(&plane.reflect_point(p).to_array())
+                .distance
+                .sqrt()
+        })
+        .collect()
+}
+
+fn median(values: &mut [f32]) -> f32 {
+    if values.is_empty() {
+        return f32::INFINITY;
+    }
+    values.sort_by(f32::total_cmp);
+    values[values.len() / 2]
+}
+
+/// The symmetry plane of the sampled vertices, if they have one. See the module docs.
 fn find_plane(
     positions: &[Vec3],
+    sample: &[Vec3],
     bounds: &Aabb,
     tree: &ImmutableKdTree<f32, 3>,
-    tolerance: f32,
-) -> Option<MirrorPlane> {
-    let step = (positions.len() / 2000).max(1);
-    let sample: Vec<Vec3> = positions.iter().step_by(step).copied().collect();
+    size: f32,
+) -> Option<Fit> {
+    if sample.is_empty() {
+        return None;
+    }
     let center = bounds.center();
+    let within = |r: &[f32], tolerance: f32| {
+        r.iter().filter(|&&d| d <= tolerance).count() as f32 / r.len() as f32
+    };
+    // The axis planes, each with its offset from the matched pairs' midpoints.
     let mut best: Option<(f32, MirrorPlane)> = None;
     for axis in [Axis::X, Axis::Y, Axis::Z] {
-        let mut plane = MirrorPlane {
-            axis,
-            offset: center[axis.index()],
-        };
+        let mut plane = MirrorPlane::axis_aligned(axis, center[axis.index()]);
         // Twice: the box centre can be off when one side carries an extra part.
         for _ in 0..2 {
+            let tolerance = MAX_TOLERANCE * size;
             let mut midpoints = Vec::new();
-            for &p in &sample {
-                let q = plane.reflect_point(p);
-                let hit = tree.nearest_one::<SquaredEuclidean>(&q.to_array());
+            for &p in sample {
+                let hit = tree.nearest_one::<SquaredEuclidean>(&plane.reflect_point(p).to_array());
                 if hit.distance <= tolerance * tolerance {
                     let partner = positions[hit.item as usize];
                     midpoints.push(0.5 * (p[axis.index()] + partner[axis.index()]));
@@ -223,16 +387,91 @@ fn find_plane(
             if midpoints.is_empty() {
                 break;
             }
-            midpoints.sort_by(f32::total_cmp);
-            plane.offset = midpoints[midpoints.len() / 2];
-            let fraction = midpoints.len() as f32 / sample.len() as f32;
-            if best.is_none_or(|(f, _)| fraction > f) {
-                best = Some((fraction, plane));
-            }
+            plane.offset = median(&mut midpoints);
+        }
+        // Judged by how closely the sample mirrors, not only how much of it does.
+        let mut r = residuals(sample, tree, plane);
+        let score = median(&mut r);
+        if best.is_none_or(|(s, _)| score < s) {
+            best = Some((score, plane));
         }
     }
-    best.filter(|(fraction, _)| *fraction >= MIN_MIRRORED_FRACTION)
-        .map(|(_, plane)| plane)
+    let (_, axis_plane) = best?;
+    let r = residuals(sample, tree, axis_plane);
+    if within(&r, EXACT_TOLERANCE * size) >= EXACT_FRACTION {
+        return Some(Fit {
+            plane: axis_plane,
+            tolerance: EXACT_TOLERANCE * size,
+        });
+    }
+    let plane = refine(sample, positions, tree, axis_plane);
+    let mut r = residuals(sample, tree, plane);
+    if within(&r, MAX_TOLERANCE * size) < MIN_MIRRORED_FRACTION {
+        return None;
+    }
+    let tolerance = (4.0 * median(&mut r)).clamp(MIN_TOLERANCE * size, MAX_TOLERANCE * size);
+    Some(Fit { plane, tolerance })
+}
+
+/// Reflective iterative closest points from `start`: reflect, pair with the nearest vertex,
+/// drop the worst pairs, refit the plane; until the normal and offset settle.
+fn refine(
+    sample: &[Vec3],
+    positions: &[Vec3],
+    tree: &ImmutableKdTree<f32, 3>,
+    start: MirrorPlane,
+) -> MirrorPlane {
+    let mut plane = start;
+    for _ in 0..30 {
+        let mut pairs: Vec<(f32, Vec3, Vec3)> = sample
+            .iter()
+            .map(|&p| {
+                let hit = tree.nearest_one::<SquaredEuclidean>(&plane.reflect_point(p).to_array());
+                (hit.distance, p, positions[hit.item as usize])
+            })
+            .collect();
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        pairs.truncate(((1.0 - TRIM) * pairs.len() as f32).ceil() as usize);
+        // Each pair's difference runs along the normal (a vertex and its mirror); the ones far
+        // from the plane say the most about its direction.
+        let mut direction = Vec3::ZERO;
+        for &(_, p, q) in &pairs {
+            let d = p - q;
+            direction += if d.dot(plane.normal) >= 0.0 { d } else { -d };
+        }
+        let normal = oriented(direction.normalize_or_zero()).unwrap_or(plane.normal);
+        let mut midpoints: Vec<f32> = pairs
+            .iter()
+            .map(|&(_, p, q)| normal.dot(0.5 * (p + q)))
+            .collect();
+        let next = MirrorPlane {
+            normal,
+            offset: median(&mut midpoints),
+        };
+        let settled = next.normal.dot(plane.normal) > 1.0 - 1e-9
+            && (next.offset - plane.offset).abs() < 1e-7 * (1.0 + plane.offset.abs());
+        plane = next;
+        if settled {
+            break;
+        }
+    }
+    plane
+}
+
+/// `n` turned so that its dominant component is positive; `None` for a zero vector.
+fn oriented(n: Vec3) -> Option<Vec3> {
+    if n == Vec3::ZERO || !n.is_finite() {
+        return None;
+    }
+    let a = n.abs();
+    let dominant = if a.x >= a.y && a.x >= a.z {
+        n.x
+    } else if a.y >= a.z {
+        n.y
+    } else {
+        n.z
+    };
+    Some(if dominant < 0.0 { -n } else { n })
 }
 
 fn mirror_map(
@@ -283,6 +522,7 @@ fn pairs_by_geometry(
     named: &[BlendshapePair],
     plane: MirrorPlane,
     mirror: &[Option<u32>],
+    size: f32,
 ) -> Vec<BlendshapePair> {
     let paired = |i: usize| {
         named
@@ -290,78 +530,95 @@ fn pairs_by_geometry(
             .any(|p| p.left.index() == i || p.right.index() == i)
     };
     // Only shapes without a partner by name that move something.
-    let mut dense = vec![Vec3::ZERO; positions.len()];
     let candidates: Vec<usize> = (0..shapes.len())
         .filter(|&i| !paired(i) && shapes[i].moved() > 0)
         .collect();
-    // error[a][b]: a mirrored against b; the diagonal is how well a mirrors onto itself (jawOpen
-    // does, and must not pair with a look-alike).
+    // A real face's mirror image lands a few millimetres off its counterpart, often on another
+    // layer (an eyelid's mirror on the eyeball): each shape's field is compared after blurring
+    // the other's over the vertices within BLUR of the mirrored point.
+    let blur = Blur::new(positions, shapes, &candidates, mirror, BLUR * size);
+    // similarity[a][b]: a's field reflected, against b's; the diagonal is how well a mirrors
+    // onto itself (jawOpen does, and must not pair with a look-alike).
     let n = candidates.len();
-    let mut error = vec![f32::INFINITY; n * n];
+    let mut similarity = vec![f32::NEG_INFINITY; n * n];
+    let mut dense = vec![Vec3::ZERO; positions.len()];
     for (kb, &b) in candidates.iter().enumerate() {
         shapes[b].write_dense(&mut dense);
+        let blurred = blur.apply(&dense);
         let norm_b: f32 = shapes[b].deltas().iter().map(|d| d.length_squared()).sum();
         for (ka, &a) in candidates.iter().enumerate() {
-            error[ka * n + kb] = mirrored_error(&shapes[a], &dense, norm_b, plane, mirror);
+            similarity[ka * n + kb] =
+                reflected_correlation(&shapes[a], &blurred, norm_b, plane, mirror);
         }
     }
-    // Symmetrised, so that a pair's error does not depend on which one is mirrored.
-    let pair_error = |ka: usize, kb: usize| 0.5 * (error[ka * n + kb] + error[kb * n + ka]);
+    // Symmetrised, so that a pair's score does not depend on which one is reflected.
+    let score = |ka: usize, kb: usize| 0.5 * (similarity[ka * n + kb] + similarity[kb * n + ka]);
     let best_of = |ka: usize| {
         (0..n)
             .filter(|&kb| kb != ka)
-            .map(|kb| (pair_error(ka, kb), kb))
-            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|kb| (score(ka, kb), kb))
+            .max_by(|x, y| x.0.total_cmp(&y.0))
     };
-    let mut pairs = Vec::new();
+    // One-to-one, strongest matches first: a lid's blink and its downward look both close the
+    // eye a little, and the look's own partner is the better match for it.
+    let mut offers: Vec<(f32, usize, usize)> = Vec::new();
     for ka in 0..n {
-        let Some((e, kb)) = best_of(ka) else { continue };
-        let mutual = best_of(kb).is_some_and(|(_, back)| back == ka);
-        let beats_self = e < error[ka * n + ka] && e < error[kb * n + kb];
-        if ka < kb && mutual && beats_self && e < PAIR_RELATIVE_ERROR {
-            let (a, b) = (candidates[ka], candidates[kb]);
-            let (left, right) = if motion_side(positions, &shapes[a], plane) >= 0.0 {
-                (a, b)
-            } else {
-                (b, a)
-            };
-            pairs.push(BlendshapePair {
-                left: BlendshapeId(left as u32),
-                right: BlendshapeId(right as u32),
-                source: PairSource::Geometry,
-            });
+        for kb in ka + 1..n {
+            let s = score(ka, kb);
+            if s >= PAIR_CORRELATION && s > similarity[ka * n + ka] && s > similarity[kb * n + kb] {
+                offers.push((s, ka, kb));
+            }
         }
+    }
+    offers.sort_by(|x, y| y.0.total_cmp(&x.0));
+    let mut taken = vec![false; n];
+    let mut pairs = Vec::new();
+    for (_, ka, kb) in offers {
+        if taken[ka] || taken[kb] {
+            continue;
+        }
+        taken[ka] = true;
+        taken[kb] = true;
+        let (a, b) = (candidates[ka], candidates[kb]);
+        let (left, right) = if motion_side(positions, &shapes[a], plane) >= 0.0 {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        pairs.push(BlendshapePair {
+            left: BlendshapeId(left as u32),
+            right: BlendshapeId(right as u32),
+            source: PairSource::Geometry,
+        });
     }
     pairs
 }
 
-/// Relative squared error between `a` mirrored across the plane and the dense deltas `b`, whose
-/// sum of squares is `norm_b`.
-fn mirrored_error(
+/// The normalised correlation between `a`'s displacements reflected across the plane and the
+/// displacements `b` (blurred; the unblurred sum of squares `norm_b`) at the mirrored vertices: 1 when `b` is
+/// `a`'s mirror image up to strength, 0 when they are unrelated, −1 when they are opposite.
+/// A moved vertex without a mirror contributes its motion to `a`'s norm and nothing to the
+/// agreement.
+fn reflected_correlation(
     a: &Blendshape,
-    b: &[Vec3],
+    b: &std::collections::HashMap<u32, Vec3>,
     norm_b: f32,
     plane: MirrorPlane,
     mirror: &[Option<u32>],
 ) -> f32 {
     let norm_a: f32 = a.deltas().iter().map(|d| d.length_squared()).sum();
-    let scale = norm_a.max(norm_b);
-    if scale <= 0.0 {
-        return f32::INFINITY;
+    if norm_a <= 0.0 || norm_b <= 0.0 {
+        return f32::NEG_INFINITY;
     }
-    // Σ|m(a) − b|² = Σ|b|² + Σ over a's mirrored vertices of (|m(a)|² − 2 m(a)·b).
-    let mut error = norm_b;
+    let mut agreement = 0.0f64;
     for (&v, &d) in a.indices().iter().zip(a.deltas()) {
-        match mirror.get(v as usize).copied().flatten() {
-            Some(m) => {
-                let md = plane.reflect_vector(d);
-                error += md.length_squared() - 2.0 * md.dot(b[m as usize]);
-            }
-            // A moved vertex with no mirror partner: that motion has no counterpart.
-            None => error += d.length_squared(),
+        if let Some(m) = mirror.get(v as usize).copied().flatten()
+            && let Some(bm) = b.get(&m)
+        {
+            agreement += f64::from(plane.reflect_vector(d).dot(*bm));
         }
     }
-    error.max(0.0) / scale
+    (agreement / (f64::from(norm_a) * f64::from(norm_b)).sqrt()) as f32
 }
 
 /// Which side a blendshape acts on (positive = the character's left).

@@ -515,11 +515,7 @@ impl<'c> Sketch<'c> {
                         .map(Target::Blendshape),
                     other => Some(other),
                 };
-                let mirror_ref = self
-                    .character
-                    .symmetry()
-                    .mirror_vertex(found.reference)
-                    .filter(|&m| m != found.reference);
+                let mirror_ref = self.mirror_reference(found.reference, partner);
                 if symmetric {
                     unmirrored = self.why_unmirrored(target, partner, mirror_ref);
                 }
@@ -649,6 +645,35 @@ impl<'c> Sketch<'c> {
             ease,
             unmirrored,
         })
+    }
+
+    /// The mirrored stroke's reference vertex: the stroke's own reflected across the plane and
+    /// snapped to the nearest vertex that the partner blendshape moves (on a real face the
+    /// reflection lands a few millimetres off its counterpart, often beside the moving part),
+    /// or, for a stroke back to neutral, the reference's mirror partner.
+    fn mirror_reference(&self, reference: u32, partner: Option<Target>) -> Option<u32> {
+        let plane = self.character.symmetry().plane()?;
+        let mirrored = plane.reflect_point(*self.character.positions().get(reference as usize)?);
+        let snapped = match partner {
+            Some(Target::Blendshape(id)) => self.character.blendshape(id).and_then(|shape| {
+                shape
+                    .indices()
+                    .iter()
+                    .zip(shape.deltas())
+                    .filter(|(_, d)| d.length_squared() > 0.0)
+                    .map(|(&v, _)| v)
+                    .min_by(|&a, &b| {
+                        let d = |v: u32| {
+                            self.character.positions()[v as usize].distance_squared(mirrored)
+                        };
+                        d(a).total_cmp(&d(b))
+                    })
+            }),
+            _ => None,
+        };
+        snapped
+            .or_else(|| self.character.symmetry().mirror_vertex(reference))
+            .filter(|&m| m != reference)
     }
 
     /// Whether `shape` moves the middle of the face (its displacement's centre lies near the

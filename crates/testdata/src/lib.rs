@@ -7,6 +7,7 @@
 
 pub mod avatar;
 pub mod glb;
+pub mod producers;
 
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -134,6 +135,43 @@ pub fn ict_id7() -> &'static Character {
             .expect("ict-face-id7.glb imports")
             .character
     })
+}
+
+/// The four ICT identities in `../shared/characters`: the generic face and three real people,
+/// none exactly symmetric (same topology and expression deltas).
+pub const ICT_IDENTITIES: [&str; 4] = [
+    "ict-face.glb",
+    "ict-face-id7.glb",
+    "ict-face-id3.glb",
+    "ict-face-id48.glb",
+];
+
+/// The ICT identity `file` (one of [`ICT_IDENTITIES`]), imported once per test binary.
+///
+/// # Panics
+/// When the file is missing or does not import.
+#[must_use]
+#[expect(
+    clippy::expect_used,
+    reason = "test support: a missing fixture must stop the test loudly"
+)]
+pub fn ict_identity(file: &str) -> &'static Character {
+    static LOADED: std::sync::Mutex<Vec<(String, &'static Character)>> =
+        std::sync::Mutex::new(Vec::new());
+    let mut loaded = LOADED
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some((_, c)) = loaded.iter().find(|(f, _)| f == file) {
+        return c;
+    }
+    let bytes =
+        std::fs::read(shared(&format!("characters/{file}"))).expect("the identity is readable");
+    let character = import_gltf(&bytes, file, &NoExternalResources)
+        .expect("the identity imports")
+        .character;
+    let leaked: &'static Character = Box::leak(Box::new(character));
+    loaded.push((file.to_owned(), leaked));
+    leaked
 }
 
 /// `character` with its blendshapes renamed `shape_1…shape_N` and shuffled (a fixed

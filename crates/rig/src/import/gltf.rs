@@ -258,7 +258,66 @@ fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-/// Per-vertex transform of one mesh instance: one matrix, or per-vertex skinning matrices.
+/// How one mesh instance is placed: by its node's matrix, or by a skin whose joints' rest
+/// matrices each primitive's own `JOINTS_0`/`WEIGHTS_0` blend per vertex.
+enum Instance {
+    Rigid(Mat4),
+    Skinned {
+        /// `joint_world · inverse_bind` of each joint, in the skin's order.
+        joints: Vec<Mat4>,
+        /// The node's own world matrix, for a vertex with no weights (or a primitive without them).
+        node: Mat4,
+    },
+}
+
+impl Instance {
+    /// The per-vertex placement of one primitive of this instance.
+    fn placement(
+        &self,
+        primitive: &gltf::Primitive<'_>,
+        label: &str,
+        buffers: &Buffers<'_>,
+    ) -> Result<Placement, ImportErrorKind> {
+        let (joints, node) = match self {
+            Instance::Rigid(m) => return Ok(Placement::Rigid(*m)),
+            Instance::Skinned { joints, node } => (joints, *node),
+        };
+        let (Some(j_acc), Some(w_acc)) = (
+            primitive.get(&gltf::Semantic::Joints(0)),
+            primitive.get(&gltf::Semantic::Weights(0)),
+        ) else {
+            return Ok(Placement::Rigid(node));
+        };
+        let joint_index = read_indices(buffers, &j_acc)?;
+        let weights = read_floats(buffers, &w_acc, Some(Dimensions::Vec4))?;
+        check_finite(&weights, 4, &format!("WEIGHTS_0 of {label}"))?;
+        let count = j_acc.count().min(w_acc.count());
+        let mut per_vertex = Vec::with_capacity(count);
+        for v in 0..count {
+            let mut m = Mat4::ZERO;
+            let mut total = 0.0;
+            for k in 0..4 {
+                let w = weights.get(4 * v + k).copied().unwrap_or(0.0);
+                if w == 0.0 {
+                    continue;
+                }
+                let j = joint_index.get(4 * v + k).copied().unwrap_or(0) as usize;
+                let jm = joints.get(j).ok_or_else(|| {
+                    ImportErrorKind::CountMismatch(format!(
+                        "JOINTS_0 of {label}: vertex {v} uses joint {j} but the skin has {}",
+                        joints.len()
+                    ))
+                })?;
+                m += *jm * w;
+                total += w;
+            }
+            per_vertex.push(if total > 0.0 { m * (1.0 / total) } else { node });
+        }
+        Ok(Placement::Skinned(per_vertex))
+    }
+}
+
+/// Per-vertex transform of one primitive: one matrix, or per-vertex skinning matrices.
 enum Placement {
     Rigid(Mat4),
     Skinned(Vec<Mat4>),
@@ -396,18 +455,18 @@ impl Builder {
             for mesh in doc.meshes() {
                 self.read_mesh(
                     &mesh,
-                    &Placement::Rigid(self.root_transform),
+                    &Instance::Rigid(self.root_transform),
                     buffers,
                     resources,
                 )?;
             }
         }
         for (node, mesh) in instances {
-            let placement = match node.skin() {
-                Some(skin) => skin_placement(&skin, &node, &mesh, &world, buffers)?,
-                None => Placement::Rigid(world[node.index()]),
+            let instance = match node.skin() {
+                Some(skin) => skin_instance(&skin, &node, &world, buffers)?,
+                None => Instance::Rigid(world[node.index()]),
             };
-            self.read_mesh(&mesh, &placement, buffers, resources)?;
+            self.read_mesh(&mesh, &instance, buffers, resources)?;
         }
         Ok(())
     }
@@ -415,7 +474,7 @@ impl Builder {
     fn read_mesh(
         &mut self,
         mesh: &gltf::Mesh<'_>,
-        placement: &Placement,
+        instance: &Instance,
         buffers: &Buffers<'_>,
         resources: &dyn Resources,
     ) -> Result<(), ImportErrorKind> {
@@ -423,32 +482,30 @@ impl Builder {
             Some(name) => format!("mesh {} '{name}'", mesh.index()),
             None => format!("mesh {}", mesh.index()),
         };
+        // The spec asks every primitive for the same targets; exporters that leave a primitive
+        // with no morph at all out of them are read too (its vertices simply do not move).
         let target_count_hint = mesh
             .primitives()
-            .next()
-            .map_or(0, |p| p.morph_targets().count());
+            .map(|p| p.morph_targets().count())
+            .max()
+            .unwrap_or(0);
         let target_names = self.resolved_target_names(mesh, &mesh_label, target_count_hint);
         let slots = target_names
             .iter()
             .map(|name| self.shape_slot(name))
             .collect::<Result<Vec<_>, _>>()?;
         self.mesh_slots.insert(mesh.index(), slots);
-        let mut target_count: Option<usize> = None;
         // Primitives that share attribute accessors share vertices (faceanim's own exports do).
-        let mut shared: HashMap<Vec<usize>, u32> = HashMap::new();
+        let mut shared: HashMap<Vec<usize>, (u32, Placement)> = HashMap::new();
 
         for primitive in mesh.primitives() {
             let label = format!("{mesh_label} primitive {}", primitive.index());
             let targets: Vec<_> = primitive.morph_targets().collect();
-            match target_count {
-                None => target_count = Some(targets.len()),
-                Some(n) if n != targets.len() => {
-                    return Err(ImportErrorKind::CountMismatch(format!(
-                        "{label} has {} morph targets but the mesh's first primitive has {n}",
-                        targets.len()
-                    )));
-                }
-                Some(_) => {}
+            if !targets.is_empty() && targets.len() != target_count_hint {
+                return Err(ImportErrorKind::CountMismatch(format!(
+                    "{label} has {} morph targets but another primitive of the mesh has {target_count_hint}",
+                    targets.len()
+                )));
             }
             let mode = primitive.mode();
             if !matches!(
@@ -471,6 +528,8 @@ impl Builder {
                         gltf::Semantic::Normals,
                         gltf::Semantic::TexCoords(0),
                         gltf::Semantic::Colors(0),
+                        gltf::Semantic::Joints(0),
+                        gltf::Semantic::Weights(0),
                     ]
                     .iter()
                     .map(|s| primitive.get(s).map_or(usize::MAX, |a| a.index())),
@@ -481,24 +540,24 @@ impl Builder {
                         .map(|t| t.positions().map_or(usize::MAX, |a| a.index())),
                 )
                 .collect();
-            let base = match shared.get(&key) {
-                Some(&base) => base,
-                None => {
-                    let base = self.read_vertices(
-                        mesh.index(),
-                        &primitive,
-                        &label,
-                        &targets,
-                        &target_names,
-                        placement,
-                        buffers,
-                    )?;
-                    shared.insert(key, base);
-                    base
-                }
+            if !shared.contains_key(&key) {
+                let placement = instance.placement(&primitive, &label, buffers)?;
+                let base = self.read_vertices(
+                    mesh.index(),
+                    &primitive,
+                    &label,
+                    &targets,
+                    &target_names,
+                    &placement,
+                    buffers,
+                )?;
+                shared.insert(key.clone(), (base, placement));
+            }
+            let Some((base, placement)) = shared.get(&key) else {
+                continue;
             };
             let local_count = position_accessor.count();
-            self.read_triangles(&primitive, &label, base, local_count, placement, buffers)?;
+            self.read_triangles(&primitive, &label, *base, local_count, placement, buffers)?;
             let first_triangle = self.parts.last().map_or(0, |p| p.triangles.end);
             let material = self.material(&primitive.material(), resources, buffers);
             self.parts.push(Part {
@@ -1090,81 +1149,35 @@ fn world_matrices(doc: &gltf::Document) -> Result<Vec<Mat4>, ImportErrorKind> {
         .collect())
 }
 
-/// Rest-pose skinning: each vertex placed by Σ wₖ · joint_worldₖ · inverse_bindₖ.
-fn skin_placement(
+/// Rest-pose skinning: each vertex is placed by Σ wₖ · joint_worldₖ · inverse_bindₖ, with the
+/// weights of the primitive it belongs to (see [`Instance::placement`]).
+fn skin_instance(
     skin: &gltf::Skin<'_>,
     node: &gltf::Node<'_>,
-    mesh: &gltf::Mesh<'_>,
     world: &[Mat4],
     buffers: &Buffers<'_>,
-) -> Result<Placement, ImportErrorKind> {
+) -> Result<Instance, ImportErrorKind> {
     let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
     let inverse_bind: Vec<Mat4> = match skin.inverse_bind_matrices() {
         Some(acc) => {
             let raw = read_floats(buffers, &acc, Some(Dimensions::Mat4))?;
-            check_finite(&raw, 16, "inverseBindMatrices")?;
+            check_finite(
+                &raw,
+                16,
+                &format!("inverseBindMatrices of skin {}", skin.index()),
+            )?;
             raw.chunks_exact(16).map(Mat4::from_cols_slice).collect()
         }
         None => vec![Mat4::IDENTITY; joints.len()],
     };
-    let joint_matrices: Vec<Mat4> = joints
-        .iter()
-        .enumerate()
-        .map(|(k, &j)| world[j] * inverse_bind.get(k).copied().unwrap_or(Mat4::IDENTITY))
-        .collect();
-    // All primitives of a skinned mesh are placed by the first one's weights when they share
-    // vertices; otherwise each primitive has its own counts, so placement is per primitive.
-    let Some(primitive) = mesh.primitives().next() else {
-        return Ok(Placement::Rigid(world[node.index()]));
-    };
-    let (Some(j_acc), Some(w_acc)) = (
-        primitive.get(&gltf::Semantic::Joints(0)),
-        primitive.get(&gltf::Semantic::Weights(0)),
-    ) else {
-        return Ok(Placement::Rigid(world[node.index()]));
-    };
-    if mesh.primitives().count() > 1 {
-        let first = primitive.get(&gltf::Semantic::Positions).map(|a| a.index());
-        if mesh
-            .primitives()
-            .any(|p| p.get(&gltf::Semantic::Positions).map(|a| a.index()) != first)
-        {
-            return Err(ImportErrorKind::Unsupported(format!(
-                "skinned mesh {} with primitives that do not share vertices",
-                mesh.index()
-            )));
-        }
-    }
-    let joint_index = read_indices(buffers, &j_acc)?;
-    let weights = read_floats(buffers, &w_acc, Some(Dimensions::Vec4))?;
-    check_finite(&weights, 4, "WEIGHTS_0")?;
-    let count = j_acc.count().min(w_acc.count());
-    let mut per_vertex = Vec::with_capacity(count);
-    for v in 0..count {
-        let mut m = Mat4::ZERO;
-        let mut total = 0.0;
-        for k in 0..4 {
-            let w = weights.get(4 * v + k).copied().unwrap_or(0.0);
-            if w == 0.0 {
-                continue;
-            }
-            let j = joint_index.get(4 * v + k).copied().unwrap_or(0) as usize;
-            let jm = joint_matrices.get(j).ok_or_else(|| {
-                ImportErrorKind::CountMismatch(format!(
-                    "vertex {v} uses joint {j} but the skin has {}",
-                    joints.len()
-                ))
-            })?;
-            m += *jm * w;
-            total += w;
-        }
-        per_vertex.push(if total > 0.0 {
-            m * (1.0 / total)
-        } else {
-            world[node.index()]
-        });
-    }
-    Ok(Placement::Skinned(per_vertex))
+    Ok(Instance::Skinned {
+        joints: joints
+            .iter()
+            .enumerate()
+            .map(|(k, &j)| world[j] * inverse_bind.get(k).copied().unwrap_or(Mat4::IDENTITY))
+            .collect(),
+        node: world[node.index()],
+    })
 }
 
 /// The media type of PNG, JPEG and WebP images, from their first bytes.

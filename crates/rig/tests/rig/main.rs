@@ -18,4 +18,5 @@ mod compressed;
 mod fuzz_import;
 mod gltf_layouts;
 mod ict;
+mod real_symmetry;
 mod source_export;

@@ -13,4 +13,5 @@ mod support;
 
 mod any_face;
 mod editing;
+mod real_faces;
 mod user_study;

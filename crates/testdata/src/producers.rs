@@ -1,0 +1,255 @@
+//! Test characters written by software other than faceanim, so that what the importer is
+//! tested on is what people bring, not what our own writer makes.
+//!
+//! [`blender_avatar`] is a full-body avatar built by Blender 3.4's Python API
+//! (`tools/blender_avatar.py`) and written by Blender's own glTF exporter: three meshes (body,
+//! face, hair), one primitive per material with its own accessors, the face's 108 shape keys on
+//! each of its primitives (most of them zero on most primitives), two skins, a rig in
+//! centimetres under a 0.01 scale, `KHR_materials_*` extensions. It is made once per build
+//! directory and script version (a few seconds) and cached under `target/test-fixtures`.
+//! [`with_vrm`] turns it into a VRM 0.x or 1.0 avatar by adding the extension's JSON, as
+//! VRoid Studio and UniVRM lay it out; compress it with [`crate::gltfpack`] or
+//! [`crate::gltf_transform`].
+
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+use serde_json::{Value, json};
+
+use crate::avatar::VrmKind;
+
+/// The ICT identity the Blender avatar's head is made from (a real, slightly asymmetric face).
+pub const BLENDER_AVATAR_HEAD: &str = "characters/ict-face-id3.glb";
+
+/// The VRM expressions of the Blender avatar: (VRM 1.0 name, VRM 0.x preset, shape keys bound),
+/// as VRoid Studio binds its `Fcl_*` keys.
+pub const BLENDER_AVATAR_EXPRESSIONS: &[(&str, &str, &str)] = &[
+    ("blink", "blink", "Fcl_EYE_Close"),
+    ("blinkLeft", "blink_l", "Fcl_EYE_Close_L"),
+    ("blinkRight", "blink_r", "Fcl_EYE_Close_R"),
+    ("aa", "a", "Fcl_MTH_A"),
+    ("ih", "i", "Fcl_MTH_I"),
+    ("ou", "u", "Fcl_MTH_U"),
+    ("ee", "e", "Fcl_MTH_E"),
+    ("oh", "o", "Fcl_MTH_O"),
+    ("happy", "joy", "Fcl_ALL_Joy"),
+    ("angry", "angry", "Fcl_ALL_Angry"),
+    ("sad", "sorrow", "Fcl_ALL_Sorrow"),
+    ("relaxed", "fun", "Fcl_ALL_Fun"),
+    ("surprised", "unknown", "Fcl_ALL_Surprised"),
+];
+
+/// The bytes of the Blender-made avatar (see the module docs), made on first use.
+///
+/// # Panics
+/// When Blender is missing or fails, with its output.
+#[must_use]
+pub fn blender_avatar() -> &'static [u8] {
+    static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
+    BYTES.get_or_init(|| {
+        let path = blender_avatar_path();
+        std::fs::read(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
+    })
+}
+
+/// Where the Blender-made avatar is cached, made there first if it is not yet.
+///
+/// # Panics
+/// When Blender is missing or fails, with its output.
+#[must_use]
+#[expect(
+    clippy::panic,
+    reason = "test support: a missing producer must stop the test loudly"
+)]
+pub fn blender_avatar_path() -> PathBuf {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let script = repo.join("tools/blender_avatar.py");
+    let source =
+        std::fs::read(&script).unwrap_or_else(|e| panic!("cannot read {}: {e}", script.display()));
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| repo.join("target"), PathBuf::from);
+    let dir = target.join("test-fixtures");
+    let path = dir.join(format!("blender-avatar-{:016x}.glb", fnv(&source)));
+    if path.exists() {
+        return path;
+    }
+    let _ = std::fs::create_dir_all(&dir);
+    // Several test processes may start at once: each writes its own file, then renames it.
+    let partial = dir.join(format!("blender-avatar-{}.partial.glb", std::process::id()));
+    let head = crate::shared(BLENDER_AVATAR_HEAD);
+    let output = std::process::Command::new("blender")
+        .args(["-b", "--factory-startup", "--python"])
+        .arg(&script)
+        .arg("--")
+        .arg(&head)
+        .arg(&partial)
+        .output();
+    match output {
+        Ok(o) if o.status.success() && partial.exists() => {
+            if let Err(e) = std::fs::rename(&partial, &path) {
+                panic!("cannot move the Blender avatar into place: {e}");
+            }
+            path
+        }
+        Ok(o) => panic!(
+            "Blender did not write the avatar: {}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        ),
+        Err(e) => panic!("cannot run blender (scripts/setup.sh installs it): {e}"),
+    }
+}
+
+/// 64-bit FNV-1a, to key the cache on the script's text.
+fn fnv(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// `glb` (the Blender avatar) with a VRM extension added: the humanoid's bones by node name,
+/// meta, and [`BLENDER_AVATAR_EXPRESSIONS`] bound to the face mesh's shape keys by name. A
+/// VRM 0.x avatar faces −Z, so its root nodes are turned half a turn, as UniVRM exports them.
+///
+/// # Panics
+/// When `glb` is not the Blender avatar (no `Face` mesh with target names).
+#[must_use]
+#[expect(
+    clippy::expect_used,
+    reason = "test support: the Blender avatar has these parts"
+)]
+pub fn with_vrm(glb: &[u8], kind: VrmKind) -> Vec<u8> {
+    let (mut root, bin) = crate::glb::parts(glb);
+    let node_named = |root: &Value, name: &str| {
+        root["nodes"]
+            .as_array()
+            .and_then(|nodes| nodes.iter().position(|n| n["name"].as_str() == Some(name)))
+            .expect("the avatar has the bone")
+    };
+    let face_mesh = root["meshes"]
+        .as_array()
+        .and_then(|m| m.iter().position(|m| m["name"].as_str() == Some("Face")))
+        .expect("the avatar has a Face mesh");
+    let face_node = root["nodes"]
+        .as_array()
+        .and_then(|n| {
+            n.iter()
+                .position(|n| n["mesh"].as_u64() == Some(face_mesh as u64))
+        })
+        .expect("a node shows the face");
+    let target_names: Vec<String> = root["meshes"][face_mesh]["extras"]["targetNames"]
+        .as_array()
+        .expect("the face's targets are named")
+        .iter()
+        .map(|n| n.as_str().unwrap_or_default().to_owned())
+        .collect();
+    let target = |name: &str| {
+        target_names
+            .iter()
+            .position(|n| n == name)
+            .expect("the face has the shape key")
+    };
+    let bones = [
+        ("hips", "Hips"),
+        ("spine", "Spine"),
+        ("chest", "Chest"),
+        ("neck", "Neck"),
+        ("head", "Head"),
+        ("leftUpperLeg", "LeftUpperLeg"),
+        ("rightUpperLeg", "RightUpperLeg"),
+    ];
+    match kind {
+        VrmKind::None => {}
+        VrmKind::V0 => {
+            let scene_roots: Vec<usize> = root["scenes"][0]["nodes"]
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .filter_map(Value::as_u64)
+                        .map(|n| n as usize)
+                        .collect()
+                })
+                .unwrap_or_default();
+            for n in scene_roots {
+                turn_half(&mut root["nodes"][n]);
+            }
+            let human_bones: Vec<Value> = bones
+                .iter()
+                .map(|(bone, node)| json!({ "bone": bone, "node": node_named(&root, node), "useDefaultValues": true }))
+                .collect();
+            let groups: Vec<Value> = BLENDER_AVATAR_EXPRESSIONS
+                .iter()
+                .map(|(name, preset, key)| {
+                    json!({ "name": name, "presetName": preset, "isBinary": false,
+                            "binds": [{ "mesh": face_mesh, "index": target(key), "weight": 100.0 }],
+                            "materialValues": [] })
+                })
+                .collect();
+            root["extensions"]["VRM"] = json!({
+                "exporterVersion": "UniVRM-0.99.0", "specVersion": "0.0",
+                "meta": { "title": "Blender test avatar", "version": "1", "author": "faceanim tests",
+                          "allowedUserName": "Everyone", "licenseName": "CC0" },
+                "humanoid": { "humanBones": human_bones },
+                "blendShapeMaster": { "blendShapeGroups": groups },
+                "firstPerson": { "firstPersonBone": node_named(&root, "Head") },
+                "secondaryAnimation": { "boneGroups": [], "colliderGroups": [] },
+                "materialProperties": []
+            });
+            push_used(&mut root, "VRM");
+        }
+        VrmKind::V1 => {
+            let mut human_bones = serde_json::Map::new();
+            for (bone, node) in bones {
+                human_bones.insert(bone.to_owned(), json!({ "node": node_named(&root, node) }));
+            }
+            let mut preset = serde_json::Map::new();
+            let mut custom = serde_json::Map::new();
+            for (name, v0, key) in BLENDER_AVATAR_EXPRESSIONS {
+                let expression = json!({ "morphTargetBinds": [{ "node": face_node, "index": target(key), "weight": 1.0 }],
+                                         "isBinary": false });
+                if *v0 == "unknown" {
+                    custom.insert((*name).to_owned(), expression);
+                } else {
+                    preset.insert((*name).to_owned(), expression);
+                }
+            }
+            root["extensions"]["VRMC_vrm"] = json!({
+                "specVersion": "1.0",
+                "meta": { "name": "Blender test avatar", "authors": ["faceanim tests"],
+                          "licenseUrl": "https://vrm.dev/licenses/1.0/" },
+                "humanoid": { "humanBones": human_bones },
+                "expressions": { "preset": preset, "custom": custom }
+            });
+            push_used(&mut root, "VRMC_vrm");
+        }
+    }
+    crate::glb::assemble(&root, &bin)
+}
+
+/// Turns a node half a turn about +Y, before its own rotation.
+fn turn_half(node: &mut Value) {
+    let [x, y, z, w] = node["rotation"]
+        .as_array()
+        .filter(|a| a.len() == 4)
+        .map_or([0.0, 0.0, 0.0, 1.0], |a| {
+            [0, 1, 2, 3].map(|i| a[i].as_f64().unwrap_or(0.0))
+        });
+    // (0, 1, 0, 0) · (x, y, z, w)
+    node["rotation"] = json!([z, w, -x, -y]);
+    if let Some(translation) = node["translation"].as_array_mut()
+        && translation.len() == 3
+    {
+        for i in [0, 2] {
+            translation[i] = json!(-translation[i].as_f64().unwrap_or(0.0));
+        }
+    }
+}
+
+fn push_used(root: &mut Value, extension: &str) {
+    if !root["extensionsUsed"].is_array() {
+        root["extensionsUsed"] = json!([]);
+    }
+    if let Some(used) = root["extensionsUsed"].as_array_mut() {
+        used.push(json!(extension));
+    }
+}
