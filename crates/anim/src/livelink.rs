@@ -4,12 +4,15 @@
 //! `EARFaceBlendShape` has the same), then head
 //! yaw, pitch, roll and each eye's yaw, pitch, roll in radians.
 //!
-//! Clip columns are matched to ARKit names in any spelling faceanim recognises (`jawOpen`,
-//! `JawOpen`, `eyeBlink_L`, …); ARKit shapes the clip lacks are written as 0. The eyes' angles
+//! Clip columns are read back into ARKit's channels by faceanim's name table
+//! ([`faceanim_rig::name_map`]): any spelling of a channel (`jawOpen`, `JawOpen`, `eyeBlink_L`,
+//! `Eye_Blink_L`), the mean of a split channel's halves (ICT's `browInnerUp_L`/`_R`), a merged
+//! shape for both its channels (`mouthSmile`); ARKit shapes the clip lacks are written as 0. The eyes' angles
 //! are derived from the eyeLook weights (at weight 1: 30° sideways, 25° up or down), since a
 //! clip carries no eye bones.
 
-use faceanim_rig::names::{ARKIT_52, arkit_name};
+use faceanim_rig::name_map::NameMap;
+use faceanim_rig::names::ARKIT_52;
 
 use crate::Clip;
 
@@ -57,14 +60,7 @@ fn capitalise(name: &str) -> String {
 /// The clip as a Live Link Face CSV (see the module docs).
 #[must_use]
 pub fn to_csv(clip: &Clip) -> String {
-    let columns: Vec<Option<usize>> = ARKIT_52
-        .iter()
-        .map(|arkit| {
-            clip.blendshapes
-                .iter()
-                .position(|n| n == arkit || arkit_name(n) == Some(arkit))
-        })
-        .collect();
+    let map = NameMap::from_names(&clip.blendshapes, &[]);
     let mut out = String::from("Timecode,BlendShapeCount");
     for name in ARKIT_52 {
         out.push(',');
@@ -77,7 +73,11 @@ pub fn to_csv(clip: &Clip) -> String {
     out.push('\n');
     let index_of = |arkit: &str| ARKIT_52.iter().position(|n| *n == arkit);
     for (f, row) in clip.frames.iter().enumerate() {
-        let values: Vec<f32> = columns.iter().map(|c| c.map_or(0.0, |c| row[c])).collect();
+        let values: Vec<f32> = map
+            .channel_values(row)
+            .into_iter()
+            .map(|v| v.unwrap_or(0.0))
+            .collect();
         let get = |arkit: &str| index_of(arkit).map_or(0.0, |i| values[i]);
         let head = clip
             .head

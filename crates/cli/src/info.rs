@@ -11,6 +11,8 @@ pub struct Report {
     blendshapes: Vec<BlendshapeReport>,
     pairs: Vec<[String; 2]>,
     arkit: Vec<String>,
+    /// ARKit channels that drive none of the blendshapes by name.
+    undriven_channels: Vec<&'static str>,
     bbox: BboxReport,
     /// Where the blendshapes move vertices.
     face: BboxReport,
@@ -39,6 +41,35 @@ struct BlendshapeReport {
     name: String,
     moved: usize,
     max_displacement: f32,
+    /// What its name means in ARKit's channels, and whether capture by name drives it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    arkit: Option<NameReport>,
+}
+
+/// One blendshape's reading in faceanim's name table (`faceanim_rig::names`).
+#[derive(Debug, Serialize)]
+struct NameReport {
+    /// How: `channel`, `split` (one side of a channel ARKit does not split), `merge` (the mean
+    /// of a left/right pair), `expression` (a viseme or VRM's `surprised`).
+    kind: NameKind,
+    /// The ARKit channels it reads.
+    channels: Vec<&'static str>,
+    /// In words, as `faceanim info` prints it.
+    meaning: String,
+    /// Whether capture by name drives it.
+    driven: bool,
+    /// Why not, when it is not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    because: Option<String>,
+}
+
+#[derive(Debug, Clone, Copy, Serialize)]
+#[serde(rename_all = "snake_case")]
+enum NameKind {
+    Channel,
+    Split,
+    Merge,
+    Expression,
 }
 
 #[derive(Debug, Serialize)]
@@ -68,24 +99,58 @@ struct PlaneReport {
     mirrored_vertices: f32,
 }
 
+fn name_report(entry: faceanim_rig::name_map::Entry, character: &Character) -> NameReport {
+    use faceanim_rig::name_map::Use;
+    use faceanim_rig::names::Drive;
+    let name_of = |i: usize| {
+        character
+            .blendshapes()
+            .get(i)
+            .map_or_else(String::new, |b| b.name().to_owned())
+    };
+    NameReport {
+        kind: match entry.drive {
+            Drive::Channel(_) => NameKind::Channel,
+            Drive::Split(..) => NameKind::Split,
+            Drive::Merge(..) => NameKind::Merge,
+            Drive::Expression(_) => NameKind::Expression,
+        },
+        channels: entry.drive.channels().iter().map(|c| c.name()).collect(),
+        meaning: entry.drive.describe(),
+        driven: entry.used == Use::Driven,
+        because: match entry.used {
+            Use::Driven => None,
+            Use::Duplicate(first) => Some(format!("{} is the same channel", name_of(first))),
+            Use::Covered => Some("its channels drive other blendshapes directly".to_owned()),
+            Use::TargetsDriven => Some("the morph targets it binds are driven by name".to_owned()),
+            Use::NoReading => Some("no reading from a face's channels (lip sync drives it)".to_owned()),
+            _ => Some("not driven".to_owned()),
+        },
+    }
+}
+
 impl Report {
     /// Gathers the report for `character`.
     pub fn of(character: &Character) -> Report {
         let names =
             |id: faceanim_rig::BlendshapeId| character.blendshapes()[id.index()].name().to_owned();
         let symmetry = character.symmetry();
+        let map = character.name_map();
         Report {
             vertices: character.vertex_count(),
             triangles: character.triangles().len(),
             blendshapes: character
                 .blendshapes()
                 .iter()
-                .map(|b| BlendshapeReport {
+                .zip(map.entries())
+                .map(|(b, entry)| BlendshapeReport {
                     name: b.name().to_owned(),
                     moved: b.moved(),
                     max_displacement: b.max_displacement(),
+                    arkit: entry.map(|e| name_report(e, character)),
                 })
                 .collect(),
+            undriven_channels: map.undriven_channels().iter().map(|c| c.name()).collect(),
             pairs: symmetry
                 .pairs()
                 .iter()
@@ -189,10 +254,29 @@ impl Report {
             .max()
             .unwrap_or(0);
         for b in &self.blendshapes {
+            let by_name = match &b.arkit {
+                Some(n) if n.driven => format!("  <- {}", n.meaning),
+                Some(n) => format!(
+                    "  ({}; not driven: {})",
+                    n.meaning,
+                    n.because.as_deref().unwrap_or("")
+                ),
+                None => String::new(),
+            };
             let _ = writeln!(
                 out,
-                "    {:width$}  {:>6} vertices moved, up to {:.5}",
+                "    {:width$}  {:>6} vertices moved, up to {:.5}{by_name}",
                 b.name, b.moved, b.max_displacement
+            );
+        }
+        if self.undriven_channels.is_empty() {
+            let _ = writeln!(out, "  ARKit channels: all 52 drive a blendshape by name");
+        } else {
+            let _ = writeln!(
+                out,
+                "  ARKit channels that drive nothing by name ({}): {}",
+                self.undriven_channels.len(),
+                self.undriven_channels.join(", ")
             );
         }
         let _ = writeln!(out, "  symmetric pairs  {}", self.pairs.len());

@@ -295,7 +295,10 @@ fn live_link_curves<'a>(animation: &'a Animation<'_>, notes: &mut Vec<String>) -
         .clip
         .blendshapes
         .iter()
-        .any(|n| faceanim_rig::names::arkit_name(n).is_some());
+        .any(|n| {
+            faceanim_rig::names::drive(n)
+                .is_some_and(|d| !matches!(d, faceanim_rig::names::Drive::Expression(_)))
+        });
     match (&animation.arkit, has_arkit) {
         (_, true) => &animation.clip,
         (Some(capture), false) => {

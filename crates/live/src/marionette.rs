@@ -60,10 +60,10 @@ struct State {
     traffic: Traffic,
     arrivals: VecDeque<Instant>,
     last_arrival: Option<Instant>,
-    /// Blendshape name → the character's index (`None`: not the character's), as names arrive.
-    lookup: HashMap<String, Option<usize>>,
-    /// The character's ARKit-named shapes by their ARKit name (for other spellings).
-    arkit: HashMap<&'static str, usize>,
+    /// Blendshape name → the character's shapes it sets (none: not the character's), as names arrive.
+    lookup: HashMap<String, Vec<usize>>,
+    /// The character's shapes each ARKit channel drives by name (for other spellings).
+    arkit: HashMap<&'static str, Vec<usize>>,
     current: Vec<f32>,
     head: Option<[f32; 3]>,
     history: VecDeque<ReceivedFrame>,
@@ -100,13 +100,23 @@ impl Marionette {
         let lookup = blendshapes
             .iter()
             .enumerate()
-            .map(|(i, n)| (n.clone(), Some(i)))
+            .map(|(i, n)| (n.clone(), vec![i]))
             .collect();
-        let arkit = blendshapes
-            .iter()
-            .enumerate()
-            .filter_map(|(i, n)| Some((faceanim_rig::names::arkit_name(n)?, i)))
-            .collect();
+        // An ARKit channel drives every shape the name table gives it (both halves of ICT's
+        // browInnerUp_L/_R, a merged mouthSmile).
+        let mut arkit: HashMap<&'static str, Vec<usize>> = HashMap::new();
+        let map = faceanim_rig::name_map::NameMap::from_names(blendshapes, &[]);
+        for (i, entry) in map.entries().iter().enumerate() {
+            let Some(entry) = entry.filter(|e| e.used == faceanim_rig::name_map::Use::Driven) else {
+                continue;
+            };
+            if matches!(entry.drive, faceanim_rig::names::Drive::Expression(_)) {
+                continue;
+            }
+            for c in entry.drive.channels() {
+                arkit.entry(c.name()).or_default().push(i);
+            }
+        }
         let state = Arc::new(Mutex::new(State {
             started: Instant::now(),
             traffic: Traffic::default(),
@@ -285,12 +295,20 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
                 return false;
             };
             let arkit = &state.arkit;
-            let index = *state.lookup.entry(name.clone()).or_insert_with(|| {
-                faceanim_rig::names::arkit_name(name).and_then(|a| arkit.get(a).copied())
-            });
-            match index {
-                Some(i) => state.current[i] = value.clamp(0.0, 1.0),
-                None => state.traffic.unmatched += 1,
+            let shapes = state
+                .lookup
+                .entry(name.clone())
+                .or_insert_with(|| {
+                    faceanim_rig::names::arkit_name(name)
+                        .and_then(|a| arkit.get(a).cloned())
+                        .unwrap_or_default()
+                })
+                .clone();
+            if shapes.is_empty() {
+                state.traffic.unmatched += 1;
+            }
+            for i in shapes {
+                state.current[i] = value.clamp(0.0, 1.0);
             }
             true
         }

@@ -32,24 +32,28 @@ pub const VRM_PRESETS: [(&str, &[&str]); 12] = [
     ("Fun", &["cheekSquintLeft", "cheekSquintRight"]),
 ];
 
-/// How one sent value is made from the character's weights.
+/// How one sent value is made from the character's weights: a weighted sum of blendshapes
+/// (one shape; the halves of a split channel; the mean of a preset's channels), or the
+/// smallest of several such sums (`Blink`, so that a wink is not a blink).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Source {
-    /// One blendshape's weight.
-    One(usize),
-    /// The mean of these blendshapes' weights.
-    Mean(Vec<usize>),
-    /// The smallest of these blendshapes' weights.
-    Min(Vec<usize>),
+    /// Σ weight × the blendshape's weight.
+    Sum(Vec<(usize, f32)>),
+    /// The smallest of these sums.
+    Min(Vec<Vec<(usize, f32)>>),
 }
 
 impl Source {
     pub(crate) fn value(&self, weights: &[f32]) -> f32 {
-        let get = |i: &usize| weights.get(*i).copied().unwrap_or(0.0);
+        let sum = |terms: &[(usize, f32)]| {
+            terms
+                .iter()
+                .map(|&(i, w)| w * weights.get(i).copied().unwrap_or(0.0))
+                .sum::<f32>()
+        };
         match self {
-            Source::One(i) => get(i),
-            Source::Mean(list) => list.iter().map(get).sum::<f32>() / list.len().max(1) as f32,
-            Source::Min(list) => list.iter().map(get).fold(f32::INFINITY, f32::min),
+            Source::Sum(terms) => sum(terms),
+            Source::Min(list) => list.iter().map(|t| sum(t)).fold(f32::INFINITY, f32::min),
         }
     }
 }
@@ -60,36 +64,49 @@ impl Names {
     pub fn describe(self) -> &'static str {
         match self {
             Names::Own => "blendshapes",
-            Names::Arkit => "ARKit-named blendshapes",
-            Names::VrmPresets => "ARKit-named blendshapes to make VRM presets from",
+            Names::Arkit => "blendshapes named for ARKit channels",
+            Names::VrmPresets => "blendshapes named for ARKit channels to make VRM presets from",
         }
     }
 
     /// The sent names for a character with blendshapes `names` and how each value is made
-    /// (empty when none applies).
+    /// (empty when none applies). ARKit channels are read back from the character's shapes by
+    /// [`faceanim_rig::name_map`]'s rule (a split channel from the mean of its halves, a merged
+    /// shape for both of its channels).
     pub(crate) fn table(self, names: &[String]) -> Vec<(String, Source)> {
-        let index = |wanted: &str| index_of(names, wanted);
+        let channels = channel_terms(names);
+        let terms = |arkit: &str| {
+            faceanim_rig::names::Channel::named(arkit).and_then(|c| channels[c.index()].clone())
+        };
         match self {
             Names::Own => names
                 .iter()
                 .enumerate()
-                .map(|(i, n)| (n.clone(), Source::One(i)))
+                .map(|(i, n)| (n.clone(), Source::Sum(vec![(i, 1.0)])))
                 .collect(),
             Names::Arkit => faceanim_rig::names::ARKIT_52
                 .iter()
-                .filter_map(|&arkit| Some((capitalised(arkit), Source::One(index(arkit)?))))
+                .filter_map(|&arkit| Some((capitalised(arkit), Source::Sum(terms(arkit)?))))
                 .collect(),
             Names::VrmPresets => VRM_PRESETS
                 .iter()
                 .filter_map(|&(preset, shapes)| {
-                    let found: Vec<usize> = shapes.iter().filter_map(|s| index(s)).collect();
+                    let found: Vec<Vec<(usize, f32)>> =
+                        shapes.iter().filter_map(|s| terms(s)).collect();
                     if found.len() != shapes.len() {
                         return None;
                     }
                     let source = if preset == "Blink" {
                         Source::Min(found)
                     } else {
-                        Source::Mean(found)
+                        let share = 1.0 / found.len() as f32;
+                        Source::Sum(
+                            found
+                                .into_iter()
+                                .flatten()
+                                .map(|(i, w)| (i, w * share))
+                                .collect(),
+                        )
                     };
                     Some((preset.to_owned(), source))
                 })
@@ -98,16 +115,42 @@ impl Names {
     }
 }
 
-/// Where `wanted` is among `names`: the same name, or the same ARKit shape in another spelling
-/// (`eyeBlink_L`, `EyeBlinkLeft`).
-pub(crate) fn index_of(names: &[String], wanted: &str) -> Option<usize> {
-    if let Some(i) = names.iter().position(|n| n == wanted) {
-        return Some(i);
+/// For each ARKit channel, the blendshapes that carry it, weighted: its own shape; else the
+/// halves of a split channel, half each; else a shape that merges it with its partner.
+fn channel_terms(names: &[String]) -> Vec<Option<Vec<(usize, f32)>>> {
+    use faceanim_rig::name_map::Use;
+    use faceanim_rig::names::Drive;
+    let map = faceanim_rig::name_map::NameMap::from_names(names, &[]);
+    let count = faceanim_rig::names::Channel::all().len();
+    let mut own: Vec<Option<usize>> = vec![None; count];
+    let mut halves: Vec<Vec<usize>> = vec![Vec::new(); count];
+    let mut merged: Vec<Option<usize>> = vec![None; count];
+    for (i, entry) in map.entries().iter().enumerate() {
+        let Some(entry) = entry.filter(|e| e.used == Use::Driven) else {
+            continue;
+        };
+        match entry.drive {
+            Drive::Channel(c) => own[c.index()] = Some(i),
+            Drive::Split(c, _) => halves[c.index()].push(i),
+            Drive::Merge(a, b) => {
+                merged[a.index()] = Some(i);
+                merged[b.index()] = Some(i);
+            }
+            _ => {}
+        }
     }
-    let arkit = faceanim_rig::names::arkit_name(wanted)?;
-    names
-        .iter()
-        .position(|n| faceanim_rig::names::arkit_name(n) == Some(arkit))
+    (0..count)
+        .map(|c| {
+            if let Some(i) = own[c] {
+                Some(vec![(i, 1.0)])
+            } else if !halves[c].is_empty() {
+                let share = 1.0 / halves[c].len() as f32;
+                Some(halves[c].iter().map(|&i| (i, share)).collect())
+            } else {
+                merged[c].map(|i| vec![(i, 1.0)])
+            }
+        })
+        .collect()
 }
 
 /// `eyeBlinkLeft` → `EyeBlinkLeft`.
@@ -124,6 +167,24 @@ mod tests {
     use super::*;
 
     #[test]
+    fn split_channels_are_sent_as_their_halves_mean() {
+        let names: Vec<String> = ["browInnerUp_L", "browInnerUp_R", "mouthSmile", "jawOpen"]
+            .map(String::from)
+            .to_vec();
+        let table = Names::Arkit.table(&names);
+        let value = |name: &str| {
+            table
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, s)| s.value(&[0.2, 0.6, 0.5, 0.9]))
+        };
+        assert!((value("BrowInnerUp").unwrap_or(0.0) - 0.4).abs() < 1e-6);
+        assert_eq!(value("MouthSmileLeft"), Some(0.5));
+        assert_eq!(value("JawOpen"), Some(0.9));
+        assert_eq!(value("CheekPuff"), None);
+    }
+
+    #[test]
     fn each_naming_covers_the_default_head() {
         let character = faceanim_head::default_character();
         let names: Vec<String> = character
@@ -136,12 +197,6 @@ mod tests {
         assert_eq!(arkit.len(), 52);
         assert!(arkit.iter().any(|(n, _)| n == "EyeBlinkLeft"));
         let presets = Names::VrmPresets.table(&names);
-        assert_eq!(
-            index_of(&names, "EyeBlinkLeft"),
-            character
-                .find_blendshape("eyeBlinkLeft")
-                .map(|id| id.index())
-        );
         assert_eq!(presets.len(), 12);
         let mut weights = vec![0.0; 52];
         let left = character

@@ -553,12 +553,6 @@ fn pairs_by_geometry(
     }
     // Symmetrised, so that a pair's score does not depend on which one is reflected.
     let score = |ka: usize, kb: usize| 0.5 * (similarity[ka * n + kb] + similarity[kb * n + ka]);
-    let best_of = |ka: usize| {
-        (0..n)
-            .filter(|&kb| kb != ka)
-            .map(|kb| (score(ka, kb), kb))
-            .max_by(|x, y| x.0.total_cmp(&y.0))
-    };
     // One-to-one, strongest matches first: a lid's blink and its downward look both close the
     // eye a little, and the look's own partner is the better match for it.
     let mut offers: Vec<(f32, usize, usize)> = Vec::new();

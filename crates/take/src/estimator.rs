@@ -59,151 +59,45 @@ pub trait Estimator: Send + Sync {
     }
 }
 
-/// By-name estimates: each of the character's ARKit-named shapes gets MediaPipe's score. A
-/// character without ARKit names whose blendshapes are VRM expressions (a VRoid or other VRM
-/// avatar) gets those derived from the scores where the mapping is clear: `blink`,
-/// `blinkLeft`, `blinkRight`; the visemes `aa`, `ih`, `ou`, `ee`, `oh` from the jaw and the
-/// mouth's shapes; `happy`, `sad`, `angry`, `surprised`; `lookUp`, `lookDown`, `lookLeft`,
-/// `lookRight` (see [`VrmPreset::from_scores`]).
+/// By-name estimates: each of the character's blendshapes whose name means ARKit channels
+/// (in any convention of [`faceanim_rig::names`]: ARKit, ICT's and Character Creator's splits,
+/// VRoid's `Fcl_*`, VRM presets, visemes) gets them from MediaPipe's scores, under the rule of
+/// [`faceanim_rig::name_map`] that nothing moves twice: a split shape (`browInnerUp_L`) gets its
+/// channel, a merged one (`mouthSmile`, `blink`) the mean of its pair, an expression (`aa`,
+/// `surprised`) its formula.
 #[derive(Debug, Clone)]
 pub struct ByName {
-    /// For each of MediaPipe's scores (in its order), the character's blendshape it drives.
-    columns: Vec<Option<usize>>,
-    /// VRM expressions derived from the scores, with their columns.
-    derived: Vec<(usize, VrmPreset)>,
+    map: faceanim_rig::name_map::NameMap,
     names: Vec<String>,
-}
-
-/// A VRM 1.0 expression preset that by-name capture can drive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum VrmPreset {
-    /// Both eyes closed.
-    Blink,
-    /// The character's left eye closed.
-    BlinkLeft,
-    /// The character's right eye closed.
-    BlinkRight,
-    /// Viseme "a": an open jaw.
-    Aa,
-    /// Viseme "i": spread lips, nearly closed.
-    Ih,
-    /// Viseme "u": pursed lips.
-    Ou,
-    /// Viseme "e": spread lips, half open.
-    Ee,
-    /// Viseme "o": rounded lips.
-    Oh,
-    /// A smile.
-    Happy,
-    /// Mouth corners down.
-    Sad,
-    /// Brows down.
-    Angry,
-    /// Brows up, eyes wide.
-    Surprised,
-    /// Eyes up.
-    LookUp,
-    /// Eyes down.
-    LookDown,
-    /// Eyes to the character's left.
-    LookLeft,
-    /// Eyes to the character's right.
-    LookRight,
-}
-
-impl VrmPreset {
-    /// The preset a blendshape name spells (VRM 1.0 names, as faceanim imports both versions).
-    #[must_use]
-    pub fn from_name(name: &str) -> Option<VrmPreset> {
-        Some(match name {
-            "blink" => VrmPreset::Blink,
-            "blinkLeft" => VrmPreset::BlinkLeft,
-            "blinkRight" => VrmPreset::BlinkRight,
-            "aa" => VrmPreset::Aa,
-            "ih" => VrmPreset::Ih,
-            "ou" => VrmPreset::Ou,
-            "ee" => VrmPreset::Ee,
-            "oh" => VrmPreset::Oh,
-            "happy" => VrmPreset::Happy,
-            "sad" => VrmPreset::Sad,
-            "angry" => VrmPreset::Angry,
-            "surprised" => VrmPreset::Surprised,
-            "lookUp" => VrmPreset::LookUp,
-            "lookDown" => VrmPreset::LookDown,
-            "lookLeft" => VrmPreset::LookLeft,
-            "lookRight" => VrmPreset::LookRight,
-            _ => return None,
-        })
-    }
-
-    /// The expression's weight from MediaPipe's ARKit scores (`score(name)` in [0, 1]).
-    /// `split_blinks`: the character also has `blinkLeft` and `blinkRight`, which then carry
-    /// the eyes (so `blink` stays 0 and an eye never closes twice).
-    #[must_use]
-    pub fn from_scores(self, score: impl Fn(&str) -> f32, split_blinks: bool) -> f32 {
-        let mean = |a: &str, b: &str| 0.5 * (score(a) + score(b));
-        let spread = mean("mouthStretchLeft", "mouthStretchRight");
-        let rounded = score("mouthFunnel").max(score("mouthPucker"));
-        let value = match self {
-            VrmPreset::Blink if split_blinks => 0.0,
-            VrmPreset::Blink => mean("eyeBlinkLeft", "eyeBlinkRight"),
-            VrmPreset::BlinkLeft => score("eyeBlinkLeft"),
-            VrmPreset::BlinkRight => score("eyeBlinkRight"),
-            VrmPreset::Aa => score("jawOpen") * (1.0 - rounded),
-            VrmPreset::Ih => spread * (1.0 - score("jawOpen")),
-            VrmPreset::Ou => score("mouthPucker"),
-            VrmPreset::Ee => spread * score("jawOpen"),
-            VrmPreset::Oh => score("mouthFunnel"),
-            VrmPreset::Happy => mean("mouthSmileLeft", "mouthSmileRight"),
-            VrmPreset::Sad => mean("mouthFrownLeft", "mouthFrownRight"),
-            VrmPreset::Angry => mean("browDownLeft", "browDownRight"),
-            VrmPreset::Surprised => {
-                0.5 * score("browInnerUp") + 0.25 * (score("eyeWideLeft") + score("eyeWideRight"))
-            }
-            VrmPreset::LookUp => mean("eyeLookUpLeft", "eyeLookUpRight"),
-            VrmPreset::LookDown => mean("eyeLookDownLeft", "eyeLookDownRight"),
-            VrmPreset::LookLeft => mean("eyeLookOutLeft", "eyeLookInRight"),
-            VrmPreset::LookRight => mean("eyeLookInLeft", "eyeLookOutRight"),
-        };
-        value.clamp(0.0, 1.0)
-    }
+    /// How many shapes MediaPipe's scores reach (it has no tongueOut).
+    driven: usize,
 }
 
 impl ByName {
-    /// The mapping onto `character`'s shapes (ARKit spellings such as `eyeBlink_L` match).
+    /// The mapping onto `character`'s shapes.
     #[must_use]
     pub fn new(character: &Character) -> ByName {
-        let columns: Vec<Option<usize>> = faceanim_track::BLENDSHAPE_NAMES
-            .iter()
-            .map(|n| {
-                if n.starts_with('_') {
-                    None
-                } else {
-                    character.find_blendshape(n).map(|id| id.index())
-                }
-            })
-            .collect();
-        // VRM expressions bind the same targets an ARKit rig's shapes would: derive them only
-        // where no ARKit shape is driven, so nothing moves twice.
-        let derived = if columns.iter().all(Option::is_none) {
-            character
-                .blendshapes()
-                .iter()
-                .enumerate()
-                .filter_map(|(c, b)| VrmPreset::from_name(b.name()).map(|p| (c, p)))
-                .collect()
-        } else {
-            Vec::new()
+        let map = character.name_map();
+        let scored = |c: faceanim_rig::names::Channel| {
+            faceanim_track::BLENDSHAPE_NAMES.contains(&c.name())
         };
+        let driven = map
+            .entries()
+            .iter()
+            .flatten()
+            .filter(|e| {
+                e.used == faceanim_rig::name_map::Use::Driven
+                    && e.drive.channels().into_iter().any(scored)
+            })
+            .count();
         ByName {
-            columns,
-            derived,
+            map,
             names: character
                 .blendshapes()
                 .iter()
                 .map(|b| b.name().to_owned())
                 .collect(),
+            driven,
         }
     }
 }
@@ -216,30 +110,16 @@ impl Estimator for ByName {
     /// MediaPipe's scores are trained to read a neutral face as zeros: the neutral frame is
     /// not used.
     fn estimate(&self, expression: &Expression, _neutral: Option<&Expression>) -> Vec<f32> {
-        let mut row = vec![0.0; self.names.len()];
-        for (score, column) in expression.scores.iter().zip(&self.columns) {
-            if let Some(c) = column {
-                row[*c] = score.clamp(0.0, 1.0);
-            }
-        }
-        if !self.derived.is_empty() {
-            let score = |name: &str| {
-                faceanim_track::BLENDSHAPE_NAMES
-                    .iter()
-                    .position(|n| *n == name)
-                    .and_then(|i| expression.scores.get(i))
-                    .copied()
-                    .unwrap_or(0.0)
-                    .clamp(0.0, 1.0)
-            };
-            let split = [VrmPreset::BlinkLeft, VrmPreset::BlinkRight]
+        let score = |name: &str| {
+            faceanim_track::BLENDSHAPE_NAMES
                 .iter()
-                .all(|p| self.derived.iter().any(|(_, q)| q == p));
-            for &(column, preset) in &self.derived {
-                row[column] = preset.from_scores(score, split);
-            }
-        }
-        row
+                .position(|n| *n == name)
+                .and_then(|i| expression.scores.get(i))
+                .copied()
+                .unwrap_or(0.0)
+                .clamp(0.0, 1.0)
+        };
+        self.map.weights_from_channels(score)
     }
 
     fn source(&self) -> EstimatorSource {
@@ -247,7 +127,7 @@ impl Estimator for ByName {
     }
 
     fn driven(&self) -> usize {
-        self.columns.iter().flatten().count() + self.derived.len()
+        self.driven
     }
 }
 
@@ -289,8 +169,8 @@ mod tests {
         let by_name = ByName::new(&character);
         assert_eq!(
             by_name.driven(),
-            7,
-            "every preset with a clear mapping, not relaxed or raw targets"
+            6,
+            "every preset with a clear mapping, not relaxed, nor a blink or Fcl_EYE_Close whose eyes blinkLeft and blinkRight carry"
         );
         let mut scores = vec![0.0; SCORES];
         let set = |scores: &mut Vec<f32>, name: &str, v: f32| {

@@ -48,7 +48,7 @@ pub mod layer;
 pub mod session;
 pub mod take;
 
-pub use estimator::{ByName, Estimator, EstimatorSource, VrmPreset};
+pub use estimator::{ByName, Estimator, EstimatorSource};
 pub use expression::Expression;
 pub use fingerprint::Fingerprint;
 pub use layer::{Layered, layer};
