@@ -123,7 +123,9 @@ fn name_report(entry: faceanim_rig::name_map::Entry, character: &Character) -> N
             Use::Duplicate(first) => Some(format!("{} is the same channel", name_of(first))),
             Use::Covered => Some("its channels drive other blendshapes directly".to_owned()),
             Use::TargetsDriven => Some("the morph targets it binds are driven by name".to_owned()),
-            Use::NoReading => Some("no reading from a face's channels (lip sync drives it)".to_owned()),
+            Use::NoReading => {
+                Some("no reading from a face's channels (lip sync drives it)".to_owned())
+            }
             _ => Some("not driven".to_owned()),
         },
     }

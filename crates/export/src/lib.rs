@@ -291,14 +291,10 @@ fn live_link_curves<'a>(animation: &'a Animation<'_>, notes: &mut Vec<String>) -
         (None, Some(session)) => session.character.clone(),
         (None, None) => "the character".to_owned(),
     };
-    let has_arkit = animation
-        .clip
-        .blendshapes
-        .iter()
-        .any(|n| {
-            faceanim_rig::names::drive(n)
-                .is_some_and(|d| !matches!(d, faceanim_rig::names::Drive::Expression(_)))
-        });
+    let has_arkit = animation.clip.blendshapes.iter().any(|n| {
+        faceanim_rig::names::drive(n)
+            .is_some_and(|d| !matches!(d, faceanim_rig::names::Drive::Expression(_)))
+    });
     match (&animation.arkit, has_arkit) {
         (_, true) => &animation.clip,
         (Some(capture), false) => {

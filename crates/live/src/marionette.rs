@@ -107,7 +107,8 @@ impl Marionette {
         let mut arkit: HashMap<&'static str, Vec<usize>> = HashMap::new();
         let map = faceanim_rig::name_map::NameMap::from_names(blendshapes, &[]);
         for (i, entry) in map.entries().iter().enumerate() {
-            let Some(entry) = entry.filter(|e| e.used == faceanim_rig::name_map::Use::Driven) else {
+            let Some(entry) = entry.filter(|e| e.used == faceanim_rig::name_map::Use::Driven)
+            else {
                 continue;
             };
             if matches!(entry.drive, faceanim_rig::names::Drive::Expression(_)) {

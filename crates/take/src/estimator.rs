@@ -78,9 +78,8 @@ impl ByName {
     #[must_use]
     pub fn new(character: &Character) -> ByName {
         let map = character.name_map();
-        let scored = |c: faceanim_rig::names::Channel| {
-            faceanim_track::BLENDSHAPE_NAMES.contains(&c.name())
-        };
+        let scored =
+            |c: faceanim_rig::names::Channel| faceanim_track::BLENDSHAPE_NAMES.contains(&c.name());
         let driven = map
             .entries()
             .iter()

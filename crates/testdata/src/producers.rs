@@ -236,7 +236,7 @@ fn turn_half(node: &mut Value) {
         });
     // (0, 1, 0, 0) · (x, y, z, w)
     node["rotation"] = json!([z, w, -x, -y]);
-    if let Some(translation) = node["translation"].as_array_mut()
+    if let Some(translation) = node.get_mut("translation").and_then(Value::as_array_mut)
         && translation.len() == 3
     {
         for i in [0, 2] {

@@ -1,0 +1,390 @@
+//! Avatars that no line of faceanim wrote: a full-body character built by Blender 3.4's Python
+//! API and written by Blender's own glTF exporter (`tools/blender_avatar.py`, run headless by
+//! the test setup: three meshes, one primitive per material each with its own vertices, the
+//! face's 108 shape keys on all of its 12 primitives, two skins, a rig in centimetres under a
+//! 0.01 scale, `KHR_materials_*`), the same made a VRM 0.x and a VRM 1.0 by adding the
+//! extension's JSON as UniVRM lays it out, and compressed by gltfpack and by gltf-transform.
+//! Each imports, `faceanim info` lists its shapes with what drives them by name, capture by
+//! name moves it, strokes through the studio's API animate it, and the export is the user's
+//! file with the animation added: counts and names kept, the Khronos validator passes it,
+//! Blender reopens it with both armatures and every shape key, three.js plays it.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    reason = "tests panic to fail"
+)]
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use faceanim_testdata::avatar::VrmKind;
+use faceanim_testdata::glb::assert_kept;
+use faceanim_testdata::producers::{BLENDER_AVATAR_EXPRESSIONS, blender_avatar, with_vrm};
+use faceanim_testdata::{gltf_transform, gltfpack};
+use serde_json::Value;
+use support::{assert_valid_gltf, blender_report, faceanim, faceanim_ok, output_dir, repo};
+
+/// The Blender avatar's shape keys.
+const SHAPE_KEYS: usize = 108;
+
+/// The five files, written into `dir`: (file, is a VRM, compressed).
+fn variants(dir: &Path) -> Vec<(PathBuf, bool, bool)> {
+    let plain = blender_avatar();
+    let files: [(&str, Vec<u8>, bool, bool); 5] = [
+        ("blender.glb", plain.to_vec(), false, false),
+        ("blender-0.vrm", with_vrm(plain, VrmKind::V0), true, false),
+        ("blender-1.vrm", with_vrm(plain, VrmKind::V1), true, false),
+        (
+            "blender-gltfpack.glb",
+            gltfpack(plain, &["-cc", "-kn", "-km"]),
+            false,
+            true,
+        ),
+        (
+            "blender-gltf-transform.glb",
+            gltf_transform(plain, "meshopt"),
+            false,
+            true,
+        ),
+    ];
+    files
+        .into_iter()
+        .map(|(name, bytes, vrm, compressed)| {
+            let path = dir.join(name);
+            std::fs::write(&path, bytes).unwrap();
+            (path, vrm, compressed)
+        })
+        .collect()
+}
+
+fn info(file: &Path) -> Value {
+    serde_json::from_str(&faceanim_ok(&["info", file.to_str().unwrap(), "--json"])).unwrap()
+}
+
+fn shape<'a>(report: &'a Value, name: &str) -> &'a Value {
+    report["blendshapes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|b| b["name"] == name)
+        .unwrap_or_else(|| panic!("no {name} in {report}"))
+}
+
+#[test]
+fn blender_avatars_import_with_every_shape_and_say_what_drives_each() {
+    let dir = output_dir("made-by-others-info");
+    for (file, vrm, compressed) in variants(&dir) {
+        let what = file.display().to_string();
+        let report = info(&file);
+        let shapes = report["blendshapes"].as_array().unwrap();
+        let expected = SHAPE_KEYS
+            + if vrm {
+                BLENDER_AVATAR_EXPRESSIONS.len()
+            } else {
+                0
+            };
+        assert_eq!(shapes.len(), expected, "{what}");
+        if !compressed {
+            assert_eq!(report["file"]["meshes"], 3, "{what}");
+            assert_eq!(report["file"]["skins"], 2, "{what}");
+            assert_eq!(report["file"]["materials"], 19, "{what}");
+        }
+        // A full body: the head box frames the face, about 1.45 m up.
+        let head = &report["head"];
+        assert!(head["min"][1].as_f64().unwrap() > 1.3, "{what}: {head}");
+        // The face's shapes move where the face is: the jaw by centimetres, teeth-only keys.
+        assert!(
+            shape(&report, "jawOpen")["max_displacement"]
+                .as_f64()
+                .unwrap()
+                > 0.01
+        );
+        assert!(shape(&report, "Fcl_HA_Hide")["moved"].as_u64().unwrap() > 0);
+        // The name table: ARKit's single browInnerUp drives ICT's halves; VRoid's duplicates
+        // give way to the ARKit-named shapes.
+        let brow = &shape(&report, "browInnerUp_L")["arkit"];
+        assert_eq!(brow["kind"], "split", "{what}: {brow}");
+        assert_eq!(brow["driven"], true, "{what}: {brow}");
+        let close = &shape(&report, "Fcl_EYE_Close_L")["arkit"];
+        assert_eq!(close["driven"], false, "{what}: {close}");
+        assert_eq!(
+            report["undriven_channels"],
+            serde_json::json!(["tongueOut"]),
+            "{what}"
+        );
+        if vrm {
+            assert_eq!(shape(&report, "aa")["arkit"]["driven"], false, "{what}");
+        }
+        // Left and right found on a real (slightly asymmetric) face.
+        assert!(report["pairs"].as_array().unwrap().len() >= 22, "{what}");
+    }
+}
+
+/// A ten-second clip over names in three conventions: ARKit's, ICT's and VRoid's.
+fn clip(dir: &Path) -> PathBuf {
+    let frames: Vec<Value> = (0..300)
+        .map(|f| {
+            let t = f as f32 / 30.0;
+            let jaw = (0.5 - 0.5 * (t * 1.3).cos()).clamp(0.0, 1.0);
+            let blink = if (t % 3.0) < 0.2 { 1.0 } else { 0.0 };
+            serde_json::json!([jaw, t / 10.0, blink, blink, 1.0 - jaw])
+        })
+        .collect();
+    let path = dir.join("ten-seconds.json");
+    let clip = serde_json::json!({ "fps": 30, "blendshapes": ["jawOpen", "mouthSmile_L", "eyeBlink_L", "eyeBlink_R", "Fcl_MTH_U"], "frames": frames });
+    std::fs::write(&path, clip.to_string()).unwrap();
+    path
+}
+
+#[test]
+fn exports_of_blender_avatars_keep_the_file_and_open_everywhere() {
+    let dir = output_dir("made-by-others-export");
+    let clip = clip(&dir);
+    let mut outputs = Vec::new();
+    for (file, vrm, _) in variants(&dir) {
+        let stem = file.file_stem().unwrap().to_string_lossy().into_owned();
+        let out = dir.join(format!("{stem}-animated.glb"));
+        faceanim_ok(&[
+            "export",
+            file.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--clip",
+            clip.to_str().unwrap(),
+        ]);
+        let report = assert_valid_gltf(&out);
+        assert_eq!(report["info"]["animationCount"], 1, "{}", out.display());
+        let input = faceanim_testdata::glb::json(&std::fs::read(&file).unwrap());
+        let output = faceanim_testdata::glb::json(&std::fs::read(&out).unwrap());
+        assert_kept(&input, &output, &out.display().to_string());
+        let used = output["extensionsUsed"].to_string();
+        for extension in [
+            "KHR_materials_clearcoat",
+            "KHR_materials_specular",
+            "KHR_materials_ior",
+        ] {
+            assert!(used.contains(extension), "{}: {used}", out.display());
+        }
+        if vrm {
+            assert!(used.contains("VRM"), "{used}");
+        }
+        outputs.push(out);
+    }
+
+    // Blender 3.4 reopens the plain, the VRM 1.0 and gltfpack's exports with both armatures,
+    // the face's every shape key (on one object), and the animation.
+    for out in [&outputs[0], &outputs[2], &outputs[3]] {
+        let report = blender_report(out);
+        let armatures = report["armatures"].as_array().unwrap();
+        assert_eq!(armatures.len(), 2, "{report}");
+        let face = report["objects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|o| !o["shape_keys"].as_array().unwrap().is_empty())
+            .unwrap_or_else(|| panic!("{report}"));
+        assert_eq!(
+            face["shape_keys"].as_array().unwrap().len(),
+            SHAPE_KEYS,
+            "{report}"
+        );
+        assert!(
+            !report["actions"].as_array().unwrap().is_empty(),
+            "{report}"
+        );
+    }
+
+    // three.js in Chromium: every primitive skinned, both rigs' bones, the face moving.
+    for out in [&outputs[0], &outputs[1], &outputs[4]] {
+        let shot = out.with_extension("png");
+        let run = Command::new("node")
+            .arg(repo().join("tools/threejs-render.mjs"))
+            .arg(out)
+            .arg(&shot)
+            .arg("2.4")
+            .output()
+            .expect("node is needed for this test");
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let report: Value = serde_json::from_slice(&run.stdout).unwrap();
+        assert!(report.get("pageErrors").is_none(), "{report}");
+        assert!(report["skinnedMeshes"].as_u64().unwrap() >= 19, "{report}");
+        assert_eq!(report["bones"], 10, "{report}");
+        assert!(report["maxInfluence"].as_f64().unwrap() > 0.5, "{report}");
+        assert!(
+            report["texturedMaterials"].as_u64().unwrap() >= 1,
+            "{report}"
+        );
+        assert!(
+            report["pixels"]["nonBackground"].as_u64().unwrap() > 5_000,
+            "{report}"
+        );
+    }
+}
+
+/// By name, a photo of a smiling person moves the ARKit-named smile on the Blender avatar and
+/// neither VRoid's duplicate keys nor the VRM's expressions, which bind those keys.
+#[test]
+fn capture_by_name_drives_the_blender_avatar_once() {
+    let dir = output_dir("made-by-others-capture");
+    let photo = faceanim_testdata::shared("images/astronaut.png");
+    for (file, vrm, _) in variants(&dir).into_iter().take(3) {
+        let out = dir.join(format!(
+            "{}.json",
+            file.file_stem().unwrap().to_string_lossy()
+        ));
+        let run = faceanim(&[
+            "track",
+            photo.to_str().unwrap(),
+            "--character",
+            file.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let clip: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+        let names: Vec<&str> = clip["blendshapes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_str().unwrap())
+            .collect();
+        let peak = |name: &str| {
+            let i = names.iter().position(|n| *n == name).unwrap();
+            clip["frames"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|row| row[i].as_f64().unwrap())
+                .fold(0.0, f64::max)
+        };
+        let what = file.display();
+        assert!(
+            peak("mouthSmile_L") > 0.3 && peak("mouthSmile_R") > 0.3,
+            "{what}"
+        );
+        for duplicate in ["Fcl_MTH_Joy", "Fcl_EYE_Close_L", "Fcl_ALL_Joy"] {
+            assert_eq!(peak(duplicate), 0.0, "{what}: {duplicate}");
+        }
+        if vrm {
+            assert_eq!(peak("happy"), 0.0, "{what}: happy binds Fcl_ALL_Joy");
+        }
+    }
+}
+
+/// The studio on the Blender avatar: a stroke drawn through the HTTP API from the chin down
+/// opens the jaw, and the studio's GLB download is the user's file with the animation.
+#[test]
+fn strokes_through_the_studio_api_animate_the_blender_avatar() {
+    let dir = output_dir("made-by-others-studio");
+    let file = dir.join("blender.glb");
+    std::fs::write(&file, blender_avatar()).unwrap();
+    let character = faceanim_rig::import::import_gltf(
+        blender_avatar(),
+        "blender.glb",
+        &faceanim_rig::import::NoExternalResources,
+    )
+    .unwrap()
+    .character;
+    let jaw = character.find_blendshape("jawOpen").unwrap();
+    let shape = character.blendshape(jaw).unwrap();
+    let (v, delta) = shape
+        .indices()
+        .iter()
+        .zip(shape.deltas())
+        .max_by(|a, b| a.1.length().total_cmp(&b.1.length()))
+        .map(|(&v, &d)| (v, d))
+        .unwrap();
+    let start = character.positions()[v as usize] + character.normals()[v as usize] * 0.001;
+    let end = character.positions()[v as usize] + delta;
+    let samples: Vec<Value> = (0..=45)
+        .map(|i| {
+            let s = i as f32 / 45.0;
+            let p = start.lerp(end, s);
+            serde_json::json!({ "t": i as f32 / 90.0, "p": [p.x, p.y, p.z] })
+        })
+        .collect();
+    let stroke = serde_json::json!({ "samples": samples }).to_string();
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
+        .args(["studio"])
+        .arg(&file)
+        .args(["--port", "0", "--project"])
+        .arg(dir.join("project.json"))
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    std::io::BufRead::read_line(
+        &mut std::io::BufReader::new(child.stdout.take().unwrap()),
+        &mut line,
+    )
+    .unwrap();
+    let port: u16 = line
+        .split("127.0.0.1:")
+        .nth(1)
+        .and_then(|rest| rest.split('/').next())
+        .and_then(|p| p.parse().ok())
+        .unwrap_or_else(|| panic!("no URL in {line}"));
+    let base = format!("http://127.0.0.1:{port}");
+    let state = http(&format!("{base}/api/strokes"), "POST", stroke.as_bytes());
+    let download = http(&format!("{base}/api/export.glb"), "GET", b"");
+    let _ = child.kill();
+    let _ = child.wait();
+    let state: Value = serde_json::from_slice(&state.unwrap_or_else(|e| panic!("{e}"))).unwrap();
+    let action = &state["actions"][0];
+    assert_eq!(action["sides"][0]["target"], "jawOpen", "{state}");
+    assert!(
+        action["sides"][0]["weight"].as_f64().unwrap() > 0.9,
+        "{state}"
+    );
+    let exported = dir.join("studio-export.glb");
+    std::fs::write(&exported, download.unwrap_or_else(|e| panic!("{e}"))).unwrap();
+    let report = assert_valid_gltf(&exported);
+    assert_eq!(report["info"]["animationCount"], 1, "{report}");
+    let input = faceanim_testdata::glb::json(blender_avatar());
+    let output = faceanim_testdata::glb::json(&std::fs::read(&exported).unwrap());
+    assert_kept(&input, &output, "the studio's download");
+}
+
+/// One HTTP request with curl-free std networking: returns the body of a 200 response.
+fn http(url: &str, method: &str, body: &[u8]) -> Result<Vec<u8>, String> {
+    use std::io::{Read as _, Write as _};
+    let rest = url.strip_prefix("http://").ok_or("not http")?;
+    let (host, path) = rest.split_once('/').ok_or("no path")?;
+    let mut stream = std::net::TcpStream::connect(host).map_err(|e| e.to_string())?;
+    let head = format!(
+        "{method} /{path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n",
+        body.len()
+    );
+    stream
+        .write_all(head.as_bytes())
+        .map_err(|e| e.to_string())?;
+    stream.write_all(body).map_err(|e| e.to_string())?;
+    let mut response = Vec::new();
+    stream
+        .read_to_end(&mut response)
+        .map_err(|e| e.to_string())?;
+    let split = response
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .ok_or("no headers")?;
+    let status = String::from_utf8_lossy(&response[..split]).into_owned();
+    if !status.starts_with("HTTP/1.1 200") {
+        return Err(format!(
+            "{status}\n{}",
+            String::from_utf8_lossy(&response[split + 4..])
+        ));
+    }
+    Ok(response[split + 4..].to_vec())
+}
