@@ -3,7 +3,8 @@
 //! the test setup: three meshes, one primitive per material each with its own vertices, the
 //! face's 108 shape keys on all of its 12 primitives, two skins, a rig in centimetres under a
 //! 0.01 scale, `KHR_materials_*`), the same made a VRM 0.x and a VRM 1.0 by adding the
-//! extension's JSON as UniVRM lays it out, and compressed by gltfpack and by gltf-transform.
+//! extension's JSON as UniVRM lays it out, and compressed by gltfpack and by gltf-transform
+//! (meshopt, and Draco, which faceanim decodes natively).
 //! Each imports, `faceanim info` lists its shapes with what drives them by name, capture by
 //! name moves it, strokes through the studio's API animate it, and the export is the user's
 //! file with the animation added: counts and names kept, the Khronos validator passes it,
@@ -30,10 +31,10 @@ use support::{assert_valid_gltf, blender_report, faceanim, faceanim_ok, output_d
 /// The Blender avatar's shape keys.
 const SHAPE_KEYS: usize = 108;
 
-/// The five files, written into `dir`: (file, is a VRM, compressed).
+/// The six files, written into `dir`: (file, is a VRM, compressed).
 fn variants(dir: &Path) -> Vec<(PathBuf, bool, bool)> {
     let plain = blender_avatar();
-    let files: [(&str, Vec<u8>, bool, bool); 5] = [
+    let files: [(&str, Vec<u8>, bool, bool); 6] = [
         ("blender.glb", plain.to_vec(), false, false),
         ("blender-0.vrm", with_vrm(plain, VrmKind::V0), true, false),
         ("blender-1.vrm", with_vrm(plain, VrmKind::V1), true, false),
@@ -46,6 +47,12 @@ fn variants(dir: &Path) -> Vec<(PathBuf, bool, bool)> {
         (
             "blender-gltf-transform.glb",
             gltf_transform(plain, "meshopt"),
+            false,
+            true,
+        ),
+        (
+            "blender-draco.glb",
+            gltf_transform(plain, "draco"),
             false,
             true,
         ),
@@ -287,6 +294,9 @@ fn capture_by_name_drives_the_blender_avatar_once() {
 #[test]
 fn strokes_through_the_studio_api_animate_the_blender_avatar() {
     let dir = output_dir("made-by-others-studio");
+    for stale in ["project.json", ".project.json.autosave"] {
+        let _ = std::fs::remove_file(dir.join(stale));
+    }
     let file = dir.join("blender.glb");
     std::fs::write(&file, blender_avatar()).unwrap();
     let character = faceanim_rig::import::import_gltf(

@@ -36,11 +36,16 @@ fn correlation(a: &[f64], b: &[f64]) -> f64 {
 fn by_name_every_moving_channel_follows_mediapipe_on_a_real_person() {
     let footage = real_footage();
     let reference: Value = serde_json::from_str(
-        &std::fs::read_to_string(repo().join("crates/cli/tests/reference/cap12_edit.mediapipe.json"))
-            .unwrap(),
+        &std::fs::read_to_string(
+            repo().join("crates/cli/tests/reference/cap12_edit.mediapipe.json"),
+        )
+        .unwrap(),
     )
     .unwrap();
-    assert_eq!(reference["sha256"], FOOTAGE_SHA256, "recorded from this very file");
+    assert_eq!(
+        reference["sha256"], FOOTAGE_SHA256,
+        "recorded from this very file"
+    );
     let dir = output_dir("real-footage");
     let out = dir.join("cap12.json");
     let head = faceanim_testdata::shared("characters/ict-face.glb");

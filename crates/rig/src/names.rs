@@ -770,6 +770,94 @@ mod tests {
         assert_eq!(arkit_name("smile"), None);
     }
 
+    /// The conventions of the module's table, each with names as their tools write them.
+    #[test]
+    fn every_convention_of_the_table() {
+        let channel = |n: &str| Drive::Channel(Channel::named(n).unwrap());
+        let split = |n: &str, side| Drive::Split(Channel::named(n).unwrap(), side);
+        let merge =
+            |a: &str, b: &str| Drive::Merge(Channel::named(a).unwrap(), Channel::named(b).unwrap());
+        let viseme = |v| Drive::Expression(Expression::Viseme(v));
+        for (name, want) in [
+            // ARKit in every case and separator, Live Link's PascalCase, MPFB's snake case.
+            ("eyeBlinkLeft", channel("eyeBlinkLeft")),
+            ("EyeBlinkLeft", channel("eyeBlinkLeft")),
+            ("eye_blink_left", channel("eyeBlinkLeft")),
+            ("JawOpen", channel("jawOpen")),
+            ("mouthRollUpper", channel("mouthRollUpper")),
+            // ICT-FaceKit and Character Creator's splits of ARKit's single channels.
+            ("eyeBlink_L", channel("eyeBlinkLeft")),
+            ("browInnerUp_L", split("browInnerUp", Side::Left)),
+            ("cheekPuff_R", split("cheekPuff", Side::Right)),
+            // Character Creator 4.
+            ("Eye_Blink_L", channel("eyeBlinkLeft")),
+            ("Brow_Raise_Inner_R", split("browInnerUp", Side::Right)),
+            ("Brow_Raise_Outer_L", channel("browOuterUpLeft")),
+            ("Brow_Drop_R", channel("browDownRight")),
+            ("Cheek_Raise_L", channel("cheekSquintLeft")),
+            ("Cheek_Puff_L", split("cheekPuff", Side::Left)),
+            ("Mouth_Smile_L", channel("mouthSmileLeft")),
+            ("Mouth_Up_Upper_L", channel("mouthUpperUpLeft")),
+            ("Mouth_Down_Lower_R", channel("mouthLowerDownRight")),
+            ("Mouth_Roll_In_Upper_L", split("mouthRollUpper", Side::Left)),
+            ("Mouth_Pucker_Up_R", split("mouthPucker", Side::Right)),
+            ("Eye_L_Look_L", channel("eyeLookOutLeft")),
+            ("Eye_L_Look_R", channel("eyeLookInLeft")),
+            ("Eye_R_Look_L", channel("eyeLookInRight")),
+            ("Eye_R_Look_Up", channel("eyeLookUpRight")),
+            ("Jaw_L", channel("jawLeft")),
+            ("Mouth_R", channel("mouthRight")),
+            ("Jaw_Open", channel("jawOpen")),
+            ("Tongue_Out", channel("tongueOut")),
+            // VRM 1.0 and 0.x presets.
+            ("blink", merge("eyeBlinkLeft", "eyeBlinkRight")),
+            ("blinkLeft", channel("eyeBlinkLeft")),
+            ("Blink_R", channel("eyeBlinkRight")),
+            ("happy", merge("mouthSmileLeft", "mouthSmileRight")),
+            ("Joy", merge("mouthSmileLeft", "mouthSmileRight")),
+            ("Sorrow", merge("mouthFrownLeft", "mouthFrownRight")),
+            ("lookLeft", merge("eyeLookOutLeft", "eyeLookInRight")),
+            ("LookUp", merge("eyeLookUpLeft", "eyeLookUpRight")),
+            ("aa", viseme(Viseme::Aa)),
+            ("A", viseme(Viseme::Aa)),
+            ("O", viseme(Viseme::Oh)),
+            ("surprised", Drive::Expression(Expression::Surprised)),
+            // VRoid Studio.
+            ("Fcl_EYE_Close", merge("eyeBlinkLeft", "eyeBlinkRight")),
+            ("Fcl_EYE_Close_L", channel("eyeBlinkLeft")),
+            ("Fcl_BRW_Angry", merge("browDownLeft", "browDownRight")),
+            ("Fcl_MTH_A", viseme(Viseme::Aa)),
+            ("Fcl_MTH_Joy", merge("mouthSmileLeft", "mouthSmileRight")),
+            // Ready Player Me / Oculus visemes.
+            ("viseme_PP", viseme(Viseme::PP)),
+            ("viseme_I", viseme(Viseme::Ih)),
+            ("viseme_kk", viseme(Viseme::Kk)),
+            // Daz Genesis 8, namespaces and numbered prefixes.
+            ("eCTRLEyesClosedL", channel("eyeBlinkLeft")),
+            ("facs_bs_EyeBlinkLeft", channel("eyeBlinkLeft")),
+            ("blendShape1.jawOpen", channel("jawOpen")),
+            ("CC_Base_Body.Mouth_Smile_R", channel("mouthSmileRight")),
+            ("A25_Jaw_Open", channel("jawOpen")),
+            // Side suffixes with a dot stay sides, not namespaces.
+            ("mouthSmile.R", channel("mouthSmileRight")),
+        ] {
+            assert_eq!(drive(name), Some(want), "{name}");
+        }
+        for nothing in [
+            "Fcl_ALL_Joy",
+            "Fcl_HA_Hide",
+            "relaxed",
+            "neutral",
+            "shape_12",
+            "target_0",
+            "Key 1",
+            "jaw",
+            "cleft",
+        ] {
+            assert_eq!(drive(nothing), None, "{nothing}");
+        }
+    }
+
     #[test]
     fn every_arkit_name_maps_to_itself() {
         for name in ARKIT_52 {

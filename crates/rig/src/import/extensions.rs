@@ -5,12 +5,13 @@
 //! read here first, as plain JSON:
 //!
 //! - every required extension is checked against what faceanim reads, and one it does not is
-//!   an error that names it (Draco with the one-line conversion);
+//!   an error that names it;
 //! - buffers are loaded (the GLB chunk, data URIs, files next to a `.gltf`), and a buffer that
 //!   only exists as an `EXT_meshopt_compression` fallback is left empty;
 //! - `EXT_meshopt_compression` buffer views are decoded (the `meshopt` crate: the vertex and
 //!   index codecs and the octahedral, quaternion, exponential and colour filters) into one new
 //!   buffer, and the views point there;
+//! - `KHR_draco_mesh_compression` primitives are decoded natively (see [`super::draco`]);
 //! - `KHR_mesh_quantization` needs nothing but to be allowed: the accessor reader already reads
 //!   normalized and plain integers, and node transforms carry the dequantization;
 //! - `EXT_texture_webp` and `KHR_texture_basisu` textures get their image as `source`;
@@ -37,6 +38,7 @@ const UNDERSTOOD: &[&str] = &[
     "KHR_texture_transform",
     "EXT_texture_webp",
     "KHR_texture_basisu",
+    "KHR_draco_mesh_compression",
 ];
 
 /// The JSON and buffers, ready for the `gltf` crate, with what was read from extensions.
@@ -94,6 +96,7 @@ pub(crate) fn prepare<'a>(
     let mut warnings = Vec::new();
     let mut buffers = load_buffers(&value, bin, resources)?;
     decode_meshopt(&mut value, &mut buffers)?;
+    super::draco::decode(&mut value, &mut buffers)?;
     let kept = keep(&value, &buffers, resources, &mut warnings);
     resolve_texture_sources(&mut value, &mut warnings);
     let uv_transforms = uv_transforms(&value);
@@ -237,14 +240,6 @@ fn check_required(value: &Value) -> Result<(), ImportErrorKind> {
                 "extensionsRequired[{i}]: not a string"
             )));
         };
-        if name == "KHR_draco_mesh_compression" {
-            return Err(ImportErrorKind::Unsupported(
-                "the file requires KHR_draco_mesh_compression (Draco-compressed meshes), which faceanim does not decode; \
-                 convert it once to meshopt compression, which faceanim reads: \
-                 npx @gltf-transform/cli meshopt IN.glb OUT.glb"
-                    .into(),
-            ));
-        }
         let known = UNDERSTOOD.contains(&name)
             || name.starts_with("KHR_materials_")
             || gltf::json::extensions::ENABLED_EXTENSIONS.contains(&name);
