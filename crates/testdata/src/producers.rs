@@ -44,6 +44,10 @@ pub const BLENDER_AVATAR_EXPRESSIONS: &[(&str, &str, &str)] = &[
 /// # Panics
 /// When Blender is missing or fails, with its output.
 #[must_use]
+#[expect(
+    clippy::panic,
+    reason = "test support: a missing producer must stop the test loudly"
+)]
 pub fn blender_avatar() -> &'static [u8] {
     static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
     BYTES.get_or_init(|| {

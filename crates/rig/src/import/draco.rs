@@ -18,6 +18,9 @@ use super::ImportErrorKind;
 
 const EXTENSION: &str = "KHR_draco_mesh_compression";
 
+/// Per-component minimum and maximum of an accessor's values.
+type Bounds = (Vec<f32>, Vec<f32>);
+
 /// Decodes every Draco-compressed primitive of `value` into a new buffer (appended to
 /// `buffers`), pointing the primitives' accessors at it.
 pub(super) fn decode(
@@ -35,7 +38,7 @@ pub(super) fn decode(
     let mut filled: Vec<(usize, Vec<u8>)> = Vec::new();
     // The decoded values' own bounds: dequantization moves them by a fraction of the
     // quantization step, and a declared min/max must be the data's exactly.
-    let mut bounds: Vec<(usize, (Vec<f32>, Vec<f32>))> = Vec::new();
+    let mut bounds: Vec<(usize, Bounds)> = Vec::new();
     let mut streams: Vec<(String, usize, Value, Value)> = Vec::new();
     if let Some(Value::Array(meshes)) = value.get_mut("meshes") {
         for (m, mesh) in meshes.iter_mut().enumerate() {
@@ -283,7 +286,7 @@ fn encode(values: &[f32], component_type: u64) -> Vec<u8> {
 }
 
 /// Per-component minimum and maximum of `values`, `components` to an element.
-fn bounds_of(values: &[f32], components: usize) -> (Vec<f32>, Vec<f32>) {
+fn bounds_of(values: &[f32], components: usize) -> Bounds {
     let mut min = vec![f32::INFINITY; components];
     let mut max = vec![f32::NEG_INFINITY; components];
     for element in values.chunks_exact(components.max(1)) {
