@@ -234,16 +234,26 @@ for i, name in enumerate(band_materials):
         m.node_tree.links.new(tex.outputs["Color"], m.node_tree.nodes["Principled BSDF"].inputs["Base Color"])
     body_mesh.materials.append(m)
 
-# --- hair: a cap over the head, two materials, no shape keys -------------------------------------
+# --- hair: a cap over the top and back of the head, two materials, no shape keys ---------------
+xs = [v.co.x for v in mesh.vertices if v.co.z > head_top - 12]
+ys = [v.co.y for v in mesh.vertices if v.co.z > head_top - 12]
+centre = Vector(((max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2, head_top - 9))
+radius = 0.55 * (max(xs) - min(xs))
 bpy.ops.mesh.primitive_uv_sphere_add(segments=24, ring_count=12, radius=1.0)
 hair = bpy.context.active_object
 hair.name = "Hair"
 hair.data.name = "Hair"
-xs = [v.co.x for v in mesh.vertices]
-ys = [v.co.y for v in mesh.vertices]
-hair.scale = ((max(xs) - min(xs)) * 0.55, (max(ys) - min(ys)) * 0.55, (head_top - neck_height) * 0.35)
-hair.location = ((max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2 + 1.0, head_top - (head_top - neck_height) * 0.25)
+hair.scale = (radius, radius * 1.1, radius * 0.9)
+hair.location = centre + Vector((0, 2.5, 1.5))  # Blender's +Y is the back of the head
 bpy.ops.object.transform_apply(location=True, rotation=True, scale=True)
+# Open at the face and the neck: keep what lies above the brows or behind the ears.
+bm = bmesh.new()
+bm.from_mesh(hair.data)
+brow = centre.z + 1.0
+gone = [v for v in bm.verts if v.co.z < brow and v.co.y < centre.y + 4.0 or v.co.z < centre.z - 10]
+bmesh.ops.delete(bm, geom=gone, context="VERTS")
+bm.to_mesh(hair.data)
+bm.free()
 hair.data.materials.append(material("Hair_Base", (0.25, 0.12, 0.05)))
 hair.data.materials.append(material("Hair_Highlight", (0.5, 0.3, 0.1), **{"Sheen": 0.5}))
 middle = sum(v.co.z for v in hair.data.vertices) / len(hair.data.vertices)

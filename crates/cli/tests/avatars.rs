@@ -16,13 +16,14 @@ mod support;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use faceanim_testdata::avatar::{ICT_EXPRESSIONS, VrmKind, full_body_glb};
 use faceanim_testdata::glb::assert_kept;
 use faceanim_testdata::{gltf_transform, gltfpack, ict};
 use serde_json::Value;
-use support::{assert_valid_gltf, blender_report, faceanim_ok, output_dir, repo};
+use support::{
+    assert_valid_gltf, blender_report, export_with_clip, faceanim_ok, output_dir, threejs_render,
+};
 
 /// The four avatars, written once per test into `dir`.
 fn avatars(dir: &Path) -> Vec<PathBuf> {
@@ -52,18 +53,6 @@ fn avatars(dir: &Path) -> Vec<PathBuf> {
 /// The JSON chunk of a GLB or VRM file.
 fn json_chunk(file: &Path) -> Value {
     faceanim_testdata::glb::json(&std::fs::read(file).unwrap())
-}
-
-/// `faceanim export FILE -o OUT --clip CLIP`.
-fn export_with_clip(file: &Path, out: &Path, clip: &Path) {
-    faceanim_ok(&[
-        "export",
-        file.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--clip",
-        clip.to_str().unwrap(),
-    ]);
 }
 
 /// A ten-second clip: the jaw opens and closes, the left smile rises, the eyes blink (VRM
@@ -171,21 +160,7 @@ fn exports_are_the_users_file_with_the_animation_and_open_everywhere() {
     // three.js (the studio's own copy) in Chromium: the textured, skinned avatar with its face
     // moving at second 5 of the clip (the jaw is open there).
     for file in [&outputs[0], &outputs[2]] {
-        let shot = file.with_extension("png");
-        let out = Command::new("node")
-            .arg(repo().join("tools/threejs-render.mjs"))
-            .arg(file)
-            .arg(&shot)
-            .arg("2.4")
-            .output()
-            .expect("node is needed for this test");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let report: Value = serde_json::from_slice(&out.stdout).unwrap();
-        assert!(report.get("pageErrors").is_none(), "{report}");
+        let report = threejs_render(file, "2.4");
         assert!(report["skinnedMeshes"].as_u64().unwrap() >= 5, "{report}");
         assert_eq!(report["bones"], 5, "{report}");
         assert!(

@@ -21,14 +21,7 @@ fn blender_opens_an_animated_export_with_all_shape_keys() {
     let clip = dir.join("blink.json");
     std::fs::write(&clip, r#"{"fps": 24, "blendshapes": ["eyeBlinkLeft", "eyeBlinkRight"], "frames": [[0,0],[1,1],[0,0]]}"#).unwrap();
     let glb = dir.join("ict-blink.glb");
-    faceanim_ok(&[
-        "export",
-        ict.to_str().unwrap(),
-        "-o",
-        glb.to_str().unwrap(),
-        "--clip",
-        clip.to_str().unwrap(),
-    ]);
+    support::export_with_clip(&ict, &glb, &clip);
 
     let report = blender_report(&glb);
     assert!(

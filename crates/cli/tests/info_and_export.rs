@@ -110,14 +110,7 @@ fn export_with_a_clip_passes_the_validator() {
     let clip_path = dir.join("smile.json");
     std::fs::write(&clip_path, clip).unwrap();
     let out_path = dir.join("ict-smile.glb");
-    faceanim_ok(&[
-        "export",
-        ict.to_str().unwrap(),
-        "-o",
-        out_path.to_str().unwrap(),
-        "--clip",
-        clip_path.to_str().unwrap(),
-    ]);
+    support::export_with_clip(&ict, &out_path, &clip_path);
     let report = assert_valid_gltf(&out_path);
     assert_eq!(report["info"]["animationCount"], 1);
     assert_eq!(report["info"]["hasMorphTargets"], true);

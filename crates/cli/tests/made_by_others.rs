@@ -20,14 +20,16 @@
 mod support;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use faceanim_testdata::avatar::VrmKind;
 use faceanim_testdata::glb::assert_kept;
 use faceanim_testdata::producers::{BLENDER_AVATAR_EXPRESSIONS, blender_avatar, with_vrm};
 use faceanim_testdata::{gltf_transform, gltfpack};
 use serde_json::Value;
-use support::{assert_valid_gltf, blender_report, faceanim, faceanim_ok, output_dir, repo};
+use support::{
+    assert_valid_gltf, blender_report, export_with_clip, faceanim_ok, output_dir, request,
+    request_bytes, start_on, threejs_render, track_clip,
+};
 
 /// The Blender avatar's shape keys.
 const SHAPE_KEYS: usize = 108;
@@ -131,6 +133,37 @@ fn blender_avatars_import_with_every_shape_and_say_what_drives_each() {
     }
 }
 
+/// A primitive that its exporter left without the morph targets its siblings carry (the
+/// Blender avatar's teeth, with their targets taken out) reads as not moving, and the export
+/// gives it zero targets so that the file written is valid glTF.
+#[test]
+fn a_primitive_without_its_siblings_targets_imports_and_exports_valid() {
+    let dir = output_dir("made-by-others-partial-targets");
+    let (mut root, bin) = faceanim_testdata::glb::parts(blender_avatar());
+    let face = root["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m["name"] == "Face")
+        .unwrap();
+    let primitive = &mut root["meshes"][face]["primitives"][4];
+    primitive.as_object_mut().unwrap().remove("targets");
+    let file = dir.join("partial.glb");
+    std::fs::write(&file, faceanim_testdata::glb::assemble(&root, &bin)).unwrap();
+    let report = info(&file);
+    assert_eq!(report["blendshapes"].as_array().unwrap().len(), SHAPE_KEYS);
+    let out = dir.join("partial-animated.glb");
+    export_with_clip(&file, &out, &clip(&dir));
+    assert_valid_gltf(&out);
+    let written = faceanim_testdata::glb::json(&std::fs::read(&out).unwrap());
+    assert_eq!(
+        written["meshes"][face]["primitives"][4]["targets"]
+            .as_array()
+            .map(Vec::len),
+        Some(SHAPE_KEYS)
+    );
+}
+
 /// A ten-second clip over names in three conventions: ARKit's, ICT's and VRoid's.
 fn clip(dir: &Path) -> PathBuf {
     let frames: Vec<Value> = (0..300)
@@ -155,14 +188,7 @@ fn exports_of_blender_avatars_keep_the_file_and_open_everywhere() {
     for (file, vrm, _) in variants(&dir) {
         let stem = file.file_stem().unwrap().to_string_lossy().into_owned();
         let out = dir.join(format!("{stem}-animated.glb"));
-        faceanim_ok(&[
-            "export",
-            file.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--clip",
-            clip.to_str().unwrap(),
-        ]);
+        export_with_clip(&file, &out, &clip);
         let report = assert_valid_gltf(&out);
         assert_eq!(report["info"]["animationCount"], 1, "{}", out.display());
         let input = faceanim_testdata::glb::json(&std::fs::read(&file).unwrap());
@@ -207,21 +233,7 @@ fn exports_of_blender_avatars_keep_the_file_and_open_everywhere() {
 
     // three.js in Chromium: every primitive skinned, both rigs' bones, the face moving.
     for out in [&outputs[0], &outputs[1], &outputs[4]] {
-        let shot = out.with_extension("png");
-        let run = Command::new("node")
-            .arg(repo().join("tools/threejs-render.mjs"))
-            .arg(out)
-            .arg(&shot)
-            .arg("2.4")
-            .output()
-            .expect("node is needed for this test");
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let report: Value = serde_json::from_slice(&run.stdout).unwrap();
-        assert!(report.get("pageErrors").is_none(), "{report}");
+        let report = threejs_render(out, "2.4");
         assert!(report["skinnedMeshes"].as_u64().unwrap() >= 19, "{report}");
         assert_eq!(report["bones"], 10, "{report}");
         assert!(report["maxInfluence"].as_f64().unwrap() > 0.5, "{report}");
@@ -247,20 +259,7 @@ fn capture_by_name_drives_the_blender_avatar_once() {
             "{}.json",
             file.file_stem().unwrap().to_string_lossy()
         ));
-        let run = faceanim(&[
-            "track",
-            photo.to_str().unwrap(),
-            "--character",
-            file.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let clip: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+        let clip = track_clip(&photo, &file, &[], &out);
         let names: Vec<&str> = clip["blendshapes"]
             .as_array()
             .unwrap()
@@ -327,32 +326,13 @@ fn strokes_through_the_studio_api_animate_the_blender_avatar() {
         .collect();
     let stroke = serde_json::json!({ "samples": samples }).to_string();
 
-    let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
-        .args(["studio"])
-        .arg(&file)
-        .args(["--port", "0", "--project"])
-        .arg(dir.join("project.json"))
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    std::io::BufRead::read_line(
-        &mut std::io::BufReader::new(child.stdout.take().unwrap()),
-        &mut line,
-    )
-    .unwrap();
-    let port: u16 = line
-        .split("127.0.0.1:")
-        .nth(1)
-        .and_then(|rest| rest.split('/').next())
-        .and_then(|p| p.parse().ok())
-        .unwrap_or_else(|| panic!("no URL in {line}"));
-    let base = format!("http://127.0.0.1:{port}");
-    let state = http(&format!("{base}/api/strokes"), "POST", stroke.as_bytes());
-    let download = http(&format!("{base}/api/export.glb"), "GET", b"");
-    let _ = child.kill();
-    let _ = child.wait();
-    let state: Value = serde_json::from_slice(&state.unwrap_or_else(|e| panic!("{e}"))).unwrap();
+    let studio = start_on(Some(&file), &dir.join("project.json"), &[]);
+    let (status, state) = request(studio.port, "POST", "/api/strokes", &[], stroke.as_bytes());
+    assert_eq!(status, 200, "{state}");
+    let (status, download) = request_bytes(studio.port, "GET", "/api/export.glb", &[], b"");
+    assert_eq!(status, 200);
+    drop(studio);
+    let state: Value = serde_json::from_str(&state).unwrap();
     let action = &state["actions"][0];
     assert_eq!(action["sides"][0]["target"], "jawOpen", "{state}");
     assert!(
@@ -360,42 +340,10 @@ fn strokes_through_the_studio_api_animate_the_blender_avatar() {
         "{state}"
     );
     let exported = dir.join("studio-export.glb");
-    std::fs::write(&exported, download.unwrap_or_else(|e| panic!("{e}"))).unwrap();
+    std::fs::write(&exported, download).unwrap();
     let report = assert_valid_gltf(&exported);
     assert_eq!(report["info"]["animationCount"], 1, "{report}");
     let input = faceanim_testdata::glb::json(blender_avatar());
     let output = faceanim_testdata::glb::json(&std::fs::read(&exported).unwrap());
     assert_kept(&input, &output, "the studio's download");
-}
-
-/// One HTTP request with curl-free std networking: returns the body of a 200 response.
-fn http(url: &str, method: &str, body: &[u8]) -> Result<Vec<u8>, String> {
-    use std::io::{Read as _, Write as _};
-    let rest = url.strip_prefix("http://").ok_or("not http")?;
-    let (host, path) = rest.split_once('/').ok_or("no path")?;
-    let mut stream = std::net::TcpStream::connect(host).map_err(|e| e.to_string())?;
-    let head = format!(
-        "{method} /{path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n",
-        body.len()
-    );
-    stream
-        .write_all(head.as_bytes())
-        .map_err(|e| e.to_string())?;
-    stream.write_all(body).map_err(|e| e.to_string())?;
-    let mut response = Vec::new();
-    stream
-        .read_to_end(&mut response)
-        .map_err(|e| e.to_string())?;
-    let split = response
-        .windows(4)
-        .position(|w| w == b"\r\n\r\n")
-        .ok_or("no headers")?;
-    let status = String::from_utf8_lossy(&response[..split]).into_owned();
-    if !status.starts_with("HTTP/1.1 200") {
-        return Err(format!(
-            "{status}\n{}",
-            String::from_utf8_lossy(&response[split + 4..])
-        ));
-    }
-    Ok(response[split + 4..].to_vec())
 }

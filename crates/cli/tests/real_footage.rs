@@ -18,7 +18,7 @@ use faceanim_rig::name_map::Use;
 use faceanim_rig::names::Drive;
 use faceanim_testdata::producers::{FOOTAGE_SHA256, real_footage};
 use serde_json::Value;
-use support::{faceanim_ok, output_dir, repo};
+use support::{output_dir, repo, track_clip};
 
 fn correlation(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len() as f64;
@@ -49,17 +49,7 @@ fn by_name_every_moving_channel_follows_mediapipe_on_a_real_person() {
     let dir = output_dir("real-footage");
     let out = dir.join("cap12.json");
     let head = faceanim_testdata::shared("characters/ict-face.glb");
-    faceanim_ok(&[
-        "track",
-        footage.to_str().unwrap(),
-        "--character",
-        head.to_str().unwrap(),
-        "--filter",
-        "none",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let clip: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let clip = track_clip(&footage, &head, &["--filter", "none"], &out);
     let frames = clip["frames"].as_array().unwrap();
     assert_eq!(
         frames.len() as u64,

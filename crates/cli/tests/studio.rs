@@ -11,24 +11,11 @@
 
 mod support;
 
-use std::io::{BufRead as _, BufReader, Read as _, Write as _};
+use std::io::{Read as _, Write as _};
 use std::net::TcpStream;
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 
-use support::{assert_valid_gltf, output_dir, repo};
-
-/// A running studio, stopped when dropped.
-struct Studio {
-    child: Child,
-    port: u16,
-}
-
-impl Drop for Studio {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use support::{Studio, assert_valid_gltf, output_dir, repo, request, start_on};
 
 fn start(project: &std::path::Path) -> Studio {
     start_with(project, &[])
@@ -40,70 +27,6 @@ fn start_with(project: &std::path::Path, more: &[&std::ffi::OsStr]) -> Studio {
         project,
         more,
     )
-}
-
-/// A studio on `character` (the built-in head with `None`).
-fn start_on(
-    character: Option<&std::path::Path>,
-    project: &std::path::Path,
-    more: &[&std::ffi::OsStr],
-) -> Studio {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
-        .arg("studio")
-        .args(character)
-        .args(["--port", "0", "--project"])
-        .arg(project)
-        .args(more)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    // "faceanim studio: http://127.0.0.1:PORT/  (…)"
-    let port = line
-        .split("127.0.0.1:")
-        .nth(1)
-        .and_then(|rest| rest.split('/').next())
-        .and_then(|p| p.parse().ok())
-        .unwrap_or_else(|| panic!("no URL in the studio's first line: {line}"));
-    Studio { child, port }
-}
-
-/// One raw HTTP/1.1 request; returns the status code and body.
-fn request(
-    port: u16,
-    method: &str,
-    path: &str,
-    headers: &[(&str, &str)],
-    body: &[u8],
-) -> (u16, String) {
-    let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
-    let mut text = format!(
-        "{method} {path} HTTP/1.1\r\nConnection: close\r\nContent-Length: {}\r\n",
-        body.len()
-    );
-    if !headers.iter().any(|(k, _)| k.eq_ignore_ascii_case("host")) {
-        text.push_str(&format!("Host: 127.0.0.1:{port}\r\n"));
-    }
-    for (k, v) in headers {
-        text.push_str(&format!("{k}: {v}\r\n"));
-    }
-    text.push_str("\r\n");
-    stream.write_all(text.as_bytes()).unwrap();
-    stream.write_all(body).unwrap();
-    let mut response = Vec::new();
-    stream.read_to_end(&mut response).unwrap();
-    let response = String::from_utf8_lossy(&response).into_owned();
-    let status = response
-        .split(' ')
-        .nth(1)
-        .and_then(|s| s.parse().ok())
-        .unwrap();
-    let body = response.split("\r\n\r\n").nth(1).unwrap_or("").to_owned();
-    (status, body)
 }
 
 /// Runs `tools/SCRIPT URL OUT ARGUMENTS…` (playwright-core driving Debian's chromium) against

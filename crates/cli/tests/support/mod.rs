@@ -8,8 +8,10 @@
     reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
 )]
 
+use std::io::{BufRead as _, BufReader, Read as _, Write as _};
+use std::net::TcpStream;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 
 pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -58,6 +60,60 @@ pub fn faceanim_ok(args: &[&str]) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8(out.stdout).unwrap()
+}
+
+/// `faceanim export CHARACTER -o OUT --clip CLIP`, which must succeed.
+pub fn export_with_clip(character: &Path, out: &Path, clip: &Path) {
+    faceanim_ok(&[
+        "export",
+        character.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--clip",
+        clip.to_str().unwrap(),
+    ]);
+}
+
+/// `faceanim track INPUT --character CHARACTER [MORE…] -o OUT`, which must succeed; returns the
+/// clip it wrote, as JSON.
+pub fn track_clip(input: &Path, character: &Path, more: &[&str], out: &Path) -> serde_json::Value {
+    let run = Command::new(env!("CARGO_BIN_EXE_faceanim"))
+        .arg("track")
+        .arg(input)
+        .arg("--character")
+        .arg(character)
+        .args(more)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "track: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap()
+}
+
+/// Opens `file` in three.js (the studio's own copy) in Chromium (`tools/threejs-render.mjs`),
+/// plays its first animation to `time` seconds, saves a screenshot beside it and returns the
+/// report of what loaded, which must hold no page error.
+pub fn threejs_render(file: &Path, time: &str) -> serde_json::Value {
+    let run = Command::new("node")
+        .arg(repo().join("tools/threejs-render.mjs"))
+        .arg(file)
+        .arg(file.with_extension("png"))
+        .arg(time)
+        .output()
+        .expect("node is needed for this test");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert!(report.get("pageErrors").is_none(), "{report}");
+    report
 }
 
 /// Runs the Khronos glTF-Validator (npm `gltf-validator`, installed by scripts/setup.sh) and
@@ -226,4 +282,95 @@ pub fn free_udp_port() -> u16 {
         .local_addr()
         .unwrap()
         .port()
+}
+
+/// A running studio, stopped when dropped.
+pub struct Studio {
+    pub child: Child,
+    pub port: u16,
+}
+
+impl Drop for Studio {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A studio on `character` (the built-in head with `None`).
+pub fn start_on(
+    character: Option<&std::path::Path>,
+    project: &std::path::Path,
+    more: &[&std::ffi::OsStr],
+) -> Studio {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
+        .arg("studio")
+        .args(character)
+        .args(["--port", "0", "--project"])
+        .arg(project)
+        .args(more)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    // "faceanim studio: http://127.0.0.1:PORT/  (…)"
+    let port = line
+        .split("127.0.0.1:")
+        .nth(1)
+        .and_then(|rest| rest.split('/').next())
+        .and_then(|p| p.parse().ok())
+        .unwrap_or_else(|| panic!("no URL in the studio's first line: {line}"));
+    Studio { child, port }
+}
+
+/// One raw HTTP/1.1 request; returns the status code and body.
+pub fn request(
+    port: u16,
+    method: &str,
+    path: &str,
+    headers: &[(&str, &str)],
+    body: &[u8],
+) -> (u16, String) {
+    let (status, body) = request_bytes(port, method, path, headers, body);
+    (status, String::from_utf8_lossy(&body).into_owned())
+}
+
+/// One raw HTTP/1.1 request; returns the status code and the body's bytes (a GLB download).
+pub fn request_bytes(
+    port: u16,
+    method: &str,
+    path: &str,
+    headers: &[(&str, &str)],
+    body: &[u8],
+) -> (u16, Vec<u8>) {
+    let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    let mut text = format!(
+        "{method} {path} HTTP/1.1\r\nConnection: close\r\nContent-Length: {}\r\n",
+        body.len()
+    );
+    if !headers.iter().any(|(k, _)| k.eq_ignore_ascii_case("host")) {
+        text.push_str(&format!("Host: 127.0.0.1:{port}\r\n"));
+    }
+    for (k, v) in headers {
+        text.push_str(&format!("{k}: {v}\r\n"));
+    }
+    text.push_str("\r\n");
+    stream.write_all(text.as_bytes()).unwrap();
+    stream.write_all(body).unwrap();
+    let mut response = Vec::new();
+    stream.read_to_end(&mut response).unwrap();
+    let split = response
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .unwrap_or(response.len());
+    let head = String::from_utf8_lossy(&response[..split]);
+    let status = head.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap();
+    (
+        status,
+        response.get(split + 4..).unwrap_or_default().to_vec(),
+    )
 }
