@@ -236,6 +236,7 @@ function showNeutralFrame(v) {
   $('neutral-info').textContent = !take || !take.neutral ? ''
     : calibrated
       ? `Neutral face: frame ${take.neutral.frame} (${take.neutral.chosen === 'user' ? 'yours' : 'the least expressive'}); the adapter reads every frame relative to it.`
+        + (take.neutral_warning ? ` Warning: ${take.neutral_warning}.` : '')
       : `Neutral face: frame ${take.neutral.frame} (unused: this estimate does not read faces relative to a neutral one).`;
 }
 $('neutral-frame').onclick = () => post('api/capture/neutral', { frame: shownFrameIndex() });

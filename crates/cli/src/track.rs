@@ -218,6 +218,13 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
                 ""
             }
         );
+        if let Some(warning) = take
+            .session
+            .neutral_check(estimator.as_ref())
+            .and_then(|check| check.warning())
+        {
+            eprintln!("warning: {warning} (--neutral-frame N)");
+        }
     }
     let estimate_seconds = started.elapsed().as_secs_f64();
     for &k in &args.keyframes {

@@ -549,13 +549,25 @@ pub struct TakeView {
     pub can_redo: bool,
     /// The frame faces are read relative to, and who chose it.
     pub neutral: Option<faceanim_take::Neutral>,
+    /// How neutral that frame looks to the estimator (`null` when it does not read faces
+    /// relative to a neutral one), and the warning to show when it does not look neutral.
+    pub neutral_check: Option<faceanim_take::NeutralCheck>,
+    /// The warning, in words.
+    pub neutral_warning: Option<String>,
 }
 
 impl TakeView {
-    /// The view of `take` (numbered `id`, with `previews` input previews).
+    /// The view of `take` (numbered `id`, with `previews` input previews), its neutral frame
+    /// judged by `estimator`.
     #[must_use]
-    pub fn of(take: &faceanim_take::Take, id: u64, previews: usize) -> TakeView {
+    pub fn of(
+        take: &faceanim_take::Take,
+        id: u64,
+        previews: usize,
+        estimator: &dyn faceanim_take::Estimator,
+    ) -> TakeView {
         let session = &take.session;
+        let neutral_check = session.neutral_check(estimator);
         let weights = session.weights();
         let mean = weights
             .iter()
@@ -587,6 +599,8 @@ impl TakeView {
             can_undo: take.can_undo(),
             can_redo: take.can_redo(),
             neutral: session.neutral(),
+            neutral_warning: neutral_check.as_ref().and_then(faceanim_take::NeutralCheck::warning),
+            neutral_check,
         }
     }
 }

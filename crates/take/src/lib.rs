@@ -53,6 +53,7 @@ pub use expression::Expression;
 pub use fingerprint::Fingerprint;
 pub use layer::{Layered, layer};
 pub use session::{
+    EXPRESSIVE_NEUTRAL, NeutralCheck,
     Correction, Edits, Filtering, Neutral, NeutralChoice, Session, SessionFrame, peak_animation,
 };
 pub use take::{Footage, ReceivedFrame, Take, recorded_fps};

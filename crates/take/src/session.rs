@@ -178,6 +178,60 @@ pub struct Neutral {
     pub chosen: NeutralChoice,
 }
 
+/// A neutral face that reads as an expression: what an estimate makes of the neutral frame
+/// itself, read against the character's own neutral (an adapter's typical neutral face from its
+/// training; MediaPipe's zeros by name). A take read relative to such a frame has that
+/// expression taken out of every other frame, so it is worth a warning.
+pub const EXPRESSIVE_NEUTRAL: f32 = 0.35;
+
+/// How neutral a take's neutral face looks: its frame, who chose it, and the blendshapes it
+/// reads above [`EXPRESSIVE_NEUTRAL`] on its own, strongest first (none: it looks neutral).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NeutralCheck {
+    /// The neutral frame.
+    pub frame: usize,
+    /// Who chose it.
+    pub chosen: NeutralChoice,
+    /// The shapes the frame reads on its own, with their weights, strongest first.
+    pub expressive: Vec<(String, f32)>,
+}
+
+impl NeutralCheck {
+    /// Whether the neutral frame looks neutral.
+    #[must_use]
+    pub fn is_clear(&self) -> bool {
+        self.expressive.is_empty()
+    }
+
+    /// What to tell the user when it does not (`None` when it does): no frame of the take looks
+    /// neutral (an automatic choice), or the chosen one reads as an expression.
+    #[must_use]
+    pub fn warning(&self) -> Option<String> {
+        if self.is_clear() {
+            return None;
+        }
+        let reads: Vec<String> = self
+            .expressive
+            .iter()
+            .take(4)
+            .map(|(name, w)| format!("{name} {w:.2}"))
+            .collect();
+        Some(match self.chosen {
+            NeutralChoice::Automatic => format!(
+                "no frame of this take looks clearly neutral: the least expressive, frame {}, reads {}; \
+                 mark a relaxed frame as the neutral one, or record a second of a relaxed face",
+                self.frame,
+                reads.join(", ")
+            ),
+            NeutralChoice::User => format!(
+                "the neutral frame {} reads {}: every frame is read relative to that expression",
+                self.frame,
+                reads.join(", ")
+            ),
+        })
+    }
+}
+
 /// The session file as written (version 1): the session's fields with its edits inline.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -304,6 +358,32 @@ impl Session {
         crate::expression::least_expressive(&expressions).map(|frame| Neutral {
             frame,
             chosen: NeutralChoice::Automatic,
+        })
+    }
+
+    /// How neutral the neutral frame looks to `estimator`, which reads it on its own (see
+    /// [`NeutralCheck`]); `None` when no frame has a face or the estimator does not read
+    /// faces relative to a neutral one (then the neutral frame does not matter).
+    #[must_use]
+    pub fn neutral_check(&self, estimator: &dyn Estimator) -> Option<NeutralCheck> {
+        if !estimator.calibrated() {
+            return None;
+        }
+        let neutral = self.neutral()?;
+        let expression = self.frames.get(neutral.frame)?.expression.as_ref()?;
+        let reading = estimator.estimate(expression, None);
+        let mut expressive: Vec<(String, f32)> = self
+            .blendshapes
+            .iter()
+            .zip(reading)
+            .filter(|(_, w)| *w > EXPRESSIVE_NEUTRAL)
+            .map(|(name, w)| (name.clone(), w))
+            .collect();
+        expressive.sort_by(|a, b| b.1.total_cmp(&a.1));
+        Some(NeutralCheck {
+            frame: neutral.frame,
+            chosen: neutral.chosen,
+            expressive,
         })
     }
 

@@ -629,7 +629,10 @@ impl CaptureDesk {
             take: self
                 .take
                 .as_ref()
-                .map(|open| TakeView::of(&open.take, open.id, open.previews.len())),
+                .map(|open| {
+                    let estimator = self.estimator(character);
+                    TakeView::of(&open.take, open.id, open.previews.len(), estimator.as_ref())
+                }),
         }
     }
 }
