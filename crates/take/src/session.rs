@@ -1072,6 +1072,42 @@ mod tests {
         assert!(error.contains("neutral: frame 5"), "{error}");
     }
 
+    /// A take whose every face is expressive says it has no clearly neutral frame; a relaxed
+    /// frame clears it; choosing an expressive one warns; by name nothing is checked.
+    #[test]
+    fn a_neutral_frame_that_reads_as_an_expression_is_flagged() {
+        let mut s = session(4);
+        let face = |first: f32| {
+            let mut scores = vec![0.0; crate::expression::SCORES];
+            scores[1] = first;
+            Some(Expression {
+                scores,
+                landmarks: vec![0.0; crate::expression::LANDMARK_COORDINATES],
+            })
+        };
+        for (frame, first) in s.frames.iter_mut().zip([0.9, 0.6, 0.8, 0.7]) {
+            frame.expression = face(first);
+        }
+        let check = s.neutral_check(&Relative).unwrap();
+        assert_eq!((check.frame, check.chosen), (1, NeutralChoice::Automatic));
+        assert_eq!(
+            check.expressive,
+            vec![("a".to_owned(), 0.6), ("b".to_owned(), 0.6)]
+        );
+        let warning = check.warning().unwrap();
+        assert!(warning.contains("no frame of this take looks clearly neutral"), "{warning}");
+        assert!(warning.contains("frame 1") && warning.contains("a 0.60, b 0.60"), "{warning}");
+
+        s.frames[3].expression = face(0.05);
+        assert!(s.neutral_check(&Relative).unwrap().is_clear());
+        s.set_neutral(Some(0), &Relative).unwrap();
+        let chosen = s.neutral_check(&Relative).unwrap();
+        assert!(chosen.warning().unwrap().starts_with("the neutral frame 0 reads a 0.90, b 0.90"));
+
+        let by_name = crate::ByName::new(&faceanim_head::default_character());
+        assert_eq!(s.neutral_check(&by_name), None, "by name, no neutral is used");
+    }
+
     #[test]
     fn an_image_becomes_zero_peak_zero() {
         let clip = peak_animation(&[0.8, 0.4], vec!["a".into(), "b".into()], 30.0, 31);
