@@ -440,24 +440,32 @@ impl Drop for FrameSource {
     }
 }
 
-fn ffmpeg_command(program: &'static str, path: &Path) -> Result<Command, MediaError> {
-    // Probe that the program exists, so a missing ffmpeg gets its own message.
-    Command::new(program)
-        .arg("-version")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .map_err(|source| MediaError::FfmpegMissing {
-            path: path.to_owned(),
-            program,
-            source,
-        })?;
+/// `program` (`ffmpeg` or `ffprobe`) with its quiet options. It is not run here: each run of
+/// either costs tens of milliseconds of start-up, so a missing program is told from the error
+/// of the run itself ([`spawn_error`]).
+fn ffmpeg_command(program: &'static str) -> Command {
     let mut command = Command::new(program);
     command.args(["-v", "error", "-hide_banner"]);
     if program == "ffmpeg" {
         command.arg("-nostdin");
     }
-    Ok(command)
+    command
+}
+
+/// The error of a failed start of `program` on `path`: missing, or another input/output error.
+fn spawn_error(program: &'static str, path: &Path, source: std::io::Error) -> MediaError {
+    if source.kind() == std::io::ErrorKind::NotFound {
+        MediaError::FfmpegMissing {
+            path: path.to_owned(),
+            program,
+            source,
+        }
+    } else {
+        MediaError::Io {
+            path: path.to_owned(),
+            source,
+        }
+    }
 }
 
 fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
@@ -465,7 +473,7 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
         path: path.to_owned(),
         message,
     };
-    let mut probe = ffmpeg_command("ffprobe", path)?;
+    let mut probe = ffmpeg_command("ffprobe");
     probe.args([
         "-select_streams",
         "v:0",
@@ -479,10 +487,7 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
         .arg(path)
         .stdin(Stdio::null())
         .output()
-        .map_err(|source| MediaError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        .map_err(|source| spawn_error("ffprobe", path, source))?;
     if !output.status.success() {
         let message = String::from_utf8_lossy(&output.stderr).trim().to_owned();
         return Err(not_video(if message.is_empty() {
@@ -523,7 +528,7 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
     if packets == Some(0) {
         return Err(not_video("the video has no frames".into()));
     }
-    let mut decode = ffmpeg_command("ffmpeg", path)?;
+    let mut decode = ffmpeg_command("ffmpeg");
     decode
         .arg("-i")
         .arg(path)
@@ -533,10 +538,9 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
-    let mut child = decode.spawn().map_err(|source| MediaError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let mut child = decode
+        .spawn()
+        .map_err(|source| spawn_error("ffmpeg", path, source))?;
     let stderr = child.stderr.take().map(|mut pipe| {
         std::thread::spawn(move || {
             let mut text = String::new();

@@ -288,6 +288,10 @@ impl Instance {
         ) else {
             return Ok(Placement::Rigid(node));
         };
+        if let Some(positions) = primitive.get(&gltf::Semantic::Positions) {
+            check_count(&j_acc, positions.count(), &format!("JOINTS_0 of {label}"))?;
+            check_count(&w_acc, positions.count(), &format!("WEIGHTS_0 of {label}"))?;
+        }
         let joint_index = read_indices(buffers, &j_acc)?;
         let weights = read_floats(buffers, &w_acc, Some(Dimensions::Vec4))?;
         check_finite(&weights, 4, &format!("WEIGHTS_0 of {label}"))?;
