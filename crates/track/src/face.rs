@@ -181,28 +181,66 @@ fn crop_into(frame: &Frame<'_>, region: &Region, out: &mut Vec<f32>) {
     let half = region.size / 2.0;
     let (w, h) = (frame.width as isize, frame.height as isize);
     let row_bytes = frame.width * 3;
+    let p = &frame.rgb;
+    out.reserve(256 * 256 * 3);
     for j in 0..256 {
         let dy = j as f32 * step - half;
         for i in 0..256 {
             let dx = i as f32 * step - half;
             let x = region.cx + dx * cos - dy * sin;
             let y = region.cy + dx * sin + dy * cos;
-            let ((xi, fx), (yi, fy)) = (subpixel(x), subpixel(y));
+            let (qx, qy) = (subpixel_fixed(x), subpixel_fixed(y));
+            let (xi, yi) = (
+                (qx >> SUBPIXEL_BITS) as isize,
+                (qy >> SUBPIXEL_BITS) as isize,
+            );
             if xi < 0 || yi < 0 || xi + 1 >= w || yi + 1 >= h {
                 out.extend(sample(frame, x, y, Border::Replicate).map(|v| v / 255.0));
                 continue;
             }
+            // OpenCV's fixed-point weights: with positions in 1/32 pixel, each of the four is
+            // a whole number of 1/1024ths, so the sum is exact and rounds half up at the end.
+            let (fx, fy) = (qx & SUBPIXEL_MASK, qy & SUBPIXEL_MASK);
+            let one = 1 << SUBPIXEL_BITS;
+            let weights = [
+                (one - fx) * (one - fy),
+                fx * (one - fy),
+                (one - fx) * fy,
+                fx * fy,
+            ];
             let top = yi as usize * row_bytes + xi as usize * 3;
             let bottom = top + row_bytes;
-            let p = &frame.rgb;
             for c in 0..3 {
-                let a = f32::from(p[top + c]) * (1.0 - fx) + f32::from(p[top + 3 + c]) * fx;
-                let b = f32::from(p[bottom + c]) * (1.0 - fx) + f32::from(p[bottom + 3 + c]) * fx;
-                out.push(round_half_up(a * (1.0 - fy) + b * fy) / 255.0);
+                let sum = i32::from(p[top + c]) * weights[0]
+                    + i32::from(p[top + 3 + c]) * weights[1]
+                    + i32::from(p[bottom + c]) * weights[2]
+                    + i32::from(p[bottom + 3 + c]) * weights[3];
+                let byte = (sum + (1 << (2 * SUBPIXEL_BITS - 1))) >> (2 * SUBPIXEL_BITS);
+                out.push(UNIT[byte as usize & 0xff]);
             }
         }
     }
 }
+
+/// `v / 255` for every byte value, as the crop's inputs are.
+static UNIT: [f32; 256] = {
+    let mut table = [0.0; 256];
+    let mut v = 0;
+    while v < 256 {
+        table[v] = v as f32 / 255.0;
+        v += 1;
+    }
+    table
+};
+
+/// A position in 1/32 pixels, rounded as [`subpixel`] rounds it.
+#[inline]
+fn subpixel_fixed(x: f32) -> i32 {
+    round_even(x * (1 << SUBPIXEL_BITS) as f32) as i32
+}
+
+/// The fraction bits of a [`subpixel_fixed`] position.
+const SUBPIXEL_MASK: i32 = (1 << SUBPIXEL_BITS) - 1;
 
 impl FaceModels {
     /// The most confident face in `frame`, or `None` when there is none.

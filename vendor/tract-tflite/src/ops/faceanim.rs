@@ -97,14 +97,19 @@ impl EvalOp for ChannelPrelu {
         let repeats = 256usize.div_ceil(alpha.len()).max(1);
         let tiled: Vec<f32> = alpha.iter().copied().cycle().take(alpha.len() * repeats).collect();
         let mut blocks = values.chunks_exact_mut(tiled.len());
+        // A select, not `max`/`min` (whose NaN rules keep the loop from vectorising).
+        let prelu = |v: &mut f32, a: &f32| {
+            let x = *v;
+            *v = if x < 0.0 { x * a } else { x };
+        };
         for block in &mut blocks {
-            for (v, a) in block.iter_mut().zip(&tiled) {
-                *v = v.max(0.0) + a * v.min(0.0);
-            }
+            block.iter_mut().zip(&tiled).for_each(|(v, a)| prelu(v, a));
         }
-        for (v, a) in blocks.into_remainder().iter_mut().zip(&tiled) {
-            *v = v.max(0.0) + a * v.min(0.0);
-        }
+        blocks
+            .into_remainder()
+            .iter_mut()
+            .zip(&tiled)
+            .for_each(|(v, a)| prelu(v, a));
         Ok(tvec!(x.into_tvalue()))
     }
 }
