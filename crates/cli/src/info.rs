@@ -247,7 +247,12 @@ impl Report {
                 let _ = writeln!(out, "  symmetry     none found");
             }
         }
-        let _ = writeln!(out, "  ARKit names  {} of 52 recognised", self.arkit.len());
+        let _ = writeln!(
+            out,
+            "  ARKit names  {} blendshapes spell an ARKit channel; {} of 52 channels drive a blendshape by name",
+            self.arkit.len(),
+            52 - self.undriven_channels.len()
+        );
         let _ = writeln!(out, "  blendshapes  {}", self.blendshapes.len());
         let width = self
             .blendshapes

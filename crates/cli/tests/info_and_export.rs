@@ -43,7 +43,9 @@ fn info_json_on_the_ict_head() {
     // The text form names the same things for people.
     let text = faceanim_ok(&["info", ict.to_str().unwrap()]);
     assert!(
-        text.contains("symmetric pairs  22") && text.contains("ARKit names  49 of 52"),
+        text.contains("symmetric pairs  22")
+            && text
+                .contains("ARKit names  49 blendshapes spell an ARKit channel; 51 of 52 channels"),
         "{text}"
     );
 }

@@ -599,7 +599,9 @@ impl TakeView {
             can_undo: take.can_undo(),
             can_redo: take.can_redo(),
             neutral: session.neutral(),
-            neutral_warning: neutral_check.as_ref().and_then(faceanim_take::NeutralCheck::warning),
+            neutral_warning: neutral_check
+                .as_ref()
+                .and_then(faceanim_take::NeutralCheck::warning),
             neutral_check,
         }
     }

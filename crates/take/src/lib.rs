@@ -53,8 +53,8 @@ pub use expression::Expression;
 pub use fingerprint::Fingerprint;
 pub use layer::{Layered, layer};
 pub use session::{
-    EXPRESSIVE_NEUTRAL, NeutralCheck,
-    Correction, Edits, Filtering, Neutral, NeutralChoice, Session, SessionFrame, peak_animation,
+    Correction, EXPRESSIVE_NEUTRAL, Edits, Filtering, Neutral, NeutralCheck, NeutralChoice,
+    Session, SessionFrame, peak_animation,
 };
 pub use take::{Footage, ReceivedFrame, Take, recorded_fps};
 

@@ -1095,17 +1095,32 @@ mod tests {
             vec![("a".to_owned(), 0.6), ("b".to_owned(), 0.6)]
         );
         let warning = check.warning().unwrap();
-        assert!(warning.contains("no frame of this take looks clearly neutral"), "{warning}");
-        assert!(warning.contains("frame 1") && warning.contains("a 0.60, b 0.60"), "{warning}");
+        assert!(
+            warning.contains("no frame of this take looks clearly neutral"),
+            "{warning}"
+        );
+        assert!(
+            warning.contains("frame 1") && warning.contains("a 0.60, b 0.60"),
+            "{warning}"
+        );
 
         s.frames[3].expression = face(0.05);
         assert!(s.neutral_check(&Relative).unwrap().is_clear());
         s.set_neutral(Some(0), &Relative).unwrap();
         let chosen = s.neutral_check(&Relative).unwrap();
-        assert!(chosen.warning().unwrap().starts_with("the neutral frame 0 reads a 0.90, b 0.90"));
+        assert!(
+            chosen
+                .warning()
+                .unwrap()
+                .starts_with("the neutral frame 0 reads a 0.90, b 0.90")
+        );
 
         let by_name = crate::ByName::new(&faceanim_head::default_character());
-        assert_eq!(s.neutral_check(&by_name), None, "by name, no neutral is used");
+        assert_eq!(
+            s.neutral_check(&by_name),
+            None,
+            "by name, no neutral is used"
+        );
     }
 
     #[test]

@@ -71,7 +71,10 @@ fn minimal_with(required: &str) -> Vec<u8> {
 fn draco_compressed_head_imports() {
     let packed = gltf_transform(ict_bytes(), "draco");
     let required = faceanim_testdata::glb::json(&packed)["extensionsRequired"].to_string();
-    assert!(required.contains("KHR_draco_mesh_compression"), "{required}");
+    assert!(
+        required.contains("KHR_draco_mesh_compression"),
+        "{required}"
+    );
     assert_same_head(&packed, "ict-draco.glb");
 }
 
@@ -79,7 +82,8 @@ fn draco_compressed_head_imports() {
 #[test]
 fn a_broken_draco_stream_is_named() {
     use base64::Engine as _;
-    let junk = base64::engine::general_purpose::STANDARD.encode(b"DRACO\x02\x02\x01 not a mesh at all");
+    let junk =
+        base64::engine::general_purpose::STANDARD.encode(b"DRACO\x02\x02\x01 not a mesh at all");
     let gltf = format!(
         r#"{{"asset":{{"version":"2.0"}},
             "extensionsUsed":["KHR_draco_mesh_compression"],

@@ -626,13 +626,10 @@ impl CaptureDesk {
             },
             live: lock(&self.live).as_ref().map(Live::view),
             vmc: self.vmc_view(),
-            take: self
-                .take
-                .as_ref()
-                .map(|open| {
-                    let estimator = self.estimator(character);
-                    TakeView::of(&open.take, open.id, open.previews.len(), estimator.as_ref())
-                }),
+            take: self.take.as_ref().map(|open| {
+                let estimator = self.estimator(character);
+                TakeView::of(&open.take, open.id, open.previews.len(), estimator.as_ref())
+            }),
         }
     }
 }
