@@ -41,6 +41,7 @@ const MIN_MIRRORED_FRACTION: f32 = 0.6;
 /// The largest and smallest distance, as a fraction of the size, at which a vertex's mirror
 /// counts as its partner.
 const MAX_TOLERANCE: f32 = 0.05;
+/// See [`MAX_TOLERANCE`].
 const MIN_TOLERANCE: f32 = 0.005;
 /// The fraction of the worst pairs the plane fit ignores at each step.
 const TRIM: f32 = 0.2;
@@ -63,6 +64,7 @@ struct Blur {
 impl Blur {
     fn new(
         positions: &[Vec3],
+        tree: &ImmutableKdTree<f32, 3>,
         shapes: &[Blendshape],
         candidates: &[usize],
         mirror: &[Option<u32>],
@@ -75,14 +77,12 @@ impl Blur {
             .collect();
         targets.sort_unstable();
         targets.dedup();
-        let points: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();
-        let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&points);
         let neighbourhoods = targets
             .into_iter()
             .map(|t| {
                 let near = tree
                     .nearest_n::<SquaredEuclidean>(
-                        &points[t as usize],
+                        &positions[t as usize].to_array(),
                         std::num::NonZero::new(BLUR_NEIGHBOURS)
                             .unwrap_or(std::num::NonZero::<usize>::MIN),
                     )
@@ -96,14 +96,12 @@ impl Blur {
         Blur { neighbourhoods }
     }
 
-    fn apply(&self, dense: &[Vec3]) -> std::collections::HashMap<u32, Vec3> {
-        self.neighbourhoods
-            .iter()
-            .map(|(t, near)| {
-                let sum: Vec3 = near.iter().map(|&v| dense[v as usize]).sum();
-                (*t, sum / near.len().max(1) as f32)
-            })
-            .collect()
+    /// `dense` blurred at the mirrored vertices, into `out` (which keeps zeros elsewhere).
+    fn apply(&self, dense: &[Vec3], out: &mut [Vec3]) {
+        for (t, near) in &self.neighbourhoods {
+            let sum: Vec3 = near.iter().map(|&v| dense[v as usize]).sum();
+            out[*t as usize] = sum / near.len().max(1) as f32;
+        }
     }
 }
 
@@ -252,7 +250,7 @@ impl Symmetry {
         let mut pairs = pairs_by_name(shapes);
         if let Some(plane) = plane {
             pairs.extend(pairs_by_geometry(
-                positions, shapes, &pairs, plane, &mirror, size,
+                positions, &tree, shapes, &pairs, plane, &mirror, size,
             ));
         }
         pairs.sort_by_key(|p| p.left.min(p.right));
@@ -518,6 +516,7 @@ fn pairs_by_name(shapes: &[Blendshape]) -> Vec<BlendshapePair> {
 
 fn pairs_by_geometry(
     positions: &[Vec3],
+    tree: &ImmutableKdTree<f32, 3>,
     shapes: &[Blendshape],
     named: &[BlendshapePair],
     plane: MirrorPlane,
@@ -536,15 +535,16 @@ fn pairs_by_geometry(
     // A real face's mirror image lands a few millimetres off its counterpart, often on another
     // layer (an eyelid's mirror on the eyeball): each shape's field is compared after blurring
     // the other's over the vertices within BLUR of the mirrored point.
-    let blur = Blur::new(positions, shapes, &candidates, mirror, BLUR * size);
+    let blur = Blur::new(positions, tree, shapes, &candidates, mirror, BLUR * size);
     // similarity[a][b]: a's field reflected, against b's; the diagonal is how well a mirrors
     // onto itself (jawOpen does, and must not pair with a look-alike).
     let n = candidates.len();
     let mut similarity = vec![f32::NEG_INFINITY; n * n];
     let mut dense = vec![Vec3::ZERO; positions.len()];
+    let mut blurred = vec![Vec3::ZERO; positions.len()];
     for (kb, &b) in candidates.iter().enumerate() {
         shapes[b].write_dense(&mut dense);
-        let blurred = blur.apply(&dense);
+        blur.apply(&dense, &mut blurred);
         let norm_b: f32 = shapes[b].deltas().iter().map(|d| d.length_squared()).sum();
         for (ka, &a) in candidates.iter().enumerate() {
             similarity[ka * n + kb] =
@@ -595,7 +595,7 @@ fn pairs_by_geometry(
 /// agreement.
 fn reflected_correlation(
     a: &Blendshape,
-    b: &std::collections::HashMap<u32, Vec3>,
+    b: &[Vec3],
     norm_b: f32,
     plane: MirrorPlane,
     mirror: &[Option<u32>],
@@ -606,8 +606,11 @@ fn reflected_correlation(
     }
     let mut agreement = 0.0f64;
     for (&v, &d) in a.indices().iter().zip(a.deltas()) {
-        if let Some(m) = mirror.get(v as usize).copied().flatten()
-            && let Some(bm) = b.get(&m)
+        if let Some(bm) = mirror
+            .get(v as usize)
+            .copied()
+            .flatten()
+            .and_then(|m| b.get(m as usize))
         {
             agreement += f64::from(plane.reflect_vector(d).dot(*bm));
         }
