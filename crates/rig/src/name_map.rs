@@ -7,8 +7,9 @@
 //! Me avatar has `jawOpen` and `viseme_aa` — and a face must never move twice for one channel,
 //! so, in the blendshapes' order:
 //!
-//! 1. a shape named as one channel (or one side of a channel ARKit does not split) is driven,
-//!    unless an earlier shape is that same channel;
+//! 1. a shape named as one channel is driven, unless an earlier shape is that same channel; one
+//!    side of a channel ARKit does not split (`browInnerUp_L`) is driven unless the rig also
+//!    has the whole channel (`browInnerUp`);
 //! 2. a shape merging a left/right pair is driven unless both channels already drive shapes of
 //!    their own (VRoid's `Fcl_EYE_Close` beside `Fcl_EYE_Close_L` and `_R`);
 //! 3. an expression (a viseme, `surprised`) is driven only when none of the channels it reads
@@ -82,24 +83,32 @@ impl NameMap {
             .filter(|&i| !is_expression(i))
             .chain((0..names.len()).filter(|&i| is_expression(i)))
             .collect();
-        // Pass 1: channels and splits.
+        // Pass 1: channels, then the halves of split channels (which give way to a shape that
+        // is the whole channel: a rig with browInnerUp and browInnerUp_L/_R moves it once).
         for &i in &order {
-            let Some(d) = drives[i] else { continue };
-            let used = match d {
-                Drive::Channel(c) => match direct[c.index()] {
+            if let Some(d @ Drive::Channel(c)) = drives[i] {
+                let used = match direct[c.index()] {
                     Some(first) => Use::Duplicate(first),
                     None => {
                         direct[c.index()] = Some(i);
                         Use::Driven
                     }
-                },
-                Drive::Split(c, _) => {
-                    direct[c.index()].get_or_insert(i);
-                    Use::Driven
-                }
-                _ => continue,
-            };
-            entries[i] = Some(Entry { drive: d, used });
+                };
+                entries[i] = Some(Entry { drive: d, used });
+            }
+        }
+        let whole = direct.clone();
+        for &i in &order {
+            if let Some(d @ Drive::Split(c, _)) = drives[i] {
+                let used = match whole[c.index()] {
+                    Some(first) => Use::Duplicate(first),
+                    None => {
+                        direct[c.index()].get_or_insert(i);
+                        Use::Driven
+                    }
+                };
+                entries[i] = Some(Entry { drive: d, used });
+            }
         }
         // Pass 2: merges and expressions, which give way to the direct channels.
         for &i in &order {
@@ -313,6 +322,20 @@ mod tests {
         assert_eq!(m.entries()[2].map(|e| e.used), Some(Use::Duplicate(0)));
         assert_eq!(m.entries()[3].map(|e| e.used), Some(Use::Duplicate(4)));
         assert_eq!(m.entries()[4].map(|e| e.used), Some(Use::Driven));
+    }
+
+    #[test]
+    fn a_whole_channel_beside_its_halves_moves_once() {
+        let m = map(&["browInnerUp_L", "browInnerUp", "browInnerUp_R"]);
+        let used: Vec<Option<Use>> = m.entries().iter().map(|e| e.map(|e| e.used)).collect();
+        assert_eq!(
+            used,
+            [
+                Some(Use::Duplicate(1)),
+                Some(Use::Driven),
+                Some(Use::Duplicate(1))
+            ]
+        );
     }
 
     #[test]
