@@ -7,9 +7,11 @@
 //! Me avatar has `jawOpen` and `viseme_aa` — and a face must never move twice for one channel,
 //! so, in the blendshapes' order:
 //!
-//! 1. a shape named as one channel is driven, unless an earlier shape is that same channel; one
-//!    side of a channel ARKit does not split (`browInnerUp_L`) is driven unless the rig also
-//!    has the whole channel (`browInnerUp`);
+//! 1. a shape that is one channel is driven unless another shape already is that channel,
+//!    ARKit's own spelling first (`eyeBlinkLeft` before VRoid's `Fcl_EYE_Close_L`, whatever the
+//!    order); one side of a channel ARKit does not split (`browInnerUp_L`) is driven unless the
+//!    rig also has the whole channel under ARKit's name (`browInnerUp`), and a synonym
+//!    (VRoid's `Fcl_BRW_Sorrow`) gives way to those halves;
 //! 2. a shape merging a left/right pair is driven unless both channels already drive shapes of
 //!    their own (VRoid's `Fcl_EYE_Close` beside `Fcl_EYE_Close_L` and `_R`);
 //! 3. an expression (a viseme, `surprised`) is driven only when none of the channels it reads
@@ -83,17 +85,17 @@ impl NameMap {
             .filter(|&i| !is_expression(i))
             .chain((0..names.len()).filter(|&i| is_expression(i)))
             .collect();
-        // Pass 1: channels, then the halves of split channels (which give way to a shape that
-        // is the whole channel: a rig with browInnerUp and browInnerUp_L/_R moves it once).
+        // Pass 1: shapes that are one channel, or one half of one, in three rounds: ARKit's own
+        // names for a channel first, then the halves of split channels (which give way to
+        // ARKit's whole channel: a rig with browInnerUp and browInnerUp_L/_R moves it once),
+        // then every other spelling (ICT's eyeBlink_L, VRoid's Fcl_EYE_Close_L, its
+        // Fcl_BRW_Sorrow), each giving way to a shape that already has its channel.
+        let spelled = |i: usize, c: Channel| crate::names::spells(&names[i], c);
         for &i in &order {
-            if let Some(d @ Drive::Channel(c)) = drives[i] {
-                let used = match direct[c.index()] {
-                    Some(first) => Use::Duplicate(first),
-                    None => {
-                        direct[c.index()] = Some(i);
-                        Use::Driven
-                    }
-                };
+            if let Some(d @ Drive::Channel(c)) = drives[i]
+                && spelled(i, c)
+            {
+                let used = claim(&mut direct, c, i);
                 entries[i] = Some(Entry { drive: d, used });
             }
         }
@@ -107,6 +109,14 @@ impl NameMap {
                         Use::Driven
                     }
                 };
+                entries[i] = Some(Entry { drive: d, used });
+            }
+        }
+        for &i in &order {
+            if let Some(d @ Drive::Channel(c)) = drives[i]
+                && !spelled(i, c)
+            {
+                let used = claim(&mut direct, c, i);
                 entries[i] = Some(Entry { drive: d, used });
             }
         }
@@ -251,6 +261,17 @@ impl NameMap {
             }
         }
         Channel::all().filter(|c| !reached[c.index()]).collect()
+    }
+}
+
+/// Channel `c` for shape `i`: driven if no shape has it yet, else a duplicate of the one that has.
+fn claim(direct: &mut [Option<usize>], c: Channel, i: usize) -> Use {
+    match direct[c.index()] {
+        Some(first) => Use::Duplicate(first),
+        None => {
+            direct[c.index()] = Some(i);
+            Use::Driven
+        }
     }
 }
 

@@ -422,6 +422,14 @@ pub fn arkit_name(name: &str) -> Option<&'static str> {
     }
 }
 
+/// Whether `name` is ARKit's own name for `channel`, in any case or separator
+/// (`browInnerUp`, `BrowInnerUp`, `brow_inner_up`), not a synonym from another convention
+/// (VRoid's `Fcl_BRW_Sorrow` also means browInnerUp, but is an expression of its own).
+#[must_use]
+pub fn spells(name: &str, channel: Channel) -> bool {
+    tokens(name).concat() == channel.name().to_ascii_lowercase()
+}
+
 /// What a blendshape called `name` means in ARKit's channels, if anything. See the module docs.
 #[must_use]
 pub fn drive(name: &str) -> Option<Drive> {
