@@ -19,10 +19,10 @@ import json
 import sys
 from pathlib import Path
 
-import cv2
 import mediapipe as mp
 import numpy as np
-from mediapipe.tasks.python import BaseOptions, vision
+
+from mediapipe_bench import video_scores
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "crates/cli/tests/reference/cap12_edit.mediapipe.json"
@@ -30,27 +30,7 @@ OUT = ROOT / "crates/cli/tests/reference/cap12_edit.mediapipe.json"
 
 def main():
     video = sys.argv[1]
-    options = vision.FaceLandmarkerOptions(
-        base_options=BaseOptions(model_asset_path=str(ROOT / "models/face_landmarker.task")),
-        running_mode=vision.RunningMode.VIDEO,
-        num_faces=1,
-        output_face_blendshapes=True,
-    )
-    frames = []
-    with vision.FaceLandmarker.create_from_options(options) as landmarker:
-        capture = cv2.VideoCapture(video)
-        fps = capture.get(cv2.CAP_PROP_FPS) or 25.0
-        while True:
-            ok, bgr = capture.read()
-            if not ok:
-                break
-            rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-            image = mp.Image(image_format=mp.ImageFormat.SRGB, data=rgb)
-            result = landmarker.detect_for_video(image, int(round(len(frames) * 1000 / fps)))
-            if result.face_blendshapes:
-                frames.append({c.category_name: c.score for c in result.face_blendshapes[0]})
-            else:
-                frames.append(None)
+    frames, fps, _ = video_scores(video, ROOT / "models/face_landmarker.task")
     names = [n for n in next(f for f in frames if f) if n != "_neutral"]
     moving, still = {}, []
     for name in names:

@@ -37,12 +37,18 @@ pub fn three_js_stills(model: &Path, poses: &serde_json::Value, dir: &Path) {
         .arg(dir)
         .output()
         .expect("node runs");
+    succeeded("heldout-stills.mjs", out);
+}
+
+/// `out` of a program run for `what`, which must have succeeded (else its output is shown).
+pub fn succeeded(what: &str, out: Output) -> Output {
     assert!(
         out.status.success(),
-        "{}\n{}",
+        "{what} failed:\n{}\n{}",
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
+    out
 }
 
 pub fn faceanim(args: &[&str]) -> Output {
@@ -53,12 +59,7 @@ pub fn faceanim(args: &[&str]) -> Output {
 }
 
 pub fn faceanim_ok(args: &[&str]) -> String {
-    let out = faceanim(args);
-    assert!(
-        out.status.success(),
-        "faceanim {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeeded(&format!("faceanim {args:?}"), faceanim(args));
     String::from_utf8(out.stdout).unwrap()
 }
 
@@ -87,11 +88,7 @@ pub fn track_clip(input: &Path, character: &Path, more: &[&str], out: &Path) -> 
         .arg(out)
         .output()
         .unwrap();
-    assert!(
-        run.status.success(),
-        "track: {}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    succeeded("faceanim track", run);
     serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap()
 }
 
@@ -106,11 +103,7 @@ pub fn threejs_render(file: &Path, time: &str) -> serde_json::Value {
         .arg(time)
         .output()
         .expect("node is needed for this test");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let run = succeeded("threejs-render.mjs", run);
     let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     assert!(report.get("pageErrors").is_none(), "{report}");
     report
@@ -267,11 +260,7 @@ pub fn vmc_send(
         .arg(out)
         .output()
         .expect("python3 with python-osc (scripts/setup.sh installs it)");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    succeeded("vmc_peer.py", run);
     serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap()
 }
 

@@ -627,8 +627,16 @@ impl CaptureDesk {
             live: lock(&self.live).as_ref().map(Live::view),
             vmc: self.vmc_view(),
             take: self.take.as_ref().map(|open| {
-                let estimator = self.estimator(character);
-                TakeView::of(&open.take, open.id, open.previews.len(), estimator.as_ref())
+                // The neutral check reads one frame: borrow the adapter, do not copy it.
+                let by_name;
+                let estimator: &dyn Estimator = match &self.adapter {
+                    Some(adapter) => adapter,
+                    None => {
+                        by_name = ByName::new(character);
+                        &by_name
+                    }
+                };
+                TakeView::of(&open.take, open.id, open.previews.len(), estimator)
             }),
         }
     }
