@@ -21,7 +21,7 @@ fn main() {
     let mut pose = faceanim_rig::Pose::default();
     for (k, w) in draws.iter().enumerate() {
         let condition = Condition::draw(&mut rng);
-        let jitter = Jitter::draw(&mut rng);
+        let jitter = Jitter::draw(&mut rng, true);
         ict.pose_into(w, &mut pose);
         let picture = camera.picture(ict, &pose, &condition, jitter, &mut rng);
         sheet.blit(&picture, (k as u32 % 4) * 256, (k as u32 / 4) * 256);

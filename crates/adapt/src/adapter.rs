@@ -92,6 +92,11 @@ pub struct TrainingReport {
     /// ([`Adapter::front_test_error`]).
     #[serde(default)]
     pub mae_test_front: Option<f32>,
+    /// The test split's error per sampling group (one, two or three shapes active, or all of
+    /// them): the dense group's floor apart from the sparse groups'. Empty in adapters from
+    /// before.
+    #[serde(default)]
+    pub mae_test_groups: Vec<crate::sampling::GroupError>,
     /// How it reads each shape shown alone ([`FaceCamera::readings`](crate::FaceCamera::readings)),
     /// filled where the character is at hand; empty in adapters from before.
     #[serde(default)]
@@ -240,6 +245,29 @@ impl Adapter {
             }
         }
         (sum / count.max(1) as f64) as f32
+    }
+
+    /// The error per sampling group over `dataset`'s test split.
+    #[must_use]
+    pub fn test_errors_by_group(
+        &self,
+        dataset: &crate::Dataset,
+    ) -> Vec<crate::sampling::GroupError> {
+        let predicted: Vec<(usize, Vec<f32>)> = dataset
+            .split()
+            .test
+            .map(|k| {
+                (
+                    k,
+                    self.predict(&dataset.expressions[k], Some(dataset.neutral(k))),
+                )
+            })
+            .collect();
+        crate::sampling::errors_by_group(
+            predicted
+                .iter()
+                .map(|(k, p)| (dataset.targets[*k].as_slice(), p.as_slice())),
+        )
     }
 
     /// [`Adapter::mean_absolute_error`] over the front renders of `dataset`'s test split;

@@ -342,8 +342,10 @@ impl Dataset {
                 } else {
                     Condition::draw(&mut rng)
                 };
+                let face = camera.face();
                 let mut at = |w: &[f32], jitter: Jitter, rng: &mut rand_chacha::ChaCha8Rng| {
                     character.pose_into(w, pose);
+                    condition.identity.apply(&face, &mut pose.positions);
                     read(
                         models,
                         &camera.picture(character, pose, &condition, jitter, rng),
@@ -357,7 +359,7 @@ impl Dataset {
                 let mut samples = Vec::with_capacity(weights.len());
                 for w in weights {
                     let jitter = if varied {
-                        Jitter::draw(&mut rng)
+                        Jitter::draw(&mut rng, !front)
                     } else {
                         Jitter::NONE
                     };
@@ -572,7 +574,9 @@ impl Dataset {
     }
 }
 
-const DATASET_FORMAT: &str = "faceanim-dataset-3";
+/// The file format, and the recipe of the renders: bumped whenever either changes (a new
+/// augmentation, other ranges), so a cached training set from before is rendered again.
+const DATASET_FORMAT: &str = "faceanim-dataset-5";
 
 /// The scores and the landmarks of `expressions`, each as one row-major matrix.
 fn columns(expressions: &[Expression]) -> (Vec<f32>, Vec<f32>) {

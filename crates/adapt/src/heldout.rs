@@ -82,6 +82,8 @@ pub struct Evaluation {
     pub neutral: NeutralSource,
     /// Per blendshape: name, MAE and mean signed error (bias), worst first.
     pub worst: Vec<(String, f32, f32)>,
+    /// The MAE per sampling group of the stills' truths (one, two, three or many shapes).
+    pub groups: Vec<crate::sampling::GroupError>,
 }
 
 fn bad(path: &Path, message: impl std::fmt::Display) -> AdaptError {
@@ -256,6 +258,11 @@ impl HeldOut {
             .collect();
         worst.sort_by(|a, b| b.1.total_cmp(&a.1));
         worst.truncate(8);
+        let groups = crate::sampling::errors_by_group(
+            found
+                .iter()
+                .map(|(s, p)| (s.weights.as_slice(), p.as_slice())),
+        );
         Ok(Evaluation {
             dir: self.dir.clone(),
             stills: self.stills.len(),
@@ -265,6 +272,7 @@ impl HeldOut {
             mae_zero_baseline: zero_error / cells,
             neutral: source,
             worst,
+            groups,
         })
     }
 }

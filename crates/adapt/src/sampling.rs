@@ -172,6 +172,75 @@ impl Group {
     pub const ALL: [Group; 4] = [Group::Uniform, Group::One, Group::Two, Group::Three];
 }
 
+impl Group {
+    /// The name used in reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Group::Uniform => "uniform",
+            Group::One => "one",
+            Group::Two => "two",
+            Group::Three => "three",
+        }
+    }
+
+    /// The group a weight vector looks like it was drawn from, by how many shapes are active:
+    /// at most one, two, three, or more (the dense group, every shape at a random weight).
+    /// Works for any truth (a held-out still's), not only the sampler's draws.
+    #[must_use]
+    pub fn of(weights: &[f32]) -> Group {
+        match weights.iter().filter(|w| **w > 0.0).count() {
+            0 | 1 => Group::One,
+            2 => Group::Two,
+            3 => Group::Three,
+            _ => Group::Uniform,
+        }
+    }
+}
+
+/// The error over one group's samples.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GroupError {
+    /// Which group.
+    pub group: Group,
+    /// Samples in it.
+    pub samples: usize,
+    /// Mean absolute error over its samples and every shape.
+    pub mae: f32,
+}
+
+/// The mean absolute error per [`Group`] of (truth, prediction) pairs, in [`Group::ALL`]'s
+/// order; groups with no sample are left out. The seed's dense group has a floor of its own
+/// (many shapes at once, some hiding others): its error is reported apart from the sparse
+/// groups', where the adapter should be near exact.
+pub fn errors_by_group<'a>(
+    pairs: impl IntoIterator<Item = (&'a [f32], &'a [f32])>,
+) -> Vec<GroupError> {
+    let mut sums = [(0.0f64, 0usize, 0usize); 4];
+    for (truth, predicted) in pairs {
+        let slot = Group::ALL
+            .iter()
+            .position(|g| *g == Group::of(truth))
+            .unwrap_or(0);
+        let (sum, cells, samples) = &mut sums[slot];
+        for (t, p) in truth.iter().zip(predicted) {
+            *sum += f64::from((t - p).abs());
+            *cells += 1;
+        }
+        *samples += 1;
+    }
+    Group::ALL
+        .iter()
+        .zip(sums)
+        .filter(|(_, (_, _, samples))| *samples > 0)
+        .map(|(&group, (sum, cells, samples))| GroupError {
+            group,
+            samples,
+            mae: (sum / cells.max(1) as f64) as f32,
+        })
+        .collect()
+}
+
 /// Draws weight vectors for one character.
 #[derive(Debug, Clone)]
 pub struct WeightSampler {

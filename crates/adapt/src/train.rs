@@ -466,9 +466,11 @@ pub fn train(
         seconds: started.elapsed().as_secs_f64(),
         corrections: 0,
         mae_test_front: None,
+        mae_test_groups: Vec::new(),
         shapes: Vec::new(),
     };
     adapter.report.mae_test_front = adapter.front_test_error(dataset);
+    adapter.report.mae_test_groups = adapter.test_errors_by_group(dataset);
     Ok(adapter)
 }
 
@@ -593,6 +595,7 @@ pub fn finetune(
     tuned.report.mae_val = kept.mae(&validation.x, &validation.y)?;
     tuned.report.corrections += corrections.len();
     tuned.report.mae_test_front = tuned.front_test_error(dataset);
+    tuned.report.mae_test_groups = tuned.test_errors_by_group(dataset);
     // Measured for the adapter before tuning; the caller reads the tuned one again.
     tuned.report.shapes.clear();
     Ok((tuned, report))

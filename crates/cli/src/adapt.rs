@@ -214,7 +214,7 @@ fn evaluate_held_out(adapter: &Adapter, folders: &[HeldOut]) -> anyhow::Result<V
         .map(|folder| {
             let e = folder.evaluate(adapter, models)?;
             eprintln!(
-                "held out {}: MAE {:.4} on {} of {} stills (predicting the mean: {:.4}, zeros: {:.4}; neutral: {:?}); worst: {}",
+                "held out {}: MAE {:.4} on {} of {} stills (predicting the mean: {:.4}, zeros: {:.4}; neutral: {:?}); by group: {}; worst: {}",
                 e.dir.display(),
                 e.mae,
                 e.faces,
@@ -222,6 +222,7 @@ fn evaluate_held_out(adapter: &Adapter, folders: &[HeldOut]) -> anyhow::Result<V
                 e.mae_mean_baseline,
                 e.mae_zero_baseline,
                 e.neutral,
+                by_group(&e.groups),
                 e.worst
                     .iter()
                     .take(4)
@@ -232,6 +233,15 @@ fn evaluate_held_out(adapter: &Adapter, folders: &[HeldOut]) -> anyhow::Result<V
             Ok(e)
         })
         .collect()
+}
+
+/// Errors per sampling group, for the terminal: `one 0.021 (12), …`.
+fn by_group(groups: &[faceanim_adapt::sampling::GroupError]) -> String {
+    groups
+        .iter()
+        .map(|g| format!("{} {:.3} ({})", g.group.name(), g.mae, g.samples))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The adapter file next to a character: `NAME.adapter.safetensors`.
@@ -417,12 +427,13 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
     let heldout = evaluate_held_out(&adapter, &folders)?;
     let report = &adapter.report;
     eprintln!(
-        "wrote {} — test MAE {:.4} ({} on the front renders), validation MAE {:.4}, {} samples, best epoch {} of {}; {:.1} s ({:.1} s for the training set, {:.1} s training)",
+        "wrote {} — test MAE {:.4} ({} on the front renders; by group: {}), validation MAE {:.4}, {} samples, best epoch {} of {}; {:.1} s ({:.1} s for the training set, {:.1} s training)",
         output.display(),
         report.mae_test,
         report
             .mae_test_front
             .map_or_else(|| "–".to_owned(), |m| format!("{m:.4}")),
+        by_group(&report.mae_test_groups),
         report.mae_val,
         report.samples,
         report.best_epoch,
@@ -435,6 +446,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         let summary = TrainingSummary {
             mae_test: report.mae_test,
             mae_test_front: report.mae_test_front,
+            mae_test_groups: &report.mae_test_groups,
             mae_val: report.mae_val,
             samples: report.samples,
             best_epoch: report.best_epoch,
@@ -459,6 +471,8 @@ struct TrainingSummary<'a> {
     mae_test: f32,
     /// On the test split's front renders.
     mae_test_front: Option<f32>,
+    /// On the test split, per sampling group.
+    mae_test_groups: &'a [faceanim_adapt::sampling::GroupError],
     mae_val: f32,
     samples: usize,
     best_epoch: usize,

@@ -18,19 +18,7 @@ use faceanim_rig::name_map::Use;
 use faceanim_rig::names::Drive;
 use faceanim_testdata::producers::{FOOTAGE_SHA256, real_footage};
 use serde_json::Value;
-use support::{output_dir, repo, track_clip};
-
-fn correlation(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len() as f64;
-    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
-    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
-    for (x, y) in a.iter().zip(b) {
-        sab += (x - ma) * (y - mb);
-        saa += (x - ma) * (x - ma);
-        sbb += (y - mb) * (y - mb);
-    }
-    sab / (saa * sbb).sqrt().max(f64::MIN_POSITIVE)
-}
+use support::{correlation, output_dir, repo, track_clip};
 
 #[test]
 fn by_name_every_moving_channel_follows_mediapipe_on_a_real_person() {

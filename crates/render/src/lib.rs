@@ -153,6 +153,22 @@ impl Camera {
         }
     }
 
+    /// A square-picture orthographic camera (parallel rays: an infinitely long lens) at `eye`
+    /// looking at `target` with `up` roughly up, seeing a square of `side` world units around
+    /// the target; `depth` is how far behind the target the scene reaches.
+    #[must_use]
+    pub fn orthographic(eye: Vec3, target: Vec3, up: Vec3, side: f32, depth: f32) -> Camera {
+        let distance = (target - eye).length().max(f32::EPSILON);
+        let view = Mat4::look_at_rh(eye, target, up);
+        let half = 0.5 * side;
+        let projection =
+            Mat4::orthographic_rh_gl(-half, half, -half, half, distance * 0.05, distance + depth);
+        Camera {
+            view_projection: projection * view,
+            eye,
+        }
+    }
+
     /// The point of the world seen at pixel (`x`, `y`) of a `size`×`size` picture, on the plane
     /// through `on` facing the camera; `None` if the camera cannot be inverted.
     #[must_use]
@@ -362,6 +378,13 @@ pub struct Shading {
     pub textures: bool,
     /// Samples per pixel along each axis (anti-aliasing; 1 is fastest, 2 the default).
     pub supersample: u32,
+    /// Flat shading: each triangle lit by its own normal at its centre (a faceted look, as
+    /// some renderers and exporters give), instead of normals interpolated between vertices.
+    pub faceted: bool,
+    /// Strength of a Blinn–Phong highlight from the key light (0: matte, the default).
+    pub specular: f32,
+    /// The highlight's exponent (larger: smaller, sharper highlights).
+    pub shininess: f32,
 }
 
 impl Default for Shading {
@@ -381,7 +404,34 @@ impl Default for Shading {
             albedo: Vec3::ONE,
             textures: true,
             supersample: 2,
+            faceted: false,
+            specular: 0.0,
+            shininess: 32.0,
         }
+    }
+}
+
+impl Shading {
+    /// The lit colour, in display space, of a surface point at `p` with unit normal `n` and
+    /// colour `c` (linear), seen from `eye`.
+    fn light(&self, p: Vec3, n: Vec3, c: Vec3, eye: Vec3) -> Vec3 {
+        let view = (eye - p).normalize_or_zero();
+        let rim = (1.0 - n.dot(view).max(0.0)).powi(3) * self.rim;
+        let (key, fill) = (self.key, self.fill);
+        let diffuse = self.ambient
+            + key.colour * n.dot(key.direction).max(0.0)
+            + fill.colour * n.dot(fill.direction).max(0.0)
+            + Vec3::splat(rim);
+        let mut linear = c * self.albedo * diffuse;
+        if self.specular > 0.0 {
+            let half = (key.direction + view).normalize_or_zero();
+            let facing = n.dot(key.direction) > 0.0;
+            if facing {
+                linear += key.colour * self.specular * n.dot(half).max(0.0).powf(self.shininess);
+            }
+        }
+        let linear = linear.max(Vec3::ZERO);
+        Vec3::new(display(linear.x), display(linear.y), display(linear.z))
     }
 }
 
@@ -459,25 +509,18 @@ pub fn render_shaded(
         colour.extend(std::iter::repeat_n(row, s as usize));
     }
     let mut depth = vec![f32::INFINITY; (s * s) as usize];
-    let (key, fill) = (shading.key, shading.fill);
     // Lit vertex colour in display space; material factors and textures multiply it there
     // (sRGB is close enough to a 2.2 gamma that this equals shading the product in linear).
-    let shade: Vec<Vec3> = pose
-        .positions
-        .iter()
-        .zip(&pose.normals)
-        .zip(&appearance.vertex_colours)
-        .map(|((p, n), c)| {
-            let view = (camera.eye - *p).normalize_or_zero();
-            let rim = (1.0 - n.dot(view).max(0.0)).powi(3) * shading.rim;
-            let light = shading.ambient
-                + key.colour * n.dot(key.direction).max(0.0)
-                + fill.colour * n.dot(fill.direction).max(0.0)
-                + Vec3::splat(rim);
-            let linear = (*c * shading.albedo * light).max(Vec3::ZERO);
-            Vec3::new(display(linear.x), display(linear.y), display(linear.z))
-        })
-        .collect();
+    let shade: Vec<Vec3> = if shading.faceted {
+        Vec::new()
+    } else {
+        pose.positions
+            .iter()
+            .zip(&pose.normals)
+            .zip(&appearance.vertex_colours)
+            .map(|((p, n), c)| shading.light(*p, *n, *c, camera.eye))
+            .collect()
+    };
     let screen: Vec<Vec4> = pose
         .positions
         .iter()
@@ -506,6 +549,16 @@ pub fn render_shaded(
             continue;
         }
         let inverse_area = 1.0 / area;
+        // Flat shading: one colour for the whole triangle, from its own normal at its centre.
+        let flat = shading.faceted.then(|| {
+            let [wa, wb, wc] = [a, b, c].map(|v| pose.positions[v]);
+            let normal = (wb - wa).cross(wc - wa).normalize_or_zero();
+            let colour = (appearance.vertex_colours[a]
+                + appearance.vertex_colours[b]
+                + appearance.vertex_colours[c])
+                / 3.0;
+            shading.light((wa + wb + wc) / 3.0, normal, colour, camera.eye)
+        });
         let material = appearance.triangle_materials[t] as usize;
         let factor = appearance
             .material_factors
@@ -554,7 +607,7 @@ pub fn render_shaded(
                 let i = (y * s + x) as usize;
                 if z < depth[i] {
                     depth[i] = z;
-                    let lit = shade[a] * w0 + shade[b] * w1 + shade[c] * w2;
+                    let lit = flat.unwrap_or_else(|| shade[a] * w0 + shade[b] * w1 + shade[c] * w2);
                     colour[i] = match texture {
                         None => lit * factor,
                         Some((texels, uvs)) => {

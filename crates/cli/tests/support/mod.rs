@@ -40,6 +40,36 @@ pub fn three_js_stills(model: &Path, poses: &serde_json::Value, dir: &Path) {
     succeeded("heldout-stills.mjs", out);
 }
 
+/// Renders `poses` of `model` with Blender's Cycles (`tools/blender_stills.py`: an
+/// orthographic camera, one sun, flat shading) into `dir`: the stills and truth.json.
+pub fn blender_stills(model: &Path, poses: &serde_json::Value, dir: &Path) {
+    let poses_path = dir.with_extension("poses.json");
+    std::fs::write(&poses_path, poses.to_string()).unwrap();
+    let out = Command::new("blender")
+        .args(["-b", "--factory-startup", "--python"])
+        .arg(repo().join("tools/blender_stills.py"))
+        .arg("--")
+        .arg(model)
+        .arg(&poses_path)
+        .arg(dir)
+        .output()
+        .expect("Blender is needed for this test: run scripts/setup.sh");
+    succeeded("blender_stills.py", out);
+}
+
+/// Pearson's correlation of two series of the same length.
+pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    sab / (saa * sbb).sqrt().max(f64::MIN_POSITIVE)
+}
+
 /// `out` of a program run for `what`, which must have succeeded (else its output is shown).
 pub fn succeeded(what: &str, out: Output) -> Output {
     assert!(
