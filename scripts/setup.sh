@@ -7,7 +7,10 @@
 #     (npm), the emulated Meta Quest 3 its VR test runs in;
 #   - gltfpack and @gltf-transform/cli (npm), which compress the tests' avatars as people's
 #     downloads are (meshopt, quantization, Draco);
-#   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to.
+#   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to;
+#   - CMU PocketSphinx (Debian: the library lip sync links, its US English models, and its
+#     test data — real LibriVox speech with transcripts) and flite, the synthetic voices whose
+#     exact phone timings the viseme accuracy test compares with.
 # Safe to run again: it installs only what is not there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,6 +21,9 @@ dpkg -s python3-numpy >/dev/null 2>&1 || packages+=(python3-numpy)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
+for package in libpocketsphinx-dev pocketsphinx-en-us pocketsphinx-testdata flite; do
+  dpkg -s "$package" >/dev/null 2>&1 || packages+=("$package")
+done
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 if ((${#packages[@]})); then
   sudo=""

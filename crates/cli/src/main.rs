@@ -6,6 +6,7 @@
 
 mod adapt;
 mod info;
+mod lipsync;
 mod outputs;
 mod session;
 mod stream;
@@ -102,6 +103,14 @@ enum Command {
     ///
     /// Example: faceanim stream take.json --to 127.0.0.1:39539 --fps 60 --loop --names arkit
     Stream(stream::StreamArgs),
+    /// Lip sync: speech (a WAV, MP3 or Ogg file, or a video's sound) drives the character's
+    /// mouth. Phones are recognised offline (CMU PocketSphinx), aligned to --text when given,
+    /// and become the 15 Oculus visemes with animators' timing; they reach the character
+    /// through its viseme shapes by name, or its ARKit mouth shapes.
+    ///
+    /// Outputs by extension, as `track` writes them. Example: faceanim lipsync line.wav
+    /// --character avatar.vrm --text "Hello there" -o line.vrm -o line.session.json
+    Lipsync(lipsync::LipsyncArgs),
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
     /// Example: faceanim eval take.json reference.json --json
@@ -269,6 +278,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         }
         Command::Render(args) => render(&args),
         Command::Track(args) => track::run(args),
+        Command::Lipsync(args) => lipsync::run(args),
         Command::Adapt(args) => adapt::run(args),
         Command::Session(args) => session::run(args),
         Command::Stream(args) => stream::run(args),

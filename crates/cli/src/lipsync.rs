@@ -1,0 +1,178 @@
+//! `faceanim lipsync`: speech drives the character's mouth.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use faceanim_speech::{MouthTable, Sound};
+use faceanim_take::{Filtering, ReceivedFrame, Take};
+
+/// `faceanim lipsync`'s arguments.
+#[derive(Debug, Args)]
+pub struct LipsyncArgs {
+    /// The speech: a WAV, MP3, Ogg or FLAC file, or a video with sound.
+    pub speech: PathBuf,
+    /// The character (default: the built-in head).
+    #[arg(long)]
+    pub character: Option<PathBuf>,
+    /// What was said (the words, or a file holding them): the phones are aligned to it,
+    /// which times them better than recognising them blind.
+    #[arg(long, value_name = "TEXT|FILE")]
+    pub text: Option<String>,
+    /// Outputs by extension, as `faceanim track` writes them (.glb/.vrm the character with
+    /// the animation, .json the clip, .csv Live Link Face, .session.json the take).
+    #[arg(short, long = "output", value_name = "OUT")]
+    pub outputs: Vec<PathBuf>,
+    /// Also write the clip (JSON) here.
+    #[arg(long)]
+    pub clip: Option<PathBuf>,
+    /// Frames per second of the animation.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f32,
+    /// Visemes as ARKit channel values for rigs without viseme shapes (JSON:
+    /// {"aa": {"jawOpen": 0.7}, …}; visemes left out keep the built-in table).
+    #[arg(long, value_name = "FILE")]
+    pub viseme_table: Option<PathBuf>,
+    /// Without --text: recognise words (English; about a third of real time) or phones (any
+    /// language, slower).
+    #[arg(long, value_enum, default_value_t = Blind::Words)]
+    pub recognise: Blind,
+    /// Print a JSON summary (timing, phones, visemes) on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// How speech without a transcript is recognised.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Blind {
+    /// English words with the language model, spoken as the dictionary says.
+    Words,
+    /// Any phone after any other.
+    Phones,
+}
+
+/// What `faceanim lipsync --json` prints.
+#[derive(serde::Serialize)]
+struct Summary<'a> {
+    audio_seconds: f32,
+    /// Reading the sound, recognising, timing and mapping (not writing).
+    seconds: f64,
+    real_time_factor: f64,
+    frames: usize,
+    fps: f32,
+    recognition: faceanim_speech::Recognition,
+    route: faceanim_speech::Route,
+    shapes_moved: usize,
+    phones: &'a [faceanim_speech::Phone],
+    visemes: &'a [faceanim_speech::visemes::Key],
+    notes: &'a [String],
+}
+
+pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
+    let mut outputs = args.outputs.clone();
+    outputs.extend(args.clip.iter().cloned());
+    anyhow::ensure!(
+        !outputs.is_empty(),
+        "give at least one -o OUTPUT (.glb, .vrm, .json, .csv, .session.json) or --clip"
+    );
+    let formats = crate::outputs::formats_of(&outputs)?;
+    anyhow::ensure!(
+        args.fps.is_finite() && (1.0..=240.0).contains(&args.fps),
+        "--fps must be between 1 and 240, got {}",
+        args.fps
+    );
+    let character = crate::load_or_default(args.character.as_deref())?.character;
+    let table = match &args.viseme_table {
+        Some(path) => MouthTable::from_json(
+            &std::fs::read_to_string(path)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?,
+        )
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?,
+        None => MouthTable::default(),
+    };
+    let transcript = args.text.as_deref().map(transcript).transpose()?;
+    let started = Instant::now();
+    let sound = Sound::read(&args.speech)?;
+    let lip_sync = faceanim_speech::lip_sync(
+        &sound,
+        transcript.as_deref(),
+        &character,
+        &table,
+        args.fps,
+        match args.recognise {
+            Blind::Words => faceanim_speech::Recognition::Words,
+            Blind::Phones => faceanim_speech::Recognition::PhoneLoop,
+        },
+    )?;
+    let seconds = started.elapsed().as_secs_f64();
+    for note in &lip_sync.notes {
+        eprintln!("{}: {note}", args.speech.display());
+    }
+    let frames: Vec<ReceivedFrame> = lip_sync
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(k, weights)| ReceivedFrame {
+            time: k as f64 / f64::from(args.fps),
+            weights: weights.clone(),
+            head: None,
+        })
+        .collect();
+    let name = stem(&args.speech);
+    let raw = Filtering::new(1, None).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let take = Take::from_received(&character, &name, frames, raw)?;
+    let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
+    for (path, format) in outputs.iter().zip(formats) {
+        crate::outputs::write(path, format, &animation)?;
+    }
+    eprintln!(
+        "{:.2} s of speech in {:.2} s ({:.2}× real time): {} phones ({}), {} visemes on {} of {} shapes ({})",
+        sound.seconds(),
+        seconds,
+        seconds / f64::from(sound.seconds()),
+        lip_sync.phones.len(),
+        match lip_sync.recognition {
+            faceanim_speech::Recognition::Transcript => "aligned to the transcript",
+            faceanim_speech::Recognition::Words => "from the words recognised",
+            faceanim_speech::Recognition::PhoneLoop => "from a phone loop",
+        },
+        lip_sync.track.keys.len(),
+        lip_sync.shapes_moved,
+        character.blendshapes().len(),
+        match lip_sync.route {
+            faceanim_speech::Route::Visemes => "its viseme shapes",
+            faceanim_speech::Route::Arkit => "its ARKit mouth shapes",
+        }
+    );
+    if args.json {
+        let summary = Summary {
+            audio_seconds: sound.seconds(),
+            seconds,
+            real_time_factor: seconds / f64::from(sound.seconds()),
+            frames: lip_sync.frames.len(),
+            fps: args.fps,
+            recognition: lip_sync.recognition,
+            route: lip_sync.route,
+            shapes_moved: lip_sync.shapes_moved,
+            phones: &lip_sync.phones,
+            visemes: &lip_sync.track.keys,
+            notes: &lip_sync.notes,
+        };
+        println!("{}", serde_json::to_string(&summary)?);
+    }
+    Ok(())
+}
+
+/// `--text`: the words themselves, or a file that holds them.
+fn transcript(text: &str) -> anyhow::Result<String> {
+    let path = Path::new(text);
+    if !text.contains(char::is_whitespace) && path.is_file() {
+        return std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{text}: {e}"));
+    }
+    Ok(text.to_owned())
+}
+
+fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map_or_else(|| "speech".to_owned(), |s| s.to_string_lossy().into_owned())
+}

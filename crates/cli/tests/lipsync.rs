@@ -1,0 +1,392 @@
+//! `faceanim lipsync` on speech no line of faceanim made:
+//! - real people reading a novel (LibriVox recordings in Debian's `pocketsphinx-testdata`,
+//!   with their transcripts): the mouth moves while speech is heard and rests in silences,
+//!   judged on the recording's own loudness away from its boundaries; the clip lasts as long
+//!   as the sound; the GLB validates and three.js plays it;
+//! - synthetic voices that say which phone they speak when (`flite -psdur`): the visemes'
+//!   accuracy within ±40 ms, with the transcript and without;
+//! - silence and noise give a closed mouth; empty, cut, non-audio and over-long files give
+//!   errors that name them.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    reason = "tests panic to fail"
+)]
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir, threejs_render};
+
+const LIBRIVOX: &str = "/usr/share/pocketsphinx/test/data/librivox";
+
+/// The LibriVox recordings and their transcripts.
+fn librivox() -> Vec<(PathBuf, String)> {
+    let transcription = std::fs::read_to_string(Path::new(LIBRIVOX).join("transcription"))
+        .expect("pocketsphinx-testdata is needed: run scripts/setup.sh");
+    transcription
+        .lines()
+        .filter_map(|line| {
+            let (text, id) = line.rsplit_once(" (")?;
+            let id = id.trim_end_matches(')');
+            let text = text.replace("<s>", "").replace("</s>", "");
+            Some((
+                Path::new(LIBRIVOX).join(format!("{id}.wav")),
+                text.trim().to_owned(),
+            ))
+        })
+        .collect()
+}
+
+/// 16-bit mono samples of a canonical WAV.
+fn samples(path: &Path) -> (Vec<i16>, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    let rate = u32::from_le_bytes(bytes[24..28].try_into().unwrap());
+    let data = bytes.windows(4).position(|w| w == b"data").unwrap() + 8;
+    (
+        bytes[data..]
+            .chunks_exact(2)
+            .map(|b| i16::from_le_bytes([b[0], b[1]]))
+            .collect(),
+        rate,
+    )
+}
+
+/// Per 10 ms: whether the recording is loud there (its own judgement, not faceanim's: louder
+/// than its quiet parts by a third of its loudness range).
+fn loud(path: &Path) -> Vec<bool> {
+    let (samples, rate) = samples(path);
+    let hop = (rate / 100) as usize;
+    let levels: Vec<f64> = samples
+        .chunks(hop)
+        .map(|c| {
+            let p = c
+                .iter()
+                .map(|&s| (f64::from(s) / 32768.0).powi(2))
+                .sum::<f64>()
+                / c.len() as f64;
+            10.0 * p.max(1e-12).log10()
+        })
+        .collect();
+    let mut sorted = levels.clone();
+    sorted.sort_by(f64::total_cmp);
+    let (quiet, peak) = (sorted[sorted.len() / 20], sorted[sorted.len() * 99 / 100]);
+    let threshold = quiet + (peak - quiet) / 3.0;
+    levels.iter().map(|l| *l > threshold).collect()
+}
+
+/// The clip's mouth activity per 10 ms: the largest weight of any shape.
+fn mouth(clip: &Value, frames: usize) -> Vec<f64> {
+    let fps = clip["fps"].as_f64().unwrap();
+    let rows = clip["frames"].as_array().unwrap();
+    (0..frames)
+        .map(|k| {
+            let f = ((k as f64 + 0.5) / 100.0 * fps).round() as usize;
+            rows.get(f.min(rows.len() - 1))
+                .unwrap()
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|w| w.as_f64().unwrap())
+                .fold(0.0, f64::max)
+        })
+        .collect()
+}
+
+fn run_lipsync(speech: &Path, more: &[&str], out: &Path) -> (Value, Value) {
+    let clip = out.with_extension("json");
+    let mut args = vec![
+        "lipsync",
+        speech.to_str().unwrap(),
+        "--clip",
+        clip.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ];
+    args.extend_from_slice(more);
+    let summary: Value = serde_json::from_str(faceanim_ok(&args).trim()).unwrap();
+    let clip: Value = serde_json::from_slice(&std::fs::read(&clip).unwrap()).unwrap();
+    (summary, clip)
+}
+
+#[test]
+fn real_speech_opens_the_mouth_while_heard_and_rests_in_silence() {
+    let out = output_dir("lipsync");
+    let mut report = Vec::new();
+    for (k, (wav, text)) in librivox().iter().enumerate() {
+        // With the transcript on some, without on the others.
+        let with_text = k % 2 == 0;
+        let more: Vec<&str> = if with_text {
+            vec!["--text", text.as_str()]
+        } else {
+            vec![]
+        };
+        let glb = out.join(format!("librivox-{k}.glb"));
+        let (summary, clip) = run_lipsync(wav, &more, &glb);
+        let seconds = summary["audio_seconds"].as_f64().unwrap();
+        let frames = clip["frames"].as_array().unwrap().len();
+        let fps = clip["fps"].as_f64().unwrap();
+        // As long as the sound, to a frame.
+        assert!(
+            ((frames as f64 - 1.0) / fps - seconds).abs() <= 1.0 / fps,
+            "{frames} frames at {fps} for {seconds} s"
+        );
+        let heard = loud(wav);
+        let open = mouth(&clip, heard.len());
+        // Judged away from boundaries: frames whose neighbours within 100 ms agree.
+        let (mut agree, mut judged) = (0, 0);
+        for i in 10..heard.len().saturating_sub(10) {
+            if heard[i - 10..=i + 10].iter().all(|h| *h == heard[i]) {
+                judged += 1;
+                if (open[i] > 0.05) == heard[i] {
+                    agree += 1;
+                }
+            }
+        }
+        let share = f64::from(agree) / f64::from(judged.max(1));
+        report.push(format!(
+            "{}: {share:.3} of {judged} frames agree; {:.2}× real time; {}",
+            wav.file_name().unwrap().to_string_lossy(),
+            summary["real_time_factor"].as_f64().unwrap(),
+            summary["recognition"]
+        ));
+        assert!(judged > 50, "{report:?}");
+        assert!(share >= 0.85, "{report:?}");
+        assert_eq!(
+            summary["recognition"],
+            if with_text { "transcript" } else { "words" },
+            "{summary}"
+        );
+        if k == 0 {
+            assert_valid_gltf(&glb);
+            let played = threejs_render(&glb, &format!("{:.2}", seconds / 2.0));
+            assert_eq!(played["animations"], 1, "{played}");
+            assert!(played["maxInfluence"].as_f64().unwrap() > 0.0, "{played}");
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+/// Phone → viseme, as the crate maps them (the test's own table: the Oculus set's usual
+/// grouping).
+fn viseme(phone: &str) -> &'static str {
+    match phone {
+        "p" | "b" | "m" => "PP",
+        "f" | "v" => "FF",
+        "th" | "dh" => "TH",
+        "t" | "d" => "DD",
+        "k" | "g" | "ng" => "kk",
+        "ch" | "jh" | "sh" | "zh" => "CH",
+        "s" | "z" => "SS",
+        "n" | "l" => "nn",
+        "r" | "er" => "RR",
+        "aa" | "ae" | "ah" | "ay" | "aw" | "ax" => "aa",
+        "eh" | "ey" => "E",
+        "ih" | "iy" | "y" => "ih",
+        "ao" | "ow" | "oy" => "oh",
+        "uh" | "uw" | "w" => "ou",
+        _ => "sil",
+    }
+}
+
+/// flite's phones with their end times: "pau:0.164 hh:0.255 …".
+fn flite_phones(text: &str) -> Vec<(String, f64)> {
+    text.split_whitespace()
+        .filter_map(|p| {
+            let (phone, end) = p.split_once(':')?;
+            Some((phone.to_owned(), end.parse().ok()?))
+        })
+        .collect()
+}
+
+#[test]
+fn visemes_of_synthetic_voices_match_their_phones_within_40_ms() {
+    let out = output_dir("lipsync-tts");
+    let lines = [
+        "The quick brown fox jumps over the lazy dog.",
+        "Please bring me my blue map before the bus leaves.",
+        "She sells sea shells by the sea shore on Thursday.",
+    ];
+    let mut report = Vec::new();
+    let (mut total_hits, mut total_frames) = (0usize, 0usize);
+    for voice in ["slt", "rms", "awb"] {
+        for (k, line) in lines.iter().enumerate() {
+            let wav = out.join(format!("{voice}-{k}.wav"));
+            let made = Command::new("flite")
+                .args(["-voice", voice, "-t", line, "-o"])
+                .arg(&wav)
+                .arg("-psdur")
+                .output()
+                .expect("flite is needed: run scripts/setup.sh");
+            assert!(made.status.success(), "{made:?}");
+            let truth = flite_phones(&String::from_utf8_lossy(&made.stdout));
+            assert!(truth.len() > 10, "{truth:?}");
+            for with_text in [true, false] {
+                let more: Vec<&str> = if with_text {
+                    vec!["--text", line]
+                } else {
+                    vec![]
+                };
+                let (summary, _) = run_lipsync(
+                    &wav,
+                    &more,
+                    &out.join(format!("{voice}-{k}-{with_text}.json")),
+                );
+                // Our viseme per 10 ms, from the phones recognised.
+                let phones = summary["phones"].as_array().unwrap();
+                let ours_at = |t: f64| {
+                    phones
+                        .iter()
+                        .find(|p| {
+                            p["start"].as_f64().unwrap() <= t && t < p["end"].as_f64().unwrap()
+                        })
+                        .map_or("sil", |p| {
+                            viseme(&p["label"].as_str().unwrap().to_lowercase())
+                        })
+                };
+                let (mut hits, mut frames) = (0, 0);
+                let mut start = 0.0;
+                for (phone, end) in &truth {
+                    let expected = viseme(phone);
+                    if expected != "sil" {
+                        let mut t = start + 0.005;
+                        while t < *end {
+                            frames += 1;
+                            let near =
+                                (-4..=4).any(|d| ours_at(t + f64::from(d) * 0.01) == expected);
+                            if near {
+                                hits += 1;
+                            }
+                            t += 0.01;
+                        }
+                    }
+                    start = *end;
+                }
+                let accuracy = f64::from(hits) / f64::from(frames.max(1));
+                if with_text {
+                    total_hits += hits as usize;
+                    total_frames += frames as usize;
+                }
+                report.push(format!(
+                    "{voice} line {k} {}: {accuracy:.3} of {frames} speech frames",
+                    if with_text { "with text" } else { "recognised" }
+                ));
+            }
+        }
+    }
+    let overall = total_hits as f64 / total_frames.max(1) as f64;
+    eprintln!(
+        "{}\nwith the transcript, overall: {overall:.3}",
+        report.join("\n")
+    );
+    std::fs::write(
+        out.join("accuracy.txt"),
+        format!("{}\n{overall:.3}\n", report.join("\n")),
+    )
+    .unwrap();
+    assert!(
+        overall >= 0.8,
+        "viseme accuracy within ±40 ms: {overall:.3}\n{report:?}"
+    );
+}
+
+fn ffmpeg(args: &[&str]) {
+    let out = Command::new("ffmpeg")
+        .args(["-v", "error", "-y"])
+        .args(args)
+        .output()
+        .expect("ffmpeg");
+    assert!(out.status.success(), "{out:?}");
+}
+
+#[test]
+fn silence_and_noise_keep_the_mouth_closed_and_bad_files_are_named() {
+    let out = output_dir("lipsync-bad");
+    let silence = out.join("silence.wav");
+    ffmpeg(&[
+        "-f",
+        "lavfi",
+        "-i",
+        "anullsrc=r=16000:cl=mono",
+        "-t",
+        "3",
+        silence.to_str().unwrap(),
+    ]);
+    let noise = out.join("noise.mp3");
+    ffmpeg(&[
+        "-f",
+        "lavfi",
+        "-i",
+        "anoisesrc=d=3:c=pink:a=0.2",
+        noise.to_str().unwrap(),
+    ]);
+    let hum = out.join("hum.ogg");
+    ffmpeg(&[
+        "-f",
+        "lavfi",
+        "-i",
+        "sine=f=50:d=3",
+        "-c:a",
+        "libvorbis",
+        hum.to_str().unwrap(),
+    ]);
+    for quiet in [&silence, &noise, &hum] {
+        let (_, clip) = run_lipsync(quiet, &[], &out.join("quiet.json"));
+        let most = clip["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r.as_array().unwrap().iter().map(|w| w.as_f64().unwrap()))
+            .fold(0.0, f64::max);
+        assert!(
+            most < 0.01,
+            "{}: the mouth moved to {most}",
+            quiet.display()
+        );
+    }
+    let empty = out.join("empty.wav");
+    std::fs::write(&empty, []).unwrap();
+    let text = out.join("notes.wav");
+    std::fs::write(&text, "these are not sounds").unwrap();
+    let cut = out.join("cut.wav");
+    let whole = std::fs::read(&silence).unwrap();
+    std::fs::write(&cut, &whole[..30]).unwrap();
+    let long = out.join("long.flac");
+    ffmpeg(&[
+        "-f",
+        "lavfi",
+        "-i",
+        "anullsrc=r=8000:cl=mono",
+        "-t",
+        "3700",
+        long.to_str().unwrap(),
+    ]);
+    let picture = support::repo().join("web/favicon.png");
+    let mut cases = vec![
+        (empty, "empty.wav: there is no sound"),
+        (text, "notes.wav"),
+        (cut, "cut.wav"),
+        (long, "long.flac: 3601 s of sound; at most 3600 s"),
+        (out.join("missing.wav"), "missing.wav"),
+    ];
+    if picture.exists() {
+        cases.push((picture, "favicon.png"));
+    }
+    for (file, says) in cases {
+        let run = faceanim(&[
+            "lipsync",
+            file.to_str().unwrap(),
+            "--clip",
+            out.join("x.json").to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{}: {stderr}", file.display());
+        assert!(stderr.contains(says), "{}: {stderr}", file.display());
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+}

@@ -1,0 +1,100 @@
+//! # faceanim-speech: speech drives the mouth
+//!
+//! A recording of speech becomes the character's mouth animation:
+//!
+//! 1. [`audio`]: the sound at 16 kHz mono (WAV read directly; MP3, Ogg, FLAC and the sound of
+//!    a video through `ffmpeg`), and where a voice is heard in it;
+//! 2. [`phones`]: phones and their times from CMU PocketSphinx ([`faceanim_sphinx_sys`]):
+//!    the transcript aligned to the sound when there is one; else the words recognised and
+//!    spoken as the dictionary says, or a phone loop;
+//! 3. [`visemes`]: phones to the 15 Oculus visemes, with animators' timing rules
+//!    (anticipation, a minimum hold, closed lips on P/B/M, pauses that relax or close);
+//! 4. [`mouth`]: visemes onto the character's own shapes — its visemes by name, or its ARKit
+//!    mouth shapes through a table the user can replace.
+//!
+//! ```no_run
+//! let character = faceanim_head::default_character();
+//! let sound = faceanim_speech::audio::Sound::read(std::path::Path::new("line.wav"))?;
+//! let lip_sync = faceanim_speech::lip_sync(
+//!     &sound, None, &character, &Default::default(), 30.0, faceanim_speech::Recognition::Words)?;
+//! assert_eq!(lip_sync.frames[0].len(), character.blendshapes().len());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![deny(missing_docs)]
+
+pub mod audio;
+pub mod mouth;
+pub mod phones;
+pub mod visemes;
+
+use faceanim_rig::Character;
+
+pub use audio::{AudioError, Sound};
+pub use mouth::{Mouth, MouthError, MouthTable, Route};
+pub use phones::{Phone, PhoneError, Recognition};
+pub use visemes::Track;
+
+/// Why lip sync failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SpeechError {
+    /// The sound could not be read.
+    #[error(transparent)]
+    Audio(#[from] AudioError),
+    /// Phones could not be recognised.
+    #[error(transparent)]
+    Phones(#[from] PhoneError),
+    /// The character has no mouth to drive.
+    #[error(transparent)]
+    Mouth(#[from] MouthError),
+}
+
+/// A sound's lip sync on a character.
+#[derive(Debug, Clone)]
+pub struct LipSync {
+    /// Frames per second.
+    pub fps: f32,
+    /// One row of the character's weights per frame, covering the whole sound.
+    pub frames: Vec<Vec<f32>>,
+    /// The visemes over time.
+    pub track: Track,
+    /// The phones recognised.
+    pub phones: Vec<Phone>,
+    /// How they were recognised.
+    pub recognition: Recognition,
+    /// How the visemes reached the character.
+    pub route: Route,
+    /// How many of the character's shapes move.
+    pub shapes_moved: usize,
+    /// What was done instead of what was asked (a transcript that could not be used).
+    pub notes: Vec<String>,
+}
+
+/// Lip sync of `sound` on `character` at `fps`, aligned to `transcript` when given, else
+/// recognised by `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]).
+///
+/// # Errors
+/// [`SpeechError`] when the character has no mouth or the recogniser fails.
+pub fn lip_sync(
+    sound: &Sound,
+    transcript: Option<&str>,
+    character: &Character,
+    table: &MouthTable,
+    fps: f32,
+    blind: Recognition,
+) -> Result<LipSync, SpeechError> {
+    let mouth = Mouth::of(character, table)?;
+    let (phones, recognition, notes) = phones::recognise(sound, transcript, blind)?;
+    let track = visemes::track(&phones, &sound.voice_activity(), sound.seconds());
+    let frames = track.sample(fps).iter().map(|v| mouth.weights(v)).collect();
+    Ok(LipSync {
+        fps,
+        frames,
+        track,
+        phones,
+        recognition,
+        route: mouth.route,
+        shapes_moved: mouth.moved(),
+        notes,
+    })
+}

@@ -1,0 +1,286 @@
+//! Phones and when they are said, from PocketSphinx: a phone loop when there is no
+//! transcript, forced alignment of the transcript's words when there is one (each word's
+//! phones from the CMU dictionary, sharing the word's time by their typical lengths).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use faceanim_sphinx_sys::{EN_US, FRAME_RATE, SphinxError};
+
+use crate::audio::Sound;
+
+/// A phone (ARPAbet, as the CMU dictionary spells them, stress removed; `SIL` for silence
+/// and noise) from `start` to `end` seconds.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Phone {
+    /// The phone.
+    pub label: String,
+    /// Start, seconds.
+    pub start: f32,
+    /// End, seconds.
+    pub end: f32,
+}
+
+/// How the phones were found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Recognition {
+    /// Words recognised with the English language model, spoken as the dictionary says (the
+    /// default without a transcript: about a third of real time; Rhubarb Lip Sync works so).
+    Words,
+    /// Any phone after any other (no words assumed: other languages, gibberish, singing), at
+    /// about 1.7× real time with CMU's recommended beams.
+    PhoneLoop,
+    /// The transcript's words aligned to the sound.
+    Transcript,
+}
+
+/// Why recognition failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PhoneError {
+    /// The recogniser failed.
+    #[error(transparent)]
+    Sphinx(#[from] SphinxError),
+    /// The dictionary could not be read.
+    #[error("{path}: {message}")]
+    Dictionary {
+        /// The file.
+        path: String,
+        /// What went wrong.
+        message: String,
+    },
+    /// The transcript has no word to align.
+    #[error("the transcript has no words")]
+    EmptyTranscript,
+}
+
+/// The phones of `sound`: aligned to `transcript` when given (falling back to `blind`, with a
+/// note, when its words are not in the dictionary or the alignment fails), else found by
+/// `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]). The notes say what was done
+/// instead of what was asked.
+///
+/// # Errors
+/// [`PhoneError`] when the recogniser or its models are missing or fail.
+pub fn recognise(
+    sound: &Sound,
+    transcript: Option<&str>,
+    blind: Recognition,
+) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
+    let mut notes = Vec::new();
+    if let Some(text) = transcript {
+        let dictionary = Dictionary::english()?;
+        let words = words_of(text);
+        if words.is_empty() {
+            return Err(PhoneError::EmptyTranscript);
+        }
+        let unknown: Vec<&str> = words
+            .iter()
+            .filter(|w| !dictionary.has(w))
+            .map(String::as_str)
+            .collect();
+        if unknown.is_empty() {
+            match align(sound, &words, &dictionary) {
+                Ok(phones) if !phones.is_empty() => {
+                    return Ok((phones, Recognition::Transcript, notes));
+                }
+                Ok(_) => notes.push(
+                    "the transcript could not be aligned to the sound: it was recognised without it".into(),
+                ),
+                Err(e) => notes.push(format!(
+                    "the transcript could not be aligned ({e}): it was recognised without it"
+                )),
+            }
+        } else {
+            notes.push(format!(
+                "the pronouncing dictionary lacks {}: the speech was recognised without the transcript",
+                unknown.join(", ")
+            ));
+        }
+    }
+    if blind == Recognition::Words {
+        return Ok((recognise_words(sound)?, Recognition::Words, notes));
+    }
+    let segments = faceanim_sphinx_sys::decode(&EN_US.phone_loop(), &sound.samples)?;
+    let phones = segments
+        .into_iter()
+        .map(|s| Phone {
+            label: phone_label(&s.label),
+            start: frame_time(s.start),
+            end: frame_time(s.end + 1),
+        })
+        .collect();
+    Ok((phones, Recognition::PhoneLoop, notes))
+}
+
+/// Phones through word recognition: the words recognised with the language model, each
+/// spoken as the dictionary says, their time shared by typical phone lengths.
+///
+/// # Errors
+/// [`PhoneError`] when the recogniser or its models are missing or fail.
+pub fn recognise_words(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
+    let dictionary = Dictionary::english()?;
+    let segments = faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples)?;
+    Ok(phones_of_words(segments, &dictionary).0)
+}
+
+fn frame_time(frame: u32) -> f32 {
+    frame as f32 / FRAME_RATE as f32
+}
+
+/// A recogniser label as a phone: stress and case removed; silence, breath and noise `SIL`.
+fn phone_label(label: &str) -> String {
+    let upper: String = label
+        .chars()
+        .filter(char::is_ascii_alphabetic)
+        .collect::<String>()
+        .to_ascii_uppercase();
+    if label.starts_with('+')
+        || label.starts_with('<')
+        || label.starts_with('[')
+        || upper.is_empty()
+    {
+        "SIL".into()
+    } else {
+        upper
+    }
+}
+
+/// The transcript's words, lower case, as the dictionary spells them (letters, digits and
+/// apostrophes; everything else separates words).
+fn words_of(text: &str) -> Vec<String> {
+    text.split(|c: char| !(c.is_alphanumeric() || c == '\''))
+        .map(|w| w.trim_matches('\'').to_lowercase())
+        .filter(|w| !w.is_empty())
+        .collect()
+}
+
+/// The CMU pronouncing dictionary: each word's first pronunciation.
+pub struct Dictionary {
+    words: HashMap<String, Vec<String>>,
+}
+
+impl Dictionary {
+    /// Debian's `cmudict-en-us.dict` (pocketsphinx-en-us).
+    ///
+    /// # Errors
+    /// [`PhoneError::Dictionary`] naming the file.
+    pub fn english() -> Result<Dictionary, PhoneError> {
+        Dictionary::read(Path::new(EN_US.dictionary))
+    }
+
+    fn read(path: &Path) -> Result<Dictionary, PhoneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| PhoneError::Dictionary {
+            path: path.display().to_string(),
+            message: format!("{e} (apt-get install pocketsphinx-en-us)"),
+        })?;
+        let mut words = HashMap::new();
+        for line in text.lines() {
+            let mut parts = line.split_whitespace();
+            let Some(word) = parts.next() else { continue };
+            // Alternative pronunciations are written word(2): the first is kept.
+            if word.contains('(') {
+                continue;
+            }
+            words
+                .entry(word.to_owned())
+                .or_insert_with(|| parts.map(phone_label).collect());
+        }
+        Ok(Dictionary { words })
+    }
+
+    /// Whether `word` is in it.
+    #[must_use]
+    pub fn has(&self, word: &str) -> bool {
+        self.words.contains_key(word)
+    }
+
+    /// The phones of `word`.
+    #[must_use]
+    pub fn phones(&self, word: &str) -> Option<&[String]> {
+        self.words.get(word).map(Vec::as_slice)
+    }
+}
+
+/// How long a phone typically lasts, relative to others (vowels and diphthongs longest,
+/// stops shortest): a word's time is shared between its phones by these.
+fn typical_length(phone: &str) -> f32 {
+    match phone {
+        "AA" | "AE" | "AO" | "AW" | "AY" | "EY" | "OW" | "OY" => 1.6,
+        "AH" | "EH" | "ER" | "IH" | "IY" | "UH" | "UW" => 1.2,
+        "P" | "B" | "T" | "D" | "K" | "G" => 0.8,
+        "S" | "Z" | "SH" | "CH" | "JH" | "F" => 1.1,
+        _ => 1.0,
+    }
+}
+
+/// Forced alignment: the words in order, with optional silences and fillers between them.
+fn align(
+    sound: &Sound,
+    words: &[String],
+    dictionary: &Dictionary,
+) -> Result<Vec<Phone>, PhoneError> {
+    let grammar = format!(
+        "#JSGF V1.0;\ngrammar transcript;\npublic <s> = {};\n",
+        words.join(" ")
+    );
+    let segments = faceanim_sphinx_sys::decode(&EN_US.grammar(grammar), &sound.samples)?;
+    let (phones, said) = phones_of_words(segments, dictionary);
+    Ok(if said == words.len() {
+        phones
+    } else {
+        Vec::new()
+    })
+}
+
+/// Word segments as phones (and how many were words, not silence or noise).
+fn phones_of_words(
+    segments: Vec<faceanim_sphinx_sys::Segment>,
+    dictionary: &Dictionary,
+) -> (Vec<Phone>, usize) {
+    let mut phones = Vec::new();
+    let mut said = 0;
+    for segment in segments {
+        let (start, end) = (frame_time(segment.start), frame_time(segment.end + 1));
+        let word = segment.label.split('(').next().unwrap_or("").to_lowercase();
+        match dictionary.phones(&word) {
+            Some(pronunciation) if !segment.label.starts_with('<') && !pronunciation.is_empty() => {
+                said += 1;
+                let total: f32 = pronunciation.iter().map(|p| typical_length(p)).sum();
+                let mut at = start;
+                for p in pronunciation {
+                    let length = (end - start) * typical_length(p) / total;
+                    phones.push(Phone {
+                        label: p.clone(),
+                        start: at,
+                        end: at + length,
+                    });
+                    at += length;
+                }
+            }
+            _ => phones.push(Phone {
+                label: "SIL".into(),
+                start,
+                end,
+            }),
+        }
+    }
+    (phones, said)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_and_words_are_normalised() {
+        assert_eq!(phone_label("AH0"), "AH");
+        assert_eq!(phone_label("+NSN+"), "SIL");
+        assert_eq!(phone_label("<sil>"), "SIL");
+        assert_eq!(phone_label("SIL"), "SIL");
+        assert_eq!(
+            words_of("Hello, world! Don't—stop 'now'."),
+            ["hello", "world", "don't", "stop", "now"]
+        );
+    }
+}

@@ -1,0 +1,308 @@
+//! Phones become visemes (the 15 of Oculus/OpenXR), timed as animators time them:
+//!
+//! - **anticipation**: the mouth shapes a sound before it is heard — lips close for P/B/M and
+//!   bite for F/V [`LIP_LEAD`] early, other shapes [`LEAD`] early; closed lips stay closed
+//!   until their release ([`RELEASE`]);
+//! - **a minimum hold**: a shape held for less than [`MIN_HOLD`] is not drawn (it would flicker)
+//!   — except a P/B/M closure, which always closes the lips, for at least that long;
+//! - **pauses**: in a short pause (under [`LONG_PAUSE`]) the mouth relaxes towards rest but
+//!   does not close; in a long one it closes;
+//! - **coarticulation**: each shape blends from the previous one over up to [`BLEND`].
+//!
+//! Only sound is mouthed: a phone the recogniser put where the recording is quiet
+//! ([`Sound::voice_activity`](crate::audio::Sound::voice_activity)) is silence, so silence,
+//! hum and steady noise give a closed mouth.
+
+use faceanim_rig::names::Viseme;
+
+use crate::phones::Phone;
+
+/// How early most shapes lead their sound, seconds.
+pub const LEAD: f32 = 0.04;
+/// How early closed lips (P, B, M) and the lip bite (F, V) lead theirs.
+pub const LIP_LEAD: f32 = 0.06;
+/// The shortest shape drawn, seconds.
+pub const MIN_HOLD: f32 = 0.06;
+/// A pause at least this long closes the mouth; a shorter one relaxes it.
+pub const LONG_PAUSE: f32 = 0.25;
+/// The longest blend from one shape to the next.
+pub const BLEND: f32 = 0.08;
+/// The shape after closed lips starts forming this long before the lips' release.
+pub const RELEASE: f32 = 0.02;
+/// How far a short pause relaxes the mouth: the previous shape's weight is kept at this.
+pub const RELAXED: f32 = 0.3;
+
+/// The viseme of a phone (ARPAbet, no stress); `Sil` for silence and anything unknown.
+#[must_use]
+pub fn viseme_of(phone: &str) -> Viseme {
+    match phone {
+        "P" | "B" | "M" => Viseme::PP,
+        "F" | "V" => Viseme::FF,
+        "TH" | "DH" => Viseme::TH,
+        "T" | "D" => Viseme::DD,
+        "K" | "G" | "NG" => Viseme::Kk,
+        "CH" | "JH" | "SH" | "ZH" => Viseme::CH,
+        "S" | "Z" => Viseme::SS,
+        "N" | "L" => Viseme::Nn,
+        "R" | "ER" => Viseme::RR,
+        "AA" | "AE" | "AH" | "AY" | "AW" => Viseme::Aa,
+        "EH" | "EY" => Viseme::E,
+        "IH" | "IY" | "Y" => Viseme::Ih,
+        "AO" | "OW" | "OY" => Viseme::Oh,
+        "UH" | "UW" | "W" => Viseme::Ou,
+        // HH takes the shape of the vowel it breathes into (see `segments`).
+        _ => Viseme::Sil,
+    }
+}
+
+/// A viseme's index in [`Viseme::ALL`].
+#[must_use]
+pub fn index(viseme: Viseme) -> usize {
+    Viseme::ALL.iter().position(|v| *v == viseme).unwrap_or(0)
+}
+
+/// One shape held from `start` (the moment it is fully formed) until the next shape starts.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Key {
+    /// Seconds.
+    pub start: f32,
+    /// Which viseme (`Sil`: the mouth at rest or closed).
+    #[serde(serialize_with = "viseme_name")]
+    pub viseme: Viseme,
+    /// How strongly, 0..1 (a relaxed pause keeps the previous shape weakly).
+    pub weight: f32,
+}
+
+fn viseme_name<S: serde::Serializer>(v: &Viseme, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(v.name())
+}
+
+/// Visemes over time.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Track {
+    /// Keys in time order.
+    pub keys: Vec<Key>,
+    /// The sound's length, seconds.
+    pub seconds: f32,
+}
+
+/// The visemes of `phones`, heard where `voiced` (one flag per 10 ms) says, in a sound of
+/// `seconds`.
+#[must_use]
+pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
+    // Phone by phone: its viseme, silenced where nothing is heard.
+    let heard = |p: &Phone| {
+        let (a, b) = ((p.start * 100.0) as usize, (p.end * 100.0).ceil() as usize);
+        let frames = &voiced[a.min(voiced.len())..b.min(voiced.len())];
+        frames.iter().filter(|v| **v).count() * 3 >= frames.len().max(1)
+    };
+    let mut runs: Vec<(Viseme, f32, f32)> = Vec::new();
+    for (k, p) in phones.iter().enumerate() {
+        let mut viseme = if heard(p) {
+            viseme_of(&p.label)
+        } else {
+            Viseme::Sil
+        };
+        if p.label == "HH" && heard(p) {
+            viseme = phones
+                .get(k + 1)
+                .map_or(Viseme::Sil, |next| viseme_of(&next.label));
+            if viseme == Viseme::Sil {
+                viseme = Viseme::Aa;
+            }
+        }
+        match runs.last_mut() {
+            Some(last) if last.0 == viseme => last.2 = p.end,
+            _ => runs.push((viseme, p.start, p.end)),
+        }
+    }
+    // Minimum hold: short shapes merge into the longer neighbour; closures stay, lengthened.
+    let mut held: Vec<(Viseme, f32, f32)> = Vec::new();
+    for run in runs {
+        let short = run.2 - run.1 < MIN_HOLD;
+        if short && run.0 != Viseme::PP && run.0 != Viseme::Sil && !held.is_empty() {
+            if let Some(last) = held.last_mut() {
+                last.2 = run.2;
+            }
+            continue;
+        }
+        match held.last_mut() {
+            Some(last) if last.0 == run.0 => last.2 = run.2,
+            _ => held.push(run),
+        }
+    }
+    let mut closure: Option<f32> = None;
+    let mut keys = Vec::with_capacity(held.len() + 1);
+    keys.push(Key {
+        start: 0.0,
+        viseme: Viseme::Sil,
+        weight: 1.0,
+    });
+    for (k, &(viseme, start, end)) in held.iter().enumerate() {
+        if viseme == Viseme::Sil {
+            let previous = keys.last().copied();
+            if end - start >= LONG_PAUSE || k == 0 || k + 1 == held.len() {
+                // A long pause (or before the first or after the last word): close, soon
+                // after the sound stops.
+                push(&mut keys, (start + 0.5 * BLEND).min(end), Viseme::Sil, 1.0);
+            } else if let Some(previous) = previous {
+                push(&mut keys, start, previous.viseme, RELAXED * previous.weight);
+            }
+            continue;
+        }
+        let lead = if matches!(viseme, Viseme::PP | Viseme::FF) {
+            LIP_LEAD
+        } else {
+            LEAD
+        };
+        // Short unstressed vowels are not opened fully.
+        let vowel = matches!(
+            viseme,
+            Viseme::Aa | Viseme::E | Viseme::Ih | Viseme::Oh | Viseme::Ou
+        );
+        let weight = if vowel && end - start < 0.08 {
+            0.75
+        } else {
+            1.0
+        };
+        // Closed lips open only at their release: what follows a P/B/M starts then.
+        let mut begin = (start - lead).max(0.0);
+        if let Some(release) = closure.take() {
+            begin = begin.max(release - RELEASE);
+        }
+        push(&mut keys, begin, viseme, weight);
+        if viseme == Viseme::PP {
+            closure = Some(end);
+        }
+    }
+    Track { keys, seconds }
+}
+
+/// Adds a key, keeping keys in order (a key that would start before the last one replaces it
+/// from its start).
+fn push(keys: &mut Vec<Key>, start: f32, viseme: Viseme, weight: f32) {
+    let start = keys.last().map_or(start, |last| start.max(last.start));
+    let several = keys.len() > 1;
+    if let Some(last) = keys.last_mut()
+        && (last.start - start).abs() < 1e-4
+        && several
+    {
+        *last = Key {
+            start,
+            viseme,
+            weight,
+        };
+        return;
+    }
+    keys.push(Key {
+        start,
+        viseme,
+        weight,
+    });
+}
+
+impl Track {
+    /// The 15 viseme weights at `time`: the key's shape, blended from the previous key's over
+    /// up to [`BLEND`] (half the key's length at most).
+    #[must_use]
+    pub fn weights_at(&self, time: f32) -> [f32; 15] {
+        let mut out = [0.0f32; 15];
+        let Some(k) = self.keys.iter().rposition(|key| key.start <= time) else {
+            return out;
+        };
+        let key = self.keys[k];
+        let end = self.keys.get(k + 1).map_or(self.seconds, |n| n.start);
+        let blend = BLEND.min(0.5 * (end - key.start)).max(1e-3);
+        let t = ((time - key.start) / blend).clamp(0.0, 1.0);
+        let mut add = |v: Viseme, w: f32| {
+            if v != Viseme::Sil {
+                out[index(v)] += w;
+            }
+        };
+        add(key.viseme, key.weight * t);
+        if k > 0 && t < 1.0 {
+            let previous = self.keys[k - 1];
+            add(previous.viseme, previous.weight * (1.0 - t));
+        }
+        out
+    }
+
+    /// The weights at `fps` frames per second over the whole sound (one frame more than whole
+    /// frames fit, so the clip lasts as long as the sound).
+    #[must_use]
+    pub fn sample(&self, fps: f32) -> Vec<[f32; 15]> {
+        let frames = (self.seconds * fps).ceil() as usize + 1;
+        (0..frames)
+            .map(|f| self.weights_at(f as f32 / fps))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn phone(label: &str, start: f32, end: f32) -> Phone {
+        Phone {
+            label: label.into(),
+            start,
+            end,
+        }
+    }
+
+    #[test]
+    fn lips_close_early_and_pauses_relax_or_close() {
+        // "ma ... pa": a short pause between, a long one after.
+        let phones = [
+            phone("SIL", 0.0, 0.3),
+            phone("M", 0.3, 0.38),
+            phone("AA", 0.38, 0.6),
+            phone("SIL", 0.6, 0.72),
+            phone("P", 0.72, 0.8),
+            phone("AA", 0.8, 1.0),
+            phone("SIL", 1.0, 2.0),
+        ];
+        let track = track(&phones, &[true; 200], 2.0);
+        let pp = index(Viseme::PP);
+        let aa = index(Viseme::Aa);
+        // Closed before the M is heard, and fully closed during it.
+        assert!(track.weights_at(0.3)[pp] > 0.5, "{:?}", track.keys);
+        assert!(
+            track.weights_at(0.35)[pp] > 0.99,
+            "{:?} {:?}",
+            track.keys,
+            track.weights_at(0.35)
+        );
+        assert!(track.weights_at(0.5)[aa] > 0.99);
+        // The short pause relaxes without closing.
+        let relaxed = track.weights_at(0.7)[aa];
+        assert!(relaxed > 0.1 && relaxed < 0.5, "{relaxed}");
+        // The long pause closes.
+        assert!(track.weights_at(1.5).iter().all(|w| *w < 1e-6));
+        assert_eq!(track.sample(30.0).len(), 61);
+    }
+
+    #[test]
+    fn a_flicker_is_not_drawn_and_the_unheard_is_silence() {
+        let phones = [
+            phone("AA", 0.0, 0.3),
+            phone("T", 0.3, 0.33),
+            phone("AA", 0.33, 0.6),
+            phone("S", 0.6, 1.0),
+        ];
+        let mut voiced = vec![true; 100];
+        voiced[60..].iter_mut().for_each(|v| *v = false);
+        let track = track(&phones, &voiced, 1.0);
+        assert!(
+            track.keys.iter().all(|k| k.viseme != Viseme::DD),
+            "{:?}",
+            track.keys
+        );
+        assert!(
+            track.keys.iter().all(|k| k.viseme != Viseme::SS),
+            "{:?}",
+            track.keys
+        );
+        assert!(track.weights_at(0.9).iter().all(|w| *w < 1e-6));
+    }
+}

@@ -1,0 +1,459 @@
+//! # faceanim-sphinx-sys: CMU PocketSphinx, as Debian ships it
+//!
+//! Thin bindings to `libpocketsphinx` 0.8 (`apt-get install libpocketsphinx-dev
+//! pocketsphinx-en-us`; BSD licence), the maintained offline recogniser whose acoustic model,
+//! phone language model and pronouncing dictionary come from a package registry. The old
+//! `pocketsphinx-sys` crates target other versions and are unmaintained; these bindings declare
+//! only the dozen functions faceanim calls ([`ffi`]) and wrap them in one safe call,
+//! [`decode`]: 16 kHz mono speech in, time-aligned labels out (phones from a phone loop, or
+//! words from a grammar for forced alignment), one frame every 10 ms.
+//!
+//! Built where the library is missing, the crate still compiles and [`decode`] returns
+//! [`SphinxError::NotInstalled`], so the rest of faceanim builds and runs on any machine.
+//!
+//! ```no_run
+//! use faceanim_sphinx_sys::{decode, Search, EN_US};
+//! let speech: Vec<i16> = vec![0; 16_000];
+//! let phones = decode(&EN_US.phone_loop(), &speech)?;
+//! for p in phones {
+//!     println!("{} {}..{}", p.label, p.start, p.end);
+//! }
+//! # Ok::<(), faceanim_sphinx_sys::SphinxError>(())
+//! ```
+#![deny(missing_docs)]
+
+use std::path::{Path, PathBuf};
+
+/// Samples per second the models expect.
+pub const SAMPLE_RATE: u32 = 16_000;
+/// Decoder frames per second (one every 10 ms).
+pub const FRAME_RATE: u32 = 100;
+
+/// Where Debian's `pocketsphinx-en-us` puts US English.
+pub const EN_US: Models<'static> = Models {
+    acoustic: "/usr/share/pocketsphinx/model/en-us/en-us",
+    language_model: "/usr/share/pocketsphinx/model/en-us/en-us.lm.bin",
+    phone_lm: "/usr/share/pocketsphinx/model/en-us/en-us-phone.lm.bin",
+    dictionary: "/usr/share/pocketsphinx/model/en-us/cmudict-en-us.dict",
+};
+
+/// A language's model files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Models<'a> {
+    /// The acoustic model's folder (`-hmm`).
+    pub acoustic: &'a str,
+    /// The word language model (`-lm`).
+    pub language_model: &'a str,
+    /// The phone language model for a phone loop (`-allphone`).
+    pub phone_lm: &'a str,
+    /// The pronouncing dictionary (`-dict`).
+    pub dictionary: &'a str,
+}
+
+impl Models<'_> {
+    /// Any phone after any other, weighted by the phone language model: recognition without a
+    /// transcript.
+    #[must_use]
+    pub fn phone_loop(&self) -> Search {
+        Search {
+            acoustic: PathBuf::from(self.acoustic),
+            mode: Mode::PhoneLoop(PathBuf::from(self.phone_lm)),
+        }
+    }
+
+    /// Words, weighted by the language model: recognition of what was said (words, which the
+    /// dictionary turns into phones), several times faster than a phone loop.
+    #[must_use]
+    pub fn words(&self) -> Search {
+        Search {
+            acoustic: PathBuf::from(self.acoustic),
+            mode: Mode::Words {
+                language_model: PathBuf::from(self.language_model),
+                dictionary: PathBuf::from(self.dictionary),
+            },
+        }
+    }
+
+    /// Exactly `jsgf` (a JSGF grammar whose words are in the dictionary), with silences and
+    /// fillers between words: forced alignment of a transcript.
+    #[must_use]
+    pub fn grammar(&self, jsgf: String) -> Search {
+        Search {
+            acoustic: PathBuf::from(self.acoustic),
+            mode: Mode::Grammar {
+                jsgf,
+                dictionary: PathBuf::from(self.dictionary),
+            },
+        }
+    }
+}
+
+/// What the decoder searches for.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Search {
+    acoustic: PathBuf,
+    mode: Mode,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Mode {
+    PhoneLoop(PathBuf),
+    Words {
+        language_model: PathBuf,
+        dictionary: PathBuf,
+    },
+    Grammar {
+        jsgf: String,
+        dictionary: PathBuf,
+    },
+}
+
+/// One decoded label and the frames it covers (both ends included, 10 ms each).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Segment {
+    /// A phone (`AA`, `SIL`, `+NSN+`) or a word (`hello`, `<sil>`, `[NOISE]`).
+    pub label: String,
+    /// First frame.
+    pub start: u32,
+    /// Last frame.
+    pub end: u32,
+}
+
+/// Why decoding failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SphinxError {
+    /// faceanim was built where libpocketsphinx was not installed.
+    #[error(
+        "speech recognition needs CMU PocketSphinx: apt-get install libpocketsphinx-dev pocketsphinx-en-us, then build faceanim again"
+    )]
+    NotInstalled,
+    /// A model file is missing.
+    #[error("{0}: missing; apt-get install pocketsphinx-en-us")]
+    MissingModel(PathBuf),
+    /// The decoder refused its configuration or failed.
+    #[error("the recogniser failed: {0}")]
+    Decoder(String),
+}
+
+fn check(path: &Path) -> Result<(), SphinxError> {
+    if path.exists() {
+        Ok(())
+    } else {
+        Err(SphinxError::MissingModel(path.to_owned()))
+    }
+}
+
+/// Decodes `samples` (16 kHz, mono) as one utterance with `search`.
+///
+/// # Errors
+/// [`SphinxError::NotInstalled`] without the library, [`SphinxError::MissingModel`] naming a
+/// missing model file, [`SphinxError::Decoder`] when the recogniser fails.
+pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+    check(&search.acoustic)?;
+    match &search.mode {
+        Mode::PhoneLoop(lm) => check(lm)?,
+        Mode::Grammar { dictionary, .. } => check(dictionary)?,
+        Mode::Words {
+            language_model,
+            dictionary,
+        } => {
+            check(language_model)?;
+            check(dictionary)?;
+        }
+    }
+    imp::decode(search, samples)
+}
+
+/// Whether this build has the recogniser.
+#[must_use]
+pub fn available() -> bool {
+    cfg!(pocketsphinx)
+}
+
+#[cfg(not(pocketsphinx))]
+mod imp {
+    use super::{Search, Segment, SphinxError};
+
+    pub fn decode(_: &Search, _: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+        Err(SphinxError::NotInstalled)
+    }
+}
+
+/// The C functions, as `pocketsphinx.h` and `sphinxbase/cmd_ln.h` of 0.8 declare them.
+#[cfg(pocketsphinx)]
+#[allow(missing_docs, non_camel_case_types, reason = "C's names")]
+pub mod ffi {
+    use std::os::raw::{c_char, c_int};
+
+    /// `ps_decoder_t`.
+    #[repr(C)]
+    pub struct ps_decoder_t {
+        _opaque: [u8; 0],
+    }
+    /// `cmd_ln_t`.
+    #[repr(C)]
+    pub struct cmd_ln_t {
+        _opaque: [u8; 0],
+    }
+    /// `ps_seg_t`.
+    #[repr(C)]
+    pub struct ps_seg_t {
+        _opaque: [u8; 0],
+    }
+    /// `arg_t`.
+    #[repr(C)]
+    pub struct arg_t {
+        _opaque: [u8; 0],
+    }
+
+    unsafe extern "C" {
+        pub fn ps_args() -> *const arg_t;
+        pub fn cmd_ln_parse_r(
+            inout: *mut cmd_ln_t,
+            defn: *const arg_t,
+            argc: i32,
+            argv: *mut *mut c_char,
+            strict: i32,
+        ) -> *mut cmd_ln_t;
+        pub fn cmd_ln_free_r(cmdln: *mut cmd_ln_t) -> c_int;
+        pub fn ps_init(config: *mut cmd_ln_t) -> *mut ps_decoder_t;
+        pub fn ps_free(ps: *mut ps_decoder_t) -> c_int;
+        pub fn ps_start_utt(ps: *mut ps_decoder_t) -> c_int;
+        pub fn ps_process_raw(
+            ps: *mut ps_decoder_t,
+            data: *const i16,
+            n_samples: usize,
+            no_search: c_int,
+            full_utt: c_int,
+        ) -> c_int;
+        pub fn ps_end_utt(ps: *mut ps_decoder_t) -> c_int;
+        pub fn ps_seg_iter(ps: *mut ps_decoder_t) -> *mut ps_seg_t;
+        pub fn ps_seg_next(seg: *mut ps_seg_t) -> *mut ps_seg_t;
+        pub fn ps_seg_word(seg: *mut ps_seg_t) -> *const c_char;
+        pub fn ps_seg_frames(seg: *mut ps_seg_t, out_sf: *mut c_int, out_ef: *mut c_int);
+        pub fn ps_seg_free(seg: *mut ps_seg_t);
+    }
+}
+
+#[cfg(pocketsphinx)]
+mod imp {
+    use std::ffi::{CStr, CString};
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    use super::{Mode, Search, Segment, SphinxError, ffi};
+
+    /// The configuration and the decoder made from it, freed together.
+    struct Decoder {
+        config: *mut ffi::cmd_ln_t,
+        ps: *mut ffi::ps_decoder_t,
+    }
+
+    impl Drop for Decoder {
+        fn drop(&mut self) {
+            // SAFETY: both pointers came from their constructors and are freed once, the
+            // decoder (which holds a reference to the configuration) first.
+            unsafe {
+                if !self.ps.is_null() {
+                    ffi::ps_free(self.ps);
+                }
+                if !self.config.is_null() {
+                    ffi::cmd_ln_free_r(self.config);
+                }
+            }
+        }
+    }
+
+    /// A grammar file that is removed when dropped.
+    struct Scratch(std::path::PathBuf);
+
+    impl Drop for Scratch {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_file(&self.0);
+        }
+    }
+
+    fn text(path: &std::path::Path) -> String {
+        path.to_string_lossy().into_owned()
+    }
+
+    pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+        let mut args: Vec<String> = vec![
+            "-hmm".into(),
+            text(&search.acoustic),
+            "-logfn".into(),
+            "/dev/null".into(),
+        ];
+        let _scratch = match &search.mode {
+            Mode::PhoneLoop(lm) => {
+                // The settings CMU recommends for phone recognition.
+                args.extend(
+                    [
+                        "-allphone",
+                        &text(lm),
+                        "-backtrace",
+                        "no",
+                        "-lw",
+                        "2.0",
+                        "-beam",
+                        "1e-20",
+                        "-pbeam",
+                        "1e-20",
+                    ]
+                    .map(str::to_owned),
+                );
+                None
+            }
+            Mode::Words {
+                language_model,
+                dictionary,
+            } => {
+                args.extend(
+                    ["-lm", &text(language_model), "-dict", &text(dictionary)].map(str::to_owned),
+                );
+                None
+            }
+            Mode::Grammar { jsgf, dictionary } => {
+                static COUNT: AtomicU64 = AtomicU64::new(0);
+                let path = std::env::temp_dir().join(format!(
+                    "faceanim-{}-{}.jsgf",
+                    std::process::id(),
+                    COUNT.fetch_add(1, Ordering::Relaxed)
+                ));
+                std::fs::write(&path, jsgf)
+                    .map_err(|e| SphinxError::Decoder(format!("{}: {e}", path.display())))?;
+                args.extend(
+                    [
+                        "-dict",
+                        &text(dictionary),
+                        "-jsgf",
+                        &text(&path),
+                        "-fsgusefiller",
+                        "yes",
+                    ]
+                    .map(str::to_owned),
+                );
+                Some(Scratch(path))
+            }
+        };
+        let owned: Vec<CString> = args
+            .iter()
+            .map(|a| CString::new(a.as_str()))
+            .collect::<Result<_, _>>()
+            .map_err(|_| SphinxError::Decoder("a path holds a NUL byte".into()))?;
+        let mut argv: Vec<*mut std::os::raw::c_char> =
+            owned.iter().map(|a| a.as_ptr().cast_mut()).collect();
+        let argc = i32::try_from(argv.len()).unwrap_or(i32::MAX);
+        let mut decoder = Decoder {
+            config: std::ptr::null_mut(),
+            ps: std::ptr::null_mut(),
+        };
+        // SAFETY: argv points at `argc` NUL-terminated strings that outlive the call (the
+        // parser copies what it keeps); ps_args() is the library's static definition table.
+        decoder.config = unsafe {
+            ffi::cmd_ln_parse_r(
+                std::ptr::null_mut(),
+                ffi::ps_args(),
+                argc,
+                argv.as_mut_ptr(),
+                1,
+            )
+        };
+        if decoder.config.is_null() {
+            return Err(SphinxError::Decoder(format!(
+                "the settings were refused: {}",
+                args.join(" ")
+            )));
+        }
+        // SAFETY: a valid configuration; the decoder keeps its own reference to it.
+        decoder.ps = unsafe { ffi::ps_init(decoder.config) };
+        if decoder.ps.is_null() {
+            return Err(SphinxError::Decoder(
+                "the models could not be loaded (a damaged model or grammar, or a word not in the dictionary)".into(),
+            ));
+        }
+        // SAFETY: a live decoder; `samples` is valid for its length during the call.
+        let processed = unsafe {
+            if ffi::ps_start_utt(decoder.ps) < 0 {
+                return Err(SphinxError::Decoder("could not start the utterance".into()));
+            }
+            let n = ffi::ps_process_raw(decoder.ps, samples.as_ptr(), samples.len(), 0, 1);
+            let end = ffi::ps_end_utt(decoder.ps);
+            n.min(end)
+        };
+        if processed < 0 {
+            return Err(SphinxError::Decoder("decoding failed".into()));
+        }
+        let mut segments = Vec::new();
+        // SAFETY: the iterator belongs to the live decoder; ps_seg_next frees it when it
+        // returns null, and each word pointer is read before the iterator moves on.
+        unsafe {
+            let mut seg = ffi::ps_seg_iter(decoder.ps);
+            while !seg.is_null() {
+                let word = ffi::ps_seg_word(seg);
+                let (mut start, mut end) = (0, 0);
+                ffi::ps_seg_frames(seg, &raw mut start, &raw mut end);
+                if !word.is_null() && end >= start && start >= 0 {
+                    segments.push(Segment {
+                        label: CStr::from_ptr(word).to_string_lossy().into_owned(),
+                        start: start.unsigned_abs(),
+                        end: end.unsigned_abs(),
+                    });
+                }
+                seg = ffi::ps_seg_next(seg);
+            }
+        }
+        Ok(segments)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_model_is_named() {
+        let models = Models {
+            acoustic: "/no/such/model",
+            ..EN_US
+        };
+        let error = decode(&models.phone_loop(), &[0; 1600])
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("/no/such/model"), "{error}");
+    }
+
+    #[test]
+    #[cfg(pocketsphinx)]
+    fn real_speech_decodes_into_phones() {
+        // "go forward ten meters", 16 kHz raw, from Debian's pocketsphinx-testdata.
+        let path = "/usr/share/pocketsphinx/test/data/goforward.raw";
+        let Ok(bytes) = std::fs::read(path) else {
+            eprintln!("{path} is missing: apt-get install pocketsphinx-testdata");
+            return;
+        };
+        let samples: Vec<i16> = bytes
+            .chunks_exact(2)
+            .map(|b| i16::from_le_bytes([b[0], b[1]]))
+            .collect();
+        let phones = decode(&EN_US.phone_loop(), &samples).unwrap();
+        let labels: Vec<&str> = phones.iter().map(|p| p.label.as_str()).collect();
+        assert!(phones.len() > 10, "{labels:?}");
+        assert!(labels.contains(&"F"), "forward: {labels:?}");
+        // Segments are in order and do not overlap.
+        for pair in phones.windows(2) {
+            assert!(pair[0].end < pair[1].start, "{pair:?}");
+        }
+        let words = decode(
+            &EN_US.grammar("#JSGF V1.0;\ngrammar t;\npublic <s> = go forward ten meters;\n".into()),
+            &samples,
+        )
+        .unwrap();
+        let words: Vec<&str> = words
+            .iter()
+            .map(|w| w.label.as_str())
+            .filter(|w| !w.starts_with('<') && !w.starts_with('['))
+            .collect();
+        assert_eq!(words, ["go", "forward", "ten", "meters"]);
+    }
+}
