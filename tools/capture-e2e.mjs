@@ -12,7 +12,7 @@ import { chromium } from 'playwright-core';
 import fs from 'node:fs';
 import path from 'node:path';
 
-const [url, out, video, y4m, truthJson, ...photos] = process.argv.slice(2);
+const [url, out, video, y4m, truthJson, speech, ...photos] = process.argv.slice(2);
 const truth = JSON.parse(truthJson);
 fs.mkdirSync(out, { recursive: true });
 const fail = (message) => { console.error(`capture-e2e: ${message}`); process.exit(1); };
@@ -317,6 +317,25 @@ try {
   const smileColumn = layered.blendshapes.indexOf('mouthSmile_L');
   check(Math.max(...layered.frames.map((row) => row[smileColumn])) > 0.5, 'the stroke did not reach the layered clip');
   await shot('11-stroke-over-take');
+
+  // 13. Speech: a recording opened as the take is lip-synced, and plays with its sound; the
+  //     stroke stays on top; scrubbing sounds a slice at the frame.
+  await page.setInputFiles('#capture-file', speech);
+  await page.waitForFunction(() => { const t = window.studio.capture.view && window.studio.capture.view.take; return t && t.sound && window.studio.sound.source === t.sound; }, null, { timeout: 120000 });
+  const spoken = (await captureState()).take;
+  const jawColumn = (await captureState()).blendshapes.indexOf('jawOpen');
+  check(spoken.estimator === 'received' && spoken.frames > 60, `the speech take: ${spoken.frames} frames, ${spoken.estimator}`);
+  check(Math.max(...spoken.weights.map((row) => row[jawColumn])) > 0.3, 'the lip sync did not open the jaw');
+  await page.click('#play');
+  await page.waitForFunction(() => window.studio.sound.playing && window.studio.frame > 20, null, { timeout: 20000 });
+  const sync = await page.evaluate(() => ({ frame: window.studio.frame, fps: window.studio.state.fps, time: window.studio.sound.time }));
+  measurements.speech_sync_ms = Math.abs(sync.time - sync.frame / sync.fps) * 1000;
+  check(measurements.speech_sync_ms < 150, `the sound is ${measurements.speech_sync_ms} ms from the animation`);
+  await page.click('#play');
+  await page.waitForFunction(() => !window.studio.sound.playing, null, { timeout: 5000 });
+  const layeredSpeech = await page.evaluate(() => fetch('api/capture/export.json').then((r) => r.json()));
+  check(Math.max(...layeredSpeech.frames.map((row) => row[smileColumn])) > 0.5, 'the stroke is not on the lip-sync take');
+  await shot('12-speech-take');
   check(consoleErrors.length === 0, `page errors: ${consoleErrors.join('; ')}`);
   console.log(JSON.stringify(measurements));
 } finally {

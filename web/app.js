@@ -9,6 +9,7 @@
 //   settings.js  the settings panel                 commands.js  toolbar and keyboard
 //   inspector.js the selected action's numbers   shapes.js    the blendshape list
 //   capture.js   capture mode: the take, its corrections, the frame diagram
+//   sound.js     a lip-sync take's sound, played and scrubbed with the animation
 //   live.js      capture from the webcam in real time
 //   vmc.js       VMC in: a phone tracker or another app drives the character
 //   xr.js        immersive sketching in a headset (WebXR): pens, the seed's states, navigation
@@ -18,6 +19,7 @@
 // (crates/studio/API.md).
 
 import { capture } from './capture.js';
+import { sound } from './sound.js';
 import './commands.js';
 import { setMode } from './mode.js';
 import { characterMeshes, characterRoot, currentFrame, isPlaying, isReady } from './playback.js';
@@ -54,6 +56,8 @@ window.studio = Object.freeze({
   /** The VR session and its state (xr.js). */
   xr: xrHook,
   capture,
+  /** A lip-sync take's sound (sound.js). */
+  sound,
 });
 
 (async () => {

@@ -13,6 +13,7 @@ import * as store from './store.js';
 import { drawTimeline } from './timeline.js';
 import { live } from './live.js';
 import { showControls as showVmcControls, vmc } from './vmc.js';
+import { setSound } from './sound.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 const input = (id) => /** @type {HTMLInputElement} */ (document.getElementById(id));
@@ -84,6 +85,7 @@ export function apply(v) {
   if (newTake) shownFrame = -1;
   // A photo plays as its ramp (0 → peak → 0), which is what exports.
   setExtent(take ? (take.ramp ? take.ramp.length : take.frames) - 1 : 0);
+  setSound(take && take.sound ? take.sound : null);
   $('still-row').hidden = !(take && take.still);
   if (take && take.still && document.activeElement !== $('still-frames')) input('still-frames').value = String(take.still);
   const sketch = store.state();
@@ -162,25 +164,34 @@ function layer(frame) {
 const ESTIMATED = { adapter: 'estimated by the adapter', by_name: 'estimated by ARKit name', session_file: 'opened from a session' };
 
 // ---------- input ----------
-input('capture-file').addEventListener('change', async () => {
-  const files = [...(input('capture-file').files || [])];
-  input('capture-file').value = '';
+/** Opens `files` as the take: one video, session or speech file, or a sequence of photos. */
+export async function openInput(files) {
   if (!files.length) return;
   showError('');
   const header = (file) => ({ 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') });
   try {
     if (files.length === 1) {
+      if (AUDIO.test(files[0].name)) $('take-info').textContent = `Lip sync of ${files[0].name}…`;
       apply(await api('POST', 'api/capture/upload', await files[0].arrayBuffer(), header(files[0])));
       return;
     }
     // Several photos are one sequence, in name order, like a folder of frames.
-    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, one session, or any number of PNG or JPEG photos');
+    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, one speech file, one session, or any number of PNG or JPEG photos');
     const batch = Date.now().toString(36) + Math.random().toString(36).slice(2, 8);
     for (const [index, file] of files.entries()) {
       $('take-info').textContent = `Sending ${file.name} (${index + 1} of ${files.length})…`;
       apply(await api('POST', `api/capture/upload?batch=${batch}&index=${index}&count=${files.length}`, await file.arrayBuffer(), header(file)));
     }
   } catch (e) { showError(String(e.message || e)); }
+}
+
+/** Speech the server lip-syncs (crates/studio: capture::audio_mime). */
+export const AUDIO = /\.(wav|mp3|ogg|oga|opus|flac|m4a|aac)$/i;
+
+input('capture-file').addEventListener('change', () => {
+  const files = [...(input('capture-file').files || [])];
+  input('capture-file').value = '';
+  openInput(files);
 });
 $('capture-open').onclick = async () => {
   const path = input('capture-path').value.trim();

@@ -4,7 +4,7 @@
 
 import { api } from './api.js';
 import * as capture from './capture.js';
-import { inCapture, onMode } from './mode.js';
+import { inCapture, onMode, setMode } from './mode.js';
 import { lastFrame, pause, play, playBackwards, setFrame, step } from './playback.js';
 import { toggleOverlays } from './overlays.js';
 import { fitTimeline } from './timeline.js';
@@ -82,7 +82,15 @@ $('character-file').addEventListener('change', (e) => { const f = /** @type {HTM
 const viewport = $('viewport');
 viewport.addEventListener('dragover', (e) => { e.preventDefault(); viewport.classList.add('dragover'); });
 viewport.addEventListener('dragleave', () => viewport.classList.remove('dragover'));
-viewport.addEventListener('drop', (e) => { e.preventDefault(); viewport.classList.remove('dragover'); const f = e.dataTransfer?.files?.[0]; if (f) uploadCharacter(f); });
+// A character opens as the character; speech (lip sync) and video open as the take.
+viewport.addEventListener('drop', (e) => {
+  e.preventDefault();
+  viewport.classList.remove('dragover');
+  const f = e.dataTransfer?.files?.[0];
+  if (!f) return;
+  if (/\.(glb|gltf|vrm)$/i.test(f.name)) uploadCharacter(f);
+  else { setMode('capture'); capture.openInput([f]); }
+});
 $('help-button').onclick = () => { $('help').hidden = !$('help').hidden; };
 $('help-close').onclick = () => { $('help').hidden = true; };
 $('step-back').onclick = () => step(-1);

@@ -201,13 +201,20 @@ export function pause() { setPlaying(false); }
 /** Pauses and steps `by` whole frames. */
 export function step(by) { pause(); setFrame(Math.round(frame) + by); }
 
+/** @type {(() => number|null)|null} */
+let clock = null;
+/** Lets `fn()` give the playing time in seconds (a sound's own clock, which the picture then
+ * follows forwards), or null while it has none; `null` removes it. */
+export function setClock(fn) { clock = fn; }
+
 onTick((now) => {
   const advancing = playing && !!store.state();
   if (advancing) {
     const fps = store.state().fps;
     const last = Math.max(1, lastFrame());
     const loop = /** @type {HTMLInputElement} */ ($('loop')).checked;
-    let f = frame + direction * (now - lastTime) / 1000 * fps;
+    const heard = clock && direction === 1 ? clock() : null;
+    let f = heard !== null ? heard * fps : frame + direction * (now - lastTime) / 1000 * fps;
     if (f > last) { if (loop) f = f % last; else { f = last; pause(); } }
     if (f < 0) { if (loop) f = last + (f % last); else { f = 0; pause(); } }
     setFrame(f);

@@ -20,7 +20,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
-use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir, threejs_render};
+use support::{
+    assert_valid_gltf, faceanim, faceanim_ok, output_dir, request, request_bytes, start_on,
+    threejs_render,
+};
 
 const LIBRIVOX: &str = "/usr/share/pocketsphinx/test/data/librivox";
 
@@ -389,4 +392,98 @@ fn silence_and_noise_keep_the_mouth_closed_and_bad_files_are_named() {
         assert!(stderr.contains(says), "{}: {stderr}", file.display());
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
+}
+
+#[test]
+fn the_studio_lip_syncs_dropped_speech_and_layers_a_stroke_on_it() {
+    let out = output_dir("lipsync-studio");
+    let (wav, _) = librivox().into_iter().nth(3).unwrap();
+    let bytes = std::fs::read(&wav).unwrap();
+    let studio = start_on(None, &out.join("project.json"), &[]);
+    let (status, state) = request(
+        studio.port,
+        "POST",
+        "/api/capture/upload",
+        &[("x-filename", "line.wav")],
+        &bytes,
+    );
+    assert_eq!(status, 200, "{state}");
+    let state: Value = serde_json::from_str(&state).unwrap();
+    let take = &state["take"];
+    assert_eq!(take["estimator"], "received", "{take}");
+    let sound = take["sound"].as_str().unwrap();
+    assert!(sound.starts_with("api/capture/sound"), "{take}");
+    let seconds = (bytes.len() - 44) as f64 / 32_000.0;
+    let frames = take["frames"].as_u64().unwrap() as f64;
+    assert!(
+        ((frames - 1.0) / 30.0 - seconds).abs() < 0.05,
+        "{frames} frames for {seconds} s"
+    );
+    // The mouth moves in it.
+    let most = take["weights"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r.as_array().unwrap().iter().map(|w| w.as_f64().unwrap()))
+        .fold(0.0, f64::max);
+    assert!(most > 0.3, "{most}");
+    // The page gets the sound back to play.
+    let (status, played) = request_bytes(studio.port, "GET", &format!("/{sound}"), &[], b"");
+    assert_eq!(status, 200);
+    assert_eq!(played, bytes);
+    // A stroke on top: the built-in head's left brow raised.
+    let head = faceanim_head::default_character();
+    let brow = head.find_blendshape("browOuterUpLeft").unwrap();
+    let shape = head.blendshape(brow).unwrap();
+    let (v, delta) = shape
+        .indices()
+        .iter()
+        .zip(shape.deltas())
+        .max_by(|a, b| a.1.length().total_cmp(&b.1.length()))
+        .map(|(&v, &d)| (v, d))
+        .unwrap();
+    let start = head.positions()[v as usize] + head.normals()[v as usize] * 0.001;
+    let end = head.positions()[v as usize] + delta;
+    let samples: Vec<Value> = (0..=30)
+        .map(|i| {
+            let p = start.lerp(end, i as f32 / 30.0);
+            serde_json::json!({ "t": f64::from(i) / 60.0, "p": [p.x, p.y, p.z] })
+        })
+        .collect();
+    let stroke = serde_json::json!({ "samples": samples }).to_string();
+    let (status, sketch) = request(studio.port, "POST", "/api/strokes", &[], stroke.as_bytes());
+    assert_eq!(status, 200, "{sketch}");
+    let sketch: Value = serde_json::from_str(&sketch).unwrap();
+    assert_eq!(
+        sketch["actions"][0]["sides"][0]["target"], "browOuterUpLeft",
+        "{sketch}"
+    );
+    let (status, glb) = request_bytes(studio.port, "GET", "/api/capture/export.glb", &[], b"");
+    assert_eq!(status, 200);
+    let (status, clip) = request_bytes(studio.port, "GET", "/api/capture/export.json", &[], b"");
+    assert_eq!(status, 200);
+    drop(studio);
+    let exported = out.join("layered.glb");
+    std::fs::write(&exported, glb).unwrap();
+    assert_valid_gltf(&exported);
+    // The exported clip has the lip sync and the stroke's brow together.
+    let clip: Value = serde_json::from_slice(&clip).unwrap();
+    let names: Vec<&str> = clip["blendshapes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    let (jaw, brow) = (
+        names.iter().position(|n| *n == "jawOpen").unwrap(),
+        names.iter().position(|n| *n == "browOuterUpLeft").unwrap(),
+    );
+    let rows = clip["frames"].as_array().unwrap();
+    let peak = |i: usize| {
+        rows.iter()
+            .map(|r| r[i].as_f64().unwrap())
+            .fold(0.0, f64::max)
+    };
+    assert!(peak(jaw) > 0.3, "the lip sync's jaw: {}", peak(jaw));
+    assert!(peak(brow) > 0.5, "the stroke's brow: {}", peak(brow));
 }

@@ -431,10 +431,19 @@ fn capture_mode_in_a_real_browser() {
         &["--adapter".as_ref(), adapter.as_os_str()],
     );
     let truth_json = serde_json::to_string(&truth).unwrap();
+    // Real speech to lip-sync (Debian's pocketsphinx-testdata: a LibriVox reading).
+    let speech = std::path::PathBuf::from(
+        "/usr/share/pocketsphinx/test/data/librivox/sense_and_sensibility_01_austen_64kb-0920.wav",
+    );
+    assert!(
+        speech.exists(),
+        "pocketsphinx-testdata is needed: run scripts/setup.sh"
+    );
     let mut arguments = vec![
         video.into_os_string(),
         y4m.into_os_string(),
         truth_json.into(),
+        speech.into_os_string(),
     ];
     arguments.extend(photos.into_iter().map(std::path::PathBuf::into_os_string));
     let measured = browser_script("capture-e2e.mjs", &studio, "", &out, &arguments);

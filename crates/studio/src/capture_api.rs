@@ -53,6 +53,7 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/close", post(close))
         .route("/api/capture/cancel", post(cancel))
         .route("/api/capture/frame/{index}", get(preview))
+        .route("/api/capture/sound", get(sound))
         .route("/api/capture/correct", post(correct))
         .route("/api/capture/uncorrect", post(uncorrect))
         .route("/api/capture/keyframe", post(keyframe))
@@ -170,6 +171,35 @@ async fn upload(
         both.desk().open_session(&character, &body, &name)?;
         return Ok(state_of(&both));
     }
+    if let Some(mime) = capture::audio_mime(&name) {
+        if batch.batch.is_some() {
+            return Err(bad(format!(
+                "{name}: speech opens on its own, not in a sequence of photos"
+            )));
+        }
+        let path = both.desk().store_upload(&name, &body, None)?;
+        let character = both.studio().character.clone();
+        let (shown, stored) = (name.clone(), path.clone());
+        // Recognition takes seconds: off the async threads.
+        let lip_sync = tokio::task::spawn_blocking(move || {
+            let sound = faceanim_speech::Sound::read(&stored)?;
+            faceanim_speech::lip_sync(
+                &sound,
+                None,
+                &character,
+                &faceanim_speech::MouthTable::default(),
+                30.0,
+                faceanim_speech::Recognition::Words,
+            )
+        })
+        .await
+        .map_err(|e| bad(format!("{shown}: lip sync stopped: {e}")))?
+        .map_err(|e| bad(format!("{shown}: {e}")))?;
+        let character = both.studio().character.clone();
+        both.desk()
+            .open_speech(&character, &lip_sync, capture::Sound { path, mime }, &name)?;
+        return Ok(state_of(&both));
+    }
     if batch.batch.is_some() && batch.index >= batch.count {
         return Err(bad(format!(
             "index: {} is not below count {}",
@@ -222,6 +252,21 @@ async fn preview(
     headers.insert(header::CONTENT_TYPE, HeaderValue::from_static("image/png"));
     headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
     Ok((headers, png).into_response())
+}
+
+/// The open lip-sync take's sound, as uploaded.
+async fn sound(State(both): State<Both>) -> Result<Response, ApiError> {
+    let sound = both
+        .desk()
+        .take()
+        .and_then(|open| open.sound.clone())
+        .ok_or(ApiError::NoPreview("the open take has no sound"))?;
+    let bytes =
+        std::fs::read(&sound.path).map_err(|e| bad(format!("{}: {e}", sound.path.display())))?;
+    let mut headers = HeaderMap::new();
+    headers.insert(header::CONTENT_TYPE, HeaderValue::from_static(sound.mime));
+    headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    Ok((headers, bytes).into_response())
 }
 
 #[derive(Deserialize)]

@@ -554,6 +554,8 @@ pub struct TakeView {
     pub neutral_check: Option<faceanim_take::NeutralCheck>,
     /// The warning, in words.
     pub neutral_warning: Option<String>,
+    /// For a lip-sync take: where the page fetches its sound to play with it.
+    pub sound: Option<String>,
 }
 
 impl TakeView {
@@ -603,6 +605,7 @@ impl TakeView {
                 .as_ref()
                 .and_then(faceanim_take::NeutralCheck::warning),
             neutral_check,
+            sound: None,
         }
     }
 }

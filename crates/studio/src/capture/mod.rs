@@ -52,6 +52,32 @@ fn face_models() -> Result<&'static FaceModels, ApiError> {
         .map_err(|e| ApiError::Models(e.clone()))
 }
 
+/// A take's sound: the uploaded file as it came, for the page to play.
+#[derive(Debug, Clone)]
+pub struct Sound {
+    /// Where the upload was stored.
+    pub path: std::path::PathBuf,
+    /// Its media type.
+    pub mime: &'static str,
+}
+
+/// The media type of an audio file by its name; `None` for a file that is not sound.
+#[must_use]
+pub fn audio_mime(name: &str) -> Option<&'static str> {
+    let extension = std::path::Path::new(name)
+        .extension()?
+        .to_string_lossy()
+        .to_ascii_lowercase();
+    Some(match extension.as_str() {
+        "wav" => "audio/wav",
+        "mp3" => "audio/mpeg",
+        "ogg" | "oga" | "opus" => "audio/ogg",
+        "flac" => "audio/flac",
+        "m4a" | "aac" => "audio/mp4",
+        _ => return None,
+    })
+}
+
 /// The take being edited, with what the server keeps beside it.
 #[derive(Debug)]
 pub struct OpenTake {
@@ -59,6 +85,8 @@ pub struct OpenTake {
     pub take: Take,
     /// A PNG preview of each input frame.
     pub previews: Previews,
+    /// The speech a lip-sync take was made from, played with it.
+    pub sound: Option<Sound>,
     /// Different for every take this process opened: the page tells takes apart by it (two
     /// uploads of `clip.mp4` are different takes).
     id: u64,
@@ -70,6 +98,7 @@ impl OpenTake {
         OpenTake {
             take,
             previews,
+            sound: None,
             id: NEXT.fetch_add(1, Ordering::Relaxed),
         }
     }
@@ -407,6 +436,42 @@ impl CaptureDesk {
         Ok(frames)
     }
 
+    /// Makes a lip-sync take of the speech at `path` (shown as `shown`), its frames the
+    /// character's weights at `lip_sync.fps`, played with the sound. Returns its frame count.
+    ///
+    /// # Errors
+    /// [`ApiError::Busy`] when a job is running, or the take's error.
+    pub fn open_speech(
+        &mut self,
+        character: &Character,
+        lip_sync: &faceanim_speech::LipSync,
+        sound: Sound,
+        shown: &str,
+    ) -> Result<usize, ApiError> {
+        self.busy()?;
+        let fps = f64::from(lip_sync.fps);
+        let frames: Vec<faceanim_take::ReceivedFrame> = lip_sync
+            .frames
+            .iter()
+            .enumerate()
+            .map(|(k, weights)| faceanim_take::ReceivedFrame {
+                time: k as f64 / fps,
+                weights: weights.clone(),
+                head: None,
+            })
+            .collect();
+        let count = frames.len();
+        let raw = Filtering::new(1, None)?;
+        let take = Take::from_received(character, shown, frames, raw)?;
+        tracing::info!("lip sync of {shown}: {count} frames");
+        self.take = Some(OpenTake {
+            sound: Some(sound),
+            ..OpenTake::new(take, Previews::new())
+        });
+        self.save_take();
+        Ok(count)
+    }
+
     /// Writes the take (or, with none, removes the autosave).
     fn save_take(&self) {
         let result = match &self.take {
@@ -636,7 +701,12 @@ impl CaptureDesk {
                         &by_name
                     }
                 };
-                TakeView::of(&open.take, open.id, open.previews.len(), estimator)
+                let mut view = TakeView::of(&open.take, open.id, open.previews.len(), estimator);
+                view.sound = open
+                    .sound
+                    .as_ref()
+                    .map(|_| format!("api/capture/sound?take={}", open.id));
+                view
             }),
         }
     }

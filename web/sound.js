@@ -1,0 +1,65 @@
+// A lip-sync take's sound: plays with the animation (while it plays forwards, the picture
+// follows the sound's own clock, so the two cannot drift), and sounds a short slice when the
+// frame is scrubbed by hand, so the animator hears where the mouth is. Owns the <audio>
+// element; capture.js says which sound the open take has.
+
+import { currentFrame, isPlaying, onFrame, onPlaying, setClock } from './playback.js';
+import * as store from './store.js';
+
+const audio = new Audio();
+audio.preload = 'auto';
+/** @type {string|null} */
+let source = null;
+/** Slices of sound while scrubbing last this long, ms. */
+const SLICE_MS = 90;
+let sliceTimer = 0;
+
+const seconds = () => currentFrame() / (store.state() ? store.state().fps : 30);
+
+/** Plays `url` with the take (null: no sound). */
+export function setSound(url) {
+  if (url === source) return;
+  source = url;
+  audio.pause();
+  if (url) audio.src = url; else audio.removeAttribute('src');
+  setClock(url ? heard : null);
+}
+
+/** The sound's time while it is really playing (not paused, not waiting for data). */
+function heard() {
+  return !audio.paused && !audio.seeking && audio.readyState >= 3 ? audio.currentTime : null;
+}
+
+/** The sound as scripts and tests see it. */
+export const sound = {
+  get source() { return source; },
+  get playing() { return !audio.paused; },
+  get time() { return audio.currentTime; },
+};
+
+onPlaying((playing) => {
+  if (!source) return;
+  window.clearTimeout(sliceTimer);
+  if (playing) {
+    audio.currentTime = seconds();
+    audio.play().catch(() => {});
+  } else {
+    audio.pause();
+  }
+});
+
+onFrame(() => {
+  if (!source) return;
+  const t = seconds();
+  if (isPlaying()) {
+    // While the sound plays the picture follows it (playback's clock); before it starts
+    // (loading, seeking) the picture leads and the sound joins it.
+    if (heard() === null && Math.abs(audio.currentTime - t) > 0.1 && !audio.seeking) audio.currentTime = t;
+    return;
+  }
+  // Scrubbing: a slice of sound at the frame.
+  audio.currentTime = Math.min(t, Number.isFinite(audio.duration) ? audio.duration : t);
+  audio.play().catch(() => {});
+  window.clearTimeout(sliceTimer);
+  sliceTimer = window.setTimeout(() => { if (!isPlaying()) audio.pause(); }, SLICE_MS);
+});
