@@ -326,6 +326,8 @@ try {
   const jawColumn = (await captureState()).blendshapes.indexOf('jawOpen');
   check(spoken.estimator === 'received' && spoken.frames > 60, `the speech take: ${spoken.frames} frames, ${spoken.estimator}`);
   check(Math.max(...spoken.weights.map((row) => row[jawColumn])) > 0.3, 'the lip sync did not open the jaw');
+  await page.waitForFunction((n) => Math.abs(window.studio.sound.waveformFrames - n) <= 2, spoken.frames, { timeout: 20000 });
+  check(await page.locator('#timeline .row.sound canvas').count() === 1, 'the timeline has no sound row');
   await page.click('#play');
   await page.waitForFunction(() => window.studio.sound.playing && window.studio.frame > 20, null, { timeout: 20000 });
   const sync = await page.evaluate(() => ({ frame: window.studio.frame, fps: window.studio.state.fps, time: window.studio.sound.time }));

@@ -126,7 +126,7 @@ export function apply(v) {
   if (document.activeElement !== $('keyframe-every')) input('keyframe-every').value = String(f.keyframe_every);
   // Take.
   $('take-info').textContent = take
-    ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; ${ESTIMATED[take.estimator] || take.estimator}${take.preference ? '; preference applied' : ''}.`
+    ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; ${take.sound ? 'lip-synced from its speech' : ESTIMATED[take.estimator] || take.estimator}${take.preference ? '; preference applied' : ''}.`
     : '';
   if (!take) $('capture-input-note').textContent = 'Open a video, photos, a session or the webcam (right).';
   $('capture-input-note').hidden = (!!take && !frameImage.hidden) || live.running;
@@ -440,7 +440,12 @@ function noPreview() {
   frameImage.hidden = true;
   frameImage.removeAttribute('src');
   const note = $('capture-input-note');
-  note.textContent = 'No preview of this frame: the take was opened from a session (or its autosave), which does not keep the input.';
+  const take = view && view.take;
+  note.textContent = take && take.sound
+    ? 'Lip sync: this take was made from speech; its sound plays with it (the sound row of the timeline).'
+    : take && take.estimator === 'received'
+      ? 'No picture: this take arrived as the character\'s weights.'
+      : 'No preview of this frame: the take was opened from a session (or its autosave), which does not keep the input.';
   note.hidden = false;
 }
 

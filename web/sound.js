@@ -5,6 +5,7 @@
 
 import { currentFrame, isPlaying, onFrame, onPlaying, setClock } from './playback.js';
 import * as store from './store.js';
+import { drawTimeline } from './timeline.js';
 
 const audio = new Audio();
 audio.preload = 'auto';
@@ -16,10 +17,34 @@ let sliceTimer = 0;
 
 const seconds = () => currentFrame() / (store.state() ? store.state().fps : 30);
 
+/** @type {number[]|null} Per frame, the sound's peak (0..1), once decoded. */
+let peaks = null;
+
+/** The sound's loudness per frame at the sketch's rate, for the timeline; null without one. */
+export function waveform() { return peaks; }
+
+/** Decodes `url` and measures its peak per frame. */
+async function measure(url) {
+  const bytes = await fetch(url).then((r) => r.arrayBuffer());
+  const decoded = await new OfflineAudioContext(1, 1, 44100).decodeAudioData(bytes);
+  if (url !== source) return;
+  const data = decoded.getChannelData(0);
+  const per = decoded.sampleRate / (store.state() ? store.state().fps : 30);
+  const frames = Math.ceil(data.length / per);
+  peaks = Array.from({ length: frames }, (_, f) => {
+    let most = 0;
+    for (let i = Math.floor(f * per); i < Math.min(data.length, Math.floor((f + 1) * per)); i++) most = Math.max(most, Math.abs(data[i]));
+    return most;
+  });
+  drawTimeline();
+}
+
 /** Plays `url` with the take (null: no sound). */
 export function setSound(url) {
   if (url === source) return;
   source = url;
+  peaks = null;
+  if (url) measure(url).catch(() => {});
   audio.pause();
   if (url) audio.src = url; else audio.removeAttribute('src');
   setClock(url ? heard : null);
@@ -35,6 +60,8 @@ export const sound = {
   get source() { return source; },
   get playing() { return !audio.paused; },
   get time() { return audio.currentTime; },
+  /** Frames whose loudness the timeline draws (0 before the sound is decoded). */
+  get waveformFrames() { return peaks ? peaks.length : 0; },
 };
 
 onPlaying((playing) => {

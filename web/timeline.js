@@ -5,6 +5,7 @@ import { currentFrame, isPlaying, lastFrame, onFrame, setFrame } from './playbac
 import { api } from './api.js';
 import { showError, showFailure } from './status.js';
 import * as store from './store.js';
+import { waveform } from './sound.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 
@@ -67,6 +68,28 @@ export function drawTimeline() {
   win.className = 'window';
   win.style.left = `${frameX(0)}px`; win.style.width = `${state.last_frame * PX}px`;
   timeline.appendChild(win);
+  // A lip-sync take's sound: its loudness per frame, under the ruler.
+  const peaks = waveform();
+  if (peaks) {
+    const row = document.createElement('div');
+    row.className = 'row sound';
+    row.style.width = `${width}px`;
+    const label = document.createElement('div');
+    label.className = 'label';
+    label.textContent = 'sound';
+    const canvas = document.createElement('canvas');
+    canvas.width = Math.max(1, peaks.length * PX);
+    canvas.height = 24;
+    canvas.style.position = 'absolute';
+    canvas.style.left = `${frameX(0)}px`;
+    const g = canvas.getContext('2d');
+    if (g) {
+      g.fillStyle = '#6fa8dc';
+      peaks.forEach((p, f) => { const h = Math.max(1, p * 22); g.fillRect(f * PX, 12 - h / 2, Math.max(1, PX - 1), h); });
+    }
+    row.append(label, canvas);
+    timeline.appendChild(row);
+  }
   const chainColours = ['#4a7bd0', '#3fa36b', '#b0609c', '#c7843a', '#5aa8b8', '#9a8a3f'];
   for (const action of state.actions) {
     const row = document.createElement('div');
