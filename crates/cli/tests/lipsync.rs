@@ -22,7 +22,7 @@ use std::process::Command;
 use serde_json::Value;
 use support::{
     assert_valid_gltf, faceanim, faceanim_ok, output_dir, request, request_bytes, start_on,
-    threejs_render,
+    strings, stroke_along, threejs_render,
 };
 
 const LIBRIVOX: &str = "/usr/share/pocketsphinx/test/data/librivox";
@@ -100,18 +100,24 @@ fn mouth(clip: &Value, frames: usize) -> Vec<f64> {
         .collect()
 }
 
+/// The largest weight in rows of weights.
+fn peak(rows: &Value) -> f64 {
+    rows.as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r.as_array().unwrap().iter().map(|w| w.as_f64().unwrap()))
+        .fold(0.0, f64::max)
+}
+
 fn run_lipsync(speech: &Path, more: &[&str], out: &Path) -> (Value, Value) {
     let clip = out.with_extension("json");
-    let mut args = vec![
-        "lipsync",
-        speech.to_str().unwrap(),
-        "--clip",
-        clip.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-    ];
-    args.extend_from_slice(more);
+    let paths = [speech, &clip, out].map(|p| p.to_str().unwrap());
+    let args: Vec<&str> = [
+        "lipsync", paths[0], "--clip", paths[1], "-o", paths[2], "--json",
+    ]
+    .into_iter()
+    .chain(more.iter().copied())
+    .collect();
     let summary: Value = serde_json::from_str(faceanim_ok(&args).trim()).unwrap();
     let clip: Value = serde_json::from_slice(&std::fs::read(&clip).unwrap()).unwrap();
     (summary, clip)
@@ -310,42 +316,28 @@ fn ffmpeg(args: &[&str]) {
 #[test]
 fn silence_and_noise_keep_the_mouth_closed_and_bad_files_are_named() {
     let out = output_dir("lipsync-bad");
-    let silence = out.join("silence.wav");
-    ffmpeg(&[
-        "-f",
-        "lavfi",
-        "-i",
-        "anullsrc=r=16000:cl=mono",
-        "-t",
-        "3",
-        silence.to_str().unwrap(),
-    ]);
-    let noise = out.join("noise.mp3");
-    ffmpeg(&[
-        "-f",
-        "lavfi",
-        "-i",
-        "anoisesrc=d=3:c=pink:a=0.2",
-        noise.to_str().unwrap(),
-    ]);
-    let hum = out.join("hum.ogg");
-    ffmpeg(&[
-        "-f",
-        "lavfi",
-        "-i",
-        "sine=f=50:d=3",
-        "-c:a",
-        "libvorbis",
-        hum.to_str().unwrap(),
-    ]);
+    // Three seconds each of digital silence, pink noise and mains hum, as ffmpeg makes them.
+    let [silence, noise, hum] = [
+        ("silence.wav", "anullsrc=r=16000:cl=mono:d=3"),
+        ("noise.mp3", "anoisesrc=d=3:c=pink:a=0.2"),
+        ("hum.ogg", "sine=f=50:d=3"),
+    ]
+    .map(|(name, source)| {
+        let path = out.join(name);
+        ffmpeg(&[
+            "-f",
+            "lavfi",
+            "-i",
+            source,
+            "-t",
+            "3",
+            path.to_str().unwrap(),
+        ]);
+        path
+    });
     for quiet in [&silence, &noise, &hum] {
         let (_, clip) = run_lipsync(quiet, &[], &out.join("quiet.json"));
-        let most = clip["frames"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .flat_map(|r| r.as_array().unwrap().iter().map(|w| w.as_f64().unwrap()))
-            .fold(0.0, f64::max);
+        let most = peak(&clip["frames"]);
         assert!(
             most < 0.01,
             "{}: the mouth moved to {most}",
@@ -420,37 +412,19 @@ fn the_studio_lip_syncs_dropped_speech_and_layers_a_stroke_on_it() {
         "{frames} frames for {seconds} s"
     );
     // The mouth moves in it.
-    let most = take["weights"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .flat_map(|r| r.as_array().unwrap().iter().map(|w| w.as_f64().unwrap()))
-        .fold(0.0, f64::max);
+    let most = peak(&take["weights"]);
     assert!(most > 0.3, "{most}");
     // The page gets the sound back to play.
     let (status, played) = request_bytes(studio.port, "GET", &format!("/{sound}"), &[], b"");
     assert_eq!(status, 200);
     assert_eq!(played, bytes);
     // A stroke on top: the built-in head's left brow raised.
-    let head = faceanim_head::default_character();
-    let brow = head.find_blendshape("browOuterUpLeft").unwrap();
-    let shape = head.blendshape(brow).unwrap();
-    let (v, delta) = shape
-        .indices()
-        .iter()
-        .zip(shape.deltas())
-        .max_by(|a, b| a.1.length().total_cmp(&b.1.length()))
-        .map(|(&v, &d)| (v, d))
-        .unwrap();
-    let start = head.positions()[v as usize] + head.normals()[v as usize] * 0.001;
-    let end = head.positions()[v as usize] + delta;
-    let samples: Vec<Value> = (0..=30)
-        .map(|i| {
-            let p = start.lerp(end, i as f32 / 30.0);
-            serde_json::json!({ "t": f64::from(i) / 60.0, "p": [p.x, p.y, p.z] })
-        })
-        .collect();
-    let stroke = serde_json::json!({ "samples": samples }).to_string();
+    let stroke = stroke_along(
+        &faceanim_head::default_character(),
+        "browOuterUpLeft",
+        30,
+        1.0 / 60.0,
+    );
     let (status, sketch) = request(studio.port, "POST", "/api/strokes", &[], stroke.as_bytes());
     assert_eq!(status, 200, "{sketch}");
     let sketch: Value = serde_json::from_str(&sketch).unwrap();
@@ -468,12 +442,7 @@ fn the_studio_lip_syncs_dropped_speech_and_layers_a_stroke_on_it() {
     assert_valid_gltf(&exported);
     // The exported clip has the lip sync and the stroke's brow together.
     let clip: Value = serde_json::from_slice(&clip).unwrap();
-    let names: Vec<&str> = clip["blendshapes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|n| n.as_str().unwrap())
-        .collect();
+    let names = strings(&clip["blendshapes"]);
     let (jaw, brow) = (
         names.iter().position(|n| *n == "jawOpen").unwrap(),
         names.iter().position(|n| *n == "browOuterUpLeft").unwrap(),

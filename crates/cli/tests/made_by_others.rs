@@ -28,7 +28,7 @@ use faceanim_testdata::{gltf_transform, gltfpack};
 use serde_json::Value;
 use support::{
     assert_valid_gltf, blender_report, export_with_clip, faceanim_ok, output_dir, request,
-    request_bytes, start_on, threejs_render, track_clip,
+    request_bytes, start_on, stroke_along, threejs_render, track_clip,
 };
 
 /// The Blender avatar's shape keys.
@@ -306,25 +306,7 @@ fn strokes_through_the_studio_api_animate_the_blender_avatar() {
     )
     .unwrap()
     .character;
-    let jaw = character.find_blendshape("jawOpen").unwrap();
-    let shape = character.blendshape(jaw).unwrap();
-    let (v, delta) = shape
-        .indices()
-        .iter()
-        .zip(shape.deltas())
-        .max_by(|a, b| a.1.length().total_cmp(&b.1.length()))
-        .map(|(&v, &d)| (v, d))
-        .unwrap();
-    let start = character.positions()[v as usize] + character.normals()[v as usize] * 0.001;
-    let end = character.positions()[v as usize] + delta;
-    let samples: Vec<Value> = (0..=45)
-        .map(|i| {
-            let s = i as f32 / 45.0;
-            let p = start.lerp(end, s);
-            serde_json::json!({ "t": i as f32 / 90.0, "p": [p.x, p.y, p.z] })
-        })
-        .collect();
-    let stroke = serde_json::json!({ "samples": samples }).to_string();
+    let stroke = stroke_along(&character, "jawOpen", 45, 1.0 / 90.0);
 
     let studio = start_on(Some(&file), &dir.join("project.json"), &[]);
     let (status, state) = request(studio.port, "POST", "/api/strokes", &[], stroke.as_bytes());

@@ -16,24 +16,14 @@ mod support;
 
 use faceanim_rig::name_map::Use;
 use faceanim_rig::names::Drive;
-use faceanim_testdata::producers::{FOOTAGE_SHA256, real_footage};
+use faceanim_testdata::producers::real_footage;
 use serde_json::Value;
-use support::{correlation, output_dir, repo, track_clip};
+use support::{follows, footage_reference, output_dir, strings, track_clip};
 
 #[test]
 fn by_name_every_moving_channel_follows_mediapipe_on_a_real_person() {
     let footage = real_footage();
-    let reference: Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            repo().join("crates/cli/tests/reference/cap12_edit.mediapipe.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
-    assert_eq!(
-        reference["sha256"], FOOTAGE_SHA256,
-        "recorded from this very file"
-    );
+    let reference = footage_reference();
     let dir = output_dir("real-footage");
     let out = dir.join("cap12.json");
     let head = faceanim_testdata::shared("characters/ict-face.glb");
@@ -44,12 +34,7 @@ fn by_name_every_moving_channel_follows_mediapipe_on_a_real_person() {
         reference["frames"].as_u64().unwrap(),
         "one row per frame of the footage"
     );
-    let names: Vec<String> = clip["blendshapes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|n| n.as_str().unwrap().to_owned())
-        .collect();
+    let names = strings(&clip["blendshapes"]);
     let map = faceanim_rig::name_map::NameMap::from_names(&names, &[]);
     let moving = reference["moving"].as_object().unwrap();
     let mut report = Vec::new();
@@ -65,14 +50,7 @@ fn by_name_every_moving_channel_follows_mediapipe_on_a_real_person() {
         let Some(theirs) = moving.get(channel).and_then(Value::as_array) else {
             continue;
         };
-        let (mut ours, mut mediapipe) = (Vec::new(), Vec::new());
-        for (row, score) in frames.iter().zip(theirs) {
-            if let Some(score) = score.as_f64() {
-                ours.push(row[i].as_f64().unwrap());
-                mediapipe.push(score);
-            }
-        }
-        let r = correlation(&ours, &mediapipe);
+        let r = follows(frames, i, theirs);
         report.push(format!("{name} ({channel}): {r:.3}"));
         if r < 0.9 {
             failures.push(format!("{name} ({channel}): {r:.3}"));

@@ -144,11 +144,28 @@ impl Camera {
     /// field of view of `fov` radians; `depth` is how far behind the target the scene reaches.
     #[must_use]
     pub fn looking_at(eye: Vec3, target: Vec3, up: Vec3, fov: f32, depth: f32) -> Camera {
+        Camera::aimed(
+            eye,
+            target,
+            up,
+            |near, far| Mat4::perspective_rh_gl(fov, 1.0, near, far),
+            depth,
+        )
+    }
+
+    /// A camera at `eye` looking at `target`, `projection(near, far)` its lens, seeing from a
+    /// twentieth of the distance to `depth` behind the target.
+    fn aimed(
+        eye: Vec3,
+        target: Vec3,
+        up: Vec3,
+        projection: impl Fn(f32, f32) -> Mat4,
+        depth: f32,
+    ) -> Camera {
         let distance = (target - eye).length().max(f32::EPSILON);
         let view = Mat4::look_at_rh(eye, target, up);
-        let projection = Mat4::perspective_rh_gl(fov, 1.0, distance * 0.05, distance + depth);
         Camera {
-            view_projection: projection * view,
+            view_projection: projection(distance * 0.05, distance + depth) * view,
             eye,
         }
     }
@@ -158,15 +175,14 @@ impl Camera {
     /// the target; `depth` is how far behind the target the scene reaches.
     #[must_use]
     pub fn orthographic(eye: Vec3, target: Vec3, up: Vec3, side: f32, depth: f32) -> Camera {
-        let distance = (target - eye).length().max(f32::EPSILON);
-        let view = Mat4::look_at_rh(eye, target, up);
         let half = 0.5 * side;
-        let projection =
-            Mat4::orthographic_rh_gl(-half, half, -half, half, distance * 0.05, distance + depth);
-        Camera {
-            view_projection: projection * view,
+        Camera::aimed(
             eye,
-        }
+            target,
+            up,
+            |near, far| Mat4::orthographic_rh_gl(-half, half, -half, half, near, far),
+            depth,
+        )
     }
 
     /// The point of the world seen at pixel (`x`, `y`) of a `size`×`size` picture, on the plane

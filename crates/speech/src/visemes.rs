@@ -242,26 +242,26 @@ impl Track {
 mod tests {
     use super::*;
 
-    fn phone(label: &str, start: f32, end: f32) -> Phone {
-        Phone {
-            label: label.into(),
-            start,
-            end,
-        }
+    /// Phones from "LABEL START END, …".
+    fn phones(text: &str) -> Vec<Phone> {
+        text.split(',')
+            .map(|p| {
+                let parts: Vec<&str> = p.split_whitespace().collect();
+                Phone {
+                    label: parts[0].into(),
+                    start: parts[1].parse().unwrap(),
+                    end: parts[2].parse().unwrap(),
+                }
+            })
+            .collect()
     }
 
     #[test]
     fn lips_close_early_and_pauses_relax_or_close() {
         // "ma ... pa": a short pause between, a long one after.
-        let phones = [
-            phone("SIL", 0.0, 0.3),
-            phone("M", 0.3, 0.38),
-            phone("AA", 0.38, 0.6),
-            phone("SIL", 0.6, 0.72),
-            phone("P", 0.72, 0.8),
-            phone("AA", 0.8, 1.0),
-            phone("SIL", 1.0, 2.0),
-        ];
+        let phones = phones(
+            "SIL 0 0.3, M 0.3 0.38, AA 0.38 0.6, SIL 0.6 0.72, P 0.72 0.8, AA 0.8 1, SIL 1 2",
+        );
         let track = track(&phones, &[true; 200], 2.0);
         let pp = index(Viseme::PP);
         let aa = index(Viseme::Aa);
@@ -284,12 +284,7 @@ mod tests {
 
     #[test]
     fn a_flicker_is_not_drawn_and_the_unheard_is_silence() {
-        let phones = [
-            phone("AA", 0.0, 0.3),
-            phone("T", 0.3, 0.33),
-            phone("AA", 0.33, 0.6),
-            phone("S", 0.6, 1.0),
-        ];
+        let phones = phones("AA 0 0.3, T 0.3 0.33, AA 0.33 0.6, S 0.6 1");
         let mut voiced = vec![true; 100];
         voiced[60..].iter_mut().for_each(|v| *v = false);
         let track = track(&phones, &voiced, 1.0);

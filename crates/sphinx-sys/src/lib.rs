@@ -186,26 +186,17 @@ mod imp {
 pub mod ffi {
     use std::os::raw::{c_char, c_int};
 
-    /// `ps_decoder_t`.
-    #[repr(C)]
-    pub struct ps_decoder_t {
-        _opaque: [u8; 0],
+    /// C's opaque structures, known only by pointer.
+    macro_rules! opaque {
+        ($($name:ident),*) => {$(
+            #[doc = concat!("`", stringify!($name), "`.")]
+            #[repr(C)]
+            pub struct $name {
+                _opaque: [u8; 0],
+            }
+        )*};
     }
-    /// `cmd_ln_t`.
-    #[repr(C)]
-    pub struct cmd_ln_t {
-        _opaque: [u8; 0],
-    }
-    /// `ps_seg_t`.
-    #[repr(C)]
-    pub struct ps_seg_t {
-        _opaque: [u8; 0],
-    }
-    /// `arg_t`.
-    #[repr(C)]
-    pub struct arg_t {
-        _opaque: [u8; 0],
-    }
+    opaque!(ps_decoder_t, cmd_ln_t, ps_seg_t, arg_t);
 
     unsafe extern "C" {
         pub fn ps_args() -> *const arg_t;

@@ -57,6 +57,75 @@ pub fn blender_stills(model: &Path, poses: &serde_json::Value, dir: &Path) {
     succeeded("blender_stills.py", out);
 }
 
+/// The strings of a JSON array (a clip's `blendshapes`).
+pub fn strings(value: &serde_json::Value) -> Vec<String> {
+    value
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap().to_owned())
+        .collect()
+}
+
+/// A stroke (the studio's `POST /api/strokes` body) from just off the vertex that `shape` of
+/// `character` moves most to where the shape takes it: `steps` samples `dt` seconds apart.
+pub fn stroke_along(
+    character: &faceanim_rig::Character,
+    shape: &str,
+    steps: u32,
+    dt: f32,
+) -> String {
+    let id = character.find_blendshape(shape).unwrap();
+    let shape = character.blendshape(id).unwrap();
+    let (v, delta) = shape
+        .indices()
+        .iter()
+        .zip(shape.deltas())
+        .max_by(|a, b| a.1.length().total_cmp(&b.1.length()))
+        .map(|(&v, &d)| (v as usize, d))
+        .unwrap();
+    let start = character.positions()[v] + character.normals()[v] * 0.001;
+    let end = character.positions()[v] + delta;
+    let samples: Vec<serde_json::Value> = (0..=steps)
+        .map(|i| {
+            let p = start.lerp(end, i as f32 / steps as f32);
+            serde_json::json!({ "t": i as f32 * dt, "p": [p.x, p.y, p.z] })
+        })
+        .collect();
+    serde_json::json!({ "samples": samples }).to_string()
+}
+
+/// MediaPipe's own runtime's scores on the real footage (`crates/cli/tests/reference`,
+/// recorded by `tools/record_footage_scores.py` from the very file the tests fetch).
+pub fn footage_reference() -> serde_json::Value {
+    let reference: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            repo().join("crates/cli/tests/reference/cap12_edit.mediapipe.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        reference["sha256"],
+        faceanim_testdata::producers::FOOTAGE_SHA256,
+        "recorded from this very file"
+    );
+    reference
+}
+
+/// Column `column` of a clip's `frames` beside MediaPipe's scores `theirs`, over the frames
+/// where MediaPipe found a face; then their correlation.
+pub fn follows(frames: &[serde_json::Value], column: usize, theirs: &[serde_json::Value]) -> f64 {
+    let (mut ours, mut mediapipe) = (Vec::new(), Vec::new());
+    for (row, score) in frames.iter().zip(theirs) {
+        if let Some(score) = score.as_f64() {
+            ours.push(row[column].as_f64().unwrap());
+            mediapipe.push(score);
+        }
+    }
+    correlation(&ours, &mediapipe)
+}
+
 /// Pearson's correlation of two series of the same length.
 pub fn correlation(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len() as f64;
