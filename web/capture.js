@@ -85,7 +85,7 @@ export function apply(v) {
   if (newTake) shownFrame = -1;
   // A photo plays as its ramp (0 → peak → 0), which is what exports.
   setExtent(take ? (take.ramp ? take.ramp.length : take.frames) - 1 : 0);
-  setSound(take && take.sound ? take.sound : null);
+  setSound(take && take.sound ? take.sound : null, take ? take.fps : 30);
   $('still-row').hidden = !(take && take.still);
   if (take && take.still && document.activeElement !== $('still-frames')) input('still-frames').value = String(take.still);
   const sketch = store.state();

@@ -4,7 +4,6 @@
 // element; capture.js says which sound the open take has.
 
 import { currentFrame, isPlaying, onFrame, onPlaying, setClock } from './playback.js';
-import * as store from './store.js';
 import { drawTimeline } from './timeline.js';
 
 const audio = new Audio();
@@ -15,12 +14,15 @@ let source = null;
 const SLICE_MS = 90;
 let sliceTimer = 0;
 
-const seconds = () => currentFrame() / (store.state() ? store.state().fps : 30);
+const seconds = () => currentFrame() / rate;
 
 /** @type {number[]|null} Per frame, the sound's peak (0..1), once decoded. */
 let peaks = null;
 
-/** The sound's loudness per frame at the sketch's rate, for the timeline; null without one. */
+/** The take's frames per second (its frames are the timeline's). */
+let rate = 30;
+
+/** The sound's loudness per frame of the take, for the timeline; null without one. */
 export function waveform() { return peaks; }
 
 /** Decodes `url` and measures its peak per frame. */
@@ -29,7 +31,7 @@ async function measure(url) {
   const decoded = await new OfflineAudioContext(1, 1, 44100).decodeAudioData(bytes);
   if (url !== source) return;
   const data = decoded.getChannelData(0);
-  const per = decoded.sampleRate / (store.state() ? store.state().fps : 30);
+  const per = decoded.sampleRate / rate;
   const frames = Math.ceil(data.length / per);
   peaks = Array.from({ length: frames }, (_, f) => {
     let most = 0;
@@ -39,10 +41,11 @@ async function measure(url) {
   drawTimeline();
 }
 
-/** Plays `url` with the take (null: no sound). */
-export function setSound(url) {
+/** Plays `url` with the take, whose frames run at `fps` (null: no sound). */
+export function setSound(url, fps = 30) {
   if (url === source) return;
   source = url;
+  rate = fps;
   peaks = null;
   if (url) measure(url).catch(() => {});
   audio.pause();
