@@ -436,7 +436,7 @@ impl CaptureDesk {
         Ok(frames)
     }
 
-    /// Makes a lip-sync take of the speech at `path` (shown as `shown`), its frames the
+    /// Makes `lip_sync` (of the speech `shown`, kept as `sound`) the take: its frames the
     /// character's weights at `lip_sync.fps`, played with the sound. Returns its frame count.
     ///
     /// # Errors
