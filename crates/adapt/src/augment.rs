@@ -148,16 +148,24 @@ impl Identity {
             return;
         }
         let side = face.side.max(f32::EPSILON);
+        let mirror = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+        // Per bump, once: its fall-off, and the mirrored bump's centre and offset.
+        let bumps = self.bumps.map(|b| {
+            (
+                -0.5 / (b.radius * b.radius),
+                b.centre,
+                b.offset,
+                mirror(b.centre),
+                mirror(b.offset),
+            )
+        });
         for p in positions {
             let local = (*p - face.centre) / side;
             let mut moved = local * self.scale;
-            for bump in &self.bumps {
-                let fall = -0.5 / (bump.radius * bump.radius);
-                let mirrored = Vec3::new(-bump.centre.x, bump.centre.y, bump.centre.z);
-                let near = (local - bump.centre).length_squared();
+            for &(fall, centre, offset, mirrored, mirrored_offset) in &bumps {
+                let near = (local - centre).length_squared();
                 let far = (local - mirrored).length_squared();
-                moved += bump.offset * (fall * near).exp()
-                    + Vec3::new(-bump.offset.x, bump.offset.y, bump.offset.z) * (fall * far).exp();
+                moved += offset * (fall * near).exp() + mirrored_offset * (fall * far).exp();
             }
             *p = face.centre + moved * side;
         }

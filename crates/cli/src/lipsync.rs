@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use clap::Args;
 use faceanim_speech::{MouthTable, Sound};
-use faceanim_take::{Filtering, ReceivedFrame, Take};
+use faceanim_take::Take;
 
 /// `faceanim lipsync`'s arguments.
 #[derive(Debug, Args)]
@@ -108,19 +108,8 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     for note in &lip_sync.notes {
         eprintln!("{}: {note}", args.speech.display());
     }
-    let frames: Vec<ReceivedFrame> = lip_sync
-        .frames
-        .iter()
-        .enumerate()
-        .map(|(k, weights)| ReceivedFrame {
-            time: k as f64 / f64::from(args.fps),
-            weights: weights.clone(),
-            head: None,
-        })
-        .collect();
     let name = stem(&args.speech);
-    let raw = Filtering::new(1, None).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let take = Take::from_received(&character, &name, frames, raw)?;
+    let take = Take::from_weights(&character, &name, args.fps, &lip_sync.frames)?;
     let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
     for (path, format) in outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation)?;

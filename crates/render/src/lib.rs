@@ -565,16 +565,6 @@ pub fn render_shaded(
             continue;
         }
         let inverse_area = 1.0 / area;
-        // Flat shading: one colour for the whole triangle, from its own normal at its centre.
-        let flat = shading.faceted.then(|| {
-            let [wa, wb, wc] = [a, b, c].map(|v| pose.positions[v]);
-            let normal = (wb - wa).cross(wc - wa).normalize_or_zero();
-            let colour = (appearance.vertex_colours[a]
-                + appearance.vertex_colours[b]
-                + appearance.vertex_colours[c])
-                / 3.0;
-            shading.light((wa + wb + wc) / 3.0, normal, colour, camera.eye)
-        });
         let material = appearance.triangle_materials[t] as usize;
         let factor = appearance
             .material_factors
@@ -599,6 +589,17 @@ pub fn render_shaded(
         else {
             continue;
         };
+        // Flat shading: one colour for the whole triangle, from its own normal at its centre
+        // (worked out only for triangles that cover a pixel).
+        let flat = shading.faceted.then(|| {
+            let [wa, wb, wc] = [a, b, c].map(|v| pose.positions[v]);
+            let normal = (wb - wa).cross(wc - wa).normalize_or_zero();
+            let colour = (appearance.vertex_colours[a]
+                + appearance.vertex_colours[b]
+                + appearance.vertex_colours[c])
+                / 3.0;
+            shading.light((wa + wb + wc) / 3.0, normal, colour, camera.eye)
+        });
         // Barycentric weights step by a constant from one pixel to the next in a row.
         let (step0, step1) = ((pb.y - pc.y) * inverse_area, (pc.y - pa.y) * inverse_area);
         for y in min_y..=max_y {

@@ -145,10 +145,16 @@ impl Sound {
 /// A canonical 16 kHz mono 16-bit PCM WAV, read without ffmpeg; `Ok(None)` for any other file
 /// (ffmpeg converts it); an error for a WAV that is cut short.
 fn read_plain_wav(path: &Path) -> Result<Option<Sound>, String> {
-    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
-    if bytes.len() < 12 || &bytes[0..4] != b"RIFF" || &bytes[8..12] != b"WAVE" {
+    // The header first: an MP3 or a video is left to ffmpeg without being read here.
+    let mut header = [0u8; 12];
+    let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    if std::io::Read::read_exact(&mut file, &mut header).is_err()
+        || &header[0..4] != b"RIFF"
+        || &header[8..12] != b"WAVE"
+    {
         return Ok(None);
     }
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
     let (mut at, mut format, mut data) = (12usize, None, None);
     while at + 8 <= bytes.len() {
         let id = &bytes[at..at + 4];

@@ -1,6 +1,7 @@
-//! Phones and when they are said, from PocketSphinx: a phone loop when there is no
-//! transcript, forced alignment of the transcript's words when there is one (each word's
-//! phones from the CMU dictionary, sharing the word's time by their typical lengths).
+//! Phones and when they are said, from PocketSphinx: forced alignment of the transcript's
+//! words when there is one; without one, the words recognised with the language model, or a
+//! phone loop. Words become phones by the CMU dictionary, sharing the word's time by their
+//! typical lengths.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -68,8 +69,13 @@ pub fn recognise(
     blind: Recognition,
 ) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
     let mut notes = Vec::new();
-    if let Some(text) = transcript {
-        let dictionary = Dictionary::english()?;
+    // Read once, for the transcript and for recognised words alike.
+    let dictionary = if transcript.is_some() || blind == Recognition::Words {
+        Some(Dictionary::english()?)
+    } else {
+        None
+    };
+    if let (Some(text), Some(dictionary)) = (transcript, &dictionary) {
         let words = words_of(text);
         if words.is_empty() {
             return Err(PhoneError::EmptyTranscript);
@@ -80,7 +86,7 @@ pub fn recognise(
             .map(String::as_str)
             .collect();
         if unknown.is_empty() {
-            match align(sound, &words, &dictionary) {
+            match align(sound, &words, dictionary) {
                 Ok(phones) if !phones.is_empty() => {
                     return Ok((phones, Recognition::Transcript, notes));
                 }
@@ -98,8 +104,12 @@ pub fn recognise(
             ));
         }
     }
-    if blind == Recognition::Words {
-        return Ok((recognise_words(sound)?, Recognition::Words, notes));
+    if let (Recognition::Words, Some(dictionary)) = (blind, &dictionary) {
+        return Ok((
+            recognise_words(sound, dictionary)?,
+            Recognition::Words,
+            notes,
+        ));
     }
     let segments = faceanim_sphinx_sys::decode(&EN_US.phone_loop(), &sound.samples)?;
     let phones = segments
@@ -114,14 +124,10 @@ pub fn recognise(
 }
 
 /// Phones through word recognition: the words recognised with the language model, each
-/// spoken as the dictionary says, their time shared by typical phone lengths.
-///
-/// # Errors
-/// [`PhoneError`] when the recogniser or its models are missing or fail.
-pub fn recognise_words(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
-    let dictionary = Dictionary::english()?;
+/// spoken as `dictionary` says, their time shared by typical phone lengths.
+fn recognise_words(sound: &Sound, dictionary: &Dictionary) -> Result<Vec<Phone>, PhoneError> {
     let segments = faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples)?;
-    Ok(phones_of_words(segments, &dictionary).0)
+    Ok(phones_of_words(segments, dictionary).0)
 }
 
 fn frame_time(frame: u32) -> f32 {

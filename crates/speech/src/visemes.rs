@@ -207,7 +207,12 @@ impl Track {
     #[must_use]
     pub fn weights_at(&self, time: f32) -> [f32; 15] {
         let mut out = [0.0f32; 15];
-        let Some(k) = self.keys.iter().rposition(|key| key.start <= time) else {
+        // Keys are in time order: the last one started by `time`, found by halving.
+        let Some(k) = self
+            .keys
+            .partition_point(|key| key.start <= time)
+            .checked_sub(1)
+        else {
             return out;
         };
         let key = self.keys[k];

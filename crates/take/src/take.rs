@@ -186,6 +186,31 @@ impl Take {
         Ok(Take::new(session, EstimatorSource::Received))
     }
 
+    /// A take of `rows` of `character`'s weights made at a steady `fps` (a lip sync, say),
+    /// named `source`, unfiltered: [`Take::from_received`] of frames `1 / fps` apart.
+    ///
+    /// # Errors
+    /// [`TakeError::Mismatch`] when a row has another number of weights than the character
+    /// has blendshapes.
+    pub fn from_weights(
+        character: &Character,
+        source: &str,
+        fps: f32,
+        rows: &[Vec<f32>],
+    ) -> Result<Take, TakeError> {
+        let step = 1.0 / f64::from(fps);
+        let frames = rows
+            .iter()
+            .enumerate()
+            .map(|(k, weights)| ReceivedFrame {
+                time: k as f64 * step,
+                weights: weights.clone(),
+                head: None,
+            })
+            .collect();
+        Take::from_received(character, source, frames, Filtering::new(1, None)?)
+    }
+
     /// Where the estimates came from.
     #[must_use]
     pub fn estimated_by(&self) -> EstimatorSource {

@@ -449,20 +449,8 @@ impl CaptureDesk {
         shown: &str,
     ) -> Result<usize, ApiError> {
         self.busy()?;
-        let fps = f64::from(lip_sync.fps);
-        let frames: Vec<faceanim_take::ReceivedFrame> = lip_sync
-            .frames
-            .iter()
-            .enumerate()
-            .map(|(k, weights)| faceanim_take::ReceivedFrame {
-                time: k as f64 / fps,
-                weights: weights.clone(),
-                head: None,
-            })
-            .collect();
-        let count = frames.len();
-        let raw = Filtering::new(1, None)?;
-        let take = Take::from_received(character, shown, frames, raw)?;
+        let count = lip_sync.frames.len();
+        let take = Take::from_weights(character, shown, lip_sync.fps, &lip_sync.frames)?;
         tracing::info!("lip sync of {shown}: {count} frames");
         self.take = Some(OpenTake {
             sound: Some(sound),
