@@ -12,6 +12,7 @@ import { showError, showFailure } from './status.js';
 import * as store from './store.js';
 import { drawTimeline } from './timeline.js';
 import { live } from './live.js';
+import { voice } from './voice.js';
 import { showControls as showVmcControls, vmc } from './vmc.js';
 import { setSound } from './sound.js';
 
@@ -30,6 +31,8 @@ export const capture = {
   get view() { return view; },
   /** Live webcam measurements (live.js). */
   live,
+  /** Live microphone measurements (voice.js). */
+  voice,
   /** Waits until no job runs; resolves with the last job's view. */
   async settled(timeoutMs = 600000) {
     const until = Date.now() + timeoutMs;
@@ -145,6 +148,7 @@ export function apply(v) {
  * being dragged shown at once). */
 function layer(frame) {
   if (live.running && live.weights) return live.weights;
+  if (voice.running && voice.weights) return voice.weights;
   if (vmc.running && vmc.weights) return vmc.weights;
   const take = view && view.take;
   if (!take) return null;

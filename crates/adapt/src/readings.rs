@@ -136,6 +136,39 @@ impl FaceCamera {
     }
 }
 
+impl FaceCamera {
+    /// Each row of `performer`'s weights shown from the front (this camera must frame the
+    /// performer) and read by `adapter`, another character's, relative to the performer's
+    /// neutral face: what the adapter's character does when the performer does that. Lip
+    /// sync reads visemes this way for a rig whose names say nothing of a mouth.
+    ///
+    /// # Errors
+    /// [`AdaptError::Model`] if a network fails, [`AdaptError::NoNeutralFace`] when the
+    /// performer's neutral render has no face to read.
+    pub fn read_performer(
+        &self,
+        performer: &Character,
+        models: &FaceModels,
+        adapter: &Adapter,
+        rows: &[Vec<f32>],
+    ) -> Result<Vec<Vec<f32>>, AdaptError> {
+        let mut pose = Pose::default();
+        let Some(neutral) = self.expression(performer, models, &[], &mut pose)?.0 else {
+            return Err(AdaptError::NoNeutralFace);
+        };
+        rows.iter()
+            .map(|row| {
+                Ok(
+                    match self.expression(performer, models, row, &mut pose)?.0 {
+                        Some(expression) => adapter.predict(&expression, Some(&neutral)),
+                        None => vec![0.0; adapter.blendshapes.len()],
+                    },
+                )
+            })
+            .collect()
+    }
+}
+
 /// The names of the shapes in `readings` that capture cannot drive.
 #[must_use]
 pub fn unseen(readings: &[ShapeReading]) -> Vec<&str> {

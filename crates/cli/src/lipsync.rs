@@ -3,8 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use anyhow::Context as _;
 use clap::Args;
-use faceanim_speech::{MouthTable, Sound};
+use faceanim_speech::{Mouth, MouthTable, Sound};
 use faceanim_take::Take;
 
 /// `faceanim lipsync`'s arguments.
@@ -33,6 +34,11 @@ pub struct LipsyncArgs {
     /// {"aa": {"jawOpen": 0.7}, …}; visemes left out keep the built-in table).
     #[arg(long, value_name = "FILE")]
     pub viseme_table: Option<PathBuf>,
+    /// Read the mouth through the character's adapter (from `faceanim adapt`): each viseme
+    /// the built-in head makes, rendered and read by it. For a rig whose shape names say
+    /// nothing of a mouth (neither visemes nor ARKit names).
+    #[arg(long, value_name = "ADAPTER")]
+    pub adapter: Option<PathBuf>,
     /// Without --text: recognise words (English; about a third of real time) or phones (any
     /// language, slower).
     #[arg(long, value_enum, default_value_t = Blind::Words)]
@@ -93,11 +99,14 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     let transcript = args.text.as_deref().map(transcript).transpose()?;
     let started = Instant::now();
     let sound = Sound::read(&args.speech)?;
-    let lip_sync = faceanim_speech::lip_sync(
+    let mouth = match &args.adapter {
+        Some(path) => mouth_by_adapter(&character, &table, path)?,
+        None => Mouth::of(&character, &table)?,
+    };
+    let lip_sync = faceanim_speech::lip_sync_with(
         &sound,
         transcript.as_deref(),
-        &character,
-        &table,
+        &mouth,
         args.fps,
         match args.recognise {
             Blind::Words => faceanim_speech::Recognition::Words,
@@ -131,6 +140,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         match lip_sync.route {
             faceanim_speech::Route::Visemes => "its viseme shapes",
             faceanim_speech::Route::Arkit => "its ARKit mouth shapes",
+            faceanim_speech::Route::Adapter => "its shapes as its adapter reads each viseme",
         }
     );
     if args.json {
@@ -164,4 +174,27 @@ fn transcript(text: &str) -> anyhow::Result<String> {
 fn stem(path: &Path) -> String {
     path.file_stem()
         .map_or_else(|| "speech".to_owned(), |s| s.to_string_lossy().into_owned())
+}
+
+/// `character`'s mouth read through its adapter at `path`: each viseme the built-in head makes
+/// (by `table`), rendered from the front and read by the adapter.
+fn mouth_by_adapter(
+    character: &faceanim_rig::Character,
+    table: &MouthTable,
+    path: &Path,
+) -> anyhow::Result<Mouth> {
+    let adapter = faceanim_adapt::Adapter::from_bytes(&faceanim_files::read_bytes(path)?)
+        .with_context(|| format!("reading the adapter {}", path.display()))?;
+    adapter
+        .check(character)
+        .with_context(|| format!("the adapter {}", path.display()))?;
+    let models = faceanim_track::FaceModels::load().context("loading the face models")?;
+    let head = faceanim_head::default_character();
+    let rows = Mouth::performer_rows(&head, table)?;
+    let readings = faceanim_adapt::FaceCamera::frame(&head, &models)?
+        .read_performer(&head, &models, &adapter, &rows)?;
+    Ok(Mouth::from_readings(
+        character.blendshapes().len(),
+        &readings,
+    ))
 }

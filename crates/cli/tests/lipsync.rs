@@ -21,8 +21,8 @@ use std::process::Command;
 
 use serde_json::Value;
 use support::{
-    assert_valid_gltf, faceanim, faceanim_ok, output_dir, request, request_bytes, start_on,
-    strings, stroke_along, threejs_render,
+    assert_valid_gltf, faceanim, faceanim_ok, flite, output_dir, request, request_bytes, start_on,
+    strings, stroke_along, threejs_render, vmc_receiver,
 };
 
 const LIBRIVOX: &str = "/usr/share/pocketsphinx/test/data/librivox";
@@ -226,14 +226,7 @@ fn visemes_of_synthetic_voices_match_their_phones_within_40_ms() {
     for voice in ["slt", "rms", "awb"] {
         for (k, line) in lines.iter().enumerate() {
             let wav = out.join(format!("{voice}-{k}.wav"));
-            let made = Command::new("flite")
-                .args(["-voice", voice, "-t", line, "-o"])
-                .arg(&wav)
-                .arg("-psdur")
-                .output()
-                .expect("flite is needed: run scripts/setup.sh");
-            assert!(made.status.success(), "{made:?}");
-            let truth = flite_phones(&String::from_utf8_lossy(&made.stdout));
+            let truth = flite_phones(&flite(voice, line, &wav));
             assert!(truth.len() > 10, "{truth:?}");
             for with_text in [true, false] {
                 let more: Vec<&str> = if with_text {
@@ -455,4 +448,243 @@ fn the_studio_lip_syncs_dropped_speech_and_layers_a_stroke_on_it() {
     };
     assert!(peak(jaw) > 0.3, "the lip sync's jaw: {}", peak(jaw));
     assert!(peak(brow) > 0.5, "the stroke's brow: {}", peak(brow));
+}
+
+/// A chunk of 16-bit samples (as bytes) sent to the studio's microphone at `rate`.
+fn chunk(port: u16, rate: &str, bytes: &[u8]) -> (u16, String) {
+    request(
+        port,
+        "POST",
+        "/api/capture/voice/chunk",
+        &[("x-sample-rate", rate)],
+        bytes,
+    )
+}
+
+/// A JSON request to the studio; its status and answer.
+fn send(port: u16, method: &str, path: &str, body: &str) -> (u16, Value) {
+    let (status, answer) = request(
+        port,
+        method,
+        path,
+        &[("Content-Type", "application/json")],
+        body.as_bytes(),
+    );
+    (
+        status,
+        serde_json::from_str(&answer).unwrap_or(Value::String(answer)),
+    )
+}
+
+/// Sends `samples` to the studio's microphone, `size` samples a request; the last answer.
+fn speak(port: u16, samples: &[i16], size: usize) -> Value {
+    let mut last = Value::Null;
+    for part in samples.chunks(size) {
+        let bytes: Vec<u8> = part.iter().flat_map(|s| s.to_le_bytes()).collect();
+        let (status, body) = chunk(port, "16000", &bytes);
+        assert_eq!(status, 200, "{body}");
+        last = serde_json::from_str(&body).unwrap();
+    }
+    last
+}
+
+/// The studio's live microphone through its API, as the page drives it (the page itself is
+/// `tools/capture-e2e.mjs`): a synthetic voice reads the calibration passage and the voice is
+/// learned; a real person (the LibriVox readings, one after the other) is recorded into a take
+/// with its sound, which exports and validates; the mouth goes out over VMC to an independent
+/// peer (PyPI's python-osc); bad chunks and delays are refused by name.
+#[test]
+fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
+    let out = output_dir("lipsync-microphone");
+    let report = out.join("vmc.json");
+    let (mut peer, vmc_port) = vmc_receiver(30, 120.0, &report);
+    let to = format!("127.0.0.1:{vmc_port}");
+    let studio = start_on(
+        None,
+        &out.join("project.json"),
+        &["--vmc-send".as_ref(), to.as_ref()],
+    );
+    let port = studio.port;
+    let start = |delay: u32| {
+        let body = format!(r#"{{"on": true, "delay_ms": {delay}}}"#);
+        send(port, "PUT", "/api/capture/voice", &body)
+    };
+    let (status, body) = start(5000);
+    assert_eq!(status, 400, "{body}");
+    assert!(body.to_string().contains("delay_ms"), "{body}");
+    // A chunk still on its way when the microphone stops is dropped, not an error.
+    let (status, body) = chunk(port, "16000", &[0; 64]);
+    assert_eq!(status, 200, "{body}");
+    assert!(body.contains(r#""live":false"#), "{body}");
+    let (status, body) = start(0);
+    assert_eq!(status, 200, "{body}");
+    for (rate, bytes, named) in [("44100", 64, "x-sample-rate"), ("16000", 63, "chunk")] {
+        let (status, body) = chunk(port, rate, &vec![0; bytes]);
+        assert_eq!(status, 400, "{body}");
+        assert!(body.contains(named), "{body}");
+    }
+
+    // Calibration: the passage read by a voice the studio never heard, sent faster than real
+    // time; the voice is learned in the background.
+    let passage = out.join("passage.wav");
+    flite("rms", faceanim_speech::listen::PASSAGE, &passage);
+    let (read, rate) = samples(&passage);
+    assert_eq!(rate, 16_000);
+    let (status, body) = send(port, "POST", "/api/capture/voice/calibrate", "{}");
+    assert_eq!(status, 200, "{body}");
+    let answer = speak(port, &read[..(21 * 16_000).min(read.len())], 3200);
+    assert_eq!(answer["live"], true, "{answer}");
+    let calibrated = (0..1200)
+        .find_map(|_| {
+            let (_, state) = send(port, "GET", "/api/capture/state", "");
+            let calibration = state["voice"]["calibration"].clone();
+            if calibration["state"] == "fitting" {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                None
+            } else {
+                Some(calibration)
+            }
+        })
+        .expect("calibration never finished");
+    assert_eq!(calibrated["state"], "calibrated", "{calibrated}");
+    assert!(
+        calibrated["visemes"].as_u64().unwrap() >= 12,
+        "{calibrated}"
+    );
+    assert_eq!(calibrated["notes"], serde_json::json!([]), "{calibrated}");
+
+    // A real person, recorded.
+    let (status, body) = send(port, "POST", "/api/capture/voice/record", r#"{"on": true}"#);
+    assert_eq!(status, 200, "{body}");
+    let mut person = Vec::new();
+    for (wav, _) in librivox() {
+        person.extend(samples(&wav).0);
+    }
+    let answer = speak(port, &person, 320);
+    assert!(
+        answer["voice"]["recording"].as_f64().unwrap() > 20.0,
+        "{answer}"
+    );
+    let (status, state) = send(
+        port,
+        "POST",
+        "/api/capture/voice/record",
+        r#"{"on": false}"#,
+    );
+    assert_eq!(status, 200, "{state}");
+    let take = &state["take"];
+    let seconds = person.len() as f64 / 16_000.0;
+    let frames = take["frames"].as_u64().unwrap() as f64;
+    assert!(
+        (frames / 30.0 - seconds).abs() < 0.1,
+        "{frames} frames for {seconds} s"
+    );
+    assert!(peak(&take["weights"]) > 0.3, "{}", peak(&take["weights"]));
+    let sound = take["sound"].as_str().unwrap();
+    let (status, played) = request_bytes(port, "GET", &format!("/{sound}"), &[], b"");
+    assert_eq!(status, 200);
+    assert_eq!(played.len(), 44 + 2 * person.len());
+    let (status, glb) = request_bytes(port, "GET", "/api/capture/export.glb", &[], b"");
+    assert_eq!(status, 200);
+    let exported = out.join("microphone.glb");
+    std::fs::write(&exported, glb).unwrap();
+    assert_valid_gltf(&exported);
+    drop(studio);
+
+    // Out over VMC: the peer saw the mouth move.
+    let jaw = support::vmc_values(&mut peer, &report, "jawOpen");
+    assert!(
+        jaw.iter().any(|w| *w > 0.1),
+        "the mouth never went out: {jaw:?}"
+    );
+}
+
+/// A rig whose shape names say nothing of a mouth (ICT's head with every shape renamed
+/// `shape_N`, in reverse order): lip sync refuses it by name until it has an adapter, then
+/// reads each viseme the built-in head makes through the adapter, and the shape that is ICT's
+/// jawOpen opens while a synthetic voice speaks and rests before it does.
+#[test]
+fn a_rig_without_mouth_names_lip_syncs_through_its_adapter() {
+    let out = output_dir("lipsync-adapter");
+    let mut parts = faceanim_testdata::ict().to_parts();
+    let count = parts.blendshapes.len();
+    let jaw_was = parts
+        .blendshapes
+        .iter()
+        .position(|b| b.name() == "jawOpen")
+        .unwrap();
+    parts.blendshapes.reverse();
+    if let Some(normals) = parts.normal_deltas.as_mut() {
+        normals.reverse();
+    }
+    parts.blendshapes = parts
+        .blendshapes
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            faceanim_rig::Blendshape::from_sparse(
+                format!("shape_{k}"),
+                b.indices().to_vec(),
+                b.deltas().to_vec(),
+            )
+        })
+        .collect();
+    let jaw = format!("shape_{}", count - 1 - jaw_was);
+    let character = faceanim_rig::Character::new(parts).unwrap();
+    let glb = out.join("unnamed.glb");
+    std::fs::write(&glb, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
+    let speech = out.join("line.wav");
+    flite(
+        "slt",
+        "Bob and Mary moved the heavy boxes up the narrow path.",
+        &speech,
+    );
+    let clip = out.join("clip.json");
+    let args = |more: &[&str]| {
+        let mut all = vec![
+            "lipsync".to_owned(),
+            speech.display().to_string(),
+            "--character".into(),
+            glb.display().to_string(),
+            "-o".into(),
+            clip.display().to_string(),
+            "--json".into(),
+        ];
+        all.extend(more.iter().map(|s| (*s).to_owned()));
+        all
+    };
+    let refused = faceanim(&args(&[]).iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(!refused.status.success());
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(said.contains("faceanim adapt"), "{said}");
+    let adapter = out.join("unnamed.adapter.safetensors");
+    let (character_arg, adapter_arg) = (glb.to_str().unwrap(), adapter.to_str().unwrap());
+    faceanim_ok(&[
+        "adapt",
+        character_arg,
+        "-o",
+        adapter_arg,
+        "--samples",
+        "1000",
+    ]);
+    let summary = faceanim_ok(
+        &args(&["--adapter", adapter_arg])
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    let summary: Value = serde_json::from_str(summary.trim()).unwrap();
+    assert_eq!(summary["route"], "adapter", "{summary}");
+    let clip: Value = serde_json::from_slice(&std::fs::read(&clip).unwrap()).unwrap();
+    let names = strings(&clip["blendshapes"]);
+    let column = names.iter().position(|n| *n == jaw).unwrap();
+    let rows = clip["frames"].as_array().unwrap();
+    let jaw_curve: Vec<f64> = rows.iter().map(|r| r[column].as_f64().unwrap()).collect();
+    let most = jaw_curve.iter().copied().fold(0.0, f64::max);
+    println!(
+        "{jaw} (ICT's jawOpen) peaks at {most:.2}; first frame {:.2}",
+        jaw_curve[0]
+    );
+    assert!(most > 0.25, "{jaw_curve:?}");
+    assert!(jaw_curve[0] < 0.05, "{jaw_curve:?}");
 }

@@ -214,8 +214,8 @@ pub(crate) fn unit_or_up(v: Vec3) -> Vec3 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn flat_square_faces_up() {
+    /// A unit square in the XZ plane, facing up: positions, triangles and their edges.
+    fn square() -> (Vec<Vec3>, Vec<[u32; 3]>, EdgeGraph) {
         let positions = vec![
             Vec3::ZERO,
             Vec3::X,
@@ -224,6 +224,12 @@ mod tests {
         ];
         let triangles = vec![[0, 1, 2], [0, 2, 3]];
         let graph = EdgeGraph::build(&positions, &triangles);
+        (positions, triangles, graph)
+    }
+
+    #[test]
+    fn flat_square_faces_up() {
+        let (positions, triangles, graph) = square();
         for n in vertex_normals(&positions, &triangles, &graph) {
             assert!((n - Vec3::Y).length() < 1e-6, "{n}");
         }
@@ -231,14 +237,7 @@ mod tests {
 
     #[test]
     fn lifting_a_corner_tilts_its_normals() {
-        let positions = vec![
-            Vec3::ZERO,
-            Vec3::X,
-            Vec3::new(1.0, 0.0, -1.0),
-            Vec3::new(0.0, 0.0, -1.0),
-        ];
-        let triangles = vec![[0, 1, 2], [0, 2, 3]];
-        let graph = EdgeGraph::build(&positions, &triangles);
+        let (positions, triangles, graph) = square();
         let shape = Blendshape::from_sparse("lift", vec![1], vec![Vec3::new(0.0, 1.0, 0.0)]);
         let deltas =
             blendshape_normal_deltas(&positions, &triangles, &graph, std::slice::from_ref(&shape))

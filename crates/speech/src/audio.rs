@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use faceanim_sphinx_sys::{FRAME_RATE, SAMPLE_RATE};
+pub use faceanim_sphinx_sys::{FRAME_RATE, SAMPLE_RATE};
 
 /// The longest sound accepted: an hour.
 pub const MAX_SECONDS: f32 = 3600.0;

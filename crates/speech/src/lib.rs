@@ -12,6 +12,10 @@
 //! 4. [`mouth`]: visemes onto the character's own shapes — its visemes by name, or its ARKit
 //!    mouth shapes through a table the user can replace.
 //!
+//! Live, from a microphone, [`listen`] classes each 10 ms as it arrives with a small
+//! classifier learned from the user's own voice (calibrated on a read passage, refined by the
+//! recogniser as they speak).
+//!
 //! ```no_run
 //! let character = faceanim_head::default_character();
 //! let sound = faceanim_speech::audio::Sound::read(std::path::Path::new("line.wav"))?;
@@ -23,6 +27,7 @@
 #![deny(missing_docs)]
 
 pub mod audio;
+pub mod listen;
 pub mod mouth;
 pub mod phones;
 pub mod visemes;
@@ -83,7 +88,21 @@ pub fn lip_sync(
     fps: f32,
     blind: Recognition,
 ) -> Result<LipSync, SpeechError> {
-    let mouth = Mouth::of(character, table)?;
+    lip_sync_with(sound, transcript, &Mouth::of(character, table)?, fps, blind)
+}
+
+/// Lip sync of `sound` through `mouth` (one read through the character's adapter:
+/// [`Mouth::from_readings`]), as [`lip_sync`] does.
+///
+/// # Errors
+/// [`SpeechError`] when the recogniser fails.
+pub fn lip_sync_with(
+    sound: &Sound,
+    transcript: Option<&str>,
+    mouth: &Mouth,
+    fps: f32,
+    blind: Recognition,
+) -> Result<LipSync, SpeechError> {
     let (phones, recognition, notes) = phones::recognise(sound, transcript, blind)?;
     let track = visemes::track(&phones, &sound.voice_activity(), sound.seconds());
     let frames = track.sample(fps).iter().map(|v| mouth.weights(v)).collect();

@@ -26,6 +26,9 @@ pub enum Route {
     Visemes,
     /// Its ARKit mouth channels, through the viseme table.
     Arkit,
+    /// Its own shapes, as its adapter reads renders of the built-in head making each viseme
+    /// ([`Mouth::from_readings`]): for a rig whose names say nothing of a mouth.
+    Adapter,
 }
 
 /// Why a character's mouth cannot be driven.
@@ -34,7 +37,7 @@ pub enum Route {
 pub enum MouthError {
     /// Neither viseme shapes nor ARKit mouth channels.
     #[error(
-        "{0} has neither viseme shapes (viseme_aa, aa/ih/ou/ee/oh, Fcl_MTH_A…) nor ARKit mouth shapes (jawOpen, mouthFunnel…) to lip-sync"
+        "{0} has neither viseme shapes (viseme_aa, aa/ih/ou/ee/oh, Fcl_MTH_A…) nor ARKit mouth shapes (jawOpen, mouthFunnel…) to lip-sync; train its adapter (faceanim adapt, or Train adapter in the studio) and lip sync reads the mouth through it"
     )]
     NoMouth(String),
     /// A viseme table is malformed.
@@ -242,6 +245,9 @@ impl MouthTable {
     }
 }
 
+/// An adapter's reading under this is left out of a viseme read through it.
+pub const MIN_READING: f32 = 0.08;
+
 /// Viseme weights to a character's blendshape weights.
 #[derive(Debug, Clone)]
 pub struct Mouth {
@@ -323,6 +329,49 @@ impl Mouth {
             shapes,
             per_viseme,
         })
+    }
+
+    /// Each viseme (Oculus order) as `performer`'s weights, by [`Mouth::of`]: what the
+    /// performer (the built-in head) does to make it; silence is its rest.
+    ///
+    /// # Errors
+    /// [`MouthError::NoMouth`] when the performer has no mouth either.
+    pub fn performer_rows(
+        performer: &Character,
+        table: &MouthTable,
+    ) -> Result<Vec<Vec<f32>>, MouthError> {
+        let mouth = Mouth::of(performer, table)?;
+        Ok((0..Viseme::ALL.len())
+            .map(|v| {
+                let mut one = [0.0f32; 15];
+                if v > 0 {
+                    one[v] = 1.0;
+                }
+                mouth.weights(&one)
+            })
+            .collect())
+    }
+
+    /// A mouth from `readings`: per viseme (Oculus order), the character's weights as its
+    /// adapter read the performer making it ([`Mouth::performer_rows`]). Readings under
+    /// [`MIN_READING`] are left out (the adapter's noise, not the mouth).
+    #[must_use]
+    pub fn from_readings(shapes: usize, readings: &[Vec<f32>]) -> Mouth {
+        Mouth {
+            route: Route::Adapter,
+            shapes,
+            per_viseme: readings
+                .iter()
+                .enumerate()
+                .map(|(v, row)| {
+                    row.iter()
+                        .enumerate()
+                        .filter(|(i, w)| v > 0 && *i < shapes && **w >= MIN_READING)
+                        .map(|(i, w)| (i, w.min(1.0)))
+                        .collect()
+                })
+                .collect(),
+        }
     }
 
     /// The character's weights for viseme weights `visemes` (Oculus order), each clamped to

@@ -239,6 +239,28 @@ fn align(
     })
 }
 
+/// The phones of as much of `text` as `sound` says from its start (a reader who stopped
+/// early), with how many of its words were said; `Ok` with no phones when the dictionary lacks
+/// a word or the recogniser found none.
+///
+/// # Errors
+/// [`PhoneError`] when the recogniser or its models are missing or fail.
+pub fn align_start(sound: &Sound, text: &str) -> Result<(Vec<Phone>, usize), PhoneError> {
+    let dictionary = Dictionary::english()?;
+    let words = words_of(text);
+    if words.is_empty() || words.iter().any(|w| !dictionary.has(w)) {
+        return Ok((Vec::new(), 0));
+    }
+    // Every prefix of the text: w1 [w2 [w3 …]].
+    let grammar = format!(
+        "#JSGF V1.0;\ngrammar passage;\npublic <s> = {}{};\n",
+        words.join(" ["),
+        "]".repeat(words.len() - 1)
+    );
+    let segments = faceanim_sphinx_sys::decode(&EN_US.grammar(grammar), &sound.samples)?;
+    Ok(phones_of_words(segments, &dictionary))
+}
+
 /// Word segments as phones (and how many were words, not silence or noise).
 fn phones_of_words(
     segments: Vec<faceanim_sphinx_sys::Segment>,

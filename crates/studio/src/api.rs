@@ -213,14 +213,22 @@ async fn reopen(State(shared): State<Shared>) -> Answer<StateView> {
     Ok(axum::Json(studio.view()))
 }
 
-async fn put_settings(State(shared): State<Shared>, body: Bytes) -> Answer<StateView> {
-    let settings: Settings = json_body(&body, "settings")?;
-    let mut studio = lock(&shared);
+/// `change` made to the project as one undoable edit; the new state.
+fn edit_project(
+    shared: &Shared,
+    change: impl FnOnce(&mut faceanim_sketch::project::ProjectFile),
+) -> Answer<StateView> {
+    let mut studio = lock(shared);
     studio.edit(None, |next| {
-        next.settings = settings;
+        change(next);
         Ok(())
     })?;
     Ok(axum::Json(studio.view()))
+}
+
+async fn put_settings(State(shared): State<Shared>, body: Bytes) -> Answer<StateView> {
+    let settings: Settings = json_body(&body, "settings")?;
+    edit_project(&shared, |next| next.settings = settings)
 }
 
 #[derive(Deserialize)]
@@ -232,12 +240,7 @@ struct Fps {
 /// The project's rate; the project's own validation says which rates are allowed.
 async fn put_fps(State(shared): State<Shared>, body: Bytes) -> Answer<StateView> {
     let Fps { fps } = json_body(&body, "fps")?;
-    let mut studio = lock(&shared);
-    studio.edit(None, |next| {
-        next.fps = fps;
-        Ok(())
-    })?;
-    Ok(axum::Json(studio.view()))
+    edit_project(&shared, |next| next.fps = fps)
 }
 
 async fn add_stroke(State(shared): State<Shared>, body: Bytes) -> Answer<StateView> {

@@ -68,6 +68,10 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/live/stop", post(live_stop))
         .route("/api/capture/live/record", post(live_record))
         .route("/api/capture/live/calibrate", post(live_calibrate))
+        .route("/api/capture/voice", put(voice))
+        .route("/api/capture/voice/calibrate", post(voice_calibrate))
+        .route("/api/capture/voice/record", post(voice_record))
+        .route("/api/capture/voice/chunk", post(voice_chunk))
         .route("/api/capture/neutral", post(neutral))
         .route("/api/capture/vmc", get(vmc_view))
         .route("/api/capture/vmc/record", post(vmc_record))
@@ -179,18 +183,21 @@ async fn upload(
         }
         let path = both.desk().store_upload(&name, &body, None)?;
         let character = both.studio().character.clone();
-        let (shown, stored) = (name.clone(), path.clone());
-        // Recognition takes seconds: off the async threads.
+        let (shown, stored, desk) = (name.clone(), path.clone(), both.desk.clone());
+        // Recognition takes seconds (and reading the mouth through an adapter a moment): off
+        // the async threads.
         let lip_sync = tokio::task::spawn_blocking(move || {
-            let sound = faceanim_speech::Sound::read(&stored)?;
-            faceanim_speech::lip_sync(
+            let mouth = lock(&desk).mouth(&character)?;
+            let sound = faceanim_speech::Sound::read(&stored)
+                .map_err(|e| ApiError::Invalid(e.to_string()))?;
+            faceanim_speech::lip_sync_with(
                 &sound,
                 None,
-                &character,
-                &faceanim_speech::MouthTable::default(),
+                &mouth,
                 30.0,
                 faceanim_speech::Recognition::Words,
             )
+            .map_err(|e| ApiError::Invalid(e.to_string()))
         })
         .await
         .map_err(|e| bad(format!("{shown}: lip sync stopped: {e}")))?
@@ -611,6 +618,72 @@ async fn live_frame(
     .await
     .map_err(|e| ApiError::Internal(e.to_string()))??;
     Ok(axum::Json(result))
+}
+
+// ---------- the live microphone ----------
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VoiceSwitch {
+    on: bool,
+    delay_ms: Option<u32>,
+}
+
+/// Turns the microphone on (with its delay) or off; while on, sets the delay.
+async fn voice(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let VoiceSwitch { on, delay_ms } = json_body(&body, "voice")?;
+    let character = both.studio().character.clone();
+    {
+        let mut desk = both.desk();
+        match (on, desk.voice_view()) {
+            (false, _) => desk.stop_voice(),
+            (true, Some(running)) => {
+                desk.set_voice_delay(delay_ms.unwrap_or(running.delay_ms))?;
+            }
+            (true, None) => desk.start_voice(&character, delay_ms.unwrap_or(0))?,
+        }
+    }
+    Ok(state_of(&both))
+}
+
+async fn voice_calibrate(State(both): State<Both>) -> Answer<CaptureView> {
+    both.desk().calibrate_voice()?;
+    Ok(state_of(&both))
+}
+
+async fn voice_record(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let Switch { on } = json_body(&body, "record")?;
+    let character = both.studio().character.clone();
+    both.desk().record_voice(&character, on)?;
+    Ok(state_of(&both))
+}
+
+/// A chunk of the microphone: 16-bit little-endian samples at 16 kHz (`x-sample-rate` says
+/// so), at most a second of them.
+async fn voice_chunk(
+    headers: HeaderMap,
+    State(both): State<Both>,
+    body: Bytes,
+) -> Answer<capture::VoiceResult> {
+    let rate = dimension(&headers, "x-sample-rate")?;
+    if rate != capture::VOICE_RATE {
+        return Err(bad(format!(
+            "x-sample-rate: {rate} Hz; the microphone is sent at {} Hz",
+            capture::VOICE_RATE
+        )));
+    }
+    if !body.len().is_multiple_of(2) || body.len() > 2 * capture::VOICE_RATE {
+        return Err(bad(format!(
+            "chunk: {} bytes is not 16-bit samples of at most a second",
+            body.len()
+        )));
+    }
+    let samples: Vec<i16> = body
+        .chunks_exact(2)
+        .map(|b| i16::from_le_bytes([b[0], b[1]]))
+        .collect();
+    let voice = both.desk().voice_handle();
+    Ok(axum::Json(voice.hear(&samples)))
 }
 
 // ---------- exports ----------

@@ -126,5 +126,12 @@ pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<
         desk: Arc::new(Mutex::new(desk)),
     };
     let app = api::router(both, address.port());
+    // Live answers are small and wanted at once: without TCP_NODELAY, one waiting for the
+    // acknowledgement of the last could sit 40 ms (Nagle's algorithm and delayed ACKs).
+    let listener = axum::serve::ListenerExt::tap_io(listener, |stream| {
+        if let Err(e) = stream.set_nodelay(true) {
+            tracing::debug!("TCP_NODELAY could not be set: {e}");
+        }
+    });
     axum::serve(listener, app).await.map_err(StudioError::Serve)
 }

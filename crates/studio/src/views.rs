@@ -324,6 +324,8 @@ pub struct CaptureView {
     pub filtering: FilteringView,
     /// Live tracking, while on.
     pub live: Option<LiveView>,
+    /// The live microphone, while on.
+    pub voice: Option<crate::capture::VoiceView>,
     /// The take, when one is open.
     pub take: Option<TakeView>,
     /// VMC in and out, when the studio was started with them.

@@ -333,6 +333,34 @@ pub fn vmc_receiver(count: usize, timeout: f32, out: &Path) -> (std::process::Ch
     (child, port)
 }
 
+/// `text` spoken by flite's `voice` (a synthetic voice no line of faceanim made) into `wav`;
+/// flite's own phone timings ("pau:0.164 hh:0.255 …", `-psdur`).
+pub fn flite(voice: &str, text: &str, wav: &Path) -> String {
+    let made = Command::new("flite")
+        .args(["-voice", voice, "-t", text, "-psdur", "-o"])
+        .arg(wav)
+        .output()
+        .expect("flite is needed: run scripts/setup.sh");
+    assert!(made.status.success(), "{made:?}");
+    String::from_utf8(made.stdout).unwrap()
+}
+
+/// Waits for the VMC peer of [`vmc_receiver`] to finish; every value it received for the
+/// blendshape `name`, in order.
+pub fn vmc_values(peer: &mut std::process::Child, report: &Path, name: &str) -> Vec<f64> {
+    assert!(peer.wait().unwrap().success());
+    let received: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap();
+    received["datagrams"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|d| d["messages"].as_array().unwrap().iter())
+        .filter(|m| m["address"] == "/VMC/Ext/Blend/Val" && m["args"][0][1] == name)
+        .map(|m| m["args"][1][1].as_f64().unwrap())
+        .collect()
+}
+
 /// The independent VMC peer sending `frames` frames of known ARKit weights and head turns to
 /// 127.0.0.1:`port` at `fps`, then `garbage` bad datagrams; returns what it sent.
 pub fn vmc_send(

@@ -9,6 +9,7 @@
 mod jobs;
 mod live;
 mod vmc;
+mod voice;
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
@@ -30,6 +31,7 @@ pub use jobs::{start_capture, start_finetune, start_training};
 use live::Live;
 pub use live::{LiveHandle, LiveResult};
 pub use vmc::VmcConfig;
+pub use voice::{Calibration, RATE as VOICE_RATE, VoiceHandle, VoiceResult, VoiceView};
 
 /// Input previews are at most this tall: enough to judge an expression beside the character.
 const PREVIEW_HEIGHT: usize = 360;
@@ -313,6 +315,13 @@ pub struct CaptureDesk {
     take_path: PathBuf,
     /// VMC in and out.
     vmc: vmc::Vmc,
+    /// The live microphone.
+    voice: voice::SharedVoice,
+    /// The voice learned by a microphone session that was stopped, for the next one.
+    voice_model: Option<faceanim_speech::listen::VoiceModel>,
+    /// The mouth read through the adapter (for a rig without mouth names), with the adapter
+    /// it was read by.
+    adapter_mouth: Option<(Adapter, faceanim_speech::Mouth)>,
 }
 
 /// A shared capture desk.
@@ -340,6 +349,9 @@ impl CaptureDesk {
             take: None,
             job: None,
             live: Arc::new(Mutex::new(None)),
+            voice: Arc::new(Mutex::new(None)),
+            voice_model: None,
+            adapter_mouth: None,
             filtering: Filtering::SEED,
             uploads: None,
             vmc: vmc::Vmc::default(),
@@ -530,6 +542,36 @@ impl CaptureDesk {
         Ok(stepped)
     }
 
+    /// The character's mouth for lip sync: its visemes or ARKit mouth shapes by name, else
+    /// read through its adapter (each viseme the built-in head makes, rendered and read; done
+    /// once per adapter).
+    ///
+    /// # Errors
+    /// [`ApiError::Invalid`] when it has no mouth by name and no adapter; the face models' or
+    /// the adapter's error.
+    pub fn mouth(&mut self, character: &Character) -> Result<faceanim_speech::Mouth, ApiError> {
+        let table = faceanim_speech::MouthTable::default();
+        let by_name = faceanim_speech::Mouth::of(character, &table);
+        let (Err(no_mouth), Some(adapter)) = (&by_name, &self.adapter) else {
+            return by_name.map_err(|e| ApiError::Invalid(e.to_string()));
+        };
+        tracing::debug!("{no_mouth}: reading the mouth through the adapter");
+        if let Some((read_by, mouth)) = &self.adapter_mouth
+            && read_by == adapter
+        {
+            return Ok(mouth.clone());
+        }
+        let models = face_models()?;
+        let performer = faceanim_head::default_character();
+        let rows = faceanim_speech::Mouth::performer_rows(&performer, &table)
+            .map_err(|e| ApiError::Internal(e.to_string()))?;
+        let readings = faceanim_adapt::FaceCamera::frame(&performer, models)?
+            .read_performer(&performer, models, adapter, &rows)?;
+        let mouth = faceanim_speech::Mouth::from_readings(character.blendshapes().len(), &readings);
+        self.adapter_mouth = Some((adapter.clone(), mouth.clone()));
+        Ok(mouth)
+    }
+
     /// Reads the adapter beside the character, keeping it only when it fits.
     fn load_adapter(&mut self, character: &Character) {
         self.adapter = None;
@@ -678,6 +720,7 @@ impl CaptureDesk {
                 default_smoothing: default_smoothing().into(),
             },
             live: lock(&self.live).as_ref().map(Live::view),
+            voice: self.voice_view(),
             vmc: self.vmc_view(),
             take: self.take.as_ref().map(|open| {
                 // The neutral check reads one frame: borrow the adapter, do not copy it.

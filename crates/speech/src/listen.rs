@@ -1,0 +1,743 @@
+//! Live lip sync: the microphone's samples, as they come, drive the mouth.
+//!
+//! Live speech cannot wait for a recogniser, so each 10 ms frame is classed as it arrives by a
+//! small classifier over its MFCCs — one diagonal Gaussian per viseme — learned from the
+//! user's own voice:
+//!
+//! 1. **Calibration**: the user reads [`PASSAGE`] for [`CALIBRATION_SECONDS`]; the recogniser
+//!    aligns the passage to the recording ([`phones::recognise`]), and every frame's viseme
+//!    becomes a labelled example ([`VoiceModel::fit`]).
+//! 2. **Refinement**: while the microphone is on, stretches of speech are recognised in the
+//!    background and their frames refine the classes ([`VoiceModel::refine`]); an uncalibrated
+//!    microphone learns this way from its first stretch.
+//! 3. Until there is a model, the mouth opens with the voice's loudness alone.
+//!
+//! [`Listener`] is the streaming part: [`Frontend`] features (pre-emphasis, 25 ms Hamming
+//! windows every 10 ms, 26 mel bands, 12 cepstra with the speaker's running mean removed, and
+//! their change over the last two frames, which adds no delay), a loudness gate that follows
+//! the room's own noise floor, the classifier, and a short attack and release. The mouth of a
+//! frame is known 12.5 ms after its centre (half a window) and follows the voice's onsets
+//! within [`ATTACK`].
+//!
+//! ```no_run
+//! use faceanim_speech::listen::{Listener, VoiceModel};
+//! let mut listener = Listener::new(None);
+//! # let samples: Vec<i16> = vec![0; 1600];
+//! for heard in listener.push(&samples) {
+//!     println!("{:.2} s: {:.0} dB, open {:.2}", heard.time, heard.level_db, heard.open);
+//! }
+//! ```
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+use faceanim_rig::names::Viseme;
+use rustfft::num_complex::Complex32;
+use rustfft::{Fft, FftPlanner};
+use serde::{Deserialize, Serialize};
+
+use crate::SpeechError;
+use crate::audio::{FRAME_SAMPLES, Sound};
+use crate::phones::{self, Phone, Recognition};
+use crate::visemes::{index, viseme_of};
+
+/// Samples per analysis window (25 ms at 16 kHz).
+pub const WINDOW: usize = 400;
+/// Samples between frames (10 ms).
+pub const HOP: usize = FRAME_SAMPLES;
+const FFT_SIZE: usize = 512;
+const MEL_BANDS: usize = 26;
+/// Cepstra per frame.
+pub const CEPSTRA: usize = 12;
+/// Features per frame: 12 cepstra, their change over two frames, and the loudness above the
+/// noise floor.
+pub const DIMS: usize = 2 * CEPSTRA + 1;
+/// How long calibration listens, seconds.
+pub const CALIBRATION_SECONDS: f32 = 20.0;
+/// How fast the mouth follows a rise in a viseme's weight, seconds (time constant).
+pub const ATTACK: f32 = 0.015;
+/// How fast it lets go, seconds.
+pub const RELEASE: f32 = 0.05;
+/// How fast the mouth's shape moves from one viseme to the next, seconds (time constant).
+pub const SHAPE_BLEND: f32 = 0.03;
+/// How many seconds of earlier examples count as much as a new stretch when refining: older
+/// ones fade so the model follows the voice and the room.
+const REMEMBERED_FRAMES: f64 = 6000.0;
+/// A class needs this many frames to be recognised at all.
+const MIN_CLASS_FRAMES: f64 = 8.0;
+
+/// Calibration aligns the passage when at least this many of its words were read.
+pub const MIN_PASSAGE_WORDS: usize = 12;
+
+/// What the user reads to calibrate: every viseme several times, in words any English reader
+/// knows (written for faceanim; every word is in the CMU dictionary).
+pub const PASSAGE: &str = "When the sunlight strikes raindrops in the air, they act as a prism \
+and form a rainbow. Peter bought five fresh pears, a bag of cherries and a jar of jam. She \
+thought the zoo would show us a huge brown owl, a few cheeky monkeys and one very lazy lion. \
+Judge each shape with your own eyes, then measure how far the king's wagon rolled. Bob and \
+Mary moved the heavy boxes up the narrow path.";
+
+/// Why calibration or refinement failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ListenError {
+    /// Nothing was heard.
+    #[error(
+        "no voice was heard in {seconds:.1} s from the microphone (is it muted, or is the input level too low?)"
+    )]
+    NoVoice {
+        /// How long was listened to.
+        seconds: f32,
+    },
+    /// Too few visemes were heard to tell them apart.
+    #[error(
+        "only {0} kinds of mouth shape were heard: read the whole passage aloud, at your usual pace"
+    )]
+    TooFewVisemes(usize),
+    /// The recogniser failed.
+    #[error(transparent)]
+    Speech(#[from] SpeechError),
+}
+
+/// One frame's features.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Features {
+    /// The window's centre, seconds from the start of the stream.
+    pub time: f32,
+    /// Loudness, dB relative to full scale.
+    pub level_db: f32,
+    /// Whether a voice is heard (louder than the noise floor by a share of the range).
+    pub voiced: bool,
+    /// How open the voice's loudness says the mouth is, 0..1 (0 when not voiced).
+    pub open: f32,
+    /// The classifier's input.
+    pub vector: [f32; DIMS],
+}
+
+/// Follows the room's noise floor and the voice's peaks, frame by frame, as
+/// [`Sound::voice_activity`] does over a whole recording.
+#[derive(Debug, Clone, Copy)]
+struct Gate {
+    floor: f32,
+    peak: f32,
+    started: bool,
+}
+
+impl Gate {
+    /// The floor rises 1 dB a second when the room gets louder; peaks fade 3 dB a second.
+    const RISE: f32 = 0.01;
+    const FADE: f32 = 0.03;
+    /// Nothing quieter is a voice, dBFS (a live microphone without gain control can be
+    /// quieter than a recording, so lower than [`Sound::voice_activity`]'s −55).
+    const QUIETEST: f32 = -65.0;
+
+    /// (voiced, open) of a frame at `level` dB.
+    fn observe(&mut self, level: f32) -> (bool, f32) {
+        if !self.started {
+            (self.floor, self.peak, self.started) = (level, level, true);
+        }
+        self.floor = if level < self.floor {
+            level
+        } else {
+            self.floor + Self::RISE
+        };
+        self.peak = if level > self.peak {
+            level
+        } else {
+            (self.peak - Self::FADE).max(self.floor)
+        };
+        let range = self.peak - self.floor;
+        if range < 12.0 || self.peak < -45.0 {
+            return (false, 0.0);
+        }
+        let threshold = (self.floor + (0.3 * range).max(8.0)).max(Self::QUIETEST);
+        if level <= threshold {
+            return (false, 0.0);
+        }
+        let above = ((level - threshold) / (self.peak - threshold).max(6.0)).clamp(0.0, 1.0);
+        (true, 0.4 + 0.6 * above)
+    }
+}
+
+/// Samples to features, streaming.
+pub struct Frontend {
+    fft: Arc<dyn Fft<f32>>,
+    window: Vec<f32>,
+    /// Per mel band: (first FFT bin, weights).
+    bands: Vec<(usize, Vec<f32>)>,
+    /// DCT-II rows for cepstra 1..=12.
+    dct: Vec<[f32; MEL_BANDS]>,
+    /// Pre-emphasised samples not yet consumed by a whole window, and the same samples as
+    /// they came (for loudness).
+    pending: VecDeque<f32>,
+    raw: VecDeque<f32>,
+    previous: f32,
+    /// Frames produced so far.
+    frames: u64,
+    /// The speaker's cepstral mean, and how many voiced frames it has seen.
+    mean: [f32; CEPSTRA],
+    seen: f32,
+    history: VecDeque<[f32; CEPSTRA]>,
+    gate: Gate,
+}
+
+impl std::fmt::Debug for Frontend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Frontend")
+            .field("frames", &self.frames)
+            .finish_non_exhaustive()
+    }
+}
+
+fn mel(hz: f32) -> f32 {
+    2595.0 * (1.0 + hz / 700.0).log10()
+}
+
+fn hz(mel: f32) -> f32 {
+    700.0 * (10f32.powf(mel / 2595.0) - 1.0)
+}
+
+impl Frontend {
+    /// A front end starting from the speaker's cepstral mean `mean` (a model's) or none.
+    #[must_use]
+    pub fn new(mean: Option<[f32; CEPSTRA]>) -> Frontend {
+        let fft = FftPlanner::new().plan_fft_forward(FFT_SIZE);
+        let window = (0..WINDOW)
+            .map(|n| {
+                0.54 - 0.46 * (2.0 * std::f32::consts::PI * n as f32 / (WINDOW - 1) as f32).cos()
+            })
+            .collect();
+        let rate = faceanim_sphinx_sys::SAMPLE_RATE as f32;
+        let (low, high) = (mel(130.0), mel(6800.0));
+        let edge = |k: usize| hz(low + (high - low) * k as f32 / (MEL_BANDS + 1) as f32);
+        let bin_hz = rate / FFT_SIZE as f32;
+        let bands = (0..MEL_BANDS)
+            .map(|b| {
+                let (left, centre, right) = (edge(b), edge(b + 1), edge(b + 2));
+                let first = (left / bin_hz).ceil() as usize;
+                let last = ((right / bin_hz).floor() as usize).min(FFT_SIZE / 2);
+                let weights = (first..=last)
+                    .map(|k| {
+                        let f = k as f32 * bin_hz;
+                        if f <= centre {
+                            (f - left) / (centre - left)
+                        } else {
+                            (right - f) / (right - centre)
+                        }
+                        .max(0.0)
+                    })
+                    .collect();
+                (first, weights)
+            })
+            .collect();
+        let dct = (1..=CEPSTRA)
+            .map(|c| {
+                let mut row = [0.0f32; MEL_BANDS];
+                for (m, r) in row.iter_mut().enumerate() {
+                    *r = (std::f32::consts::PI * c as f32 * (m as f32 + 0.5) / MEL_BANDS as f32)
+                        .cos();
+                }
+                row
+            })
+            .collect();
+        Frontend {
+            fft,
+            window,
+            bands,
+            dct,
+            pending: VecDeque::with_capacity(2 * WINDOW),
+            raw: VecDeque::with_capacity(2 * WINDOW),
+            previous: 0.0,
+            frames: 0,
+            mean: mean.unwrap_or([0.0; CEPSTRA]),
+            seen: if mean.is_some() { 100.0 } else { 0.0 },
+            history: VecDeque::with_capacity(3),
+            gate: Gate {
+                floor: -100.0,
+                peak: -100.0,
+                started: false,
+            },
+        }
+    }
+
+    /// The speaker's cepstral mean so far.
+    #[must_use]
+    pub fn mean(&self) -> [f32; CEPSTRA] {
+        self.mean
+    }
+
+    /// The features of every whole window `samples` completes.
+    pub fn push(&mut self, samples: &[i16]) -> Vec<Features> {
+        let mut out = Vec::with_capacity(samples.len() / HOP + 1);
+        for &s in samples {
+            let x = f32::from(s) / 32768.0;
+            self.pending.push_back(x - 0.97 * self.previous);
+            self.raw.push_back(x);
+            self.previous = x;
+            if self.pending.len() == WINDOW {
+                out.push(self.frame());
+                self.pending.drain(..HOP);
+                self.raw.drain(..HOP);
+            }
+        }
+        out
+    }
+
+    fn frame(&mut self) -> Features {
+        let time = (self.frames as f32 * HOP as f32 + WINDOW as f32 / 2.0)
+            / faceanim_sphinx_sys::SAMPLE_RATE as f32;
+        self.frames += 1;
+        let mut buffer: Vec<Complex32> = self
+            .pending
+            .iter()
+            .zip(&self.window)
+            .map(|(x, w)| Complex32::new(x * w, 0.0))
+            .collect();
+        let power_sum: f32 = self.raw.iter().map(|x| x * x).sum();
+        buffer.resize(FFT_SIZE, Complex32::new(0.0, 0.0));
+        self.fft.process(&mut buffer);
+        let power = power_sum / WINDOW as f32;
+        let level_db = if power <= 1e-10 {
+            -100.0
+        } else {
+            10.0 * power.log10()
+        };
+        let mut log_mel = [0.0f32; MEL_BANDS];
+        for (out, (first, weights)) in log_mel.iter_mut().zip(&self.bands) {
+            let energy: f32 = weights
+                .iter()
+                .enumerate()
+                .map(|(k, w)| w * buffer[first + k].norm_sqr())
+                .sum();
+            *out = (energy + 1e-10).ln();
+        }
+        let mut cepstra = [0.0f32; CEPSTRA];
+        for (c, row) in cepstra.iter_mut().zip(&self.dct) {
+            *c = row.iter().zip(&log_mel).map(|(a, b)| a * b).sum::<f32>() / MEL_BANDS as f32;
+        }
+        let (voiced, open) = self.gate.observe(level_db);
+        if voiced {
+            // The mean of the voice, not of the room: a running mean over about three seconds
+            // of speech (a plain mean until then).
+            self.seen += 1.0;
+            let rate = 1.0 / self.seen.min(300.0);
+            for (m, c) in self.mean.iter_mut().zip(&cepstra) {
+                *m += (c - *m) * rate;
+            }
+        }
+        let mut normalised = cepstra;
+        for (n, m) in normalised.iter_mut().zip(&self.mean) {
+            *n -= m;
+        }
+        let before = self.history.front().copied().unwrap_or(normalised);
+        self.history.push_back(normalised);
+        if self.history.len() > 2 {
+            self.history.pop_front();
+        }
+        let mut vector = [0.0f32; DIMS];
+        vector[..CEPSTRA].copy_from_slice(&normalised);
+        for k in 0..CEPSTRA {
+            vector[CEPSTRA + k] = normalised[k] - before[k];
+        }
+        vector[DIMS - 1] = ((level_db - self.gate.floor) / 10.0).clamp(0.0, 6.0);
+        Features {
+            time,
+            level_db,
+            voiced,
+            open,
+            vector,
+        }
+    }
+}
+
+/// One viseme's examples: their count, sum and sum of squares (so that refining adds to them).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+struct Class {
+    count: f64,
+    sum: Vec<f64>,
+    squares: Vec<f64>,
+}
+
+impl Class {
+    fn empty() -> Class {
+        Class {
+            count: 0.0,
+            sum: vec![0.0; DIMS],
+            squares: vec![0.0; DIMS],
+        }
+    }
+}
+
+/// The classifier: per viseme (Oculus order), a diagonal Gaussian of its frames' features.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct VoiceModel {
+    classes: Vec<Class>,
+    /// The speaker's cepstral mean.
+    mean: [f32; CEPSTRA],
+    /// Stretches it learned from (calibration and refinements).
+    pub stretches: usize,
+}
+
+/// A class ready to score frames.
+#[derive(Debug, Clone)]
+struct Scorer {
+    viseme: usize,
+    log_prior: f32,
+    mean: [f32; DIMS],
+    inverse_variance: [f32; DIMS],
+    log_norm: f32,
+}
+
+impl VoiceModel {
+    /// Learns from `features` labelled by `phones` (frames where no voice is heard are
+    /// silence).
+    ///
+    /// # Errors
+    /// [`ListenError`] when no voice was heard or too few visemes to tell apart.
+    pub fn fit(
+        features: &[Features],
+        phones: &[Phone],
+        mean: [f32; CEPSTRA],
+    ) -> Result<VoiceModel, ListenError> {
+        let mut model = VoiceModel {
+            classes: vec![Class::empty(); Viseme::ALL.len()],
+            mean,
+            stretches: 0,
+        };
+        model.learn(features, phones)?;
+        Ok(model)
+    }
+
+    /// Adds a stretch of speech to what the model knows, earlier stretches fading.
+    ///
+    /// # Errors
+    /// [`ListenError`] when no voice was heard in it or too few visemes (the model is kept).
+    pub fn refine(
+        &mut self,
+        features: &[Features],
+        phones: &[Phone],
+        mean: [f32; CEPSTRA],
+    ) -> Result<(), ListenError> {
+        let mut next = self.clone();
+        let known: f64 = next.classes.iter().map(|c| c.count).sum();
+        let keep = (REMEMBERED_FRAMES / known.max(1.0)).min(1.0);
+        for class in &mut next.classes {
+            class.count *= keep;
+            class.sum.iter_mut().for_each(|s| *s *= keep);
+            class.squares.iter_mut().for_each(|s| *s *= keep);
+        }
+        next.mean = mean;
+        next.learn(features, phones)?;
+        *self = next;
+        Ok(())
+    }
+
+    fn learn(&mut self, features: &[Features], phones: &[Phone]) -> Result<(), ListenError> {
+        if !features.iter().any(|f| f.voiced) {
+            return Err(ListenError::NoVoice {
+                seconds: features.last().map_or(0.0, |f| f.time),
+            });
+        }
+        let mut heard = vec![false; Viseme::ALL.len()];
+        for (f, label) in features.iter().zip(labels(features, phones)) {
+            let class = &mut self.classes[index(label)];
+            heard[index(label)] = true;
+            class.count += 1.0;
+            for (k, x) in f.vector.iter().enumerate() {
+                let x = f64::from(*x);
+                class.sum[k] += x;
+                class.squares[k] += x * x;
+            }
+        }
+        let kinds = heard.iter().filter(|h| **h).count();
+        if kinds < 5 {
+            return Err(ListenError::TooFewVisemes(kinds.saturating_sub(1)));
+        }
+        self.stretches += 1;
+        Ok(())
+    }
+
+    /// The speaker's cepstral mean the model was learned with.
+    #[must_use]
+    pub fn speaker_mean(&self) -> [f32; CEPSTRA] {
+        self.mean
+    }
+
+    /// How many visemes the model can tell apart (silence included).
+    #[must_use]
+    pub fn visemes_known(&self) -> usize {
+        self.classes
+            .iter()
+            .filter(|c| c.count >= MIN_CLASS_FRAMES)
+            .count()
+    }
+
+    fn scorers(&self) -> Vec<Scorer> {
+        let total: f64 = self.classes.iter().map(|c| c.count).sum();
+        // The variance of all frames together, a floor under each class's own.
+        let mut all = [0.0f64; DIMS];
+        let mut all_mean = [0.0f64; DIMS];
+        for class in &self.classes {
+            for k in 0..DIMS {
+                all_mean[k] += class.sum[k];
+                all[k] += class.squares[k];
+            }
+        }
+        for k in 0..DIMS {
+            all_mean[k] /= total.max(1.0);
+            all[k] = (all[k] / total.max(1.0) - all_mean[k] * all_mean[k]).max(1e-6);
+        }
+        self.classes
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.count >= MIN_CLASS_FRAMES)
+            .map(|(viseme, c)| {
+                let mut mean = [0.0f32; DIMS];
+                let mut inverse_variance = [0.0f32; DIMS];
+                let mut log_norm = 0.0f32;
+                for k in 0..DIMS {
+                    let m = c.sum[k] / c.count;
+                    let v = (c.squares[k] / c.count - m * m).max(0.05 * all[k]);
+                    mean[k] = m as f32;
+                    inverse_variance[k] = (1.0 / v) as f32;
+                    log_norm -= 0.5 * (v as f32).ln();
+                }
+                Scorer {
+                    viseme,
+                    log_prior: ((c.count / total) as f32).ln(),
+                    mean,
+                    inverse_variance,
+                    log_norm,
+                }
+            })
+            .collect()
+    }
+}
+
+/// Each frame's viseme by `phones` (silence where no voice is heard or no phone covers it).
+#[must_use]
+pub fn labels(features: &[Features], phones: &[Phone]) -> Vec<Viseme> {
+    let mut at = 0usize;
+    features
+        .iter()
+        .map(|f| {
+            while at < phones.len() && phones[at].end <= f.time {
+                at += 1;
+            }
+            match phones.get(at) {
+                Some(p) if f.voiced && p.start <= f.time => {
+                    let v = viseme_of(&p.label);
+                    if p.label == "HH" { Viseme::Aa } else { v }
+                }
+                _ => Viseme::Sil,
+            }
+        })
+        .collect()
+}
+
+/// The mouth at one frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Heard {
+    /// The frame's centre, seconds from the start of the stream.
+    pub time: f32,
+    /// Loudness, dB relative to full scale.
+    pub level_db: f32,
+    /// Whether a voice is heard.
+    pub voiced: bool,
+    /// How open the mouth is, 0..1 (the largest viseme weight).
+    pub open: f32,
+    /// The 15 viseme weights (Oculus order), smoothed.
+    pub visemes: [f32; 15],
+}
+
+/// Samples in, the mouth out: features, the classifier (when there is a model) and smoothing.
+#[derive(Debug)]
+pub struct Listener {
+    front: Frontend,
+    scorers: Vec<Scorer>,
+    /// How open the mouth is, smoothed by [`ATTACK`] and [`RELEASE`].
+    open: f32,
+    /// The mouth's shape (viseme weights with the largest 1), smoothed by [`SHAPE_BLEND`]: kept
+    /// through pauses, so the mouth closes from the shape it had.
+    shape: [f32; 15],
+}
+
+impl Listener {
+    /// A listener classing frames with `model`, or opening the mouth with loudness alone.
+    #[must_use]
+    pub fn new(model: Option<&VoiceModel>) -> Listener {
+        Listener {
+            front: Frontend::new(model.map(VoiceModel::speaker_mean)),
+            scorers: model.map(VoiceModel::scorers).unwrap_or_default(),
+            open: 0.0,
+            shape: [0.0; 15],
+        }
+    }
+
+    /// Classes frames with `model` from now on.
+    pub fn set_model(&mut self, model: &VoiceModel) {
+        self.scorers = model.scorers();
+    }
+
+    /// Whether frames are classed (else loudness alone opens the mouth).
+    #[must_use]
+    pub fn classifies(&self) -> bool {
+        !self.scorers.is_empty()
+    }
+
+    /// The speaker's cepstral mean so far.
+    #[must_use]
+    pub fn speaker_mean(&self) -> [f32; CEPSTRA] {
+        self.front.mean()
+    }
+
+    /// The mouth at every frame `samples` completes.
+    pub fn push(&mut self, samples: &[i16]) -> Vec<Heard> {
+        self.front
+            .push(samples)
+            .into_iter()
+            .map(|f| self.hear(&f))
+            .collect()
+    }
+
+    fn hear(&mut self, f: &Features) -> Heard {
+        let step = HOP as f32 / faceanim_sphinx_sys::SAMPLE_RATE as f32;
+        let rate = |seconds: f32| 1.0 - (-step / seconds).exp();
+        let open = if f.voiced { f.open } else { 0.0 };
+        self.open += (open - self.open) * rate(if open > self.open { ATTACK } else { RELEASE });
+        if let Some(shape) = f.voiced.then(|| self.shape_of(f)) {
+            // A mouth opening from rest takes its shape at once; a moving one blends.
+            let k = if self.open < 0.05 {
+                1.0
+            } else {
+                rate(SHAPE_BLEND)
+            };
+            for (s, t) in self.shape.iter_mut().zip(shape) {
+                *s += (t - *s) * k;
+            }
+        }
+        let mut visemes = [0.0f32; 15];
+        for (v, s) in visemes.iter_mut().zip(&self.shape) {
+            *v = s * self.open;
+        }
+        Heard {
+            time: f.time,
+            level_db: f.level_db,
+            voiced: f.voiced,
+            open: self.open,
+            visemes,
+        }
+    }
+
+    /// A voiced frame's mouth shape: the likeliest viseme at 1, close runners-up blended in
+    /// (together at most [`BLEND_CAP`]); loudness alone gives an open "aa".
+    fn shape_of(&self, f: &Features) -> [f32; 15] {
+        let mut out = [0.0f32; 15];
+        if self.scorers.is_empty() {
+            out[index(Viseme::Aa)] = 0.8;
+            return out;
+        }
+        let scores: Vec<f32> = self
+            .scorers
+            .iter()
+            .map(|s| {
+                let distance: f32 = f
+                    .vector
+                    .iter()
+                    .zip(&s.mean)
+                    .zip(&s.inverse_variance)
+                    .map(|((x, m), iv)| (x - m) * (x - m) * iv)
+                    .sum();
+                // Tempered: diagonal Gaussians over correlated features are overconfident.
+                (s.log_prior + s.log_norm - 0.5 * distance) / TEMPERATURE
+            })
+            .collect();
+        let best = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        for (s, score) in self.scorers.iter().zip(&scores) {
+            out[s.viseme] = (score - best).exp();
+        }
+        // Silence's share says nothing of the shape: the loudness gate decides openness.
+        out[0] = 0.0;
+        let most = out.iter().copied().fold(0.0, f32::max);
+        if most <= 0.0 {
+            out[index(Viseme::Aa)] = 0.8;
+            return out;
+        }
+        out.iter_mut()
+            .for_each(|w| *w = if *w >= 0.25 * most { *w / most } else { 0.0 });
+        let total: f32 = out.iter().sum();
+        if total > BLEND_CAP {
+            out.iter_mut().for_each(|w| *w *= BLEND_CAP / total);
+        }
+        out
+    }
+}
+
+/// The viseme weights of a frame add up to at most this much (the largest is 1).
+const BLEND_CAP: f32 = 1.35;
+
+/// How much the classifier's log-likelihoods are flattened.
+const TEMPERATURE: f32 = 4.0;
+
+/// A model of the voice in `samples`: the recording aligned to `passage` as far as it was
+/// read (at least [`MIN_PASSAGE_WORDS`] words of it), else recognised; each frame labelled by
+/// its phone.
+///
+/// # Errors
+/// [`ListenError`] when no voice was heard, too few visemes, or the recogniser fails.
+pub fn calibrate(
+    samples: &[i16],
+    passage: &str,
+) -> Result<(VoiceModel, Recognition, Vec<String>), ListenError> {
+    let sound = Sound {
+        samples: samples.to_vec(),
+    };
+    // The passage as far as it was read; recognised instead when too little of it was.
+    let (aligned, said) = phones::align_start(&sound, passage).map_err(SpeechError::from)?;
+    let (phones, recognition, notes) = if said >= MIN_PASSAGE_WORDS {
+        (aligned, Recognition::Transcript, Vec::new())
+    } else {
+        let (phones, recognition, _) =
+            phones::recognise(&sound, None, Recognition::Words).map_err(SpeechError::from)?;
+        let note = format!(
+            "only {said} words of the passage were heard in order: the voice was learned from the words recognised instead"
+        );
+        (phones, recognition, vec![note])
+    };
+    // Twice: the speaker's mean from the whole recording first, so that its first seconds are
+    // normalised as well as the rest.
+    let mut first = Frontend::new(None);
+    first.push(samples);
+    let mut front = Frontend::new(Some(first.mean()));
+    let features = front.push(samples);
+    let model = VoiceModel::fit(&features, &phones, front.mean())?;
+    Ok((model, recognition, notes))
+}
+
+/// `model` refined by a stretch of live speech (`samples`), recognised without a transcript;
+/// `mean` is the speaker's cepstral mean when the stretch began. Without a model, the stretch
+/// makes the first one.
+///
+/// # Errors
+/// [`ListenError`] when no voice was heard in it, too few visemes, or the recogniser fails.
+pub fn refine(
+    model: Option<&VoiceModel>,
+    samples: &[i16],
+    mean: [f32; CEPSTRA],
+) -> Result<VoiceModel, ListenError> {
+    let sound = Sound {
+        samples: samples.to_vec(),
+    };
+    let (phones, _, _) =
+        phones::recognise(&sound, None, Recognition::Words).map_err(SpeechError::from)?;
+    let mut front = Frontend::new(Some(mean));
+    let features = front.push(samples);
+    match model {
+        Some(model) => {
+            let mut next = model.clone();
+            next.refine(&features, &phones, front.mean())?;
+            Ok(next)
+        }
+        None => VoiceModel::fit(&features, &phones, front.mean()),
+    }
+}

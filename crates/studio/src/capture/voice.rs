@@ -1,0 +1,506 @@
+//! The microphone drives the mouth live: the page sends the microphone's samples as they come
+//! (16 kHz, 20 ms at a time); each 10 ms frame is classed into visemes
+//! ([`faceanim_speech::listen`]), put on the character's mouth, sent out over VMC like the
+//! webcam's face, and recorded into a take with its sound when asked.
+//!
+//! The classifier learns the user's voice: Calibrate listens to 20 s of the passage read
+//! aloud and aligns it in the background; while the microphone is on, every stretch of
+//! [`REFINE_SECONDS`] is recognised in the background and refines it. Until a model exists the
+//! mouth follows loudness alone.
+
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use faceanim_rig::Character;
+use faceanim_speech::Mouth;
+use faceanim_speech::audio::{FRAME_RATE, SAMPLE_RATE};
+use faceanim_speech::listen::{self, CALIBRATION_SECONDS, Listener, PASSAGE, VoiceModel};
+use serde::Serialize;
+
+use super::{CaptureDesk, OpenTake, Previews, Sound, private_dir};
+use crate::error::ApiError;
+use crate::lock;
+
+/// Samples per second the page sends.
+pub const RATE: usize = SAMPLE_RATE as usize;
+/// Seconds of speech between background refinements, and the stretch each one recognises.
+pub const REFINE_SECONDS: usize = 10;
+/// The longest audio delay the page may set, milliseconds.
+pub const MAX_DELAY_MS: u32 = 2000;
+/// Frames per second of a recorded microphone take.
+const RECORDED_FPS: f32 = 30.0;
+/// The longest recording, seconds (an hour, as for speech files).
+const MAX_RECORDING_SECONDS: usize = 3600;
+
+/// Where calibration is.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "state", rename_all = "snake_case")]
+pub enum Calibration {
+    /// Not calibrated (the mouth follows loudness until the first refinement).
+    None,
+    /// Listening to the passage.
+    Listening {
+        /// Seconds heard so far.
+        seconds: f32,
+    },
+    /// Aligning the passage and learning the voice.
+    Fitting,
+    /// The voice is learned.
+    Calibrated {
+        /// Visemes the model tells apart (silence included).
+        visemes: usize,
+        /// What was done instead of aligning the passage, if anything.
+        notes: Vec<String>,
+    },
+    /// Calibration failed; the previous model (if any) is kept.
+    Failed {
+        /// Why.
+        message: String,
+    },
+}
+
+/// The live microphone as the page sees it.
+#[derive(Debug, Clone, Serialize)]
+pub struct VoiceView {
+    /// Seconds of sound received.
+    pub seconds: f32,
+    /// How far the mouth is held back behind the voice, milliseconds (for streams whose audio
+    /// arrives later than the picture).
+    pub delay_ms: u32,
+    /// The longest delay allowed, milliseconds.
+    pub max_delay_ms: u32,
+    /// Calibration.
+    pub calibration: Calibration,
+    /// The passage to read while calibrating.
+    pub passage: &'static str,
+    /// Stretches of speech the classifier has learned from (calibration and refinements).
+    pub learned: usize,
+    /// Whether frames are classed into visemes (else loudness alone opens the mouth).
+    pub classifying: bool,
+    /// The last background refinement's failure, if it failed.
+    pub refine_error: Option<String>,
+    /// Seconds recorded, while recording.
+    pub recording: Option<f32>,
+}
+
+/// One chunk's answer.
+#[derive(Debug, Serialize)]
+pub struct VoiceResult {
+    /// False when the microphone was stopped while the chunk was on its way.
+    pub live: bool,
+    /// The character's weights now (after the delay), when a frame is due.
+    pub weights: Option<Vec<f32>>,
+    /// How open the mouth is, 0..1, in that frame.
+    pub open: f32,
+    /// The loudness of the newest frame, dB relative to full scale.
+    pub level_db: f32,
+    /// Milliseconds the server spent.
+    pub server_ms: f64,
+    /// The microphone's state.
+    pub voice: Option<VoiceView>,
+}
+
+/// A frame waiting for its time (the delay).
+struct Due {
+    at: f32,
+    weights: Vec<f32>,
+    open: f32,
+}
+
+/// The live microphone.
+pub(super) struct Voice {
+    /// Tells this microphone session's background work from a later one's.
+    session: u64,
+    listener: Listener,
+    mouth: Mouth,
+    model: Option<VoiceModel>,
+    /// Counts calibrations: a refinement begun before one is not applied after it.
+    generation: u64,
+    delay: f32,
+    due: VecDeque<Due>,
+    received: usize,
+    calibration: Calibration,
+    calibration_samples: Vec<i16>,
+    /// The last [`REFINE_SECONDS`] of sound, and how much came since the last refinement.
+    recent: VecDeque<i16>,
+    since_refine: usize,
+    refining: bool,
+    refine_error: Option<String>,
+    /// Recording: the sound and the weights of each frame as shown.
+    recording: Option<(Vec<i16>, Vec<Vec<f32>>)>,
+    last: Option<(Vec<f32>, f32)>,
+    performer: Option<Arc<Mutex<faceanim_live::Performer>>>,
+}
+
+impl std::fmt::Debug for Voice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Voice")
+            .field("received", &self.received)
+            .field("calibration", &self.calibration)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Voice {
+    fn view(&self) -> VoiceView {
+        VoiceView {
+            seconds: self.received as f32 / RATE as f32,
+            delay_ms: (self.delay * 1000.0).round() as u32,
+            max_delay_ms: MAX_DELAY_MS,
+            calibration: self.calibration.clone(),
+            passage: PASSAGE,
+            learned: self.model.as_ref().map_or(0, |m| m.stretches),
+            classifying: self.listener.classifies(),
+            refine_error: self.refine_error.clone(),
+            recording: self
+                .recording
+                .as_ref()
+                .map(|(s, _)| s.len() as f32 / RATE as f32),
+        }
+    }
+
+    fn set_model(&mut self, model: VoiceModel) {
+        self.listener.set_model(&model);
+        self.model = Some(model);
+    }
+}
+
+/// The live microphone, shared with its background work.
+pub(super) type SharedVoice = Arc<Mutex<Option<Voice>>>;
+
+impl CaptureDesk {
+    /// Starts (or restarts) the live microphone, its mouth held back by `delay_ms`. A voice
+    /// learned earlier in this process is kept.
+    ///
+    /// # Errors
+    /// [`ApiError::Invalid`] when the character has no mouth to drive ([`CaptureDesk::mouth`]),
+    /// or the delay is out of range.
+    pub fn start_voice(&mut self, character: &Character, delay_ms: u32) -> Result<(), ApiError> {
+        static SESSIONS: AtomicU64 = AtomicU64::new(1);
+        check_delay(delay_ms)?;
+        let mouth = self.mouth(character)?;
+        let mut slot = lock(&self.voice);
+        let model = slot
+            .as_ref()
+            .and_then(|v| v.model.clone())
+            .or_else(|| self.voice_model.clone());
+        *slot = Some(Voice {
+            session: SESSIONS.fetch_add(1, Ordering::Relaxed),
+            listener: Listener::new(model.as_ref()),
+            mouth,
+            model,
+            generation: 0,
+            delay: delay_ms as f32 / 1000.0,
+            due: VecDeque::new(),
+            received: 0,
+            calibration: Calibration::None,
+            calibration_samples: Vec::new(),
+            recent: VecDeque::with_capacity(REFINE_SECONDS * RATE),
+            since_refine: 0,
+            refining: false,
+            refine_error: None,
+            recording: None,
+            last: None,
+            performer: self.vmc.performer.clone(),
+        });
+        Ok(())
+    }
+
+    /// Stops the microphone (a recording in progress is dropped); the learned voice is kept
+    /// for the next start.
+    pub fn stop_voice(&mut self) {
+        if let Some(voice) = lock(&self.voice).take()
+            && let Some(model) = voice.model
+        {
+            self.voice_model = Some(model);
+        }
+    }
+
+    /// The microphone's state, while on.
+    #[must_use]
+    pub fn voice_view(&self) -> Option<VoiceView> {
+        lock(&self.voice).as_ref().map(Voice::view)
+    }
+
+    /// Holds the mouth back by `delay_ms` from now on.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when the microphone is off; [`ApiError::Invalid`] out of range.
+    pub fn set_voice_delay(&mut self, delay_ms: u32) -> Result<(), ApiError> {
+        check_delay(delay_ms)?;
+        let mut slot = lock(&self.voice);
+        let voice = slot
+            .as_mut()
+            .ok_or(ApiError::Live("start the microphone first"))?;
+        voice.delay = delay_ms as f32 / 1000.0;
+        Ok(())
+    }
+
+    /// Listens to the next [`CALIBRATION_SECONDS`] as the passage read aloud.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when the microphone is off or calibration is already under way.
+    pub fn calibrate_voice(&mut self) -> Result<(), ApiError> {
+        let mut slot = lock(&self.voice);
+        let voice = slot
+            .as_mut()
+            .ok_or(ApiError::Live("start the microphone first"))?;
+        if matches!(
+            voice.calibration,
+            Calibration::Listening { .. } | Calibration::Fitting
+        ) {
+            return Err(ApiError::Live("calibration is already under way"));
+        }
+        voice.calibration = Calibration::Listening { seconds: 0.0 };
+        voice.calibration_samples.clear();
+        Ok(())
+    }
+
+    /// Starts or stops recording the microphone; stopping makes the recording the take, with
+    /// its sound.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when the microphone is off, not recording, or nothing was heard;
+    /// the take's or the scratch file's error.
+    pub fn record_voice(&mut self, character: &Character, on: bool) -> Result<(), ApiError> {
+        if !on {
+            // Before the recording is taken: a busy desk keeps it for the next try.
+            self.busy()?;
+        }
+        let recording = {
+            let mut slot = lock(&self.voice);
+            let voice = slot
+                .as_mut()
+                .ok_or(ApiError::Live("start the microphone first"))?;
+            if on {
+                voice.recording = Some((Vec::new(), Vec::new()));
+                return Ok(());
+            }
+            voice
+                .recording
+                .take()
+                .ok_or(ApiError::Live("not recording"))?
+        };
+        let (samples, frames) = recording;
+        if frames.is_empty() {
+            return Err(ApiError::Live("nothing was recorded (no sound arrived)"));
+        }
+        // Frames came every 10 ms: the take samples them at its own rate.
+        let per_frame = FRAME_RATE as f32 / RECORDED_FPS;
+        let count = ((frames.len() as f32 / per_frame).ceil() as usize).max(1);
+        let rows: Vec<Vec<f32>> = (0..count)
+            .map(|i| {
+                frames[((i as f32 * per_frame).round() as usize).min(frames.len() - 1)].clone()
+            })
+            .collect();
+        let dir = private_dir(&mut self.uploads, "faceanim-uploads-", "uploads")?;
+        let path = dir.join(format!("microphone-{}.wav", std::process::id()));
+        faceanim_files::write_atomic(&path, &wav(&samples)).map_err(ApiError::Disk)?;
+        let take =
+            faceanim_take::Take::from_weights(character, "microphone.wav", RECORDED_FPS, &rows)?;
+        self.take = Some(OpenTake {
+            sound: Some(Sound {
+                path,
+                mime: "audio/wav",
+            }),
+            ..OpenTake::new(take, Previews::new())
+        });
+        self.save_take();
+        Ok(())
+    }
+
+    /// The live microphone, to hear chunks without holding the desk.
+    #[must_use]
+    pub fn voice_handle(&self) -> VoiceHandle {
+        VoiceHandle {
+            voice: self.voice.clone(),
+        }
+    }
+}
+
+fn check_delay(delay_ms: u32) -> Result<(), ApiError> {
+    if delay_ms > MAX_DELAY_MS {
+        return Err(ApiError::Invalid(format!(
+            "delay_ms: {delay_ms} ms; the audio delay is 0 to {MAX_DELAY_MS} ms"
+        )));
+    }
+    Ok(())
+}
+
+/// A 16 kHz mono 16-bit WAV of `samples`.
+fn wav(samples: &[i16]) -> Vec<u8> {
+    let data = (samples.len() * 2) as u32;
+    let mut out = Vec::with_capacity(44 + samples.len() * 2);
+    out.extend_from_slice(b"RIFF");
+    out.extend_from_slice(&(36 + data).to_le_bytes());
+    out.extend_from_slice(b"WAVEfmt ");
+    out.extend_from_slice(&16u32.to_le_bytes());
+    out.extend_from_slice(&1u16.to_le_bytes());
+    out.extend_from_slice(&1u16.to_le_bytes());
+    out.extend_from_slice(&(RATE as u32).to_le_bytes());
+    out.extend_from_slice(&(RATE as u32 * 2).to_le_bytes());
+    out.extend_from_slice(&2u16.to_le_bytes());
+    out.extend_from_slice(&16u16.to_le_bytes());
+    out.extend_from_slice(b"data");
+    out.extend_from_slice(&data.to_le_bytes());
+    for s in samples {
+        out.extend_from_slice(&s.to_le_bytes());
+    }
+    out
+}
+
+/// What a chunk needs, taken from the desk so hearing it does not block the desk.
+pub struct VoiceHandle {
+    voice: SharedVoice,
+}
+
+impl VoiceHandle {
+    /// Hears one chunk of the microphone (16 kHz mono samples) and returns the mouth now.
+    #[must_use]
+    pub fn hear(&self, samples: &[i16]) -> VoiceResult {
+        let started = Instant::now();
+        let mut slot = lock(&self.voice);
+        let Some(voice) = slot.as_mut() else {
+            return VoiceResult {
+                live: false,
+                weights: None,
+                open: 0.0,
+                level_db: -100.0,
+                server_ms: 0.0,
+                voice: None,
+            };
+        };
+        voice.received += samples.len();
+        let now = voice.received as f32 / RATE as f32;
+        let mut level_db = -100.0;
+        for heard in voice.listener.push(samples) {
+            level_db = heard.level_db;
+            voice.due.push_back(Due {
+                at: heard.time + voice.delay,
+                weights: voice.mouth.weights(&heard.visemes),
+                open: heard.open,
+            });
+        }
+        // The newest frame whose time has come (the delay holds frames back).
+        let mut shown = None;
+        while voice.due.front().is_some_and(|d| d.at <= now) {
+            shown = voice.due.pop_front();
+            if let (Some(d), Some((_, frames))) = (&shown, voice.recording.as_mut()) {
+                frames.push(d.weights.clone());
+            }
+        }
+        if let Some((sound, _)) = voice.recording.as_mut()
+            && sound.len() < MAX_RECORDING_SECONDS * RATE
+        {
+            sound.extend_from_slice(samples);
+        }
+        if let Some(d) = &shown {
+            if let Some(performer) = &voice.performer {
+                lock(performer).send(&d.weights, None, now);
+            }
+            voice.last = Some((d.weights.clone(), d.open));
+        }
+        self.listen(voice, samples);
+        let (weights, open) = voice
+            .last
+            .clone()
+            .map_or((None, 0.0), |(w, o)| (Some(w), o));
+        VoiceResult {
+            live: true,
+            weights,
+            open,
+            level_db,
+            server_ms: started.elapsed().as_secs_f64() * 1000.0,
+            voice: Some(voice.view()),
+        }
+    }
+
+    /// Feeds calibration and refinement, starting their background work when a stretch is
+    /// complete.
+    fn listen(&self, voice: &mut Voice, samples: &[i16]) {
+        if let Calibration::Listening { .. } = voice.calibration {
+            voice.calibration_samples.extend_from_slice(samples);
+            let seconds = voice.calibration_samples.len() as f32 / RATE as f32;
+            voice.calibration = Calibration::Listening { seconds };
+            if seconds >= CALIBRATION_SECONDS {
+                voice.calibration = Calibration::Fitting;
+                let heard = std::mem::take(&mut voice.calibration_samples);
+                let (shared, session) = (self.voice.clone(), voice.session);
+                std::thread::spawn(move || {
+                    let result = listen::calibrate(&heard, PASSAGE);
+                    let mut slot = lock(&shared);
+                    let Some(voice) = slot.as_mut().filter(|v| v.session == session) else {
+                        return;
+                    };
+                    match result {
+                        Ok((model, _, notes)) => {
+                            voice.generation += 1;
+                            voice.calibration = Calibration::Calibrated {
+                                visemes: model.visemes_known(),
+                                notes,
+                            };
+                            voice.set_model(model);
+                        }
+                        Err(e) => {
+                            voice.calibration = Calibration::Failed {
+                                message: e.to_string(),
+                            };
+                        }
+                    }
+                });
+            }
+            return;
+        }
+        if voice.calibration == Calibration::Fitting {
+            return;
+        }
+        let keep = REFINE_SECONDS * RATE;
+        voice.recent.extend(samples.iter().copied());
+        while voice.recent.len() > keep {
+            voice.recent.pop_front();
+        }
+        voice.since_refine += samples.len();
+        if voice.since_refine < keep || voice.refining {
+            return;
+        }
+        voice.since_refine = 0;
+        let stretch: Vec<i16> = voice.recent.iter().copied().collect();
+        // Only a stretch with speech in it is worth recognising.
+        let sound = faceanim_speech::Sound { samples: stretch };
+        if sound.voice_activity().iter().filter(|v| **v).count() < 200 {
+            return;
+        }
+        voice.refining = true;
+        let (shared, session) = (self.voice.clone(), voice.session);
+        let (model, mean, generation) = (
+            voice.model.clone(),
+            voice.listener.speaker_mean(),
+            voice.generation,
+        );
+        std::thread::spawn(move || {
+            let result = listen::refine(model.as_ref(), &sound.samples, mean);
+            let mut slot = lock(&shared);
+            let Some(voice) = slot.as_mut().filter(|v| v.session == session) else {
+                return;
+            };
+            voice.refining = false;
+            // A calibration under way or finished meanwhile wins over a refinement of the voice
+            // as it was before.
+            if voice.generation != generation
+                || voice.calibration == Calibration::Fitting
+                || matches!(voice.calibration, Calibration::Listening { .. })
+            {
+                return;
+            }
+            match result {
+                Ok(model) => {
+                    voice.refine_error = None;
+                    voice.set_model(model);
+                }
+                Err(e) => voice.refine_error = Some(e.to_string()),
+            }
+        });
+    }
+}
