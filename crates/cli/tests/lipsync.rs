@@ -516,8 +516,16 @@ fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
     let (status, body) = chunk(port, "16000", &[0; 64]);
     assert_eq!(status, 200, "{body}");
     assert!(body.contains(r#""live":false"#), "{body}");
-    let (status, body) = start(0);
+    // Held back by 300 ms (a stream's audio delay): the first 200 ms give no mouth yet, the
+    // next do; then the delay is taken off while the microphone runs.
+    let (status, body) = start(300);
     assert_eq!(status, 200, "{body}");
+    assert_eq!(body["voice"]["delay_ms"], 300, "{body}");
+    let silence = vec![0i16; 3200];
+    assert_eq!(speak(port, &silence, 3200)["weights"], Value::Null);
+    assert!(speak(port, &silence, 3200)["weights"].is_array());
+    let (status, body) = start(0);
+    assert_eq!(body["voice"]["delay_ms"], 0, "{status} {body}");
     for (rate, bytes, named) in [("44100", 64, "x-sample-rate"), ("16000", 63, "chunk")] {
         let (status, body) = chunk(port, rate, &vec![0; bytes]);
         assert_eq!(status, 400, "{body}");

@@ -5,8 +5,8 @@
 //! user's own voice:
 //!
 //! 1. **Calibration**: the user reads [`PASSAGE`] for [`CALIBRATION_SECONDS`]; the recogniser
-//!    aligns the passage to the recording ([`phones::recognise`]), and every frame's viseme
-//!    becomes a labelled example ([`VoiceModel::fit`]).
+//!    aligns as much of the passage as was read to the recording ([`phones::align_start`]),
+//!    and every frame's viseme becomes a labelled example ([`VoiceModel::fit`]).
 //! 2. **Refinement**: while the microphone is on, stretches of speech are recognised in the
 //!    background and their frames refine the classes ([`VoiceModel::refine`]); an uncalibrated
 //!    microphone learns this way from its first stretch.
@@ -15,12 +15,12 @@
 //! [`Listener`] is the streaming part: [`Frontend`] features (pre-emphasis, 25 ms Hamming
 //! windows every 10 ms, 26 mel bands, 12 cepstra with the speaker's running mean removed, and
 //! their change over the last two frames, which adds no delay), a loudness gate that follows
-//! the room's own noise floor, the classifier, and a short attack and release. The mouth of a
-//! frame is known 12.5 ms after its centre (half a window) and follows the voice's onsets
-//! within [`ATTACK`].
+//! the room's own noise floor, the classifier, and smoothing: the mouth's openness follows the
+//! voice with a short [`ATTACK`] and [`RELEASE`], its shape moves between visemes over
+//! [`SHAPE_BLEND`]. The mouth of a frame is known 12.5 ms after its centre (half a window).
 //!
 //! ```no_run
-//! use faceanim_speech::listen::{Listener, VoiceModel};
+//! use faceanim_speech::listen::Listener;
 //! let mut listener = Listener::new(None);
 //! # let samples: Vec<i16> = vec![0; 1600];
 //! for heard in listener.push(&samples) {
@@ -60,7 +60,7 @@ pub const ATTACK: f32 = 0.015;
 pub const RELEASE: f32 = 0.05;
 /// How fast the mouth's shape moves from one viseme to the next, seconds (time constant).
 pub const SHAPE_BLEND: f32 = 0.03;
-/// How many seconds of earlier examples count as much as a new stretch when refining: older
+/// How many frames of earlier examples (a minute) are kept at full weight when refining: older
 /// ones fade so the model follows the voice and the room.
 const REMEMBERED_FRAMES: f64 = 6000.0;
 /// A class needs this many frames to be recognised at all.

@@ -128,7 +128,7 @@ pub(super) struct Voice {
     since_refine: usize,
     refining: bool,
     refine_error: Option<String>,
-    /// Recording: the sound and the weights of each frame as shown.
+    /// Recording: the sound and the character's weights of each 10 ms frame, as heard.
     recording: Option<(Vec<i16>, Vec<Vec<f32>>)>,
     last: Option<(Vec<f32>, f32)>,
     performer: Option<Arc<Mutex<faceanim_live::Performer>>>,
@@ -374,12 +374,26 @@ impl VoiceHandle {
         };
         voice.received += samples.len();
         let now = voice.received as f32 / RATE as f32;
+        // A recording keeps the sound and each frame's mouth as heard (not delayed: the take
+        // plays them together), up to an hour.
+        let recording = voice
+            .recording
+            .as_mut()
+            .filter(|(sound, _)| sound.len() < MAX_RECORDING_SECONDS * RATE);
+        let mut recorded = recording.map(|(sound, frames)| {
+            sound.extend_from_slice(samples);
+            frames
+        });
         let mut level_db = -100.0;
         for heard in voice.listener.push(samples) {
             level_db = heard.level_db;
+            let weights = voice.mouth.weights(&heard.visemes);
+            if let Some(frames) = recorded.as_mut() {
+                frames.push(weights.clone());
+            }
             voice.due.push_back(Due {
                 at: heard.time + voice.delay,
-                weights: voice.mouth.weights(&heard.visemes),
+                weights,
                 open: heard.open,
             });
         }
@@ -387,14 +401,6 @@ impl VoiceHandle {
         let mut shown = None;
         while voice.due.front().is_some_and(|d| d.at <= now) {
             shown = voice.due.pop_front();
-            if let (Some(d), Some((_, frames))) = (&shown, voice.recording.as_mut()) {
-                frames.push(d.weights.clone());
-            }
-        }
-        if let Some((sound, _)) = voice.recording.as_mut()
-            && sound.len() < MAX_RECORDING_SECONDS * RATE
-        {
-            sound.extend_from_slice(samples);
         }
         if let Some(d) = &shown {
             if let Some(performer) = &voice.performer {
