@@ -342,7 +342,21 @@ try {
   check(Math.max(...layeredSpeech.frames.map((row) => row[smileColumn])) > 0.5, 'the stroke is not on the lip-sync take');
   await shot('12-speech-take');
 
-  // 14. The microphone: the mouth follows the voice live; Calibrate shows the passage and
+  // 14. The viseme table: shown as JSON when opened, with how this character lip-syncs; an
+  //     edit applies (aa opens the jaw less), and the built-in table comes back.
+  await page.click('#visemes summary');
+  await page.waitForFunction(() => window.studio.capture.visemes.view !== null, null, { timeout: 10000 });
+  check(JSON.parse(await page.inputValue('#visemes-table')).aa.jawOpen > 0, 'the viseme table does not show aa opening the jaw');
+  check((await page.textContent('#visemes-note')).includes('ARKit'), 'the page does not say how the character lip-syncs');
+  await page.fill('#visemes-table', '{"aa": {"jawOpen": 0.25}}');
+  await page.click('#visemes-apply');
+  await page.waitForFunction(() => window.studio.capture.visemes.view.default === false, null, { timeout: 10000 });
+  check(JSON.parse(await page.inputValue('#visemes-table')).aa.jawOpen === 0.25, 'the edited table is not shown');
+  await page.click('#visemes-reset');
+  await page.waitForFunction(() => window.studio.capture.visemes.view.default === true, null, { timeout: 10000 });
+  await page.click('#visemes summary');
+
+  // 15. The microphone: the mouth follows the voice live; Calibrate shows the passage and
   //     learns the voice from it; latency and the mouth's delay at the voice's onsets are
   //     measured on the page's own clock; Record makes a take with its sound.
   await page.click('#voice-live');

@@ -13,6 +13,7 @@ import * as store from './store.js';
 import { drawTimeline } from './timeline.js';
 import { live } from './live.js';
 import { voice } from './voice.js';
+import { visemes } from './visemes.js';
 import { showControls as showVmcControls, vmc } from './vmc.js';
 import { setSound } from './sound.js';
 
@@ -33,6 +34,8 @@ export const capture = {
   live,
   /** Live microphone measurements (voice.js). */
   voice,
+  /** Lip sync's viseme table (visemes.js). */
+  visemes,
   /** Waits until no job runs; resolves with the last job's view. */
   async settled(timeoutMs = 600000) {
     const until = Date.now() + timeoutMs;

@@ -696,3 +696,68 @@ fn a_rig_without_mouth_names_lip_syncs_through_its_adapter() {
     assert!(most > 0.25, "{jaw_curve:?}");
     assert!(jaw_curve[0] < 0.05, "{jaw_curve:?}");
 }
+
+/// The studio's viseme table: refused by field when wrong; a table that moves nothing keeps
+/// the mouth of uploaded speech still; it is kept beside the project, read again when the
+/// studio starts, and `{}` brings the built-in table back.
+#[test]
+fn the_studio_viseme_table_is_checked_kept_and_used() {
+    let out = output_dir("lipsync-visemes");
+    let project = out.join("visemes.faceanim.json");
+    let _ = std::fs::remove_file(out.join("visemes.faceanim.visemes.json"));
+    let studio = start_on(None, &project, &[]);
+    let port = studio.port;
+    let (_, view) = send(port, "GET", "/api/capture/visemes", "");
+    assert_eq!(view["route"], "arkit", "{view}");
+    assert_eq!(view["default"], true, "{view}");
+    for (bad, named) in [
+        (r#"{"aa": {"jawOpen": 2}}"#, "aa.jawOpen"),
+        (r#"{"zz": {"jawOpen": 0.5}}"#, "zz"),
+        (r#"{"aa": {"jawWide": 0.5}}"#, "jawWide"),
+        ("[1, 2]", "viseme"),
+    ] {
+        let (status, body) = send(port, "PUT", "/api/capture/visemes", bad);
+        assert_eq!(status, 400, "{bad}: {body}");
+        assert!(body.to_string().contains(named), "{bad}: {body}");
+    }
+    // Every viseme moves nothing.
+    let still: serde_json::Map<String, Value> = view["visemes"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(|v| (v.clone(), serde_json::json!({ "jawOpen": 0.0 })))
+        .collect();
+    let (status, view) = send(
+        port,
+        "PUT",
+        "/api/capture/visemes",
+        &Value::Object(still).to_string(),
+    );
+    assert_eq!(status, 200, "{view}");
+    assert_eq!(view["default"], false, "{view}");
+    let (wav, _) = librivox().into_iter().nth(1).unwrap();
+    let (status, state) = request(
+        port,
+        "POST",
+        "/api/capture/upload",
+        &[("x-filename", "line.wav")],
+        &std::fs::read(&wav).unwrap(),
+    );
+    assert_eq!(status, 200, "{state}");
+    let state: Value = serde_json::from_str(&state).unwrap();
+    let most = peak(&state["take"]["weights"]);
+    assert!(
+        most < 1e-6,
+        "a table that moves nothing moved the mouth to {most}"
+    );
+    drop(studio);
+    assert!(out.join("visemes.faceanim.visemes.json").exists());
+    let studio = start_on(None, &project, &[]);
+    let (_, view) = send(studio.port, "GET", "/api/capture/visemes", "");
+    assert_eq!(
+        view["default"], false,
+        "the table was not read again: {view}"
+    );
+    let (_, view) = send(studio.port, "PUT", "/api/capture/visemes", "{}");
+    assert_eq!(view["default"], true, "{view}");
+}

@@ -69,6 +69,7 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/live/record", post(live_record))
         .route("/api/capture/live/calibrate", post(live_calibrate))
         .route("/api/capture/voice", put(voice))
+        .route("/api/capture/visemes", get(visemes).put(put_visemes))
         .route("/api/capture/voice/calibrate", post(voice_calibrate))
         .route("/api/capture/voice/record", post(voice_record))
         .route("/api/capture/voice/chunk", post(voice_chunk))
@@ -618,6 +619,53 @@ async fn live_frame(
     .await
     .map_err(|e| ApiError::Internal(e.to_string()))??;
     Ok(axum::Json(result))
+}
+
+// ---------- lip sync's viseme table ----------
+
+/// The viseme table as the page edits it.
+#[derive(serde::Serialize)]
+struct VisemesView {
+    /// Per viseme, ARKit channel → value.
+    visemes: std::collections::BTreeMap<String, std::collections::BTreeMap<String, f32>>,
+    /// Whether it is the built-in table.
+    default: bool,
+    /// How lip sync reaches this character: `visemes`, `arkit`, `adapter`, or `null` when it
+    /// cannot (`no_mouth` says why).
+    route: Option<faceanim_speech::Route>,
+    no_mouth: Option<String>,
+}
+
+fn visemes_view(both: &Both) -> axum::Json<VisemesView> {
+    let character = both.studio().character.clone();
+    let desk = both.desk();
+    let (table, default) = desk.visemes();
+    let route = faceanim_speech::Mouth::of(&character, table)
+        .map(|m| m.route)
+        .or_else(|e| {
+            if desk.has_adapter() {
+                Ok(faceanim_speech::Route::Adapter)
+            } else {
+                Err(e.to_string())
+            }
+        });
+    axum::Json(VisemesView {
+        visemes: table.visemes.clone(),
+        default,
+        no_mouth: route.as_ref().err().cloned(),
+        route: route.ok(),
+    })
+}
+
+async fn visemes(State(both): State<Both>) -> axum::Json<VisemesView> {
+    visemes_view(&both)
+}
+
+async fn put_visemes(State(both): State<Both>, body: Bytes) -> Answer<VisemesView> {
+    let text = std::str::from_utf8(&body).map_err(|_| bad("visemes: the body is not UTF-8"))?;
+    let character = both.studio().character.clone();
+    both.desk().set_visemes(&character, text)?;
+    Ok(visemes_view(&both))
 }
 
 // ---------- the live microphone ----------

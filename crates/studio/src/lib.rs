@@ -117,6 +117,7 @@ pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<
     }
     let take_path = state::take_autosave_path(&config.project_path);
     let mut desk = capture::CaptureDesk::new(&config.character, config.adapter_path, take_path);
+    desk.open_visemes(state::visemes_path(&config.project_path));
     desk.open_vmc(config.vmc, &config.character)
         .map_err(StudioError::Vmc)?;
     let studio =

@@ -353,6 +353,16 @@ fn autosave_path(project: &std::path::Path) -> PathBuf {
 }
 
 /// Where capture mode keeps the take being edited: `.NAME.take.json` beside the project.
+/// Where the studio keeps the user's viseme table for `project` (beside it, visible: the same
+/// file works with `faceanim lipsync --viseme-table`).
+pub(crate) fn visemes_path(project: &std::path::Path) -> PathBuf {
+    let name = project
+        .file_name()
+        .map_or_else(|| "project".into(), |n| n.to_string_lossy().into_owned());
+    let stem = name.strip_suffix(".json").unwrap_or(&name);
+    project.with_file_name(format!("{stem}.visemes.json"))
+}
+
 pub(crate) fn take_autosave_path(project: &std::path::Path) -> PathBuf {
     let name = project
         .file_name()

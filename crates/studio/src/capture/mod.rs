@@ -322,6 +322,10 @@ pub struct CaptureDesk {
     /// The mouth read through the adapter (for a rig without mouth names), with the adapter
     /// it was read by.
     adapter_mouth: Option<(Adapter, faceanim_speech::Mouth)>,
+    /// Visemes as ARKit channel values (the user's, or the built-in table), and the file the
+    /// user's is kept in.
+    visemes: faceanim_speech::MouthTable,
+    visemes_path: Option<PathBuf>,
 }
 
 /// A shared capture desk.
@@ -352,6 +356,8 @@ impl CaptureDesk {
             voice: Arc::new(Mutex::new(None)),
             voice_model: None,
             adapter_mouth: None,
+            visemes: faceanim_speech::MouthTable::default(),
+            visemes_path: None,
             filtering: Filtering::SEED,
             uploads: None,
             vmc: vmc::Vmc::default(),
@@ -550,7 +556,7 @@ impl CaptureDesk {
     /// [`ApiError::Invalid`] when it has no mouth by name and no adapter; the face models' or
     /// the adapter's error.
     pub fn mouth(&mut self, character: &Character) -> Result<faceanim_speech::Mouth, ApiError> {
-        let table = faceanim_speech::MouthTable::default();
+        let table = self.visemes.clone();
         let by_name = faceanim_speech::Mouth::of(character, &table);
         let (Err(no_mouth), Some(adapter)) = (&by_name, &self.adapter) else {
             return by_name.map_err(|e| ApiError::Invalid(e.to_string()));
@@ -561,6 +567,7 @@ impl CaptureDesk {
         {
             return Ok(mouth.clone());
         }
+        // The built-in head makes each viseme by the table: it is the adapter's route's too.
         let models = face_models()?;
         let performer = faceanim_head::default_character();
         let rows = faceanim_speech::Mouth::performer_rows(&performer, &table)
@@ -570,6 +577,58 @@ impl CaptureDesk {
         let mouth = faceanim_speech::Mouth::from_readings(character.blendshapes().len(), &readings);
         self.adapter_mouth = Some((adapter.clone(), mouth.clone()));
         Ok(mouth)
+    }
+
+    /// Keeps the user's viseme table in `path`, reading it from there when it exists (a file
+    /// that is not a table is reported and left alone).
+    pub fn open_visemes(&mut self, path: PathBuf) {
+        if let Ok(text) = std::fs::read_to_string(&path) {
+            match faceanim_speech::MouthTable::from_json(&text) {
+                Ok(table) => self.visemes = table,
+                Err(e) => tracing::warn!("{}: not used ({e})", path.display()),
+            }
+        }
+        self.visemes_path = Some(path);
+    }
+
+    /// Whether the character's adapter is loaded.
+    #[must_use]
+    pub fn has_adapter(&self) -> bool {
+        self.adapter.is_some()
+    }
+
+    /// The viseme table lip sync uses on ARKit rigs, and whether it is the built-in one.
+    #[must_use]
+    pub fn visemes(&self) -> (&faceanim_speech::MouthTable, bool) {
+        (
+            &self.visemes,
+            self.visemes == faceanim_speech::MouthTable::default(),
+        )
+    }
+
+    /// Makes `text` (JSON, as `faceanim lipsync --viseme-table` reads it; visemes left out
+    /// keep the built-in values, `{}` is the built-in table) the viseme table, saves it beside
+    /// the project, and puts it on the live microphone's mouth.
+    ///
+    /// # Errors
+    /// [`ApiError::Invalid`] naming the field that is wrong; the save's error.
+    pub fn set_visemes(&mut self, character: &Character, text: &str) -> Result<(), ApiError> {
+        let table = faceanim_speech::MouthTable::from_json(text)
+            .map_err(|e| ApiError::Invalid(e.to_string()))?;
+        if let Some(path) = &self.visemes_path {
+            let json = serde_json::to_string_pretty(&table.visemes)
+                .map_err(|e| ApiError::Internal(e.to_string()))?;
+            faceanim_files::write_atomic(path, json.as_bytes())?;
+        }
+        self.visemes = table;
+        self.adapter_mouth = None;
+        if lock(&self.voice).is_some() {
+            let mouth = self.mouth(character)?;
+            if let Some(voice) = lock(&self.voice).as_mut() {
+                voice.set_mouth(mouth);
+            }
+        }
+        Ok(())
     }
 
     /// Reads the adapter beside the character, keeping it only when it fits.

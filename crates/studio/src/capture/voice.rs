@@ -161,6 +161,10 @@ impl Voice {
         }
     }
 
+    pub(super) fn set_mouth(&mut self, mouth: Mouth) {
+        self.mouth = mouth;
+    }
+
     fn set_model(&mut self, model: VoiceModel) {
         self.listener.set_model(&model);
         self.model = Some(model);
