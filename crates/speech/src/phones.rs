@@ -69,6 +69,24 @@ pub fn recognise(
     blind: Recognition,
 ) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
     let mut notes = Vec::new();
+    if transcript.is_none() && blind == Recognition::Words {
+        // The dictionary is read while the recogniser loads and decodes (the recogniser reads
+        // its own copy): on a short line its reading is a good share of the time.
+        let (segments, dictionary) = std::thread::scope(|scope| {
+            let dictionary = scope.spawn(Dictionary::english);
+            let segments = faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples);
+            (segments, dictionary.join())
+        });
+        let dictionary = dictionary.map_err(|_| PhoneError::Dictionary {
+            path: EN_US.dictionary.to_owned(),
+            message: "reading it stopped".into(),
+        })??;
+        return Ok((
+            phones_of_words(segments?, &dictionary).0,
+            Recognition::Words,
+            notes,
+        ));
+    }
     // Read once, for the transcript and for recognised words alike.
     let dictionary = if transcript.is_some() || blind == Recognition::Words {
         Some(Dictionary::english()?)

@@ -34,6 +34,11 @@ const JSON_LIMIT: usize = 16 * 1024 * 1024;
 /// Character uploads may be this large.
 const CHARACTER_LIMIT: usize = 512 * 1024 * 1024;
 
+/// The body of a request that takes nothing from it (the page may send `{}`), read all the
+/// same: a body left unread when the answer closes the connection turns the close into a
+/// reset, and the client may lose the answer.
+pub(crate) type Unread = Bytes;
+
 /// A JSON body as `T`, or [`ApiError::Invalid`] naming `what` and the problem.
 pub(crate) fn json_body<T: serde::de::DeserializeOwned>(
     bytes: &[u8],
@@ -193,13 +198,13 @@ async fn put_project(State(shared): State<Shared>, body: Bytes) -> Answer<StateV
     Ok(axum::Json(studio.view()))
 }
 
-async fn new_project(State(shared): State<Shared>) -> axum::Json<StateView> {
+async fn new_project(State(shared): State<Shared>, _unread: Unread) -> axum::Json<StateView> {
     let mut studio = lock(&shared);
     studio.new_project();
     axum::Json(studio.view())
 }
 
-async fn save(State(shared): State<Shared>) -> Answer<SavedView> {
+async fn save(State(shared): State<Shared>, _unread: Unread) -> Answer<SavedView> {
     let studio = lock(&shared);
     studio.save()?;
     Ok(axum::Json(SavedView {
@@ -207,7 +212,7 @@ async fn save(State(shared): State<Shared>) -> Answer<SavedView> {
     }))
 }
 
-async fn reopen(State(shared): State<Shared>) -> Answer<StateView> {
+async fn reopen(State(shared): State<Shared>, _unread: Unread) -> Answer<StateView> {
     let mut studio = lock(&shared);
     studio.reopen()?;
     Ok(axum::Json(studio.view()))
@@ -358,13 +363,13 @@ async fn candidates(State(shared): State<Shared>, body: Bytes) -> Answer<Option<
     ))
 }
 
-async fn undo(State(shared): State<Shared>) -> axum::Json<StateView> {
+async fn undo(State(shared): State<Shared>, _unread: Unread) -> axum::Json<StateView> {
     let mut studio = lock(&shared);
     studio.undo();
     axum::Json(studio.view())
 }
 
-async fn redo(State(shared): State<Shared>) -> axum::Json<StateView> {
+async fn redo(State(shared): State<Shared>, _unread: Unread) -> axum::Json<StateView> {
     let mut studio = lock(&shared);
     studio.redo();
     axum::Json(studio.view())

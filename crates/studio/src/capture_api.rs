@@ -15,7 +15,7 @@ use faceanim_media::raw::{PixelLayout, YuvMatrix, YuvRange, raw_to_image};
 use faceanim_take::{Filtering, TakeError};
 use serde::Deserialize;
 
-use crate::api::{download, json_body, uploaded_name};
+use crate::api::{Unread, download, json_body, uploaded_name};
 use crate::capture::{self, CaptureDesk, SharedDesk};
 use crate::error::{Answer, ApiError};
 use crate::views::CaptureView;
@@ -386,17 +386,17 @@ async fn neutral(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     Ok(state_of(&both))
 }
 
-async fn live_calibrate(State(both): State<Both>) -> Answer<CaptureView> {
+async fn live_calibrate(State(both): State<Both>, _unread: Unread) -> Answer<CaptureView> {
     both.desk().calibrate_live()?;
     Ok(state_of(&both))
 }
 
-async fn undo(State(both): State<Both>) -> Answer<CaptureView> {
+async fn undo(State(both): State<Both>, _unread: Unread) -> Answer<CaptureView> {
     both.desk().step_history(true)?;
     Ok(state_of(&both))
 }
 
-async fn redo(State(both): State<Both>) -> Answer<CaptureView> {
+async fn redo(State(both): State<Both>, _unread: Unread) -> Answer<CaptureView> {
     both.desk().step_history(false)?;
     Ok(state_of(&both))
 }
@@ -476,13 +476,13 @@ async fn train(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     Ok(state_of(&both))
 }
 
-async fn finetune(State(both): State<Both>) -> Answer<CaptureView> {
+async fn finetune(State(both): State<Both>, _unread: Unread) -> Answer<CaptureView> {
     let character = both.studio().character.clone();
     capture::start_finetune(&both.desk, character)?;
     Ok(state_of(&both))
 }
 
-async fn live_start(State(both): State<Both>) -> Answer<CaptureView> {
+async fn live_start(State(both): State<Both>, _unread: Unread) -> Answer<CaptureView> {
     // Loading the models the first time takes a moment: off the async threads.
     let desk = both.desk.clone();
     let character = both.studio().character.clone();
@@ -694,7 +694,7 @@ async fn voice(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     Ok(state_of(&both))
 }
 
-async fn voice_calibrate(State(both): State<Both>) -> Answer<CaptureView> {
+async fn voice_calibrate(State(both): State<Both>, _unread: Unread) -> Answer<CaptureView> {
     both.desk().calibrate_voice()?;
     Ok(state_of(&both))
 }
