@@ -5,6 +5,7 @@
 
 import { api } from './api.js';
 import { apply, currentView, post, showTakeFrame, turnHead } from './capture.js';
+import { pushMedian } from './medians.js';
 import { applyLayer, pause } from './playback.js';
 import { onRender } from './scene.js';
 import { showError } from './status.js';
@@ -238,11 +239,7 @@ onRender(() => {
   const latency = drawn - captured;
   live.stages = { grab_ms: sent - captured, round_trip_ms: received - sent, draw_ms: drawn - received };
   pendingShown = null;
-  const l = live.latencies;
-  l.push(latency);
-  if (l.length > 120) l.shift();
-  const sorted = l.slice().sort((a, b) => a - b);
-  live.latency_ms = sorted[Math.floor(sorted.length / 2)];
+  live.latency_ms = pushMedian(live.latencies, latency, 120);
   const now = performance.now();
   if (now - fpsWindow.start >= 1000) {
     live.fps = fpsWindow.count * 1000 / (now - fpsWindow.start);

@@ -6,6 +6,7 @@
 
 import { api } from './api.js';
 import { apply, post, showTakeFrame } from './capture.js';
+import { pushMedian } from './medians.js';
 import { applyLayer, pause } from './playback.js';
 import { onRender } from './scene.js';
 import { showError } from './status.js';
@@ -164,18 +165,11 @@ onRender(() => {
   voice.stages.draw_ms = drawn - shown.received;
   const latency = drawn - shown.newest + WINDOW_MS + voice.stages.input_ms;
   if (onset !== null && shown.open > OPEN && shown.newest >= onset) {
-    const o = voice.onset_lags;
-    o.push(drawn - onset + voice.stages.input_ms);
-    if (o.length > 50) o.shift();
-    voice.onset_lag_ms = o.slice().sort((a, b) => a - b)[Math.floor(o.length / 2)];
+    voice.onset_lag_ms = pushMedian(voice.onset_lags, drawn - onset + voice.stages.input_ms, 50);
     onset = null;
   }
   shown = null;
-  const l = voice.latencies;
-  l.push(latency);
-  if (l.length > 200) l.shift();
-  const sorted = l.slice().sort((a, b) => a - b);
-  voice.latency_ms = sorted[Math.floor(sorted.length / 2)];
+  voice.latency_ms = pushMedian(voice.latencies, latency, 200);
 });
 
 const CALIBRATION_TEXT = {

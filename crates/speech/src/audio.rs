@@ -133,13 +133,23 @@ impl Sound {
         sorted.sort_by(f32::total_cmp);
         let floor = sorted[sorted.len() / 10];
         let peak = sorted[(sorted.len() * 98 / 100).min(sorted.len() - 1)];
-        let range = peak - floor;
-        if range < 12.0 || peak < -45.0 {
-            return vec![false; levels.len()];
+        match voice_threshold(floor, peak, -55.0) {
+            Some(threshold) => levels.iter().map(|&l| l > threshold).collect(),
+            None => vec![false; levels.len()],
         }
-        let threshold = (floor + (0.3 * range).max(8.0)).max(-55.0);
-        levels.iter().map(|&l| l > threshold).collect()
     }
+}
+
+/// The level (dBFS) above which a voice is heard, between a quiet `floor` and a loud `peak`:
+/// a share of their range above the floor, and never under `quietest`. `None` when quiet and
+/// loud differ too little (silence, steady noise, hum) or nothing is loud. The rule of both
+/// [`Sound::voice_activity`] and the live listener's gate.
+pub(crate) fn voice_threshold(floor: f32, peak: f32, quietest: f32) -> Option<f32> {
+    let range = peak - floor;
+    if range < 12.0 || peak < -45.0 {
+        return None;
+    }
+    Some((floor + (0.3 * range).max(8.0)).max(quietest))
 }
 
 /// A canonical 16 kHz mono 16-bit PCM WAV, read without ffmpeg; `Ok(None)` for any other file

@@ -37,7 +37,7 @@ use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
 use crate::SpeechError;
-use crate::audio::{FRAME_SAMPLES, Sound};
+use crate::audio::{FRAME_SAMPLES, Sound, voice_threshold};
 use crate::phones::{self, Phone, Recognition};
 use crate::visemes::{index, viseme_of};
 
@@ -146,11 +146,9 @@ impl Gate {
         } else {
             (self.peak - Self::FADE).max(self.floor)
         };
-        let range = self.peak - self.floor;
-        if range < 12.0 || self.peak < -45.0 {
+        let Some(threshold) = voice_threshold(self.floor, self.peak, Self::QUIETEST) else {
             return (false, 0.0);
-        }
-        let threshold = (self.floor + (0.3 * range).max(8.0)).max(Self::QUIETEST);
+        };
         if level <= threshold {
             return (false, 0.0);
         }
