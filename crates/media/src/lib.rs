@@ -3,8 +3,9 @@
 //! One [`FrameSource`] for every input a user points capture at: a still image (PNG or JPEG,
 //! told apart by their bytes, not their names), a folder of images (in name order, as an
 //! image sequence), or a video file, decoded by Debian's `ffmpeg` program through a pipe.
-//! Every frame comes out as 8-bit RGB. Video is resampled to a constant frame rate (its own
-//! average rate) so that frame `i` is always at `i / fps` seconds: a dropped or duplicated
+//! Every frame comes out as 8-bit RGB, upright (a phone's rotated video is turned as a player
+//! shows it). Video is resampled to a constant frame rate (the rate ffmpeg takes as the
+//! stream's own) so that frame `i` is always at `i / fps` seconds: a dropped or duplicated
 //! frame in the file never shifts the timeline.
 //!
 //! Raw frames from a caller (the studio's webcam, as packed RGB or the camera's own YUV) are
@@ -133,10 +134,10 @@ pub enum MediaError {
     NotVideo {
         /// The input.
         path: PathBuf,
-        /// What ffprobe/ffmpeg said, or what is missing.
+        /// What ffmpeg said, or what is missing.
         message: String,
     },
-    /// `ffmpeg`/`ffprobe` are not installed.
+    /// `ffmpeg` is not installed.
     #[error(
         "{path}: reading video needs the ffmpeg program, which was not found ({program}: {source}). \
          Install it (Debian/Ubuntu: `sudo apt-get install ffmpeg`; macOS: `brew install ffmpeg`), \
@@ -145,7 +146,7 @@ pub enum MediaError {
     FfmpegMissing {
         /// The input.
         path: PathBuf,
-        /// `ffmpeg` or `ffprobe`.
+        /// The program: `ffmpeg`.
         program: &'static str,
         /// Why it could not start.
         source: std::io::Error,
@@ -272,7 +273,8 @@ pub struct SourceInfo {
     pub height: usize,
     /// Frames per second (a still image or a folder: the rate it was opened with).
     pub fps: f32,
-    /// How many frames there will be, when known in advance.
+    /// How many frames there will be, when known in advance: exact for images, from the
+    /// duration for a video (about right; for a progress bar, not a promise).
     pub frames: Option<usize>,
 }
 
@@ -440,24 +442,12 @@ impl Drop for FrameSource {
     }
 }
 
-/// `program` (`ffmpeg` or `ffprobe`) with its quiet options. It is not run here: each run of
-/// either costs tens of milliseconds of start-up, so a missing program is told from the error
-/// of the run itself ([`spawn_error`]).
-fn ffmpeg_command(program: &'static str) -> Command {
-    let mut command = Command::new(program);
-    command.args(["-v", "error", "-hide_banner"]);
-    if program == "ffmpeg" {
-        command.arg("-nostdin");
-    }
-    command
-}
-
-/// The error of a failed start of `program` on `path`: missing, or another input/output error.
-fn spawn_error(program: &'static str, path: &Path, source: std::io::Error) -> MediaError {
+/// The error of a failed start of ffmpeg on `path`: missing, or another input/output error.
+fn spawn_error(path: &Path, source: std::io::Error) -> MediaError {
     if source.kind() == std::io::ErrorKind::NotFound {
         MediaError::FfmpegMissing {
             path: path.to_owned(),
-            program,
+            program: "ffmpeg",
             source,
         }
     } else {
@@ -468,98 +458,233 @@ fn spawn_error(program: &'static str, path: &Path, source: std::io::Error) -> Me
     }
 }
 
+/// Opens a video with one ffmpeg process, which decodes it and says on stderr what it writes.
+///
+/// Each run of ffmpeg costs about 60 ms before it reads a byte (Debian's build loads some 200
+/// libraries), so the video is not probed first by a second program: ffmpeg's own account of
+/// the stream it writes (its `[info]` header, tagged by `-v level+info`) gives the frame size
+/// after rotation (a phone's portrait video is turned upright) and the constant rate it writes
+/// at; the input's duration gives the frame count, approximately. Everything else ffmpeg says
+/// is kept for the messages of errors.
 fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
-    let not_video = |message: String| MediaError::NotVideo {
-        path: path.to_owned(),
-        message,
-    };
-    let mut probe = ffmpeg_command("ffprobe");
-    probe.args([
-        "-select_streams",
-        "v:0",
-        "-count_packets",
-        "-show_entries",
-        "stream=width,height,avg_frame_rate,r_frame_rate,nb_read_packets",
-        "-of",
-        "json",
-    ]);
-    let output = probe
+    let mut child = Command::new("ffmpeg")
+        .args([
+            "-v",
+            "level+info",
+            "-nostats",
+            "-hide_banner",
+            "-nostdin",
+            "-i",
+        ])
         .arg(path)
-        .stdin(Stdio::null())
-        .output()
-        .map_err(|source| spawn_error("ffprobe", path, source))?;
-    if !output.status.success() {
-        let message = String::from_utf8_lossy(&output.stderr).trim().to_owned();
-        return Err(not_video(if message.is_empty() {
-            "ffprobe could not read it".into()
-        } else {
-            message
-        }));
-    }
-    let json: serde_json::Value = serde_json::from_slice(&output.stdout)
-        .map_err(|e| not_video(format!("unexpected ffprobe output: {e}")))?;
-    let Some(stream) = json["streams"].as_array().and_then(|s| s.first()) else {
-        return Err(not_video("it has no video stream".into()));
-    };
-    let dimension = |key: &str| {
-        stream[key]
-            .as_u64()
-            .and_then(|v| usize::try_from(v).ok())
-            .filter(|&v| v > 0 && v <= 8192)
-    };
-    let (Some(width), Some(height)) = (dimension("width"), dimension("height")) else {
-        return Err(not_video(
-            "the video stream has no usable frame size".into(),
-        ));
-    };
-    let rate = |key: &str| {
-        let text = stream[key].as_str()?;
-        let (n, d) = text.split_once('/').unwrap_or((text, "1"));
-        let (n, d): (f64, f64) = (n.parse().ok()?, d.parse().ok()?);
-        let fps = n / d;
-        (fps.is_finite() && fps > 0.0 && fps <= 1000.0).then_some(fps as f32)
-    };
-    let Some(fps) = rate("avg_frame_rate").or_else(|| rate("r_frame_rate")) else {
-        return Err(not_video("the video stream has no frame rate".into()));
-    };
-    let packets = stream["nb_read_packets"]
-        .as_str()
-        .and_then(|n| n.parse::<usize>().ok());
-    if packets == Some(0) {
-        return Err(not_video("the video has no frames".into()));
-    }
-    let mut decode = ffmpeg_command("ffmpeg");
-    decode
-        .arg("-i")
-        .arg(path)
-        .args(["-map", "0:v:0", "-an", "-sn", "-fps_mode", "cfr"])
-        .args(["-r", &format!("{fps}")])
+        .args(["-map", "0:v:0", "-an", "-sn", "-dn", "-fps_mode", "cfr"])
         .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
-    let mut child = decode
+        .stderr(Stdio::piped())
         .spawn()
-        .map_err(|source| spawn_error("ffmpeg", path, source))?;
-    let stderr = child.stderr.take().map(|mut pipe| {
-        std::thread::spawn(move || {
-            let mut text = String::new();
-            let _ = pipe.read_to_string(&mut text);
-            text
-        })
+        .map_err(|source| spawn_error(path, source))?;
+    let Some(stderr) = child.stderr.take() else {
+        return Err(MediaError::Io {
+            path: path.to_owned(),
+            source: std::io::Error::other("ffmpeg's error output was not opened"),
+        });
+    };
+    let mut log = std::io::BufReader::new(stderr);
+    let header = match read_header(&mut log) {
+        Ok(header) => header,
+        Err(said) => {
+            // ffmpeg ended (or its stream line was not understood): reap it, then say why.
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(MediaError::NotVideo {
+                path: path.to_owned(),
+                message: said,
+            });
+        }
+    };
+    let stderr = std::thread::spawn(move || {
+        let mut errors = String::new();
+        let _ = read_log(&mut log, |level, text| {
+            if level.is_error() {
+                errors.push_str(text);
+                errors.push('\n');
+            }
+            std::ops::ControlFlow::Continue(())
+        });
+        errors
     });
     Ok(FrameSource {
         path: path.to_owned(),
         info: SourceInfo {
-            width,
-            height,
-            fps,
-            frames: packets,
+            width: header.width,
+            height: header.height,
+            fps: header.fps,
+            frames: header.frames,
         },
-        kind: Kind::Video(child, stderr),
+        kind: Kind::Video(child, Some(stderr)),
         delivered: 0,
         image_names: Vec::new(),
     })
+}
+
+/// How loud a line of ffmpeg's log is, from its `[level]` tag.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Level {
+    /// `[panic]`, `[fatal]` or `[error]`.
+    Error,
+    /// Anything quieter.
+    Other,
+}
+
+impl Level {
+    fn is_error(self) -> bool {
+        self == Level::Error
+    }
+}
+
+/// Reads ffmpeg's `-v level+…` log line by line, calling `line` with each line's level and
+/// its text without the tag, until the log ends or `line` breaks.
+fn read_log(
+    log: &mut impl std::io::BufRead,
+    mut line: impl FnMut(Level, &str) -> std::ops::ControlFlow<()>,
+) -> std::io::Result<()> {
+    let mut bytes = Vec::new();
+    loop {
+        bytes.clear();
+        if log.read_until(b'\n', &mut bytes)? == 0 {
+            return Ok(());
+        }
+        let text = String::from_utf8_lossy(&bytes);
+        let text = text.trim_end();
+        let (level, rest) = match text.strip_prefix('[').and_then(|t| t.split_once("] ")) {
+            Some((tag, rest)) => (
+                if matches!(tag, "panic" | "fatal" | "error") {
+                    Level::Error
+                } else {
+                    Level::Other
+                },
+                rest,
+            ),
+            None => (Level::Other, text),
+        };
+        if line(level, rest).is_break() {
+            return Ok(());
+        }
+    }
+}
+
+/// What ffmpeg's header says of the video it is about to write.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Header {
+    width: usize,
+    height: usize,
+    fps: f32,
+    frames: Option<usize>,
+}
+
+/// Reads ffmpeg's log up to the line describing its output's video stream. On failure, what
+/// to tell the user: ffmpeg's errors, or what was missing.
+fn read_header(log: &mut impl std::io::BufRead) -> Result<Header, String> {
+    let mut errors: Vec<String> = Vec::new();
+    let mut duration = None;
+    let mut output = false;
+    let mut stream: Option<Result<(usize, usize, f32), String>> = None;
+    read_log(log, |level, text| {
+        if level.is_error() {
+            errors.push(text.to_owned());
+        } else if output {
+            if text.trim_start().starts_with("Stream #") && text.contains(" Video: ") {
+                stream = Some(output_stream(text));
+                return std::ops::ControlFlow::Break(());
+            }
+        } else if text.starts_with("Output #") {
+            output = true;
+        } else if let Some(rest) = text.trim_start().strip_prefix("Duration: ") {
+            duration = duration.or_else(|| parse_duration(rest));
+        }
+        std::ops::ControlFlow::Continue(())
+    })
+    .map_err(|e| format!("reading ffmpeg's messages: {e}"))?;
+    match stream {
+        Some(Ok((width, height, fps))) => Ok(Header {
+            width,
+            height,
+            fps,
+            frames: duration
+                .map(|seconds| (seconds * f64::from(fps)).round())
+                .filter(|n| (1.0..1e9).contains(n))
+                .map(|n| n as usize),
+        }),
+        Some(Err(message)) => Err(message),
+        None if errors.iter().any(|e| e.contains("matches no streams")) => {
+            Err("it has no video stream".into())
+        }
+        None if errors.is_empty() => Err("the video has no frames".into()),
+        None => Err(errors.join("; ")),
+    }
+}
+
+/// The frame size and rate in ffmpeg's line for the video stream it writes, such as `Stream
+/// #0:0: Video: rawvideo (RGB[24] / 0x18424752), rgb24(pc, progressive), 400x300 [SAR 1:1 DAR
+/// 4:3], q=2-31, 72000 kb/s, 29.97 fps, 30k tbn`.
+fn output_stream(line: &str) -> Result<(usize, usize, f32), String> {
+    // What is in brackets (codec tags, colour details) is not a field of its own.
+    let mut depth = 0usize;
+    let flat: String = line
+        .chars()
+        .filter(|&c| {
+            match c {
+                '(' => depth += 1,
+                ')' => depth = depth.saturating_sub(1),
+                _ => return depth == 0,
+            }
+            false
+        })
+        .collect();
+    let fields: Vec<&str> = flat.split(',').map(str::trim).collect();
+    let size = fields.iter().find_map(|field| {
+        let (w, h) = field.split_whitespace().next()?.split_once('x')?;
+        let dimension = |text: &str| text.parse::<usize>().ok().filter(|&v| v > 0 && v <= 8192);
+        Some((dimension(w)?, dimension(h)?))
+    });
+    let Some((width, height)) = size else {
+        return Err(format!(
+            "the video stream has no usable frame size ({line})"
+        ));
+    };
+    let fps = fields
+        .iter()
+        .find_map(|field| parse_rate(field.strip_suffix(" fps")?))
+        .ok_or_else(|| format!("the video stream has no frame rate ({line})"))?;
+    Ok((width, height, fps))
+}
+
+/// A rate as ffmpeg prints one: `25`, `29.97` (two decimals: the NTSC rates, `N/1.001`, are
+/// taken as such), `1k`.
+fn parse_rate(text: &str) -> Option<f32> {
+    let (number, scale) = match text.strip_suffix('k') {
+        Some(n) => (n, 1000.0),
+        None => (text, 1.0),
+    };
+    let printed = number.parse::<f64>().ok()? * scale;
+    let ntsc = (printed * 1.001).round() / 1.001;
+    let fps = if number.contains('.') && (ntsc - printed).abs() < 0.006 {
+        ntsc
+    } else {
+        printed
+    };
+    (fps.is_finite() && fps > 0.0 && fps <= 1000.0).then_some(fps as f32)
+}
+
+/// Seconds from ffmpeg's `HH:MM:SS.cc, start: …`; `None` for `N/A`.
+fn parse_duration(text: &str) -> Option<f64> {
+    let clock = text.split(',').next()?.trim();
+    let mut parts = clock.split(':');
+    let (h, m, s) = (parts.next()?, parts.next()?, parts.next()?);
+    let seconds =
+        h.parse::<f64>().ok()? * 3600.0 + m.parse::<f64>().ok()? * 60.0 + s.parse::<f64>().ok()?;
+    (seconds.is_finite() && seconds > 0.0).then_some(seconds)
 }
 
 fn read_video_frame(
@@ -619,4 +744,77 @@ fn read_video_frame(
         });
     }
     Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// ffmpeg 5.1's log for a 400×300 H.264 clip, as `-v level+info` prints it.
+    const LOG: &str = "[info] Input #0, mov,mp4,m4a,3gp,3g2,mj2, from 'clip.mp4':
+[info]   Metadata:
+[info]     encoder         : Lavf59.27.100
+[info]   Duration: 00:00:03.60, start: 0.000000, bitrate: 189 kb/s
+[info]   Stream #0:0[0x1](und): Video: h264 (High) (avc1 / 0x31637661), yuv420p(progressive), 640x360 [SAR 1:1 DAR 4:3], 185 kb/s, 24 fps, 24 tbr, 12800 tbn (default)
+[info] Stream mapping:
+[info]   Stream #0:0 -> #0:0 (h264 (native) -> rawvideo (native))
+[info] Output #0, rawvideo, to 'pipe:':
+[info]   Metadata:
+[info]     encoder         : Lavf59.27.100
+[info]   Stream #0:0(und): Video: rawvideo (RGB[24] / 0x18424752), rgb24(pc, gbr/unknown/unknown, progressive), 400x300 [SAR 1:1 DAR 4:3], q=2-31, 72000 kb/s, 25 fps, 25 tbn (default)
+[info]     Metadata:
+";
+
+    #[test]
+    fn the_header_is_the_output_streams_not_the_inputs() {
+        let header = read_header(&mut LOG.as_bytes()).unwrap();
+        assert_eq!(
+            header,
+            Header {
+                width: 400,
+                height: 300,
+                fps: 25.0,
+                frames: Some(90)
+            }
+        );
+    }
+
+    #[test]
+    fn rates_as_ffmpeg_prints_them() {
+        let ntsc = |n: f64| (n / 1.001) as f32;
+        assert_eq!(parse_rate("29.97"), Some(ntsc(30.0)));
+        assert_eq!(parse_rate("23.98"), Some(ntsc(24.0)));
+        assert_eq!(parse_rate("59.94"), Some(ntsc(60.0)));
+        assert_eq!(parse_rate("12.50"), Some(12.5));
+        assert_eq!(parse_rate("25"), Some(25.0));
+        assert_eq!(parse_rate("1k"), Some(1000.0));
+        assert_eq!(parse_rate("0"), None);
+        assert_eq!(parse_rate("many"), None);
+        assert_eq!(parse_duration("01:02:03.50, start: 0.0"), Some(3723.5));
+        assert_eq!(parse_duration("N/A, bitrate: N/A"), None);
+    }
+
+    #[test]
+    fn what_ffmpeg_says_when_it_stops_is_the_message() {
+        let none = "[info] Input #0, matroska,webm, from 'a.mkv':\n[error] Stream map '0:v:0' matches no streams.\n[fatal] To ignore this, add a trailing '?' to the map.\n";
+        assert_eq!(
+            read_header(&mut none.as_bytes()).unwrap_err(),
+            "it has no video stream"
+        );
+        let text = "[error] notes.mp4: Invalid data found when processing input\n";
+        assert_eq!(
+            read_header(&mut text.as_bytes()).unwrap_err(),
+            "notes.mp4: Invalid data found when processing input"
+        );
+        assert_eq!(
+            read_header(&mut "".as_bytes()).unwrap_err(),
+            "the video has no frames"
+        );
+        let odd = "[info] Output #0, rawvideo, to 'pipe:':\n[info]   Stream #0:0: Video: rawvideo, rgb24, 25 fps\n";
+        assert!(
+            read_header(&mut odd.as_bytes())
+                .unwrap_err()
+                .contains("no usable frame size")
+        );
+    }
 }

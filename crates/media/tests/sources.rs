@@ -78,6 +78,72 @@ fn a_video_keeps_its_frame_count_order_and_rate() {
 }
 
 #[test]
+fn a_phone_video_turned_on_its_side_comes_out_upright() {
+    // A phone records landscape pixels and says "turn me 90°" in the file; players, and
+    // MediaPipe's users, see it upright. Here ffmpeg writes such a file: frames whose left
+    // quarter is green, then the same stream with the rotation set.
+    let dir = tempfile::tempdir().unwrap();
+    let (width, height) = (64, 48);
+    let frame: Vec<u8> = (0..width * height)
+        .flat_map(|i| [0, if i % width < 16 { 250 } else { 0 }, 128])
+        .collect();
+    let plain = dir.path().join("plain.mp4");
+    faceanim_testdata::encode_video(
+        &plain,
+        (width, height),
+        30,
+        &["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "0"],
+        std::iter::repeat_n(frame.as_slice(), 5),
+    );
+    let turned = dir.path().join("portrait.mp4");
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-i"])
+        .arg(&plain)
+        .args(["-c", "copy", "-metadata:s:v:0", "rotate=90"])
+        .arg(&turned)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let mut source = FrameSource::open(&turned, 30.0).unwrap();
+    let info = source.info();
+    assert_eq!((info.width, info.height), (48, 64));
+    let frames = read_all(&mut source);
+    assert_eq!(frames.len(), 5);
+    // As ffmpeg's own player shows it (ffprobe reads the file's rotation as 90°
+    // counter-clockwise): the left quarter is now the bottom quarter.
+    let green = |x: usize, y: usize| frames[0].rgb[(y * 48 + x) * 3 + 1];
+    assert!(
+        green(24, 60) > 200 && green(24, 4) < 50 && green(24, 40) < 50,
+        "{} {} {}",
+        green(24, 60),
+        green(24, 4),
+        green(24, 40)
+    );
+}
+
+#[test]
+fn an_ntsc_rate_is_kept_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ntsc.mp4");
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-f", "lavfi", "-i"])
+        .arg("testsrc=s=64x48:r=30000/1001:d=1")
+        .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
+        .arg(&path)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let mut source = FrameSource::open(&path, 12.0).unwrap();
+    let info = source.info();
+    assert!(
+        (f64::from(info.fps) - 30000.0 / 1001.0).abs() < 1e-4,
+        "{}",
+        info.fps
+    );
+    assert_eq!(info.frames, Some(read_all(&mut source).len()));
+}
+
+#[test]
 fn images_and_folders_in_name_order() {
     let dir = tempfile::tempdir().unwrap();
     let video = dir.path().join("v.mkv");
