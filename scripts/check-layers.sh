@@ -2,7 +2,8 @@
 # Fails when a crate depends, directly or not, on what belongs to a layer above it. Two bands:
 #   - the pure core (character, animation, sketch, default head) knows no HTTP server, async
 #     runtime, video or neural network;
-#   - the middle band (face tracking, media, capture, the take layer, the exporter, VMC) may run
+#   - the middle band (face tracking, media, capture, the take layer, the exporter, VMC, shape
+#     generation) may run
 #     MediaPipe's models with tract, but knows no HTTP server, async runtime or training library;
 #   - speech (the recogniser's bindings and lip sync) knows neither the face models nor HTTP,
 #     async runtimes or training: audio is its own domain.
@@ -25,7 +26,8 @@ check() {
 check "pure core" '^(tract-|axum|tokio|hyper|reqwest|burn|candle|ort|ffmpeg|rust-embed|tower)' \
   faceanim-rig faceanim-anim faceanim-sketch faceanim-head
 check "middle band" '^(axum|tokio|hyper|reqwest|burn|candle|rust-embed|tower)' \
-  faceanim-track faceanim-media faceanim-capture faceanim-take faceanim-export faceanim-live
+  faceanim-track faceanim-media faceanim-capture faceanim-take faceanim-export faceanim-live \
+  faceanim-fit
 check "speech" '^(tract-|axum|tokio|hyper|reqwest|burn|candle|ort|rust-embed|tower|faceanim-track|faceanim-capture)' \
   faceanim-sphinx-sys faceanim-speech
 [ "$status" -eq 0 ] && echo "check-layers: the pure core and the middle band depend on nothing above them"

@@ -32,6 +32,9 @@ if not hasattr(numpy, "bool"):
 
 args = sys.argv[sys.argv.index("--") + 1 :]
 head_path, out_path = args[0], args[1]
+# "bare": the same avatar exported without any shape keys, as a scan, a sculpt or an avatar
+# whose face was never rigged comes.
+bare = args[2:] == ["bare"]
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.import_scene.gltf(filepath=head_path)
@@ -345,6 +348,11 @@ skin(hair, hair_rig, hair_weights)
 # The body rig in centimetres under an object scaled to metres (Mixamo, Character Creator).
 for rig in (body_rig, hair_rig):
     rig.scale = (1 / CM, 1 / CM, 1 / CM)
+
+if bare:
+    for obj in bpy.data.objects:
+        if obj.type == "MESH" and obj.data.shape_keys:
+            obj.shape_key_clear()
 
 bpy.ops.export_scene.gltf(
     filepath=out_path,

@@ -5,6 +5,7 @@
 //! Each subcommand's arguments are a clap `Args` struct, passed as they are to its code.
 
 mod adapt;
+mod generate;
 mod info;
 mod lipsync;
 mod outputs;
@@ -111,6 +112,14 @@ enum Command {
     /// Outputs by extension, as `track` writes them. Example: faceanim lipsync line.wav
     /// --character avatar.vrm --text "Hello there" -o line.vrm -o line.session.json
     Lipsync(lipsync::LipsyncArgs),
+    /// Make ARKit's 52 blendshapes on a head that has none (a scan, a sculpt, an avatar
+    /// exported without shape keys): the face found on a render, a template head registered
+    /// onto it, and the template's shapes moved onto the head's own vertices (deformation
+    /// transfer). Writes the head's own file with the shapes added; everything else in it is
+    /// kept. Shapes the head already has are left as they are.
+    ///
+    /// Example: faceanim generate-shapes scan.glb -o scan-rigged.glb
+    GenerateShapes(generate::GenerateArgs),
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
     /// Example: faceanim eval take.json reference.json --json
@@ -282,6 +291,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Adapt(args) => adapt::run(args),
         Command::Session(args) => session::run(args),
         Command::Stream(args) => stream::run(args),
+        Command::GenerateShapes(args) => generate::run(&args),
         Command::Eval(args) => eval(&args),
     }
 }

@@ -61,36 +61,48 @@ pub fn blender_avatar() -> &'static [u8] {
 /// # Panics
 /// When Blender is missing or fails, with its output.
 #[must_use]
+pub fn blender_avatar_path() -> PathBuf {
+    blender_avatar_made("blender-avatar", &[])
+}
+
+/// The same avatar as [`blender_avatar_path`], exported by Blender without any shape keys: a
+/// full-body avatar whose face was never rigged (cached like it).
+///
+/// # Panics
+/// When Blender is missing or fails, with its output.
+#[must_use]
+pub fn blender_bare_avatar_path() -> PathBuf {
+    blender_avatar_made("blender-bare-avatar", &["bare"])
+}
+
 #[expect(
     clippy::panic,
     reason = "test support: a missing producer must stop the test loudly"
 )]
-pub fn blender_avatar_path() -> PathBuf {
+fn blender_avatar_made(stem: &str, extra: &[&str]) -> PathBuf {
     let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/blender_avatar.py");
     let source =
         std::fs::read(&script).unwrap_or_else(|e| panic!("cannot read {}: {e}", script.display()));
     let dir = fixtures_dir();
-    let path = dir.join(format!("blender-avatar-{:016x}.glb", fnv(&source)));
+    let path = dir.join(format!("{stem}-{:016x}.glb", fnv(&source)));
     if path.exists() {
         return path;
     }
     let _ = std::fs::create_dir_all(&dir);
     // Several test processes may start at once: each writes its own file, then renames it.
-    let partial = dir.join(format!("blender-avatar-{}.partial.glb", std::process::id()));
+    let partial = dir.join(format!("{stem}-{}.partial.glb", std::process::id()));
     let head = crate::shared(BLENDER_AVATAR_HEAD);
-    let args: [&std::ffi::OsStr; 6] = [
+    let mut args: Vec<&std::ffi::OsStr> = vec![
         "-b".as_ref(),
         "--factory-startup".as_ref(),
         "--python".as_ref(),
         script.as_os_str(),
         "--".as_ref(),
         head.as_os_str(),
+        partial.as_os_str(),
     ];
-    run(
-        "blender",
-        &[&args[..], &[partial.as_os_str()]].concat(),
-        &dir,
-    );
+    args.extend(extra.iter().map(std::ffi::OsStr::new));
+    run("blender", &args, &dir);
     if let Err(e) = std::fs::rename(&partial, &path) {
         panic!("Blender did not write the avatar where asked: {e}");
     }

@@ -942,8 +942,13 @@ impl Builder {
         if self.positions.is_empty() || self.triangles.is_empty() {
             return Err(ImportErrorKind::NoMeshes);
         }
+        let mut warnings = self.warnings;
         if !self.saw_targets {
-            return Err(ImportErrorKind::NoMorphTargets);
+            warnings.push(
+                "no morph targets (blendshapes): make ARKit's 52 on this head with \
+                 `faceanim generate-shapes` (or export it with its shape keys)"
+                    .to_owned(),
+            );
         }
         // Parts are recorded per primitive; their triangle ranges are contiguous by construction.
         let size = crate::character::Aabb::around(&self.positions).diagonal();
@@ -1012,7 +1017,7 @@ impl Builder {
         };
         Ok(Imported {
             character,
-            warnings: self.warnings,
+            warnings,
         })
     }
 }

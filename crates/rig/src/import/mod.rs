@@ -100,7 +100,7 @@ pub enum ImportErrorKind {
     },
     /// The file has geometry but no morph targets to animate.
     #[error(
-        "no morph targets (blendshapes): faceanim animates blendshape characters; export the mesh with its shape keys"
+        "no morph targets (blendshapes): faceanim animates blendshape characters; export the meshes with their shape keys"
     )]
     NoMorphTargets,
     /// The file has no triangle geometry.

@@ -1,0 +1,220 @@
+//! Registration of the template onto the user's head: a similarity transform that best maps
+//! the template's landmarks onto the head's (Umeyama's least squares), then non-rigid ICP: the
+//! template's vertices move towards the head's surface (point to plane) and its landmarks
+//! towards the head's, held together by a stiffness on neighbouring vertices' displacements
+//! that is lowered step by step, so the whole head settles first and the details last.
+
+use glam::{DMat3, DVec3, Mat3, Vec3};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+
+use crate::FitError;
+use crate::mesh::{edges, vertex_normals};
+use crate::sparse::Normal;
+
+/// A similarity transform: `scale · rotation · p + translation`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Similarity {
+    /// Uniform scale.
+    pub scale: f32,
+    /// Rotation.
+    pub rotation: Mat3,
+    /// Translation.
+    pub translation: Vec3,
+}
+
+impl Similarity {
+    /// `p` transformed.
+    #[must_use]
+    pub fn apply(&self, p: Vec3) -> Vec3 {
+        self.scale * (self.rotation * p) + self.translation
+    }
+
+    /// The similarity taking `from` onto `to` (pairs of points) in least squares (Umeyama
+    /// 1991); `None` with fewer than three pairs or all of them on a line.
+    #[must_use]
+    pub fn fit(from: &[Vec3], to: &[Vec3]) -> Option<Similarity> {
+        let n = from.len().min(to.len());
+        if n < 3 {
+            return None;
+        }
+        let mean =
+            |points: &[Vec3]| points[..n].iter().map(|p| p.as_dvec3()).sum::<DVec3>() / n as f64;
+        let (mf, mt) = (mean(from), mean(to));
+        let mut covariance = DMat3::ZERO;
+        let mut spread = 0.0;
+        for (f, t) in from[..n].iter().zip(&to[..n]) {
+            let (f, t) = (f.as_dvec3() - mf, t.as_dvec3() - mt);
+            covariance += DMat3::from_cols(t * f.x, t * f.y, t * f.z);
+            spread += f.length_squared();
+        }
+        covariance /= n as f64;
+        spread /= n as f64;
+        let svd = svd3(covariance)?;
+        let mut d = DVec3::ONE;
+        if svd.0.determinant() * svd.2.determinant() < 0.0 {
+            d.z = -1.0;
+        }
+        let rotation = svd.0 * DMat3::from_diagonal(d) * svd.2.transpose();
+        let scale = svd.1.dot(d) / spread.max(1e-300);
+        if !(scale.is_finite() && scale > 0.0) {
+            return None;
+        }
+        let translation = mt - scale * (rotation * mf);
+        Some(Similarity {
+            scale: scale as f32,
+            rotation: rotation.as_mat3(),
+            translation: translation.as_vec3(),
+        })
+    }
+}
+
+/// `m = U · diag(s) · Vᵀ` by faer's dense SVD.
+fn svd3(m: DMat3) -> Option<(DMat3, DVec3, DMat3)> {
+    let a = faer::Mat::<f64>::from_fn(3, 3, |r, c| m.col(c)[r]);
+    let svd = a.svd().ok()?;
+    let (u, s, v) = (svd.U(), svd.S(), svd.V());
+    let to = |x: faer::MatRef<'_, f64>| {
+        DMat3::from_cols_array(&[
+            x[(0, 0)],
+            x[(1, 0)],
+            x[(2, 0)],
+            x[(0, 1)],
+            x[(1, 1)],
+            x[(2, 1)],
+            x[(0, 2)],
+            x[(1, 2)],
+            x[(2, 2)],
+        ])
+    };
+    let s = s.column_vector();
+    Some((to(u), DVec3::new(s[0], s[1], s[2]), to(v)))
+}
+
+/// The head being fitted: its vertices, their normals and an index of them.
+pub(crate) struct Target<'a> {
+    pub(crate) positions: &'a [Vec3],
+    pub(crate) normals: Vec<Vec3>,
+    tree: ImmutableKdTree<f32, 3>,
+}
+
+impl<'a> Target<'a> {
+    pub(crate) fn new(positions: &'a [Vec3], triangles: &[[u32; 3]]) -> Target<'a> {
+        let points: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();
+        Target {
+            positions,
+            normals: vertex_normals(positions, triangles),
+            tree: ImmutableKdTree::new_from_slice(&points),
+        }
+    }
+
+    /// The nearest vertex to `p`, and its distance.
+    pub(crate) fn nearest(&self, p: Vec3) -> (usize, f32) {
+        let hit = self.tree.nearest_one::<SquaredEuclidean>(&p.to_array());
+        (hit.item as usize, hit.distance.sqrt())
+    }
+}
+
+/// One stage of the stiffness schedule.
+#[derive(Debug, Clone, Copy)]
+struct Stage {
+    /// Weight of neighbouring displacements' differences.
+    stiffness: f64,
+    /// Weight of each landmark pair.
+    landmarks: f64,
+    /// Surface pairs farther apart than this fraction of the head's size are ignored.
+    reach: f32,
+}
+
+const SCHEDULE: [Stage; 6] = [
+    Stage {
+        stiffness: 200.0,
+        landmarks: 20.0,
+        reach: 0.06,
+    },
+    Stage {
+        stiffness: 60.0,
+        landmarks: 10.0,
+        reach: 0.04,
+    },
+    Stage {
+        stiffness: 20.0,
+        landmarks: 5.0,
+        reach: 0.03,
+    },
+    Stage {
+        stiffness: 8.0,
+        landmarks: 2.0,
+        reach: 0.02,
+    },
+    Stage {
+        stiffness: 3.0,
+        landmarks: 1.0,
+        reach: 0.015,
+    },
+    Stage {
+        stiffness: 1.5,
+        landmarks: 0.5,
+        reach: 0.01,
+    },
+];
+
+/// Iterations per stage (new surface pairs each).
+const ITERATIONS: usize = 2;
+
+/// Non-rigid ICP of `template` (already placed by the similarity) onto `target`:
+/// `landmarks` pairs a template point (weights over its vertices) with a point of the head.
+/// Returns the template's vertices moved onto the head, and the mean distance of the paired
+/// vertices at the end.
+pub(crate) fn nonrigid(
+    template: &[Vec3],
+    triangles: &[[u32; 3]],
+    landmarks: &[(Vec<(usize, f64)>, Vec3)],
+    target: &Target<'_>,
+    size: f32,
+) -> Result<(Vec<Vec3>, f32), FitError> {
+    let n = template.len();
+    let edges = edges(triangles, n);
+    let mut current = template.to_vec();
+    let mut residual = f32::NAN;
+    for stage in SCHEDULE {
+        for _ in 0..ITERATIONS {
+            let normals = vertex_normals(&current, triangles);
+            let mut normal = Normal::new(n);
+            // Displacements d = x' − x; stiffness keeps neighbours' displacements alike.
+            for &(i, j) in &edges {
+                normal.edge(i as usize, j as usize, [0.0; 3], stage.stiffness);
+            }
+            for (terms, goal) in landmarks {
+                let now = terms
+                    .iter()
+                    .fold(DVec3::ZERO, |s, &(i, c)| s + c * template[i].as_dvec3());
+                normal.row(terms, (goal.as_dvec3() - now).to_array(), stage.landmarks);
+            }
+            let (mut paired, mut distance_sum) = (0usize, 0.0f32);
+            for (i, p) in current.iter().enumerate() {
+                let (j, distance) = target.nearest(*p);
+                let facing = normals[i].dot(target.normals[j]);
+                if distance > stage.reach * size || facing < 0.5 {
+                    continue;
+                }
+                // The nearest point of the head's tangent plane there.
+                let plane = target.normals[j];
+                let goal = *p + plane * plane.dot(target.positions[j] - *p);
+                paired += 1;
+                distance_sum += (goal - *p).length();
+                let displacement = goal.as_dvec3() - template[i].as_dvec3();
+                normal.row(&[(i, 1.0)], displacement.to_array(), 1.0);
+            }
+            // Vertices with nothing pulling them still need a value: a faint pull to stay.
+            for i in 0..n {
+                normal.row(&[(i, 1.0)], [0.0; 3], 1e-6);
+            }
+            let displacement = normal.solve()?;
+            for ((c, t), d) in current.iter_mut().zip(template).zip(&displacement) {
+                *c = *t + DVec3::from_array(*d).as_vec3();
+            }
+            residual = distance_sum / paired.max(1) as f32;
+        }
+    }
+    Ok((current, residual))
+}
