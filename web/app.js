@@ -24,9 +24,10 @@
 import { capture } from './capture.js';
 import { sound } from './sound.js';
 import './commands.js';
+import './generate.js';
 import { setMode } from './mode.js';
 import { characterMeshes, characterRoot, currentFrame, isPlaying, isReady } from './playback.js';
-import { drawStats, frameCamera, project } from './scene.js';
+import { drawStats, project } from './scene.js';
 import './inspector.js';
 import './settings.js';
 import './shapes.js';
@@ -65,9 +66,7 @@ window.studio = Object.freeze({
 
 (async () => {
   try {
-    const character = await store.loadCharacter();
-    document.getElementById('character-name').textContent = character.name;
-    frameCamera(character.head);
+    await store.loadCharacter();
     await store.run('GET', 'api/state');
   } catch (e) { showFailure(e); }
   // Open in capture mode with `#capture` in the address.

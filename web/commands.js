@@ -64,15 +64,20 @@ $('project-file').addEventListener('change', async (e) => {
   catch (err) { showError(`${file.name}: ${err.message || err}`); }
 });
 
+// Each character read (the first, another opened, one given blendshapes): its name in the
+// toolbar, the camera on its head.
+store.onCharacter((character) => {
+  $('character-name').textContent = character.name;
+  frameCamera(character.head);
+});
+
 /** Opens another character (a .glb or self-contained .gltf); the project starts empty. */
 async function uploadCharacter(file) {
   showError('');
   showStatus(`Opening ${file.name}…`);
   try {
     const result = await api('POST', 'api/character/upload', await file.arrayBuffer(), { 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') });
-    const character = await store.loadCharacter();
-    $('character-name').textContent = character.name;
-    frameCamera(character.head);
+    await store.loadCharacter();
     store.setState(result.state, true);
     if (result.warnings.length) showError(result.warnings.join('\n'));
   } catch (err) { showFailure(err); showStatus(`Could not open ${file.name}; still on ${store.character().name}.`); }

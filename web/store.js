@@ -24,6 +24,11 @@ export const selection = () => selected;
 
 /** Calls `listener(state, rebake)` after every new state; `rebake` when the animation changed. */
 export function onState(listener) { stateListeners.push(listener); }
+
+const characterListeners = [];
+/** Calls `listener(character)` each time the character's facts are read (at start, and after
+ * another character is opened). */
+export function onCharacter(listener) { characterListeners.push(listener); }
 /** Calls `listener()` when the selection changes. */
 export function onSelection(listener) { selectionListeners.push(listener); }
 
@@ -44,6 +49,7 @@ export function setState(next, rebake) {
 /** Reads the character's facts again (after an upload). */
 export async function loadCharacter() {
   characterView = await api('GET', 'api/character');
+  for (const listener of characterListeners) listener(characterView);
   return characterView;
 }
 

@@ -34,6 +34,15 @@ struct FileReport {
     materials: usize,
     textures: usize,
     vrm: bool,
+    /// The blendshapes `faceanim generate-shapes` made, as the file records them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    generated: Option<GeneratedReport>,
+}
+
+#[derive(Debug, Serialize)]
+struct GeneratedReport {
+    shapes: Vec<String>,
+    template: String,
 }
 
 #[derive(Debug, Serialize)]
@@ -175,6 +184,10 @@ impl Report {
                 materials: s.count("materials"),
                 textures: s.count("textures"),
                 vrm: s.is_vrm(),
+                generated: s.generated_shapes().map(|g| GeneratedReport {
+                    shapes: g.shapes,
+                    template: g.template,
+                }),
             }),
             symmetry_plane: symmetry.plane().map(|p| PlaneReport {
                 axis: match p.axis() {
@@ -231,6 +244,14 @@ impl Report {
                 f.textures,
                 if f.vrm { ", VRM" } else { "" }
             );
+            if let Some(g) = &f.generated {
+                let _ = writeln!(
+                    out,
+                    "  generated    {} blendshapes made by faceanim generate-shapes (template: {})",
+                    g.shapes.len(),
+                    g.template
+                );
+            }
         }
         match &self.symmetry_plane {
             Some(p) => {

@@ -14,7 +14,9 @@ mod support;
 
 use serde_json::Value;
 use std::path::Path;
-use support::{assert_valid_gltf, blender_report, faceanim, faceanim_ok, output_dir};
+use support::{
+    assert_valid_gltf, blender_report, faceanim, faceanim_ok, output_dir, request, start_on,
+};
 
 fn info(file: &Path) -> Value {
     serde_json::from_str(&faceanim_ok(&["info", file.to_str().unwrap(), "--json"])).unwrap()
@@ -72,6 +74,26 @@ fn a_bare_avatar_gets_the_52_shapes_and_keeps_everything() {
         0,
         "{}",
         read["undriven_channels"]
+    );
+
+    // The file says which shapes were generated, and faceanim says so.
+    let generated = &read["file"]["generated"];
+    assert_eq!(
+        generated["shapes"].as_array().unwrap().len(),
+        52,
+        "{generated}"
+    );
+    assert!(
+        generated["template"]
+            .as_str()
+            .unwrap()
+            .contains("ict-facekit"),
+        "{generated}"
+    );
+    let text = faceanim_ok(&["info", rigged.to_str().unwrap()]);
+    assert!(
+        text.contains("52 blendshapes made by faceanim generate-shapes"),
+        "{text}"
     );
 
     // Everything the avatar had is still there.
@@ -172,4 +194,48 @@ fn a_bare_avatar_gets_the_52_shapes_and_keeps_everything() {
         String::from_utf8_lossy(&wrong.stderr).contains("blinkish"),
         "{wrong:?}"
     );
+}
+
+#[test]
+fn the_studio_generates_shapes_for_a_character_without_any() {
+    let out = output_dir("generate-shapes-studio");
+    let bare = out.join("bare.glb");
+    std::fs::copy(
+        faceanim_testdata::producers::blender_bare_avatar_path(),
+        &bare,
+    )
+    .unwrap();
+    let before = std::fs::read(&bare).unwrap();
+    let studio = start_on(Some(&bare), &out.join("bare.faceanim.json"), &[]);
+    let character = |port| -> Value {
+        serde_json::from_str(&request(port, "GET", "/api/character", &[], b"").1).unwrap()
+    };
+    let shown = character(studio.port);
+    assert_eq!(shown["blendshapes"].as_array().unwrap().len(), 0);
+    assert!(shown.get("generated").is_none());
+
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/character/generate-shapes",
+        &[("content-type", "application/json")],
+        b"{}",
+    );
+    assert_eq!(status, 200, "{body}");
+    let answer: Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(answer["shapes"].as_array().unwrap().len(), 52);
+    let written = Path::new(answer["written"].as_str().unwrap());
+    assert_eq!(written, out.join("bare.shapes.glb"));
+    assert_valid_gltf(written);
+    assert_eq!(
+        std::fs::read(&bare).unwrap(),
+        before,
+        "the user's file changed"
+    );
+
+    // The studio now works on the new character, and says its shapes were generated.
+    let shown = character(studio.port);
+    assert_eq!(shown["name"], "bare.shapes");
+    assert_eq!(shown["blendshapes"].as_array().unwrap().len(), 52);
+    assert_eq!(shown["generated"]["count"], 52, "{shown}");
 }

@@ -651,6 +651,41 @@ impl Character {
         self.source.as_deref()
     }
 
+    /// This character with `record` noted in its file (see
+    /// [`crate::source::GeneratedShapes`]), added to what the file noted already; a character
+    /// made in code or from OBJ files has no file to note it in and comes back as it was.
+    #[must_use]
+    pub fn with_generated_shapes(&self, record: &crate::source::GeneratedShapes) -> Character {
+        let Some(source) = self.source() else {
+            return self.clone();
+        };
+        let mut all = source.generated_shapes().unwrap_or_default();
+        for name in &record.shapes {
+            if !all.shapes.contains(name) {
+                all.shapes.push(name.clone());
+            }
+        }
+        all.template = if all.template.is_empty() || all.template == record.template {
+            record.template.clone()
+        } else {
+            format!("{}, {}", all.template, record.template)
+        };
+        let mut source = source.clone();
+        let asset = &mut source.document["asset"];
+        if !asset.is_object() {
+            *asset = serde_json::json!({ "version": "2.0" });
+        }
+        if !asset["extras"].is_object() {
+            asset["extras"] = serde_json::json!({});
+        }
+        if !asset["extras"]["faceanim"].is_object() {
+            asset["extras"]["faceanim"] = serde_json::json!({});
+        }
+        asset["extras"]["faceanim"]["generated"] =
+            serde_json::json!({ "shapes": all.shapes, "template": all.template });
+        self.clone().with_source(source)
+    }
+
     /// This character with the file it came from (the importer's job).
     #[must_use]
     pub(crate) fn with_source(mut self, source: crate::source::GltfSource) -> Character {

@@ -64,7 +64,36 @@ impl std::fmt::Debug for GltfSource {
     }
 }
 
+/// Which of a file's blendshapes `faceanim generate-shapes` made, and from which template: kept
+/// in the file itself, as `asset.extras.faceanim.generated` (`{"shapes": [...], "template":
+/// "..."}`), so that every tool that reads the file back can say so.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct GeneratedShapes {
+    /// The generated shapes' names.
+    pub shapes: Vec<String>,
+    /// The template(s) they came from.
+    pub template: String,
+}
+
 impl GltfSource {
+    /// What the file records of generated shapes, if anything.
+    #[must_use]
+    pub fn generated_shapes(&self) -> Option<GeneratedShapes> {
+        let record = self.document.pointer("/asset/extras/faceanim/generated")?;
+        let shapes: Vec<String> = record
+            .get("shapes")?
+            .as_array()?
+            .iter()
+            .filter_map(|s| s.as_str().map(str::to_owned))
+            .collect();
+        let template = record
+            .get("template")
+            .and_then(Value::as_str)
+            .unwrap_or_default()
+            .to_owned();
+        Some(GeneratedShapes { shapes, template })
+    }
+
     /// How many entries the file's top-level array `key` (`nodes`, `meshes`, `skins`, …) has.
     #[must_use]
     pub fn count(&self, key: &str) -> usize {

@@ -19,7 +19,9 @@ use serde::{Deserialize, Deserializer};
 
 use crate::capture_api::Both;
 use crate::error::{Answer, ApiError};
-use crate::views::{AnchorView, CandidatesView, CharacterView, SavedView, StateView, UploadView};
+use crate::views::{
+    AnchorView, CandidatesView, CharacterView, GeneratedView, SavedView, StateView, UploadView,
+};
 use crate::{Studio, lock};
 
 /// The page, embedded at build time so the binary needs nothing beside it.
@@ -84,6 +86,7 @@ pub fn router(both: Both, port: u16) -> Router {
         .with_state(shared.clone());
     let upload = Router::new()
         .route("/api/character/upload", post(upload_character))
+        .route("/api/character/generate-shapes", post(generate_shapes))
         .layer(DefaultBodyLimit::max(CHARACTER_LIMIT))
         .with_state(both.clone());
     Router::new()
@@ -181,6 +184,68 @@ async fn upload_character(
     lock(&both.desk).character_changed(&studio.character, adapter_path);
     Ok(axum::Json(UploadView {
         warnings: imported.warnings.iter().map(ToString::to_string).collect(),
+        state: studio.view(),
+    }))
+}
+
+/// Generates ARKit's blendshapes on a character that has none (`faceanim generate-shapes` with
+/// the default templates), writes the result beside the project as `NAME.shapes.glb` (the
+/// user's own file is never written), and opens it as the character.
+async fn generate_shapes(State(both): State<Both>, _unread: Unread) -> Answer<GeneratedView> {
+    let (character, folder) = {
+        let studio = lock(&both.studio);
+        (
+            Arc::clone(&studio.character),
+            studio.project_path.parent().map_or_else(
+                || std::path::PathBuf::from("."),
+                std::path::Path::to_path_buf,
+            ),
+        )
+    };
+    let (imported, path, shapes) = tokio::task::spawn_blocking(move || {
+        let models =
+            faceanim_track::FaceModels::load().map_err(|e| ApiError::Models(e.to_string()))?;
+        let templates = faceanim_fit::Template::Realistic.characters()?;
+        let templates: Vec<&faceanim_rig::Character> = templates.iter().collect();
+        let generated = faceanim_fit::generate(
+            &character,
+            &templates,
+            &models,
+            &faceanim_fit::Options::default(),
+        )?;
+        let shapes: Vec<String> = generated
+            .shapes
+            .iter()
+            .map(|s| s.name().to_owned())
+            .collect();
+        let with = character
+            .with_extra_blendshapes(generated.shapes)?
+            .with_generated_shapes(&faceanim_rig::source::GeneratedShapes {
+                shapes: shapes.clone(),
+                template: generated
+                    .templates
+                    .iter()
+                    .map(|t| t.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(" + "),
+            });
+        let bytes = faceanim_export::glb(&with, None)?;
+        let name = format!("{}.shapes.glb", character.name());
+        let path = folder.join(&name);
+        faceanim_files::write_atomic(&path, &bytes)?;
+        let imported = import_gltf(&bytes, &name, &NoExternalResources)?;
+        Ok::<_, ApiError>((imported, path, shapes))
+    })
+    .await
+    .map_err(|e| ApiError::Internal(e.to_string()))??;
+    let mut studio = lock(&both.studio);
+    studio.replace_character(imported.character);
+    let adapter_path =
+        faceanim_adapt::default_adapter_path(studio.project_path.parent(), studio.character.name());
+    lock(&both.desk).character_changed(&studio.character, adapter_path);
+    Ok(axum::Json(GeneratedView {
+        written: path.display().to_string(),
+        shapes,
         state: studio.view(),
     }))
 }

@@ -88,6 +88,10 @@ pub enum ApiError {
     /// A VMC socket could not be opened, or its names fit none of the character's.
     #[error(transparent)]
     Vmc(#[from] faceanim_live::LiveError),
+    /// Blendshapes could not be generated (no face found on the character, too few
+    /// landmarks, nothing to make, a failed solve).
+    #[error(transparent)]
+    Fit(#[from] faceanim_fit::FitError),
     /// A worker thread ended without an answer (a bug; the log says where).
     #[error("internal error: {0}")]
     Internal(String),
@@ -106,6 +110,11 @@ impl ApiError {
             | ApiError::NoTake
             | ApiError::Live(_) => StatusCode::BAD_REQUEST,
             ApiError::NoStroke { .. } | ApiError::NoPreview(_) => StatusCode::NOT_FOUND,
+            ApiError::Fit(
+                faceanim_fit::FitError::NoFace(_)
+                | faceanim_fit::FitError::TooFewLandmarks { .. }
+                | faceanim_fit::FitError::NothingToMake { .. },
+            ) => StatusCode::UNPROCESSABLE_ENTITY,
             ApiError::Busy(_) => StatusCode::CONFLICT,
             ApiError::Disk(_)
             | ApiError::Scratch { .. }
@@ -115,6 +124,7 @@ impl ApiError {
             | ApiError::Adapt(_)
             | ApiError::Capture(_)
             | ApiError::Vmc(_)
+            | ApiError::Fit(_)
             | ApiError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }

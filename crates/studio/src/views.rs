@@ -234,6 +234,18 @@ pub struct CharacterView {
     pub head: BoundsView,
     /// The character's size `D` (the head box's diagonal), that default distances scale with.
     pub diagonal: f32,
+    /// The shapes `faceanim generate-shapes` made, as its file records them, and the template.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub generated: Option<GeneratedShapesView>,
+}
+
+/// Shapes a character's file records as generated.
+#[derive(Debug, Serialize)]
+pub struct GeneratedShapesView {
+    /// How many.
+    pub count: usize,
+    /// The template they came from.
+    pub template: String,
 }
 
 /// An axis-aligned box.
@@ -260,6 +272,13 @@ impl CharacterView {
             bounds: view(character.bounds()),
             head: view(character.head_bounds()),
             diagonal: character.size(),
+            generated: character
+                .source()
+                .and_then(faceanim_rig::source::GltfSource::generated_shapes)
+                .map(|g| GeneratedShapesView {
+                    count: g.shapes.len(),
+                    template: g.template,
+                }),
         }
     }
 }
@@ -295,6 +314,17 @@ pub struct UploadView {
     /// The importer's warnings.
     pub warnings: Vec<String>,
     /// The new state.
+    pub state: StateView,
+}
+
+/// `POST /api/character/generate-shapes`.
+#[derive(Debug, Serialize)]
+pub struct GeneratedView {
+    /// Where the character with its new shapes was written.
+    pub written: String,
+    /// The shapes made.
+    pub shapes: Vec<String>,
+    /// The new state (an empty project on the new character).
     pub state: StateView,
 }
 
