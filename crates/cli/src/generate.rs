@@ -58,25 +58,10 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<()> {
     let options = Options {
         only: (!args.only.is_empty()).then(|| args.only.clone()),
     };
-    let generated = faceanim_fit::generate(&user, &templates, &models, &options)
-        .with_context(|| format!("generating shapes on {}", args.character.display()))?;
-    let names: Vec<String> = generated
-        .shapes
-        .iter()
-        .map(|s| s.name().to_owned())
-        .collect();
-    let with = user
-        .with_extra_blendshapes(generated.shapes.clone())
-        .context("adding the shapes")?
-        .with_generated_shapes(&faceanim_rig::source::GeneratedShapes {
-            shapes: names.clone(),
-            template: generated
-                .templates
-                .iter()
-                .map(|t| t.name.as_str())
-                .collect::<Vec<_>>()
-                .join(" + "),
-        });
+    let (with, generated) =
+        faceanim_fit::with_generated_shapes(&user, &templates, &models, &options)
+            .with_context(|| format!("generating shapes on {}", args.character.display()))?;
+    let names: Vec<&str> = generated.shapes.iter().map(|s| s.name()).collect();
     let bytes = faceanim_export::glb(&with, None)?;
     faceanim_files::write_atomic(&args.output, &bytes)?;
     let seconds = started.elapsed().as_secs_f64();

@@ -94,6 +94,13 @@ impl BboxReport {
             max: b.max.to_array(),
         }
     }
+
+    /// `[x, y, z] .. [x, y, z]`, to four decimals.
+    fn text(&self) -> String {
+        let [a, b, c] = self.min;
+        let [d, e, f] = self.max;
+        format!("[{a:.4}, {b:.4}, {c:.4}] .. [{d:.4}, {e:.4}, {f:.4}]")
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -212,25 +219,15 @@ impl Report {
         let _ = writeln!(out, "  triangles    {}", self.triangles);
         let _ = writeln!(
             out,
-            "  bounding box [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}] (size {:.4})",
-            self.bbox.min[0],
-            self.bbox.min[1],
-            self.bbox.min[2],
-            self.bbox.max[0],
-            self.bbox.max[1],
-            self.bbox.max[2],
+            "  bounding box {} (size {:.4})",
+            self.bbox.text(),
             self.size
         );
         if self.full_body {
             let _ = writeln!(
                 out,
-                "  head         [{:.4}, {:.4}, {:.4}] .. [{:.4}, {:.4}, {:.4}] (framing and default distances)",
-                self.head.min[0],
-                self.head.min[1],
-                self.head.min[2],
-                self.head.max[0],
-                self.head.max[1],
-                self.head.max[2],
+                "  head         {} (framing and default distances)",
+                self.head.text()
             );
         }
         if let Some(f) = &self.file {

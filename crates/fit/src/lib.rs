@@ -67,6 +67,9 @@ pub enum FitError {
     /// A shipped template does not import (a broken build).
     #[error("the built-in template does not import: {0}")]
     Template(String),
+    /// A generated shape did not fit the character (a bug, reported rather than hidden).
+    #[error("adding the shapes: {0}")]
+    Shapes(faceanim_rig::ModelError),
     /// A face model failed.
     #[error("face model: {0}")]
     Model(String),
@@ -244,6 +247,39 @@ pub fn generate(
         landmarks: user_marks.found(),
         templates: fits,
     })
+}
+
+/// `user` with the shapes [`generate`] makes added, its file noting them as generated (see
+/// [`faceanim_rig::source::GeneratedShapes`]): what `faceanim generate-shapes` and the studio
+/// write.
+///
+/// # Errors
+/// As [`generate`]; [`FitError::Shapes`] if a shape does not fit the character (a bug).
+pub fn with_generated_shapes(
+    user: &Character,
+    templates: &[&Character],
+    models: &FaceModels,
+    options: &Options,
+) -> Result<(Character, Generated), FitError> {
+    let generated = generate(user, templates, models, options)?;
+    let record = faceanim_rig::source::GeneratedShapes {
+        shapes: generated
+            .shapes
+            .iter()
+            .map(|s| s.name().to_owned())
+            .collect(),
+        template: generated
+            .templates
+            .iter()
+            .map(|t| t.name.as_str())
+            .collect::<Vec<_>>()
+            .join(" + "),
+    };
+    let with = user
+        .with_extra_blendshapes(generated.shapes.clone())
+        .map_err(FitError::Shapes)?
+        .with_generated_shapes(&record);
+    Ok((with, generated))
 }
 
 /// The template's shapes per ARKit channel, as dense deltas: a channel's own shape, or its

@@ -78,25 +78,23 @@ pub(crate) fn pieces(triangles: &[[u32; 3]], vertices: usize) -> (Vec<u32>, usiz
 /// The point of triangle `abc` nearest `p`, as barycentric weights (Ericson, Real-Time
 /// Collision Detection, 5.1.5).
 pub(crate) fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    let (ab, ac) = (b - a, c - a);
+    // How far `p`, seen from each corner, lies along the two edges from `a`.
+    let along = |corner: Vec3| (ab.dot(p - corner), ac.dot(p - corner));
+    let ((d1, d2), (d3, d4), (d5, d6)) = (along(a), along(b), along(c));
     if d1 <= 0.0 && d2 <= 0.0 {
         return [1.0, 0.0, 0.0];
     }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
     if d3 >= 0.0 && d4 <= d3 {
         return [0.0, 1.0, 0.0];
+    }
+    if d6 >= 0.0 && d5 <= d6 {
+        return [0.0, 0.0, 1.0];
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let v = d1 / (d1 - d3);
         return [1.0 - v, v, 0.0];
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return [0.0, 0.0, 1.0];
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {

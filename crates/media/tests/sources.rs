@@ -34,6 +34,16 @@ fn make_video(path: &Path, count: usize, fps: u32, codec: &[&str]) {
     );
 }
 
+/// Runs the real ffmpeg quietly with `args`, overwriting its output; it must succeed.
+fn ffmpeg(args: &[&str]) {
+    let status = Command::new("ffmpeg")
+        .args(["-v", "error", "-y"])
+        .args(args)
+        .status()
+        .unwrap();
+    assert!(status.success(), "ffmpeg {args:?}");
+}
+
 fn read_all(source: &mut FrameSource) -> Vec<faceanim_media::Image> {
     let mut frames = Vec::new();
     while let Some(f) = source.next_frame().unwrap() {
@@ -96,14 +106,16 @@ fn a_phone_video_turned_on_its_side_comes_out_upright() {
         std::iter::repeat_n(frame.as_slice(), 5),
     );
     let turned = dir.path().join("portrait.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-i"])
-        .arg(&plain)
-        .args(["-c", "copy", "-metadata:s:v:0", "rotate=90"])
-        .arg(&turned)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    let (plain_name, turned_name) = (plain.to_str().unwrap(), turned.to_str().unwrap());
+    ffmpeg(&[
+        "-i",
+        plain_name,
+        "-c",
+        "copy",
+        "-metadata:s:v:0",
+        "rotate=90",
+        turned_name,
+    ]);
     let mut source = FrameSource::open(&turned, 30.0).unwrap();
     let info = source.info();
     assert_eq!((info.width, info.height), (48, 64));
@@ -125,14 +137,16 @@ fn a_phone_video_turned_on_its_side_comes_out_upright() {
 fn an_ntsc_rate_is_kept_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("ntsc.mp4");
-    let status = Command::new("ffmpeg")
-        .args(["-v", "error", "-y", "-f", "lavfi", "-i"])
-        .arg("testsrc=s=64x48:r=30000/1001:d=1")
-        .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
-        .arg(&path)
-        .status()
-        .unwrap();
-    assert!(status.success());
+    let source = "testsrc=s=64x48:r=30000/1001:d=1";
+    ffmpeg(&[
+        "-f",
+        "lavfi",
+        "-i",
+        source,
+        "-c:v",
+        "libx264",
+        path.to_str().unwrap(),
+    ]);
     let mut source = FrameSource::open(&path, 12.0).unwrap();
     let info = source.info();
     assert!(
@@ -152,14 +166,10 @@ fn images_and_folders_in_name_order() {
     let frames = dir.path().join("frames");
     std::fs::create_dir(&frames).unwrap();
     for (ext, start) in [("png", 0), ("jpg", 3)] {
-        let status = Command::new("ffmpeg")
-            .args(["-v", "error", "-i"])
-            .arg(&video)
-            .args(["-start_number", &start.to_string()])
-            .arg(frames.join(format!("f%03d.{ext}")))
-            .status()
-            .unwrap();
-        assert!(status.success());
+        let start = start.to_string();
+        let pattern = frames.join(format!("f%03d.{ext}"));
+        let (input, output) = (video.to_str().unwrap(), pattern.to_str().unwrap());
+        ffmpeg(&["-i", input, "-start_number", &start, output]);
     }
     std::fs::write(frames.join("notes.txt"), "not a frame").unwrap();
     let mut source = FrameSource::open(&frames, 12.0).unwrap();

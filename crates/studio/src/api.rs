@@ -176,15 +176,9 @@ async fn upload_character(
         tokio::task::spawn_blocking(move || import_gltf(&body, &name, &NoExternalResources))
             .await
             .map_err(|e| ApiError::Internal(e.to_string()))??;
-    let mut studio = lock(&both.studio);
-    studio.replace_character(imported.character);
-    // An uploaded character's adapter lives beside the project.
-    let adapter_path =
-        faceanim_adapt::default_adapter_path(studio.project_path.parent(), studio.character.name());
-    lock(&both.desk).character_changed(&studio.character, adapter_path);
     Ok(axum::Json(UploadView {
         warnings: imported.warnings.iter().map(ToString::to_string).collect(),
-        state: studio.view(),
+        state: open_character(&both, imported.character),
     }))
 }
 
@@ -207,7 +201,7 @@ async fn generate_shapes(State(both): State<Both>, _unread: Unread) -> Answer<Ge
             faceanim_track::FaceModels::load().map_err(|e| ApiError::Models(e.to_string()))?;
         let templates = faceanim_fit::Template::Realistic.characters()?;
         let templates: Vec<&faceanim_rig::Character> = templates.iter().collect();
-        let generated = faceanim_fit::generate(
+        let (with, generated) = faceanim_fit::with_generated_shapes(
             &character,
             &templates,
             &models,
@@ -218,17 +212,6 @@ async fn generate_shapes(State(both): State<Both>, _unread: Unread) -> Answer<Ge
             .iter()
             .map(|s| s.name().to_owned())
             .collect();
-        let with = character
-            .with_extra_blendshapes(generated.shapes)?
-            .with_generated_shapes(&faceanim_rig::source::GeneratedShapes {
-                shapes: shapes.clone(),
-                template: generated
-                    .templates
-                    .iter()
-                    .map(|t| t.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(" + "),
-            });
         let bytes = faceanim_export::glb(&with, None)?;
         let name = format!("{}.shapes.glb", character.name());
         let path = folder.join(&name);
@@ -238,16 +221,22 @@ async fn generate_shapes(State(both): State<Both>, _unread: Unread) -> Answer<Ge
     })
     .await
     .map_err(|e| ApiError::Internal(e.to_string()))??;
-    let mut studio = lock(&both.studio);
-    studio.replace_character(imported.character);
-    let adapter_path =
-        faceanim_adapt::default_adapter_path(studio.project_path.parent(), studio.character.name());
-    lock(&both.desk).character_changed(&studio.character, adapter_path);
     Ok(axum::Json(GeneratedView {
         written: path.display().to_string(),
         shapes,
-        state: studio.view(),
+        state: open_character(&both, imported.character),
     }))
+}
+
+/// Makes `character` the studio's (an empty project on it) and tells capture; its adapter
+/// lives beside the project. The new state.
+fn open_character(both: &Both, character: faceanim_rig::Character) -> StateView {
+    let mut studio = lock(&both.studio);
+    studio.replace_character(character);
+    let adapter_path =
+        faceanim_adapt::default_adapter_path(studio.project_path.parent(), studio.character.name());
+    lock(&both.desk).character_changed(&studio.character, adapter_path);
+    studio.view()
 }
 
 async fn project(
