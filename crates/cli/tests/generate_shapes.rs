@@ -35,18 +35,14 @@ fn bare_avatar(out: &Path) -> (std::path::PathBuf, Vec<u8>) {
     (bare, bytes)
 }
 
-#[test]
-fn a_bare_avatar_gets_the_52_shapes_and_keeps_everything() {
-    let out = output_dir("generate-shapes");
-    let (bare, before) = bare_avatar(&out);
-    assert_eq!(info(&bare)["blendshapes"].as_array().unwrap().len(), 0);
-
-    let rigged = out.join("rigged.glb");
+/// `faceanim generate-shapes INPUT -o OUTPUT --json`: its report, every ARKit shape made, the
+/// file valid.
+fn generate(input: &Path, output: &Path) -> Value {
     let report = faceanim_ok(&[
         "generate-shapes",
-        bare.to_str().unwrap(),
+        input.to_str().unwrap(),
         "-o",
-        rigged.to_str().unwrap(),
+        output.to_str().unwrap(),
         "--json",
     ]);
     eprintln!("{report}");
@@ -58,6 +54,18 @@ fn a_bare_avatar_gets_the_52_shapes_and_keeps_everything() {
             "{name} was not made: {made:?}"
         );
     }
+    assert_valid_gltf(output);
+    report
+}
+
+#[test]
+fn a_bare_avatar_gets_the_52_shapes_and_keeps_everything() {
+    let out = output_dir("generate-shapes");
+    let (bare, before) = bare_avatar(&out);
+    assert_eq!(info(&bare)["blendshapes"].as_array().unwrap().len(), 0);
+
+    let rigged = out.join("rigged.glb");
+    generate(&bare, &rigged);
     assert_eq!(
         std::fs::read(&bare).unwrap(),
         before,
@@ -178,4 +186,28 @@ fn the_studio_generates_shapes_for_a_character_without_any() {
     assert_eq!(shown["name"], "bare.shapes");
     assert_eq!(shown["blendshapes"].as_array().unwrap().len(), 52);
     assert_eq!(shown["generated"]["count"], 52, "{shown}");
+}
+
+#[test]
+fn a_scanned_head_as_one_obj_gets_the_shapes() {
+    // A head as a scanner or a sculpting tool hands it over: one OBJ, no blendshapes, no
+    // materials, written by Blender's own OBJ exporter (ICT-FaceKit identity 7, which no
+    // template is made from).
+    let out = output_dir("generate-shapes-obj");
+    let scan = out.join("scan.obj");
+    let made = std::process::Command::new("blender")
+        .args(["-b", "--factory-startup", "--python"])
+        .arg(support::repo().join("tools/blender_to_obj.py"))
+        .arg("--")
+        .arg(faceanim_testdata::shared("characters/ict-face-id7.glb"))
+        .arg(&scan)
+        .output()
+        .expect("Blender is needed for this test: run scripts/setup.sh");
+    support::succeeded("blender_to_obj.py", made);
+    let rigged = out.join("scan.glb");
+    generate(&scan, &rigged);
+    assert_eq!(
+        info(&rigged)["undriven_channels"].as_array().unwrap().len(),
+        0
+    );
 }

@@ -95,10 +95,19 @@ pub fn load_character(path: &Path) -> Result<Imported, FileError> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
     if is_obj {
-        return Err(FileError::NotACharacter {
-            path: path.to_owned(),
-            reason: "a single OBJ has no blendshapes: give the folder holding the neutral OBJ and one OBJ per blendshape".into(),
-        });
+        // A single OBJ (a scan, a sculpt): a head without blendshapes.
+        let text = String::from_utf8_lossy(&bytes);
+        let stem = path
+            .file_stem()
+            .map_or_else(|| name.clone(), |s| s.to_string_lossy().into_owned());
+        return Ok(import_obj_set(
+            &stem,
+            ObjSource {
+                name: &name,
+                text: &text,
+            },
+            &[],
+        )?);
     }
     let dir = path
         .parent()

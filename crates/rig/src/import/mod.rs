@@ -98,11 +98,6 @@ pub enum ImportErrorKind {
         /// What is wrong.
         problem: String,
     },
-    /// The file has geometry but no morph targets to animate.
-    #[error(
-        "no morph targets (blendshapes): faceanim animates blendshape characters; export the meshes with their shape keys"
-    )]
-    NoMorphTargets,
     /// The file has no triangle geometry.
     #[error("no triangle meshes found")]
     NoMeshes,

@@ -23,7 +23,8 @@ pub struct ObjSource<'a> {
     pub text: &'a str,
 }
 
-/// Imports a neutral OBJ and its blendshape OBJs. `character_name` names the result.
+/// Imports a neutral OBJ and its blendshape OBJs (none: a head to make shapes for, with a
+/// warning saying how). `character_name` names the result.
 ///
 /// # Errors
 /// An [`ImportError`] naming the offending file (and line, for syntax errors).
@@ -36,9 +37,6 @@ pub fn import_obj_set(
         source_name: source.to_owned(),
         kind,
     };
-    if shapes.is_empty() {
-        return Err(err(neutral.name, ImportErrorKind::NoMorphTargets));
-    }
     if shapes.len() > MAX_BLENDSHAPES {
         return Err(err(
             neutral.name,
@@ -177,9 +175,18 @@ pub fn import_obj_set(
         normal_deltas: None,
     })
     .map_err(|e| err(neutral.name, e.into()))?;
+    let warnings = if shapes.is_empty() {
+        vec![
+            "no blendshapes: make ARKit's 52 on this head with `faceanim generate-shapes` (or \
+             give the folder holding the neutral OBJ and one OBJ per blendshape)"
+                .to_owned(),
+        ]
+    } else {
+        Vec::new()
+    };
     Ok(Imported {
         character,
-        warnings: Vec::new(),
+        warnings,
     })
 }
 
