@@ -17,8 +17,8 @@ if [ -z "$bare" ]; then
   bare=$(ls target/test-fixtures/blender-bare-avatar-*.glb | head -1)
 fi
 cp "$bare" "$out/avatar.glb"
-[ -f "$out/avatar-subdivided.glb" ] || blender -b --factory-startup --python tools/blender_subdivide.py \
-  -- "$out/avatar.glb" "$out/avatar-subdivided.glb" >/dev/null 2>&1
+[ -f "$out/avatar-subdivided.glb" ] || blender -b --factory-startup --python tools/blender_bare.py \
+  -- "$out/avatar.glb" "$out/avatar-subdivided.glb" subdivide >/dev/null 2>&1
 for head in avatar avatar-subdivided; do
   for run in 1 2 3; do
     /usr/bin/time -f "%e %M" -o "$out/$head.time" target/release/faceanim generate-shapes \

@@ -197,13 +197,13 @@ fn a_scanned_head_as_one_obj_gets_the_shapes() {
     let scan = out.join("scan.obj");
     let made = std::process::Command::new("blender")
         .args(["-b", "--factory-startup", "--python"])
-        .arg(support::repo().join("tools/blender_to_obj.py"))
+        .arg(support::repo().join("tools/blender_bare.py"))
         .arg("--")
         .arg(faceanim_testdata::shared("characters/ict-face-id7.glb"))
         .arg(&scan)
         .output()
         .expect("Blender is needed for this test: run scripts/setup.sh");
-    support::succeeded("blender_to_obj.py", made);
+    support::succeeded("blender_bare.py", made);
     let rigged = out.join("scan.glb");
     generate(&scan, &rigged);
     assert_eq!(

@@ -29,19 +29,14 @@ pub struct SurfacePoint {
 }
 
 impl SurfacePoint {
-    /// The point on `positions` (the character's or a deformed copy).
+    /// The point on `positions` (the character's or a deformed copy), or the same weights
+    /// applied to other per-vertex values (a blendshape's deltas).
     #[must_use]
     pub fn on(&self, triangles: &[[u32; 3]], positions: &[Vec3]) -> Vec3 {
         let t = triangles[self.triangle as usize];
         (0..3).fold(Vec3::ZERO, |sum, k| {
             sum + self.weights[k] * positions[t[k] as usize]
         })
-    }
-
-    /// The same weights applied to per-vertex values (a blendshape's deltas, say).
-    #[must_use]
-    pub fn blend(&self, triangles: &[[u32; 3]], values: &[Vec3]) -> Vec3 {
-        self.on(triangles, values)
     }
 }
 
@@ -215,14 +210,10 @@ impl<'a> RayCaster<'a> {
         y: f32,
         on: &dyn Fn(u32) -> bool,
     ) -> Option<SurfacePoint> {
-        let inverse = camera.view_projection.inverse();
-        let (nx, ny) = (2.0 * x / size - 1.0, 1.0 - 2.0 * y / size);
-        let near = inverse.project_point3(Vec3::new(nx, ny, -1.0));
-        let far = inverse.project_point3(Vec3::new(nx, ny, 1.0));
-        let direction = (far - near).normalize_or_zero();
+        let (near, direction) = camera.ray(size, x, y)?;
         let (cx, cy) = (
-            ((0.5 * (nx + 1.0)) * CELLS as f32).floor(),
-            ((0.5 * (1.0 - ny)) * CELLS as f32).floor(),
+            (x / size * CELLS as f32).floor(),
+            (y / size * CELLS as f32).floor(),
         );
         if !(0.0..CELLS as f32).contains(&cx) || !(0.0..CELLS as f32).contains(&cy) {
             return None;

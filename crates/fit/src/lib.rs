@@ -140,8 +140,7 @@ pub fn generate(
     let mut kept: Vec<String> = Vec::new();
     for shape in user.blendshapes() {
         let channels = match drive(shape.name()) {
-            Some(Drive::Channel(c) | Drive::Split(c, _)) => vec![c],
-            Some(Drive::Merge(a, b)) => vec![a, b],
+            Some(d @ (Drive::Channel(_) | Drive::Split(..) | Drive::Merge(..))) => d.channels(),
             _ => Vec::new(),
         };
         for c in channels {
@@ -216,7 +215,7 @@ pub fn generate(
             register::nonrigid(&placed, t_tri, &landmark_terms, &target, size)?;
         let correspondence =
             transfer::Correspondence::new(u_pos, u_tri, &fitted, t_tri, REACH * size);
-        let deltas: Vec<Vec<Vec3>> = channels.iter().map(|(_, d)| d.clone()).collect();
+        let (names, deltas): (Vec<String>, Vec<Vec<Vec3>>) = channels.into_iter().unzip();
         let moved = transfer.shapes(
             &correspondence,
             (t_pos, t_tri),
@@ -227,10 +226,10 @@ pub fn generate(
         // A displacement under a millionth of the head is no movement.
         let threshold = 1e-6 * size;
         shapes.extend(
-            channels
+            names
                 .iter()
                 .zip(&moved)
-                .map(|((name, _), dense)| Blendshape::from_dense(name.clone(), dense, threshold)),
+                .map(|(name, dense)| Blendshape::from_dense(name.clone(), dense, threshold)),
         );
         fits.push(TemplateFit {
             name: template.name().to_owned(),
@@ -238,7 +237,7 @@ pub fn generate(
             scale: similarity.scale,
             residual: residual / size,
             corresponding: correspondence.vertices.iter().flatten().count(),
-            shapes: channels.into_iter().map(|(name, _)| name).collect(),
+            shapes: names,
         });
     }
     Ok(Generated {
@@ -282,27 +281,36 @@ pub fn with_generated_shapes(
     Ok((with, generated))
 }
 
-/// The template's shapes per ARKit channel, as dense deltas: a channel's own shape, or its
-/// halves added (`browInnerUp_L` and `_R`); only those asked for and not already `kept`.
+/// The template's shapes per ARKit channel (see [`channel_deltas`]): only those asked for
+/// and not already `kept`.
 fn template_channels(
     template: &Character,
     options: &Options,
     kept: &[String],
 ) -> Vec<(String, Vec<Vec3>)> {
-    let n = template.vertex_count();
+    channel_deltas(template)
+        .into_iter()
+        .filter(|(channel, _)| {
+            options
+                .only
+                .as_ref()
+                .is_none_or(|only| only.iter().any(|o| o == channel))
+                && !kept.iter().any(|k| k == channel)
+        })
+        .collect()
+}
+
+/// `character`'s shapes per ARKit channel, as dense deltas over its vertices: a channel's own
+/// shape, or its halves added (`browInnerUp_L` and `_R`); in the order they first appear.
+#[must_use]
+pub fn channel_deltas(character: &Character) -> Vec<(String, Vec<Vec3>)> {
+    let n = character.vertex_count();
     let mut channels: Vec<(String, Vec<Vec3>)> = Vec::new();
-    for shape in template.blendshapes() {
+    for shape in character.blendshapes() {
         let channel = match drive(shape.name()) {
             Some(Drive::Channel(c) | Drive::Split(c, _)) => c.name(),
             _ => continue,
         };
-        let wanted = options
-            .only
-            .as_ref()
-            .is_none_or(|only| only.iter().any(|o| o == channel));
-        if !wanted || kept.iter().any(|k| k == channel) {
-            continue;
-        }
         let index = match channels.iter().position(|(name, _)| name == channel) {
             Some(i) => i,
             None => {

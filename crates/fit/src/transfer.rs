@@ -209,7 +209,7 @@ impl<'a> Transfer<'a> {
                 }
                 for (r, point) in rhs.iter_mut().zip(&correspondence.vertices) {
                     if let Some(point) = point {
-                        let d = scale * (rotation * point.blend(t_triangles, delta));
+                        let d = scale * (rotation * point.on(t_triangles, delta));
                         for k in 0..3 {
                             r[k] += ANCHOR * f64::from(d[k]);
                         }

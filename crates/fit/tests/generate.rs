@@ -15,8 +15,7 @@
     reason = "tests panic to fail"
 )]
 
-use faceanim_fit::{Generated, Options, Template, generate, relative_error};
-use faceanim_rig::names::{Drive, drive};
+use faceanim_fit::{Generated, Options, Template, channel_deltas, generate, relative_error};
 use faceanim_rig::{Character, CharacterParts};
 use glam::Vec3;
 
@@ -30,34 +29,10 @@ fn stripped(character: &Character) -> Character {
     .unwrap()
 }
 
-/// Dense deltas per ARKit channel (halves of split shapes added).
-fn channels(character: &Character) -> Vec<(String, Vec<Vec3>)> {
-    let mut out: Vec<(String, Vec<Vec3>)> = Vec::new();
-    for shape in character.blendshapes() {
-        let Some(Drive::Channel(c) | Drive::Split(c, _)) = drive(shape.name()) else {
-            continue;
-        };
-        let i = out
-            .iter()
-            .position(|(n, _)| n == c.name())
-            .unwrap_or_else(|| {
-                out.push((
-                    c.name().to_owned(),
-                    vec![Vec3::ZERO; character.vertex_count()],
-                ));
-                out.len() - 1
-            });
-        for (&v, d) in shape.indices().iter().zip(shape.deltas()) {
-            out[i].1[v as usize] += *d;
-        }
-    }
-    out
-}
-
 /// Per shape the original has, the relative error of the generated one; printed, and their
 /// mean returned.
 fn compare(what: &str, original: &Character, generated: &Generated) -> f64 {
-    let reference = channels(original);
+    let reference = channel_deltas(original);
     let mut errors = Vec::new();
     let mut line = String::new();
     for shape in &generated.shapes {

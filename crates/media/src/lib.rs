@@ -505,8 +505,8 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
     };
     let stderr = std::thread::spawn(move || {
         let mut errors = String::new();
-        let _ = read_log(&mut log, |level, text| {
-            if level.is_error() {
+        let _ = read_log(&mut log, |error, text| {
+            if error {
                 errors.push_str(text);
                 errors.push('\n');
             }
@@ -528,26 +528,12 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
     })
 }
 
-/// How loud a line of ffmpeg's log is, from its `[level]` tag.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Level {
-    /// `[panic]`, `[fatal]` or `[error]`.
-    Error,
-    /// Anything quieter.
-    Other,
-}
-
-impl Level {
-    fn is_error(self) -> bool {
-        self == Level::Error
-    }
-}
-
-/// Reads ffmpeg's `-v level+…` log line by line, calling `line` with each line's level and
-/// its text without the tag, until the log ends or `line` breaks.
+/// Reads ffmpeg's `-v level+…` log line by line, calling `line` with whether the line's tag
+/// says an error (`[panic]`, `[fatal]`, `[error]`) and its text without the tag, until the
+/// log ends or `line` breaks.
 fn read_log(
     log: &mut impl std::io::BufRead,
-    mut line: impl FnMut(Level, &str) -> std::ops::ControlFlow<()>,
+    mut line: impl FnMut(bool, &str) -> std::ops::ControlFlow<()>,
 ) -> std::io::Result<()> {
     let mut bytes = Vec::new();
     loop {
@@ -557,18 +543,11 @@ fn read_log(
         }
         let text = String::from_utf8_lossy(&bytes);
         let text = text.trim_end();
-        let (level, rest) = match text.strip_prefix('[').and_then(|t| t.split_once("] ")) {
-            Some((tag, rest)) => (
-                if matches!(tag, "panic" | "fatal" | "error") {
-                    Level::Error
-                } else {
-                    Level::Other
-                },
-                rest,
-            ),
-            None => (Level::Other, text),
+        let (error, rest) = match text.strip_prefix('[').and_then(|t| t.split_once("] ")) {
+            Some((tag, rest)) => (matches!(tag, "panic" | "fatal" | "error"), rest),
+            None => (false, text),
         };
-        if line(level, rest).is_break() {
+        if line(error, rest).is_break() {
             return Ok(());
         }
     }
@@ -590,8 +569,8 @@ fn read_header(log: &mut impl std::io::BufRead) -> Result<Header, String> {
     let mut duration = None;
     let mut output = false;
     let mut stream: Option<Result<(usize, usize, f32), String>> = None;
-    read_log(log, |level, text| {
-        if level.is_error() {
+    read_log(log, |error, text| {
+        if error {
             errors.push(text.to_owned());
         } else if output {
             if text.trim_start().starts_with("Stream #") && text.contains(" Video: ") {

@@ -185,10 +185,10 @@ impl Camera {
         )
     }
 
-    /// The point of the world seen at pixel (`x`, `y`) of a `size`×`size` picture, on the plane
-    /// through `on` facing the camera; `None` if the camera cannot be inverted.
+    /// The ray through pixel (`x`, `y`) of a `size`×`size` picture: where it leaves the near
+    /// plane, and its unit direction into the scene; `None` if the camera cannot be inverted.
     #[must_use]
-    pub fn unproject(&self, size: f32, x: f32, y: f32, on: Vec3) -> Option<Vec3> {
+    pub fn ray(&self, size: f32, x: f32, y: f32) -> Option<(Vec3, Vec3)> {
         let inverse = self.view_projection.inverse();
         if !inverse.is_finite() {
             return None;
@@ -196,7 +196,14 @@ impl Camera {
         let (nx, ny) = (2.0 * x / size - 1.0, 1.0 - 2.0 * y / size);
         let near = inverse.project_point3(Vec3::new(nx, ny, -1.0));
         let far = inverse.project_point3(Vec3::new(nx, ny, 1.0));
-        let direction = (far - near).normalize_or_zero();
+        Some((near, (far - near).normalize_or_zero()))
+    }
+
+    /// The point of the world seen at pixel (`x`, `y`) of a `size`×`size` picture, on the plane
+    /// through `on` facing the camera; `None` if the camera cannot be inverted.
+    #[must_use]
+    pub fn unproject(&self, size: f32, x: f32, y: f32, on: Vec3) -> Option<Vec3> {
+        let (near, direction) = self.ray(size, x, y)?;
         let normal = (self.eye - on).normalize_or_zero();
         let along = direction.dot(normal);
         if along.abs() < 1e-6 {
