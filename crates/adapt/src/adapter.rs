@@ -12,7 +12,8 @@ use std::collections::HashMap;
 use faceanim_rig::Character;
 use serde::{Deserialize, Serialize};
 
-use crate::features::{Calibration, Expression, FeatureSet};
+use crate::features::{Calibration, Expression, FeatureSet, LandmarkFrame};
+use crate::locality::Locality;
 use crate::readings::ShapeReading;
 use crate::{AdaptError, Fingerprint};
 
@@ -53,11 +54,23 @@ pub struct Architecture {
     /// existed read them as they are).
     #[serde(default)]
     pub calibration: Calibration,
+    /// How it places the landmarks (adapters from before read them in the whole face's frame).
+    #[serde(default)]
+    pub frame: LandmarkFrame,
+    /// Which inputs each shape reads (adapters from before read all of them). With
+    /// [`Locality::PerShape`], training sets `hidden` to the width per shape times the shapes.
+    #[serde(default)]
+    pub locality: Locality,
 }
 
+/// Hidden units per shape in the default network.
+pub const WIDTH_PER_SHAPE: usize = 16;
+
 impl Default for Architecture {
-    /// The seed's best: Linear → LeakyReLU → Linear → Clamp, hidden 256, over both feature
-    /// sets, relative to a neutral face.
+    /// The seed's best, Linear → LeakyReLU → Linear → Clamp over both feature sets, relative to
+    /// a neutral face; its landmarks in the rigid frame, and each shape with
+    /// [`WIDTH_PER_SHAPE`] hidden units that read only what the shape moves
+    /// ([`crate::locality`]).
     fn default() -> Architecture {
         Architecture {
             features: FeatureSet::Both,
@@ -65,6 +78,23 @@ impl Default for Architecture {
             activation: Activation::LeakyRelu,
             clamp: true,
             calibration: Calibration::Neutral,
+            frame: LandmarkFrame::Rigid,
+            locality: Locality::PerShape {
+                width: WIDTH_PER_SHAPE,
+            },
+        }
+    }
+}
+
+impl Architecture {
+    /// The seed's network: one hidden layer of 256 over every input, landmarks in the whole
+    /// face's frame (the adapters before rigid frames and per-shape parts).
+    #[must_use]
+    pub fn global() -> Architecture {
+        Architecture {
+            frame: LandmarkFrame::Whole,
+            locality: Locality::Global,
+            ..Architecture::default()
         }
     }
 }
@@ -198,12 +228,15 @@ impl Adapter {
     /// calibrated (to the training set's typical neutral face when `neutral` is `None`).
     #[must_use]
     pub fn input(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
-        let features = self.architecture.features;
-        let own = neutral.map(|n| features.input(n));
+        let Architecture {
+            features,
+            frame,
+            calibration,
+            ..
+        } = self.architecture;
+        let own = neutral.map(|n| features.input(frame, n));
         let neutral = own.as_deref().unwrap_or(&self.reference_neutral);
-        self.architecture
-            .calibration
-            .input(features, expression, neutral)
+        calibration.input(features, frame, expression, neutral)
     }
 
     /// The character's weights for `expression` (see [`Adapter::input`] for `neutral`).

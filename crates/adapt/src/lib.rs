@@ -11,7 +11,10 @@
 //! - [`augment`]: domain randomisation of those renders (camera, light, skin, background,
 //!   picture quality), so the adapter transfers to pictures it never saw.
 //! - [`features`]: what the adapter sees (scores, pose-normalised landmarks, or both), as
-//!   captured or relative to a neutral face ([`Calibration`]).
+//!   captured or relative to a neutral face ([`Calibration`]), the landmarks placed by the
+//!   face's rigid part ([`LandmarkFrame`]).
+//! - [`locality`]: which inputs each shape reads — only what it moves, so that a person's
+//!   mouth does not drive the character's eyes ([`Locality`]).
 //! - [`heldout`]: the adapter measured on stills of the character from another renderer.
 //! - [`readings`]: which shapes capture can drive, each shown alone and read back.
 //! - [`mod@train`] (candle): Adam on a censored absolute error ([`Loss`]; the seed's squared
@@ -29,16 +32,18 @@ pub mod augment;
 pub mod dataset;
 pub mod features;
 pub mod heldout;
+pub mod locality;
 pub mod readings;
 pub mod sampling;
 mod tensors;
 pub mod train;
 
-pub use adapter::{Activation, Adapter, Architecture, Fit, TrainingReport};
+pub use adapter::{Activation, Adapter, Architecture, Fit, TrainingReport, WIDTH_PER_SHAPE};
 pub use augment::Augmentation;
 pub use dataset::{Control, Dataset, DatasetOptions, FaceCamera, Framing, Split};
 pub use faceanim_take::{Correction, Fingerprint};
-pub use features::{Calibration, Expression, FeatureSet};
+pub use features::{Calibration, Expression, FeatureSet, LandmarkFrame};
+pub use locality::Locality;
 pub use readings::{Reading, ShapeReading};
 pub use train::{FinetuneReport, Loss, TrainOptions, finetune, train};
 

@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 use crate::AdaptError;
 use crate::adapter::{Adapter, Architecture, TrainingReport};
 use crate::dataset::{Control, Dataset};
+use crate::locality::Locality;
 use faceanim_take::Correction;
 
 impl From<candle_core::Error> for AdaptError {
@@ -104,6 +105,9 @@ struct Net {
     output_weight: Var,
     output_bias: Var,
     architecture: Architecture,
+    /// Which weights may be non-zero ([`Locality::PerShape`]): (hidden × inputs,
+    /// outputs × hidden), 1 or 0.
+    masks: Option<(Tensor, Tensor)>,
 }
 
 impl Net {
@@ -127,6 +131,7 @@ impl Net {
             output_weight: var(uniform(outputs * hidden, hidden), &[outputs, hidden])?,
             output_bias: var(uniform(outputs, hidden), &[outputs])?,
             architecture,
+            masks: None,
         })
     }
 
@@ -145,7 +150,29 @@ impl Net {
             output_weight: var(&adapter.output_weight, &[outputs, hidden])?,
             output_bias: var(&adapter.output_bias, &[outputs])?,
             architecture: adapter.architecture,
+            masks: None,
         })
+        .and_then(|mut net| {
+            // A per-shape network keeps its parts: its zeros stay zeros in fine-tuning.
+            if matches!(adapter.architecture.locality, Locality::PerShape { .. }) {
+                let nonzero = |w: &[f32]| w.iter().map(|v| f32::from(*v != 0.0)).collect();
+                net.mask((
+                    nonzero(&adapter.hidden_weight),
+                    nonzero(&adapter.output_weight),
+                ))?;
+            }
+            Ok(net)
+        })
+    }
+
+    /// Keeps the weights outside `masks` (hidden × inputs, outputs × hidden; 1 or 0) at zero.
+    fn mask(&mut self, (hidden, output): (Vec<f32>, Vec<f32>)) -> Result<(), AdaptError> {
+        let shape = |v: &Var| v.as_tensor().shape().clone();
+        self.masks = Some((
+            Tensor::from_vec(hidden, shape(&self.hidden_weight), &Device::Cpu)?,
+            Tensor::from_vec(output, shape(&self.output_weight), &Device::Cpu)?,
+        ));
+        Ok(())
     }
 
     fn vars(&self) -> Vec<Var> {
@@ -169,8 +196,9 @@ impl Net {
 
     /// The outputs before the clamp.
     fn raw(&self, x: &Tensor) -> Result<Tensor, AdaptError> {
+        let (hidden_weight, output_weight) = self.weights()?;
         let h = x
-            .matmul(&self.hidden_weight.as_tensor().t()?)?
+            .matmul(&hidden_weight.t()?)?
             .broadcast_add(self.hidden_bias.as_tensor())?;
         let h = match self.architecture.activation {
             crate::adapter::Activation::Relu => h.relu()?,
@@ -179,8 +207,20 @@ impl Net {
                 f64::from(self.architecture.activation.negative_slope()),
             )?,
         };
-        Ok(h.matmul(&self.output_weight.as_tensor().t()?)?
+        Ok(h.matmul(&output_weight.t()?)?
             .broadcast_add(self.output_bias.as_tensor())?)
+    }
+
+    /// The two weight matrices, masked.
+    fn weights(&self) -> Result<(Tensor, Tensor), AdaptError> {
+        let (h, o) = (
+            self.hidden_weight.as_tensor(),
+            self.output_weight.as_tensor(),
+        );
+        Ok(match &self.masks {
+            Some((mh, mo)) => (h.mul(mh)?, o.mul(mo)?),
+            None => (h.clone(), o.clone()),
+        })
     }
 
     /// `loss` of the rows `index` of `examples`.
@@ -218,14 +258,14 @@ impl Net {
     }
 
     fn snapshot(&self) -> Result<[Vec<f32>; 4], AdaptError> {
-        let flat = |v: &Var| -> Result<Vec<f32>, AdaptError> {
-            Ok(v.as_tensor().flatten_all()?.to_vec1::<f32>()?)
-        };
+        let flat =
+            |v: &Tensor| -> Result<Vec<f32>, AdaptError> { Ok(v.flatten_all()?.to_vec1::<f32>()?) };
+        let (hidden_weight, output_weight) = self.weights()?;
         Ok([
-            flat(&self.hidden_weight)?,
-            flat(&self.hidden_bias)?,
-            flat(&self.output_weight)?,
-            flat(&self.output_bias)?,
+            flat(&hidden_weight)?,
+            flat(self.hidden_bias.as_tensor())?,
+            flat(&output_weight)?,
+            flat(self.output_bias.as_tensor())?,
         ])
     }
 }
@@ -376,9 +416,14 @@ pub fn train(
     if dataset.len() < crate::MIN_SAMPLES {
         return Err(AdaptError::NotEnoughData(dataset.len()));
     }
-    let features = options.architecture.features;
-    let neutral_inputs: Vec<Vec<f32>> =
-        dataset.neutrals.iter().map(|n| features.input(n)).collect();
+    let Architecture {
+        features, frame, ..
+    } = options.architecture;
+    let neutral_inputs: Vec<Vec<f32>> = dataset
+        .neutrals
+        .iter()
+        .map(|n| features.input(frame, n))
+        .collect();
     let mut reference_neutral = vec![0.0f32; features.len()];
     for n in &neutral_inputs {
         reference_neutral
@@ -396,7 +441,7 @@ pub fn train(
             options
                 .architecture
                 .calibration
-                .input(features, e, &neutral_inputs[n])
+                .input(features, frame, e, &neutral_inputs[n])
         })
         .collect();
     let split = dataset.split();
@@ -415,12 +460,32 @@ pub fn train(
         part(split.test.clone())?,
     );
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(options.seed);
-    let net = Net::init(
-        options.architecture,
-        features.len(),
-        dataset.blendshapes.len(),
-        &mut rng,
-    )?;
+    let outputs = dataset.blendshapes.len();
+    let mut architecture = options.architecture;
+    let net = match architecture.locality {
+        Locality::Global => Net::init(architecture, features.len(), outputs, &mut rng)?,
+        Locality::PerShape { width } => {
+            let reads = crate::locality::reads(
+                features,
+                &reference_neutral,
+                &inputs[split.train.clone()],
+                &dataset.targets[split.train.clone()],
+            );
+            for (name, read) in dataset.blendshapes.iter().zip(&reads) {
+                let scores = features.scores();
+                tracing::debug!(
+                    shape = %name,
+                    scores = read[..scores].iter().filter(|r| **r).count(),
+                    landmarks = read[scores..].iter().filter(|r| **r).count() / 3,
+                    "reads"
+                );
+            }
+            architecture.hidden = width.max(1) * outputs;
+            let mut net = Net::init(architecture, features.len(), outputs, &mut rng)?;
+            net.mask(crate::locality::masks(&reads, width.max(1)))?;
+            net
+        }
+    };
     let mut optimizer = adam(&net, options.learning_rate)?;
     let mut best = (f32::INFINITY, 0usize, net.snapshot()?);
     let mut epochs = 0;
@@ -446,7 +511,7 @@ pub fn train(
     let mut adapter = Adapter {
         blendshapes: dataset.blendshapes.clone(),
         fingerprint: dataset.fingerprint.clone(),
-        architecture: options.architecture,
+        architecture,
         report: TrainingReport::default(),
         reference_neutral,
         input_mean: mean,

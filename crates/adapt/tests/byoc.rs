@@ -109,9 +109,10 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
         "the other shapes average {others}: {estimate:?}"
     );
 
-    // Every shape shown alone and read back: the jaw is read, and the seed's squared error
-    // through the clamp, trained on the same set, leaves more shapes that capture never drives
-    // (an output below 0 gets no gradient through the clamp, even where its shape is active).
+    // Every shape shown alone and read back: the jaw is read, and the seed's adapter (one
+    // layer over every input, squared error through the clamp), trained on the same set,
+    // leaves no fewer shapes that capture never drives (an output below 0 gets no gradient
+    // through the clamp, even where its shape is active).
     let readings = camera.readings(ict, &models, &adapter).unwrap();
     assert_eq!(readings.len(), ict.blendshapes().len());
     assert!(
@@ -132,6 +133,7 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
     let seed_loss = train(
         &data,
         &TrainOptions {
+            architecture: faceanim_adapt::Architecture::global(),
             loss: Loss::SquaredClamped,
             ..TrainOptions::default()
         },
@@ -141,19 +143,21 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
     let seed_readings = camera.readings(ict, &models, &seed_loss).unwrap();
     let unseen = |r: &[faceanim_adapt::ShapeReading]| faceanim_adapt::readings::unseen(r).len();
     eprintln!(
-        "shapes capture cannot drive: {} with the censored loss, {} with the seed's (test MAE {:.4} and {:.4})",
+        "shapes capture cannot drive: {} with the default adapter, {} with the seed's (test MAE {:.4} and {:.4})",
         unseen(&readings),
         unseen(&seed_readings),
         adapter.report.mae_test,
         seed_loss.report.mae_test
     );
-    // The censored loss never reads fewer shapes than the seed's. (It read strictly more
-    // before training varied the person and the lens; on 2,000 samples of the varied renders
-    // the two tie at 37 of 53 unseen from the front.)
+    // The default never reads fewer shapes than the seed's, and errs less. (On 2,000 samples
+    // of the varied renders the seed's leaves 37 of 53 unseen from the front, the default 35;
+    // the seed's loss through per-shape parts reads more, 27, at a test MAE of 0.092 against
+    // the default's 0.081: it reads them by reading everything higher.)
     assert!(
         unseen(&readings) <= unseen(&seed_readings),
-        "censored: {readings:?}\nseed's: {seed_readings:?}"
+        "default: {readings:?}\nseed's: {seed_readings:?}"
     );
+    assert!(adapter.report.mae_test < seed_loss.report.mae_test);
 
     // Another identity of the same rig: the adapter is accepted with a warning, and works.
     let id7 = faceanim_testdata::ict_id7();

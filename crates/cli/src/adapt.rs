@@ -10,7 +10,8 @@ use faceanim_adapt::heldout::{Evaluation, HeldOut};
 use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
 use faceanim_adapt::{
     Activation, Adapter, Architecture, Augmentation, Calibration, Control, Dataset, DatasetOptions,
-    FaceCamera, FeatureSet, Loss, ShapeReading, TrainOptions,
+    FaceCamera, FeatureSet, LandmarkFrame, Locality, Loss, ShapeReading, TrainOptions,
+    WIDTH_PER_SHAPE,
 };
 use faceanim_rig::Character;
 use faceanim_take::Session;
@@ -50,9 +51,19 @@ pub struct AdaptArgs {
     /// What the adapter reads.
     #[arg(long, value_enum, default_value_t = FeatureChoice::Both)]
     pub features: FeatureChoice,
-    /// Width of the hidden layer.
-    #[arg(long, default_value_t = 256)]
-    pub hidden: usize,
+    /// Which inputs each shape reads: only those it moves in the training set, through hidden
+    /// units of its own (per-shape), or all of them through one shared layer, as the seed's
+    /// network (global).
+    #[arg(long, value_enum, default_value_t = LocalityChoice::PerShape)]
+    pub locality: LocalityChoice,
+    /// Where the landmarks' origin and unit come from: the landmarks expressions hardly move
+    /// (rigid), or all of them, as adapters before (whole).
+    #[arg(long, value_enum, default_value_t = FrameChoice::Rigid)]
+    pub landmark_frame: FrameChoice,
+    /// Width of the hidden layer: per shape with --locality per-shape (default 16), in all
+    /// with --locality global (default 256).
+    #[arg(long)]
+    pub hidden: Option<usize>,
     /// ReLU instead of LeakyReLU between the layers.
     #[arg(long)]
     pub relu: bool,
@@ -135,6 +146,24 @@ impl From<LossChoice> for Loss {
     }
 }
 
+/// The command line's names for [`Locality`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LocalityChoice {
+    /// Each shape reads only what it moves, through hidden units of its own.
+    PerShape,
+    /// Every shape reads every input through one shared hidden layer (the seed's).
+    Global,
+}
+
+/// The command line's names for [`LandmarkFrame`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FrameChoice {
+    /// Placed by the landmarks expressions hardly move.
+    Rigid,
+    /// Placed by all landmarks (adapters before).
+    Whole,
+}
+
 /// The command line's names for [`Calibration`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum CalibrationChoice {
@@ -166,9 +195,26 @@ impl From<FeatureChoice> for FeatureSet {
 impl AdaptArgs {
     /// The network the arguments describe.
     fn architecture(&self) -> Architecture {
+        let (locality, hidden) = match self.locality {
+            LocalityChoice::PerShape => (
+                Locality::PerShape {
+                    width: self.hidden.unwrap_or(WIDTH_PER_SHAPE),
+                },
+                Architecture::default().hidden,
+            ),
+            LocalityChoice::Global => (
+                Locality::Global,
+                self.hidden.unwrap_or(Architecture::global().hidden),
+            ),
+        };
         Architecture {
             features: self.features.into(),
-            hidden: self.hidden,
+            hidden,
+            locality,
+            frame: match self.landmark_frame {
+                FrameChoice::Rigid => LandmarkFrame::Rigid,
+                FrameChoice::Whole => LandmarkFrame::Whole,
+            },
             activation: if self.relu {
                 Activation::Relu
             } else {
@@ -352,11 +398,12 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         faceanim_adapt::MIN_SAMPLES,
         args.samples
     );
-    anyhow::ensure!(
-        (1..=4096).contains(&args.hidden),
-        "--hidden must be between 1 and 4096, got {}",
-        args.hidden
-    );
+    if let Some(hidden) = args.hidden {
+        anyhow::ensure!(
+            (1..=4096).contains(&hidden),
+            "--hidden must be between 1 and 4096, got {hidden}"
+        );
+    }
     let character = crate::load_or_default(args.character.as_deref())?.character;
     let output = args
         .output
@@ -554,14 +601,20 @@ fn ablation(
             }
         }
     }
+    let seed = Architecture::global();
     for architecture in [
+        seed,
+        Architecture {
+            frame: default.frame,
+            ..seed
+        },
         Architecture {
             hidden: 100,
-            ..default
+            ..seed
         },
         Architecture {
             hidden: 384,
-            ..default
+            ..seed
         },
         Architecture {
             activation: Activation::Relu,
@@ -620,6 +673,8 @@ fn ablation(
             },
         )?;
         let heldout = evaluate_held_out(&adapter, folders)?;
+        // As trained: a per-shape network's width is known once the shapes are.
+        let architecture = adapter.architecture;
         // Every row on the front renders' test split too (the project's renders without
         // augmentation), once they exist.
         let front = datasets
@@ -627,10 +682,12 @@ fn ablation(
             .find(|(a, _)| *a == Augmentation::None)
             .map(|(_, d)| adapter.mean_absolute_error_of(d, d.split().test));
         eprintln!(
-            "{} {} {} {} {:?} clamp={} {}: test MAE {:.4}",
+            "{} {} {} {} {} {} {:?} clamp={} {}: test MAE {:.4}",
             augmentation.name(),
             architecture.features.name(),
             architecture.calibration.name(),
+            architecture.frame.name(),
+            architecture.locality.name(),
             architecture.hidden,
             architecture.activation,
             architecture.clamp,
@@ -641,6 +698,8 @@ fn ablation(
             augmentation,
             features: architecture.features,
             calibration: architecture.calibration,
+            frame: architecture.frame,
+            locality: architecture.locality,
             hidden: architecture.hidden,
             activation: architecture.activation,
             clamp: architecture.clamp,
@@ -661,9 +720,9 @@ fn ablation(
             .map(|f| format!(" held-out MAE ({}) |", f.dir.display()))
             .collect();
         println!(
-            "| augmentation | features | calibration | layers | hidden | loss | test MAE (own renders) | test MAE (front renders) |{heldout_columns} best epoch | seconds |"
+            "| augmentation | features | calibration | landmarks | inputs per shape | layers | hidden | loss | test MAE (own renders) | test MAE (front renders) |{heldout_columns} best epoch | seconds |"
         );
-        println!("|{}", " --- |".repeat(10 + folders.len()));
+        println!("|{}", " --- |".repeat(12 + folders.len()));
         for r in &results {
             let activation = match r.activation {
                 Activation::Relu => "ReLU",
@@ -679,10 +738,15 @@ fn ablation(
                 .mae_front_renders_test
                 .map_or_else(|| "–".to_owned(), |m| format!("{m:.4}"));
             println!(
-                "| {} | {} | {} | Linear → {activation} → Linear{clamp} | {} | {} | {:.4} | {front} |{heldout} {} | {:.1} |",
+                "| {} | {} | {} | {} | {} | Linear → {activation} → Linear{clamp} | {} | {} | {:.4} | {front} |{heldout} {} | {:.1} |",
                 r.augmentation.name(),
                 r.features.name(),
                 r.calibration.name(),
+                r.frame.name(),
+                match r.locality {
+                    Locality::Global => "all",
+                    Locality::PerShape { .. } => "what it moves",
+                },
                 r.hidden,
                 r.loss.name(),
                 r.mae_test,
@@ -700,6 +764,8 @@ struct AblationRow {
     augmentation: Augmentation,
     features: FeatureSet,
     calibration: Calibration,
+    frame: LandmarkFrame,
+    locality: Locality,
     hidden: usize,
     activation: Activation,
     clamp: bool,
