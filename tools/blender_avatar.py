@@ -18,6 +18,7 @@
 #   are written, and one image texture.
 #
 # Nothing here is faceanim's code: Blender writes every byte of the file.
+import os
 import sys
 
 import bmesh
@@ -25,19 +26,16 @@ import bpy
 import numpy
 from mathutils import Vector
 
-# Debian bookworm pairs Blender 3.4 with NumPy 1.24, which removed the `numpy.bool` alias that
-# Blender 3.4's glTF importer still uses; restore it so the stock importer runs unchanged.
-if not hasattr(numpy, "bool"):
-    numpy.bool = bool
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from blender_gltf import open_gltf, script_args  # noqa: E402
 
-args = sys.argv[sys.argv.index("--") + 1 :]
+args = script_args()
 head_path, out_path = args[0], args[1]
 # "bare": the same avatar exported without any shape keys, as a scan, a sculpt or an avatar
 # whose face was never rigged comes.
 bare = args[2:] == ["bare"]
 
-bpy.ops.wm.read_factory_settings(use_empty=True)
-bpy.ops.import_scene.gltf(filepath=head_path)
+open_gltf(head_path)
 face = next(o for o in bpy.data.objects if o.type == "MESH")
 face.name = "Face"
 face.data.name = "Face"

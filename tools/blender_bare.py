@@ -4,20 +4,18 @@
 # denser head, about four times the vertices, for timing `faceanim generate-shapes`.
 #
 #   blender -b --factory-startup --python tools/blender_bare.py -- IN.glb OUT.{obj,glb} [subdivide]
+import os
 import sys
 
 import bpy
-import numpy
 
-# Blender 3.4's glTF importer still uses `numpy.bool` (see blender_avatar.py).
-if not hasattr(numpy, "bool"):
-    numpy.bool = bool
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from blender_gltf import open_gltf, script_args  # noqa: E402
 
-args = sys.argv[sys.argv.index("--") + 1 :]
+args = script_args()
 source, out = args[0], args[1]
 subdivide = args[2:] == ["subdivide"]
-bpy.ops.wm.read_factory_settings(use_empty=True)
-bpy.ops.import_scene.gltf(filepath=source)
+open_gltf(source)
 for obj in bpy.data.objects:
     if obj.type != "MESH":
         continue

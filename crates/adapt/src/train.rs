@@ -144,25 +144,23 @@ impl Net {
         let var = |values: &[f32], shape: &[usize]| {
             Var::from_slice(values, shape, &Device::Cpu).map_err(AdaptError::from)
         };
-        Ok(Net {
+        let mut net = Net {
             hidden_weight: var(&adapter.hidden_weight, &[hidden, inputs])?,
             hidden_bias: var(&adapter.hidden_bias, &[hidden])?,
             output_weight: var(&adapter.output_weight, &[outputs, hidden])?,
             output_bias: var(&adapter.output_bias, &[outputs])?,
             architecture: adapter.architecture,
             masks: None,
-        })
-        .and_then(|mut net| {
-            // A per-shape network keeps its parts: its zeros stay zeros in fine-tuning.
-            if matches!(adapter.architecture.locality, Locality::PerShape { .. }) {
-                let nonzero = |w: &[f32]| w.iter().map(|v| f32::from(*v != 0.0)).collect();
-                net.mask((
-                    nonzero(&adapter.hidden_weight),
-                    nonzero(&adapter.output_weight),
-                ))?;
-            }
-            Ok(net)
-        })
+        };
+        // A per-shape network keeps its parts: its zeros stay zeros in fine-tuning.
+        if matches!(adapter.architecture.locality, Locality::PerShape { .. }) {
+            let nonzero = |w: &[f32]| w.iter().map(|v| f32::from(*v != 0.0)).collect();
+            net.mask((
+                nonzero(&adapter.hidden_weight),
+                nonzero(&adapter.output_weight),
+            ))?;
+        }
+        Ok(net)
     }
 
     /// Keeps the weights outside `masks` (hidden × inputs, outputs × hidden; 1 or 0) at zero.
