@@ -1,6 +1,6 @@
 # What the Blender scripts here share: their arguments after `--`, and a glTF opened in an
-# empty scene by Blender's own importer. Imported by tools/blender_avatar.py and
-# tools/blender_bare.py (beside them on sys.path).
+# empty scene by Blender's own importer. Imported by blender_avatar.py, blender_bare.py,
+# blender_shape_keys.py and blender_stills.py (beside them on sys.path).
 import sys
 
 import bpy

@@ -4,19 +4,16 @@
 # change lengths), plus vertex count, the armatures (with their bone counts) and the animation
 # actions found.
 import json
+import os
 import sys
 
 import bpy
-import numpy
 
-# Debian bookworm pairs Blender 3.4 with NumPy 1.24, which removed the `numpy.bool` alias that
-# Blender 3.4's glTF importer still uses; restore it so the stock importer runs unchanged.
-if not hasattr(numpy, "bool"):
-    numpy.bool = bool
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from blender_gltf import open_gltf, script_args  # noqa: E402
 
-path = sys.argv[sys.argv.index("--") + 1]
-bpy.ops.wm.read_factory_settings(use_empty=True)
-bpy.ops.import_scene.gltf(filepath=path)
+path = script_args()[0]
+open_gltf(path)
 
 report = {"blender": bpy.app.version_string, "objects": [], "armatures": [], "actions": []}
 for obj in bpy.data.objects:

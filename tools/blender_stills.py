@@ -17,13 +17,10 @@ import os
 import sys
 
 import bpy
-import numpy
 from mathutils import Euler, Vector
 
-# Debian bookworm pairs Blender 3.4 with NumPy 1.24, which removed the `numpy.bool` alias that
-# Blender 3.4's glTF importer still uses; restore it so the stock importer runs unchanged.
-if not hasattr(numpy, "bool"):
-    numpy.bool = bool
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from blender_gltf import open_gltf, script_args  # noqa: E402
 
 
 def fail(message):
@@ -31,7 +28,7 @@ def fail(message):
     sys.exit(1)
 
 
-args = sys.argv[sys.argv.index("--") + 1:]
+args = script_args()
 if len(args) != 3:
     fail("usage: blender -b --python blender_stills.py -- MODEL.glb POSES.json OUTDIR")
 model, poses_path, out = args
@@ -42,8 +39,7 @@ view = {"yaw": -10.0, "pitch": 4.0, "size": 384, "samples": 12, "sun": [35.0, 30
 view.update(poses.get("view", {}))
 os.makedirs(out, exist_ok=True)
 
-bpy.ops.wm.read_factory_settings(use_empty=True)
-bpy.ops.import_scene.gltf(filepath=model)
+open_gltf(model)
 meshes = [o for o in bpy.data.objects if o.type == "MESH"]
 if not meshes:
     fail(f"{model}: no mesh")
