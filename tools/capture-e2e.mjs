@@ -216,8 +216,8 @@ try {
   measurements.adapter_shapes_read_300 = shapes.filter((r) => r.reading === 'read').length;
   const info = await page.textContent('#adapter-info');
   check(state.adapter.unseen.length ? info.includes(`Capture cannot drive ${state.adapter.unseen.length} of ${shapes.length} shapes`) && info.includes(state.adapter.unseen[0]) : !info.includes('cannot drive'), `the page does not say which shapes capture cannot drive: ${info}`);
-  // The adapter reads faces against the take's neutral frame: the least expressive until the
-  // animator names one, here the frame under the playhead.
+  // The adapter reads faces against the take's neutral face: each part of the face at its
+  // calmest frame until the animator names one, here the frame under the playhead.
   check(state.adapter.calibrated && state.take.neutral && state.take.neutral.chosen === 'automatic', `no automatic neutral frame: ${JSON.stringify(state.take.neutral)}`);
   await page.click('#neutral-frame');
   await page.waitForFunction(() => window.studio.capture.view.take.neutral.chosen === 'user', null, { timeout: 30000 });
@@ -225,6 +225,9 @@ try {
   check((await page.textContent('#neutral-info')).includes(`frame ${named} (yours)`), 'the page does not say which frame is neutral');
   await page.click('#neutral-auto');
   await page.waitForFunction(() => window.studio.capture.view.take.neutral.chosen === 'automatic', null, { timeout: 30000 });
+  const automatic = (await captureState()).take.neutral, said = await page.textContent('#neutral-info');
+  check(said.includes(`lids ${automatic.parts.lids}, gaze ${automatic.parts.gaze}, brows ${automatic.parts.brows}, mouth ${automatic.parts.mouth}`)
+    || said.includes(`frame ${automatic.frame} (the calmest)`), `the page does not say where the automatic neutral comes from: ${said} ${JSON.stringify(automatic)}`);
 
   // 7. A training can be cancelled.
   await page.fill('#train-samples', '20000');

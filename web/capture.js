@@ -253,9 +253,17 @@ function showNeutralFrame(v) {
   for (const id of ['neutral-frame', 'neutral-auto']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !calibrated;
   $('neutral-info').textContent = !take || !take.neutral ? ''
     : calibrated
-      ? `Neutral face: frame ${take.neutral.frame} (${take.neutral.chosen === 'user' ? 'yours' : 'the least expressive'}); the adapter reads every frame relative to it.`
+      ? `Neutral face: ${neutralFrames(take.neutral)}; the adapter reads every frame relative to it.`
         + (take.neutral_warning ? ` Warning: ${take.neutral_warning}.` : '')
-      : `Neutral face: frame ${take.neutral.frame} (unused: this estimate does not read faces relative to a neutral one).`;
+      : `Neutral face: ${neutralFrames(take.neutral)} (unused: this estimate does not read faces relative to a neutral one).`;
+}
+/** Where a take's neutral face comes from, in words: the user's frame, or each part's. */
+function neutralFrames(neutral) {
+  if (neutral.chosen === 'user') return `frame ${neutral.frame} (yours)`;
+  const p = neutral.parts;
+  return p.lids === p.mouth && p.gaze === p.mouth && p.brows === p.mouth
+    ? `frame ${p.mouth} (the calmest)`
+    : `each part at its calmest frame (lids ${p.lids}, gaze ${p.gaze}, brows ${p.brows}, mouth ${p.mouth})`;
 }
 $('neutral-frame').onclick = () => post('api/capture/neutral', { frame: shownFrameIndex() });
 $('neutral-auto').onclick = () => post('api/capture/neutral', { frame: null });

@@ -13,7 +13,7 @@
 //! The expression itself ([`Expression`]) belongs to `faceanim-take`, which estimators and
 //! sessions share; this module only chooses what of it the adapter reads.
 
-pub use faceanim_take::expression::{Expression, LANDMARK_COORDINATES, SCORES};
+pub use faceanim_take::expression::{Expression, LANDMARK_COORDINATES, RIGID, SCORES, rigid_frame};
 use serde::{Deserialize, Serialize};
 
 /// Which features feed the adapter.
@@ -117,48 +117,6 @@ impl LandmarkFrame {
     }
 }
 
-/// MediaPipe's landmarks (indices into the 478) that place [`LandmarkFrame::Rigid`]: the nose
-/// from bridge to tip, the eyes' inner and outer corners, the forehead and the temples. All are
-/// among the blendshape model's landmarks.
-pub const RIGID: [usize; 26] = [
-    1, 4, 5, 6, 168, 195, 197, 133, 362, 33, 263, 10, 21, 54, 103, 67, 109, 251, 284, 332, 297,
-    338, 127, 234, 356, 454,
-];
-
-/// `landmarks` (an [`Expression`]'s, three coordinates each) moved and scaled so that the
-/// [`RIGID`] ones are centred at the origin with unit spread. A similarity of the whole-face
-/// frame, so it can be applied to features recorded in it.
-#[must_use]
-pub fn rigid_frame(landmarks: &[f32]) -> Vec<f32> {
-    let point = |k: usize| {
-        landmarks
-            .get(3 * k..3 * k + 3)
-            .map_or(glam::Vec3::ZERO, glam::Vec3::from_slice)
-    };
-    let rigid: Vec<glam::Vec3> = faceanim_track::BLENDSHAPE_LANDMARKS
-        .iter()
-        .enumerate()
-        .filter(|(_, l)| RIGID.contains(l))
-        .map(|(k, _)| point(k))
-        .collect();
-    let centre = rigid.iter().copied().sum::<glam::Vec3>() / rigid.len().max(1) as f32;
-    let spread = (rigid
-        .iter()
-        .map(|p| (*p - centre).length_squared())
-        .sum::<f32>()
-        / rigid.len().max(1) as f32)
-        .sqrt();
-    let scale = if spread > f32::EPSILON {
-        1.0 / spread
-    } else {
-        1.0
-    };
-    landmarks
-        .chunks_exact(3)
-        .flat_map(|p| ((glam::Vec3::from_slice(p) - centre) * scale).to_array())
-        .collect()
-}
-
 /// Whether the adapter reads a face as it is or relative to a neutral face of the same source.
 ///
 /// The seed's expression space is relative to a neutral face; MediaPipe's features are not:
@@ -200,46 +158,5 @@ impl Calibration {
             input.iter_mut().zip(neutral).for_each(|(v, n)| *v -= n);
         }
         input
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_rigid_frame_ignores_where_the_face_was_placed_and_how_big_it_was() {
-        let landmarks: Vec<f32> = (0..LANDMARK_COORDINATES)
-            .map(|k| ((k * 37) % 101) as f32 / 50.0 - 1.0)
-            .collect();
-        let moved: Vec<f32> = landmarks
-            .iter()
-            .enumerate()
-            .map(|(k, v)| 2.5 * v + [0.3, -1.0, 0.7][k % 3])
-            .collect();
-        for (a, b) in rigid_frame(&landmarks).iter().zip(rigid_frame(&moved)) {
-            assert!((a - b).abs() < 1e-4, "{a} {b}");
-        }
-    }
-
-    #[test]
-    fn an_open_jaw_moves_no_eye_landmark_in_the_rigid_frame() {
-        let landmarks: Vec<f32> = (0..LANDMARK_COORDINATES)
-            .map(|k| ((k * 53) % 97) as f32 / 40.0 - 1.0)
-            .collect();
-        // The chin and lower lip drop; nothing else moves.
-        let jaw = [17, 14, 152, 148, 176, 377, 400, 84, 314];
-        let mut open = landmarks.clone();
-        for (k, l) in faceanim_track::BLENDSHAPE_LANDMARKS.iter().enumerate() {
-            if jaw.contains(l) {
-                open[3 * k + 1] -= 0.8;
-            }
-        }
-        let (before, after) = (rigid_frame(&landmarks), rigid_frame(&open));
-        let eye = faceanim_track::BLENDSHAPE_LANDMARKS
-            .iter()
-            .position(|l| *l == 145)
-            .unwrap_or(0);
-        assert!((before[3 * eye + 1] - after[3 * eye + 1]).abs() < 1e-6);
     }
 }

@@ -15,9 +15,9 @@
 //!
 //! Weights are given by blendshape name (names left out are 0) or as an array in the
 //! character's blendshape order. `neutral` (optional) is a picture of the neutral face under
-//! the same camera and light; without it the least expressive still is the neutral, as for a
-//! take. Every picture goes through capture as a photo does (the detector on each, no temporal
-//! filter).
+//! the same camera and light; without it each part of the face (lids, gaze, brows, mouth) is
+//! taken from the still where it is calmest, as for a take. Every picture goes through capture
+//! as a photo does (the detector on each, no temporal filter).
 
 use std::path::{Path, PathBuf};
 
@@ -57,8 +57,9 @@ pub struct HeldOut {
 pub enum NeutralSource {
     /// The folder's neutral picture.
     Given,
-    /// The least expressive still.
-    LeastExpressive,
+    /// Each part of the face from the still where it is calmest
+    /// ([`faceanim_take::expression::rest_face`]).
+    Calmest,
     /// Fewer than two stills had a face: the adapter's typical neutral was used.
     Typical,
 }
@@ -218,8 +219,11 @@ impl HeldOut {
             None => {
                 let faces: Vec<Option<&Expression>> =
                     expressions.iter().map(Option::as_ref).collect();
-                match faceanim_take::expression::least_expressive(&faces) {
-                    Some(k) => (faces[k].cloned(), NeutralSource::LeastExpressive),
+                match faceanim_take::expression::calmest_parts(&faces) {
+                    Some(parts) => (
+                        faceanim_take::expression::rest_face(&faces, parts),
+                        NeutralSource::Calmest,
+                    ),
                     None => (None, NeutralSource::Typical),
                 }
             }

@@ -87,7 +87,7 @@ pub enum SessionAction {
 /// A frame number or `auto`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NeutralFrame {
-    /// The least expressive frame.
+    /// Each part of the face at its calmest frame.
     Auto,
     /// This frame.
     Frame(usize),
@@ -149,7 +149,7 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
                 );
                 println!("keyframes: {:?}", session.keyframes());
                 if let Some(n) = session.neutral() {
-                    println!("neutral: frame {} ({:?})", n.frame, n.chosen);
+                    println!("neutral: {} ({:?})", n.parts, n.chosen);
                 }
                 for (frame, values) in &session.edits.corrections {
                     let list: Vec<String> =

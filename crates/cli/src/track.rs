@@ -209,11 +209,11 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         && let Some(n) = neutral
     {
         eprintln!(
-            "neutral face: frame {} ({}){}",
-            n.frame,
+            "neutral face: {} ({}){}",
+            n.parts,
             match n.chosen {
                 faceanim_take::NeutralChoice::User => "--neutral-frame",
-                faceanim_take::NeutralChoice::Automatic => "the least expressive",
+                faceanim_take::NeutralChoice::Automatic => "each part of the face at its calmest",
             },
             if n.chosen == faceanim_take::NeutralChoice::Automatic {
                 "; give --neutral-frame N if another frame is more neutral"

@@ -118,7 +118,8 @@ fn adapt_then_track_correct_and_fine_tune() {
     assert_eq!(printed["frames"], 24);
     assert_eq!(
         printed["neutral"],
-        serde_json::json!({"frame": 0, "chosen": "user"})
+        serde_json::json!({"frame": 0, "chosen": "user",
+            "parts": {"lids": 0, "gaze": 0, "brows": 0, "mouth": 0}})
     );
     assert!(printed["adapter_ms_per_frame"].as_f64().unwrap() < 5.0);
     let clip = read_json(&clip_path);
@@ -161,10 +162,11 @@ fn adapt_then_track_correct_and_fine_tune() {
     assert_eq!(keys, vec![0, 5, 7, 10, 15, 20, 23]);
     assert_eq!(
         shown["neutral"],
-        serde_json::json!({"frame": 0, "chosen": "user"})
+        serde_json::json!({"frame": 0, "chosen": "user",
+            "parts": {"lids": 0, "gaze": 0, "brows": 0, "mouth": 0}})
     );
     // Saying the open-mouthed frame 11 is neutral reads every other frame against it: frame
-    // 11 itself becomes rest. `auto` goes back to the least expressive frame, a shut one.
+    // 11 itself becomes rest. `auto` goes back to each part's calmest frame: the mouth's is a shut one.
     faceanim_ok(&[
         "session",
         session_arg,
@@ -176,7 +178,8 @@ fn adapt_then_track_correct_and_fine_tune() {
     let shown = show(session_arg);
     assert_eq!(
         shown["neutral"],
-        serde_json::json!({"frame": 11, "chosen": "user"})
+        serde_json::json!({"frame": 11, "chosen": "user",
+            "parts": {"lids": 11, "gaze": 11, "brows": 11, "mouth": 11}})
     );
     let against_open = dir.path().join("against-open.json");
     faceanim_ok(&[

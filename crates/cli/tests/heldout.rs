@@ -22,6 +22,9 @@
 //!   on `cap13_edit2`); each shape reading only what it moves (`faceanim_adapt::locality`)
 //!   reads +0.3 to +0.8 there.
 //!
+//! Each video is read against its automatic neutral face, as `faceanim track` reads any take:
+//! each part of the face (lids, gaze, brows, mouth) at its own calmest frame.
+//!
 //! Every still goes through capture as a photo does (the detector on each, no temporal filter).
 //! The numbers are printed and kept in `test-output/heldout/summary.json`.
 #![allow(
@@ -277,21 +280,28 @@ fn an_adapter_reads_people_and_renderers_it_never_saw() {
         mae < baseline / 2.0,
         "held-out MAE {mae} against the mean's {baseline}"
     );
-    // Without the neutral picture the least expressive of these random poses stands in, which
-    // is not quite neutral: still well under the mean pose's error.
+    // Without the neutral picture each part of the face is taken from the pose where it is
+    // calmest, as for a take, which is not quite neutral: 0.0902, where the least expressive
+    // pose as a whole gave 0.0931; well under the mean pose's error.
     let auto = heldout[3]["mae"].as_f64().unwrap();
     assert!(auto < 0.6 * baseline, "held-out MAE without neutral {auto}");
+    assert!(auto <= 0.0925, "held-out MAE without neutral {auto}");
     for (e, bar) in heldout.iter().zip([0.08, 0.085]) {
         let mae = e["mae"].as_f64().unwrap();
         assert!(mae <= bar, "{mae}: {e}");
     }
     // Real people: every channel MediaPipe moves on each video. The issue asks for a mean of
-    // 0.85 on cap12_edit; ICT's squint is not MediaPipe's (see the module's docs) and holds
-    // the mean under it (0.81; 0.90 without the two squints; the seed's network gave 0.66).
-    // The two other videos were in no choice: 0.72 and 0.70 (the seed's network: 0.57 and
-    // 0.60); their weak channels are browDown, which MediaPipe does not see on the character
-    // at all, and mouthRollLower. These bars keep what holds from slipping: most channels
-    // follow, and every channel MediaPipe sees on the character does, the squints too.
+    // 0.85 on cap12_edit: 0.86, read against each part of the face at its calmest frame (0.81
+    // against the least expressive frame as a whole, which had to be calm everywhere at once:
+    // its lids were not at their widest — MediaPipe's blink 0.08 there, 0.02 in the lids' own
+    // calmest frame — and most of the man's lid movement read as less than nothing against
+    // it; the seed's network gave 0.66). ICT's squint is not MediaPipe's (see the module's docs)
+    // and is the weakest there. The two other videos came in no choice of the training: 0.70
+    // and 0.70 (against the least expressive frame 0.72 and 0.70; the seed's network 0.57
+    // and 0.60); their weak channels are browDown, which MediaPipe does not see on the
+    // character at all, and mouthRollLower. These bars keep what holds from slipping: most
+    // channels follow, and every channel MediaPipe sees on the character does, the squints
+    // too.
     for (footage, bar) in &footage {
         let channels = footage["channels"].as_object().unwrap();
         let what = bar.video.file;
@@ -334,7 +344,7 @@ const FOOTAGE: [FootageBar; 3] = [
     FootageBar {
         video: CAP12,
         channels: 9,
-        mean: 0.75,
+        mean: 0.83,
         astray: 2,
     },
     FootageBar {

@@ -1012,14 +1012,14 @@ fn a_vrm_avatars_download_is_a_vrm() {
     assert!(json["extensions"]["VRMC_vrm"].is_object(), "still a VRM");
 }
 
-/// The neutral face: a take's is its least expressive frame until the user says which is
-/// neutral (kept with the take); live, Calibrate takes the next face, and a face held still
+/// The neutral face: a take's is each part of the face at its calmest frame until the user
+/// says which is neutral (kept with the take); live, Calibrate takes the next face, and a face held still
 /// becomes the neutral on its own.
 #[test]
 fn the_neutral_face_of_a_take_and_of_the_live_webcam() {
     let dir = tempfile::tempdir().unwrap();
     let video = dir.path().join("jaw.mp4");
-    // Open, then shut: the shut frames are the least expressive.
+    // Open, then shut: the mouth is calmest in the shut frames.
     let jaw: Vec<f32> = (0..10).map(|i| 0.8 * (1.0 - i as f32 / 9.0)).collect();
     support::encode_h264(&video, 256, 24, &support::ict_jaw_frames(&jaw, 256));
     let project = dir.path().join("neutral.faceanim.json");
@@ -1029,6 +1029,7 @@ fn the_neutral_face_of_a_take_and_of_the_live_webcam() {
     let neutral = &state["take"]["neutral"];
     assert_eq!(neutral["chosen"], "automatic", "{neutral}");
     assert!(neutral["frame"].as_u64().unwrap() >= 7, "{neutral}");
+    assert_eq!(neutral["frame"], neutral["parts"]["mouth"], "{neutral}");
     let (status, body) = request(
         studio.port,
         "POST",
@@ -1049,7 +1050,8 @@ fn the_neutral_face_of_a_take_and_of_the_live_webcam() {
     let state: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert_eq!(
         state["take"]["neutral"],
-        serde_json::json!({"frame": 6, "chosen": "user"})
+        serde_json::json!({"frame": 6, "chosen": "user",
+            "parts": {"lids": 6, "gaze": 6, "brows": 6, "mouth": 6}})
     );
     drop(studio);
     let studio = start(&project);

@@ -375,7 +375,7 @@ async fn preference(State(both): State<Both>, body: Bytes) -> Answer<CaptureView
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct NeutralFrame {
-    /// The frame, or `null` for the least expressive one.
+    /// The frame, or `null` for each part of the face at its calmest frame.
     frame: Option<usize>,
 }
 

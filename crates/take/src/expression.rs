@@ -57,23 +57,255 @@ impl Expression {
     }
 }
 
-/// The frame whose face is nearest to rest (least [`Expression::energy`]), the automatic
-/// neutral of a take; `None` when fewer than two frames have a face (a single picture is not
-/// read against itself: an adapter then uses the neutral face typical of its training).
+/// The parts of a face that come to rest on their own. A person seldom has every part at rest
+/// in the same frame (the eyes wide open while the mouth is mid-word, the brows up while
+/// listening, the eyes on a screen below the camera), so a take's automatic neutral face takes
+/// each part from the frame where that part is calmest ([`calmest_parts`], [`rest_face`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FacePart {
+    /// The eyelids (blinking, squinting, widening), wherever the eyes look.
+    Lids,
+    /// Where the eyes look: the eyeLook scores and the irises.
+    Gaze,
+    /// The brows.
+    Brows,
+    /// The rest: mouth, jaw, cheeks and nose, and the face's outline.
+    Mouth,
+}
+
+/// MediaPipe's landmarks (indices into the 478) of the two eyelids' contours.
+const LIDS: [usize; 32] = [
+    33, 7, 163, 144, 145, 153, 154, 155, 133, 173, 157, 158, 159, 160, 161, 246, 263, 249, 390,
+    373, 374, 380, 381, 382, 362, 398, 384, 385, 386, 387, 388, 466,
+];
+/// MediaPipe's landmarks of the two brows.
+const BROWS: [usize; 20] = [
+    46, 52, 53, 55, 63, 65, 66, 70, 105, 107, 276, 282, 283, 285, 293, 295, 296, 300, 334, 336,
+];
+/// MediaPipe's iris landmarks (centre and four points, each eye).
+const IRISES: std::ops::RangeInclusive<usize> = 468..=477;
+
+impl FacePart {
+    /// Every part.
+    pub const ALL: [FacePart; 4] = [
+        FacePart::Lids,
+        FacePart::Gaze,
+        FacePart::Brows,
+        FacePart::Mouth,
+    ];
+
+    /// The part MediaPipe's score `name` (one of [`faceanim_track::BLENDSHAPE_NAMES`]) belongs
+    /// to.
+    #[must_use]
+    pub fn of_score(name: &str) -> FacePart {
+        if name.starts_with("eyeLook") {
+            FacePart::Gaze
+        } else if name.starts_with("eye") {
+            FacePart::Lids
+        } else if name.starts_with("brow") {
+            FacePart::Brows
+        } else {
+            FacePart::Mouth
+        }
+    }
+
+    /// The part MediaPipe's landmark `index` (into the 478) belongs to.
+    #[must_use]
+    pub fn of_landmark(index: usize) -> FacePart {
+        if IRISES.contains(&index) {
+            FacePart::Gaze
+        } else if LIDS.contains(&index) {
+            FacePart::Lids
+        } else if BROWS.contains(&index) {
+            FacePart::Brows
+        } else {
+            FacePart::Mouth
+        }
+    }
+
+    /// How far this part of `expression` is from rest: the sum of its ARKit scores (MediaPipe's
+    /// `_neutral` left out), as [`Expression::energy`] sums the whole face's.
+    #[must_use]
+    pub fn energy(self, expression: &Expression) -> f32 {
+        faceanim_track::BLENDSHAPE_NAMES
+            .iter()
+            .zip(&expression.scores)
+            .skip(1)
+            .filter(|(name, _)| FacePart::of_score(name) == self)
+            .map(|(_, s)| s.clamp(0.0, 1.0))
+            .sum()
+    }
+}
+
+/// The frame each [`FacePart`] of a neutral face comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PartFrames {
+    /// The eyelids' frame.
+    pub lids: usize,
+    /// The gaze's frame.
+    pub gaze: usize,
+    /// The brows' frame.
+    pub brows: usize,
+    /// The mouth's (and the rest of the face's) frame.
+    pub mouth: usize,
+}
+
+impl PartFrames {
+    /// Every part from `frame`.
+    #[must_use]
+    pub fn all(frame: usize) -> PartFrames {
+        PartFrames {
+            lids: frame,
+            gaze: frame,
+            brows: frame,
+            mouth: frame,
+        }
+    }
+
+    /// The frame of `part`.
+    #[must_use]
+    pub fn of(self, part: FacePart) -> usize {
+        match part {
+            FacePart::Lids => self.lids,
+            FacePart::Gaze => self.gaze,
+            FacePart::Brows => self.brows,
+            FacePart::Mouth => self.mouth,
+        }
+    }
+
+    /// Whether every part comes from the same frame.
+    #[must_use]
+    pub fn is_one_frame(self) -> bool {
+        FacePart::ALL.iter().all(|p| self.of(*p) == self.mouth)
+    }
+}
+
+impl std::fmt::Display for PartFrames {
+    /// `frame N` when every part comes from it, else `lids 3, gaze 9, brows 3, mouth 12`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.is_one_frame() {
+            write!(f, "frame {}", self.mouth)
+        } else {
+            write!(
+                f,
+                "lids {}, gaze {}, brows {}, mouth {}",
+                self.lids, self.gaze, self.brows, self.mouth
+            )
+        }
+    }
+}
+
+/// Each [`FacePart`]'s calmest frame among `expressions` (least [`FacePart::energy`]; the
+/// earliest of equals), the automatic neutral of a take; `None` when fewer than two frames
+/// have a face (a single picture is not read against itself: an adapter then uses the neutral
+/// face typical of its training).
 #[must_use]
-pub fn least_expressive(expressions: &[Option<&Expression>]) -> Option<usize> {
-    let faces: Vec<(usize, f32)> = expressions
-        .iter()
-        .enumerate()
-        .filter_map(|(k, e)| e.map(|e| (k, e.energy())))
-        .collect();
-    if faces.len() < 2 {
+pub fn calmest_parts(expressions: &[Option<&Expression>]) -> Option<PartFrames> {
+    if expressions.iter().flatten().count() < 2 {
         return None;
     }
-    faces
-        .into_iter()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(k, _)| k)
+    let calmest = |part: FacePart| {
+        expressions
+            .iter()
+            .enumerate()
+            .filter_map(|(k, e)| e.map(|e| (k, part.energy(e))))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |(k, _)| k)
+    };
+    Some(PartFrames {
+        lids: calmest(FacePart::Lids),
+        gaze: calmest(FacePart::Gaze),
+        brows: calmest(FacePart::Brows),
+        mouth: calmest(FacePart::Mouth),
+    })
+}
+
+/// The neutral face made of each part of `expressions` at its frame in `parts`: scores and
+/// landmarks of a part from that part's frame, the landmarks moved onto the mouth's frame by
+/// the similarity that takes their own frame's [`RIGID`] landmarks onto the mouth frame's (the
+/// pose-normalised landmarks of two frames are placed by the whole face, which an open jaw
+/// shifts). `None` when a part's frame has no face.
+#[must_use]
+pub fn rest_face(expressions: &[Option<&Expression>], parts: PartFrames) -> Option<Expression> {
+    let face = |part: FacePart| expressions.get(parts.of(part)).copied().flatten();
+    let base = face(FacePart::Mouth)?;
+    if parts.is_one_frame() {
+        return Some(base.clone());
+    }
+    let (base_centre, base_spread) = rigid_placement(&base.landmarks);
+    let mut rest = base.clone();
+    for part in [FacePart::Lids, FacePart::Gaze, FacePart::Brows] {
+        let from = face(part)?;
+        for ((name, slot), score) in faceanim_track::BLENDSHAPE_NAMES
+            .iter()
+            .zip(&mut rest.scores)
+            .zip(&from.scores)
+        {
+            if FacePart::of_score(name) == part {
+                *slot = *score;
+            }
+        }
+        let (centre, spread) = rigid_placement(&from.landmarks);
+        let scale = base_spread / spread;
+        for ((landmark, slot), point) in BLENDSHAPE_LANDMARKS
+            .iter()
+            .zip(rest.landmarks.chunks_exact_mut(3))
+            .zip(from.landmarks.chunks_exact(3))
+        {
+            if FacePart::of_landmark(*landmark) == part {
+                let moved = (glam::Vec3::from_slice(point) - centre) * scale + base_centre;
+                slot.copy_from_slice(&moved.to_array());
+            }
+        }
+    }
+    Some(rest)
+}
+
+/// MediaPipe's landmarks (indices into the 478) that expressions hardly move: the nose from
+/// bridge to tip, the eyes' inner and outer corners, the forehead and the temples. All are
+/// among the blendshape model's landmarks. They place a face's landmarks by its rigid part
+/// ([`rigid_frame`]).
+pub const RIGID: [usize; 26] = [
+    1, 4, 5, 6, 168, 195, 197, 133, 362, 33, 263, 10, 21, 54, 103, 67, 109, 251, 284, 332, 297,
+    338, 127, 234, 356, 454,
+];
+
+/// The centre and the root mean square spread of the [`RIGID`] landmarks among `landmarks`
+/// (an [`Expression`]'s, three coordinates each); a spread of 1 where they have none.
+fn rigid_placement(landmarks: &[f32]) -> (glam::Vec3, f32) {
+    let point = |k: usize| {
+        landmarks
+            .get(3 * k..3 * k + 3)
+            .map_or(glam::Vec3::ZERO, glam::Vec3::from_slice)
+    };
+    let rigid: Vec<glam::Vec3> = BLENDSHAPE_LANDMARKS
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| RIGID.contains(l))
+        .map(|(k, _)| point(k))
+        .collect();
+    let centre = rigid.iter().copied().sum::<glam::Vec3>() / rigid.len().max(1) as f32;
+    let spread = (rigid
+        .iter()
+        .map(|p| (*p - centre).length_squared())
+        .sum::<f32>()
+        / rigid.len().max(1) as f32)
+        .sqrt();
+    (centre, if spread > f32::EPSILON { spread } else { 1.0 })
+}
+
+/// `landmarks` (an [`Expression`]'s, three coordinates each) moved and scaled so that the
+/// [`RIGID`] ones are centred at the origin with unit spread. A similarity of the whole-face
+/// frame, so it can be applied to features recorded in it.
+#[must_use]
+pub fn rigid_frame(landmarks: &[f32]) -> Vec<f32> {
+    let (centre, spread) = rigid_placement(landmarks);
+    let scale = 1.0 / spread;
+    landmarks
+        .chunks_exact(3)
+        .flat_map(|p| ((glam::Vec3::from_slice(p) - centre) * scale).to_array())
+        .collect()
 }
 
 /// The blendshape model's landmarks with the pose removed: into a y-up frame, centred on the
@@ -114,6 +346,155 @@ pub fn normalised_landmarks(landmarks: &[[f32; 3]], head: Option<[f32; 3]>) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A made-up face's landmarks as an [`Expression`] stores them (the blendshape model's
+    /// 146, three coordinates each), deterministic.
+    fn landmarks() -> Vec<f32> {
+        (0..LANDMARK_COORDINATES)
+            .map(|k| ((k * 53) % 97) as f32 / 40.0 - 1.0)
+            .collect()
+    }
+
+    /// The landmark positions (into the 146) of one part.
+    fn of_part(part: FacePart) -> Vec<usize> {
+        (0..BLENDSHAPE_LANDMARKS.len())
+            .filter(|k| FacePart::of_landmark(BLENDSHAPE_LANDMARKS[*k]) == part)
+            .collect()
+    }
+
+    fn score(name: &str) -> usize {
+        faceanim_track::BLENDSHAPE_NAMES
+            .iter()
+            .position(|n| *n == name)
+            .unwrap()
+    }
+
+    #[test]
+    fn every_score_and_landmark_belongs_to_its_part() {
+        let part = |name: &str| FacePart::of_score(name);
+        assert_eq!(part("eyeBlinkLeft"), FacePart::Lids);
+        assert_eq!(part("eyeSquintRight"), FacePart::Lids);
+        assert_eq!(part("eyeWideLeft"), FacePart::Lids);
+        assert_eq!(part("eyeLookDownRight"), FacePart::Gaze);
+        assert_eq!(part("browInnerUp"), FacePart::Brows);
+        for mouth in [
+            "jawOpen",
+            "mouthSmileLeft",
+            "cheekSquintLeft",
+            "noseSneerRight",
+        ] {
+            assert_eq!(part(mouth), FacePart::Mouth, "{mouth}");
+        }
+        // Both eyes' lids, irises and brows, all among the blendshape model's landmarks.
+        let counts = FacePart::ALL.map(|p| of_part(p).len());
+        assert_eq!(counts[..3], [32, 10, 20], "{counts:?}");
+        assert_eq!(counts.iter().sum::<usize>(), BLENDSHAPE_LANDMARKS.len());
+    }
+
+    /// Frame 0 has its eyes half shut and its mouth at rest; frame 1 its eyes open and its jaw
+    /// open, which moves the whole-face frame its landmarks are stored in (a shift and a
+    /// scale). The neutral face takes the open lids of frame 1, placed where they belong in
+    /// frame 0, and frame 0's mouth.
+    #[test]
+    fn each_part_of_the_neutral_face_comes_from_its_calmest_frame() {
+        let face = landmarks();
+        let (lids, mouth) = (of_part(FacePart::Lids), of_part(FacePart::Mouth));
+        let (blink, jaw) = (score("eyeBlinkLeft"), score("jawOpen"));
+        let mut shut = Expression {
+            scores: vec![0.0; SCORES],
+            landmarks: face.clone(),
+        };
+        shut.scores[blink] = 0.6;
+        // The lids close between the eyes' corners, which stay.
+        for &k in lids
+            .iter()
+            .filter(|k| !RIGID.contains(&BLENDSHAPE_LANDMARKS[**k]))
+        {
+            shut.landmarks[3 * k + 1] -= 0.05;
+        }
+        let mut open = Expression {
+            scores: vec![0.0; SCORES],
+            landmarks: face.clone(),
+        };
+        open.scores[jaw] = 0.7;
+        let chin = mouth
+            .iter()
+            .copied()
+            .filter(|k| !RIGID.contains(&BLENDSHAPE_LANDMARKS[*k]));
+        for k in chin.clone() {
+            open.landmarks[3 * k + 1] -= 0.3;
+        }
+        // Stored relative to a centre the open jaw lowered, and a spread it widened.
+        open.landmarks = open
+            .landmarks
+            .chunks_exact(3)
+            .flat_map(|p| {
+                ((glam::Vec3::from_slice(p) - glam::Vec3::new(0.0, -0.1, 0.0)) / 1.2).to_array()
+            })
+            .collect();
+        let faces = [Some(&shut), Some(&open)];
+        let parts = calmest_parts(&faces).unwrap();
+        assert_eq!(
+            parts,
+            PartFrames {
+                lids: 1,
+                gaze: 0,
+                brows: 0,
+                mouth: 0
+            }
+        );
+        assert_eq!(parts.to_string(), "lids 1, gaze 0, brows 0, mouth 0");
+        let rest = rest_face(&faces, parts).unwrap();
+        assert_eq!((rest.scores[blink], rest.scores[jaw]), (0.0, 0.0));
+        let worst = (0..BLENDSHAPE_LANDMARKS.len())
+            .flat_map(|k| (0..3).map(move |c| 3 * k + c))
+            .map(|i| (rest.landmarks[i] - face[i]).abs())
+            .fold(0.0, f32::max);
+        assert!(worst < 1e-5, "the rest face is off by {worst}");
+
+        // One frame is not read against itself; a frame without a face is never chosen.
+        assert_eq!(calmest_parts(&[Some(&shut), None]), None);
+        let parts = calmest_parts(&[None, Some(&open), Some(&shut)]).unwrap();
+        assert_eq!((parts.lids, parts.mouth), (1, 2));
+        assert_eq!(PartFrames::all(4).to_string(), "frame 4");
+        assert_eq!(rest_face(&faces, PartFrames::all(1)).unwrap(), open);
+    }
+
+    #[test]
+    fn the_rigid_frame_ignores_where_the_face_was_placed_and_how_big_it_was() {
+        let landmarks: Vec<f32> = (0..LANDMARK_COORDINATES)
+            .map(|k| ((k * 37) % 101) as f32 / 50.0 - 1.0)
+            .collect();
+        let moved: Vec<f32> = landmarks
+            .iter()
+            .enumerate()
+            .map(|(k, v)| 2.5 * v + [0.3, -1.0, 0.7][k % 3])
+            .collect();
+        for (a, b) in rigid_frame(&landmarks).iter().zip(rigid_frame(&moved)) {
+            assert!((a - b).abs() < 1e-4, "{a} {b}");
+        }
+    }
+
+    #[test]
+    fn an_open_jaw_moves_no_eye_landmark_in_the_rigid_frame() {
+        let landmarks: Vec<f32> = (0..LANDMARK_COORDINATES)
+            .map(|k| ((k * 53) % 97) as f32 / 40.0 - 1.0)
+            .collect();
+        // The chin and lower lip drop; nothing else moves.
+        let jaw = [17, 14, 152, 148, 176, 377, 400, 84, 314];
+        let mut open = landmarks.clone();
+        for (k, l) in BLENDSHAPE_LANDMARKS.iter().enumerate() {
+            if jaw.contains(l) {
+                open[3 * k + 1] -= 0.8;
+            }
+        }
+        let (before, after) = (rigid_frame(&landmarks), rigid_frame(&open));
+        let eye = BLENDSHAPE_LANDMARKS
+            .iter()
+            .position(|l| *l == 145)
+            .unwrap_or(0);
+        assert!((before[3 * eye + 1] - after[3 * eye + 1]).abs() < 1e-6);
+    }
 
     #[test]
     fn turning_moving_and_scaling_a_face_leaves_its_features() {

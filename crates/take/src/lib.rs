@@ -11,8 +11,8 @@
 //!   corrections, preference, smoothing), kept in a JSON file; the animation is derived.
 //! - [`take`]: a session being edited with undo and redo, and [`Take::from_capture`].
 //! - [`calibration`]: a live performer's neutral face (Calibrate, or a face held still); a
-//!   take's is its least expressive frame or the one the user names
-//!   ([`Session::set_neutral`]).
+//!   take's is made of each part of the face at its calmest frame, or is the frame the user
+//!   names ([`Session::set_neutral`]).
 //! - [`layer`]: the one rule that puts a sketch over a take.
 //!
 //! ```

@@ -15,7 +15,7 @@ use faceanim_anim::filter::OneEuro;
 use serde::{Deserialize, Serialize};
 
 use crate::estimator::Estimator;
-use crate::expression::Expression;
+use crate::expression::{Expression, PartFrames};
 use crate::{Fingerprint, TakeError};
 
 /// One frame of a session.
@@ -152,7 +152,7 @@ pub struct Session {
     pub fps: f32,
     /// The frames.
     pub frames: Vec<SessionFrame>,
-    /// The frame the user said is neutral (`None`: the least expressive one, see
+    /// The frame the user said is neutral (`None`: each part at its calmest frame, see
     /// [`Session::neutral`]).
     pub neutral: Option<usize>,
     /// What the user changed.
@@ -169,13 +169,17 @@ pub enum NeutralChoice {
     User,
 }
 
-/// The frame a take's faces are read relative to.
+/// The neutral face a take's faces are read relative to: the frame the user named, or each
+/// part of the face at its own calmest frame ([`crate::expression::calmest_parts`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct Neutral {
-    /// Its index.
+    /// The user's frame; automatically, the calmest frame of the mouth (and the rest of the
+    /// face that is neither lids, gaze nor brows).
     pub frame: usize,
     /// Who chose it.
     pub chosen: NeutralChoice,
+    /// The frame each part of the face comes from (all `frame` when the user chose it).
+    pub parts: PartFrames,
 }
 
 /// A neutral face that reads as an expression: what an estimate makes of the neutral frame
@@ -192,7 +196,9 @@ pub struct NeutralCheck {
     pub frame: usize,
     /// Who chose it.
     pub chosen: NeutralChoice,
-    /// The shapes the frame reads on its own, with their weights, strongest first.
+    /// The frame each part of the neutral face comes from.
+    pub parts: PartFrames,
+    /// The shapes the neutral face reads on its own, with their weights, strongest first.
     pub expressive: Vec<(String, f32)>,
 }
 
@@ -218,9 +224,9 @@ impl NeutralCheck {
             .collect();
         Some(match self.chosen {
             NeutralChoice::Automatic => format!(
-                "no frame of this take looks clearly neutral: the least expressive, frame {}, reads {}; \
+                "no frame of this take looks clearly neutral: its calmest face ({}) reads {}; \
                  mark a relaxed frame as the neutral one, or record a second of a relaxed face",
-                self.frame,
+                self.parts,
                 reads.join(", ")
             ),
             NeutralChoice::User => format!(
@@ -343,22 +349,27 @@ impl Session {
         }
     }
 
-    /// The frame faces are read relative to: the user's, else the least expressive frame
-    /// with a face; `None` when no frame has one.
+    /// The neutral face faces are read relative to: the user's frame, else each part of the
+    /// face at its calmest frame with a face; `None` when fewer than two frames have one.
     #[must_use]
     pub fn neutral(&self) -> Option<Neutral> {
         if let Some(frame) = self.neutral {
             return Some(Neutral {
                 frame,
                 chosen: NeutralChoice::User,
+                parts: PartFrames::all(frame),
             });
         }
-        let expressions: Vec<Option<&Expression>> =
-            self.frames.iter().map(|f| f.expression.as_ref()).collect();
-        crate::expression::least_expressive(&expressions).map(|frame| Neutral {
-            frame,
+        crate::expression::calmest_parts(&self.expressions()).map(|parts| Neutral {
+            frame: parts.mouth,
             chosen: NeutralChoice::Automatic,
+            parts,
         })
+    }
+
+    /// Every frame's expression (`None` without a face).
+    fn expressions(&self) -> Vec<Option<&Expression>> {
+        self.frames.iter().map(|f| f.expression.as_ref()).collect()
     }
 
     /// How neutral the neutral frame looks to `estimator`, which reads it on its own (see
@@ -370,8 +381,8 @@ impl Session {
             return None;
         }
         let neutral = self.neutral()?;
-        let expression = self.frames.get(neutral.frame)?.expression.as_ref()?;
-        let reading = estimator.estimate(expression, None);
+        let expression = crate::expression::rest_face(&self.expressions(), neutral.parts)?;
+        let reading = estimator.estimate(&expression, None);
         let mut expressive: Vec<(String, f32)> = self
             .blendshapes
             .iter()
@@ -383,14 +394,15 @@ impl Session {
         Some(NeutralCheck {
             frame: neutral.frame,
             chosen: neutral.chosen,
+            parts: neutral.parts,
             expressive,
         })
     }
 
-    /// The neutral frame's expression.
+    /// The neutral face's expression ([`crate::expression::rest_face`] of its parts).
     #[must_use]
-    pub fn neutral_expression(&self) -> Option<&Expression> {
-        self.frames.get(self.neutral()?.frame)?.expression.as_ref()
+    pub fn neutral_expression(&self) -> Option<Expression> {
+        crate::expression::rest_face(&self.expressions(), self.neutral()?.parts)
     }
 
     /// Makes `frame` the neutral one (`None`: back to the automatic choice) and estimates
@@ -725,6 +737,7 @@ impl Session {
     /// with the user's values (frames without a face are skipped).
     #[must_use]
     pub fn corrections_for_training(&self) -> Vec<Correction> {
+        let neutral = self.neutral_expression();
         self.edits
             .corrections
             .iter()
@@ -738,7 +751,7 @@ impl Session {
                 }
                 Some(Correction {
                     expression,
-                    neutral: self.neutral_expression().cloned(),
+                    neutral: neutral.clone(),
                     target,
                 })
             })
@@ -760,9 +773,8 @@ impl Session {
                 ),
             });
         }
-        let expressions: Vec<Option<&Expression>> =
-            self.frames.iter().map(|f| f.expression.as_ref()).collect();
-        let estimates = estimate_frames(&expressions, estimator, self.neutral_expression());
+        let neutral = self.neutral_expression();
+        let estimates = estimate_frames(&self.expressions(), estimator, neutral.as_ref());
         for (frame, estimate) in self.frames.iter_mut().zip(estimates) {
             frame.estimate = estimate;
         }
@@ -1010,6 +1022,11 @@ mod tests {
     }
 
     /// Reads "a" as the first score relative to the neutral's, "b" as the first score itself.
+    /// The score the tests' faces move: jawOpen, one of the mouth's (the part whose calmest
+    /// frame is the neutral's `frame`).
+    const JAW: usize = 25;
+
+    /// Reads [`JAW`] relative to the neutral face's, and as it is.
     struct Relative;
 
     impl Estimator for Relative {
@@ -1019,8 +1036,8 @@ mod tests {
             &NAMES
         }
         fn estimate(&self, e: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
-            let rest = neutral.map_or(0.0, |n| n.scores[1]);
-            vec![(e.scores[1] - rest).clamp(0.0, 1.0), e.scores[1]]
+            let rest = neutral.map_or(0.0, |n| n.scores[JAW]);
+            vec![(e.scores[JAW] - rest).clamp(0.0, 1.0), e.scores[JAW]]
         }
         fn source(&self) -> crate::EstimatorSource {
             crate::EstimatorSource::Adapter
@@ -1031,13 +1048,14 @@ mod tests {
     }
 
     #[test]
-    fn the_neutral_frame_is_the_least_expressive_until_the_user_names_one() {
-        // Frame i's face has its first ARKit score at |i − 3| / 10: frame 3 is at rest;
-        // frame 5 has no face.
+    fn the_neutral_face_is_each_parts_calmest_frame_until_the_user_names_one() {
+        // Frame i's face has its jawOpen at |i − 3| / 10 and its browDownLeft at |i − 6| / 10:
+        // the mouth rests in frame 3, the brows in frame 6; frame 5 has no face.
         let mut s = session(8);
         for (i, frame) in s.frames.iter_mut().enumerate() {
             let mut scores = vec![0.0; crate::expression::SCORES];
-            scores[1] = (i as f32 - 3.0).abs() / 10.0;
+            scores[JAW] = (i as f32 - 3.0).abs() / 10.0;
+            scores[1] = (i as f32 - 6.0).abs() / 10.0;
             frame.expression = (i != 5).then(|| Expression {
                 scores,
                 landmarks: vec![0.0; crate::expression::LANDMARK_COORDINATES],
@@ -1048,8 +1066,21 @@ mod tests {
             (automatic.frame, automatic.chosen),
             (3, NeutralChoice::Automatic)
         );
+        // The lids and the gaze never move: their first frame is as calm as any.
+        assert_eq!(
+            automatic.parts,
+            PartFrames {
+                lids: 0,
+                gaze: 0,
+                brows: 6,
+                mouth: 3
+            }
+        );
+        let rest = s.neutral_expression().unwrap();
+        assert_eq!((rest.scores[JAW], rest.scores[1]), (0.0, 0.0));
         s.set_neutral(Some(7), &Relative).unwrap();
         assert_eq!(s.neutral().unwrap().chosen, NeutralChoice::User);
+        assert_eq!(s.neutral().unwrap().parts, PartFrames::all(7));
         // Frame 0 (0.3) against frame 7 (0.4): below rest, so 0; frame 7 against itself: 0.
         assert_eq!(s.frames[0].estimate, vec![0.0, 0.3]);
         s.set_neutral(None, &Relative).unwrap();
@@ -1079,7 +1110,7 @@ mod tests {
         let mut s = session(4);
         let face = |first: f32| {
             let mut scores = vec![0.0; crate::expression::SCORES];
-            scores[1] = first;
+            scores[JAW] = first;
             Some(Expression {
                 scores,
                 landmarks: vec![0.0; crate::expression::LANDMARK_COORDINATES],
@@ -1090,6 +1121,7 @@ mod tests {
         }
         let check = s.neutral_check(&Relative).unwrap();
         assert_eq!((check.frame, check.chosen), (1, NeutralChoice::Automatic));
+        assert_eq!(check.parts.mouth, 1);
         assert_eq!(
             check.expressive,
             vec![("a".to_owned(), 0.6), ("b".to_owned(), 0.6)]
@@ -1100,7 +1132,7 @@ mod tests {
             "{warning}"
         );
         assert!(
-            warning.contains("frame 1") && warning.contains("a 0.60, b 0.60"),
+            warning.contains("mouth 1") && warning.contains("a 0.60, b 0.60"),
             "{warning}"
         );
 

@@ -122,9 +122,10 @@ impl Take {
         let expressions: Vec<Option<Expression>> =
             records.iter().map(Expression::from_record).collect();
         let faces: Vec<Option<&Expression>> = expressions.iter().map(Option::as_ref).collect();
-        // A new take is read relative to its least expressive frame until the user picks one.
-        let neutral = crate::expression::least_expressive(&faces).and_then(|k| faces[k]);
-        let estimates = estimate_frames(&faces, estimator, neutral);
+        // A new take is read relative to its parts' calmest frames until the user picks one.
+        let neutral = crate::expression::calmest_parts(&faces)
+            .and_then(|parts| crate::expression::rest_face(&faces, parts));
+        let estimates = estimate_frames(&faces, estimator, neutral.as_ref());
         let frames = records
             .iter()
             .zip(expressions)

@@ -515,8 +515,8 @@ impl CaptureDesk {
         Ok(())
     }
 
-    /// Makes `frame` the take's neutral one (`None`: the least expressive) and estimates every
-    /// frame again relative to it with the desk's estimator.
+    /// Makes `frame` the take's neutral one (`None`: each part of the face at its calmest
+    /// frame) and estimates every frame again relative to it with the desk's estimator.
     ///
     /// # Errors
     /// [`ApiError::NoTake`] when no take is open, or the take's refusal (a frame past the end
