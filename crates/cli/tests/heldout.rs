@@ -296,8 +296,8 @@ fn an_adapter_reads_people_and_renderers_it_never_saw() {
     // its lids were not at their widest — MediaPipe's blink 0.08 there, 0.02 in the lids' own
     // calmest frame — and most of the man's lid movement read as less than nothing against
     // it; the seed's network gave 0.66). ICT's squint is not MediaPipe's (see the module's docs)
-    // and is the weakest there. The two other videos came in no choice of the training: 0.70
-    // and 0.70 (against the least expressive frame 0.72 and 0.70; the seed's network 0.57
+    // and is the weakest there. The two other videos came in no choice of the training (they
+    // were looked at, with cap12, when the neutral's parts were chosen): 0.70 and 0.70 (against the least expressive frame 0.72 and 0.70; the seed's network 0.57
     // and 0.60); their weak channels are browDown, which MediaPipe does not see on the
     // character at all, and mouthRollLower. These bars keep what holds from slipping: most
     // channels follow, and every channel MediaPipe sees on the character does, the squints
