@@ -128,14 +128,22 @@ impl FacePart {
     /// `_neutral` left out), as [`Expression::energy`] sums the whole face's.
     #[must_use]
     pub fn energy(self, expression: &Expression) -> f32 {
-        faceanim_track::BLENDSHAPE_NAMES
+        score_parts()
             .iter()
             .zip(&expression.scores)
             .skip(1)
-            .filter(|(name, _)| FacePart::of_score(name) == self)
+            .filter(|(part, _)| **part == self)
             .map(|(_, s)| s.clamp(0.0, 1.0))
             .sum()
     }
+}
+
+/// The part of each of MediaPipe's scores, in their order ([`FacePart::of_score`] worked out
+/// once: a take's neutral is found over every frame each time a view asks for it).
+fn score_parts() -> &'static [FacePart; SCORES] {
+    static PARTS: std::sync::LazyLock<[FacePart; SCORES]> =
+        std::sync::LazyLock::new(|| faceanim_track::BLENDSHAPE_NAMES.map(FacePart::of_score));
+    &PARTS
 }
 
 /// The frame each [`FacePart`] of a neutral face comes from.
@@ -237,12 +245,8 @@ pub fn rest_face(expressions: &[Option<&Expression>], parts: PartFrames) -> Opti
     let mut rest = base.clone();
     for part in [FacePart::Lids, FacePart::Gaze, FacePart::Brows] {
         let from = face(part)?;
-        for ((name, slot), score) in faceanim_track::BLENDSHAPE_NAMES
-            .iter()
-            .zip(&mut rest.scores)
-            .zip(&from.scores)
-        {
-            if FacePart::of_score(name) == part {
+        for ((of, slot), score) in score_parts().iter().zip(&mut rest.scores).zip(&from.scores) {
+            if *of == part {
                 *slot = *score;
             }
         }
