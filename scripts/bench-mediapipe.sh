@@ -6,8 +6,8 @@
 # faceanim is measured as a user runs it: `faceanim track VIDEO -o clip.json -o clip.glb` on
 # the built-in head, everything the command does for the clip (starting ffmpeg, decoding,
 # detection, landmarks, blendshapes, the estimates, writing both files); only the face
-# models' loading, once per process, is left out (its summary's
-# `whole_frames_per_second`). MediaPipe's Face Landmarker task (VIDEO mode, OpenCV decoding) is
+# models' loading and the start of the threads that run them, once per process, is left out
+# (its summary's `whole_frames_per_second`). MediaPipe's Face Landmarker task (VIDEO mode, OpenCV decoding) is
 # timed the same way: from opening the video to the last frame's scores, its model's loading
 # left out (tools/mediapipe_bench.py).
 #

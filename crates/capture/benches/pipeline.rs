@@ -7,7 +7,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use faceanim_track::{FaceModels, Frame, Tracker, TrackingMode};
+use faceanim_track::{FaceModels, Frame, SharedFrame, Tracker, TrackingMode, Workers};
 
 const FRAMES: usize = 30;
 
@@ -53,21 +53,13 @@ fn run(models: &FaceModels, frames: &[Vec<u8>], mode: TrackingMode) -> usize {
     found
 }
 
-/// Tracking `at_once` frames together, one per thread.
-fn run_at_once(models: &FaceModels, frames: &[Vec<u8>], at_once: usize) -> usize {
+/// Tracking frames together, one on this thread and one on each worker.
+fn run_at_once(models: &FaceModels, workers: &Workers, frames: &[SharedFrame]) -> usize {
     let mut tracker = Tracker::new(models, TrackingMode::Track);
     let mut found = 0;
-    for chunk in frames.chunks(at_once) {
-        let batch: Vec<Frame<'_>> = chunk
-            .iter()
-            .map(|rgb| Frame {
-                width: 640,
-                height: 480,
-                rgb,
-            })
-            .collect();
+    for batch in frames.chunks(workers.count() + 1) {
         found += tracker
-            .next_frames(&batch)
+            .next_frames(batch, workers)
             .unwrap()
             .iter()
             .filter(|f| f.is_some())
@@ -80,8 +72,17 @@ fn benches(c: &mut Criterion) {
     let frames = video();
     {
         let models = FaceModels::load().unwrap();
+        let workers = Workers::start(&models, 1).unwrap();
+        let shared: Vec<SharedFrame> = frames
+            .iter()
+            .map(|rgb| SharedFrame {
+                width: 640,
+                height: 480,
+                rgb: std::sync::Arc::new(rgb.clone()),
+            })
+            .collect();
         assert_eq!(
-            run_at_once(&models, &frames, 2),
+            run_at_once(&models, &workers, &shared),
             FRAMES,
             "the face must be found"
         );
@@ -89,7 +90,7 @@ fn benches(c: &mut Criterion) {
         group.throughput(Throughput::Elements(FRAMES as u64));
         group.sample_size(10);
         group.bench_function("tracking", |b| {
-            b.iter(|| black_box(run_at_once(&models, &frames, 2)));
+            b.iter(|| black_box(run_at_once(&models, &workers, &shared)));
         });
         group.finish();
     }

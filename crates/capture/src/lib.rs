@@ -15,7 +15,9 @@ use faceanim_anim::Clip;
 use faceanim_anim::filter::{OneEuro, fill_gaps, fill_gaps_rows};
 use faceanim_anim::keyframes::{interpolate_between, keyframe_indices};
 use faceanim_media::{FrameSource, MediaError};
-use faceanim_track::{Face, FaceModels, Found, Frame, ModelError, Tracker, TrackingMode};
+use faceanim_track::{
+    Face, FaceModels, Found, Frame, ModelError, SharedFrame, Tracker, TrackingMode, Workers,
+};
 use serde::Serialize;
 
 /// Why capture stopped.
@@ -140,22 +142,23 @@ pub fn capture_frame(
 /// Captures every frame of `source`; `progress` is called after each frame with the number
 /// done.
 ///
-/// The stages overlap: a thread reads (decodes) frames ahead while `frames_at_once` frames are
-/// tracked together, one per thread ([`Tracker::next_frames`]); 1 tracks one frame at a time.
+/// The stages overlap: a thread reads (decodes) frames ahead while frames are tracked together,
+/// one on this thread and one on each of `workers`' ([`Tracker::next_frames`]); with no
+/// workers, one frame at a time.
 ///
 /// # Errors
 /// A [`CaptureError`] for unreadable input or a failing model.
 pub fn capture(
     models: &FaceModels,
+    workers: &Workers,
     source: &mut FrameSource,
     mode: TrackingMode,
-    frames_at_once: usize,
     mut progress: impl FnMut(usize),
 ) -> Result<Capture, CaptureError> {
     let info = source.info();
     let mut tracker = Tracker::new(models, mode);
     let mut frames = Vec::with_capacity(info.frames.unwrap_or(0));
-    let batch = frames_at_once.max(1);
+    let batch = workers.count() + 1;
     std::thread::scope(|scope| -> Result<(), CaptureError> {
         // Decoded frames wait here for the trackers: a few ahead, no more.
         let (send, receive) = std::sync::mpsc::sync_channel(2 * batch);
@@ -174,7 +177,11 @@ pub fn capture(
             images.clear();
             while images.len() < batch {
                 match receive.recv() {
-                    Ok(Ok(Some(image))) => images.push(image),
+                    Ok(Ok(Some(image))) => images.push(SharedFrame {
+                        width: image.width,
+                        height: image.height,
+                        rgb: std::sync::Arc::new(image.rgb),
+                    }),
                     Ok(Ok(None)) | Err(_) => {
                         done = true;
                         break;
@@ -182,18 +189,10 @@ pub fn capture(
                     Ok(Err(e)) => return Err(e.into()),
                 }
             }
-            let batch_frames: Vec<Frame<'_>> = images
-                .iter()
-                .map(|image| Frame {
-                    width: image.width,
-                    height: image.height,
-                    rgb: &image.rgb,
-                })
-                .collect();
             let first = frames.len();
             let faces =
                 tracker
-                    .next_frames(&batch_frames)
+                    .next_frames(&images, workers)
                     .map_err(|source| CaptureError::Model {
                         frame: first,
                         source,

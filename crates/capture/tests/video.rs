@@ -10,7 +10,7 @@
 
 use faceanim_capture::{Filtering, capture};
 use faceanim_media::{FrameSource, read_image};
-use faceanim_track::{FaceModels, TrackingMode};
+use faceanim_track::{FaceModels, TrackingMode, Workers};
 
 /// The frames' story: N = neutral, O = jaw open, B = blank (no face).
 const STORY: &str = "NNNOOONNBBNNOOON";
@@ -37,8 +37,9 @@ fn capture_file(
     mode: TrackingMode,
     at_once: usize,
 ) -> faceanim_capture::Capture {
+    let workers = Workers::start(models, at_once - 1).unwrap();
     let mut source = FrameSource::open(path, 30.0).unwrap();
-    capture(models, &mut source, mode, at_once, |_| {}).unwrap()
+    capture(models, &workers, &mut source, mode, |_| {}).unwrap()
 }
 
 #[test]
@@ -47,10 +48,11 @@ fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
     let path = dir.path().join("ict.mp4");
     make_video(&path);
     let models = FaceModels::load().unwrap();
+    // Two frames at once (what `faceanim track` does on two cores).
+    let workers = Workers::start(&models, 1).unwrap();
     let mut source = FrameSource::open(&path, 30.0).unwrap();
     let mut reported = 0;
-    // Two frames at once (what `faceanim track` does on two cores).
-    let result = capture(&models, &mut source, TrackingMode::Track, 2, |n| {
+    let result = capture(&models, &workers, &mut source, TrackingMode::Track, |n| {
         reported = n
     })
     .unwrap();

@@ -8,7 +8,7 @@ use anyhow::Context as _;
 use faceanim_anim::filter::OneEuro;
 use faceanim_media::FrameSource;
 use faceanim_take::{ByName, Estimator, Filtering, Footage, Session, Take};
-use faceanim_track::{FaceModels, TrackingMode};
+use faceanim_track::{FaceModels, TrackingMode, Workers};
 
 /// Which of the clean-ups to apply; the jitter of each is reported so users can choose.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -134,9 +134,12 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         );
     }
 
-    // Start-up (once per process): the face models. What follows is per clip, and is what
-    // the summary's whole-command rate counts.
+    // Start-up (once per process): the face models, and the threads that run them beside
+    // this one (as MediaPipe's graph starts its own with the models; each warms itself on a
+    // blank picture, which overlaps the clip's start below). What follows is per clip, and
+    // is what the summary's whole-command rate counts.
     let models = FaceModels::load().context("loading the face models")?;
+    let workers = Workers::start(&models, threads - 1).context("starting the face models")?;
     let clip_started = Instant::now();
     // Open and capture.
     let mut source = FrameSource::open(&args.input, args.fps)?;
@@ -158,7 +161,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         .progress_chars("=> "),
     );
     let started = Instant::now();
-    let result = faceanim_capture::capture(&models, &mut source, mode, threads, |n| {
+    let result = faceanim_capture::capture(&models, &workers, &mut source, mode, |n| {
         bar.set_position(n as u64)
     })
     .with_context(|| format!("capturing {}", args.input.display()))?;

@@ -248,6 +248,18 @@ impl FaceModels {
     /// # Errors
     /// [`ModelError`] if the frame's size and bytes disagree or a model fails.
     pub fn find_face(&self, frame: &Frame<'_>) -> Result<Option<Face>, ModelError> {
+        match self.detect_face(frame)? {
+            Some((region, score)) => self.face_in_region(frame, region, score).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    /// The detector alone: the region of the most confident face in `frame` (for the landmark
+    /// network) and its score, or `None` when there is none.
+    ///
+    /// # Errors
+    /// [`ModelError`] if the frame's size and bytes disagree or the detector fails.
+    pub fn detect_face(&self, frame: &Frame<'_>) -> Result<Option<(Region, f32)>, ModelError> {
         let bad = |message: String| ModelError::Runtime {
             model: "frame",
             message,
@@ -337,7 +349,7 @@ impl FaceModels {
             size: (x1 - x0).max(y1 - y0) * REGION_SCALE,
             rotation,
         };
-        self.face_in_region(frame, region, best.score).map(Some)
+        Ok(Some((region, best.score)))
     }
 
     /// Landmarks and scores of the face in `region` of `frame` (tracking reuses the previous

@@ -18,7 +18,8 @@ use std::io::Read as _;
 pub use face::{Face, Frame, Region};
 pub use pose::{CanonicalFace, HeadPose};
 pub use tracker::{
-    Found, MIN_PRESENCE, Tracker, TrackerStats, TrackingMode, region_from_landmarks,
+    Found, MIN_PRESENCE, SharedFrame, Tracker, TrackerStats, TrackingMode, Workers,
+    region_from_landmarks,
 };
 
 use tract_tflite::prelude::*;
@@ -117,7 +118,8 @@ pub const BLENDSHAPE_NAMES: [&str; 52] = [
     "noseSneerRight",
 ];
 
-/// The three networks, optimised and ready to run.
+/// The three networks, optimised and ready to run (a clone shares them).
+#[derive(Clone)]
 pub struct FaceModels {
     detector: Plan,
     landmarks: Plan,

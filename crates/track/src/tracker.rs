@@ -3,9 +3,12 @@
 //! and the detector runs only on the first frame and whenever the landmark network says the
 //! face is gone (presence below [`MIN_PRESENCE`]).
 //!
-//! [`Tracker::next_frames`] follows several frames at once, one per thread: they share the
-//! region of the last frame done (a frame or two older than MediaPipe's, well inside the
-//! region's margin at video rates), and a frame where the face is lost is done again alone.
+//! [`Tracker::next_frames`] follows several frames at once, one per thread ([`Workers`],
+//! started with the models): they share the region of the last frame done (a frame or two older
+//! than MediaPipe's, well inside the region's margin at video rates), and a frame where the
+//! face is lost is done again alone.
+
+use std::sync::{Arc, mpsc};
 
 use crate::face::{REGION_SCALE, level_rotation};
 use crate::{Face, FaceModels, Frame, ModelError, Region};
@@ -106,60 +109,231 @@ impl<'m> Tracker<'m> {
 }
 
 impl Tracker<'_> {
-    /// The faces in `frames` (consecutive frames of one video), tracked in parallel, one
-    /// thread per frame, from the region of the last frame done; the same as calling
-    /// [`Tracker::next_frame`] on each when there is no face to follow yet or it is lost.
+    /// The faces in `frames` (consecutive frames of one video), tracked in parallel from one
+    /// region — the last frame done's, or when there is no face to follow yet the detector's
+    /// on the first of them — the first frame on this thread, the next ones on `workers`'
+    /// threads (any beyond them on this thread too). A frame where the face is lost, and every
+    /// one after it, is done as [`Tracker::next_frame`] does it.
     ///
     /// # Errors
     /// [`ModelError`] if a frame is malformed or a model fails.
     pub fn next_frames(
         &mut self,
-        frames: &[Frame<'_>],
+        frames: &[SharedFrame],
+        workers: &Workers,
     ) -> Result<Vec<Option<(Face, Found)>>, ModelError> {
-        let shared = match (self.mode, self.previous) {
-            (TrackingMode::Track, Some(previous)) if frames.len() > 1 => previous,
-            _ => return frames.iter().map(|f| self.next_frame(f)).collect(),
+        let (shared, detected) = match (self.mode, self.previous) {
+            (TrackingMode::Track, Some(previous)) if frames.len() > 1 => (previous, false),
+            (TrackingMode::Track, None) if frames.len() > 1 => {
+                self.stats.detector_runs += 1;
+                match self.models.detect_face(&frames[0].frame())? {
+                    Some(found) => (found, true),
+                    None => {
+                        self.stats.frames += 1;
+                        self.stats.no_face += 1;
+                        let mut out = vec![None];
+                        out.extend(self.next_frames(&frames[1..], workers)?);
+                        return Ok(out);
+                    }
+                }
+            }
+            _ => return frames.iter().map(|f| self.next_frame(&f.frame())).collect(),
         };
         let (region, score) = shared;
-        let models = self.models;
-        let faces: Vec<Result<Face, ModelError>> = std::thread::scope(|scope| {
-            let others: Vec<_> = frames[1..]
+        let handed = workers.threads.len().min(frames.len() - 1);
+        for (thread, frame) in workers.threads.iter().zip(&frames[1..=handed]) {
+            thread.give(frame.clone(), region, score);
+        }
+        let mut faces = vec![
+            self.models
+                .face_in_region(&frames[0].frame(), region, score),
+        ];
+        faces.extend(workers.threads[..handed].iter().map(Worker::take));
+        faces.extend(
+            frames[1 + handed..]
                 .iter()
-                .map(|frame| scope.spawn(move || models.face_in_region(frame, region, score)))
-                .collect();
-            let mut faces = vec![models.face_in_region(&frames[0], region, score)];
-            faces.extend(others.into_iter().map(|h| {
-                h.join().unwrap_or_else(|_| {
-                    Err(ModelError::Runtime {
-                        model: "face landmarks",
-                        message: "a tracking thread panicked".into(),
-                    })
-                })
-            }));
-            faces
-        });
+                .map(|f| self.models.face_in_region(&f.frame(), region, score)),
+        );
         let mut out = Vec::with_capacity(frames.len());
         let mut shared_valid = true;
-        for (frame, face) in frames.iter().zip(faces) {
+        for (k, (frame, face)) in frames.iter().zip(faces).enumerate() {
+            let first_detected = detected && k == 0;
             if shared_valid {
                 let face = face?;
                 if face.presence >= MIN_PRESENCE {
                     self.stats.frames += 1;
                     self.previous = Some((region_from_landmarks(&face.landmarks), score));
-                    out.push(Some((face, Found::Tracked)));
+                    let found = if first_detected {
+                        Found::Detected
+                    } else {
+                        Found::Tracked
+                    };
+                    out.push(Some((face, found)));
                     continue;
                 }
                 // Lost: the frames from here are done one by one. When the shared region
-                // itself failed, this frame goes straight to the detector; otherwise an
-                // earlier frame of this batch gave a newer region, tried first.
+                // itself failed, this frame goes straight to the detector (or, when the
+                // detector gave it, has no face); otherwise an earlier frame of this batch
+                // gave a newer region, tried first.
                 shared_valid = false;
                 if self.previous == Some(shared) {
                     self.previous = None;
                 }
+                if first_detected {
+                    self.stats.frames += 1;
+                    self.stats.no_face += 1;
+                    self.previous = None;
+                    out.push(None);
+                    continue;
+                }
             }
-            out.push(self.next_frame(frame)?);
+            out.push(self.next_frame(&frame.frame())?);
         }
         Ok(out)
+    }
+}
+
+/// A frame whose bytes are shared (reference-counted), so that handing it to a [`Workers`]
+/// thread copies nothing.
+#[derive(Debug, Clone)]
+pub struct SharedFrame {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// `width × height × 3` bytes.
+    pub rgb: Arc<Vec<u8>>,
+}
+
+impl SharedFrame {
+    /// The frame, borrowed.
+    #[must_use]
+    pub fn frame(&self) -> Frame<'_> {
+        Frame {
+            width: self.width,
+            height: self.height,
+            rgb: &self.rgb,
+        }
+    }
+}
+
+/// Threads that find faces beside the caller's for [`Tracker::next_frames`], started with the
+/// models and kept for every video after, as MediaPipe's graph keeps its threads: each runs
+/// the networks once on a blank picture as it starts, so that what a thread's first frame
+/// warms (the network runtime's scratch space, the allocator's memory for it) is ready before
+/// any video. A thread started afresh for each frame paid that every time: its landmark pass
+/// took half as long again as a warm thread's.
+///
+/// The threads end when this is dropped.
+#[derive(Debug)]
+pub struct Workers {
+    threads: Vec<Worker>,
+}
+
+/// One worker thread: a job goes in, its face comes out.
+#[derive(Debug)]
+struct Worker {
+    jobs: Option<mpsc::Sender<(SharedFrame, Region, f32)>>,
+    faces: mpsc::Receiver<Result<Face, ModelError>>,
+    handle: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Workers {
+    /// Starts `count` threads (0: every frame on the caller's thread), each with its own
+    /// handle on `models` (the networks are shared, not copied).
+    ///
+    /// # Errors
+    /// [`ModelError::Runtime`] if the system refuses a thread.
+    pub fn start(models: &FaceModels, count: usize) -> Result<Workers, ModelError> {
+        let threads = (0..count)
+            .map(|n| {
+                let models = models.clone();
+                let (jobs, incoming) = mpsc::channel::<(SharedFrame, Region, f32)>();
+                let (done, faces) = mpsc::channel();
+                let handle = std::thread::Builder::new()
+                    .name(format!("faceanim-track-{n}"))
+                    .spawn(move || {
+                        warm_up(&models);
+                        for (frame, region, score) in incoming {
+                            // A panic becomes this frame's error, not the program's.
+                            let face =
+                                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                                    models.face_in_region(&frame.frame(), region, score)
+                                }))
+                                .unwrap_or_else(|_| Err(panicked()));
+                            if done.send(face).is_err() {
+                                break;
+                            }
+                        }
+                    })
+                    .map_err(|e| ModelError::Runtime {
+                        model: "face landmarks",
+                        message: format!("starting a tracking thread: {e}"),
+                    })?;
+                Ok(Worker {
+                    jobs: Some(jobs),
+                    faces,
+                    handle: Some(handle),
+                })
+            })
+            .collect::<Result<_, ModelError>>()?;
+        Ok(Workers { threads })
+    }
+
+    /// How many threads there are.
+    #[must_use]
+    pub fn count(&self) -> usize {
+        self.threads.len()
+    }
+}
+
+/// One pass of the landmark and blendshape networks on a blank 256×256 picture, whose result
+/// is not wanted.
+fn warm_up(models: &FaceModels) {
+    let blank = vec![0u8; 256 * 256 * 3];
+    let frame = Frame {
+        width: 256,
+        height: 256,
+        rgb: &blank,
+    };
+    let whole = Region {
+        cx: 128.0,
+        cy: 128.0,
+        size: 256.0,
+        rotation: 0.0,
+    };
+    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        models.face_in_region(&frame, whole, 0.0)
+    }));
+}
+
+impl Worker {
+    fn give(&self, frame: SharedFrame, region: Region, score: f32) {
+        // A thread that has ended says so when its face is taken.
+        if let Some(jobs) = &self.jobs {
+            let _ = jobs.send((frame, region, score));
+        }
+    }
+
+    fn take(&self) -> Result<Face, ModelError> {
+        self.faces.recv().unwrap_or_else(|_| Err(panicked()))
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        // Closing the queue ends the thread once its job in hand (if any) is done.
+        self.jobs = None;
+        if let Some(handle) = self.handle.take() {
+            let _ = handle.join();
+        }
+    }
+}
+
+fn panicked() -> ModelError {
+    ModelError::Runtime {
+        model: "face landmarks",
+        message: "a tracking thread panicked".into(),
     }
 }
 
