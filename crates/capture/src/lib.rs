@@ -139,6 +139,33 @@ pub fn capture_frame(
     Ok(FrameRecord::from_face(index, time, face))
 }
 
+/// Captures consecutive frames together ([`Tracker::next_frames`]: the first on this thread,
+/// the others on `workers`'), `first` being the first one's index in an input of `fps` frames
+/// per second: what [`capture`] does with each group of frames, for callers that read the
+/// frames themselves (to show them as they go, say).
+///
+/// # Errors
+/// [`CaptureError::Model`] if a frame is malformed or a model fails.
+pub fn capture_frames(
+    tracker: &mut Tracker<'_>,
+    workers: &Workers,
+    first: usize,
+    fps: f32,
+    frames: &[SharedFrame],
+) -> Result<Vec<FrameRecord>, CaptureError> {
+    let faces = tracker
+        .next_frames(frames, workers)
+        .map_err(|source| CaptureError::Model {
+            frame: first,
+            source,
+        })?;
+    Ok(faces
+        .into_iter()
+        .enumerate()
+        .map(|(k, face)| FrameRecord::from_face(first + k, (first + k) as f32 / fps, face))
+        .collect())
+}
+
 /// Captures every frame of `source`; `progress` is called after each frame with the number
 /// done.
 ///
@@ -189,18 +216,9 @@ pub fn capture(
                     Ok(Err(e)) => return Err(e.into()),
                 }
             }
-            let first = frames.len();
-            let faces =
-                tracker
-                    .next_frames(&images, workers)
-                    .map_err(|source| CaptureError::Model {
-                        frame: first,
-                        source,
-                    })?;
-            for face in faces {
-                let index = frames.len();
-                frames.push(FrameRecord::from_face(index, index as f32 / info.fps, face));
-                progress(index + 1);
+            for record in capture_frames(&mut tracker, workers, frames.len(), info.fps, &images)? {
+                frames.push(record);
+                progress(frames.len());
             }
         }
         Ok(())

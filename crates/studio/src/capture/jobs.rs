@@ -10,11 +10,11 @@ use faceanim_adapt::{
 use faceanim_media::FrameSource;
 use faceanim_rig::Character;
 use faceanim_take::Footage;
-use faceanim_track::{Frame, Tracker, TrackingMode};
+use faceanim_track::{SharedFrame, Tracker, TrackingMode};
 
 use super::{
     CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Job, JobKind, PREVIEW_HEIGHT, Previews, STILL_FRAMES,
-    SharedDesk, face_models, lock, private_dir,
+    SharedDesk, face_models, face_workers, lock, private_dir,
 };
 use crate::error::ApiError;
 
@@ -60,29 +60,42 @@ fn read_input(job: &Job, path: &Path, shown_name: &str) -> Result<(Footage, Prev
     let mut source = FrameSource::open(path, 30.0).map_err(renamed)?;
     let info = source.info();
     job.stage("reading frames", info.frames.unwrap_or(0));
+    let workers = lock(face_workers()?);
     let mut tracker = Tracker::new(models, TrackingMode::Track);
     let mut records = Vec::new();
     let mut previews = Previews::new();
     let mut names = Vec::new();
-    while let Some(image) = source.next_frame().map_err(renamed)? {
+    // A frame for each thread at a time, each shown as it is read.
+    let mut frames = Vec::with_capacity(workers.count() + 1);
+    loop {
+        frames.clear();
+        while frames.len() <= workers.count() {
+            let Some(image) = source.next_frame().map_err(renamed)? else {
+                break;
+            };
+            previews.push_image(&image, PREVIEW_HEIGHT)?;
+            names.push(source.frame_name(records.len() + frames.len()));
+            frames.push(SharedFrame {
+                width: image.width,
+                height: image.height,
+                rgb: Arc::new(image.rgb),
+            });
+        }
+        if frames.is_empty() {
+            break;
+        }
         if job.cancelled() {
             return Err(faceanim_adapt::AdaptError::Cancelled.into());
         }
-        let index = records.len();
-        let frame = Frame {
-            width: image.width,
-            height: image.height,
-            rgb: &image.rgb,
-        };
-        records.push(faceanim_capture::capture_frame(
+        let first = records.len();
+        records.extend(faceanim_capture::capture_frames(
             &mut tracker,
-            index,
-            index as f32 / info.fps,
-            &frame,
+            &workers,
+            first,
+            info.fps,
+            &frames,
         )?);
-        previews.push_image(&image, PREVIEW_HEIGHT)?;
-        names.push(source.frame_name(index));
-        job.progress(index + 1);
+        job.progress(records.len());
     }
     if records.is_empty() {
         return Err(ApiError::Invalid(format!("{shown_name}: no frames")));

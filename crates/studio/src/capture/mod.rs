@@ -20,7 +20,7 @@ use faceanim_adapt::{Adapter, Fit};
 use faceanim_anim::filter::OneEuro;
 use faceanim_rig::Character;
 use faceanim_take::{ByName, Estimator, Filtering, Footage, Session, Take, TakeError};
-use faceanim_track::FaceModels;
+use faceanim_track::{FaceModels, Workers};
 use serde::Serialize;
 
 use crate::error::ApiError;
@@ -50,6 +50,23 @@ fn face_models() -> Result<&'static FaceModels, ApiError> {
     static MODELS: OnceLock<Result<FaceModels, String>> = OnceLock::new();
     MODELS
         .get_or_init(|| FaceModels::load_with_threads(1).map_err(|e| e.to_string()))
+        .as_ref()
+        .map_err(|e| ApiError::Models(e.clone()))
+}
+
+/// Threads that track beside a job's own thread (one per core beyond the first), started with
+/// the face models on first use and kept for the process, warm, as `faceanim track` keeps its
+/// own for a clip. One job reads an input at a time; the lock says so.
+fn face_workers() -> Result<&'static Mutex<Workers>, ApiError> {
+    static WORKERS: OnceLock<Result<Mutex<Workers>, String>> = OnceLock::new();
+    let models = face_models()?;
+    WORKERS
+        .get_or_init(|| {
+            let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+            Workers::start(models, cores.clamp(1, 8) - 1)
+                .map(Mutex::new)
+                .map_err(|e| e.to_string())
+        })
         .as_ref()
         .map_err(|e| ApiError::Models(e.clone()))
 }
