@@ -144,9 +144,14 @@ impl Tracker<'_> {
         for (thread, frame) in workers.threads.iter().zip(&frames[1..=handed]) {
             thread.give(frame.clone(), region, score);
         }
+        // Caught, so that the workers' faces are always taken (a panic here would leave them
+        // waiting for the next batch).
         let mut faces = vec![
-            self.models
-                .face_in_region(&frames[0].frame(), region, score),
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                self.models
+                    .face_in_region(&frames[0].frame(), region, score)
+            }))
+            .unwrap_or_else(|_| Err(panicked())),
         ];
         faces.extend(workers.threads[..handed].iter().map(Worker::take));
         faces.extend(
