@@ -1,12 +1,15 @@
 //! The neutral face of a live performance: the face a calibrated estimator reads every frame
 //! relative to. The performer presses Calibrate with a relaxed face (the next frame with a face
-//! becomes the neutral), or holds still: after [`STILL_SECONDS`] of a face that barely moves,
-//! its mean becomes the neutral when there is none yet or when it is less expressive than the
-//! automatic one before it. A neutral the performer chose is never replaced automatically.
+//! becomes the neutral, whole), or holds still: after [`STILL_SECONDS`] of a face that barely
+//! moves, its mean becomes the neutral when there is none yet; a later still face replaces
+//! each part of it ([`FacePart`]: lids, gaze, brows, mouth) that it holds calmer, as a take's
+//! automatic neutral takes each part from its own calmest frame ([`rest_face`]) — a performer
+//! seldom holds still with every part at rest at once. A neutral the performer chose is never
+//! replaced automatically.
 
 use std::collections::VecDeque;
 
-use crate::expression::Expression;
+use crate::expression::{Expression, FacePart, PartFrames, rest_face};
 use crate::session::NeutralChoice;
 
 /// How long a face must stay still to be taken as the neutral one, seconds.
@@ -15,13 +18,17 @@ pub const STILL_SECONDS: f32 = 1.5;
 /// of each frame's from their mean, in units of the face's own spread (landmark noise of a
 /// webcam is about a third of it; speaking or smiling moves them several times as much).
 pub const STILL_SPREAD: f32 = 0.015;
-/// How much less expression energy a new still face needs to replace an automatic neutral.
+/// How much less expression energy a part of a new still face needs to replace that part of an
+/// automatic neutral.
 const BETTER_BY: f32 = 0.05;
 
 /// The live neutral face. See the module docs.
 #[derive(Debug, Clone, Default)]
 pub struct LiveNeutral {
     neutral: Option<(Expression, NeutralChoice)>,
+    /// An automatic neutral's still faces, one per part in [`FacePart::ALL`]'s order: each
+    /// part's calmest so far.
+    still_parts: Vec<Expression>,
     pending: bool,
     window: VecDeque<(f32, Expression)>,
 }
@@ -59,6 +66,7 @@ impl LiveNeutral {
         if self.pending {
             self.pending = false;
             self.window.clear();
+            self.still_parts.clear();
             self.neutral = Some((expression.clone(), NeutralChoice::User));
             return;
         }
@@ -82,13 +90,32 @@ impl LiveNeutral {
         let Some(still) = self.still_face() else {
             return;
         };
-        let better = match &self.neutral {
-            None => true,
-            Some((current, _)) => still.energy() < current.energy() - BETTER_BY,
-        };
-        if better {
+        if self.still_parts.len() != FacePart::ALL.len() {
+            self.still_parts = vec![still.clone(); FacePart::ALL.len()];
             self.neutral = Some((still, NeutralChoice::Automatic));
             self.window.clear();
+            return;
+        }
+        let mut changed = false;
+        for (part, calmest) in FacePart::ALL.iter().zip(&mut self.still_parts) {
+            if part.energy(&still) < part.energy(calmest) - BETTER_BY {
+                *calmest = still.clone();
+                changed = true;
+            }
+        }
+        if changed {
+            self.window.clear();
+            let faces: Vec<Option<&Expression>> = self.still_parts.iter().map(Some).collect();
+            let at = |part: FacePart| FacePart::ALL.iter().position(|p| *p == part).unwrap_or(0);
+            let parts = PartFrames {
+                lids: at(FacePart::Lids),
+                gaze: at(FacePart::Gaze),
+                brows: at(FacePart::Brows),
+                mouth: at(FacePart::Mouth),
+            };
+            if let Some(rest) = rest_face(&faces, parts) {
+                self.neutral = Some((rest, NeutralChoice::Automatic));
+            }
         }
     }
 
@@ -138,6 +165,63 @@ mod tests {
                 .map(|k| (k as f32 * 0.1).sin() * 0.1 + wobble * (k as f32).cos())
                 .collect(),
         }
+    }
+
+    /// A face with these scores set, by MediaPipe's names.
+    fn scored(set: &[(&str, f32)]) -> Expression {
+        let mut e = face(0.0, 0.0);
+        for (name, value) in set {
+            let k = faceanim_track::BLENDSHAPE_NAMES
+                .iter()
+                .position(|n| n == name)
+                .unwrap();
+            e.scores[k] = *value;
+        }
+        e
+    }
+
+    fn score(e: &Expression, name: &str) -> f32 {
+        let k = faceanim_track::BLENDSHAPE_NAMES
+            .iter()
+            .position(|n| *n == name)
+            .unwrap();
+        e.scores[k]
+    }
+
+    #[test]
+    fn each_part_of_the_neutral_comes_from_the_stillness_where_it_was_calmest() {
+        let mut live = LiveNeutral::default();
+        // Held still with the lids half shut and the mouth at rest...
+        let sleepy = scored(&[("eyeBlinkLeft", 0.3), ("eyeBlinkRight", 0.3)]);
+        for f in 0..60 {
+            live.observe(f as f32 / 30.0, Some(&sleepy));
+        }
+        assert_eq!(live.chosen(), Some(NeutralChoice::Automatic));
+        // ...a moment of talking...
+        for f in 60..90 {
+            let t = f as f32 / 30.0;
+            live.observe(t, Some(&face(0.3, 0.2 * (t * 9.0).sin())));
+        }
+        // ...then still again, the eyes wide open but smiling: as expressive as a whole, so
+        // neither face is the calmer, but each has one part at rest.
+        let smiling = scored(&[("mouthSmileLeft", 0.3), ("mouthSmileRight", 0.3)]);
+        for f in 90..150 {
+            live.observe(f as f32 / 30.0, Some(&smiling));
+        }
+        let neutral = live.neutral().unwrap();
+        for name in [
+            "eyeBlinkLeft",
+            "eyeBlinkRight",
+            "mouthSmileLeft",
+            "mouthSmileRight",
+        ] {
+            assert!(
+                score(neutral, name) < 1e-6,
+                "{name}: {}",
+                score(neutral, name)
+            );
+        }
+        assert_eq!(live.chosen(), Some(NeutralChoice::Automatic));
     }
 
     #[test]
