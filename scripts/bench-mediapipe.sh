@@ -55,6 +55,10 @@ fi
 
 cargo build --release --locked -p faceanim >&2
 faceanim=target/release/faceanim
+# One untimed run of each first: the first run after a build or a reboot reads ffmpeg's 215
+# libraries (0.7 s, against 0.06 s warm) and Python's from disk, which measures the disk.
+"$faceanim" track "${videos[0]}" -o "$out/warm-up.json" >/dev/null 2>&1
+"$venv/bin/python" tools/mediapipe_bench.py "${videos[0]}" models/face_landmarker.task >/dev/null
 for video in "${videos[@]}"; do
   name=$(basename "$video")
   "$faceanim" track "$video" -o "$out/$name.clip.json" -o "$out/$name.glb" >"$out/$name.summary.json"
