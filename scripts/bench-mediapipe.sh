@@ -7,9 +7,9 @@
 # the built-in head, everything the command does for the clip (starting ffmpeg, decoding,
 # detection, landmarks, blendshapes, the estimates, writing both files); only the face
 # models' loading and the start of the threads that run them, once per process, is left out
-# (its summary's `whole_frames_per_second`). MediaPipe's Face Landmarker task (VIDEO mode, OpenCV decoding) is
-# timed the same way: from opening the video to the last frame's scores, its model's loading
-# left out (tools/mediapipe_bench.py).
+# (its summary's `whole_frames_per_second`). MediaPipe's Face Landmarker task (VIDEO mode,
+# OpenCV decoding) is timed the same way: from opening the video to the last frame's scores,
+# its model's loading left out (tools/mediapipe_bench.py).
 #
 # It makes a Python venv with PyPI mediapipe in target/mediapipe-venv (once). Videos: the ones
 # given, or by default a 640×480 10-second video of the astronaut photograph of ../shared/images
