@@ -139,6 +139,16 @@ pub fn capture_frame(
     Ok(FrameRecord::from_face(index, time, face))
 }
 
+/// A decoded frame as tracking threads share it (its bytes moved, not copied).
+#[must_use]
+pub fn shared(image: faceanim_media::Image) -> SharedFrame {
+    SharedFrame {
+        width: image.width,
+        height: image.height,
+        rgb: std::sync::Arc::new(image.rgb),
+    }
+}
+
 /// Captures consecutive frames together ([`Tracker::next_frames`]: the first on this thread,
 /// the others on `workers`'), `first` being the first one's index in an input of `fps` frames
 /// per second: what [`capture`] does with each group of frames, for callers that read the
@@ -204,11 +214,7 @@ pub fn capture(
             images.clear();
             while images.len() < batch {
                 match receive.recv() {
-                    Ok(Ok(Some(image))) => images.push(SharedFrame {
-                        width: image.width,
-                        height: image.height,
-                        rgb: std::sync::Arc::new(image.rgb),
-                    }),
+                    Ok(Ok(Some(image))) => images.push(shared(image)),
                     Ok(Ok(None)) | Err(_) => {
                         done = true;
                         break;

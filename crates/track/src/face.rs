@@ -222,6 +222,16 @@ fn crop_into(frame: &Frame<'_>, region: &Region, out: &mut Vec<f32>) {
     }
 }
 
+/// Exactly the whole of a 256×256 frame, the landmark network's own input size: a frame read
+/// in this region is the crop itself, without resampling (not nearly this region: then it is
+/// resampled).
+pub(crate) const WHOLE_CROP: Region = Region {
+    cx: 128.0,
+    cy: 128.0,
+    size: 256.0,
+    rotation: 0.0,
+};
+
 /// `v / 255` for every byte value, as the crop's inputs are.
 static UNIT: [f32; 256] = {
     let mut table = [0.0; 256];
@@ -376,14 +386,7 @@ impl FaceModels {
             )
         };
         let mut crop = Vec::with_capacity(256 * 256 * 3);
-        // Exactly the whole of a 256×256 frame (not nearly: then it is resampled).
-        const WHOLE: Region = Region {
-            cx: 128.0,
-            cy: 128.0,
-            size: 256.0,
-            rotation: 0.0,
-        };
-        let identity = frame.width == 256 && frame.height == 256 && region == WHOLE;
+        let identity = frame.width == 256 && frame.height == 256 && region == WHOLE_CROP;
         if identity {
             // The frame is the crop (a render made for the network): no resampling.
             crop.extend(frame.rgb.iter().map(|&v| f32::from(v) / 255.0));

@@ -10,7 +10,7 @@
 
 use std::sync::{Arc, mpsc};
 
-use crate::face::{REGION_SCALE, level_rotation};
+use crate::face::{REGION_SCALE, WHOLE_CROP, level_rotation};
 use crate::{Face, FaceModels, Frame, ModelError, Region};
 
 /// Landmark presence below which a face counts as lost (MediaPipe's default
@@ -146,13 +146,7 @@ impl Tracker<'_> {
         }
         // Caught, so that the workers' faces are always taken (a panic here would leave them
         // waiting for the next batch).
-        let mut faces = vec![
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                self.models
-                    .face_in_region(&frames[0].frame(), region, score)
-            }))
-            .unwrap_or_else(|_| Err(panicked())),
-        ];
+        let mut faces = vec![face_caught(self.models, &frames[0], region, score)];
         faces.extend(workers.threads[..handed].iter().map(Worker::take));
         faces.extend(
             frames[1 + handed..]
@@ -187,7 +181,6 @@ impl Tracker<'_> {
                 if first_detected {
                     self.stats.frames += 1;
                     self.stats.no_face += 1;
-                    self.previous = None;
                     out.push(None);
                     continue;
                 }
@@ -260,12 +253,7 @@ impl Workers {
                     .spawn(move || {
                         warm_up(&models);
                         for (frame, region, score) in incoming {
-                            // A panic becomes this frame's error, not the program's.
-                            let face =
-                                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                                    models.face_in_region(&frame.frame(), region, score)
-                                }))
-                                .unwrap_or_else(|_| Err(panicked()));
+                            let face = face_caught(&models, &frame, region, score);
                             if done.send(face).is_err() {
                                 break;
                             }
@@ -295,21 +283,26 @@ impl Workers {
 /// One pass of the landmark and blendshape networks on a blank 256×256 picture, whose result
 /// is not wanted.
 fn warm_up(models: &FaceModels) {
-    let blank = vec![0u8; 256 * 256 * 3];
-    let frame = Frame {
+    let blank = SharedFrame {
         width: 256,
         height: 256,
-        rgb: &blank,
+        rgb: Arc::new(vec![0u8; 256 * 256 * 3]),
     };
-    let whole = Region {
-        cx: 128.0,
-        cy: 128.0,
-        size: 256.0,
-        rotation: 0.0,
-    };
-    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        models.face_in_region(&frame, whole, 0.0)
-    }));
+    let _ = face_caught(models, &blank, WHOLE_CROP, 0.0);
+}
+
+/// [`FaceModels::face_in_region`], a panic in it becoming the frame's error rather than the
+/// thread's end (so that every face handed to a worker comes back).
+fn face_caught(
+    models: &FaceModels,
+    frame: &SharedFrame,
+    region: Region,
+    score: f32,
+) -> Result<Face, ModelError> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        models.face_in_region(&frame.frame(), region, score)
+    }))
+    .unwrap_or_else(|_| Err(panicked()))
 }
 
 impl Worker {

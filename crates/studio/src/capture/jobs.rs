@@ -10,7 +10,7 @@ use faceanim_adapt::{
 use faceanim_media::FrameSource;
 use faceanim_rig::Character;
 use faceanim_take::Footage;
-use faceanim_track::{SharedFrame, Tracker, TrackingMode};
+use faceanim_track::{Tracker, TrackingMode};
 
 use super::{
     CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Job, JobKind, PREVIEW_HEIGHT, Previews, STILL_FRAMES,
@@ -75,11 +75,7 @@ fn read_input(job: &Job, path: &Path, shown_name: &str) -> Result<(Footage, Prev
             };
             previews.push_image(&image, PREVIEW_HEIGHT)?;
             names.push(source.frame_name(records.len() + frames.len()));
-            frames.push(SharedFrame {
-                width: image.width,
-                height: image.height,
-                rgb: Arc::new(image.rgb),
-            });
+            frames.push(faceanim_capture::shared(image));
         }
         if frames.is_empty() {
             break;
