@@ -6,7 +6,8 @@
 //! [`Tracker::next_frames`] follows several frames at once, one per thread ([`Workers`],
 //! started with the models): they share the region of the last frame done (a frame or two older
 //! than MediaPipe's, well inside the region's margin at video rates), and a frame where the
-//! face is lost is done again alone.
+//! face is lost is done again alone. With the detector on every frame, the frames are
+//! independent and each thread finds its own frame's face.
 
 use std::sync::{Arc, mpsc};
 
@@ -93,18 +94,8 @@ impl<'m> Tracker<'m> {
             }
         }
         self.stats.detector_runs += 1;
-        match self.models.find_face(frame)? {
-            Some(face) if face.presence >= MIN_PRESENCE => {
-                self.previous =
-                    Some((region_from_landmarks(&face.landmarks), face.detection_score));
-                Ok(Some((face, Found::Detected)))
-            }
-            _ => {
-                self.previous = None;
-                self.stats.no_face += 1;
-                Ok(None)
-            }
-        }
+        let face = self.models.find_face(frame)?;
+        Ok(self.detected(face))
     }
 }
 
@@ -113,7 +104,9 @@ impl Tracker<'_> {
     /// region — the last frame done's, or when there is no face to follow yet the detector's
     /// on the first of them — the first frame on this thread, the next ones on `workers`'
     /// threads (any beyond them on this thread too). A frame where the face is lost, and every
-    /// one after it, is done as [`Tracker::next_frame`] does it.
+    /// one after it, is done as [`Tracker::next_frame`] does it. With
+    /// [`TrackingMode::DetectEveryFrame`] each frame is found by the detector on its own
+    /// thread, as [`Tracker::next_frame`] finds it.
     ///
     /// # Errors
     /// [`ModelError`] if a frame is malformed or a model fails.
@@ -123,6 +116,9 @@ impl Tracker<'_> {
         workers: &Workers,
     ) -> Result<Vec<Option<(Face, Found)>>, ModelError> {
         let (shared, detected) = match (self.mode, self.previous) {
+            (TrackingMode::DetectEveryFrame, _) if frames.len() > 1 => {
+                return self.detect_frames(frames, workers);
+            }
             (TrackingMode::Track, Some(previous)) if frames.len() > 1 => (previous, false),
             (TrackingMode::Track, None) if frames.len() > 1 => {
                 self.stats.detector_runs += 1;
@@ -140,26 +136,13 @@ impl Tracker<'_> {
             _ => return frames.iter().map(|f| self.next_frame(&f.frame())).collect(),
         };
         let (region, score) = shared;
-        let handed = workers.threads.len().min(frames.len() - 1);
-        for (thread, frame) in workers.threads.iter().zip(&frames[1..=handed]) {
-            thread.give(frame.clone(), region, score);
-        }
-        // Caught, so that the workers' faces are always taken (a panic here would leave them
-        // waiting for the next batch).
-        let mut faces = vec![face_caught(self.models, &frames[0], region, score)];
-        faces.extend(workers.threads[..handed].iter().map(Worker::take));
-        faces.extend(
-            frames[1 + handed..]
-                .iter()
-                .map(|f| self.models.face_in_region(&f.frame(), region, score)),
-        );
+        let faces = workers.run(self.models, frames, Job::InRegion(region, score));
         let mut out = Vec::with_capacity(frames.len());
         let mut shared_valid = true;
         for (k, (frame, face)) in frames.iter().zip(faces).enumerate() {
             let first_detected = detected && k == 0;
             if shared_valid {
-                let face = face?;
-                if face.presence >= MIN_PRESENCE {
+                if let Some(face) = face?.filter(|f| f.presence >= MIN_PRESENCE) {
                     self.stats.frames += 1;
                     self.previous = Some((region_from_landmarks(&face.landmarks), score));
                     let found = if first_detected {
@@ -188,6 +171,41 @@ impl Tracker<'_> {
             out.push(self.next_frame(&frame.frame())?);
         }
         Ok(out)
+    }
+
+    /// [`TrackingMode::DetectEveryFrame`]'s [`Tracker::next_frames`]: the detector on every
+    /// frame at once, each as [`Tracker::next_frame`] would count and keep it.
+    fn detect_frames(
+        &mut self,
+        frames: &[SharedFrame],
+        workers: &Workers,
+    ) -> Result<Vec<Option<(Face, Found)>>, ModelError> {
+        workers
+            .run(self.models, frames, Job::Detect)
+            .into_iter()
+            .map(|face| {
+                let face = face?;
+                self.stats.frames += 1;
+                self.stats.detector_runs += 1;
+                Ok(self.detected(face))
+            })
+            .collect()
+    }
+
+    /// What the detector's `face` means for the tracker: a face to follow, or none.
+    fn detected(&mut self, face: Option<Face>) -> Option<(Face, Found)> {
+        match face {
+            Some(face) if face.presence >= MIN_PRESENCE => {
+                self.previous =
+                    Some((region_from_landmarks(&face.landmarks), face.detection_score));
+                Some((face, Found::Detected))
+            }
+            _ => {
+                self.previous = None;
+                self.stats.no_face += 1;
+                None
+            }
+        }
     }
 }
 
@@ -228,12 +246,35 @@ pub struct Workers {
     threads: Vec<Worker>,
 }
 
-/// One worker thread: a job goes in, its face comes out.
+/// One worker thread: a frame and its job go in, its face comes out.
 #[derive(Debug)]
 struct Worker {
-    jobs: Option<mpsc::Sender<(SharedFrame, Region, f32)>>,
-    faces: mpsc::Receiver<Result<Face, ModelError>>,
+    jobs: Option<mpsc::Sender<(SharedFrame, Job)>>,
+    faces: mpsc::Receiver<Result<Option<Face>, ModelError>>,
     handle: Option<std::thread::JoinHandle<()>>,
+}
+
+/// How a frame's face is to be found.
+#[derive(Debug, Clone, Copy)]
+enum Job {
+    /// The landmarks in this region, with the detector's score that the region goes back to.
+    InRegion(Region, f32),
+    /// The detector first ([`FaceModels::find_face`]).
+    Detect,
+}
+
+impl Job {
+    /// The face `job` finds in `frame`, a panic in the models becoming the frame's error
+    /// rather than the thread's end (so that every face handed to a worker comes back).
+    fn run(self, models: &FaceModels, frame: &SharedFrame) -> Result<Option<Face>, ModelError> {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match self {
+            Job::InRegion(region, score) => models
+                .face_in_region(&frame.frame(), region, score)
+                .map(Some),
+            Job::Detect => models.find_face(&frame.frame()),
+        }))
+        .unwrap_or_else(|_| Err(panicked()))
+    }
 }
 
 impl Workers {
@@ -246,15 +287,14 @@ impl Workers {
         let threads = (0..count)
             .map(|n| {
                 let models = models.clone();
-                let (jobs, incoming) = mpsc::channel::<(SharedFrame, Region, f32)>();
+                let (jobs, incoming) = mpsc::channel::<(SharedFrame, Job)>();
                 let (done, faces) = mpsc::channel();
                 let handle = std::thread::Builder::new()
                     .name(format!("faceanim-track-{n}"))
                     .spawn(move || {
                         warm_up(&models);
-                        for (frame, region, score) in incoming {
-                            let face = face_caught(&models, &frame, region, score);
-                            if done.send(face).is_err() {
+                        for (frame, job) in incoming {
+                            if done.send(job.run(&models, &frame)).is_err() {
                                 break;
                             }
                         }
@@ -278,6 +318,29 @@ impl Workers {
     pub fn count(&self) -> usize {
         self.threads.len()
     }
+
+    /// `job` on every frame: the first on the caller's thread, the next ones on the threads,
+    /// any beyond them on the caller's thread after; the faces in the frames' order. Every
+    /// face handed out is taken before this returns, errors included.
+    fn run(
+        &self,
+        models: &FaceModels,
+        frames: &[SharedFrame],
+        job: Job,
+    ) -> Vec<Result<Option<Face>, ModelError>> {
+        let Some((first, rest)) = frames.split_first() else {
+            return Vec::new();
+        };
+        let handed = self.threads.len().min(rest.len());
+        for (thread, frame) in self.threads.iter().zip(&rest[..handed]) {
+            thread.give(frame.clone(), job);
+        }
+        let mut faces = Vec::with_capacity(frames.len());
+        faces.push(job.run(models, first));
+        faces.extend(self.threads[..handed].iter().map(Worker::take));
+        faces.extend(rest[handed..].iter().map(|f| job.run(models, f)));
+        faces
+    }
 }
 
 /// One pass of the landmark and blendshape networks on a blank 256×256 picture, whose result
@@ -288,32 +351,18 @@ fn warm_up(models: &FaceModels) {
         height: 256,
         rgb: Arc::new(vec![0u8; 256 * 256 * 3]),
     };
-    let _ = face_caught(models, &blank, WHOLE_CROP, 0.0);
-}
-
-/// [`FaceModels::face_in_region`], a panic in it becoming the frame's error rather than the
-/// thread's end (so that every face handed to a worker comes back).
-fn face_caught(
-    models: &FaceModels,
-    frame: &SharedFrame,
-    region: Region,
-    score: f32,
-) -> Result<Face, ModelError> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        models.face_in_region(&frame.frame(), region, score)
-    }))
-    .unwrap_or_else(|_| Err(panicked()))
+    let _ = Job::InRegion(WHOLE_CROP, 0.0).run(models, &blank);
 }
 
 impl Worker {
-    fn give(&self, frame: SharedFrame, region: Region, score: f32) {
+    fn give(&self, frame: SharedFrame, job: Job) {
         // A thread that has ended says so when its face is taken.
         if let Some(jobs) = &self.jobs {
-            let _ = jobs.send((frame, region, score));
+            let _ = jobs.send((frame, job));
         }
     }
 
-    fn take(&self) -> Result<Face, ModelError> {
+    fn take(&self) -> Result<Option<Face>, ModelError> {
         self.faces.recv().unwrap_or_else(|_| Err(panicked()))
     }
 }

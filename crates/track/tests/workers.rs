@@ -89,3 +89,41 @@ fn frames_done_together_match_frames_done_one_by_one() {
     assert_eq!(together.stats(), alone.stats());
     assert_eq!(together.stats().detector_runs, 3);
 }
+
+#[test]
+fn frames_detected_together_match_frames_detected_one_by_one() {
+    let models = FaceModels::load().unwrap();
+    let frames = frames();
+
+    let mut alone = Tracker::new(&models, TrackingMode::DetectEveryFrame);
+    let one_by_one: Vec<_> = frames
+        .iter()
+        .map(|f| alone.next_frame(&f.frame()).unwrap())
+        .collect();
+
+    // Two workers beside this thread, five frames at a time: the batches have more frames
+    // than threads (the rest done on this thread after), and the last one is a single frame.
+    let workers = Workers::start(&models, 2).unwrap();
+    let mut together = Tracker::new(&models, TrackingMode::DetectEveryFrame);
+    let mut batched = Vec::new();
+    for batch in frames.chunks(5) {
+        batched.extend(together.next_frames(batch, &workers).unwrap());
+    }
+
+    assert_eq!(batched.len(), STORY.len());
+    for (i, ((c, a), b)) in STORY.chars().zip(&one_by_one).zip(&batched).enumerate() {
+        match (c, a, b) {
+            ('B', None, None) => {}
+            ('N' | 'O', Some((a, found_a)), Some((b, found_b))) => {
+                assert_eq!((*found_a, *found_b), (Found::Detected, Found::Detected));
+                // Each frame on its own, whichever thread read it: the same face.
+                assert_eq!(a.landmarks, b.landmarks, "frame {i}");
+                assert_eq!(a.scores, b.scores, "frame {i}");
+            }
+            _ => panic!("frame {i} ({c}): one by one {a:?}, together {b:?}"),
+        }
+    }
+    assert_eq!(together.stats(), alone.stats());
+    assert_eq!(together.stats().detector_runs, STORY.len());
+    assert_eq!(together.stats().no_face, 2);
+}
