@@ -22,6 +22,7 @@
 use std::path::{Path, PathBuf};
 
 use faceanim_track::{FaceModels, Frame, Tracker, TrackingMode};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::AdaptError;
@@ -176,7 +177,8 @@ impl HeldOut {
         })
     }
 
-    /// Runs every still through capture (the detector on each) and `adapter`.
+    /// Runs every still through capture (the detector on each, the stills spread over the
+    /// cores) and `adapter`.
     ///
     /// # Errors
     /// [`AdaptError::Format`] for a picture that cannot be read, [`AdaptError::Model`] if a
@@ -204,9 +206,10 @@ impl HeldOut {
                 )
             }))
         };
+        // Each still on its own, so on every core.
         let expressions: Vec<Option<Expression>> = self
             .stills
-            .iter()
+            .par_iter()
             .map(|s| read(&s.image))
             .collect::<Result<_, _>>()?;
         let (neutral, source) = match &self.neutral {
