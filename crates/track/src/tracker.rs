@@ -343,14 +343,15 @@ impl Workers {
     }
 }
 
-/// One pass of the landmark and blendshape networks on a blank 256×256 picture, whose result
-/// is not wanted.
+/// One pass of each network a job may run (the detector, then the landmark and blendshape
+/// networks) on a blank 256×256 picture, whose result is not wanted.
 fn warm_up(models: &FaceModels) {
     let blank = SharedFrame {
         width: 256,
         height: 256,
         rgb: Arc::new(vec![0u8; 256 * 256 * 3]),
     };
+    let _ = Job::Detect.run(models, &blank);
     let _ = Job::InRegion(WHOLE_CROP, 0.0).run(models, &blank);
 }
 
