@@ -16,7 +16,10 @@ use faceanim_track::{FaceModels, TrackingMode, Workers};
 const STORY: &str = "NNNOOONNBBNNOOON";
 const FPS: u32 = 25;
 
-fn make_video(path: &std::path::Path) {
+/// The story as a video in a folder of its own (gone when the folder is dropped).
+fn ict_video() -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ict.mp4");
     let neutral = read_image(&faceanim_testdata::shared("images/ict-face-neutral.png")).unwrap();
     let open = read_image(&faceanim_testdata::shared("images/ict-face-jawopen.png")).unwrap();
     let (width, height) = (neutral.width, neutral.height);
@@ -27,7 +30,8 @@ fn make_video(path: &std::path::Path) {
         _ => blank.as_slice(),
     });
     let codec = ["-c:v", "libx264", "-pix_fmt", "yuv444p", "-qp", "4"];
-    faceanim_testdata::encode_video(path, (width, height), FPS, &codec, frames);
+    faceanim_testdata::encode_video(&path, (width, height), FPS, &codec, frames);
+    (dir, path)
 }
 
 /// Captures the video at `path`, `at_once` frames together.
@@ -44,9 +48,7 @@ fn capture_file(
 
 #[test]
 fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("ict.mp4");
-    make_video(&path);
+    let (_dir, path) = ict_video();
     let models = FaceModels::load().unwrap();
     // Two frames at once (what `faceanim track` does on two cores).
     let workers = Workers::start(&models, 1).unwrap();
@@ -113,9 +115,7 @@ fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
 
 #[test]
 fn keyframes_every_five_are_interpolated_and_smoothing_is_separate() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("ict.mp4");
-    make_video(&path);
+    let (_dir, path) = ict_video();
     let models = FaceModels::load().unwrap();
     let result = capture_file(&models, &path, TrackingMode::Track, 2);
     let raw = result.clip(Filtering::default()).unwrap();
