@@ -199,9 +199,11 @@ pub fn capture(
     std::thread::scope(|scope| -> Result<(), CaptureError> {
         // Decoded frames wait here for the trackers: a few ahead, no more.
         let (send, receive) = std::sync::mpsc::sync_channel(2 * batch);
+        // ... and their bytes come back to be read into again.
+        let (give_back, spares) = std::sync::mpsc::channel::<Vec<u8>>();
         scope.spawn(move || {
             loop {
-                let next = source.next_frame();
+                let next = source.next_frame_reusing(spares.try_recv().ok());
                 let end = !matches!(next, Ok(Some(_)));
                 if send.send(next).is_err() || end {
                     break;
@@ -225,6 +227,12 @@ pub fn capture(
             for record in capture_frames(&mut tracker, workers, frames.len(), info.fps, &images)? {
                 frames.push(record);
                 progress(frames.len());
+            }
+            for image in images.drain(..) {
+                // A worker may not have let go of its frame yet: then it is not reused.
+                if let Ok(bytes) = std::sync::Arc::try_unwrap(image.rgb) {
+                    let _ = give_back.send(bytes);
+                }
             }
         }
         Ok(())

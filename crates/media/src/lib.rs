@@ -399,6 +399,19 @@ impl FrameSource {
     /// A [`MediaError`] if an image of a sequence is unreadable or of another size, or ffmpeg
     /// fails part-way.
     pub fn next_frame(&mut self) -> Result<Option<Image>, MediaError> {
+        self.next_frame_reusing(None)
+    }
+
+    /// [`FrameSource::next_frame`], a video's frame read into `spare` (the bytes of a frame
+    /// the caller is done with) when it is of this source's size: a long video then allocates
+    /// and clears no frame-sized memory per frame (24 MB a second at 1080p and 30 fps).
+    ///
+    /// # Errors
+    /// As [`FrameSource::next_frame`].
+    pub fn next_frame_reusing(
+        &mut self,
+        spare: Option<Vec<u8>>,
+    ) -> Result<Option<Image>, MediaError> {
         let SourceInfo { width, height, .. } = self.info;
         let frame = match &mut self.kind {
             Kind::Images(rest, first) => {
@@ -421,7 +434,12 @@ impl FrameSource {
                 }
             }
             Kind::Video(child, stderr) => {
-                read_video_frame(&self.path, child, stderr, width, height, self.delivered)?
+                let bytes = width * height * 3;
+                let rgb = spare
+                    .filter(|spare| spare.len() == bytes)
+                    .unwrap_or_else(|| vec![0; bytes]);
+                let frame = Image { width, height, rgb };
+                read_video_frame(&self.path, child, stderr, frame, self.delivered)?
             }
         };
         if frame.is_some() {
@@ -484,6 +502,7 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|source| spawn_error(path, source))?;
+    widen_pipe(&child);
     let Some(stderr) = child.stderr.take() else {
         return Err(MediaError::Io {
             path: path.to_owned(),
@@ -527,6 +546,20 @@ fn open_video(path: &Path) -> Result<FrameSource, MediaError> {
         image_names: Vec::new(),
     })
 }
+
+/// A Linux pipe holds 64 KiB: a 1080p frame (6 MB) then crosses in about a hundred turns of
+/// ffmpeg writing and this process reading, each a pair of wake-ups. Raised to 1 MiB (an
+/// unprivileged process's limit) it takes a few. Where the system refuses, the pipe stays as
+/// it was.
+#[cfg(target_os = "linux")]
+fn widen_pipe(child: &Child) {
+    if let Some(stdout) = child.stdout.as_ref() {
+        let _ = rustix::pipe::fcntl_setpipe_size(stdout, 1 << 20);
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn widen_pipe(_: &Child) {}
 
 /// Reads ffmpeg's `-v level+…` log line by line, calling `line` with whether the line's tag
 /// says an error (`[panic]`, `[fatal]`, `[error]`) and its text without the tag, until the
@@ -666,21 +699,20 @@ fn parse_duration(text: &str) -> Option<f64> {
     (seconds.is_finite() && seconds > 0.0).then_some(seconds)
 }
 
+/// Reads the next frame of the video into `frame`'s bytes: `None` at its clean end.
 fn read_video_frame(
     path: &Path,
     child: &mut Child,
     stderr: &mut Option<std::thread::JoinHandle<String>>,
-    width: usize,
-    height: usize,
+    mut frame: Image,
     delivered: usize,
 ) -> Result<Option<Image>, MediaError> {
     let Some(stdout) = child.stdout.as_mut() else {
         return Ok(None);
     };
-    let mut rgb = vec![0u8; width * height * 3];
     let mut filled = 0;
-    while filled < rgb.len() {
-        match stdout.read(&mut rgb[filled..]) {
+    while filled < frame.rgb.len() {
+        match stdout.read(&mut frame.rgb[filled..]) {
             Ok(0) => break,
             Ok(n) => filled += n,
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
@@ -692,8 +724,8 @@ fn read_video_frame(
             }
         }
     }
-    if filled == rgb.len() {
-        return Ok(Some(Image { width, height, rgb }));
+    if filled == frame.rgb.len() {
+        return Ok(Some(frame));
     }
     // End of the pipe: a clean end, or ffmpeg failed.
     child.stdout = None;

@@ -88,6 +88,40 @@ fn a_video_keeps_its_frame_count_order_and_rate() {
 }
 
 #[test]
+fn a_video_read_into_frames_given_back_is_the_same_video() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("clip.mkv");
+    make_video(&path, 6, 25, &["-c:v", "ffv1"]);
+    let fresh = read_all(&mut FrameSource::open(&path, 30.0).unwrap());
+    let mut source = FrameSource::open(&path, 30.0).unwrap();
+    // Bytes given back are recognised by their spare capacity (a fresh frame has none); a
+    // spare of another size is not written into.
+    let bytes = 64 * 48 * 3;
+    let given_back = || {
+        let mut spare = Vec::with_capacity(bytes + 100);
+        spare.resize(bytes, 7u8);
+        spare
+    };
+    let first = source
+        .next_frame_reusing(Some(vec![7u8; 10]))
+        .unwrap()
+        .unwrap();
+    assert_eq!(first, fresh[0]);
+    assert_eq!(first.rgb.capacity(), bytes, "the odd-sized spare was used");
+    let mut read = 1;
+    while let Some(frame) = source.next_frame_reusing(Some(given_back())).unwrap() {
+        assert_eq!(frame, fresh[read], "frame {read}");
+        assert_eq!(
+            frame.rgb.capacity(),
+            bytes + 100,
+            "frame {read} was not read into the spare"
+        );
+        read += 1;
+    }
+    assert_eq!(read, fresh.len());
+}
+
+#[test]
 fn a_phone_video_turned_on_its_side_comes_out_upright() {
     // A phone records landscape pixels and says "turn me 90°" in the file; players, and
     // MediaPipe's users, see it upright. Here ffmpeg writes such a file: frames whose left
