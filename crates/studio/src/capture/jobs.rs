@@ -10,7 +10,7 @@ use faceanim_adapt::{
 use faceanim_media::FrameSource;
 use faceanim_rig::Character;
 use faceanim_take::Footage;
-use faceanim_track::{Tracker, TrackingMode};
+use faceanim_track::{SharedFrame, Tracker, TrackingMode};
 
 use super::{
     CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Job, JobKind, PREVIEW_HEIGHT, Previews, STILL_FRAMES,
@@ -65,12 +65,18 @@ fn read_input(job: &Job, path: &Path, shown_name: &str) -> Result<(Footage, Prev
     let mut records = Vec::new();
     let mut previews = Previews::new();
     let mut names = Vec::new();
-    // A frame for each thread at a time, each shown as it is read.
+    // A frame for each thread at a time, each shown as it is read; the bytes of frames done
+    // with are read into again.
     let mut frames = Vec::with_capacity(workers.count() + 1);
+    let mut spares = Vec::with_capacity(workers.count() + 1);
     loop {
-        frames.clear();
+        spares.extend(
+            frames
+                .drain(..)
+                .filter_map(|f: SharedFrame| Arc::try_unwrap(f.rgb).ok()),
+        );
         while frames.len() <= workers.count() {
-            let Some(image) = source.next_frame().map_err(renamed)? else {
+            let Some(image) = source.next_frame_reusing(spares.pop()).map_err(renamed)? else {
                 break;
             };
             previews.push_image(&image, PREVIEW_HEIGHT)?;
