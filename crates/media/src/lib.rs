@@ -404,7 +404,7 @@ impl FrameSource {
 
     /// [`FrameSource::next_frame`], a video's frame read into `spare` (the bytes of a frame
     /// the caller is done with) when it is of this source's size: a long video then allocates
-    /// and clears no frame-sized memory per frame (24 MB a second at 1080p and 30 fps).
+    /// and clears no frame-sized memory per frame (190 MB a second at 1080p and 30 fps).
     ///
     /// # Errors
     /// As [`FrameSource::next_frame`].
