@@ -149,6 +149,14 @@ pub fn shared(image: faceanim_media::Image) -> SharedFrame {
     }
 }
 
+/// The bytes of a frame tracking is done with, to read the next frame into
+/// ([`FrameSource::next_frame_reusing`]); `None` while another thread still holds the frame
+/// (a worker that has not let go of it yet).
+#[must_use]
+pub fn reusable(frame: SharedFrame) -> Option<Vec<u8>> {
+    std::sync::Arc::try_unwrap(frame.rgb).ok()
+}
+
 /// Captures consecutive frames together ([`Tracker::next_frames`]: the first on this thread,
 /// the others on `workers`'), `first` being the first one's index in an input of `fps` frames
 /// per second: what [`capture`] does with each group of frames, for callers that read the
@@ -228,11 +236,8 @@ pub fn capture(
                 frames.push(record);
                 progress(frames.len());
             }
-            for image in images.drain(..) {
-                // A worker may not have let go of its frame yet: then it is not reused.
-                if let Ok(bytes) = std::sync::Arc::try_unwrap(image.rgb) {
-                    let _ = give_back.send(bytes);
-                }
+            for bytes in images.drain(..).filter_map(reusable) {
+                let _ = give_back.send(bytes);
             }
         }
         Ok(())

@@ -10,7 +10,7 @@ use faceanim_adapt::{
 use faceanim_media::FrameSource;
 use faceanim_rig::Character;
 use faceanim_take::Footage;
-use faceanim_track::{SharedFrame, Tracker, TrackingMode};
+use faceanim_track::{Tracker, TrackingMode};
 
 use super::{
     CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Job, JobKind, PREVIEW_HEIGHT, Previews, STILL_FRAMES,
@@ -70,11 +70,7 @@ fn read_input(job: &Job, path: &Path, shown_name: &str) -> Result<(Footage, Prev
     let mut frames = Vec::with_capacity(workers.count() + 1);
     let mut spares = Vec::with_capacity(workers.count() + 1);
     loop {
-        spares.extend(
-            frames
-                .drain(..)
-                .filter_map(|f: SharedFrame| Arc::try_unwrap(f.rgb).ok()),
-        );
+        spares.extend(frames.drain(..).filter_map(faceanim_capture::reusable));
         while frames.len() <= workers.count() {
             let Some(image) = source.next_frame_reusing(spares.pop()).map_err(renamed)? else {
                 break;
