@@ -200,6 +200,11 @@ try {
   // 6. Train the adapter from the page (few renders: the adapter tests check accuracy); the
   //    progress bar moves; then the take is estimated by the adapter.
   await openSection('adapter-section');
+  // Left empty, the field trains the studio's default, which the page shows from the state.
+  const placeholder = await page.getAttribute('#train-samples', 'placeholder');
+  const defaultSamples = (await captureState()).adapter.default_samples;
+  check(Number(placeholder) === defaultSamples && defaultSamples >= 10000,
+    `the renders field shows ${placeholder}, the studio's default is ${defaultSamples}`);
   await page.fill('#train-samples', '300');
   await page.click('#train');
   await page.waitForFunction(() => { const j = window.studio.capture.view.job; return j && j.kind.includes('training') && j.running && j.done > 0; }, null, { timeout: 120000 });

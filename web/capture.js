@@ -119,6 +119,7 @@ export function apply(v) {
   if (!running && polling) { window.clearInterval(polling); polling = 0; }
   // Adapter.
   const a = v.adapter;
+  input('train-samples').placeholder = String(a.default_samples);
   $('adapter-info').textContent = a.loaded
     ? `Adapter: ${a.path}${a.report ? ` (test MAE ${a.report.mae_test.toFixed(4)}, ${a.report.samples} renders)` : ''}.${a.note ? ` ${a.note}` : ''}${a.unseen.length ? ` Capture cannot drive ${a.unseen.length} of ${a.report ? a.report.shapes.length : '?'} shapes, each shown alone: ${a.unseen.join(', ')}. Sketch them or correct frames.` : ''}`
     : `No adapter yet: estimating by ARKit name.${a.note ? ` ${a.note}` : ''} Train one to drive every shape of this character.`;
@@ -216,7 +217,11 @@ export async function post(path, body) {
 }
 
 // ---------- adapter ----------
-$('train').onclick = () => post('api/capture/adapter/train', { samples: Math.round(Number(input('train-samples').value) || 10000) });
+// Empty: the studio's default, shown as the placeholder.
+$('train').onclick = () => {
+  const samples = Math.round(Number(input('train-samples').value));
+  post('api/capture/adapter/train', samples > 0 ? { samples } : {});
+};
 $('finetune').onclick = () => post('api/capture/adapter/finetune');
 
 // ---------- smoothing ----------

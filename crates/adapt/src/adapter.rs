@@ -108,9 +108,13 @@ pub struct TrainingReport {
     pub mae_val: f32,
     /// Samples in the dataset.
     pub samples: usize,
-    /// Epochs run.
+    /// Networks averaged, each trained on its own share of the training split
+    /// ([`crate::train::DEFAULT_MEMBERS`]); 1 in adapters from before.
+    #[serde(default = "one")]
+    pub members: usize,
+    /// Epochs run (the most of any member).
     pub epochs: usize,
-    /// The epoch whose weights were kept.
+    /// The epoch whose weights were kept (the latest of any member's).
     pub best_epoch: usize,
     /// Seconds spent training.
     pub seconds: f64,
@@ -131,6 +135,10 @@ pub struct TrainingReport {
     /// filled where the character is at hand; empty in adapters from before.
     #[serde(default)]
     pub shapes: Vec<ShapeReading>,
+}
+
+fn one() -> usize {
+    1
 }
 
 /// How a character relates to an adapter that passed [`Adapter::check`].

@@ -205,7 +205,8 @@ fn read(
 /// What to generate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DatasetOptions {
-    /// Number of weight vectors (the seed's 10,000 by default).
+    /// Number of weight vectors ([`crate::DEFAULT_SAMPLES`] where the user does not say; the
+    /// seed renders 10,000).
     pub samples: usize,
     /// Random seed.
     pub seed: u64,

@@ -45,7 +45,9 @@ pub use faceanim_take::{Correction, Fingerprint};
 pub use features::{Calibration, Expression, FeatureSet, LandmarkFrame};
 pub use locality::Locality;
 pub use readings::{Reading, ShapeReading};
-pub use train::{FinetuneReport, Loss, TrainOptions, finetune, train};
+pub use train::{
+    DEFAULT_MEMBERS, DEFAULT_SAMPLES, FinetuneReport, Loss, TrainOptions, finetune, train,
+};
 
 use std::path::{Path, PathBuf};
 
@@ -101,6 +103,14 @@ pub enum AdaptError {
     /// Too few samples to split into training, validation and test.
     #[error("{0} samples are too few to train on")]
     NotEnoughData(usize),
+    /// More networks than training samples to share out among them.
+    #[error("{members} networks cannot share {training} training samples")]
+    TooManyMembers {
+        /// Networks asked for.
+        members: usize,
+        /// Samples in the training split.
+        training: usize,
+    },
     /// The face model found no face in the character's neutral front render, so its shapes
     /// cannot be read one by one.
     #[error("the face model reads no face in the character's neutral front render")]

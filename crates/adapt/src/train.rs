@@ -82,7 +82,31 @@ pub struct TrainOptions {
     pub patience: usize,
     /// Seed of the initial weights and the batch order.
     pub seed: u64,
+    /// Networks trained side by side, each on its own share of the training split, and
+    /// averaged ([`DEFAULT_MEMBERS`]; 1: one network on all of it).
+    pub members: usize,
 }
+
+/// Networks in an adapter by default. Each is trained on its own share of the training
+/// split, and the adapter's output is their mean (bagging). Measured on ICT's identity with 25
+/// shapes (`crates/cli/tests/heldout.rs`'s tuning material), whole `faceanim adapt`, on two or
+/// three training sets (seeds) each:
+///
+/// | | three.js stills, this head | three.js stills, another person | cap12 (real video, correlation with MediaPipe) |
+/// | --- | --- | --- | --- |
+/// | one network, 10,000 renders | 0.0738, 0.0746, 0.0742 | 0.0764, 0.0766, 0.0776 | 0.858, 0.857, 0.848 |
+/// | one network, 20,000 renders | 0.0711, 0.0723, 0.0731 | 0.0741, 0.0743, 0.0753 | 0.842, 0.848, 0.837 |
+/// | two networks, 20,000 renders | 0.0733, 0.0738 | 0.0748, 0.0752 | 0.873, 0.881 |
+///
+/// One network on all the renders reads renders best and people worst: it fits the renders
+/// more closely, and people are not renders. Two networks read both better than one network on
+/// half as many renders; on the two other real videos too (cap13 0.737 and 0.786 against 0.703
+/// and 0.696, franck 0.789 and 0.822 against 0.700 and 0.767).
+pub const DEFAULT_MEMBERS: usize = 2;
+
+/// Random expressions rendered by default: 10,000 for each of the [`DEFAULT_MEMBERS`]
+/// networks.
+pub const DEFAULT_SAMPLES: usize = 20_000;
 
 impl Default for TrainOptions {
     fn default() -> TrainOptions {
@@ -94,6 +118,7 @@ impl Default for TrainOptions {
             max_epochs: 400,
             patience: 25,
             seed: 1,
+            members: DEFAULT_MEMBERS,
         }
     }
 }
@@ -400,11 +425,16 @@ fn adam(net: &Net, learning_rate: f64) -> Result<candle_nn::AdamW, AdaptError> {
     )?)
 }
 
-/// Trains an adapter on `dataset`; `control.progress` gets (epoch, max epochs).
+/// Trains an adapter on `dataset`: `options.members` networks, each on its own consecutive
+/// share of the training split (its own inputs read, [`Locality::PerShape`], measured on that
+/// share) and stopped early on the whole validation split, kept as one network whose output is
+/// their mean; the test MAE is that network's. `control.progress` gets (epochs done, epochs at
+/// most) over all members.
 ///
 /// # Errors
 /// [`AdaptError::Training`] if candle fails, [`AdaptError::NotEnoughData`] for fewer than
-/// [`crate::MIN_SAMPLES`] samples, [`AdaptError::Cancelled`] when cancelled.
+/// [`crate::MIN_SAMPLES`] samples, [`AdaptError::TooManyMembers`] for more members than
+/// training samples, [`AdaptError::Cancelled`] when cancelled.
 pub fn train(
     dataset: &Dataset,
     options: &TrainOptions,
@@ -452,60 +482,41 @@ pub fn train(
             &scale,
         )
     };
-    let (train_set, validation, test) = (
-        part(split.train.clone())?,
-        part(split.validation.clone())?,
-        part(split.test.clone())?,
-    );
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(options.seed);
-    let outputs = dataset.blendshapes.len();
-    let mut architecture = options.architecture;
-    let net = match architecture.locality {
-        Locality::Global => Net::init(architecture, features.len(), outputs, &mut rng)?,
-        Locality::PerShape { width } => {
-            let reads = crate::locality::reads(
-                features,
-                &reference_neutral,
-                &inputs[split.train.clone()],
-                &dataset.targets[split.train.clone()],
-            );
-            for (name, read) in dataset.blendshapes.iter().zip(&reads) {
-                let scores = features.scores();
-                tracing::debug!(
-                    shape = %name,
-                    scores = read[..scores].iter().filter(|r| **r).count(),
-                    landmarks = read[scores..].iter().filter(|r| **r).count() / 3,
-                    "reads"
-                );
-            }
-            architecture.hidden = width.max(1) * outputs;
-            let mut net = Net::init(architecture, features.len(), outputs, &mut rng)?;
-            net.mask(crate::locality::masks(&reads, width.max(1)))?;
-            net
-        }
-    };
-    let mut optimizer = adam(&net, options.learning_rate)?;
-    let mut best = (f32::INFINITY, 0usize, net.snapshot()?);
-    let mut epochs = 0;
-    for e in 1..=options.max_epochs {
-        if control.cancelled() {
-            return Err(AdaptError::Cancelled);
-        }
-        epoch(&net, &mut optimizer, &train_set, None, options, &mut rng)?;
-        epochs = e;
-        let mae = net.mae(&validation.x, &validation.y)?;
-        tracing::debug!(epoch = e, mae_val = mae, "trained");
-        if mae < best.0 {
-            best = (mae, e, net.snapshot()?);
-        } else if e - best.1 >= options.patience {
-            break;
-        } else if (e - best.1) % (options.patience / 3).max(1) == 0 {
-            // On a plateau, smaller steps settle into the minimum Adam keeps jumping over.
-            optimizer.set_learning_rate(optimizer.learning_rate() * 0.5);
-        }
-        (control.progress)(e, options.max_epochs);
+    let (validation, test) = (part(split.validation.clone())?, part(split.test.clone())?);
+    let members = options.members.max(1);
+    if split.train.len() < members {
+        return Err(AdaptError::TooManyMembers {
+            members,
+            training: split.train.len(),
+        });
     }
-    let [hidden_weight, hidden_bias, output_weight, output_bias] = best.2;
+    let outputs = dataset.blendshapes.len();
+    let mut trained = Vec::with_capacity(members);
+    for (member, share) in shares(split.train.clone(), members).into_iter().enumerate() {
+        let train_set = part(share.clone())?;
+        let job = Member {
+            index: member,
+            of: members,
+            inputs: &inputs[share.clone()],
+            targets: &dataset.targets[share],
+            reference_neutral: &reference_neutral,
+            names: &dataset.blendshapes,
+        };
+        trained.push(job.train(&train_set, &validation, options, &control)?);
+    }
+    // Every member has the same architecture: a per-shape network's width is set in training.
+    let architecture = trained[0].architecture;
+    let [hidden_weight, hidden_bias, output_weight, output_bias] = bag(&trained, outputs);
+    let architecture = Architecture {
+        hidden: architecture.hidden * members,
+        locality: match architecture.locality {
+            Locality::Global => Locality::Global,
+            Locality::PerShape { width } => Locality::PerShape {
+                width: width * members,
+            },
+        },
+        ..architecture
+    };
     let mut adapter = Adapter {
         blendshapes: dataset.blendshapes.clone(),
         fingerprint: dataset.fingerprint.clone(),
@@ -522,10 +533,11 @@ pub fn train(
     let kept = Net::from_adapter(&adapter)?;
     adapter.report = TrainingReport {
         mae_test: kept.mae(&test.x, &test.y)?,
-        mae_val: best.0,
+        mae_val: kept.mae(&validation.x, &validation.y)?,
         samples: dataset.len(),
-        epochs,
-        best_epoch: best.1,
+        members,
+        epochs: trained.iter().map(|m| m.epochs).max().unwrap_or(0),
+        best_epoch: trained.iter().map(|m| m.best_epoch).max().unwrap_or(0),
         seconds: started.elapsed().as_secs_f64(),
         corrections: 0,
         mae_test_front: None,
@@ -535,6 +547,164 @@ pub fn train(
     adapter.report.mae_test_front = adapter.front_test_error(dataset);
     adapter.report.mae_test_groups = adapter.test_errors_by_group(dataset);
     Ok(adapter)
+}
+
+/// `range` cut into `members` consecutive shares, as equal as can be (the first ones one
+/// longer).
+fn shares(range: std::ops::Range<usize>, members: usize) -> Vec<std::ops::Range<usize>> {
+    let (n, members) = (range.len(), members.max(1));
+    let mut start = range.start;
+    (0..members)
+        .map(|m| {
+            let len = n / members + usize::from(m < n % members);
+            let share = start..start + len;
+            start += len;
+            share
+        })
+        .collect()
+}
+
+/// One network of an adapter to train: its share of the training split.
+struct Member<'a> {
+    /// Which member (0 is trained with the options' seed, each next with the next seed).
+    index: usize,
+    /// Of how many.
+    of: usize,
+    /// Its share's inputs, as the adapter reads them (before standardisation).
+    inputs: &'a [Vec<f32>],
+    /// Its share's weights.
+    targets: &'a [Vec<f32>],
+    /// The mean neutral face's input (where the landmarks are, for locality).
+    reference_neutral: &'a [f32],
+    /// The shapes' names, for the log.
+    names: &'a [String],
+}
+
+/// A member's kept weights (hidden weight, hidden bias, output weight, output bias).
+struct Trained {
+    architecture: Architecture,
+    weights: [Vec<f32>; 4],
+    epochs: usize,
+    best_epoch: usize,
+}
+
+impl Member<'_> {
+    /// Trains on `train` (its share, standardised), keeping the epoch with the best
+    /// `validation` MAE; progress is reported over all members' epochs.
+    fn train(
+        &self,
+        train: &Examples,
+        validation: &Examples,
+        options: &TrainOptions,
+        control: &Control<'_>,
+    ) -> Result<Trained, AdaptError> {
+        let mut rng =
+            rand_chacha::ChaCha8Rng::seed_from_u64(options.seed.wrapping_add(self.index as u64));
+        let outputs = self.targets.first().map_or(0, Vec::len);
+        let mut architecture = options.architecture;
+        let features = architecture.features;
+        let net = match architecture.locality {
+            Locality::Global => Net::init(architecture, features.len(), outputs, &mut rng)?,
+            Locality::PerShape { width } => {
+                let reads = crate::locality::reads(
+                    features,
+                    self.reference_neutral,
+                    self.inputs,
+                    self.targets,
+                );
+                for (name, read) in self.names.iter().zip(&reads) {
+                    let scores = features.scores();
+                    tracing::debug!(
+                        member = self.index,
+                        shape = %name,
+                        scores = read[..scores].iter().filter(|r| **r).count(),
+                        landmarks = read[scores..].iter().filter(|r| **r).count() / 3,
+                        "reads"
+                    );
+                }
+                architecture.hidden = width.max(1) * outputs;
+                let mut net = Net::init(architecture, features.len(), outputs, &mut rng)?;
+                net.mask(crate::locality::masks(&reads, width.max(1)))?;
+                net
+            }
+        };
+        let mut optimizer = adam(&net, options.learning_rate)?;
+        let mut best = (f32::INFINITY, 0usize, net.snapshot()?);
+        let mut epochs = 0;
+        let done_before = self.index * options.max_epochs;
+        for e in 1..=options.max_epochs {
+            if control.cancelled() {
+                return Err(AdaptError::Cancelled);
+            }
+            epoch(&net, &mut optimizer, train, None, options, &mut rng)?;
+            epochs = e;
+            let mae = net.mae(&validation.x, &validation.y)?;
+            tracing::debug!(member = self.index, epoch = e, mae_val = mae, "trained");
+            if mae < best.0 {
+                best = (mae, e, net.snapshot()?);
+            } else if e - best.1 >= options.patience {
+                break;
+            } else if (e - best.1) % (options.patience / 3).max(1) == 0 {
+                // On a plateau, smaller steps settle into the minimum Adam keeps jumping over.
+                optimizer.set_learning_rate(optimizer.learning_rate() * 0.5);
+            }
+            (control.progress)(done_before + e, self.of * options.max_epochs);
+        }
+        (control.progress)(
+            (self.index + 1) * options.max_epochs,
+            self.of * options.max_epochs,
+        );
+        Ok(Trained {
+            architecture,
+            weights: best.2,
+            epochs,
+            best_epoch: best.1,
+        })
+    }
+}
+
+/// The members as one network whose output is the mean of theirs: their hidden units side by
+/// side (a per-shape network's each shape's units together, so its parts stay in the layout
+/// [`Locality::PerShape`] describes), their output weights and biases divided by their number.
+fn bag(members: &[Trained], outputs: usize) -> [Vec<f32>; 4] {
+    let count = members.len();
+    let Some(first) = members.first() else {
+        return Default::default();
+    };
+    if count == 1 {
+        return first.weights.clone();
+    }
+    let hidden = first.architecture.hidden;
+    let inputs = first.weights[0].len() / hidden.max(1);
+    // Units are bagged in blocks: a shape's own units (per shape), or the whole layer.
+    let block = match first.architecture.locality {
+        Locality::PerShape { width } => width.max(1),
+        Locality::Global => hidden,
+    };
+    let total = hidden * count;
+    // The merged index of member m's unit u.
+    let merged = |m: usize, u: usize| (u / block) * block * count + m * block + u % block;
+    let mut hidden_weight = vec![0.0f32; total * inputs];
+    let mut hidden_bias = vec![0.0f32; total];
+    let mut output_weight = vec![0.0f32; outputs * total];
+    let mut output_bias = vec![0.0f32; outputs];
+    let share = 1.0 / count as f32;
+    for (m, member) in members.iter().enumerate() {
+        let [w, b, ow, ob] = &member.weights;
+        for u in 0..hidden {
+            let k = merged(m, u);
+            hidden_weight[k * inputs..(k + 1) * inputs]
+                .copy_from_slice(&w[u * inputs..(u + 1) * inputs]);
+            hidden_bias[k] = b[u];
+            for o in 0..outputs {
+                output_weight[o * total + k] = ow[o * hidden + u] * share;
+            }
+        }
+        for (sum, v) in output_bias.iter_mut().zip(ob) {
+            *sum += v * share;
+        }
+    }
+    [hidden_weight, hidden_bias, output_weight, output_bias]
 }
 
 /// How fine-tuning went.
@@ -662,4 +832,117 @@ pub fn finetune(
     // Measured for the adapter before tuning; the caller reads the tuned one again.
     tuned.report.shapes.clear();
     Ok((tuned, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The network's raw outputs for one input row, written out (no candle).
+    fn outputs(weights: &[Vec<f32>; 4], hidden: usize, x: &[f32]) -> Vec<f32> {
+        let [w, b, ow, ob] = weights;
+        let h: Vec<f32> = (0..hidden)
+            .map(|u| {
+                let z: f32 = w[u * x.len()..(u + 1) * x.len()]
+                    .iter()
+                    .zip(x)
+                    .map(|(a, b)| a * b)
+                    .sum::<f32>()
+                    + b[u];
+                z.max(0.0)
+            })
+            .collect();
+        ob.iter()
+            .enumerate()
+            .map(|(o, bias)| {
+                bias + h
+                    .iter()
+                    .enumerate()
+                    .map(|(u, v)| ow[o * hidden + u] * v)
+                    .sum::<f32>()
+            })
+            .collect()
+    }
+
+    fn member(locality: Locality, rng: &mut rand_chacha::ChaCha8Rng) -> Trained {
+        let (inputs, outputs) = (5, 3);
+        let (hidden, block) = match locality {
+            Locality::PerShape { width } => (width * outputs, width),
+            Locality::Global => (4, 4),
+        };
+        let mut random = |n: usize| (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut output_weight: Vec<f32> = random(outputs * hidden);
+        if block < hidden {
+            // Each shape's output reads only its own units.
+            for o in 0..outputs {
+                for u in 0..hidden {
+                    if u / block != o {
+                        output_weight[o * hidden + u] = 0.0;
+                    }
+                }
+            }
+        }
+        Trained {
+            architecture: Architecture {
+                hidden,
+                locality,
+                ..Architecture::default()
+            },
+            weights: [
+                random(hidden * inputs),
+                random(hidden),
+                output_weight,
+                random(outputs),
+            ],
+            epochs: 1,
+            best_epoch: 1,
+        }
+    }
+
+    #[test]
+    fn bagged_networks_read_out_the_mean_of_their_members() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for locality in [Locality::PerShape { width: 2 }, Locality::Global] {
+            let members: Vec<Trained> = (0..3).map(|_| member(locality, &mut rng)).collect();
+            let bagged = bag(&members, 3);
+            let hidden = members[0].architecture.hidden;
+            for _ in 0..10 {
+                let x: Vec<f32> = (0..5).map(|_| rng.random_range(-2.0..2.0)).collect();
+                let each: Vec<Vec<f32>> = members
+                    .iter()
+                    .map(|m| outputs(&m.weights, hidden, &x))
+                    .collect();
+                let got = outputs(&bagged, hidden * 3, &x);
+                for (o, v) in got.iter().enumerate() {
+                    let mean = each.iter().map(|e| e[o]).sum::<f32>() / 3.0;
+                    assert!(
+                        (v - mean).abs() < 1e-5,
+                        "{locality:?} output {o}: {v} vs {mean}"
+                    );
+                }
+            }
+            if let Locality::PerShape { width } = locality {
+                // Each shape's units stay together: its output reads only its own block of
+                // width × members units, as a per-shape network of that width.
+                let (total, block) = (hidden * 3, width * 3);
+                for o in 0..3 {
+                    for u in 0..total {
+                        if u / block != o {
+                            assert!(bagged[2][o * total + u] == 0.0, "shape {o} unit {u}");
+                        }
+                    }
+                }
+            }
+        }
+        // One member is itself.
+        let one = member(Locality::PerShape { width: 2 }, &mut rng);
+        assert_eq!(bag(std::slice::from_ref(&one), 3), one.weights);
+    }
+
+    #[test]
+    fn a_training_split_is_shared_out_whole_and_in_order() {
+        assert_eq!(shares(0..10, 3), vec![0..4, 4..7, 7..10]);
+        assert_eq!(shares(5..21, 2), vec![5..13, 13..21]);
+        assert_eq!(shares(0..8, 1), vec![0..8]);
+    }
 }

@@ -11,7 +11,8 @@ use faceanim_adapt::{
 use faceanim_rig::Character;
 use faceanim_track::FaceModels;
 
-/// Enough samples for a test to show the adapter learns (10,000 is the product's default).
+/// Enough samples for a test to show the adapter learns (the product renders
+/// [`faceanim_adapt::DEFAULT_SAMPLES`]).
 const SAMPLES: usize = 2000;
 
 fn dataset(character: &Character, models: &FaceModels, samples: usize, seed: u64) -> Dataset {

@@ -25,14 +25,20 @@ pub struct AdaptArgs {
     /// The adapter file to write.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Random expressions to render (split 80/10/10 into training, validation and test).
-    #[arg(long, default_value_t = 10_000)]
+    /// Random expressions to render (split 80/10/10 into training, validation and test; the
+    /// training part shared out among the --members networks).
+    #[arg(long, default_value_t = faceanim_adapt::DEFAULT_SAMPLES)]
     pub samples: usize,
+    /// Networks trained side by side, each on its own share of the training renders, whose
+    /// mean the adapter reads out (bagging: people are read better than by one network on all
+    /// of them, which follows the renders too closely); 1 for one network.
+    #[arg(long, default_value_t = faceanim_adapt::DEFAULT_MEMBERS)]
+    pub members: usize,
     /// Random seed (expressions, initial weights, batch order).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Print {"mae_test", "mae_val", "samples", "seconds", "shapes": [...], "heldout": [...]}
-    /// as JSON at the end.
+    /// Print {"mae_test", "mae_val", "samples", "members", "seconds", "shapes": [...],
+    /// "heldout": [...]} as JSON at the end.
     #[arg(long)]
     pub json: bool,
     /// Whether the training renders vary camera, light, skin, background and picture quality
@@ -398,6 +404,13 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         faceanim_adapt::MIN_SAMPLES,
         args.samples
     );
+    let training = faceanim_adapt::Split::of(args.samples).train.len();
+    anyhow::ensure!(
+        (1..=training).contains(&args.members),
+        "--members must be between 1 and the {training} training samples of --samples {}, got {}",
+        args.samples,
+        args.members
+    );
     if let Some(hidden) = args.hidden {
         anyhow::ensure!(
             (1..=4096).contains(&hidden),
@@ -454,6 +467,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         architecture: args.architecture(),
         loss: args.loss.into(),
         seed: args.seed,
+        members: args.members,
         ..TrainOptions::default()
     };
     if args.ablation {
@@ -474,7 +488,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
     let heldout = evaluate_held_out(&adapter, &folders)?;
     let report = &adapter.report;
     eprintln!(
-        "wrote {} — test MAE {:.4} ({} on the front renders; by group: {}), validation MAE {:.4}, {} samples, best epoch {} of {}; {:.1} s ({:.1} s for the training set, {:.1} s training)",
+        "wrote {} — test MAE {:.4} ({} on the front renders; by group: {}), validation MAE {:.4}, {} samples, {} networks, best epoch {} of {}; {:.1} s ({:.1} s for the training set, {:.1} s training)",
         output.display(),
         report.mae_test,
         report
@@ -483,6 +497,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         by_group(&report.mae_test_groups),
         report.mae_val,
         report.samples,
+        report.members,
         report.best_epoch,
         report.epochs,
         seconds,
@@ -496,6 +511,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
             mae_test_groups: &report.mae_test_groups,
             mae_val: report.mae_val,
             samples: report.samples,
+            members: report.members,
             best_epoch: report.best_epoch,
             epochs: report.epochs,
             seconds,
@@ -522,6 +538,8 @@ struct TrainingSummary<'a> {
     mae_test_groups: &'a [faceanim_adapt::sampling::GroupError],
     mae_val: f32,
     samples: usize,
+    /// Networks averaged.
+    members: usize,
     best_epoch: usize,
     epochs: usize,
     /// Wall-clock seconds from the start to the written adapter (training set, training and
@@ -585,7 +603,9 @@ fn ablation(
     json: bool,
 ) -> anyhow::Result<()> {
     let default = Architecture::default();
-    let mut rows: Vec<(Augmentation, Architecture, Loss)> = Vec::new();
+    // Each row: the training set's augmentation, the network, its loss and how many networks
+    // are averaged (the seed trains one).
+    let mut rows: Vec<(Augmentation, Architecture, Loss, usize)> = Vec::new();
     for augmentation in [Augmentation::None, Augmentation::Randomised] {
         for features in [FeatureSet::Scores, FeatureSet::Landmarks, FeatureSet::Both] {
             for calibration in [Calibration::None, Calibration::Neutral] {
@@ -597,6 +617,7 @@ fn ablation(
                         ..default
                     },
                     base.loss,
+                    base.members,
                 ));
             }
         }
@@ -637,10 +658,23 @@ fn ablation(
         } else {
             Loss::SquaredClamped
         };
-        rows.push((Augmentation::Randomised, architecture, loss));
+        let members = if architecture.locality == Locality::Global {
+            1
+        } else {
+            base.members
+        };
+        rows.push((Augmentation::Randomised, architecture, loss, members));
     }
     if base.loss != Loss::SquaredClamped {
-        rows.push((Augmentation::Randomised, default, Loss::SquaredClamped));
+        rows.push((
+            Augmentation::Randomised,
+            default,
+            Loss::SquaredClamped,
+            base.members,
+        ));
+    }
+    if base.members != 1 {
+        rows.push((Augmentation::Randomised, default, base.loss, 1));
     }
     // The other augmentation's training set is cached beside the given one.
     let other = |augmentation: Augmentation| -> anyhow::Result<Dataset> {
@@ -657,7 +691,7 @@ fn ablation(
     let mut datasets: Vec<(Augmentation, Dataset)> =
         vec![(options.augmentation, dataset_given.clone())];
     let mut results = Vec::new();
-    for (augmentation, architecture, loss) in rows {
+    for (augmentation, architecture, loss, members) in rows {
         if !datasets.iter().any(|(a, _)| *a == augmentation) {
             datasets.push((augmentation, other(augmentation)?));
         }
@@ -669,6 +703,7 @@ fn ablation(
             &TrainOptions {
                 architecture,
                 loss,
+                members,
                 ..*base
             },
         )?;
@@ -701,6 +736,7 @@ fn ablation(
             frame: architecture.frame,
             locality: architecture.locality,
             hidden: architecture.hidden,
+            members,
             activation: architecture.activation,
             clamp: architecture.clamp,
             loss,
@@ -720,9 +756,9 @@ fn ablation(
             .map(|f| format!(" held-out MAE ({}) |", f.dir.display()))
             .collect();
         println!(
-            "| augmentation | features | calibration | landmarks | inputs per shape | layers | hidden | loss | test MAE (own renders) | test MAE (front renders) |{heldout_columns} best epoch | seconds |"
+            "| augmentation | features | calibration | landmarks | inputs per shape | layers | hidden | networks | loss | test MAE (own renders) | test MAE (front renders) |{heldout_columns} best epoch | seconds |"
         );
-        println!("|{}", " --- |".repeat(12 + folders.len()));
+        println!("|{}", " --- |".repeat(13 + folders.len()));
         for r in &results {
             let activation = match r.activation {
                 Activation::Relu => "ReLU",
@@ -738,7 +774,7 @@ fn ablation(
                 .mae_front_renders_test
                 .map_or_else(|| "–".to_owned(), |m| format!("{m:.4}"));
             println!(
-                "| {} | {} | {} | {} | {} | Linear → {activation} → Linear{clamp} | {} | {} | {:.4} | {front} |{heldout} {} | {:.1} |",
+                "| {} | {} | {} | {} | {} | Linear → {activation} → Linear{clamp} | {} | {} | {} | {:.4} | {front} |{heldout} {} | {:.1} |",
                 r.augmentation.name(),
                 r.features.name(),
                 r.calibration.name(),
@@ -748,6 +784,7 @@ fn ablation(
                     Locality::PerShape { .. } => "what it moves",
                 },
                 r.hidden,
+                r.members,
                 r.loss.name(),
                 r.mae_test,
                 r.epochs,
@@ -766,7 +803,10 @@ struct AblationRow {
     calibration: Calibration,
     frame: LandmarkFrame,
     locality: Locality,
+    /// Hidden units in all (of every member).
     hidden: usize,
+    /// Networks averaged.
+    members: usize,
     activation: Activation,
     clamp: bool,
     loss: Loss,

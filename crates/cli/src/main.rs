@@ -236,6 +236,7 @@ struct EvalArgs {
 }
 
 fn main() -> ExitCode {
+    let spare_heap = faceanim_malloc::keep_spare_heap();
     let cli = Cli::parse();
     let filter = match cli.verbose {
         0 => "warn",
@@ -249,6 +250,7 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .without_time()
         .init();
+    tracing::debug!(spare_heap, "allocator keeps spare heap");
     match run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {

@@ -46,8 +46,6 @@ use support::{
     track_clip,
 };
 
-/// Training samples: the product's default.
-const SAMPLES: &str = "10000";
 /// A channel moves on the footage when MediaPipe's score spans at least this between its 5th
 /// and 95th percentiles (a channel that never changes by a tenth is noise around a constant).
 const MOVES: f64 = 0.1;
@@ -198,14 +196,13 @@ fn an_adapter_reads_people_and_renderers_it_never_saw() {
     let held_out_auto = out.join("blender-person-c-no-neutral");
     blender_stills(&models[2], &without, &held_out_auto);
 
+    // The product's defaults: samples and networks as a user gets them.
     let adapter = out.join("head.adapter.safetensors");
     let mut args = vec![
         "adapt",
         models[0].to_str().unwrap(),
         "-o",
         adapter.to_str().unwrap(),
-        "--samples",
-        SAMPLES,
         "--json",
     ];
     let dirs = [&own, &person_b, &held_out, &held_out_auto].map(|d| d.to_str().unwrap().to_owned());

@@ -455,6 +455,8 @@ pub struct AdapterView {
     /// The character's shapes capture cannot drive (each shown alone, not read by the
     /// adapter): the animator sketches them or corrects frames.
     pub unseen: Vec<String>,
+    /// Renders training draws when the page does not say how many.
+    pub default_samples: usize,
 }
 
 /// A long job.

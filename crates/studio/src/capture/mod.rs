@@ -39,8 +39,8 @@ const PREVIEW_HEIGHT: usize = 360;
 const LIVE_PREVIEW_HEIGHT: usize = 240;
 /// Frames a photo's 0 → peak → 0 animation lasts.
 const STILL_FRAMES: usize = 30;
-/// Training-set size when the page does not say (the seed's).
-pub const DEFAULT_SAMPLES: usize = 10_000;
+/// Training-set size when the page does not say (the command line's too).
+pub const DEFAULT_SAMPLES: usize = faceanim_adapt::DEFAULT_SAMPLES;
 /// Fine-tuning needs the training set as an anchor; without a cached one it renders this many.
 const FINETUNE_ANCHOR_SAMPLES: usize = 2_000;
 
@@ -788,6 +788,7 @@ impl CaptureDesk {
                         .map(str::to_owned)
                         .collect()
                 }),
+                default_samples: DEFAULT_SAMPLES,
             },
             job: self.job.as_ref().map(|j| j.view()),
             filtering: FilteringView {
