@@ -321,7 +321,10 @@ fn with_bar<T>(
 ) -> anyhow::Result<T> {
     let progress = bar(total as u64, what);
     let never = AtomicBool::new(false);
-    let report = |done: usize, _total: usize| progress.set_position(done as u64);
+    let report = |done: usize, total: usize| {
+        progress.set_length(total as u64);
+        progress.set_position(done as u64);
+    };
     let result = work(Control {
         progress: &report,
         cancel: &never,
@@ -391,9 +394,11 @@ fn dataset(
 }
 
 fn train_with_bar(dataset: &Dataset, options: &TrainOptions) -> anyhow::Result<Adapter> {
-    with_bar(options.max_epochs, "training epoch", |control| {
-        faceanim_adapt::train(dataset, options, control)
-    })
+    with_bar(
+        options.max_epochs * options.members.max(1),
+        "training epoch",
+        |control| faceanim_adapt::train(dataset, options, control),
+    )
 }
 
 pub fn run(args: AdaptArgs) -> anyhow::Result<()> {

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::atomic::Ordering;
 
 use faceanim_adapt::{
     Adapter, Control, Dataset, DatasetOptions, FaceCamera, Fingerprint, Fit, TrainOptions,
@@ -204,7 +205,10 @@ pub fn start_training(
             seed,
             ..TrainOptions::default()
         };
-        job.stage("training", train_options.max_epochs);
+        job.stage(
+            "training",
+            train_options.max_epochs * train_options.members.max(1),
+        );
         let mut adapter = with_control(job, |control| {
             faceanim_adapt::train(&dataset, &train_options, control)
         })?;
@@ -297,7 +301,11 @@ fn with_control<T>(
     job: &Job,
     work: impl FnOnce(Control<'_>) -> Result<T, faceanim_adapt::AdaptError>,
 ) -> Result<T, ApiError> {
-    let progress = |done: usize, _total: usize| job.progress(done);
+    // The work knows its length best (training: every network's epochs at most).
+    let progress = |done: usize, total: usize| {
+        job.total.store(total, Ordering::Relaxed);
+        job.progress(done);
+    };
     Ok(work(Control {
         progress: &progress,
         cancel: &job.cancel,
