@@ -264,38 +264,38 @@ fn an_adapter_reads_people_and_renderers_it_never_saw() {
             .join(", ")
     );
     // The held-out renderer and person with the neutral given: the issue asks for 0.08. The
-    // seed's global network gave 0.0785; per-shape parts give 0.0803, their sparse groups as
-    // good and the group with every shape at once (0.238 against 0.227) worse, for a real
-    // person's squint that no longer follows the mouth (below). This bar keeps it from
-    // slipping further; under half of always answering the mean pose.
+    // seed's global network gave 0.0785 and reads a person's talking as a squint; one per-shape
+    // network on 10,000 renders gave 0.0803; two on 10,000 each, averaged (the product's
+    // default, `faceanim_adapt::DEFAULT_MEMBERS`), 0.0782. Under half of always answering the
+    // mean pose.
     let (mae, baseline) = (
         heldout[2]["mae"].as_f64().unwrap(),
         heldout[2]["mae_mean_baseline"].as_f64().unwrap(),
     );
-    assert!(mae <= 0.085, "held-out MAE {mae}: {}", heldout[2]);
+    assert!(mae <= 0.08, "held-out MAE {mae}: {}", heldout[2]);
     assert!(
         mae < baseline / 2.0,
         "held-out MAE {mae} against the mean's {baseline}"
     );
     // Without the neutral picture each part of the face is taken from the pose where it is
-    // calmest, as for a take, which is not quite neutral: 0.0902, where the least expressive
-    // pose as a whole gave 0.0931; well under the mean pose's error.
+    // calmest, as for a take, which is not quite neutral: 0.0849 (one network: 0.0902, and
+    // 0.0931 against the least expressive pose as a whole); well under the mean pose's error.
     let auto = heldout[3]["mae"].as_f64().unwrap();
     assert!(auto < 0.6 * baseline, "held-out MAE without neutral {auto}");
-    assert!(auto <= 0.0925, "held-out MAE without neutral {auto}");
+    assert!(auto <= 0.0875, "held-out MAE without neutral {auto}");
     for (e, bar) in heldout.iter().zip([0.08, 0.085]) {
         let mae = e["mae"].as_f64().unwrap();
         assert!(mae <= bar, "{mae}: {e}");
     }
     // Real people: every channel MediaPipe moves on each video. The issue asks for a mean of
-    // 0.85 on cap12_edit: 0.86, read against each part of the face at its calmest frame (0.81
+    // 0.85 on cap12_edit: 0.873 (one network 0.858), read against each part of the face at its calmest frame (0.81
     // against the least expressive frame as a whole, which had to be calm everywhere at once:
     // its lids were not at their widest — MediaPipe's blink 0.08 there, 0.02 in the lids' own
     // calmest frame — and most of the man's lid movement read as less than nothing against
     // it; the seed's network gave 0.66). ICT's squint is not MediaPipe's (see the module's docs)
     // and is the weakest there. The two other videos came in no choice of the training (they
-    // were looked at, with cap12, when the neutral's parts were chosen): 0.70 and 0.70 (against the least expressive frame 0.72 and 0.70; the seed's network 0.57
-    // and 0.60); their weak channels are browDown, which MediaPipe does not see on the
+    // were looked at, with cap12, when the neutral's parts were chosen): 0.737 and 0.789 (one
+    // network 0.70 and 0.70; the seed's network 0.57 and 0.60); their weak channels are browDown, which MediaPipe does not see on the
     // character at all, and mouthRollLower. These bars keep what holds from slipping: most
     // channels follow, and every channel MediaPipe sees on the character does, the squints
     // too.
@@ -341,19 +341,19 @@ const FOOTAGE: [FootageBar; 3] = [
     FootageBar {
         video: CAP12,
         channels: 9,
-        mean: 0.83,
+        mean: 0.85,
         astray: 2,
     },
     FootageBar {
         video: CAP13,
         channels: 9,
-        mean: 0.65,
+        mean: 0.70,
         astray: 3,
     },
     FootageBar {
         video: FRANCK,
         channels: 5,
-        mean: 0.65,
+        mean: 0.72,
         astray: 3,
     },
 ];
