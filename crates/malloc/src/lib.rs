@@ -3,12 +3,13 @@
 //! Training an adapter (candle) allocates and frees tensors of a few hundred KiB to a few MiB at
 //! every step: the masked weights, their gradients, Adam's moments. glibc serves each block over
 //! 128 KiB with its own `mmap` and returns it with `munmap` when freed, so every step the kernel
-//! maps, clears and unmaps the same memory again (glibc raises that threshold by itself as
-//! blocks are freed, but only until a program tunes anything). Training the adapter's two
-//! networks on 4,000 cached renders took 19.4 s, 10.9 s of it in the kernel; with blocks up to
-//! [`MMAP_THRESHOLD`] taken from the heap and [`TOP_PAD`] of freed heap kept for reuse, 9.4 s
-//! with 1.1 s in the kernel (`faceanim adapt`, whole command, 2 cores). The memory is kept, not lost: the heap stays at most [`TOP_PAD`]
-//! above what is in use.
+//! maps, clears and unmaps the same memory again. glibc raises that threshold by itself as
+//! blocks are freed, but not reliably: training the adapter's two networks on 20,000 cached
+//! renders took 129 s of user and 103 s of system time untuned, and 121 s and 2.9 s with blocks
+//! up to [`MMAP_THRESHOLD`] taken from the heap and [`TOP_PAD`] of freed heap kept for reuse,
+//! giving the same weights to the bit (`faceanim adapt`, whole command, 2 cores). On 4,000
+//! renders, untuned runs took 17.8 and 28.1 s, tuned ones 13.0 and 15.1 s. The memory is kept,
+//! not lost: the heap stays at most [`TOP_PAD`] above what is in use.
 //!
 //! ```
 //! let kept = faceanim_malloc::keep_spare_heap();
