@@ -108,6 +108,14 @@ pub const DEFAULT_MEMBERS: usize = 2;
 /// networks.
 pub const DEFAULT_SAMPLES: usize = 20_000;
 
+impl TrainOptions {
+    /// Epochs training runs at most, over all its networks: what its progress counts to.
+    #[must_use]
+    pub fn epochs_at_most(&self) -> usize {
+        self.max_epochs * self.members.max(1)
+    }
+}
+
 impl Default for TrainOptions {
     fn default() -> TrainOptions {
         TrainOptions {
@@ -496,7 +504,6 @@ pub fn train(
         let train_set = part(share.clone())?;
         let job = Member {
             index: member,
-            of: members,
             inputs: &inputs[share.clone()],
             targets: &dataset.targets[share],
             reference_neutral: &reference_neutral,
@@ -504,19 +511,8 @@ pub fn train(
         };
         trained.push(job.train(&train_set, &validation, options, &control)?);
     }
-    // Every member has the same architecture: a per-shape network's width is set in training.
-    let architecture = trained[0].architecture;
-    let [hidden_weight, hidden_bias, output_weight, output_bias] = bag(&trained, outputs);
-    let architecture = Architecture {
-        hidden: architecture.hidden * members,
-        locality: match architecture.locality {
-            Locality::Global => Locality::Global,
-            Locality::PerShape { width } => Locality::PerShape {
-                width: width * members,
-            },
-        },
-        ..architecture
-    };
+    let (architecture, [hidden_weight, hidden_bias, output_weight, output_bias]) =
+        bag(&trained, outputs);
     let mut adapter = Adapter {
         blendshapes: dataset.blendshapes.clone(),
         fingerprint: dataset.fingerprint.clone(),
@@ -568,8 +564,6 @@ fn shares(range: std::ops::Range<usize>, members: usize) -> Vec<std::ops::Range<
 struct Member<'a> {
     /// Which member (0 is trained with the options' seed, each next with the next seed).
     index: usize,
-    /// Of how many.
-    of: usize,
     /// Its share's inputs, as the adapter reads them (before standardisation).
     inputs: &'a [Vec<f32>],
     /// Its share's weights.
@@ -648,11 +642,11 @@ impl Member<'_> {
                 // On a plateau, smaller steps settle into the minimum Adam keeps jumping over.
                 optimizer.set_learning_rate(optimizer.learning_rate() * 0.5);
             }
-            (control.progress)(done_before + e, self.of * options.max_epochs);
+            (control.progress)(done_before + e, options.epochs_at_most());
         }
         (control.progress)(
             (self.index + 1) * options.max_epochs,
-            self.of * options.max_epochs,
+            options.epochs_at_most(),
         );
         Ok(Trained {
             architecture,
@@ -665,14 +659,15 @@ impl Member<'_> {
 
 /// The members as one network whose output is the mean of theirs: their hidden units side by
 /// side (a per-shape network's each shape's units together, so its parts stay in the layout
-/// [`Locality::PerShape`] describes), their output weights and biases divided by their number.
-fn bag(members: &[Trained], outputs: usize) -> [Vec<f32>; 4] {
+/// [`Locality::PerShape`] describes), their output weights and biases divided by their number;
+/// and that network's architecture (every member's, `count` times as wide).
+fn bag(members: &[Trained], outputs: usize) -> (Architecture, [Vec<f32>; 4]) {
     let count = members.len();
     let Some(first) = members.first() else {
         return Default::default();
     };
     if count == 1 {
-        return first.weights.clone();
+        return (first.architecture, first.weights.clone());
     }
     let hidden = first.architecture.hidden;
     let inputs = first.weights[0].len() / hidden.max(1);
@@ -682,6 +677,16 @@ fn bag(members: &[Trained], outputs: usize) -> [Vec<f32>; 4] {
         Locality::Global => hidden,
     };
     let total = hidden * count;
+    let architecture = Architecture {
+        hidden: total,
+        locality: match first.architecture.locality {
+            Locality::Global => Locality::Global,
+            Locality::PerShape { width } => Locality::PerShape {
+                width: width * count,
+            },
+        },
+        ..first.architecture
+    };
     // The merged index of member m's unit u.
     let merged = |m: usize, u: usize| (u / block) * block * count + m * block + u % block;
     let mut hidden_weight = vec![0.0f32; total * inputs];
@@ -704,7 +709,10 @@ fn bag(members: &[Trained], outputs: usize) -> [Vec<f32>; 4] {
             *sum += v * share;
         }
     }
-    [hidden_weight, hidden_bias, output_weight, output_bias]
+    (
+        architecture,
+        [hidden_weight, hidden_bias, output_weight, output_bias],
+    )
 }
 
 /// How fine-tuning went.
@@ -904,8 +912,9 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         for locality in [Locality::PerShape { width: 2 }, Locality::Global] {
             let members: Vec<Trained> = (0..3).map(|_| member(locality, &mut rng)).collect();
-            let bagged = bag(&members, 3);
+            let (architecture, bagged) = bag(&members, 3);
             let hidden = members[0].architecture.hidden;
+            assert_eq!(architecture.hidden, hidden * 3);
             for _ in 0..10 {
                 let x: Vec<f32> = (0..5).map(|_| rng.random_range(-2.0..2.0)).collect();
                 let each: Vec<Vec<f32>> = members
@@ -922,6 +931,10 @@ mod tests {
                 }
             }
             if let Locality::PerShape { width } = locality {
+                assert_eq!(
+                    architecture.locality,
+                    Locality::PerShape { width: width * 3 }
+                );
                 // Each shape's units stay together: its output reads only its own block of
                 // width × members units, as a per-shape network of that width.
                 let (total, block) = (hidden * 3, width * 3);
@@ -936,7 +949,8 @@ mod tests {
         }
         // One member is itself.
         let one = member(Locality::PerShape { width: 2 }, &mut rng);
-        assert_eq!(bag(std::slice::from_ref(&one), 3), one.weights);
+        let (architecture, weights) = bag(std::slice::from_ref(&one), 3);
+        assert_eq!((architecture, weights), (one.architecture, one.weights));
     }
 
     #[test]

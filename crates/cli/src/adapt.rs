@@ -394,11 +394,9 @@ fn dataset(
 }
 
 fn train_with_bar(dataset: &Dataset, options: &TrainOptions) -> anyhow::Result<Adapter> {
-    with_bar(
-        options.max_epochs * options.members.max(1),
-        "training epoch",
-        |control| faceanim_adapt::train(dataset, options, control),
-    )
+    with_bar(options.epochs_at_most(), "training epoch", |control| {
+        faceanim_adapt::train(dataset, options, control)
+    })
 }
 
 pub fn run(args: AdaptArgs) -> anyhow::Result<()> {

@@ -455,7 +455,7 @@ struct Train {
 }
 
 fn default_samples() -> usize {
-    capture::DEFAULT_SAMPLES
+    faceanim_adapt::DEFAULT_SAMPLES
 }
 
 fn one_u64() -> u64 {

@@ -3,7 +3,6 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::Ordering;
 
 use faceanim_adapt::{
     Adapter, Control, Dataset, DatasetOptions, FaceCamera, Fingerprint, Fit, TrainOptions,
@@ -205,10 +204,7 @@ pub fn start_training(
             seed,
             ..TrainOptions::default()
         };
-        job.stage(
-            "training",
-            train_options.max_epochs * train_options.members.max(1),
-        );
+        job.stage("training", train_options.epochs_at_most());
         let mut adapter = with_control(job, |control| {
             faceanim_adapt::train(&dataset, &train_options, control)
         })?;
@@ -302,10 +298,7 @@ fn with_control<T>(
     work: impl FnOnce(Control<'_>) -> Result<T, faceanim_adapt::AdaptError>,
 ) -> Result<T, ApiError> {
     // The work knows its length best (training: every network's epochs at most).
-    let progress = |done: usize, total: usize| {
-        job.total.store(total, Ordering::Relaxed);
-        job.progress(done);
-    };
+    let progress = |done: usize, total: usize| job.progress_of(done, total);
     Ok(work(Control {
         progress: &progress,
         cancel: &job.cancel,

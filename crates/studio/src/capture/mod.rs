@@ -39,8 +39,6 @@ const PREVIEW_HEIGHT: usize = 360;
 const LIVE_PREVIEW_HEIGHT: usize = 240;
 /// Frames a photo's 0 → peak → 0 animation lasts.
 const STILL_FRAMES: usize = 30;
-/// Training-set size when the page does not say (the command line's too).
-pub const DEFAULT_SAMPLES: usize = faceanim_adapt::DEFAULT_SAMPLES;
 /// Fine-tuning needs the training set as an anchor; without a cached one it renders this many.
 const FINETUNE_ANCHOR_SAMPLES: usize = 2_000;
 
@@ -280,6 +278,12 @@ impl Job {
 
     fn progress(&self, done: usize) {
         self.done.store(done, Ordering::Relaxed);
+    }
+
+    /// Progress where the work itself says how long it is.
+    fn progress_of(&self, done: usize, total: usize) {
+        self.total.store(total, Ordering::Relaxed);
+        self.progress(done);
     }
 
     fn cancelled(&self) -> bool {
@@ -788,7 +792,7 @@ impl CaptureDesk {
                         .map(str::to_owned)
                         .collect()
                 }),
-                default_samples: DEFAULT_SAMPLES,
+                default_samples: faceanim_adapt::DEFAULT_SAMPLES,
             },
             job: self.job.as_ref().map(|j| j.view()),
             filtering: FilteringView {
