@@ -34,6 +34,11 @@ head_path, out_path = args[0], args[1]
 # "bare": the same avatar exported without any shape keys, as a scan, a sculpt or an avatar
 # whose face was never rigged comes.
 bare = args[2:] == ["bare"]
+# "remeshed": the face rebuilt by Blender's Decimate modifier (another topology, about a third
+# of the vertices), its VRoid-style keys carried over by a Surface Deform modifier bound to the
+# original head, and ARKit's own keys left out: a rig made by other software whose shapes are
+# not ARKit's and whose vertices are nobody's template.
+remeshed = args[2:] == ["remeshed"]
 
 open_gltf(head_path)
 face = next(o for o in bpy.data.objects if o.type == "MESH")
@@ -167,6 +172,37 @@ for name, offset in [("Fcl_HA_Hide", (0, 0.0, -0.01)), ("Fcl_HA_Fung1", (0, -0.0
 for i in range(4):
     mix(f"Custom_Smile_{i}_L", {"mouthSmile_L": 0.25 * (i + 1), "cheekSquint_L": 0.1 * i})
     mix(f"Custom_Smile_{i}_R", {"mouthSmile_R": 0.25 * (i + 1), "cheekSquint_R": 0.1 * i})
+
+# --- another topology: the face decimated, its VRoid keys carried over ------------------------
+if remeshed:
+    kept_keys = [k.name for k in keys if k != mesh.shape_keys.reference_key and k.name not in own]
+    bpy.ops.object.select_all(action="DESELECT")
+    face.select_set(True)
+    bpy.context.view_layer.objects.active = face
+    bpy.ops.object.duplicate()
+    new = bpy.context.active_object
+    new.shape_key_clear()
+    decimate = new.modifiers.new("Decimate", "DECIMATE")
+    decimate.ratio = 0.35
+    bpy.ops.object.modifier_apply(modifier=decimate.name)
+    deform = new.modifiers.new("Carry", "SURFACE_DEFORM")
+    deform.target = face
+    bpy.ops.object.surfacedeform_bind(modifier=deform.name)
+    for k in keys:
+        k.value = 0.0
+    new.shape_key_add(name="Basis", from_mix=False)
+    for name in kept_keys:
+        keys[name].value = 1.0
+        bpy.context.view_layer.update()
+        bpy.ops.object.modifier_apply_as_shapekey(keep_modifier=True, modifier=deform.name)
+        new.data.shape_keys.key_blocks[-1].name = name
+        keys[name].value = 0.0
+    new.modifiers.remove(deform)
+    bpy.data.objects.remove(face)
+    face = new
+    face.name = "Face"
+    mesh = face.data
+    mesh.name = "Face"
 
 # --- place the head in centimetres at head height -----------------------------------------------
 bpy.ops.object.select_all(action="DESELECT")

@@ -93,6 +93,9 @@ export function apply(v) {
   setExtent(take ? (take.ramp ? take.ramp.length : take.frames) - 1 : 0);
   setSound(take && take.sound ? take.sound : null, take ? take.fps : 30);
   $('still-row').hidden = !(take && take.still);
+  // Said once by the server: an autosaved take it could not open and set aside.
+  $('capture-notice').hidden = !v.notice;
+  $('capture-notice').textContent = v.notice || '';
   if (take && take.still && document.activeElement !== $('still-frames')) input('still-frames').value = String(take.still);
   const sketch = store.state();
   if (newTake && sketch && Math.abs(sketch.fps - take.fps) > 1e-3) {
@@ -176,7 +179,7 @@ const ESTIMATED = { adapter: 'estimated by the adapter', by_name: 'estimated by 
 export async function openInput(files) {
   if (!files.length) return;
   showError('');
-  const header = (file) => ({ 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') });
+  const header = (file) => ({ 'x-filename': encodeURIComponent(file.name) });
   try {
     if (files.length === 1) {
       if (AUDIO.test(files[0].name)) $('take-info').textContent = `Lip sync of ${files[0].name}…`;

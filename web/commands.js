@@ -76,7 +76,7 @@ async function uploadCharacter(file) {
   showError('');
   showStatus(`Opening ${file.name}…`);
   try {
-    const result = await api('POST', 'api/character/upload', await file.arrayBuffer(), { 'x-filename': file.name.replace(/[^\x20-\x7e]/g, '_') });
+    const result = await api('POST', 'api/character/upload', await file.arrayBuffer(), { 'x-filename': encodeURIComponent(file.name) });
     await store.loadCharacter();
     store.setState(result.state, true);
     if (result.warnings.length) showError(result.warnings.join('\n'));

@@ -1,4 +1,4 @@
-//! Measuring an adapter on pictures it never saw: stills of the character made by another
+//! Measuring an adapter (or any estimator: a retarget map) on pictures it never saw: stills of the character made by another
 //! renderer (Blender, three.js, a game engine) with the weights each was posed at.
 //!
 //! A folder holds the pictures and `truth.json`:
@@ -26,8 +26,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::AdaptError;
-use crate::adapter::Adapter;
 use crate::features::Expression;
+use faceanim_take::Estimator;
 
 /// The truth file's name in a held-out folder.
 pub const TRUTH: &str = "truth.json";
@@ -178,14 +178,14 @@ impl HeldOut {
     }
 
     /// Runs every still through capture (the detector on each, the stills spread over the
-    /// cores) and `adapter`.
+    /// cores) and `estimator` (an adapter, a retarget map).
     ///
     /// # Errors
     /// [`AdaptError::Format`] for a picture that cannot be read, [`AdaptError::Model`] if a
     /// network fails.
     pub fn evaluate(
         &self,
-        adapter: &Adapter,
+        estimator: &dyn Estimator,
         models: &FaceModels,
     ) -> Result<Evaluation, AdaptError> {
         let read = |path: &Path| -> Result<Option<Expression>, AdaptError> {
@@ -231,12 +231,12 @@ impl HeldOut {
                 }
             }
         };
-        let n = adapter.blendshapes.len();
+        let n = estimator.blendshapes().len();
         let found: Vec<(&Still, Vec<f32>)> = self
             .stills
             .iter()
             .zip(&expressions)
-            .filter_map(|(s, e)| Some((s, adapter.predict(e.as_ref()?, neutral.as_ref()))))
+            .filter_map(|(s, e)| Some((s, estimator.estimate(e.as_ref()?, neutral.as_ref()))))
             .collect();
         let count = found.len().max(1) as f32;
         let mut mean = vec![0.0f32; n];
@@ -257,8 +257,8 @@ impl HeldOut {
             }
         }
         let cells = (count * n.max(1) as f32).max(1.0);
-        let mut worst: Vec<(String, f32, f32)> = adapter
-            .blendshapes
+        let mut worst: Vec<(String, f32, f32)> = estimator
+            .blendshapes()
             .iter()
             .zip(error.iter().zip(&bias))
             .map(|(name, (&e, &b))| (name.clone(), e, b))

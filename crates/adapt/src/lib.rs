@@ -29,6 +29,8 @@
 
 pub mod adapter;
 pub mod augment;
+pub mod bridge;
+pub mod calibrate;
 pub mod dataset;
 pub mod features;
 pub mod heldout;

@@ -486,7 +486,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
     }
     let mut adapter = train_with_bar(&dataset, &train_options)?;
     adapter.report.shapes = readings(&character, &adapter)?;
-    faceanim_files::write_atomic(&output, &adapter.to_bytes()?)?;
+    faceanim_files::write_output(&output, &adapter.to_bytes()?)?;
     let seconds = started.elapsed().as_secs_f64();
     let heldout = evaluate_held_out(&adapter, &folders)?;
     let report = &adapter.report;
@@ -526,7 +526,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
             shapes: &report.shapes,
             heldout: &heldout,
         };
-        println!("{}", serde_json::to_string(&summary)?);
+        outln!("{}", serde_json::to_string(&summary)?);
     }
     Ok(())
 }
@@ -752,16 +752,16 @@ fn ablation(
         });
     }
     if json {
-        println!("{}", serde_json::to_string(&results)?);
+        outln!("{}", serde_json::to_string(&results)?);
     } else {
         let heldout_columns: String = folders
             .iter()
             .map(|f| format!(" held-out MAE ({}) |", f.dir.display()))
             .collect();
-        println!(
+        outln!(
             "| augmentation | features | calibration | landmarks | inputs per shape | layers | hidden | networks | loss | test MAE (own renders) | test MAE (front renders) |{heldout_columns} best epoch | seconds |"
         );
-        println!("|{}", " --- |".repeat(13 + folders.len()));
+        outln!("|{}", " --- |".repeat(13 + folders.len()));
         for r in &results {
             let activation = match r.activation {
                 Activation::Relu => "ReLU",
@@ -776,7 +776,7 @@ fn ablation(
             let front = r
                 .mae_front_renders_test
                 .map_or_else(|| "–".to_owned(), |m| format!("{m:.4}"));
-            println!(
+            outln!(
                 "| {} | {} | {} | {} | {} | Linear → {activation} → Linear{clamp} | {} | {} | {} | {:.4} | {front} |{heldout} {} | {:.1} |",
                 r.augmentation.name(),
                 r.features.name(),
@@ -877,7 +877,7 @@ fn finetune(
         faceanim_adapt::finetune(&adapter, &dataset, &corrections, &train_options, control)
     })?;
     tuned.report.shapes = readings(character, &tuned)?;
-    faceanim_files::write_atomic(output, &tuned.to_bytes()?)?;
+    faceanim_files::write_output(output, &tuned.to_bytes()?)?;
     let seconds = started.elapsed().as_secs_f64();
     let heldout = evaluate_held_out(&tuned, folders)?;
     eprintln!(
@@ -902,7 +902,7 @@ fn finetune(
             shapes: &tuned.report.shapes,
             heldout: &heldout,
         };
-        println!("{}", serde_json::to_string(&summary)?);
+        outln!("{}", serde_json::to_string(&summary)?);
     }
     Ok(())
 }
@@ -943,7 +943,7 @@ fn evaluate(
     // Held-out folders alone need no renders.
     if !folders.is_empty() {
         let heldout = evaluate_held_out(&adapter, folders)?;
-        println!("{}", serde_json::to_string(&Measured::HeldOut { heldout })?);
+        outln!("{}", serde_json::to_string(&Measured::HeldOut { heldout })?);
         return Ok(());
     }
     let (dataset, _) = dataset(character, options, cache, fresh)?;
@@ -954,7 +954,7 @@ fn evaluate(
         dataset.len(),
         character.name()
     );
-    println!(
+    outln!(
         "{}",
         serde_json::to_string(&Measured::Renders {
             mae,

@@ -63,7 +63,7 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<()> {
             .with_context(|| format!("generating shapes on {}", args.character.display()))?;
     let names: Vec<&str> = generated.shapes.iter().map(|s| s.name()).collect();
     let bytes = faceanim_export::glb(&with, None)?;
-    faceanim_files::write_atomic(&args.output, &bytes)?;
+    faceanim_files::write_output(&args.output, &bytes)?;
     let seconds = started.elapsed().as_secs_f64();
     if args.json {
         let report = serde_json::json!({
@@ -84,7 +84,7 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<()> {
             })).collect::<Vec<_>>(),
             "seconds": seconds,
         });
-        println!("{report}");
+        outln!("{report}");
     }
     eprintln!(
         "wrote {} ({} shapes made on {} vertices in {seconds:.1} s{})",

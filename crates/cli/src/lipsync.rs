@@ -89,16 +89,18 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     );
     let character = crate::load_or_default(args.character.as_deref())?.character;
     let table = match &args.viseme_table {
-        Some(path) => MouthTable::from_json(
-            &std::fs::read_to_string(path)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?,
-        )
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?,
+        Some(path) => MouthTable::from_json(&read_text(path, "--viseme-table")?)
+            .map_err(|e| anyhow::anyhow!("--viseme-table {}: {e}", path.display()))?,
         None => MouthTable::default(),
     };
     let transcript = args.text.as_deref().map(transcript).transpose()?;
     let started = Instant::now();
     let sound = Sound::read(&args.speech)?;
+    if let Some((text, from)) = &transcript {
+        faceanim_speech::phones::transcript_words(text, sound.seconds())
+            .map_err(|e| anyhow::anyhow!("--text {from}: {e}"))?;
+    }
+    let transcript = transcript.map(|(text, _)| text);
     let mouth = match &args.adapter {
         Some(path) => mouth_by_adapter(&character, &table, path)?,
         None => Mouth::of(&character, &table)?,
@@ -157,18 +159,43 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
             visemes: &lip_sync.track.keys,
             notes: &lip_sync.notes,
         };
-        println!("{}", serde_json::to_string(&summary)?);
+        outln!("{}", serde_json::to_string(&summary)?);
     }
     Ok(())
 }
 
-/// `--text`: the words themselves, or a file that holds them.
-fn transcript(text: &str) -> anyhow::Result<String> {
+/// The largest transcript or viseme table read, in bytes: a line of dialogue is a few hundred.
+const MAX_TEXT_BYTES: u64 = 1 << 20;
+
+/// `--text`: the words themselves, or a file that holds them; with how to name it in a
+/// message (the file, or "(the words given)").
+fn transcript(text: &str) -> anyhow::Result<(String, String)> {
     let path = Path::new(text);
     if !text.contains(char::is_whitespace) && path.is_file() {
-        return std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{text}: {e}"));
+        return Ok((read_text(path, "--text")?, path.display().to_string()));
     }
-    Ok(text.to_owned())
+    Ok((text.to_owned(), "(the words given)".to_owned()))
+}
+
+/// The UTF-8 text of `path`, given as `option`: at most [`MAX_TEXT_BYTES`], read only after
+/// its size is known; errors name the option and the file.
+fn read_text(path: &Path, option: &str) -> anyhow::Result<String> {
+    let named = |what: String| anyhow::anyhow!("{option} {}: {what}", path.display());
+    let size = std::fs::metadata(path)
+        .map_err(|e| named(e.to_string()))?
+        .len();
+    if size > MAX_TEXT_BYTES {
+        return Err(named(format!(
+            "{size} bytes; a transcript or table is at most {MAX_TEXT_BYTES} bytes"
+        )));
+    }
+    let bytes = std::fs::read(path).map_err(|e| named(e.to_string()))?;
+    String::from_utf8(bytes).map_err(|e| {
+        named(format!(
+            "not UTF-8 text (byte {} is not)",
+            e.utf8_error().valid_up_to()
+        ))
+    })
 }
 
 fn stem(path: &Path) -> String {

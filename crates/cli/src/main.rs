@@ -4,11 +4,29 @@
 //! (which names the file and the problem) and exits with status 1; usage errors exit with 2.
 //! Each subcommand's arguments are a clap `Args` struct, passed as they are to its code.
 
+/// `println!` that returns the error (a reader that went away: `faceanim … | head`) instead of
+/// panicking; `main` ends quietly on a broken pipe, as ripgrep does.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)?
+    }};
+}
+
+/// `print!` that returns the error; see [`outln`].
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($arg)*)?
+    }};
+}
+
 mod adapt;
 mod generate;
 mod info;
 mod lipsync;
 mod outputs;
+mod retarget;
 mod session;
 mod stream;
 mod track;
@@ -120,6 +138,16 @@ enum Command {
     ///
     /// Example: faceanim generate-shapes scan.glb -o scan-rigged.glb
     GenerateShapes(generate::GenerateArgs),
+    /// Make, show or edit the character's retarget map: which of its own shapes answer to each
+    /// of ARKit's 52 channels — by name, by geometry (a template head registered on its face,
+    /// each channel's shape moved onto it and matched by its own shapes), or as you set them —
+    /// with each channel calibrated on the character's renders. Seconds, no training; kept
+    /// beside the character (NAME.retarget.json) and used by track, the studio, VMC in and lip
+    /// sync.
+    ///
+    /// Examples: faceanim retarget avatar.vrm; faceanim retarget avatar.vrm --set
+    /// jawOpen=Fcl_MTH_A:0.8
+    Retarget(retarget::RetargetArgs),
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
     /// Example: faceanim eval take.json reference.json --json
@@ -253,6 +281,8 @@ fn main() -> ExitCode {
     tracing::debug!(spare_heap, "allocator keeps spare heap");
     match run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of standard output went away (`faceanim … | head`): nothing more to say.
+        Err(error) if is_broken_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
             // Library errors already spell out their source (with its path); print a cause
             // only when it adds something.
@@ -270,6 +300,21 @@ fn main() -> ExitCode {
     }
 }
 
+/// Whether `error` comes from writing to a pipe whose reader has gone.
+fn is_broken_pipe(error: &anyhow::Error) -> bool {
+    error.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+            || cause
+                .downcast_ref::<faceanim_files::FileError>()
+                .is_some_and(|e| {
+                    matches!(e, faceanim_files::FileError::Io { source, .. }
+                        if source.kind() == std::io::ErrorKind::BrokenPipe)
+                })
+    })
+}
+
 fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Studio(args) => studio(args),
@@ -278,7 +323,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Sketch(args) => sketch(&args),
         Command::ExportDefault(args) => {
             let character = faceanim_head::default_character();
-            faceanim_files::write_atomic(&args.output, &faceanim_export::glb(&character, None)?)?;
+            faceanim_files::write_output(&args.output, &faceanim_export::glb(&character, None)?)?;
             eprintln!(
                 "wrote {} ({} vertices, {} blendshapes)",
                 args.output.display(),
@@ -294,6 +339,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Session(args) => session::run(args),
         Command::Stream(args) => stream::run(args),
         Command::GenerateShapes(args) => generate::run(&args),
+        Command::Retarget(args) => retarget::run(args),
         Command::Eval(args) => eval(&args),
     }
 }
@@ -302,9 +348,9 @@ fn info(args: &InfoArgs) -> anyhow::Result<()> {
     let imported = load_or_default(args.character.as_deref())?;
     let report = info::Report::of(&imported.character);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print!("{}", report.text(&imported.character));
+        out!("{}", report.text(&imported.character));
     }
     Ok(())
 }
@@ -336,7 +382,7 @@ fn export(args: &ExportArgs) -> anyhow::Result<()> {
         }
         None => faceanim_export::glb(&character, None)?,
     };
-    faceanim_files::write_atomic(&args.output, &glb)?;
+    faceanim_files::write_output(&args.output, &glb)?;
     eprintln!(
         "wrote {} ({} vertices, {} blendshapes{})",
         args.output.display(),
@@ -390,7 +436,7 @@ fn render(args: &RenderArgs) -> anyhow::Result<()> {
         }
         faceanim_render::render(&character, &pose, &camera, &appearance, size)
     };
-    faceanim_files::write_atomic(&args.output, &image.to_png()?)?;
+    faceanim_files::write_output(&args.output, &image.to_png()?)?;
     eprintln!(
         "wrote {} ({}×{})",
         args.output.display(),
@@ -407,20 +453,23 @@ fn eval(args: &EvalArgs) -> anyhow::Result<()> {
     );
     let result = faceanim_anim::metrics::compare(&clip_a, &clip_b);
     if args.json {
-        println!("{}", serde_json::to_string(&result)?);
+        outln!("{}", serde_json::to_string(&result)?);
     } else {
-        println!(
+        outln!(
             "DTW distance        {:.4} ({:.4} per frame)",
-            result.dtw, result.dtw_per_frame
+            result.dtw,
+            result.dtw_per_frame
         );
-        println!(
+        outln!(
             "jitter (RMS change) {:.4} vs {:.4} (difference {:+.4})",
-            result.jitter_a, result.jitter_b, result.jitter_diff
+            result.jitter_a,
+            result.jitter_b,
+            result.jitter_diff
         );
         match result.mae {
-            Some(mae) => println!("MAE                 {mae:.4}"),
+            Some(mae) => outln!("MAE                 {mae:.4}"),
             None => {
-                println!("MAE                 n/a (the clips differ in frames or names)")
+                outln!("MAE                 n/a (the clips differ in frames or names)")
             }
         }
     }
@@ -522,7 +571,7 @@ fn studio(args: StudioArgs) -> anyhow::Result<()> {
     runtime.block_on(async move {
         let (listener, address) = faceanim_studio::bind(port).await?;
         let url = format!("http://{address}/");
-        println!(
+        outln!(
             "faceanim studio: {url}  (character: {}, project: {})",
             character.name(),
             project_path.display()

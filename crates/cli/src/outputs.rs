@@ -22,7 +22,7 @@ pub fn write(path: &Path, format: Format, animation: &Animation<'_>) -> anyhow::
     for note in &exported.notes {
         eprintln!("{}: {note}", path.display());
     }
-    faceanim_files::write_atomic(path, &exported.bytes)?;
+    faceanim_files::write_output(path, &exported.bytes)?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }

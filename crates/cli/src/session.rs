@@ -112,7 +112,7 @@ fn load(path: &Path) -> anyhow::Result<Session> {
 }
 
 fn save(path: &Path, session: &Session) -> anyhow::Result<()> {
-    faceanim_files::write_atomic(path, session.to_json().as_bytes())?;
+    faceanim_files::write_output(path, session.to_json().as_bytes())?;
     Ok(())
 }
 
@@ -136,9 +136,9 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
                 "neutral": session.neutral(),
             });
             if json {
-                println!("{summary}");
+                outln!("{summary}");
             } else {
-                println!(
+                outln!(
                     "{}: {} frames at {} fps of {}, for {} ({} blendshapes)",
                     path.display(),
                     session.frames.len(),
@@ -147,16 +147,16 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
                     session.character,
                     session.blendshapes.len()
                 );
-                println!("keyframes: {:?}", session.keyframes());
+                outln!("keyframes: {:?}", session.keyframes());
                 if let Some(n) = session.neutral() {
-                    println!("neutral: {} ({:?})", n.parts, n.chosen);
+                    outln!("neutral: {} ({:?})", n.parts, n.chosen);
                 }
                 for (frame, values) in &session.edits.corrections {
                     let list: Vec<String> =
                         values.iter().map(|(n, v)| format!("{n}={v:.3}")).collect();
-                    println!("frame {frame}: {}", list.join(" "));
+                    outln!("frame {frame}: {}", list.join(" "));
                 }
-                println!(
+                outln!(
                     "preference: {}",
                     if session.edits.preference.is_some() {
                         "applied"

@@ -128,7 +128,7 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
         "send_ms_mean": sending.as_secs_f64() * 1000.0 / stats.frames.max(1) as f64,
         "send_ms_max": slowest.as_secs_f64() * 1000.0,
     });
-    println!("{summary}");
+    outln!("{summary}");
     if stats.dropped > 0 {
         eprintln!(
             "warning: {} of {} frames were refused by the network ({}); is the marionette listening on {destination}?",

@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 use faceanim_anim::filter::OneEuro;
 use faceanim_media::FrameSource;
-use faceanim_take::{ByName, Estimator, Filtering, Footage, Session, Take};
+use faceanim_take::{ByName, Estimator, Filtering, Footage, Retargeted, Session, Take};
 use faceanim_track::{FaceModels, TrackingMode, Workers};
 
 /// Which of the clean-ups to apply; the jitter of each is reported so users can choose.
@@ -61,9 +61,18 @@ pub struct TrackArgs {
     /// (default: the number of cores; 1 tracks frame by frame).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Drive the character through its adapter (from `faceanim adapt`) instead of by name.
+    /// Drive the character through its adapter (from `faceanim adapt`) instead of its
+    /// retarget map.
     #[arg(long)]
     pub adapter: Option<PathBuf>,
+    /// The character's retarget map (default: NAME.retarget.json beside the character, made
+    /// there in seconds when its shapes' names do not cover what MediaPipe reads).
+    #[arg(long, value_name = "MAP")]
+    pub retarget: Option<PathBuf>,
+    /// Only the shapes whose names say an ARKit channel move, with MediaPipe's scores as they
+    /// are (no retarget map).
+    #[arg(long, conflicts_with_all = ["adapter", "retarget"])]
+    pub by_name: bool,
     /// Also write the session (frames, estimates, keyframes) to correct with `faceanim
     /// session`.
     #[arg(long)]
@@ -125,20 +134,20 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     // Load the character and its estimator first: a bad one should fail before minutes of
     // video.
     let character = crate::load_or_default(args.character.as_deref())?.character;
-    let estimator = estimator(&args, &character)?;
-    if !formats.is_empty() || args.session.is_some() {
-        anyhow::ensure!(
-            estimator.driven() > 0,
-            "{} has no ARKit-named blendshapes: train an adapter for it (faceanim adapt) and give it with --adapter",
-            character.name()
-        );
-    }
-
     // Start-up (once per process): the face models, and the threads that run them beside
     // this one (as MediaPipe's graph starts its own with the models; each warms itself on a
     // blank picture, which overlaps the clip's start below). What follows is per clip, and
     // is what the summary's whole-command rate counts.
     let models = FaceModels::load().context("loading the face models")?;
+    let estimator = estimator(&args, &character, &models)?;
+    if !formats.is_empty() || args.session.is_some() {
+        anyhow::ensure!(
+            estimator.driven() > 0,
+            "no shape of {} answers to MediaPipe's channels, by name or by geometry: set the map's rows (faceanim retarget --set) or train an adapter (faceanim adapt)",
+            character.name()
+        );
+    }
+
     let workers = Workers::start(&models, threads - 1).context("starting the face models")?;
     let clip_started = Instant::now();
     // Open and capture.
@@ -168,7 +177,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let capture_seconds = started.elapsed().as_secs_f64();
     if let Some(raw) = &args.raw {
-        faceanim_files::write_atomic(raw, &serde_json::to_vec(&result)?)?;
+        faceanim_files::write_output(raw, &serde_json::to_vec(&result)?)?;
         eprintln!(
             "wrote {} (landmarks and scores of {} frames)",
             raw.display(),
@@ -240,7 +249,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     }
     let session = &take.session;
     if let Some(path) = &args.session {
-        faceanim_files::write_atomic(path, session.to_json().as_bytes())?;
+        faceanim_files::write_output(path, session.to_json().as_bytes())?;
         eprintln!(
             "wrote {} (the session: correct it with faceanim session)",
             path.display()
@@ -291,7 +300,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
             "chosen": faceanim_anim::metrics::jitter(&animation.clip.frames),
         },
     });
-    println!("{summary}");
+    outln!("{summary}");
     if found == 0 {
         eprintln!(
             "warning: {}: no face was found in any frame; the animation is all zeros",
@@ -301,13 +310,28 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The character's adapter (`--adapter`), or its by-name mapping.
+/// The character's adapter (`--adapter`), else its retarget map (`--retarget`, or the one
+/// beside it, made when needed), else its names.
 fn estimator(
     args: &TrackArgs,
     character: &faceanim_rig::Character,
+    models: &FaceModels,
 ) -> anyhow::Result<Box<dyn Estimator>> {
     let Some(path) = &args.adapter else {
-        return Ok(Box::new(ByName::new(character)));
+        if args.by_name {
+            return Ok(Box::new(ByName::new(character)));
+        }
+        return Ok(
+            match crate::retarget::for_capture(
+                character,
+                args.character.as_deref(),
+                args.retarget.as_deref(),
+                models,
+            )? {
+                Some(map) => Box::new(Retargeted::new(std::sync::Arc::new(map))),
+                None => Box::new(ByName::new(character)),
+            },
+        );
     };
     let adapter = faceanim_adapt::Adapter::from_bytes(&faceanim_files::read_bytes(path)?)
         .with_context(|| format!("reading the adapter {}", path.display()))?;

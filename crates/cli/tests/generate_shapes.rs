@@ -125,7 +125,7 @@ fn a_bare_avatar_gets_the_52_shapes_and_keeps_everything() {
     let again = out.join("again.glb");
     let x = out.join("x.glb");
     for (input, output, more, says) in [
-        (&rigged, &again, &[][..], "none of the shapes"),
+        (&rigged, &again, &[][..], "already has every shape"),
         (&bare, &bare, &[][..], "replace the input"),
         (
             &bare,

@@ -70,11 +70,16 @@ impl Format {
     ];
 
     /// The format a file name asks for, by its ending: `.byoc.csv` the seed's CSV,
-    /// `.session.json` a session, `.json` a clip, `.glb` the character, `.csv` Live Link Face.
+    /// `.session.json` a session, `.json` a clip, `.glb` the character, `.csv` Live Link Face;
+    /// `-` (standard output) the clip.
     ///
     /// # Errors
     /// [`ExportError::UnknownExtension`] naming the file and the endings understood.
     pub fn from_path(path: &Path) -> Result<Format, ExportError> {
+        // Standard output: the clip, the common currency of pipes.
+        if path.as_os_str() == "-" {
+            return Ok(Format::ClipJson);
+        }
         let lower = path.to_string_lossy().to_ascii_lowercase();
         // The longest endings first: `.byoc.csv` is also `.csv`.
         let mut endings: Vec<(Format, &str)> = Format::ALL

@@ -262,6 +262,10 @@ pub fn remove_stale_partials(dir: &Path, age: std::time::Duration) -> Vec<PathBu
 
 /// Writes `bytes` to `path` atomically: readers see the old file or the new one, never a part.
 ///
+/// Only a regular file is replaced that way. A symbolic link is followed and its target
+/// written (the link stays a link); something that is not a regular file — a device such as
+/// `/dev/null`, a named pipe, a socket — is written in place, never replaced by a file.
+///
 /// # Errors
 /// [`FileError::Io`] with the path.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
@@ -269,6 +273,77 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         path: path.to_owned(),
         source,
     };
+    let target = link_target(path).map_err(io)?;
+    match std::fs::metadata(&target) {
+        Ok(existing) if existing.is_dir() => {
+            return Err(io(std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a folder, not a file",
+            )));
+        }
+        Ok(existing) if !existing.is_file() => {
+            // A device, a pipe or a socket: written as it is, never replaced.
+            let mut file = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&target)
+                .map_err(io)?;
+            file.write_all(bytes).map_err(io)?;
+            return file.flush().map_err(io);
+        }
+        _ => {}
+    }
+    replace_file(&target, bytes).map_err(io)
+}
+
+/// Writes a command's output: `-` is standard output, anything else [`write_atomic`].
+///
+/// # Errors
+/// [`FileError::Io`] with the path (`-` for standard output: a reader that went away gives
+/// [`std::io::ErrorKind::BrokenPipe`], which a command ends on quietly).
+pub fn write_output(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    if is_stdout(path) {
+        let mut out = std::io::stdout().lock();
+        return out
+            .write_all(bytes)
+            .and_then(|()| out.flush())
+            .map_err(|source| FileError::Io {
+                path: path.to_owned(),
+                source,
+            });
+    }
+    write_atomic(path, bytes)
+}
+
+/// Whether an output path means standard output (`-`).
+#[must_use]
+pub fn is_stdout(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// The file a path finally names, following symbolic links (also ones whose target does not
+/// exist yet, which the write creates); `path` itself when it is not a link.
+fn link_target(path: &Path) -> std::io::Result<PathBuf> {
+    let mut current = path.to_owned();
+    // As the kernel does: a chain of links longer than 40 is a loop.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&current) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let next = std::fs::read_link(&current)?;
+                current = if next.is_absolute() {
+                    next
+                } else {
+                    current.parent().unwrap_or(Path::new(".")).join(next)
+                };
+            }
+            _ => return Ok(current),
+        }
+    }
+    Err(std::io::Error::other("too many levels of symbolic links"))
+}
+
+/// A regular file (or none yet) replaced by `bytes`: a temporary file beside it, synced, then
+/// renamed over it.
+fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
         _ => PathBuf::from("."),
@@ -279,10 +354,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         .file_name()
         .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
     let mut temp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
+        .prefix(&format!(".{}.", short_name(&name)))
         .suffix(PARTIAL_SUFFIX)
-        .tempfile_in(&dir)
-        .map_err(io)?;
+        .tempfile_in(&dir)?;
     // Temporary files are private (0600); the result should be as readable as the file it
     // replaces, or as an ordinary new file.
     let permissions = match std::fs::metadata(path) {
@@ -290,12 +364,23 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         Err(_) => new_file_permissions(),
     };
     if let Some(permissions) = permissions {
-        temp.as_file().set_permissions(permissions).map_err(io)?;
+        temp.as_file().set_permissions(permissions)?;
     }
-    temp.write_all(bytes).map_err(io)?;
-    temp.as_file().sync_all().map_err(io)?;
-    temp.persist(path).map_err(|e| io(e.error))?;
+    temp.write_all(bytes)?;
+    temp.as_file().sync_all()?;
+    temp.persist(path).map_err(|e| e.error)?;
     Ok(())
+}
+
+/// A file name short enough to prefix a temporary name (file names are at most 255 bytes).
+fn short_name(name: &str) -> &str {
+    let cut = name
+        .char_indices()
+        .map(|(i, c)| i + c.len_utf8())
+        .take_while(|&end| end <= 120)
+        .last()
+        .unwrap_or(0);
+    &name[..cut]
 }
 
 /// Mode of a newly created output: rw-r--r--, like `touch` under the usual umask.
@@ -351,6 +436,63 @@ mod tests {
             !left.exists() && mine.exists(),
             "only faceanim's partial write goes"
         );
+    }
+
+    #[test]
+    #[cfg(unix)]
+    fn special_files_are_written_in_place_and_links_stay_links() {
+        use std::os::unix::fs::FileTypeExt as _;
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        // (Devices are tried through the command, in crates/cli/tests/fuzz.rs: a test that
+        // failed here must not replace this machine's /dev/null.)
+        // A link is followed, and stays a link; a dangling one creates its target.
+        let target = dir.path().join("real.json");
+        std::fs::write(&target, b"old").unwrap_or_else(|e| panic!("{e}"));
+        let link = dir.path().join("link.json");
+        std::os::unix::fs::symlink("real.json", &link).unwrap_or_else(|e| panic!("{e}"));
+        write_atomic(&link, b"new").unwrap_or_else(|e| panic!("{e}"));
+        assert!(std::fs::symlink_metadata(&link).is_ok_and(|m| m.file_type().is_symlink()));
+        assert_eq!(std::fs::read(&target).ok().as_deref(), Some(&b"new"[..]));
+        let dangling = dir.path().join("later.json");
+        std::os::unix::fs::symlink("made.json", &dangling).unwrap_or_else(|e| panic!("{e}"));
+        write_atomic(&dangling, b"made").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            std::fs::read(dir.path().join("made.json")).ok().as_deref(),
+            Some(&b"made"[..])
+        );
+        // A loop of links is an error naming the path, not a hang.
+        let a = dir.path().join("a");
+        std::os::unix::fs::symlink("b", &a).unwrap_or_else(|e| panic!("{e}"));
+        std::os::unix::fs::symlink("a", dir.path().join("b")).unwrap_or_else(|e| panic!("{e}"));
+        assert!(write_atomic(&a, b"x").is_err());
+        // A folder is refused by name.
+        let e = write_atomic(dir.path(), b"x")
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("is a folder"), "{e}");
+        // A named pipe is written, not replaced.
+        let fifo = dir.path().join("pipe");
+        if std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success())
+        {
+            let reader = {
+                let fifo = fifo.clone();
+                std::thread::spawn(move || std::fs::read(fifo).unwrap_or_default())
+            };
+            write_atomic(&fifo, b"through the pipe").unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(
+                reader.join().ok().as_deref(),
+                Some(&b"through the pipe"[..])
+            );
+            assert!(std::fs::symlink_metadata(&fifo).is_ok_and(|m| m.file_type().is_fifo()));
+        }
+        // A very long name still gets its temporary file.
+        let long = dir.path().join(format!("{}.json", "n".repeat(250)));
+        write_atomic(&long, b"long").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(std::fs::read(&long).ok().as_deref(), Some(&b"long"[..]));
     }
 
     #[test]

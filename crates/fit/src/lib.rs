@@ -20,6 +20,7 @@
 #![deny(missing_docs)]
 
 pub mod landmarks;
+mod mapping;
 mod mesh;
 pub mod register;
 mod sparse;
@@ -32,6 +33,7 @@ use faceanim_track::FaceModels;
 use glam::Vec3;
 
 pub use landmarks::{FaceLandmarks, SurfacePoint};
+pub use mapping::{MIN_EXPLAINED, SPARSITY, retarget_map};
 pub use register::Similarity;
 pub use templates::Template;
 
@@ -55,6 +57,18 @@ pub enum FitError {
         found: usize,
         /// The least that will do.
         needed: usize,
+    },
+    /// The character already drives, by its own shapes, every channel asked for.
+    #[error(
+        "{user} already has every shape asked for ({wanted}): its own shapes drive all {count} of them by name, so there is nothing to generate"
+    )]
+    AlreadyHas {
+        /// The user's character.
+        user: String,
+        /// What was asked for.
+        wanted: String,
+        /// How many channels it drives.
+        count: usize,
     },
     /// The template has none of the shapes asked for.
     #[error("the template {template} has none of the shapes to make ({wanted})")]
@@ -159,26 +173,116 @@ pub fn generate(
         }
     }
     if work.is_empty() {
+        let wanted = options
+            .only
+            .as_ref()
+            .map_or_else(|| "any ARKit shape".to_owned(), |o| o.join(", "));
+        // Nothing left to make because the character has it all, or because no template
+        // has what was asked for: two different things to tell the user.
+        let mut asked: Vec<String> = match &options.only {
+            Some(only) => only.clone(),
+            None => templates
+                .iter()
+                .flat_map(|t| template_channels(t, options, &[]))
+                .map(|(name, _)| name)
+                .collect(),
+        };
+        asked.sort();
+        asked.dedup();
+        if !asked.is_empty() && asked.iter().all(|a| kept.contains(a)) {
+            return Err(FitError::AlreadyHas {
+                user: user.name().to_owned(),
+                wanted,
+                count: asked.len(),
+            });
+        }
         return Err(FitError::NothingToMake {
             template: templates
                 .iter()
                 .map(|t| t.name())
                 .collect::<Vec<_>>()
                 .join(", "),
-            wanted: options
-                .only
-                .as_ref()
-                .map_or_else(|| "any ARKit shape".to_owned(), |o| o.join(", ")),
+            wanted,
         });
     }
     let user_marks = FaceLandmarks::find(user, models)?;
-    let (u_pos, u_tri) = (user.positions(), user.triangles());
-    let size = user.size();
-    let target = register::Target::new(u_pos, u_tri);
-    let transfer = transfer::Transfer::new(u_pos, u_tri)?;
+    let on_user = OnUser::new(user)?;
     let mut shapes = Vec::new();
     let mut fits = Vec::new();
     for (template, channels) in work {
+        let registered = on_user.register(&user_marks, template, models)?;
+        let (names, deltas): (Vec<String>, Vec<Vec<Vec3>>) = channels.into_iter().unzip();
+        let moved = on_user.transfer(&registered, template, &deltas);
+        // A displacement under a millionth of the head is no movement.
+        let threshold = 1e-6 * on_user.size;
+        shapes.extend(
+            names
+                .iter()
+                .zip(&moved)
+                .map(|(name, dense)| Blendshape::from_dense(name.clone(), dense, threshold)),
+        );
+        fits.push(registered.report(template, names));
+    }
+    Ok(Generated {
+        shapes,
+        kept,
+        landmarks: user_marks.found(),
+        templates: fits,
+    })
+}
+
+/// The user's head made ready to receive templates: its surface indexed for registration and
+/// its mesh factorised for deformation transfer (once for every template and shape).
+pub(crate) struct OnUser<'a> {
+    user: &'a Character,
+    target: register::Target<'a>,
+    transfer: transfer::Transfer<'a>,
+    /// The user's size (its bounding box's diagonal).
+    pub(crate) size: f32,
+}
+
+/// One template registered onto the user's head.
+pub(crate) struct Registered {
+    landmarks: [usize; 2],
+    similarity: Similarity,
+    residual: f32,
+    correspondence: transfer::Correspondence,
+}
+
+impl Registered {
+    /// How the fit went, for the report.
+    fn report(&self, template: &Character, shapes: Vec<String>) -> TemplateFit {
+        TemplateFit {
+            name: template.name().to_owned(),
+            landmarks: self.landmarks,
+            scale: self.similarity.scale,
+            residual: self.residual,
+            corresponding: self.correspondence.vertices.iter().flatten().count(),
+            shapes,
+        }
+    }
+}
+
+impl<'a> OnUser<'a> {
+    pub(crate) fn new(user: &'a Character) -> Result<OnUser<'a>, FitError> {
+        let (positions, triangles) = (user.positions(), user.triangles());
+        Ok(OnUser {
+            user,
+            target: register::Target::new(positions, triangles),
+            transfer: transfer::Transfer::new(positions, triangles)?,
+            size: user.size(),
+        })
+    }
+
+    /// `template` placed on the user's face by their landmarks (`user_marks` on the user),
+    /// then fitted to its surface by non-rigid ICP.
+    pub(crate) fn register(
+        &self,
+        user_marks: &FaceLandmarks,
+        template: &Character,
+        models: &FaceModels,
+    ) -> Result<Registered, FitError> {
+        let (u_pos, u_tri) = (self.user.positions(), self.user.triangles());
         let template_marks = FaceLandmarks::find(template, models)?;
         let pairs: Vec<(SurfacePoint, SurfacePoint)> = user_marks.points[..FACE_LANDMARKS]
             .iter()
@@ -186,7 +290,7 @@ pub fn generate(
             .filter_map(|(u, t)| Some(((*u)?, (*t)?)))
             .collect();
         let too_few = || FitError::TooFewLandmarks {
-            user: user.name().to_owned(),
+            user: self.user.name().to_owned(),
             found: pairs.len(),
             needed: MIN_LANDMARKS,
         };
@@ -212,40 +316,32 @@ pub fn generate(
             })
             .collect();
         let (fitted, residual) =
-            register::nonrigid(&placed, t_tri, &landmark_terms, &target, size)?;
+            register::nonrigid(&placed, t_tri, &landmark_terms, &self.target, self.size)?;
         let correspondence =
-            transfer::Correspondence::new(u_pos, u_tri, &fitted, t_tri, REACH * size);
-        let (names, deltas): (Vec<String>, Vec<Vec<Vec3>>) = channels.into_iter().unzip();
-        let moved = transfer.shapes(
-            &correspondence,
-            (t_pos, t_tri),
-            &deltas,
-            similarity.rotation,
-            similarity.scale,
-        );
-        // A displacement under a millionth of the head is no movement.
-        let threshold = 1e-6 * size;
-        shapes.extend(
-            names
-                .iter()
-                .zip(&moved)
-                .map(|(name, dense)| Blendshape::from_dense(name.clone(), dense, threshold)),
-        );
-        fits.push(TemplateFit {
-            name: template.name().to_owned(),
+            transfer::Correspondence::new(u_pos, u_tri, &fitted, t_tri, REACH * self.size);
+        Ok(Registered {
             landmarks: [template_marks.found(), pairs.len()],
-            scale: similarity.scale,
-            residual: residual / size,
-            corresponding: correspondence.vertices.iter().flatten().count(),
-            shapes: names,
-        });
+            similarity,
+            residual: residual / self.size,
+            correspondence,
+        })
     }
-    Ok(Generated {
-        shapes,
-        kept,
-        landmarks: user_marks.found(),
-        templates: fits,
-    })
+
+    /// `deltas` (dense, over `template`'s vertices) moved onto the user's vertices.
+    pub(crate) fn transfer(
+        &self,
+        registered: &Registered,
+        template: &Character,
+        deltas: &[Vec<Vec3>],
+    ) -> Vec<Vec<Vec3>> {
+        self.transfer.shapes(
+            &registered.correspondence,
+            (template.positions(), template.triangles()),
+            deltas,
+            registered.similarity.rotation,
+            registered.similarity.scale,
+        )
+    }
 }
 
 /// `user` with the shapes [`generate`] makes added, its file noting them as generated (see

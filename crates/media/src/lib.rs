@@ -16,6 +16,7 @@ use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
+pub mod ffmpeg;
 pub mod raw;
 
 /// An RGB image, 8 bits per channel, rows top to bottom.
@@ -633,7 +634,7 @@ fn read_header(log: &mut impl std::io::BufRead) -> Result<Header, String> {
             Err("it has no video stream".into())
         }
         None if errors.is_empty() => Err("the video has no frames".into()),
-        None => Err(errors.join("; ")),
+        None => Err(ffmpeg::explain(&errors.join("\n"))),
     }
 }
 
@@ -744,7 +745,7 @@ fn read_video_frame(
             message: if message.trim().is_empty() {
                 format!("{status}, {filled} bytes of a partial frame")
             } else {
-                message.trim().to_owned()
+                ffmpeg::explain(&message)
             },
         });
     }
@@ -815,7 +816,7 @@ mod tests {
         let text = "[error] notes.mp4: Invalid data found when processing input\n";
         assert_eq!(
             read_header(&mut text.as_bytes()).unwrap_err(),
-            "notes.mp4: Invalid data found when processing input"
+            "not a video, sound or picture that ffmpeg can read (damaged, or another kind of file)"
         );
         assert_eq!(
             read_header(&mut "".as_bytes()).unwrap_err(),

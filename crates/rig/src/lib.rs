@@ -35,9 +35,11 @@
 #![deny(missing_docs)]
 
 mod character;
+mod excerpt;
 pub mod export;
 mod graph;
 pub mod import;
+pub mod json;
 pub mod name_map;
 pub mod names;
 pub mod normals;
@@ -49,6 +51,7 @@ pub use character::{
     Aabb, Blendshape, BlendshapeId, Character, CharacterParts, Material, MaterialId, ModelError,
     Part, SPARSE_DELTA_THRESHOLD, Texture,
 };
+pub use excerpt::{QUOTED_CHARS, excerpt};
 /// The vector types of the public API, re-exported so users need not match versions.
 pub use glam;
 pub use graph::EdgeGraph;

@@ -44,13 +44,22 @@ pub enum AudioError {
     #[error("{0}: there is no sound in it")]
     Empty(PathBuf),
     /// The sound is too long.
-    #[error("{path}: {seconds:.0} s of sound; at most {max:.0} s are read at once (cut it into parts)", max = MAX_SECONDS)]
+    #[error("{path}: {} of sound; at most {max:.0} s are read at once (cut it into parts)", long(*.seconds), max = MAX_SECONDS)]
     TooLong {
         /// The file.
         path: PathBuf,
-        /// Its length.
+        /// Its length ([`f32::INFINITY`] where only "longer than the limit" is known).
         seconds: f32,
     },
+}
+
+/// A length too long to read, in words.
+fn long(seconds: f32) -> String {
+    if seconds.is_finite() {
+        format!("{seconds:.0} s")
+    } else {
+        format!("more than {MAX_SECONDS:.0} s")
+    }
 }
 
 impl Sound {
@@ -70,9 +79,19 @@ impl Sound {
         if metadata.len() == 0 {
             return Err(AudioError::Empty(path.to_owned()));
         }
-        let sound = match read_plain_wav(path).map_err(bad)? {
-            Some(sound) => sound,
-            None => convert(path)?,
+        let sound = match read_wav(path).map_err(bad)? {
+            Wav::Plain(sound) => sound,
+            Wav::Other(header) => {
+                header.check().map_err(bad)?;
+                if header.seconds() > f64::from(MAX_SECONDS) {
+                    return Err(AudioError::TooLong {
+                        path: path.to_owned(),
+                        seconds: header.seconds() as f32,
+                    });
+                }
+                convert(path)?
+            }
+            Wav::Elsewhere => convert(path)?,
         };
         sound.checked(path)
     }
@@ -152,9 +171,59 @@ pub(crate) fn voice_threshold(floor: f32, peak: f32, quietest: f32) -> Option<f3
     Some((floor + (0.3 * range).max(8.0)).max(quietest))
 }
 
-/// A canonical 16 kHz mono 16-bit PCM WAV, read without ffmpeg; `Ok(None)` for any other file
-/// (ffmpeg converts it); an error for a WAV that is cut short.
-fn read_plain_wav(path: &Path) -> Result<Option<Sound>, String> {
+/// What a file's WAV header says.
+enum Wav {
+    /// A canonical 16 kHz mono 16-bit PCM WAV, read here.
+    Plain(Sound),
+    /// A WAV of another format (ffmpeg converts it), checked first.
+    Other(WavHeader),
+    /// Not a WAV: ffmpeg reads it.
+    Elsewhere,
+}
+
+/// The format and length a WAV file declares.
+struct WavHeader {
+    channels: u16,
+    rate: u32,
+    bits: u16,
+    data_bytes: usize,
+}
+
+/// The lowest and highest sample rates a sound may have: telephone speech is 8 kHz, studio
+/// recordings up to 384 kHz.
+const RATES: std::ops::RangeInclusive<u32> = 4_000..=384_000;
+
+impl WavHeader {
+    /// Refuses, before ffmpeg is run, a header no recorder writes: a rate that would make
+    /// ffmpeg produce hours of samples from a small file, no channels, no sample size.
+    fn check(&self) -> Result<(), String> {
+        if !RATES.contains(&self.rate) {
+            return Err(format!(
+                "the WAV header says {} Hz; sound is {} to {} Hz",
+                self.rate,
+                RATES.start(),
+                RATES.end()
+            ));
+        }
+        if !(1..=32).contains(&self.channels) {
+            return Err(format!("the WAV header says {} channels", self.channels));
+        }
+        if !(1..=64).contains(&self.bits) {
+            return Err(format!("the WAV header says {}-bit samples", self.bits));
+        }
+        Ok(())
+    }
+
+    /// The length the header declares.
+    fn seconds(&self) -> f64 {
+        let frame = f64::from(self.channels) * f64::from(self.bits).div_euclid(8.0).max(1.0);
+        self.data_bytes as f64 / frame / f64::from(self.rate.max(1))
+    }
+}
+
+/// Reads `path`'s WAV header: a canonical 16 kHz mono 16-bit PCM WAV is read whole here; an
+/// error for a WAV that is cut short or lacks its format.
+fn read_wav(path: &Path) -> Result<Wav, String> {
     // The header first: an MP3 or a video is left to ffmpeg without being read here.
     let mut header = [0u8; 12];
     let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
@@ -162,7 +231,7 @@ fn read_plain_wav(path: &Path) -> Result<Option<Sound>, String> {
         || &header[0..4] != b"RIFF"
         || &header[8..12] != b"WAVE"
     {
-        return Ok(None);
+        return Ok(Wav::Elsewhere);
     }
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
     let (mut at, mut format, mut data) = (12usize, None, None);
@@ -191,17 +260,22 @@ fn read_plain_wav(path: &Path) -> Result<Option<Sound>, String> {
             data = Some(&bytes[body..end]);
             break;
         }
-        at = end + (size & 1);
+        at = end.saturating_add(size & 1);
     }
     match (format, data) {
-        (Some((1, 1, SAMPLE_RATE, 16)), Some(data)) => Ok(Some(Sound {
+        (Some((1, 1, SAMPLE_RATE, 16)), Some(data)) => Ok(Wav::Plain(Sound {
             samples: data
                 .chunks_exact(2)
                 .map(|b| i16::from_le_bytes([b[0], b[1]]))
                 .collect(),
         })),
+        (Some((_, channels, rate, bits)), data) => Ok(Wav::Other(WavHeader {
+            channels,
+            rate,
+            bits,
+            data_bytes: data.map_or(0, <[u8]>::len),
+        })),
         (None, _) => Err("a WAV file without its format chunk".into()),
-        _ => Ok(None),
     }
 }
 
@@ -233,28 +307,35 @@ fn convert(path: &Path) -> Result<Sound, AudioError> {
         })?;
     if !output.status.success() {
         let said = String::from_utf8_lossy(&output.stderr);
-        let said = said.lines().last().unwrap_or("").trim();
         let message = if said.contains("does not contain any stream")
             || said.contains("Output file #0 does not contain")
-            || said.contains("Invalid data found")
+            || said.contains("matches no streams")
             || said.contains("no audio")
         {
             "not a sound or a video with sound".to_owned()
         } else {
-            format!("ffmpeg could not read it: {said}")
+            faceanim_media::ffmpeg::explain(&said)
         };
         return Err(AudioError::Read {
             path: path.to_owned(),
             message,
         });
     }
-    Ok(Sound {
+    let sound = Sound {
         samples: output
             .stdout
             .chunks_exact(2)
             .map(|b| i16::from_le_bytes([b[0], b[1]]))
             .collect(),
-    })
+    };
+    // ffmpeg stops a second past the limit (-t): all that is known is that it is longer.
+    if sound.seconds() > MAX_SECONDS {
+        return Err(AudioError::TooLong {
+            path: path.to_owned(),
+            seconds: f32::INFINITY,
+        });
+    }
+    Ok(sound)
 }
 
 #[cfg(test)]

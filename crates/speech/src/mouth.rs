@@ -212,14 +212,15 @@ impl MouthTable {
     /// [`MouthError::Table`] naming the field that is wrong.
     pub fn from_json(text: &str) -> Result<MouthTable, MouthError> {
         let given: BTreeMap<String, BTreeMap<String, f32>> =
-            serde_json::from_str(text).map_err(|e| {
+            faceanim_rig::json::from_slice(text.as_bytes()).map_err(|e| {
                 MouthError::Table(format!("not a table of viseme → channel → value: {e}"))
             })?;
         let mut table = MouthTable::default();
         for (viseme, channels) in given {
             if !Viseme::ALL.iter().any(|v| v.name() == viseme) || viseme == Viseme::Sil.name() {
                 return Err(MouthError::Table(format!(
-                    "{viseme}: not one of the visemes {}",
+                    "{}: not one of the visemes {}",
+                    faceanim_rig::excerpt(&viseme),
                     Viseme::ALL[1..]
                         .iter()
                         .map(|v| v.name())
@@ -230,12 +231,14 @@ impl MouthTable {
             for (channel, value) in &channels {
                 if faceanim_rig::names::Channel::named(channel).is_none() {
                     return Err(MouthError::Table(format!(
-                        "{viseme}.{channel}: not an ARKit channel"
+                        "{viseme}.{}: not an ARKit channel",
+                        faceanim_rig::excerpt(channel)
                     )));
                 }
                 if !(0.0..=1.0).contains(value) {
                     return Err(MouthError::Table(format!(
-                        "{viseme}.{channel}: {value} is not in 0..1"
+                        "{viseme}.{}: {value} is not in 0..1",
+                        faceanim_rig::excerpt(channel)
                     )));
                 }
             }

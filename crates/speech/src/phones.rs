@@ -54,6 +54,49 @@ pub enum PhoneError {
     /// The transcript has no word to align.
     #[error("the transcript has no words")]
     EmptyTranscript,
+    /// The transcript has more words than the sound could say.
+    #[error(
+        "the transcript has {words} words for {seconds:.1} s of sound; a voice says at most {most} in that time (give the line's own words)"
+    )]
+    TranscriptTooLong {
+        /// Its words.
+        words: usize,
+        /// The sound's length.
+        seconds: f32,
+        /// The most words accepted for that length.
+        most: usize,
+    },
+}
+
+/// The fastest speech a transcript may describe, in words a second (auctioneers reach about
+/// 6; conversational English is 2 to 3).
+pub const MAX_WORDS_PER_SECOND: f32 = 10.0;
+
+/// The transcript's words, checked against the sound's length before any work is done with
+/// them: not empty, and no more than [`MAX_WORDS_PER_SECOND`] allow (plus a few, for very
+/// short sounds), so that a wrong file given as a transcript is refused at once instead of
+/// growing the recogniser's grammar without bound.
+///
+/// # Errors
+/// [`PhoneError::EmptyTranscript`] or [`PhoneError::TranscriptTooLong`].
+pub fn transcript_words(text: &str, seconds: f32) -> Result<Vec<String>, PhoneError> {
+    let most = (seconds.max(0.0) * MAX_WORDS_PER_SECOND) as usize + 8;
+    // Counted before the words are made: a huge text costs no allocation to refuse.
+    let words = text
+        .split(|c: char| !(c.is_alphanumeric() || c == '\''))
+        .filter(|w| !w.trim_matches('\'').is_empty())
+        .count();
+    if words == 0 {
+        return Err(PhoneError::EmptyTranscript);
+    }
+    if words > most {
+        return Err(PhoneError::TranscriptTooLong {
+            words,
+            seconds,
+            most,
+        });
+    }
+    Ok(words_of(text))
 }
 
 /// The phones of `sound`: aligned to `transcript` when given (falling back to `blind`, with a
@@ -94,10 +137,7 @@ pub fn recognise(
         None
     };
     if let (Some(text), Some(dictionary)) = (transcript, &dictionary) {
-        let words = words_of(text);
-        if words.is_empty() {
-            return Err(PhoneError::EmptyTranscript);
-        }
+        let words = transcript_words(text, sound.seconds())?;
         let unknown: Vec<&str> = words
             .iter()
             .filter(|w| !dictionary.has(w))
@@ -116,9 +156,18 @@ pub fn recognise(
                 )),
             }
         } else {
+            let shown: Vec<String> = unknown
+                .iter()
+                .take(8)
+                .map(|w| faceanim_rig::excerpt(w).into_owned())
+                .collect();
+            let more = match unknown.len() {
+                n if n > 8 => format!(" and {} more", n - 8),
+                _ => String::new(),
+            };
             notes.push(format!(
-                "the pronouncing dictionary lacks {}: the speech was recognised without the transcript",
-                unknown.join(", ")
+                "the pronouncing dictionary lacks {}{more}: the speech was recognised without the transcript",
+                shown.join(", ")
             ));
         }
     }

@@ -162,7 +162,43 @@ pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxEr
             check(dictionary)?;
         }
     }
+    let _turn = Turn::wait();
     imp::decode(search, samples)
+}
+
+/// A turn to decode: at most one decoder per core runs at once (each holds its models, some
+/// 250 MB with the language model), so that a burst of requests — a studio's uploads, a
+/// batch — queues for the cores instead of multiplying memory.
+struct Turn;
+
+/// Decoders running now, and the signal that one ended.
+static RUNNING: std::sync::Mutex<usize> = std::sync::Mutex::new(0);
+static ENDED: std::sync::Condvar = std::sync::Condvar::new();
+
+impl Turn {
+    fn wait() -> Turn {
+        let most = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+        let mut running = RUNNING
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        while *running >= most {
+            running = ENDED
+                .wait(running)
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+        }
+        *running += 1;
+        Turn
+    }
+}
+
+impl Drop for Turn {
+    fn drop(&mut self) {
+        let mut running = RUNNING
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        *running = running.saturating_sub(1);
+        ENDED.notify_one();
+    }
 }
 
 /// Whether this build has the recogniser.

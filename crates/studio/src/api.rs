@@ -5,12 +5,12 @@ use std::sync::{Arc, Mutex};
 
 use axum::Router;
 use axum::body::Bytes;
-use axum::extract::{DefaultBodyLimit, Path, Request, State};
+use axum::extract::{DefaultBodyLimit, Path, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
-use axum::middleware::{self, Next};
+use axum::middleware;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post, put};
-use faceanim_export::{Animation, Exported, Format};
+use faceanim_export::{Animation, Format};
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_sketch::project::StrokeFile;
 use faceanim_sketch::settings::Settings;
@@ -19,6 +19,7 @@ use serde::{Deserialize, Deserializer};
 
 use crate::capture_api::Both;
 use crate::error::{Answer, ApiError};
+use crate::http::{self, Unread, download, json_body, uploaded_name};
 use crate::views::{
     AnchorView, CandidatesView, CharacterView, GeneratedView, SavedView, StateView, UploadView,
 };
@@ -35,19 +36,6 @@ type Shared = Arc<Mutex<Studio>>;
 const JSON_LIMIT: usize = 16 * 1024 * 1024;
 /// Character uploads may be this large.
 const CHARACTER_LIMIT: usize = 512 * 1024 * 1024;
-
-/// The body of a request that takes nothing from it (the page may send `{}`), read all the
-/// same: a body left unread when the answer closes the connection turns the close into a
-/// reset, and the client may lose the answer.
-pub(crate) type Unread = Bytes;
-
-/// A JSON body as `T`, or [`ApiError::Invalid`] naming `what` and the problem.
-pub(crate) fn json_body<T: serde::de::DeserializeOwned>(
-    bytes: &[u8],
-    what: &str,
-) -> Result<T, ApiError> {
-    serde_json::from_slice(bytes).map_err(|e| ApiError::Invalid(format!("{what}: {e}")))
-}
 
 pub fn router(both: Both, port: u16) -> Router {
     let shared = both.studio.clone();
@@ -94,45 +82,11 @@ pub fn router(both: Both, port: u16) -> Router {
         .merge(upload)
         .merge(crate::capture_api::router(both))
         .fallback(get(page))
+        .layer(middleware::from_fn(http::catch_panics))
+        .layer(middleware::from_fn(http::json_errors))
         .layer(middleware::from_fn(move |request, next| {
-            only_local(port, request, next)
+            http::only_local(port, request, next)
         }))
-}
-
-/// Refuses requests not addressed to this studio by its own name (DNS rebinding) and
-/// cross-site requests from other origins.
-async fn only_local(port: u16, request: Request, next: Next) -> Response {
-    let allowed_hosts = [
-        format!("127.0.0.1:{port}"),
-        format!("localhost:{port}"),
-        format!("[::1]:{port}"),
-    ];
-    let host = request
-        .headers()
-        .get(header::HOST)
-        .and_then(|h| h.to_str().ok())
-        .unwrap_or("");
-    if !allowed_hosts.iter().any(|a| a == host) {
-        return (
-            StatusCode::FORBIDDEN,
-            format!("host '{host}' is not this studio"),
-        )
-            .into_response();
-    }
-    if let Some(origin) = request.headers().get(header::ORIGIN) {
-        let origin = origin.to_str().unwrap_or("");
-        if !allowed_hosts
-            .iter()
-            .any(|a| origin == format!("http://{a}"))
-        {
-            return (
-                StatusCode::FORBIDDEN,
-                format!("origin '{origin}' is not this studio"),
-            )
-                .into_response();
-        }
-    }
-    next.run(request).await
 }
 
 async fn page(uri: axum::http::Uri) -> Response {
@@ -149,7 +103,10 @@ async fn page(uri: axum::http::Uri) -> Response {
             headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-cache"));
             (headers, file.data.into_owned()).into_response()
         }
-        None => (StatusCode::NOT_FOUND, format!("no page '{path}'")).into_response(),
+        None => http::error_answer(
+            StatusCode::NOT_FOUND,
+            format!("no page '{}'", faceanim_rig::excerpt(path)),
+        ),
     }
 }
 
@@ -431,49 +388,6 @@ async fn redo(State(shared): State<Shared>, _unread: Unread) -> axum::Json<State
 
 /// An export the browser saves as `NAME.EXTENSION` (its notes go to the log); `extension` is
 /// the format's for this character ([`Format::extension_for`]: a VRM stays `.vrm`).
-pub(crate) fn download(
-    format: Format,
-    extension: &str,
-    name: &str,
-    exported: Exported,
-) -> Response {
-    for note in &exported.notes {
-        tracing::info!("{name}.{extension}: {note}");
-    }
-    let disposition = format!(
-        "attachment; filename=\"{}.{extension}\"",
-        name.replace('"', "")
-    );
-    let mut headers = HeaderMap::new();
-    headers.insert(
-        header::CONTENT_TYPE,
-        HeaderValue::from_static(format.mime()),
-    );
-    if let Ok(value) = HeaderValue::from_str(&disposition) {
-        headers.insert(header::CONTENT_DISPOSITION, value);
-    }
-    headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
-    (headers, exported.bytes).into_response()
-}
-
-/// The name an upload was sent with (header `x-filename`, else `fallback`); refused naming it
-/// when the file is empty.
-pub(crate) fn uploaded_name(
-    headers: &HeaderMap,
-    body: &[u8],
-    fallback: &str,
-) -> Result<String, ApiError> {
-    let name = headers
-        .get("x-filename")
-        .and_then(|h| h.to_str().ok())
-        .unwrap_or(fallback)
-        .to_owned();
-    if body.is_empty() {
-        return Err(ApiError::Invalid(format!("{name}: the file is empty")));
-    }
-    Ok(name)
-}
-
 fn file_stem(studio: &Studio) -> String {
     studio.project_path.file_stem().map_or_else(
         || "faceanim".to_owned(),

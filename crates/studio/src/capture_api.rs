@@ -15,9 +15,9 @@ use faceanim_media::raw::{PixelLayout, YuvMatrix, YuvRange, raw_to_image};
 use faceanim_take::{Filtering, TakeError};
 use serde::Deserialize;
 
-use crate::api::{Unread, download, json_body, uploaded_name};
 use crate::capture::{self, CaptureDesk, SharedDesk};
 use crate::error::{Answer, ApiError};
+use crate::http::{Unread, download, json_body, uploaded_name};
 use crate::views::CaptureView;
 use crate::{Studio, lock};
 
@@ -189,8 +189,10 @@ async fn upload(
         // the async threads.
         let lip_sync = tokio::task::spawn_blocking(move || {
             let mouth = lock(&desk).mouth(&character)?;
-            let sound = faceanim_speech::Sound::read(&stored)
-                .map_err(|e| ApiError::Invalid(e.to_string()))?;
+            // Messages name the file the user picked, not its private copy.
+            let sound = faceanim_speech::Sound::read(&stored).map_err(|e| {
+                ApiError::Invalid(e.to_string().replace(&stored.display().to_string(), &shown))
+            })?;
             faceanim_speech::lip_sync_with(
                 &sound,
                 None,
@@ -201,8 +203,13 @@ async fn upload(
             .map_err(|e| ApiError::Invalid(e.to_string()))
         })
         .await
-        .map_err(|e| bad(format!("{shown}: lip sync stopped: {e}")))?
-        .map_err(|e| bad(format!("{shown}: {e}")))?;
+        .map_err(|e| bad(format!("{name}: lip sync stopped: {e}")))?
+        .map_err(|e| match e {
+            ApiError::Invalid(message) if message.starts_with(name.as_str()) => {
+                ApiError::Invalid(message)
+            }
+            e => bad(format!("{name}: {e}")),
+        })?;
         let character = both.studio().character.clone();
         both.desk()
             .open_speech(&character, &lip_sync, capture::Sound { path, mime }, &name)?;
@@ -547,11 +554,17 @@ async fn vmc_send(State(both): State<Both>, body: Bytes) -> Answer<VmcSent> {
 }
 
 fn dimension(headers: &HeaderMap, name: &str) -> Result<usize, ApiError> {
+    number_header(headers, name, "the size in pixels")
+}
+
+/// The required header `name` as a whole number, or a 400 naming it and saying it must give
+/// `what`.
+fn number_header(headers: &HeaderMap, name: &str, what: &str) -> Result<usize, ApiError> {
     headers
         .get(name)
         .and_then(|h| h.to_str().ok())
-        .and_then(|v| v.parse().ok())
-        .ok_or_else(|| bad(format!("frame: header {name} must give the size in pixels")))
+        .and_then(|v| v.trim().parse().ok())
+        .ok_or_else(|| bad(format!("header {name} must give {what} as a whole number")))
 }
 
 /// The optional header `name`, as text; `default` when absent.
@@ -713,7 +726,7 @@ async fn voice_chunk(
     State(both): State<Both>,
     body: Bytes,
 ) -> Answer<capture::VoiceResult> {
-    let rate = dimension(&headers, "x-sample-rate")?;
+    let rate = number_header(&headers, "x-sample-rate", "the sound's samples per second")?;
     if rate != capture::VOICE_RATE {
         return Err(bad(format!(
             "x-sample-rate: {rate} Hz; the microphone is sent at {} Hz",

@@ -113,7 +113,8 @@ impl ApiError {
             ApiError::Fit(
                 faceanim_fit::FitError::NoFace(_)
                 | faceanim_fit::FitError::TooFewLandmarks { .. }
-                | faceanim_fit::FitError::NothingToMake { .. },
+                | faceanim_fit::FitError::NothingToMake { .. }
+                | faceanim_fit::FitError::AlreadyHas { .. },
             ) => StatusCode::UNPROCESSABLE_ENTITY,
             ApiError::Busy(_) => StatusCode::CONFLICT,
             ApiError::Disk(_)

@@ -22,6 +22,7 @@ mod api;
 pub mod capture;
 mod capture_api;
 pub mod error;
+mod http;
 mod state;
 pub mod views;
 

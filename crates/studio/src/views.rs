@@ -360,6 +360,9 @@ pub struct CaptureView {
     pub take: Option<TakeView>,
     /// VMC in and out, when the studio was started with them.
     pub vmc: Option<VmcView>,
+    /// Something the user should know that no request asked about: the autosaved take that
+    /// could not be opened, and where it was set aside.
+    pub notice: Option<String>,
 }
 
 /// VMC in (`--vmc-listen`) and out (`--vmc-send`).

@@ -17,6 +17,9 @@ use crate::expression::Expression;
 pub enum EstimatorSource {
     /// MediaPipe's scores put on the character's ARKit-named shapes.
     ByName,
+    /// MediaPipe's scores through the character's retarget map (by name and by geometry,
+    /// calibrated on the character).
+    Retarget,
     /// The character's adapter.
     Adapter,
     /// Unknown: the take was opened from a session file, which does not say.
@@ -31,6 +34,7 @@ impl EstimatorSource {
     pub fn noun(self) -> &'static str {
         match self {
             EstimatorSource::ByName => "by-name mapping",
+            EstimatorSource::Retarget => "retarget map",
             EstimatorSource::Adapter => "adapter",
             EstimatorSource::SessionFile => "session file",
             EstimatorSource::Received => "received stream",
@@ -127,6 +131,118 @@ impl Estimator for ByName {
 
     fn driven(&self) -> usize {
         self.driven
+    }
+}
+
+/// Estimates through a character's retarget map ([`faceanim_retarget::RetargetMap`]): each
+/// MediaPipe score, as it rises above the face's neutral one, becomes a channel value (times
+/// the gain the map's calibration measured on the character); the map puts the channels on
+/// the character's own shapes — by name where the names say it, by geometry where they do
+/// not.
+#[derive(Debug, Clone)]
+pub struct Retargeted {
+    map: std::sync::Arc<faceanim_retarget::RetargetMap>,
+    /// For each ARKit channel, its index in MediaPipe's scores (none for `tongueOut`).
+    score_of: Vec<Option<usize>>,
+}
+
+impl Retargeted {
+    /// Estimates through `map`.
+    #[must_use]
+    pub fn new(map: std::sync::Arc<faceanim_retarget::RetargetMap>) -> Retargeted {
+        let score_of = faceanim_rig::names::ARKIT_52
+            .iter()
+            .map(|c| faceanim_track::BLENDSHAPE_NAMES.iter().position(|n| n == c))
+            .collect();
+        Retargeted { map, score_of }
+    }
+
+    /// The map.
+    #[must_use]
+    pub fn map(&self) -> &faceanim_retarget::RetargetMap {
+        &self.map
+    }
+
+    /// ARKit's 52 channel values for `expression` read against `neutral` (each score's rise
+    /// above the neutral face's; the score itself without one), times the map's calibrated gain
+    /// where it has one; the gaze's scores are read as they are.
+    #[must_use]
+    pub fn channels(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
+        let score = |e: &Expression, c: usize| {
+            self.score_of[c]
+                .and_then(|i| e.scores.get(i))
+                .copied()
+                .unwrap_or(0.0)
+        };
+        let rise = |name: &str| {
+            let Some(c) = faceanim_retarget::channel_index(name) else {
+                return 0.0;
+            };
+            // Where the eyes look is no expression over a resting face: looking at the
+            // camera is rest, whatever the neutral frame's eyes did.
+            let base = match neutral {
+                Some(n) if !name.starts_with("eyeLook") => score(n, c),
+                _ => 0.0,
+            };
+            score(expression, c) - base
+        };
+        let values = match &self.map.calibration {
+            Some(calibration) => calibration.values(rise),
+            None => faceanim_rig::names::ARKIT_52
+                .iter()
+                .map(|name| rise(name).clamp(0.0, 1.0))
+                .collect(),
+        };
+        // Nor is it calibrated: MediaPipe reads a person's gaze as it reads a render's.
+        values
+            .into_iter()
+            .zip(faceanim_rig::names::ARKIT_52)
+            .map(|(v, name)| {
+                if name.starts_with("eyeLook") {
+                    rise(name).clamp(0.0, 1.0)
+                } else {
+                    v
+                }
+            })
+            .collect()
+    }
+}
+
+impl Estimator for Retargeted {
+    fn blendshapes(&self) -> &[String] {
+        &self.map.blendshapes
+    }
+
+    fn estimate(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
+        self.map.weights(&self.channels(expression, neutral))
+    }
+
+    /// A map reads each score's rise above the take's neutral face.
+    fn calibrated(&self) -> bool {
+        true
+    }
+
+    fn source(&self) -> EstimatorSource {
+        EstimatorSource::Retarget
+    }
+
+    fn driven(&self) -> usize {
+        let mut moved = vec![false; self.map.blendshapes.len()];
+        for row in &self.map.rows {
+            for name in row.shapes.keys() {
+                if let Some(i) = self.map.blendshapes.iter().position(|b| b == name) {
+                    moved[i] = true;
+                }
+            }
+        }
+        if let Some(solve) = &self.map.solve {
+            for name in &solve.shapes {
+                if let Some(i) = self.map.blendshapes.iter().position(|b| b == name) {
+                    moved[i] = true;
+                }
+            }
+        }
+        moved.iter().filter(|m| **m).count()
     }
 }
 

@@ -48,7 +48,7 @@ pub mod layer;
 pub mod session;
 pub mod take;
 
-pub use estimator::{ByName, Estimator, EstimatorSource};
+pub use estimator::{ByName, Estimator, EstimatorSource, Retargeted};
 pub use expression::Expression;
 pub use fingerprint::Fingerprint;
 pub use layer::{Layered, layer};
@@ -125,9 +125,13 @@ pub enum TakeError {
         /// What differs.
         reason: String,
     },
-    /// A session file that is malformed.
+    /// A session file that is malformed (not JSON, or not a session: its message names the
+    /// field).
     #[error("{0}")]
     Format(String),
+    /// A session file whose values cannot be used, each problem with its JSON path.
+    #[error("invalid session file: {}", .0.join("; "))]
+    Invalid(Vec<String>),
     /// A frame without a face cannot be the neutral one.
     #[error("frame {frame} has no face, so it cannot be the neutral frame")]
     NoFace {

@@ -787,69 +787,130 @@ impl Session {
         serde_json::to_string(self).unwrap_or_default()
     }
 
-    /// Parses and checks a session file.
+    /// Parses and checks a session file: every value that cannot be finite or in range is
+    /// refused with its JSON path, before anything is computed from it (a photo's animation
+    /// length, keyframes, indices), so that no session can make a later step allocate without
+    /// bound or produce NaN.
     ///
     /// # Errors
-    /// [`TakeError::Format`] naming the field that is wrong.
+    /// [`TakeError::Format`] for JSON that is not a session (with the path of the value that is
+    /// wrong), [`TakeError::Invalid`] with every problem found and its path.
     pub fn from_json(bytes: &[u8]) -> Result<Session, TakeError> {
-        let session: Session = serde_json::from_slice(bytes)
+        let session: Session = faceanim_rig::json::from_slice(bytes)
             .map_err(|e| TakeError::Format(format!("not a session file: {e}")))?;
-        let bad = |m: String| Err(TakeError::Format(m));
-        if session.version != 1 {
-            return bad(format!(
-                "version {} is not supported (1 is)",
-                session.version
+        let problems = session.problems();
+        if problems.is_empty() {
+            Ok(session)
+        } else {
+            Err(TakeError::Invalid(problems))
+        }
+    }
+
+    /// Every value of the session that is out of range, with its JSON path.
+    fn problems(&self) -> Vec<String> {
+        let mut problems = Vec::new();
+        let mut bad = |p: String| problems.push(p);
+        if self.version != 1 {
+            bad(format!("version: {} is not supported (1 is)", self.version));
+        }
+        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= MAX_FPS) {
+            bad(format!(
+                "fps: {} must be above 0 and at most {MAX_FPS}",
+                self.fps
             ));
         }
-        if !(session.fps.is_finite() && session.fps > 0.0) {
-            return bad(format!("fps {} must be positive", session.fps));
+        if self.frames.len() > MAX_FRAMES {
+            bad(format!(
+                "frames: {} frames; a session holds at most {MAX_FRAMES}",
+                self.frames.len()
+            ));
         }
-        let width = session.blendshapes.len();
-        for (k, frame) in session.frames.iter().enumerate() {
-            if frame.estimate.len() != width {
-                return bad(format!(
-                    "frames[{k}].estimate has {} weights for {width} blendshapes",
-                    frame.estimate.len()
+        if !(1..=1000).contains(&self.edits.keyframe_every) {
+            bad(format!(
+                "keyframe_every: {} must be between 1 and 1000",
+                self.edits.keyframe_every
+            ));
+        }
+        if let Some(Err(why)) = self.edits.smoothing.map(|s| s.validate()) {
+            bad(format!("smoothing: {why}"));
+        }
+        if let Some(length) = self.edits.still_frames {
+            if !(1..=MAX_STILL_FRAMES).contains(&length) {
+                bad(format!(
+                    "still_frames: {length} must be between 1 and {MAX_STILL_FRAMES}"
                 ));
             }
-            if frame.estimate.iter().any(|w| !w.is_finite()) {
-                return bad(format!("frames[{k}].estimate is not finite"));
+            if self.frames.len() != 1 {
+                bad(format!(
+                    "still_frames: only a take of one photo has it, this one has {} frames",
+                    self.frames.len()
+                ));
             }
         }
-        if let Some(frame) = session.neutral
-            && session
+        let width = self.blendshapes.len();
+        for (k, frame) in self.frames.iter().enumerate() {
+            frame_problems(frame, &format!("frames[{k}]"), width, &mut bad);
+        }
+        let count = self.frames.len();
+        if let Some(frame) = self.neutral
+            && self
                 .frames
                 .get(frame)
                 .is_none_or(|f| f.expression.is_none())
         {
-            return bad(format!(
+            bad(format!(
                 "neutral: frame {frame} is past the end or has no face"
             ));
         }
-        for (&frame, values) in &session.edits.corrections {
-            if frame >= session.frames.len() {
-                return bad(format!("corrections: frame {frame} is past the end"));
+        for (field, list) in [
+            ("added_keyframes", &self.edits.added_keyframes),
+            ("removed_keyframes", &self.edits.removed_keyframes),
+        ] {
+            if let Some((k, frame)) = list.iter().enumerate().find(|(_, f)| **f >= count) {
+                bad(format!(
+                    "{field}[{k}]: frame {frame} is past the end ({count} frames)"
+                ));
+            }
+        }
+        for (&frame, values) in &self.edits.corrections {
+            if frame >= count {
+                bad(format!(
+                    "corrections.{frame}: frame {frame} is past the end ({count} frames)"
+                ));
             }
             for (name, value) in values {
-                if !session.blendshapes.contains(name) {
-                    return bad(format!("corrections[{frame}]: no blendshape '{name}'"));
-                }
-                if !(0.0..=1.0).contains(value) {
-                    return bad(format!(
-                        "corrections[{frame}].{name} = {value} is outside 0..1"
+                let shown = faceanim_rig::excerpt(name);
+                if !self.blendshapes.contains(name) {
+                    bad(format!("corrections.{frame}: no blendshape '{shown}'"));
+                } else if !(0.0..=1.0).contains(value) {
+                    bad(format!(
+                        "corrections.{frame}.{shown}: {value} is outside 0..1"
                     ));
                 }
             }
         }
-        if session
-            .edits
-            .preference
-            .as_ref()
-            .is_some_and(|p| p.len() != width)
-        {
-            return bad(format!("preference must have {width} offsets"));
+        if let Some(offsets) = &self.edits.preference {
+            if offsets.len() != width {
+                bad(format!(
+                    "preference: {} offsets for {width} blendshapes",
+                    offsets.len()
+                ));
+            }
+            if let Some((k, v)) = offsets
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !(-1.0..=1.0).contains(*v))
+            {
+                bad(format!("preference[{k}]: {v} is outside -1..1"));
+            }
         }
-        Ok(session)
+        // A file full of bad values says what is wrong in a few lines, not a megabyte.
+        if problems.len() > MAX_PROBLEMS {
+            let more = problems.len() - MAX_PROBLEMS;
+            problems.truncate(MAX_PROBLEMS);
+            problems.push(format!("and {more} more"));
+        }
+        problems
     }
 
     /// The seed toolkit's CSV: one line per frame, `name.png,w1,…,wN`, in the session's
@@ -866,6 +927,87 @@ impl Session {
             out.push('\n');
         }
         out
+    }
+}
+
+/// The highest frame rate a session may have.
+pub const MAX_FPS: f32 = 1000.0;
+/// The most frames a session may have: ten hours at 60 frames a second.
+pub const MAX_FRAMES: usize = 10 * 3600 * 60;
+/// The longest 0 → peak → 0 animation a photo becomes, in frames.
+pub const MAX_STILL_FRAMES: usize = 10_000;
+/// Problems listed in one message at most.
+const MAX_PROBLEMS: usize = 12;
+/// The largest head angle a session may hold, in degrees (a turn and a half either way: a
+/// tracker that unwraps angles may pass ±180).
+const MAX_DEGREES: f32 = 540.0;
+/// The farthest head position a session may hold, in metres.
+const MAX_METRES: f32 = 1000.0;
+
+/// The problems of one session frame at JSON path `path`, for a character of `width` shapes.
+fn frame_problems(frame: &SessionFrame, path: &str, width: usize, bad: &mut impl FnMut(String)) {
+    if !(frame.time.is_finite() && frame.time >= 0.0) {
+        bad(format!(
+            "{path}.time: {} must be a time in seconds from 0",
+            frame.time
+        ));
+    }
+    if !(0.0..=1.0).contains(&frame.presence) {
+        bad(format!(
+            "{path}.presence: {} is outside 0..1",
+            frame.presence
+        ));
+    }
+    let out_of =
+        |values: &[f32], limit: f32| values.iter().position(|v| !(-limit..=limit).contains(v));
+    if let Some(k) = frame.head.and_then(|h| out_of(&h, MAX_DEGREES)) {
+        bad(format!(
+            "{path}.head[{k}]: {} degrees is not a head angle (at most {MAX_DEGREES})",
+            frame.head.map_or(f32::NAN, |h| h[k])
+        ));
+    }
+    if let Some(k) = frame.head_position.and_then(|p| out_of(&p, MAX_METRES)) {
+        bad(format!(
+            "{path}.head_position[{k}]: {} m is not a head position (at most {MAX_METRES} m)",
+            frame.head_position.map_or(f32::NAN, |p| p[k])
+        ));
+    }
+    if let Some(expression) = &frame.expression {
+        for (field, values, wanted) in [
+            ("scores", &expression.scores, crate::expression::SCORES),
+            (
+                "landmarks",
+                &expression.landmarks,
+                crate::expression::LANDMARK_COORDINATES,
+            ),
+        ] {
+            if values.len() != wanted {
+                bad(format!(
+                    "{path}.expression.{field}: {} values, not {wanted}",
+                    values.len()
+                ));
+            } else if let Some(k) = out_of(values, 1e3) {
+                bad(format!(
+                    "{path}.expression.{field}[{k}]: {} is not a measurement",
+                    values[k]
+                ));
+            }
+        }
+    }
+    if frame.estimate.len() != width {
+        bad(format!(
+            "{path}.estimate: {} weights for {width} blendshapes",
+            frame.estimate.len()
+        ));
+    } else if let Some(k) = frame
+        .estimate
+        .iter()
+        .position(|w| !(-1.0..=2.0).contains(w))
+    {
+        bad(format!(
+            "{path}.estimate[{k}]: {} is not a weight",
+            frame.estimate[k]
+        ));
     }
 }
 

@@ -75,6 +75,18 @@ pub fn blender_bare_avatar_path() -> PathBuf {
     blender_avatar_made("blender-bare-avatar", &["bare"])
 }
 
+/// The same avatar with its face rebuilt by Blender's Decimate modifier (another topology,
+/// about 9,000 face vertices where the ICT head has 24,591) and only its VRoid-style keys,
+/// carried onto the new mesh by a Surface Deform modifier: no ARKit names, and vertices no
+/// template of ours shares (cached like it).
+///
+/// # Panics
+/// When Blender is missing or fails, with its output.
+#[must_use]
+pub fn blender_remeshed_avatar_path() -> PathBuf {
+    blender_avatar_made("blender-remeshed-avatar", &["remeshed"])
+}
+
 #[expect(
     clippy::panic,
     reason = "test support: a missing producer must stop the test loudly"

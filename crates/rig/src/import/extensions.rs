@@ -103,8 +103,9 @@ pub(crate) fn prepare<'a>(
     let vrm = super::vrm::read(&value, &mut warnings);
     // What is handled here must not reach the `gltf` crate's extension check.
     drop_extensions(&mut value, |name| UNDERSTOOD.contains(&name));
+    // A value of the wrong type is named by its path (`meshes[0].primitives[1].indices`).
     let root: gltf::json::Root =
-        serde_json::from_value(value).map_err(|e| ImportErrorKind::InvalidJson(e.to_string()))?;
+        crate::json::from_value(value).map_err(|e| ImportErrorKind::InvalidJson(e.to_string()))?;
     Ok(Prepared {
         root,
         buffers: Buffers(buffers),
@@ -177,7 +178,7 @@ fn keep(
                 }
                 Err(reason) => warnings.push(format!(
                     "image {i} ('{}') cannot be embedded in exports: {reason}",
-                    super::gltf::shorten(&uri)
+                    crate::excerpt(&uri).into_owned()
                 )),
             }
         }
@@ -286,11 +287,11 @@ fn load_buffers<'a>(
                 let data = super::gltf::load_uri(uri, resources).map_err(|reason| {
                     ImportErrorKind::MissingBuffer {
                         index,
-                        uri: super::gltf::shorten(uri),
+                        uri: crate::excerpt(uri).into_owned(),
                         reason,
                     }
                 })?;
-                (Cow::Owned(data), super::gltf::shorten(uri))
+                (Cow::Owned(data), crate::excerpt(uri).into_owned())
             }
             None if fallback => (Cow::Borrowed(&[][..]), String::new()),
             None if index == 0 => {

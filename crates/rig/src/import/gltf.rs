@@ -211,17 +211,6 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKi
     )))
 }
 
-pub(super) fn shorten(uri: &str) -> String {
-    if uri.len() > 60 {
-        format!(
-            "{}…",
-            &uri[..uri.char_indices().nth(40).map_or(uri.len(), |(i, _)| i)]
-        )
-    } else {
-        uri.to_owned()
-    }
-}
-
 /// Loads a `data:` URI or, through `resources`, a relative one (percent-decoded).
 pub(super) fn load_uri(uri: &str, resources: &dyn Resources) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {

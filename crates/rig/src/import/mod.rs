@@ -69,9 +69,12 @@ pub struct ImportError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ImportErrorKind {
-    /// Neither GLB nor glTF JSON (nor OBJ, where that was expected).
+    /// Neither GLB nor glTF JSON.
     #[error("not a glTF file: {0}")]
     NotGltf(String),
+    /// An OBJ file without a mesh in it.
+    #[error("not an OBJ mesh: {0}")]
+    NotObj(String),
     /// The data ends before what its headers declare.
     #[error("truncated: {0}")]
     Truncated(String),

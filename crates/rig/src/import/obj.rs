@@ -282,10 +282,9 @@ fn parse(source: ObjSource<'_>, full: bool) -> Result<ObjMesh, ImportErrorKind> 
         }
     }
     if !saw_anything || mesh.positions.is_empty() {
-        return Err(ImportErrorKind::NotGltf(format!(
-            "'{}' has no OBJ vertices (no 'v' lines)",
-            source.name
-        )));
+        return Err(ImportErrorKind::NotObj(
+            "it has no vertices (no 'v' lines)".into(),
+        ));
     }
     Ok(mesh)
 }

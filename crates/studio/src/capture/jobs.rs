@@ -121,7 +121,8 @@ fn rename(message: &str, path: &Path, shown: &str) -> String {
 
 impl CaptureDesk {
     /// Saves an uploaded input (or one photo of a sequence sent as `batch`) to a private
-    /// folder and returns its path.
+    /// folder and returns its path. Each upload gets a folder of its own (a sequence's photos
+    /// share their batch's), so that two uploads of the same name at once never share a file.
     ///
     /// # Errors
     /// [`ApiError::Invalid`] for a bad batch name, or the file error.
@@ -131,20 +132,30 @@ impl CaptureDesk {
         bytes: &[u8],
         batch: Option<&str>,
     ) -> Result<PathBuf, ApiError> {
-        let mut dir = private_dir(&mut self.uploads, "faceanim-capture-", "uploads")?.to_owned();
+        let root = private_dir(&mut self.uploads, "faceanim-capture-", "uploads")?.to_owned();
         // Photos sent together are one sequence: a folder of their own, read in name order.
-        if let Some(batch) = batch {
-            if batch.is_empty() || !batch.chars().all(|c| c.is_ascii_alphanumeric()) {
-                return Err(ApiError::Invalid(format!(
-                    "batch: '{batch}' must be letters and digits"
-                )));
+        let dir = match batch {
+            Some(batch) => {
+                if batch.is_empty()
+                    || batch.len() > 64
+                    || !batch.chars().all(|c| c.is_ascii_alphanumeric())
+                {
+                    return Err(ApiError::Invalid(format!(
+                        "batch: '{}' must be 1 to 64 letters and digits",
+                        faceanim_rig::excerpt(batch)
+                    )));
+                }
+                root.join(format!("batch-{batch}"))
             }
-            dir = dir.join(format!("batch-{batch}"));
-            std::fs::create_dir_all(&dir).map_err(|source| ApiError::Scratch {
-                what: dir.display().to_string(),
-                source,
-            })?;
-        }
+            None => {
+                self.uploads_stored += 1;
+                root.join(format!("upload-{}", self.uploads_stored))
+            }
+        };
+        std::fs::create_dir_all(&dir).map_err(|source| ApiError::Scratch {
+            what: dir.display().to_string(),
+            source,
+        })?;
         // Keep only a safe file name (its extension tells images from videos).
         let clean: String = name
             .chars()

@@ -331,6 +331,10 @@ pub struct CaptureDesk {
     filtering: Filtering,
     /// Uploaded inputs are written here (ffmpeg reads files).
     uploads: Option<tempfile::TempDir>,
+    /// Uploads stored so far: each gets a folder of its own.
+    uploads_stored: u64,
+    /// What the page should tell the user once: an autosave that was set aside.
+    notice: Option<String>,
     /// The take's session is written here after every change and read back at start, so
     /// closing the studio loses no correction.
     take_path: PathBuf,
@@ -347,6 +351,33 @@ pub struct CaptureDesk {
     /// user's is kept in.
     visemes: faceanim_speech::MouthTable,
     visemes_path: Option<PathBuf>,
+}
+
+/// A take of `session` once its animation has been worked out (what every view and export
+/// asks for first), or why it cannot be: the session's own checks should leave nothing that
+/// fails here, and this keeps one that slipped through from being stored.
+fn playable(session: Session) -> Result<Take, String> {
+    let take = Take::from_session(session);
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| take.session.clip())) {
+        Ok(_) => Ok(take),
+        Err(_) => Err("its animation could not be worked out".to_owned()),
+    }
+}
+
+/// Renames the file at `path` to `NAME.broken-SECONDS.EXT` beside it; returns the new path.
+fn set_aside(path: &std::path::Path) -> std::io::Result<PathBuf> {
+    let seconds = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let name = path
+        .file_name()
+        .map_or_else(|| "take".into(), |n| n.to_string_lossy().into_owned());
+    let aside = path.with_file_name(match name.rsplit_once('.') {
+        Some((stem, extension)) => format!("{stem}.broken-{seconds}.{extension}"),
+        None => format!("{name}.broken-{seconds}"),
+    });
+    std::fs::rename(path, &aside)?;
+    Ok(aside)
 }
 
 /// A shared capture desk.
@@ -381,6 +412,8 @@ impl CaptureDesk {
             visemes_path: None,
             filtering: Filtering::SEED,
             uploads: None,
+            uploads_stored: 0,
+            notice: None,
             vmc: vmc::Vmc::default(),
         };
         desk.load_adapter(character);
@@ -408,25 +441,55 @@ impl CaptureDesk {
         )?)
     }
 
-    /// Reopens the autosaved take (without its previews: the input is not kept).
+    /// Reopens the autosaved take (without its previews: the input is not kept). One that
+    /// cannot be opened — refused, of another character, or failing to play — is set aside
+    /// under another name and the page told so, so that it is neither lost nor met again at
+    /// every start.
     fn restore_take(&mut self, character: &Character) {
-        let Ok(bytes) = std::fs::read(&self.take_path) else {
-            return;
+        let bytes = match std::fs::read(&self.take_path) {
+            Ok(bytes) => bytes,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return,
+            Err(e) => {
+                tracing::warn!("{}: {e}; not opened", self.take_path.display());
+                return;
+            }
         };
-        match Session::from_json(&bytes) {
-            Ok(session) if session.blendshapes == names(character) => {
+        let opened = Session::from_json(&bytes)
+            .map_err(|e| e.to_string())
+            .and_then(|session| {
+                if session.blendshapes == names(character) {
+                    playable(session)
+                } else {
+                    Err(format!(
+                        "it is a take of {}",
+                        faceanim_rig::excerpt(&session.character)
+                    ))
+                }
+            });
+        match opened {
+            Ok(take) => {
                 tracing::info!(
                     "reopened the take of {} from {}",
-                    session.source,
+                    take.session.source,
                     self.take_path.display()
                 );
-                self.take = Some(OpenTake::new(Take::from_session(session), Previews::new()));
+                self.take = Some(OpenTake::new(take, Previews::new()));
             }
-            Ok(_) => tracing::warn!(
-                "{} is a take of another character; not opened",
-                self.take_path.display()
-            ),
-            Err(e) => tracing::warn!("{}: {e}; not opened", self.take_path.display()),
+            Err(why) => {
+                let aside = set_aside(&self.take_path);
+                let notice = match &aside {
+                    Ok(path) => format!(
+                        "The autosaved take could not be opened ({why}); it was set aside as {}.",
+                        path.display()
+                    ),
+                    Err(e) => format!(
+                        "The autosaved take {} could not be opened ({why}), nor set aside ({e}).",
+                        self.take_path.display()
+                    ),
+                };
+                tracing::warn!("{notice}");
+                self.notice = Some(notice);
+            }
         }
     }
 
@@ -446,7 +509,7 @@ impl CaptureDesk {
     ) -> Result<usize, ApiError> {
         self.busy()?;
         let session = Session::from_json(bytes).map_err(|source| ApiError::Session {
-            what: shown.to_owned(),
+            what: faceanim_rig::excerpt(shown).into_owned(),
             source,
         })?;
         let names = names(character);
@@ -462,16 +525,20 @@ impl CaptureDesk {
                 n => format!("it lacks {n}: {}, …", lacking[..5].join(", ")),
             };
             return Err(ApiError::Invalid(format!(
-                "{shown}: a session of {} with {} blendshapes, not of {} with {} ({how})",
-                session.character,
+                "{}: a session of {} with {} blendshapes, not of {} with {} ({how})",
+                faceanim_rig::excerpt(shown),
+                faceanim_rig::excerpt(&session.character),
                 session.blendshapes.len(),
                 character.name(),
                 names.len()
             )));
         }
         let frames = session.frames.len();
+        // Played once before it is kept: a take that cannot be shown is never autosaved.
+        let take = playable(session)
+            .map_err(|why| ApiError::Invalid(format!("{}: {why}", faceanim_rig::excerpt(shown))))?;
         tracing::info!("opened the session {shown}: {frames} frames");
-        self.set_take(Take::from_session(session), Previews::new());
+        self.set_take(take, Previews::new());
         Ok(frames)
     }
 
@@ -519,6 +586,7 @@ impl CaptureDesk {
 
     /// Makes `take` the one being edited (and autosaves it).
     fn set_take(&mut self, take: Take, previews: Previews) {
+        self.notice = None;
         self.take = Some(OpenTake::new(take, previews));
         self.save_take();
     }
@@ -803,6 +871,7 @@ impl CaptureDesk {
             live: lock(&self.live).as_ref().map(Live::view),
             voice: self.voice_view(),
             vmc: self.vmc_view(),
+            notice: self.notice.clone(),
             take: self.take.as_ref().map(|open| {
                 // The neutral check reads one frame: borrow the adapter, do not copy it.
                 let by_name;

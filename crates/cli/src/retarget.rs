@@ -1,0 +1,289 @@
+//! `faceanim retarget`: the character's retarget map — which of its own shapes answer to each
+//! of ARKit's channels (by name, by geometry, or as the user says), calibrated on the
+//! character — made in seconds, shown, edited and saved beside it; and the map that every
+//! capture command uses by default.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use faceanim_retarget::{RetargetMap, RowSource};
+use faceanim_rig::Character;
+use faceanim_track::FaceModels;
+
+/// `faceanim retarget`'s arguments.
+#[derive(Debug, clap::Args)]
+pub struct RetargetArgs {
+    /// The character (default: the built-in head).
+    pub character: Option<PathBuf>,
+    /// The map file (default: NAME.retarget.json beside the character).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Make the map again even if one is there (rows you set are kept).
+    #[arg(long)]
+    pub remake: bool,
+    /// Set a channel's row: `CHANNEL=SHAPE:WEIGHT[,SHAPE:WEIGHT…]` (a weight of 1 may be left
+    /// out), or `CHANNEL=` for nothing; repeatable. The channel then moves those shapes alone.
+    #[arg(long = "set", value_name = "CHANNEL=SHAPES")]
+    pub set: Vec<String>,
+    /// Skip the calibration on the character's renders (MediaPipe's scores are used as they
+    /// are).
+    #[arg(long)]
+    pub no_calibration: bool,
+    /// Also measure the map on stills of the character by another renderer (a folder with
+    /// truth.json, as `faceanim adapt --eval-dir` reads); repeatable.
+    #[arg(long = "eval-dir", value_name = "DIR")]
+    pub eval_dirs: Vec<PathBuf>,
+    /// Print the map's rows and measures as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: RetargetArgs) -> anyhow::Result<()> {
+    let character = crate::load_or_default(args.character.as_deref())?.character;
+    let path = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_path(args.character.as_deref(), &character));
+    let models = FaceModels::load().context("loading the face models")?;
+    let names = shape_names(&character);
+    let existing = read(&path, &names)?;
+    let mut map = match existing {
+        Some(map) if !args.remake && (map.calibration.is_some() || args.no_calibration) => map,
+        previous => make(&character, &models, previous.as_ref(), !args.no_calibration)?,
+    };
+    for set in &args.set {
+        let (channel, shapes) = parse_set(set)?;
+        map.set_row(&channel, shapes)
+            .map_err(|e| anyhow::anyhow!("--set {set}: {e}"))?;
+    }
+    faceanim_files::write_output(&path, map.to_json().as_bytes())?;
+    eprintln!("wrote {}", path.display());
+    let mut evaluations = Vec::new();
+    if !args.eval_dirs.is_empty() {
+        let estimator = faceanim_take::Retargeted::new(std::sync::Arc::new(map.clone()));
+        for dir in &args.eval_dirs {
+            let held_out = faceanim_adapt::heldout::HeldOut::read(dir, &names)?;
+            let e = held_out.evaluate(&estimator, &models)?;
+            eprintln!(
+                "{}: MAE {:.4} over {} of {} stills (always the mean: {:.4}; all zeros: {:.4}; neutral {:?})",
+                dir.display(),
+                e.mae,
+                e.faces,
+                e.stills,
+                e.mae_mean_baseline,
+                e.mae_zero_baseline,
+                e.neutral
+            );
+            evaluations.push(e);
+        }
+    }
+    if args.json {
+        outln!(
+            "{}",
+            serde_json::json!({
+                "map": path,
+                "rows": map.rows,
+                "mode": map.mode,
+                "calibrated": map.calibration.as_ref().map(|c| c.channels.keys().collect::<Vec<_>>()),
+                "made": map.made,
+                "heldout": evaluations,
+            })
+        );
+    } else {
+        out!("{}", table(&map));
+    }
+    Ok(())
+}
+
+/// The map's rows in words: one line per channel that reaches a shape.
+pub fn table(map: &RetargetMap) -> String {
+    let mut text = String::new();
+    for (row, name) in map.rows.iter().zip(faceanim_rig::names::ARKIT_52) {
+        if row.shapes.is_empty() {
+            continue;
+        }
+        let shapes: Vec<String> = map
+            .answers(faceanim_retarget::channel_index(name).unwrap_or_default())
+            .iter()
+            .map(|(s, w)| format!("{s} {w:.2}"))
+            .collect();
+        let from = match row.from {
+            RowSource::ByName => "by name".to_owned(),
+            RowSource::Geometry => format!(
+                "geometry, {:.0}% of it",
+                100.0 * row.explained.unwrap_or(0.0)
+            ),
+            RowSource::User => "set by you".to_owned(),
+            RowSource::None => String::new(),
+        };
+        let calibrated = map
+            .calibration
+            .as_ref()
+            .is_some_and(|c| c.channels.contains_key(name));
+        text.push_str(&format!(
+            "{name:<20} {:<40} ({from}{})\n",
+            shapes.join(", "),
+            if calibrated { ", calibrated" } else { "" }
+        ));
+    }
+    let missing: Vec<&str> = map
+        .rows
+        .iter()
+        .zip(faceanim_rig::names::ARKIT_52)
+        .filter(|(row, _)| row.shapes.is_empty())
+        .map(|(_, name)| name)
+        .collect();
+    if !missing.is_empty() {
+        text.push_str(&format!(
+            "no shape of {} answers to: {}\n",
+            map.character,
+            missing.join(", ")
+        ));
+    }
+    text
+}
+
+/// `CHANNEL=SHAPE:W,SHAPE:W` as the channel and its shapes.
+fn parse_set(text: &str) -> anyhow::Result<(String, BTreeMap<String, f32>)> {
+    let (channel, list) = text
+        .split_once('=')
+        .ok_or_else(|| anyhow::anyhow!("--set {text}: write CHANNEL=SHAPE:WEIGHT,…"))?;
+    let mut shapes = BTreeMap::new();
+    for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let (shape, weight) = match item.rsplit_once(':') {
+            Some((shape, w)) => (
+                shape,
+                w.parse::<f32>()
+                    .map_err(|_| anyhow::anyhow!("--set {text}: '{w}' is not a weight"))?,
+            ),
+            None => (item, 1.0),
+        };
+        shapes.insert(shape.to_owned(), weight);
+    }
+    Ok((channel.trim().to_owned(), shapes))
+}
+
+fn shape_names(character: &Character) -> Vec<String> {
+    character
+        .blendshapes()
+        .iter()
+        .map(|b| b.name().to_owned())
+        .collect()
+}
+
+/// Where a character's map lives by default: `NAME.retarget.json` beside its file.
+pub fn default_path(character_path: Option<&Path>, character: &Character) -> PathBuf {
+    faceanim_adapt::bridge::default_map_path(
+        character_path.and_then(Path::parent),
+        character.name(),
+    )
+}
+
+/// The map at `path` if there is one that fits the character (a map of another character is
+/// said and ignored).
+fn read(path: &Path, names: &[String]) -> anyhow::Result<Option<RetargetMap>> {
+    if !path.exists() {
+        return Ok(None);
+    }
+    let bytes = faceanim_files::read_bytes(path)?;
+    match RetargetMap::from_json(&bytes, names) {
+        Ok(map) => Ok(Some(map)),
+        Err(e @ faceanim_retarget::RetargetError::OtherCharacter { .. }) => {
+            eprintln!("{}: {e}", path.display());
+            Ok(None)
+        }
+        Err(e) => Err(anyhow::anyhow!("{}: {e}", path.display())),
+    }
+}
+
+/// Makes the map, with a progress bar over the calibration's renders.
+fn make(
+    character: &Character,
+    models: &FaceModels,
+    previous: Option<&RetargetMap>,
+    calibrate: bool,
+) -> anyhow::Result<RetargetMap> {
+    eprintln!(
+        "making the retarget map of {} (the template registered on its face{})",
+        character.name(),
+        if calibrate {
+            ", then each channel calibrated on its renders"
+        } else {
+            ""
+        }
+    );
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} calibrating {pos}/{len} renders [{bar:40}] {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let map = faceanim_adapt::bridge::make_map(
+        character,
+        models,
+        previous,
+        calibrate,
+        faceanim_adapt::Control {
+            progress: &progress,
+            cancel: &never,
+        },
+    )
+    .with_context(|| format!("making the retarget map of {}", character.name()))?;
+    bar.finish_and_clear();
+    eprintln!(
+        "{} of ARKit's 52 channels reach its shapes ({} by name, {} by geometry) in {:.1} s",
+        map.answered(),
+        map.rows
+            .iter()
+            .filter(|r| r.from == RowSource::ByName)
+            .count(),
+        map.rows
+            .iter()
+            .filter(|r| r.from == RowSource::Geometry)
+            .count(),
+        map.made.seconds.unwrap_or(0.0)
+    );
+    Ok(map)
+}
+
+/// The map a capture command uses for `character` (loaded from `character_path`): the one
+/// at `given` or beside the character when it fits; made (and saved beside the character)
+/// when the rig's names leave channels MediaPipe reads without a shape; `None` for a rig its
+/// names drive whole, which is driven by name.
+pub fn for_capture(
+    character: &Character,
+    character_path: Option<&Path>,
+    given: Option<&Path>,
+    models: &FaceModels,
+) -> anyhow::Result<Option<RetargetMap>> {
+    let names = shape_names(character);
+    if let Some(path) = given {
+        return read(path, &names)?.map(Some).ok_or_else(|| {
+            anyhow::anyhow!("{}: not a map of {}", path.display(), character.name())
+        });
+    }
+    let path = default_path(character_path, character);
+    if let Some(map) = read(&path, &names)? {
+        return Ok(Some(map));
+    }
+    if !faceanim_adapt::bridge::needs_map(character) {
+        return Ok(None);
+    }
+    let map = make(character, models, None, true)?;
+    match faceanim_files::write_atomic(&path, map.to_json().as_bytes()) {
+        Ok(()) => eprintln!(
+            "saved {} (edit it, or faceanim retarget --set)",
+            path.display()
+        ),
+        Err(e) => eprintln!("warning: the map was not saved: {e}"),
+    }
+    Ok(Some(map))
+}

@@ -1,0 +1,475 @@
+//! The retarget map by geometry: which of a character's own shapes make each ARKit channel
+//! its names do not give.
+//!
+//! The template head is registered onto the character's face as [`crate::generate`] does, and
+//! each channel's template shape is moved onto the character's vertices (deformation
+//! transfer): `D_c`, what the channel looks like on this face. The character's shapes that no
+//! name claims (`B_k`) are then compared with those displacements in a least squares weighted
+//! by face region — lids, gaze, brows, cheeks, nose, jaw, mouth and the rest each count alike,
+//! so that a small region (a lid) weighs as much as a large one (the jaw) — giving the Gram
+//! matrix `G = BᵀWB` and the products `H = BᵀWD` of the per-frame solve
+//! ([`faceanim_retarget::Solve`]), and each channel's own row.
+
+use std::collections::BTreeMap;
+
+use faceanim_retarget::{Fitted, Mode, RetargetMap, RowSource, Solve, channel_index};
+use faceanim_rig::Character;
+use faceanim_track::FaceModels;
+use glam::Vec3;
+
+use crate::{FaceLandmarks, FitError, OnUser, channel_deltas};
+
+/// The price of a shape in the solve, per unit of its size (see [`Solve`]).
+pub const SPARSITY: f32 = 0.04;
+/// A shape taking less than this of a channel is left out of the channel's row.
+const ROW_FLOOR: f32 = 0.05;
+/// A channel whose displacement the free shapes reproduce less than this share of is not
+/// reached by geometry (its row stays empty and the solve leaves it out): the character has
+/// nothing like it.
+pub const MIN_EXPLAINED: f32 = 0.7;
+/// A shape may answer to a channel when at least this share of its (region-weighted) motion
+/// is in the channel's region.
+const REGION_SHARE: f64 = 0.2;
+/// A channel (or shape) with more than this share of its motion on one side of the face is
+/// one-sided.
+const ONE_SIDED: f64 = 0.75;
+/// A channel whose one shape explains at least this share of it is driven by its row.
+const DIRECT_EXPLAINED: f32 = 0.85;
+
+/// The face regions that count alike in the fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Region {
+    Lids,
+    Gaze,
+    Brows,
+    Cheeks,
+    Nose,
+    Jaw,
+    Mouth,
+    /// Everything no channel moves (the rest of the head, a body): counts half, so that a
+    /// shape moving it where no channel does pays for it.
+    Rest,
+}
+
+impl Region {
+    fn of_channel(name: &str) -> Region {
+        if name.starts_with("eyeLook") {
+            Region::Gaze
+        } else if name.starts_with("eye") {
+            Region::Lids
+        } else if name.starts_with("brow") {
+            Region::Brows
+        } else if name.starts_with("cheek") {
+            Region::Cheeks
+        } else if name.starts_with("nose") {
+            Region::Nose
+        } else if name.starts_with("jaw") {
+            Region::Jaw
+        } else {
+            Region::Mouth
+        }
+    }
+}
+
+/// `character`'s retarget map: by name, then by geometry from `templates` (the first that has
+/// a channel gives it) for the channels its names leave out, if any of its shapes is free to
+/// take them. Rows a user set in `previous` (a map of the same character) are kept.
+///
+/// # Errors
+/// [`FitError`] when the face cannot be found or the template not placed.
+pub fn retarget_map(
+    character: &Character,
+    templates: &[&Character],
+    models: &FaceModels,
+    previous: Option<&RetargetMap>,
+) -> Result<RetargetMap, FitError> {
+    let names: Vec<String> = character
+        .blendshapes()
+        .iter()
+        .map(|b| b.name().to_owned())
+        .collect();
+    let parts = character.expression_parts();
+    let mut map = RetargetMap::by_name(character.name(), &names, &parts);
+    if let Some(previous) = previous.filter(|p| p.blendshapes == names) {
+        for (c, row) in previous.rows.iter().enumerate() {
+            if row.from == RowSource::User {
+                map.rows[c] = row.clone();
+            }
+        }
+    }
+    let wanted: Vec<usize> = (0..faceanim_retarget::CHANNELS)
+        .filter(|&c| map.rows[c].from == RowSource::None)
+        .collect();
+    let free = RetargetMap::free_shapes(&names, &parts);
+    if wanted.is_empty() || free.is_empty() {
+        map.set_geometry(Vec::new(), None, Mode::Frame);
+        return Ok(map);
+    }
+    let user_marks = FaceLandmarks::find(character, models)?;
+    let on_user = OnUser::new(character)?;
+    // Each channel's displacement on the character, from the first template that has it; and
+    // every channel's, for the regions.
+    let n = character.vertex_count();
+    let mut displacement: Vec<Option<Vec<Vec3>>> = vec![None; faceanim_retarget::CHANNELS];
+    let mut region_of = vec![(0.0f32, Region::Rest); n];
+    let mut fit = None;
+    for template in templates {
+        let channels: Vec<(String, Vec<Vec3>)> = channel_deltas(template)
+            .into_iter()
+            .filter(|(name, _)| channel_index(name).is_some_and(|c| displacement[c].is_none()))
+            .collect();
+        if !channels
+            .iter()
+            .any(|(name, _)| channel_index(name).is_some_and(|c| wanted.contains(&c)))
+        {
+            continue;
+        }
+        let registered = on_user.register(&user_marks, template, models)?;
+        let (channel_names, deltas): (Vec<String>, Vec<Vec<Vec3>>) = channels.into_iter().unzip();
+        let moved = on_user.transfer(&registered, template, &deltas);
+        for (name, dense) in channel_names.iter().zip(moved) {
+            let region = Region::of_channel(name);
+            for (slot, d) in region_of.iter_mut().zip(&dense) {
+                let length = d.length();
+                if length > slot.0 {
+                    *slot = (length, region);
+                }
+            }
+            if let Some(c) = channel_index(name) {
+                displacement[c] = Some(dense);
+            }
+        }
+        fit.get_or_insert_with(|| registered.report(template, Vec::new()));
+    }
+    // A vertex belongs to a region where a channel moves it by a thousandth of the head.
+    let still = 1e-3 * on_user.size;
+    let region: Vec<Region> = region_of
+        .iter()
+        .map(|(length, r)| if *length > still { *r } else { Region::Rest })
+        .collect();
+    let mut counts: BTreeMap<Region, usize> = BTreeMap::new();
+    for r in &region {
+        *counts.entry(*r).or_default() += 1;
+    }
+    let weight: Vec<f64> = region
+        .iter()
+        .map(|r| {
+            let share = if *r == Region::Rest { 0.5 } else { 1.0 };
+            share / counts[r] as f64
+        })
+        .collect();
+    let channels: Vec<usize> = wanted
+        .iter()
+        .copied()
+        .filter(|&c| displacement[c].is_some())
+        .collect();
+    // Regions the names already drive (a named blink's lids) are theirs: the solve keeps out.
+    let named: Vec<Region> = map
+        .rows
+        .iter()
+        .filter(|r| matches!(r.from, RowSource::ByName | RowSource::User) && !r.shapes.is_empty())
+        .map(|r| Region::of_channel(&r.channel))
+        .collect();
+    let (rows, solve) = fit_shapes(
+        character,
+        &free,
+        &channels,
+        &displacement,
+        &Weighting {
+            weight: &weight,
+            region: &region,
+            named: &named,
+        },
+    );
+    map.set_geometry(rows, solve, Mode::Frame);
+    if let Some(fit) = fit {
+        map.made.template = Some(fit.name);
+        map.made.landmarks = Some(fit.landmarks[1]);
+        map.made.residual = Some(fit.residual);
+    }
+    Ok(map)
+}
+
+/// How the fit weighs the character's vertices: each one's weight, its region, and the regions
+/// its names already drive.
+#[derive(Clone, Copy)]
+struct Weighting<'a> {
+    weight: &'a [f64],
+    region: &'a [Region],
+    named: &'a [Region],
+}
+
+/// The free shapes against the channels' displacements: each channel's row (with the share
+/// explained) and the per-frame solve over the channels they reach.
+fn fit_shapes(
+    character: &Character,
+    free: &[usize],
+    channels: &[usize],
+    displacement: &[Option<Vec<Vec3>>],
+    weighting: &Weighting<'_>,
+) -> (Vec<Fitted>, Option<Solve>) {
+    let Weighting {
+        weight,
+        region,
+        named,
+    } = *weighting;
+    let shapes = character.blendshapes();
+    // Dense deltas of the free shapes over the vertices any of them moves.
+    let n = character.vertex_count();
+    let mut dense: Vec<Vec<Vec3>> = Vec::with_capacity(free.len());
+    for &k in free {
+        let mut d = vec![Vec3::ZERO; n];
+        for (&i, delta) in shapes[k].indices().iter().zip(shapes[k].deltas()) {
+            d[i as usize] = *delta;
+        }
+        dense.push(d);
+    }
+    let moved: Vec<usize> = (0..n)
+        .filter(|&v| {
+            dense.iter().any(|d| d[v] != Vec3::ZERO)
+                || channels
+                    .iter()
+                    .any(|&c| displacement[c].as_ref().is_some_and(|d| d[v] != Vec3::ZERO))
+        })
+        .collect();
+    let dot = |a: &[Vec3], b: &[Vec3]| -> f64 {
+        moved
+            .iter()
+            .map(|&v| weight[v] * f64::from(a[v].dot(b[v])))
+            .sum()
+    };
+    let k = free.len();
+    let mut gram = vec![vec![0.0f64; k]; k];
+    for i in 0..k {
+        for j in i..k {
+            let g = dot(&dense[i], &dense[j]);
+            gram[i][j] = g;
+            gram[j][i] = g;
+        }
+    }
+    // Shapes that move nothing the fit weighs are left out.
+    let largest = (0..k).map(|i| gram[i][i]).fold(0.0, f64::max);
+    let kept: Vec<usize> = (0..k).filter(|&i| gram[i][i] > 1e-9 * largest).collect();
+    if kept.is_empty() {
+        let none = |&c: &usize| Fitted {
+            channel: c,
+            shapes: BTreeMap::new(),
+            explained: 0.0,
+        };
+        return (channels.iter().map(none).collect(), None);
+    }
+    let scale = kept.iter().map(|&i| gram[i][i]).sum::<f64>() / kept.len() as f64;
+    // Which shapes may answer to which channel: those that move the channel's region (a
+    // share of their weighted energy there), so that a nose sneer is never made of a squint
+    // and a brow, nor a glance of a blink.
+    let share_in = |i: usize, r: Region| -> f64 {
+        let inside: f64 = moved
+            .iter()
+            .filter(|&&v| region[v] == r)
+            .map(|&v| weight[v] * f64::from(dense[i][v].length_squared()))
+            .sum();
+        inside / gram[i][i].max(f64::MIN_POSITIVE)
+    };
+    // And on the channel's side: a channel that moves one side of the face (more than
+    // [`ONE_SIDED`] of its motion there) takes no shape that moves only the other side.
+    let positions = character.positions();
+    let centre = {
+        let face: Vec<f32> = moved
+            .iter()
+            .filter(|&&v| region[v] != Region::Rest)
+            .map(|&v| positions[v].x)
+            .collect();
+        face.iter().sum::<f32>() / face.len().max(1) as f32
+    };
+    let right_share = |d: &[Vec3]| -> f64 {
+        let (mut right, mut all) = (0.0, 0.0);
+        for &v in &moved {
+            let e = weight[v] * f64::from(d[v].length_squared());
+            all += e;
+            if positions[v].x > centre {
+                right += e;
+            }
+        }
+        right / all.max(f64::MIN_POSITIVE)
+    };
+    let shape_sides: Vec<f64> = kept.iter().map(|&i| right_share(&dense[i])).collect();
+    let allowed: Vec<Vec<bool>> = channels
+        .iter()
+        .map(|&c| {
+            let r = Region::of_channel(faceanim_rig::names::ARKIT_52[c]);
+            let side = displacement[c].as_deref().map_or(0.5, right_share);
+            kept.iter()
+                .enumerate()
+                .map(|(k, &i)| {
+                    let same_side = if side > ONE_SIDED {
+                        shape_sides[k] >= 1.0 - ONE_SIDED
+                    } else if side < 1.0 - ONE_SIDED {
+                        shape_sides[k] <= ONE_SIDED
+                    } else {
+                        true
+                    };
+                    same_side && share_in(i, r) >= REGION_SHARE
+                })
+                .collect()
+        })
+        .collect();
+    let projections: Vec<Vec<f64>> = kept
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| {
+            channels
+                .iter()
+                .enumerate()
+                .map(|(col, &c)| {
+                    if allowed[col][k] {
+                        displacement[c].as_ref().map_or(0.0, |d| dot(&dense[i], d)) / scale
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let energy: Vec<f64> = channels
+        .iter()
+        .map(|&c| displacement[c].as_ref().map_or(0.0, |d| dot(d, d)) / scale)
+        .collect();
+    let solve = Solve {
+        shapes: kept
+            .iter()
+            .map(|&i| shapes[free[i]].name().to_owned())
+            .collect(),
+        channels: channels
+            .iter()
+            .map(|&c| faceanim_rig::names::ARKIT_52[c].to_owned())
+            .collect(),
+        gram: kept
+            .iter()
+            .map(|&i| kept.iter().map(|&j| (gram[i][j] / scale) as f32).collect())
+            .collect(),
+        projections: projections
+            .iter()
+            .map(|row| row.iter().map(|v| *v as f32).collect())
+            .collect(),
+        sparsity: SPARSITY,
+    };
+    // Each channel alone: its row, and how much of it the shapes explain.
+    let mut rows = Vec::new();
+    let mut reached = Vec::new();
+    for (col, &c) in channels.iter().enumerate() {
+        let mut unit = vec![0.0; channels.len()];
+        unit[col] = 1.0;
+        let x = solve.weights_among(&unit, &allowed[col]);
+        let xgx: f64 = (0..x.len())
+            .map(|i| {
+                (0..x.len())
+                    .map(|j| f64::from(x[i]) * f64::from(solve.gram[i][j]) * f64::from(x[j]))
+                    .sum::<f64>()
+            })
+            .sum();
+        let xh: f64 = (0..x.len())
+            .map(|i| f64::from(x[i]) * projections[i][col])
+            .sum();
+        let explained = if energy[col] > 0.0 {
+            (1.0 - (xgx - 2.0 * xh + energy[col]) / energy[col]).clamp(0.0, 1.0) as f32
+        } else {
+            0.0
+        };
+        let shapes_of_row: BTreeMap<String, f32> = if explained >= MIN_EXPLAINED {
+            reached.push(col);
+            x.iter()
+                .zip(&solve.shapes)
+                .filter(|(w, _)| **w >= ROW_FLOOR)
+                .map(|(w, name)| (name.clone(), (*w * 1000.0).round() / 1000.0))
+                .collect()
+        } else {
+            BTreeMap::new()
+        };
+        rows.push(Fitted {
+            channel: c,
+            shapes: shapes_of_row,
+            explained: (explained * 1000.0).round() / 1000.0,
+        });
+    }
+    // A channel with a shape of its own (one shape makes it, and that shape makes no other
+    // channel) is driven by its row, as a named one is; the solve matches, frame by frame,
+    // the channels that share shapes or need several at once. (Measured on ICT's heads with
+    // their names replaced, whose shapes are one per channel: solving those per frame trades
+    // one shape for another as a person's channels combine, and follows the person less.)
+    let own_shape = |col: usize| -> Option<String> {
+        let shapes = &rows[col].shapes;
+        let (name, w) = shapes.iter().max_by(|a, b| a.1.total_cmp(b.1))?;
+        let rest: f32 = shapes.values().sum::<f32>() - w;
+        (rows[col].explained >= DIRECT_EXPLAINED && *w >= 0.5 && rest < 0.15).then(|| name.clone())
+    };
+    let mut uses: BTreeMap<&str, usize> = BTreeMap::new();
+    for &col in &reached {
+        for name in rows[col].shapes.keys() {
+            *uses.entry(name.as_str()).or_default() += 1;
+        }
+    }
+    let direct: Vec<(usize, String)> = reached
+        .iter()
+        .filter_map(|&col| own_shape(col).map(|name| (col, name)))
+        .filter(|(_, name)| uses.get(name.as_str()) == Some(&1))
+        .collect();
+    let solved: Vec<usize> = reached
+        .iter()
+        .copied()
+        .filter(|col| !direct.iter().any(|(d, _)| d == col))
+        .collect();
+    // Regions driven by a row of their own (named, set by the user, or a shape of its own) are
+    // left to it: a shape that moves one of them (a whole-face emotion raising the brows) is
+    // not in the solve, or opening the mouth would raise the brows too.
+    let owned: Vec<Region> = named
+        .iter()
+        .copied()
+        .chain(
+            direct
+                .iter()
+                .map(|(col, _)| Region::of_channel(faceanim_rig::names::ARKIT_52[channels[*col]])),
+        )
+        .collect();
+    let shapes_left: Vec<usize> = (0..solve.shapes.len())
+        .filter(|&k| !direct.iter().any(|(_, name)| *name == solve.shapes[k]))
+        .filter(|&k| !owned.iter().any(|&r| share_in(kept[k], r) >= REGION_SHARE))
+        .collect();
+    let solve = (!solved.is_empty() && !shapes_left.is_empty()).then(|| Solve {
+        shapes: shapes_left
+            .iter()
+            .map(|&k| solve.shapes[k].clone())
+            .collect(),
+        channels: solved
+            .iter()
+            .map(|&col| solve.channels[col].clone())
+            .collect(),
+        gram: shapes_left
+            .iter()
+            .map(|&i| shapes_left.iter().map(|&j| solve.gram[i][j]).collect())
+            .collect(),
+        projections: shapes_left
+            .iter()
+            .map(|&k| {
+                solved
+                    .iter()
+                    .map(|&col| solve.projections[k][col])
+                    .collect()
+            })
+            .collect(),
+        sparsity: solve.sparsity,
+    });
+    (rows, solve)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn channels_fall_in_their_regions() {
+        assert_eq!(Region::of_channel("eyeBlinkLeft"), Region::Lids);
+        assert_eq!(Region::of_channel("eyeLookUpRight"), Region::Gaze);
+        assert_eq!(Region::of_channel("jawOpen"), Region::Jaw);
+        assert_eq!(Region::of_channel("tongueOut"), Region::Mouth);
+    }
+}
