@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Fails when a crate depends, directly or not, on what belongs to a layer above it. Two bands:
-#   - the pure core (character, animation, sketch, default head) knows no HTTP server, async
+# Fails when a crate depends, directly or not, on what belongs to a layer above it. Three bands:
+#   - the pure core (character, animation, sketch, default head, the retarget map) knows no HTTP server, async
 #     runtime, video or neural network;
 #   - the middle band (face tracking, media, capture, the take layer, the exporter, VMC, shape
 #     generation) may run
@@ -24,11 +24,11 @@ check() {
   done
 }
 check "pure core" '^(tract-|axum|tokio|hyper|reqwest|burn|candle|ort|ffmpeg|rust-embed|tower)' \
-  faceanim-rig faceanim-anim faceanim-sketch faceanim-head
+  faceanim-rig faceanim-anim faceanim-sketch faceanim-head faceanim-retarget
 check "middle band" '^(axum|tokio|hyper|reqwest|burn|candle|rust-embed|tower)' \
   faceanim-track faceanim-media faceanim-capture faceanim-take faceanim-export faceanim-live \
   faceanim-fit
 check "speech" '^(tract-|axum|tokio|hyper|reqwest|burn|candle|ort|rust-embed|tower|faceanim-track|faceanim-capture)' \
   faceanim-sphinx-sys faceanim-speech
-[ "$status" -eq 0 ] && echo "check-layers: the pure core and the middle band depend on nothing above them"
+[ "$status" -eq 0 ] && echo "check-layers: the pure core, the middle band and speech depend on nothing above them"
 exit "$status"

@@ -6,9 +6,19 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-scripts/setup.sh
+# The installs (downloads and dpkg, mostly waiting) run while clippy compiles; nothing clippy
+# checks needs them (the recogniser's bindings are checked, not linked).
+mkdir -p target
+scripts/setup.sh >target/setup.log 2>&1 &
+setup=$!
 cargo clippy --workspace --all-targets --locked -- -D warnings
 scripts/check-layers.sh
+if ! wait "$setup"; then
+  cat target/setup.log >&2
+  echo "test.sh: scripts/setup.sh failed (its output is above)" >&2
+  exit 1
+fi
+cat target/setup.log
 cargo test --workspace --doc --locked
 # The kernel faceanim adds to its vendored tract-tflite, against its contract in scalar code.
 cargo test -p tract-tflite --lib --locked faceanim

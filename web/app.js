@@ -13,6 +13,7 @@
 //   live.js      capture from the webcam in real time
 //   voice.js     the microphone drives the mouth in real time (voice-worklet.js: its samples)
 //   visemes.js   lip sync's viseme table, edited
+//   retarget.js  the retarget map: which of the character's shapes answer to each ARKit channel
 //   medians.js   running medians of live measurements
 //   vmc.js       VMC in: a phone tracker or another app drives the character
 //   xr.js        immersive sketching in a headset (WebXR): pens, the seed's states, navigation

@@ -14,6 +14,7 @@ import { drawTimeline } from './timeline.js';
 import { live } from './live.js';
 import { voice } from './voice.js';
 import { visemes } from './visemes.js';
+import { showMap } from './retarget.js';
 import { showControls as showVmcControls, vmc } from './vmc.js';
 import { setSound } from './sound.js';
 
@@ -125,8 +126,9 @@ export function apply(v) {
   input('train-samples').placeholder = String(a.default_samples);
   $('adapter-info').textContent = a.loaded
     ? `Adapter: ${a.path}${a.report ? ` (test MAE ${a.report.mae_test.toFixed(4)}, ${a.report.samples} renders)` : ''}.${a.note ? ` ${a.note}` : ''}${a.unseen.length ? ` Capture cannot drive ${a.unseen.length} of ${a.report ? a.report.shapes.length : '?'} shapes, each shown alone: ${a.unseen.join(', ')}. Sketch them or correct frames.` : ''}`
-    : `No adapter yet: estimating by ARKit name.${a.note ? ` ${a.note}` : ''} Train one to drive every shape of this character.`;
+    : `No adapter: ${v.retarget.in_use ? 'capture is read through the retarget map' : 'estimating by ARKit name'}.${a.note ? ` ${a.note}` : ''} Train one to refine it on this character's renders.`;
   /** @type {HTMLButtonElement} */ ($('finetune')).disabled = running || !a.loaded || !take || !take.corrected.length;
+  showMap(v.retarget, apply, running);
   // Filtering.
   const f = v.filtering;
   const s = f.smoothing || f.default_smoothing;
@@ -172,7 +174,7 @@ function layer(frame) {
 }
 
 /** How the take-info line says where the estimates came from. */
-const ESTIMATED = { adapter: 'estimated by the adapter', by_name: 'estimated by ARKit name', session_file: 'opened from a session' };
+const ESTIMATED = { adapter: 'estimated by the adapter', by_name: 'estimated by ARKit name', retarget: 'read through the retarget map', session_file: 'opened from a session' };
 
 // ---------- input ----------
 /** Opens `files` as the take: one video, session or speech file, or a sequence of photos. */

@@ -16,6 +16,7 @@ const ROUTE_TEXT = {
   visemes: 'This character has its own viseme shapes: the table is not used.',
   arkit: 'This character lip-syncs through its ARKit mouth shapes, by this table.',
   adapter: 'This character has no mouth names: its adapter reads the built-in head making each viseme by this table.',
+  retarget: 'This character has no mouth names: its retarget map puts each viseme of this table on its own shapes.',
 };
 
 function show(/** @type {any} */ view) {

@@ -28,11 +28,7 @@ pub fn default_map_path(folder: Option<&Path>, character_name: &str) -> PathBuf 
 /// nothing free) is driven by name as it is.
 #[must_use]
 pub fn needs_map(character: &Character) -> bool {
-    let names: Vec<String> = character
-        .blendshapes()
-        .iter()
-        .map(|b| b.name().to_owned())
-        .collect();
+    let names: Vec<String> = character.blendshape_names();
     let parts = character.expression_parts();
     let by_name = RetargetMap::by_name(character.name(), &names, &parts);
     let unread = by_name.rows.iter().any(|row| {

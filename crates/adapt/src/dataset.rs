@@ -379,11 +379,7 @@ impl Dataset {
             })
             .collect::<Result<_, AdaptError>>()?;
         let mut dataset = Dataset {
-            blendshapes: character
-                .blendshapes()
-                .iter()
-                .map(|b| b.name().to_owned())
-                .collect(),
+            blendshapes: character.blendshape_names(),
             fingerprint: Fingerprint::of(character),
             seed: options.seed,
             drawn: options.samples,

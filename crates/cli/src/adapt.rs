@@ -234,11 +234,7 @@ impl AdaptArgs {
 
 /// Reads every `--eval-dir` for `character`'s blendshapes.
 fn held_out(dirs: &[PathBuf], character: &Character) -> anyhow::Result<Vec<HeldOut>> {
-    let names: Vec<String> = character
-        .blendshapes()
-        .iter()
-        .map(|b| b.name().to_owned())
-        .collect();
+    let names: Vec<String> = character.blendshape_names();
     dirs.iter()
         .map(|dir| Ok(HeldOut::read(dir, &names)?))
         .collect()

@@ -103,7 +103,12 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     let transcript = transcript.map(|(text, _)| text);
     let mouth = match &args.adapter {
         Some(path) => mouth_by_adapter(&character, &table, path)?,
-        None => Mouth::of(&character, &table)?,
+        None => match Mouth::of(&character, &table) {
+            Ok(mouth) => mouth,
+            Err(no_mouth) => {
+                mouth_by_map(&character, args.character.as_deref(), &table)?.ok_or(no_mouth)?
+            }
+        },
     };
     let lip_sync = faceanim_speech::lip_sync_with(
         &sound,
@@ -143,6 +148,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
             faceanim_speech::Route::Visemes => "its viseme shapes",
             faceanim_speech::Route::Arkit => "its ARKit mouth shapes",
             faceanim_speech::Route::Adapter => "its shapes as its adapter reads each viseme",
+            faceanim_speech::Route::Retarget => "its shapes as its retarget map places each viseme",
         }
     );
     if args.json {
@@ -205,6 +211,20 @@ fn stem(path: &Path) -> String {
 
 /// `character`'s mouth read through its adapter at `path`: each viseme the built-in head makes
 /// (by `table`), rendered from the front and read by the adapter.
+/// The mouth of a rig whose names say nothing of one, through its retarget map (the one
+/// beside it, or made and saved there now); `None` when the map moves no shape of it.
+fn mouth_by_map(
+    character: &faceanim_rig::Character,
+    character_path: Option<&Path>,
+    table: &MouthTable,
+) -> anyhow::Result<Option<Mouth>> {
+    let models = faceanim_track::FaceModels::load().context("loading the face models")?;
+    let Some(map) = crate::retarget::for_capture(character, character_path, None, &models)? else {
+        return Ok(None);
+    };
+    Ok(Some(Mouth::through_map(&map, table)).filter(Mouth::moves))
+}
+
 fn mouth_by_adapter(
     character: &faceanim_rig::Character,
     table: &MouthTable,

@@ -346,11 +346,33 @@ fn run(command: Command) -> anyhow::Result<()> {
 
 fn info(args: &InfoArgs) -> anyhow::Result<()> {
     let imported = load_or_default(args.character.as_deref())?;
-    let report = info::Report::of(&imported.character);
+    let character = &imported.character;
+    let report = info::Report::of(character);
+    // Which of its shapes answer to each ARKit channel: its retarget map, when it has one.
+    let map_path = retarget::default_path(args.character.as_deref(), character);
+    let map = retarget::read_beside(&map_path, character)?;
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(&report)?);
+        let mut value = serde_json::to_value(&report)?;
+        value["retarget"] = serde_json::json!({
+            "path": map_path,
+            "needed": faceanim_adapt::bridge::needs_map(character),
+            "rows": map.as_ref().map(|m| &m.rows),
+        });
+        outln!("{}", serde_json::to_string_pretty(&value)?);
     } else {
-        out!("{}", report.text(&imported.character));
+        out!("{}", report.text(character));
+        match &map {
+            Some(map) => out!(
+                "retarget map ({}):\n{}",
+                map_path.display(),
+                retarget::table(map)
+            ),
+            None if faceanim_adapt::bridge::needs_map(character) => outln!(
+                "no retarget map yet: `faceanim retarget` makes one (capture makes it too) at {}",
+                map_path.display()
+            ),
+            None => {}
+        }
     }
     Ok(())
 }

@@ -46,7 +46,7 @@ pub fn run(args: RetargetArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| default_path(args.character.as_deref(), &character));
     let models = FaceModels::load().context("loading the face models")?;
-    let names = shape_names(&character);
+    let names = character.blendshape_names();
     let existing = read(&path, &names)?;
     let mut map = match existing {
         Some(map) if !args.remake && (map.calibration.is_some() || args.no_calibration) => map,
@@ -164,20 +164,21 @@ fn parse_set(text: &str) -> anyhow::Result<(String, BTreeMap<String, f32>)> {
     Ok((channel.trim().to_owned(), shapes))
 }
 
-fn shape_names(character: &Character) -> Vec<String> {
-    character
-        .blendshapes()
-        .iter()
-        .map(|b| b.name().to_owned())
-        .collect()
-}
-
 /// Where a character's map lives by default: `NAME.retarget.json` beside its file.
 pub fn default_path(character_path: Option<&Path>, character: &Character) -> PathBuf {
     faceanim_adapt::bridge::default_map_path(
         character_path.and_then(Path::parent),
         character.name(),
     )
+}
+
+/// The map at `path` if there is one that fits `character` (one of another character is said
+/// and ignored).
+///
+/// # Errors
+/// The file cannot be read, or is not a map.
+pub fn read_beside(path: &Path, character: &Character) -> anyhow::Result<Option<RetargetMap>> {
+    read(path, &character.blendshape_names())
 }
 
 /// The map at `path` if there is one that fits the character (a map of another character is
@@ -264,7 +265,7 @@ pub fn for_capture(
     given: Option<&Path>,
     models: &FaceModels,
 ) -> anyhow::Result<Option<RetargetMap>> {
-    let names = shape_names(character);
+    let names = character.blendshape_names();
     if let Some(path) = given {
         return read(path, &names)?.map(Some).ok_or_else(|| {
             anyhow::anyhow!("{}: not a map of {}", path.display(), character.name())

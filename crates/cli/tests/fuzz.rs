@@ -23,6 +23,7 @@
 mod mutate;
 mod support;
 
+use faceanim_speech::audio::wav_bytes as wav;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -193,26 +194,6 @@ fn session_files() {
         .to_string();
     assert!(error.contains("frames[2].presence"), "{error}");
     cases.finish();
-}
-
-/// A canonical WAV of `samples` at `rate`, `channels` interleaved.
-fn wav(samples: &[i16], rate: u32, channels: u16) -> Vec<u8> {
-    let data: Vec<u8> = samples.iter().flat_map(|s| s.to_le_bytes()).collect();
-    let mut out = Vec::new();
-    out.extend_from_slice(b"RIFF");
-    out.extend_from_slice(&(36 + data.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"WAVEfmt ");
-    out.extend_from_slice(&16u32.to_le_bytes());
-    out.extend_from_slice(&1u16.to_le_bytes());
-    out.extend_from_slice(&channels.to_le_bytes());
-    out.extend_from_slice(&rate.to_le_bytes());
-    out.extend_from_slice(&(rate * 2 * u32::from(channels)).to_le_bytes());
-    out.extend_from_slice(&(2 * channels).to_le_bytes());
-    out.extend_from_slice(&16u16.to_le_bytes());
-    out.extend_from_slice(b"data");
-    out.extend_from_slice(&(data.len() as u32).to_le_bytes());
-    out.extend_from_slice(&data);
-    out
 }
 
 /// flite's `slt` voice saying a line, as the WAV flite writes (16 kHz mono).
@@ -451,6 +432,17 @@ fn the_command_refuses_what_it_cannot_use_by_name() {
     let photo = photo_session();
     let session = dir.path().join("take.session.json");
     let out = dir.path().join("x.json");
+    // `faceanim session take.session.json export -o TO` of `bad`.
+    let export = |bad: &Value, to: &Path| {
+        std::fs::write(&session, serde_json::to_vec(bad).unwrap()).unwrap();
+        command(&[
+            os("session"),
+            session.as_os_str(),
+            os("export"),
+            os("-o"),
+            to.as_os_str(),
+        ])
+    };
     for (field, value) in [
         ("still_frames", json!(1e9)),
         ("still_frames", json!(1e12)),
@@ -462,14 +454,7 @@ fn the_command_refuses_what_it_cannot_use_by_name() {
     ] {
         let mut bad = photo.clone();
         bad[field] = value;
-        std::fs::write(&session, serde_json::to_vec(&bad).unwrap()).unwrap();
-        let (code, stderr) = command(&[
-            os("session"),
-            session.as_os_str(),
-            os("export"),
-            os("-o"),
-            out.as_os_str(),
-        ]);
+        let (code, stderr) = export(&bad, &out);
         assert_eq!(code, 1, "{stderr}");
         assert!(
             stderr.contains(field) && stderr.contains("take.session.json"),
@@ -478,14 +463,7 @@ fn the_command_refuses_what_it_cannot_use_by_name() {
     }
     let mut bad = photo.clone();
     bad["frames"][0]["head"] = json!([1e39, 0, 0]);
-    std::fs::write(&session, serde_json::to_vec(&bad).unwrap()).unwrap();
-    let (code, stderr) = command(&[
-        os("session"),
-        session.as_os_str(),
-        os("export"),
-        os("-o"),
-        dir.path().join("x.csv").as_os_str(),
-    ]);
+    let (code, stderr) = export(&bad, &dir.path().join("x.csv"));
     assert_eq!(code, 1, "{stderr}");
     assert!(stderr.contains("frames[0].head[0]"), "{stderr}");
 
@@ -493,64 +471,38 @@ fn the_command_refuses_what_it_cannot_use_by_name() {
     let speech = dir.path().join("line.wav");
     std::fs::write(&speech, speech_wav(dir.path())).unwrap();
     let words = dir.path().join("words.txt");
-    std::fs::write(&words, "mama made my bed ".repeat(600_000)).unwrap();
     let clip = dir.path().join("line.json");
+    let with_text = |text: &[u8]| {
+        std::fs::write(&words, text).unwrap();
+        command(&[
+            os("lipsync"),
+            speech.as_os_str(),
+            os("--text"),
+            words.as_os_str(),
+            os("-o"),
+            clip.as_os_str(),
+        ])
+    };
     let started = std::time::Instant::now();
-    let (code, stderr) = command(&[
-        os("lipsync"),
-        speech.as_os_str(),
-        os("--text"),
-        words.as_os_str(),
-        os("-o"),
-        clip.as_os_str(),
-    ]);
+    let (code, stderr) = with_text("mama made my bed ".repeat(600_000).as_bytes());
     assert_eq!(code, 1, "{stderr}");
     assert!(
         stderr.contains("--text") && stderr.contains("words.txt"),
         "{stderr}"
     );
     assert!(started.elapsed().as_secs() < 20, "{stderr}");
-    std::fs::write(&words, "mama made my bed ".repeat(200)).unwrap();
-    let (code, stderr) = command(&[
-        os("lipsync"),
-        speech.as_os_str(),
-        os("--text"),
-        words.as_os_str(),
-        os("-o"),
-        clip.as_os_str(),
-    ]);
-    assert_eq!(code, 1, "{stderr}");
-    assert!(
-        stderr.contains("--text") && stderr.contains("800 words"),
-        "{stderr}"
-    );
-    std::fs::write(&words, [0xff, 0xfe, b'a']).unwrap();
-    let (code, stderr) = command(&[
-        os("lipsync"),
-        speech.as_os_str(),
-        os("--text"),
-        words.as_os_str(),
-        os("-o"),
-        clip.as_os_str(),
-    ]);
-    assert_eq!(code, 1, "{stderr}");
-    assert!(
-        stderr.contains("--text") && stderr.contains("UTF-8"),
-        "{stderr}"
-    );
-    std::fs::write(&words, "...").unwrap();
-    let (_, stderr) = command(&[
-        os("lipsync"),
-        speech.as_os_str(),
-        os("--text"),
-        words.as_os_str(),
-        os("-o"),
-        clip.as_os_str(),
-    ]);
-    assert!(
-        stderr.contains("--text") && stderr.contains("no words"),
-        "{stderr}"
-    );
+    for (text, said) in [
+        ("mama made my bed ".repeat(200).into_bytes(), "800 words"),
+        (vec![0xff, 0xfe, b'a'], "UTF-8"),
+        (b"...".to_vec(), "no words"),
+    ] {
+        let (code, stderr) = with_text(&text);
+        assert_eq!(code, 1, "{stderr}");
+        assert!(
+            stderr.contains("--text") && stderr.contains(said),
+            "{stderr}"
+        );
+    }
     let slow = dir.path().join("slow.wav");
     std::fs::write(&slow, wav(&[0; 200_000], 1, 1)).unwrap();
     let started = std::time::Instant::now();
@@ -691,14 +643,12 @@ fn the_studio_answers_every_upload_and_survives_a_bad_take() {
             &[0; 64],
         ),
     );
-    answered(
-        "a path that is not a number",
-        request(port, "GET", "/api/capture/frame/x", &[], b""),
-    );
-    answered(
-        "no such route",
-        request(port, "DELETE", "/api/capture/state", &[], b""),
-    );
+    for (what, method, path) in [
+        ("a path that is not a number", "GET", "/api/capture/frame/x"),
+        ("no such route", "DELETE", "/api/capture/state"),
+    ] {
+        answered(what, request(port, method, path, &[], b""));
+    }
     // JSON routes with values of every wrong kind, a take open.
     answered(
         "the photo",
@@ -796,14 +746,12 @@ fn the_studio_answers_every_upload_and_survives_a_bad_take() {
         upload("bad.session.json", &serde_json::to_vec(&bad).unwrap()),
     );
     assert!(status == 400 && body.contains("still_frames"), "{body}");
-    answered(
-        "after it",
-        request(port, "GET", "/api/capture/state", &[], b""),
-    );
-    answered(
-        "an export after it",
-        request(port, "GET", "/api/capture/export.json", &[], b""),
-    );
+    for (what, path) in [
+        ("after it", "/api/capture/state"),
+        ("an export after it", "/api/capture/export.json"),
+    ] {
+        answered(what, request(port, "GET", path, &[], b""));
+    }
     drop(studio);
     // A bad take autosaved (by an older version, or by hand) is set aside at the next start.
     let autosave = dir.path().join(".fuzz.faceanim.json.take.json");

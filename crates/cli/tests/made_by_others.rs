@@ -260,12 +260,7 @@ fn capture_by_name_drives_the_blender_avatar_once() {
             file.file_stem().unwrap().to_string_lossy()
         ));
         let clip = track_clip(&photo, &file, &[], &out);
-        let names: Vec<&str> = clip["blendshapes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|n| n.as_str().unwrap())
-            .collect();
+        let names = support::strings(&clip["blendshapes"]);
         let peak = |name: &str| {
             let i = names.iter().position(|n| *n == name).unwrap();
             clip["frames"]

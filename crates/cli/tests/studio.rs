@@ -460,16 +460,15 @@ fn capture_mode_in_a_real_browser() {
         spoken.extend_from_slice(&bytes[data..]);
         spoken.resize(spoken.len() + (pause * 32_000.0) as usize, 0);
     }
-    let mut wav = b"RIFF".to_vec();
-    wav.extend((36 + spoken.len() as u32).to_le_bytes());
-    wav.extend(b"WAVEfmt ");
-    for field in [16u32, 1 | (1 << 16), 16_000, 32_000, 2 | (16 << 16)] {
-        wav.extend(field.to_le_bytes());
-    }
-    wav.extend(b"data");
-    wav.extend((spoken.len() as u32).to_le_bytes());
-    wav.extend(spoken);
-    std::fs::write(&microphone, wav).unwrap();
+    let samples: Vec<i16> = spoken
+        .chunks_exact(2)
+        .map(|b| i16::from_le_bytes([b[0], b[1]]))
+        .collect();
+    std::fs::write(
+        &microphone,
+        faceanim_speech::audio::wav_bytes(&samples, 16_000, 1),
+    )
+    .unwrap();
     let mut arguments = vec![
         video.into_os_string(),
         y4m.into_os_string(),
@@ -547,12 +546,7 @@ fn a_phone_trackers_vmc_stream_becomes_a_take() {
     let take = &state["take"];
     assert_eq!(take["frames"], 300, "{}", state["vmc"]);
     assert_eq!(take["estimator"], "received");
-    let names: Vec<&str> = state["blendshapes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|n| n.as_str().unwrap())
-        .collect();
+    let names = support::strings(&state["blendshapes"]);
     let column = |name: &str| names.iter().position(|n| *n == name).unwrap();
     for (k, frame) in sent["frames"].as_array().unwrap().iter().enumerate() {
         let estimate = &take["estimates"][k];

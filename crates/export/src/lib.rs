@@ -177,11 +177,7 @@ impl<'a> Animation<'a> {
         name: &str,
     ) -> Result<Animation<'a>, ExportError> {
         let retarget = clip.retarget(character, name)?;
-        let names: Vec<String> = character
-            .blendshapes()
-            .iter()
-            .map(|b| b.name().to_owned())
-            .collect();
+        let names: Vec<String> = character.blendshape_names();
         Ok(Animation {
             character: Some(character),
             clip: Clip {

@@ -55,12 +55,17 @@ impl FaceLandmarks {
     /// [`FitError::NoFace`] when the landmark model finds no face on the render (a face it
     /// cannot read: too stylised, turned away, hidden), [`FitError::Model`] if a model fails.
     pub fn find(character: &Character, models: &FaceModels) -> Result<FaceLandmarks, FitError> {
-        let appearance = Appearance::of(character);
         let neutral = character.pose(&[]);
+        // Small holes (a few triangles missing) would show the background through the face
+        // and hide it from the face model: the render closes them; the landmarks are still
+        // lifted onto the character's own triangles.
+        let patched = patched(character);
+        let shown = patched.as_ref().unwrap_or(character);
+        let appearance = Appearance::of(shown);
         let mut found = None;
         for view in views(character) {
             let camera = Camera::front(&view, 0.75);
-            let image = faceanim_render::render(character, &neutral, &camera, &appearance, RENDER);
+            let image = faceanim_render::render(shown, &neutral, &camera, &appearance, RENDER);
             let frame = Frame {
                 width: RENDER as usize,
                 height: RENDER as usize,
@@ -117,6 +122,39 @@ impl FaceLandmarks {
 /// Where to look for the face, in turn: the head box (a head, or a character whose shapes
 /// show where its face is), then, when that box is the whole character (a full body without
 /// shapes), the top of it at shrinking heights: a head is the top fifth to tenth of a body.
+/// Holes of at most this many edges are closed for the render.
+const SMALL_HOLE: usize = 8;
+
+/// `character` with its small holes closed, when it has any.
+fn patched(character: &Character) -> Option<Character> {
+    let fill = crate::mesh::small_hole_fill(character.triangles(), SMALL_HOLE);
+    if fill.is_empty() {
+        return None;
+    }
+    let mut parts = character.to_parts();
+    // Each fill triangle joins the material run of the triangle beside its hole.
+    let mut runs: Vec<std::ops::Range<usize>> =
+        parts.parts.iter().map(|p| p.triangles.clone()).collect();
+    if runs.is_empty() {
+        runs.push(0..parts.triangles.len());
+    }
+    let mut triangles = Vec::with_capacity(parts.triangles.len() + fill.len());
+    for (k, run) in runs.iter().enumerate() {
+        let start = triangles.len();
+        triangles.extend_from_slice(&parts.triangles[run.clone()]);
+        triangles.extend(
+            fill.iter()
+                .filter(|(t, _)| run.contains(t))
+                .map(|(_, f)| *f),
+        );
+        if let Some(part) = parts.parts.get_mut(k) {
+            part.triangles = start..triangles.len();
+        }
+    }
+    parts.triangles = triangles;
+    Character::new(parts).ok()
+}
+
 fn views(character: &Character) -> Vec<Aabb> {
     let head = character.head_bounds();
     let mut views = vec![head];

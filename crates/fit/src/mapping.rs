@@ -83,11 +83,7 @@ pub fn retarget_map(
     models: &FaceModels,
     previous: Option<&RetargetMap>,
 ) -> Result<RetargetMap, FitError> {
-    let names: Vec<String> = character
-        .blendshapes()
-        .iter()
-        .map(|b| b.name().to_owned())
-        .collect();
+    let names: Vec<String> = character.blendshape_names();
     let parts = character.expression_parts();
     let mut map = RetargetMap::by_name(character.name(), &names, &parts);
     if let Some(previous) = previous.filter(|p| p.blendshapes == names) {

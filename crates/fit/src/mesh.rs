@@ -1,4 +1,5 @@
-//! Small mesh helpers: edges, normals, closest points on triangles, connected pieces.
+//! Small mesh helpers: edges, normals, closest points on triangles, connected pieces, small
+//! holes.
 
 use glam::Vec3;
 
@@ -139,5 +140,106 @@ mod tests {
         assert_eq!(piece[6], piece[0]);
         assert_ne!(piece[3], piece[0]);
         assert_eq!(edges(&[[0, 1, 2], [2, 1, 3]], 4).len(), 5);
+    }
+}
+
+/// Triangles that close every hole of at most `longest` edges (a triangle or a few missing
+/// from a scan or a damaged export), each a fan over the hole's border, facing as its
+/// neighbours do, with the index of a triangle beside the hole (for its material). Larger
+/// openings (the neck, the eyes' and mouth's openings) and borders that touch themselves are
+/// left alone.
+pub(crate) fn small_hole_fill(triangles: &[[u32; 3]], longest: usize) -> Vec<(usize, [u32; 3])> {
+    use std::collections::{HashMap, HashSet};
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::with_capacity(triangles.len() * 3);
+    for (i, t) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            directed.insert((t[k], t[(k + 1) % 3]), i);
+        }
+    }
+    // A border edge has no triangle on its other side; around a hole they run one way.
+    let mut next: HashMap<u32, u32> = HashMap::new();
+    let mut tangled: HashSet<u32> = HashSet::new();
+    for &(a, b) in directed.keys() {
+        if !directed.contains_key(&(b, a)) && next.insert(a, b).is_some() {
+            tangled.insert(a);
+        }
+    }
+    let mut seen: HashSet<u32> = HashSet::new();
+    let mut fill = Vec::new();
+    let mut starts: Vec<u32> = next.keys().copied().collect();
+    starts.sort_unstable();
+    for start in starts {
+        if seen.contains(&start) {
+            continue;
+        }
+        let mut ring = vec![start];
+        let mut at = start;
+        let closed = loop {
+            seen.insert(at);
+            let Some(&n) = next.get(&at) else { break false };
+            if n == start {
+                break true;
+            }
+            if seen.contains(&n) || ring.len() > longest {
+                break false;
+            }
+            ring.push(n);
+            at = n;
+        };
+        if !closed
+            || ring.len() < 3
+            || ring.len() > longest
+            || ring.iter().any(|v| tangled.contains(v))
+        {
+            continue;
+        }
+        // The border runs along its neighbours' edges; the fill runs against them.
+        let beside = directed[&(ring[0], ring[1])];
+        for k in 1..ring.len() - 1 {
+            fill.push((beside, [ring[0], ring[k + 1], ring[k]]));
+        }
+    }
+    fill
+}
+
+#[cfg(test)]
+mod hole_tests {
+    use super::small_hole_fill;
+
+    /// A square of three by three quads (18 triangles, counter-clockwise), 4×4 vertices.
+    fn grid() -> Vec<[u32; 3]> {
+        let mut t = Vec::new();
+        for y in 0..3u32 {
+            for x in 0..3u32 {
+                let a = y * 4 + x;
+                t.push([a, a + 1, a + 5]);
+                t.push([a, a + 5, a + 4]);
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn a_missing_triangle_is_closed_facing_as_its_neighbours() {
+        let whole = grid();
+        // The outer border (12 edges) is an opening, not a hole.
+        assert!(small_hole_fill(&whole, 8).is_empty());
+        for gone in [8, 9] {
+            // The centre quad's triangles: every vertex of them is inside.
+            let mut holed = whole.clone();
+            let removed = holed.remove(gone);
+            let fill = small_hole_fill(&holed, 8);
+            assert_eq!(fill.len(), 1, "{fill:?}");
+            let [a, b, c] = fill[0].1;
+            let turns = [[a, b, c], [b, c, a], [c, a, b]];
+            assert!(turns.contains(&removed), "{:?} for {removed:?}", fill[0].1);
+            let beside = holed[fill[0].0];
+            assert!(beside.iter().filter(|v| removed.contains(v)).count() == 2);
+        }
+        // The whole centre quad: one hole of four edges, two triangles.
+        let mut holed = whole.clone();
+        holed.drain(8..10);
+        assert_eq!(small_hole_fill(&holed, 8).len(), 2);
+        assert!(small_hole_fill(&holed, 3).is_empty(), "longer than allowed");
     }
 }

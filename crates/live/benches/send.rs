@@ -9,11 +9,7 @@ use faceanim_live::{Names, Performer};
 fn send(c: &mut Criterion) {
     let receiver = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
     let character = faceanim_head::default_character();
-    let own: Vec<String> = character
-        .blendshapes()
-        .iter()
-        .map(|b| b.name().to_owned())
-        .collect();
+    let own: Vec<String> = character.blendshape_names();
     let many: Vec<String> = (0..124).map(|i| format!("Fcl_shape_{i:03}")).collect();
     for (label, names, mode) in [
         ("52 ARKit shapes", &own, Names::Arkit),

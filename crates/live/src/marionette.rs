@@ -64,6 +64,17 @@ struct State {
     lookup: HashMap<String, Vec<usize>>,
     /// The character's shapes each ARKit channel drives by name (for other spellings).
     arkit: HashMap<&'static str, Vec<usize>>,
+    /// The character's own names.
+    own: HashMap<String, usize>,
+    /// The character's retarget map: ARKit values it has no shape named for reach its shapes
+    /// through it.
+    map: Option<Arc<faceanim_retarget::RetargetMap>>,
+    /// ARKit's 52 channel values as they arrived (for the map).
+    channels: Vec<f32>,
+    /// Whether any ARKit value arrived since listening started (then a map makes the frame).
+    through_map: bool,
+    /// The shapes set by their own names, which the map leaves as sent.
+    direct: Vec<bool>,
     current: Vec<f32>,
     head: Option<[f32; 3]>,
     history: VecDeque<ReceivedFrame>,
@@ -106,15 +117,11 @@ impl Marionette {
         // browInnerUp_L/_R, a merged mouthSmile).
         let mut arkit: HashMap<&'static str, Vec<usize>> = HashMap::new();
         let map = faceanim_rig::name_map::NameMap::from_names(blendshapes, &[]);
-        for (i, entry) in map.entries().iter().enumerate() {
-            let Some(entry) = entry.filter(|e| e.used == faceanim_rig::name_map::Use::Driven)
-            else {
-                continue;
-            };
-            if matches!(entry.drive, faceanim_rig::names::Drive::Expression(_)) {
+        for (i, drive) in map.driven_drives() {
+            if matches!(drive, faceanim_rig::names::Drive::Expression(_)) {
                 continue;
             }
-            for c in entry.drive.channels() {
+            for c in drive.channels() {
                 arkit.entry(c.name()).or_default().push(i);
             }
         }
@@ -125,6 +132,15 @@ impl Marionette {
             last_arrival: None,
             lookup,
             arkit,
+            own: blendshapes
+                .iter()
+                .enumerate()
+                .map(|(i, n)| (n.clone(), i))
+                .collect(),
+            map: None,
+            channels: vec![0.0; faceanim_rig::names::ARKIT_52.len()],
+            through_map: false,
+            direct: vec![false; blendshapes.len()],
             current: vec![0.0; blendshapes.len()],
             head: None,
             history: VecDeque::new(),
@@ -145,6 +161,24 @@ impl Marionette {
             stop,
             thread: Some(thread),
         })
+    }
+
+    /// Reads ARKit values through `map` from now on (`None`: by name alone): a channel the
+    /// character has no shape named for reaches the shapes the map gives it (a phone's
+    /// `jawOpen` opening a VRoid mouth), while values named as the character's own shapes
+    /// set those shapes as sent. A map of other shapes is ignored, with a warning.
+    pub fn set_map(&self, map: Option<Arc<faceanim_retarget::RetargetMap>>) {
+        let mut state = lock(&self.state);
+        if let Some(m) = &map
+            && m.blendshapes.len() != state.current.len()
+        {
+            tracing::warn!(
+                "a retarget map of {} shapes does not fit this character",
+                m.blendshapes.len()
+            );
+            return;
+        }
+        state.map = map;
     }
 
     /// The address it listens on.
@@ -295,6 +329,23 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             else {
                 return false;
             };
+            let value = value.clamp(0.0, 1.0);
+            if let Some(&i) = state.own.get(name.as_str()) {
+                state.current[i] = value;
+                state.direct[i] = true;
+                return true;
+            }
+            // Kept with or without a map, so that a map given mid-stream starts from every
+            // channel's last value (a sender sends only what changed).
+            if let Some(c) =
+                faceanim_rig::names::arkit_name(name).and_then(faceanim_retarget::channel_index)
+            {
+                state.channels[c] = value;
+                state.through_map = true;
+                if state.map.is_some() {
+                    return true;
+                }
+            }
             let arkit = &state.arkit;
             let shapes = state
                 .lookup
@@ -309,15 +360,27 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
                 state.traffic.unmatched += 1;
             }
             for i in shapes {
-                state.current[i] = value.clamp(0.0, 1.0);
+                state.current[i] = value;
             }
             true
         }
         "/VMC/Ext/Blend/Apply" => {
             state.traffic.frames += 1;
+            let weights = match &state.map {
+                Some(map) if state.through_map => {
+                    let mut weights = map.weights(&state.channels);
+                    for (i, w) in weights.iter_mut().enumerate() {
+                        if state.direct[i] {
+                            *w = state.current[i];
+                        }
+                    }
+                    weights
+                }
+                _ => state.current.clone(),
+            };
             let frame = ReceivedFrame {
                 time,
-                weights: state.current.clone(),
+                weights,
                 head: state.head,
             };
             if let Some(recording) = state.recording.as_mut() {
@@ -348,5 +411,44 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             state.traffic.unknown += 1;
             true
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Names, Performer};
+
+    #[test]
+    fn arkit_values_reach_shapes_named_otherwise_through_the_map() {
+        let theirs: Vec<String> = ["jawOpen", "eyeBlinkLeft"].map(String::from).to_vec();
+        let ours: Vec<String> = ["Fcl_MTH_A", "Fcl_EYE_Close_L"].map(String::from).to_vec();
+        let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &ours).unwrap();
+        let mut performer = Performer::new(marionette.address(), &theirs, Names::Arkit).unwrap();
+        let wait = |marionette: &Marionette, count: usize| {
+            let frames = marionette.wait_for_frames(count, Duration::from_secs(5));
+            assert_eq!(frames.len(), count);
+            frames[count - 1].clone()
+        };
+        // By name alone the blink arrives and the mouth, named otherwise, does not.
+        performer.send(&[0.5, 1.0], None, 0.0);
+        let frame = wait(&marionette, 1);
+        assert_eq!(frame.weights, vec![0.0, 1.0]);
+        // Through the map: the row the user set (or geometry found) opens the mouth.
+        let mut map = faceanim_retarget::RetargetMap::by_name("vroid", &ours, &[]);
+        map.set_row("jawOpen", [("Fcl_MTH_A".to_owned(), 0.8)].into())
+            .unwrap();
+        marionette.set_map(Some(Arc::new(map)));
+        performer.send(&[0.6, 1.0], None, 1.0);
+        let frame = wait(&marionette, 2);
+        assert!(
+            (frame.weights[0] - 0.48).abs() < 1e-5,
+            "{:?}",
+            frame.weights
+        );
+        assert!((frame.weights[1] - 1.0).abs() < 1e-5, "{:?}", frame.weights);
+        // A map of other shapes is ignored.
+        let other = faceanim_retarget::RetargetMap::by_name("x", &theirs[..1], &[]);
+        marionette.set_map(Some(Arc::new(other)));
     }
 }

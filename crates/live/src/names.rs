@@ -187,11 +187,7 @@ mod tests {
     #[test]
     fn each_naming_covers_the_default_head() {
         let character = faceanim_head::default_character();
-        let names: Vec<String> = character
-            .blendshapes()
-            .iter()
-            .map(|b| b.name().to_owned())
-            .collect();
+        let names: Vec<String> = character.blendshape_names();
         assert_eq!(Names::Own.table(&names).len(), 52);
         let arkit = Names::Arkit.table(&names);
         assert_eq!(arkit.len(), 52);

@@ -217,15 +217,8 @@ impl RetargetMap {
                 explained: None,
             })
             .collect();
-        for (i, entry) in name_map.entries().iter().enumerate() {
-            let Some(Entry {
-                drive,
-                used: Use::Driven,
-            }) = entry
-            else {
-                continue;
-            };
-            let parts: Vec<(Channel, f32)> = match *drive {
+        for (i, drive) in name_map.driven_drives() {
+            let parts: Vec<(Channel, f32)> = match drive {
                 Drive::Channel(c) | Drive::Split(c, _) => vec![(c, 1.0)],
                 Drive::Merge(a, b) => vec![(a, 0.5), (b, 0.5)],
                 // Expressions (visemes, `surprised`) are several channels at once: geometry

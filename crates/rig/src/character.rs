@@ -591,6 +591,15 @@ impl Character {
         &self.blendshapes
     }
 
+    /// The blendshapes' names, in file order.
+    #[must_use]
+    pub fn blendshape_names(&self) -> Vec<String> {
+        self.blendshapes
+            .iter()
+            .map(|b| b.name().to_owned())
+            .collect()
+    }
+
     /// The blendshape `id`.
     #[must_use]
     pub fn blendshape(&self, id: BlendshapeId) -> Option<&Blendshape> {

@@ -208,6 +208,20 @@ impl NameMap {
             .collect()
     }
 
+    /// Each blendshape capture by name drives, with what its name means: (index, drive).
+    pub fn driven_drives(&self) -> impl Iterator<Item = (usize, Drive)> + '_ {
+        self.entries
+            .iter()
+            .enumerate()
+            .filter_map(|(i, e)| match e {
+                Some(Entry {
+                    drive,
+                    used: Use::Driven,
+                }) => Some((i, *drive)),
+                _ => None,
+            })
+    }
+
     /// ARKit's 52 channel values read back from the blendshapes' `weights` (`None` where no
     /// driven shape carries the channel): a channel's own shape gives its weight; the halves
     /// of a split channel give their mean; a merged shape gives its weight to both channels it
@@ -217,16 +231,9 @@ impl NameMap {
         let mut direct: Vec<Option<f32>> = vec![None; Channel::all().len()];
         let mut split: Vec<(f32, u32)> = vec![(0.0, 0); Channel::all().len()];
         let mut merged: Vec<Option<f32>> = vec![None; Channel::all().len()];
-        for (i, entry) in self.entries.iter().enumerate() {
-            let Some(Entry {
-                drive,
-                used: Use::Driven,
-            }) = entry
-            else {
-                continue;
-            };
+        for (i, drive) in self.driven_drives() {
             let w = weights.get(i).copied().unwrap_or(0.0);
-            match *drive {
+            match drive {
                 Drive::Channel(c) => direct[c.index()] = Some(w),
                 Drive::Split(c, _) => {
                     let s = &mut split[c.index()];

@@ -131,12 +131,7 @@ impl Sketch<'_> {
             .collect();
         Clip {
             fps: self.fps(),
-            blendshapes: self
-                .character()
-                .blendshapes()
-                .iter()
-                .map(|b| b.name().to_owned())
-                .collect(),
+            blendshapes: self.character().blendshape_names(),
             frames,
             head: None,
             head_position: None,

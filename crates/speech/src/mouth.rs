@@ -29,6 +29,9 @@ pub enum Route {
     /// Its own shapes, as its adapter reads renders of the built-in head making each viseme
     /// ([`Mouth::from_readings`]): for a rig whose names say nothing of a mouth.
     Adapter,
+    /// Its own shapes, as its retarget map puts each viseme's ARKit channels on them
+    /// ([`Mouth::through_map`]): for a rig whose names say nothing of a mouth, by geometry.
+    Retarget,
 }
 
 /// Why a character's mouth cannot be driven.
@@ -37,7 +40,7 @@ pub enum Route {
 pub enum MouthError {
     /// Neither viseme shapes nor ARKit mouth channels.
     #[error(
-        "{0} has neither viseme shapes (viseme_aa, aa/ih/ou/ee/oh, Fcl_MTH_A…) nor ARKit mouth shapes (jawOpen, mouthFunnel…) to lip-sync; train its adapter (faceanim adapt, or Train adapter in the studio) and lip sync reads the mouth through it"
+        "{0} has neither viseme shapes (viseme_aa, aa/ih/ou/ee/oh, Fcl_MTH_A…) nor ARKit mouth shapes (jawOpen, mouthFunnel…) to lip-sync; make its retarget map (faceanim retarget, or Make map in the studio) and lip sync reaches its shapes by geometry"
     )]
     NoMouth(String),
     /// A viseme table is malformed.
@@ -353,6 +356,42 @@ impl Mouth {
                 mouth.weights(&one)
             })
             .collect())
+    }
+
+    /// A mouth through `map` (the character's retarget map, see `faceanim-retarget`): each
+    /// viseme's ARKit channel values in `table` put on the character's own shapes by the
+    /// map's rows (by name where its names say, by geometry where they do not).
+    #[must_use]
+    pub fn through_map(map: &faceanim_retarget::RetargetMap, table: &MouthTable) -> Mouth {
+        let per_viseme = Viseme::ALL
+            .iter()
+            .map(|v| {
+                let Some(channels) = table.visemes.get(v.name()).filter(|_| *v != Viseme::Sil)
+                else {
+                    return Vec::new();
+                };
+                let values: Vec<f32> = faceanim_rig::names::ARKIT_52
+                    .iter()
+                    .map(|c| channels.get(*c).copied().unwrap_or(0.0))
+                    .collect();
+                map.weights(&values)
+                    .into_iter()
+                    .enumerate()
+                    .filter(|(_, w)| *w >= MIN_READING)
+                    .collect()
+            })
+            .collect();
+        Mouth {
+            route: Route::Retarget,
+            shapes: map.blendshapes.len(),
+            per_viseme,
+        }
+    }
+
+    /// Whether any viseme moves a shape.
+    #[must_use]
+    pub fn moves(&self) -> bool {
+        self.per_viseme.iter().any(|pairs| !pairs.is_empty())
     }
 
     /// A mouth from `readings`: per viseme (Oculus order), the character's weights as its

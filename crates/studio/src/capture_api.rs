@@ -64,6 +64,8 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/still", put(still))
         .route("/api/capture/adapter/train", post(train))
         .route("/api/capture/adapter/finetune", post(finetune))
+        .route("/api/capture/retarget", post(make_map))
+        .route("/api/capture/retarget/row", put(map_row))
         .route("/api/capture/live/start", post(live_start))
         .route("/api/capture/live/stop", post(live_stop))
         .route("/api/capture/live/record", post(live_record))
@@ -483,6 +485,40 @@ async fn train(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     Ok(state_of(&both))
 }
 
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct MakeMap {
+    /// Make it again (keeping the rows the user set) when there is one.
+    #[serde(default)]
+    remake: bool,
+}
+
+async fn make_map(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let MakeMap { remake } = if body.is_empty() {
+        MakeMap::default()
+    } else {
+        json_body(&body, "retarget")?
+    };
+    let character = both.studio().character.clone();
+    capture::start_map(&both.desk, character, remake)?;
+    Ok(state_of(&both))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MapRow {
+    /// An ARKit channel.
+    channel: String,
+    /// The character's shapes that answer to it at 1, with their weights (none: nothing).
+    shapes: std::collections::BTreeMap<String, f32>,
+}
+
+async fn map_row(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let MapRow { channel, shapes } = json_body(&body, "retarget row")?;
+    both.desk().set_map_row(&channel, shapes)?;
+    Ok(state_of(&both))
+}
+
 async fn finetune(State(both): State<Both>, _unread: Unread) -> Answer<CaptureView> {
     let character = both.studio().character.clone();
     capture::start_finetune(&both.desk, character)?;
@@ -643,7 +679,7 @@ struct VisemesView {
     visemes: std::collections::BTreeMap<String, std::collections::BTreeMap<String, f32>>,
     /// Whether it is the built-in table.
     default: bool,
-    /// How lip sync reaches this character: `visemes`, `arkit`, `adapter`, or `null` when it
+    /// How lip sync reaches this character: `visemes`, `arkit`, `adapter`, `retarget`, or `null` when it
     /// cannot (`no_mouth` says why).
     route: Option<faceanim_speech::Route>,
     no_mouth: Option<String>,
@@ -658,6 +694,11 @@ fn visemes_view(both: &Both) -> axum::Json<VisemesView> {
         .or_else(|e| {
             if desk.has_adapter() {
                 Ok(faceanim_speech::Route::Adapter)
+            } else if desk
+                .map()
+                .is_some_and(|m| faceanim_speech::Mouth::through_map(m, table).moves())
+            {
+                Ok(faceanim_speech::Route::Retarget)
             } else {
                 Err(e.to_string())
             }

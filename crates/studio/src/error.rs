@@ -131,6 +131,16 @@ impl ApiError {
     }
 }
 
+impl From<faceanim_adapt::bridge::BridgeError> for ApiError {
+    fn from(e: faceanim_adapt::bridge::BridgeError) -> ApiError {
+        match e {
+            faceanim_adapt::bridge::BridgeError::Fit(e) => ApiError::Fit(e),
+            faceanim_adapt::bridge::BridgeError::Calibration(e) => ApiError::Adapt(e),
+            other => ApiError::Internal(other.to_string()),
+        }
+    }
+}
+
 /// The error's JSON body.
 #[derive(serde::Serialize)]
 struct ErrorView {

@@ -286,11 +286,7 @@ impl CharacterView {
 /// The character's blendshape names, in order.
 #[must_use]
 pub fn names(character: &Character) -> Vec<String> {
-    character
-        .blendshapes()
-        .iter()
-        .map(|b| b.name().to_owned())
-        .collect()
+    character.blendshape_names()
 }
 
 /// `GET /api/character/anchors`: where a blendshape moves the most.
@@ -363,6 +359,43 @@ pub struct CaptureView {
     /// Something the user should know that no request asked about: the autosaved take that
     /// could not be opened, and where it was set aside.
     pub notice: Option<String>,
+    /// The character's retarget map.
+    pub retarget: RetargetView,
+}
+
+/// The character's retarget map: which of its shapes answer to each ARKit channel.
+#[derive(Debug, Serialize)]
+pub struct RetargetView {
+    /// Where it is read from and saved to.
+    pub path: String,
+    /// Whether there is one.
+    pub loaded: bool,
+    /// Whether the rig's names leave channels MediaPipe reads without a shape (then capture
+    /// makes the map before its first take).
+    pub needed: bool,
+    /// Whether it reads capture now (it does unless an adapter does).
+    pub in_use: bool,
+    /// Why the one beside the character is not used.
+    pub note: Option<String>,
+    /// How long making it took.
+    pub seconds: Option<f32>,
+    /// The 52 channels in ARKit's order.
+    pub rows: Vec<RetargetRowView>,
+}
+
+/// One ARKit channel's row of the map.
+#[derive(Debug, Serialize)]
+pub struct RetargetRowView {
+    /// The channel, in ARKit's spelling.
+    pub channel: String,
+    /// By name, by geometry, set by the user, or nothing.
+    pub from: faceanim_retarget::RowSource,
+    /// The shapes answering to the channel at 1, with their weights.
+    pub shapes: Vec<(String, f32)>,
+    /// For a geometric row: the share of the channel's displacement the shapes reproduce.
+    pub explained: Option<f32>,
+    /// Whether the channel's scores are scaled to the character on its renders.
+    pub calibrated: bool,
 }
 
 /// VMC in (`--vmc-listen`) and out (`--vmc-send`).

@@ -95,11 +95,7 @@ impl ByName {
             .count();
         ByName {
             map,
-            names: character
-                .blendshapes()
-                .iter()
-                .map(|b| b.name().to_owned())
-                .collect(),
+            names: character.blendshape_names(),
             driven,
         }
     }

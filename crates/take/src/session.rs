@@ -349,6 +349,37 @@ impl Session {
         }
     }
 
+    /// The same footage read for another character by `estimator` (its blendshapes, its
+    /// fingerprint `fingerprint`): frames, expressions, head pose, neutral frame and filtering
+    /// are kept; estimates are made anew; corrections and the preference, which name the old
+    /// character's shapes, are left behind.
+    #[must_use]
+    pub fn for_character(
+        &self,
+        character: String,
+        fingerprint: Fingerprint,
+        estimator: &dyn Estimator,
+    ) -> Session {
+        let mut session = Session::new(
+            self.source.clone(),
+            character,
+            estimator.blendshapes().to_vec(),
+            fingerprint,
+            self.fps,
+            self.edits.keyframe_every,
+            self.frames.clone(),
+        );
+        session.neutral = self.neutral;
+        session.edits.smoothing = self.edits.smoothing;
+        session.edits.still_frames = self.edits.still_frames;
+        let neutral = session.neutral_expression();
+        let estimates = estimate_frames(&session.expressions(), estimator, neutral.as_ref());
+        for (frame, estimate) in session.frames.iter_mut().zip(estimates) {
+            frame.estimate = estimate;
+        }
+        session
+    }
+
     /// The neutral face faces are read relative to: the user's frame, else each part of the
     /// face at its calmest frame with a face; `None` when fewer than two frames have one.
     #[must_use]

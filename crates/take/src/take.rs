@@ -98,11 +98,7 @@ impl Take {
                 character: character.name().to_owned(),
             });
         }
-        let names: Vec<String> = character
-            .blendshapes()
-            .iter()
-            .map(|b| b.name().to_owned())
-            .collect();
+        let names: Vec<String> = character.blendshape_names();
         if estimator.blendshapes() != names.as_slice() {
             return Err(TakeError::Mismatch {
                 character: character.name().to_owned(),
@@ -152,11 +148,7 @@ impl Take {
         frames: Vec<ReceivedFrame>,
         filtering: Filtering,
     ) -> Result<Take, TakeError> {
-        let names: Vec<String> = character
-            .blendshapes()
-            .iter()
-            .map(|b| b.name().to_owned())
-            .collect();
+        let names: Vec<String> = character.blendshape_names();
         if let Some(bad) = frames.iter().find(|f| f.weights.len() != names.len()) {
             return Err(TakeError::Mismatch {
                 character: character.name().to_owned(),

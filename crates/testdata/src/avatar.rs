@@ -299,11 +299,7 @@ pub fn full_body_glb_textured(
         views: Vec::new(),
         accessors: Vec::new(),
     };
-    let names: Vec<String> = head
-        .blendshapes()
-        .iter()
-        .map(|b| b.name().to_owned())
-        .collect();
+    let names: Vec<String> = head.blendshape_names();
     // Joints: 0 Hips (0.95), 1 Spine (1.1), 2 Chest (1.25), 3 Neck (1.38), 4 Head (HEAD_HEIGHT).
     let heights = [0.95f32, 1.1, 1.25, 1.38, HEAD_HEIGHT];
     let joint_names = ["Hips", "Spine", "Chest", "Neck", "Head"];

@@ -29,6 +29,15 @@ pub struct Frame<'a> {
     pub rgb: &'a [u8],
 }
 
+impl<'a> Frame<'a> {
+    /// A frame of `width × height` pixels over `rgb` (`width × height × 3` bytes; a size that
+    /// does not match is refused where the frame is read).
+    #[must_use]
+    pub fn new(width: usize, height: usize, rgb: &'a [u8]) -> Frame<'a> {
+        Frame { width, height, rgb }
+    }
+}
+
 /// A face found in a frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Face {

@@ -20,11 +20,7 @@ fn decode(name: &str) -> faceanim_media::Image {
 fn scores(models: &FaceModels, name: &str) -> HashMap<&'static str, f32> {
     let faceanim_media::Image { width, height, rgb } = decode(name);
     let face = models
-        .find_face(&Frame {
-            width,
-            height,
-            rgb: &rgb,
-        })
+        .find_face(&Frame::new(width, height, &rgb))
         .unwrap()
         .unwrap_or_else(|| panic!("{name}: no face"));
     assert!(

@@ -41,11 +41,7 @@ fn landmarks_and_scores_match_mediapipe_on_the_same_pixels() {
             )
         );
         let face = models
-            .find_face(&Frame {
-                width,
-                height,
-                rgb: &rgb,
-            })
+            .find_face(&Frame::new(width, height, &rgb))
             .unwrap()
             .unwrap_or_else(|| panic!("{name}: no face, where MediaPipe found one"));
         let points = theirs["landmarks"].as_array().unwrap();

@@ -497,3 +497,62 @@ pub fn request_bytes(
         response.get(split + 4..).unwrap_or_default().to_vec(),
     )
 }
+
+/// `video` captured once by `faceanim track … --session` onto the built-in head, every frame
+/// kept (no keyframes): its frames' expressions, for tests to read through any character's
+/// estimator (`Session::for_character`). Cached in `target/test-fixtures` for this build of
+/// faceanim, so that the tests of one run capture each video once.
+pub fn captured_session(video: faceanim_testdata::producers::Footage) -> faceanim_take::Session {
+    let binary = std::fs::metadata(env!("CARGO_BIN_EXE_faceanim")).unwrap();
+    let built = binary
+        .modified()
+        .ok()
+        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+        .map_or(0, |d| d.as_secs());
+    let dir = repo().join("target/test-fixtures");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!(
+        "captured-{}-{built}-{}.session.json",
+        video.stem(),
+        binary.len()
+    ));
+    // One test process captures; the others (nextest runs tests side by side) wait for it.
+    let lock = path.with_extension("lock");
+    let started = std::time::Instant::now();
+    while !path.exists() {
+        match std::fs::File::create_new(&lock) {
+            Ok(_) => {
+                let partial = dir.join(format!("{}.{}.partial", video.stem(), std::process::id()));
+                let captured = std::panic::catch_unwind(|| {
+                    faceanim_ok(&[
+                        "track",
+                        faceanim_testdata::producers::footage(video)
+                            .to_str()
+                            .unwrap(),
+                        "--filter",
+                        "none",
+                        "--by-name",
+                        "--session",
+                        partial.to_str().unwrap(),
+                    ])
+                });
+                if captured.is_ok() {
+                    std::fs::rename(&partial, &path).unwrap();
+                }
+                std::fs::remove_file(&lock).unwrap();
+                if let Err(e) = captured {
+                    std::panic::resume_unwind(e);
+                }
+            }
+            Err(_) => {
+                assert!(
+                    started.elapsed().as_secs() < 1200,
+                    "{} was held for 20 minutes",
+                    lock.display()
+                );
+                std::thread::sleep(std::time::Duration::from_millis(250));
+            }
+        }
+    }
+    faceanim_take::Session::from_json(&std::fs::read(&path).unwrap()).unwrap()
+}

@@ -59,11 +59,7 @@ fn faces() -> Vec<Face> {
     let mut faces = Vec::new();
     for file in ICT_IDENTITIES {
         let named = ict_identity(file);
-        let names: Vec<String> = named
-            .blendshapes()
-            .iter()
-            .map(|b| b.name().to_owned())
-            .collect();
+        let names: Vec<String> = named.blendshape_names();
         faces.push(Face {
             character: named,
             original: names.clone(),

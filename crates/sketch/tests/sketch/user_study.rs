@@ -18,11 +18,7 @@ fn sketch(project: &Project) -> Sketch<'static> {
 
 /// A reference clip over the character's blendshapes from per-name weight curves.
 fn reference(frames: usize, curves: &[(&str, &dyn Fn(f32) -> f32)]) -> Clip {
-    let names: Vec<String> = ict()
-        .blendshapes()
-        .iter()
-        .map(|b| b.name().to_owned())
-        .collect();
+    let names: Vec<String> = ict().blendshape_names();
     let frames = (0..frames)
         .map(|f| {
             let mut row = vec![0.0; names.len()];

@@ -37,6 +37,7 @@ pub fn start_capture(
     let desk = desk.clone();
     spawn_job(job, move |job| {
         let (footage, previews) = read_input(job, &path, &shown_name)?;
+        super::retarget::ensure_map(job, &desk, &character)?;
         let mut guard = lock(&desk);
         let take = guard.take_of(&character, footage)?;
         let message = format!(
@@ -291,7 +292,10 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
 
 /// Runs `work` on its own thread and ends `job` with its outcome. A panic (a bug) ends the job
 /// with an error instead of leaving the studio busy for ever.
-fn spawn_job(job: Arc<Job>, work: impl FnOnce(&Job) -> Result<String, ApiError> + Send + 'static) {
+pub(super) fn spawn_job(
+    job: Arc<Job>,
+    work: impl FnOnce(&Job) -> Result<String, ApiError> + Send + 'static,
+) {
     std::thread::spawn(move || {
         let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&job)))
             .unwrap_or_else(|_| {

@@ -8,6 +8,7 @@
 
 mod jobs;
 mod live;
+mod retarget;
 mod vmc;
 mod voice;
 
@@ -30,6 +31,7 @@ use crate::views::{AdapterView, CaptureView, FilteringView, Group, JobView, Take
 pub use jobs::{start_capture, start_finetune, start_training};
 use live::Live;
 pub use live::{LiveHandle, LiveResult};
+pub use retarget::start_map;
 pub use vmc::VmcConfig;
 pub use voice::{Calibration, RATE as VOICE_RATE, VoiceHandle, VoiceResult, VoiceView};
 
@@ -230,6 +232,8 @@ pub enum JobKind {
     TrainingAdapter,
     /// Fine-tuning the adapter on the take's corrections.
     FineTuning,
+    /// Registering the template on the character and calibrating its retarget map.
+    MakingMap,
 }
 
 impl std::fmt::Display for JobKind {
@@ -238,6 +242,7 @@ impl std::fmt::Display for JobKind {
             JobKind::ReadingInput => "reading the input",
             JobKind::TrainingAdapter => "training the adapter",
             JobKind::FineTuning => "fine-tuning the adapter",
+            JobKind::MakingMap => "making the retarget map",
         })
     }
 }
@@ -324,6 +329,12 @@ pub struct CaptureDesk {
     adapter: Option<Adapter>,
     /// Why the adapter beside the character is not used, or that it fits another shape.
     adapter_note: Option<String>,
+    /// Where the character's retarget map is read from and saved to (beside the adapter).
+    map_path: PathBuf,
+    /// The character's retarget map: what reads capture when there is no adapter.
+    map: Option<Arc<faceanim_retarget::RetargetMap>>,
+    /// Why the map beside the character is not used.
+    map_note: Option<String>,
     take: Option<OpenTake>,
     job: Option<Arc<Job>>,
     live: Arc<Mutex<Option<Live>>>,
@@ -380,6 +391,11 @@ fn set_aside(path: &std::path::Path) -> std::io::Result<PathBuf> {
     Ok(aside)
 }
 
+/// Where the map of `character` lives: beside its adapter.
+fn map_path(adapter_path: &std::path::Path, character: &Character) -> PathBuf {
+    faceanim_adapt::bridge::default_map_path(adapter_path.parent(), character.name())
+}
+
 /// A shared capture desk.
 pub type SharedDesk = Arc<Mutex<CaptureDesk>>;
 
@@ -399,9 +415,12 @@ impl CaptureDesk {
     pub fn new(character: &Character, adapter_path: PathBuf, take_path: PathBuf) -> CaptureDesk {
         let mut desk = CaptureDesk {
             take_path,
+            map_path: map_path(&adapter_path, character),
             adapter_path,
             adapter: None,
             adapter_note: None,
+            map: None,
+            map_note: None,
             take: None,
             job: None,
             live: Arc::new(Mutex::new(None)),
@@ -417,16 +436,18 @@ impl CaptureDesk {
             vmc: vmc::Vmc::default(),
         };
         desk.load_adapter(character);
+        desk.load_map(character);
         desk.restore_take(character);
         desk
     }
 
-    /// What estimates new takes of `character`: its adapter when there is one, else the
-    /// by-name mapping.
+    /// What estimates new takes of `character`: its adapter when there is one (the user
+    /// trained it), else its retarget map, else the by-name mapping.
     fn estimator(&self, character: &Character) -> Box<dyn Estimator> {
-        match &self.adapter {
-            Some(adapter) => Box::new(adapter.clone()),
-            None => Box::new(ByName::new(character)),
+        match (&self.adapter, &self.map) {
+            (Some(adapter), _) => Box::new(adapter.clone()),
+            (None, Some(map)) => Box::new(faceanim_take::Retargeted::new(map.clone())),
+            (None, None) => Box::new(ByName::new(character)),
         }
     }
 
@@ -639,14 +660,24 @@ impl CaptureDesk {
 
     /// The character's mouth for lip sync: its visemes or ARKit mouth shapes by name, else
     /// read through its adapter (each viseme the built-in head makes, rendered and read; done
-    /// once per adapter).
+    /// once per adapter), else each viseme's channels through its retarget map.
     ///
     /// # Errors
-    /// [`ApiError::Invalid`] when it has no mouth by name and no adapter; the face models' or
+    /// [`ApiError::Invalid`] when it has no mouth by name, no adapter and no map that moves
+    /// one; the face models' or
     /// the adapter's error.
     pub fn mouth(&mut self, character: &Character) -> Result<faceanim_speech::Mouth, ApiError> {
         let table = self.visemes.clone();
         let by_name = faceanim_speech::Mouth::of(character, &table);
+        if by_name.is_err()
+            && self.adapter.is_none()
+            && let Some(map) = &self.map
+        {
+            let mouth = faceanim_speech::Mouth::through_map(map, &table);
+            if mouth.moves() {
+                return Ok(mouth);
+            }
+        }
         let (Err(no_mouth), Some(adapter)) = (&by_name, &self.adapter) else {
             return by_name.map_err(|e| ApiError::Invalid(e.to_string()));
         };
@@ -761,8 +792,10 @@ impl CaptureDesk {
         }
         self.take = None;
         *lock(&self.live) = None;
+        self.map_path = map_path(&adapter_path, character);
         self.adapter_path = adapter_path;
         self.load_adapter(character);
+        self.load_map(character);
         // VMC names follow the character.
         if let Err(e) = self.open_vmc(self.vmc.config(), character) {
             tracing::warn!("VMC for {}: {e}", character.name());
@@ -872,17 +905,12 @@ impl CaptureDesk {
             voice: self.voice_view(),
             vmc: self.vmc_view(),
             notice: self.notice.clone(),
+            retarget: self.map_view(character),
             take: self.take.as_ref().map(|open| {
                 // The neutral check reads one frame: borrow the adapter, do not copy it.
-                let by_name;
-                let estimator: &dyn Estimator = match &self.adapter {
-                    Some(adapter) => adapter,
-                    None => {
-                        by_name = ByName::new(character);
-                        &by_name
-                    }
-                };
-                let mut view = TakeView::of(&open.take, open.id, open.previews.len(), estimator);
+                let estimator = self.estimator(character);
+                let mut view =
+                    TakeView::of(&open.take, open.id, open.previews.len(), estimator.as_ref());
                 view.sound = open
                     .sound
                     .as_ref()

@@ -44,6 +44,13 @@ impl Default for Vmc {
 }
 
 impl Vmc {
+    /// Gives the marionette, when listening, the character's retarget map.
+    pub(super) fn set_map(&self, map: Option<Arc<faceanim_retarget::RetargetMap>>) {
+        if let Some(marionette) = &self.marionette {
+            marionette.set_map(map);
+        }
+    }
+
     /// The links as the studio was started.
     pub(super) fn config(&self) -> VmcConfig {
         self.config
@@ -64,7 +71,10 @@ impl CaptureDesk {
         };
         let blendshapes = names(character);
         if let Some(address) = config.listen {
-            self.vmc.marionette = Some(Marionette::listen(address, &blendshapes)?);
+            let marionette = Marionette::listen(address, &blendshapes)?;
+            // A phone's ARKit values reach shapes named otherwise through the map.
+            marionette.set_map(self.map.clone());
+            self.vmc.marionette = Some(marionette);
         }
         if let Some((destination, names)) = config.send {
             let performer = Performer::new(destination, &blendshapes, names)?;

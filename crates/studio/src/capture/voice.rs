@@ -301,7 +301,11 @@ impl CaptureDesk {
             .collect();
         let dir = private_dir(&mut self.uploads, "faceanim-uploads-", "uploads")?;
         let path = dir.join(format!("microphone-{}.wav", std::process::id()));
-        faceanim_files::write_atomic(&path, &wav(&samples)).map_err(ApiError::Disk)?;
+        faceanim_files::write_atomic(
+            &path,
+            &faceanim_speech::audio::wav_bytes(&samples, RATE as u32, 1),
+        )
+        .map_err(ApiError::Disk)?;
         let take =
             faceanim_take::Take::from_weights(character, "microphone.wav", RECORDED_FPS, &rows)?;
         self.take = Some(OpenTake {
@@ -331,28 +335,6 @@ fn check_delay(delay_ms: u32) -> Result<(), ApiError> {
         )));
     }
     Ok(())
-}
-
-/// A 16 kHz mono 16-bit WAV of `samples`.
-fn wav(samples: &[i16]) -> Vec<u8> {
-    let data = (samples.len() * 2) as u32;
-    let mut out = Vec::with_capacity(44 + samples.len() * 2);
-    out.extend_from_slice(b"RIFF");
-    out.extend_from_slice(&(36 + data).to_le_bytes());
-    out.extend_from_slice(b"WAVEfmt ");
-    out.extend_from_slice(&16u32.to_le_bytes());
-    out.extend_from_slice(&1u16.to_le_bytes());
-    out.extend_from_slice(&1u16.to_le_bytes());
-    out.extend_from_slice(&(RATE as u32).to_le_bytes());
-    out.extend_from_slice(&(RATE as u32 * 2).to_le_bytes());
-    out.extend_from_slice(&2u16.to_le_bytes());
-    out.extend_from_slice(&16u16.to_le_bytes());
-    out.extend_from_slice(b"data");
-    out.extend_from_slice(&data.to_le_bytes());
-    for s in samples {
-        out.extend_from_slice(&s.to_le_bytes());
-    }
-    out
 }
 
 /// What a chunk needs, taken from the desk so hearing it does not block the desk.

@@ -1,0 +1,207 @@
+//! The character's retarget map on the capture desk: read from beside the character, made in
+//! the background (by the page's button, or before the first capture of a rig whose names
+//! leave channels without a shape), shown row by row, and edited a row at a time.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use faceanim_retarget::RetargetMap;
+use faceanim_rig::Character;
+
+use super::jobs::spawn_job;
+use super::{CaptureDesk, Job, JobKind, SharedDesk, face_models, lock};
+use crate::error::ApiError;
+use crate::views::{RetargetRowView, RetargetView};
+
+impl CaptureDesk {
+    /// Reads the map beside the character, when there is one that fits it.
+    pub(super) fn load_map(&mut self, character: &Character) {
+        self.map = None;
+        self.map_note = None;
+        if !self.map_path.exists() {
+            return;
+        }
+        let names = super::names(character);
+        let loaded = faceanim_files::read_bytes(&self.map_path)
+            .map_err(|e| e.to_string())
+            .and_then(|bytes| RetargetMap::from_json(&bytes, &names).map_err(|e| e.to_string()));
+        match loaded {
+            Ok(map) => self.map = Some(Arc::new(map)),
+            Err(e) => {
+                tracing::warn!("{}: {e}", self.map_path.display());
+                self.map_note = Some(format!("{} is not used: {e}", self.map_path.display()));
+            }
+        }
+    }
+
+    /// The character's retarget map, when it has one.
+    #[must_use]
+    pub fn map(&self) -> Option<&RetargetMap> {
+        self.map.as_deref()
+    }
+
+    /// The map's rows for the page.
+    #[must_use]
+    pub fn map_view(&self, character: &Character) -> RetargetView {
+        let rows = self.map.as_ref().map_or_else(Vec::new, |map| {
+            map.rows
+                .iter()
+                .enumerate()
+                .map(|(c, row)| RetargetRowView {
+                    channel: row.channel.clone(),
+                    from: row.from,
+                    shapes: map
+                        .answers(c)
+                        .into_iter()
+                        .map(|(s, w)| (s.to_owned(), w))
+                        .collect(),
+                    explained: row.explained,
+                    calibrated: map
+                        .calibration
+                        .as_ref()
+                        .is_some_and(|k| k.channels.contains_key(&row.channel)),
+                })
+                .collect()
+        });
+        RetargetView {
+            path: self.map_path.display().to_string(),
+            loaded: self.map.is_some(),
+            needed: faceanim_adapt::bridge::needs_map(character),
+            in_use: self.adapter.is_none() && self.map.is_some(),
+            note: self.map_note.clone(),
+            seconds: self.map.as_ref().and_then(|m| m.made.seconds),
+            rows,
+        }
+    }
+
+    /// Sets `channel`'s row to `shapes` (the user's choice, kept when the map is made again),
+    /// saves the map and re-reads the take through it.
+    ///
+    /// # Errors
+    /// [`ApiError::Invalid`] when there is no map, or naming the channel, shape or weight that
+    /// is wrong; the save's error.
+    pub fn set_map_row(
+        &mut self,
+        channel: &str,
+        shapes: BTreeMap<String, f32>,
+    ) -> Result<(), ApiError> {
+        self.busy()?;
+        let mut map =
+            self.map.as_deref().cloned().ok_or_else(|| {
+                ApiError::Invalid("there is no retarget map: make one first".into())
+            })?;
+        map.set_row(channel, shapes)
+            .map_err(|e| ApiError::Invalid(e.to_string()))?;
+        faceanim_files::write_atomic(&self.map_path, map.to_json().as_bytes())?;
+        self.install_map(map)
+    }
+
+    /// Makes `map` the desk's, and re-reads the take and the webcam through it unless an
+    /// adapter reads them.
+    fn install_map(&mut self, map: RetargetMap) -> Result<(), ApiError> {
+        let map = Arc::new(map);
+        self.map = Some(map.clone());
+        self.map_note = None;
+        self.vmc.set_map(Some(map.clone()));
+        if self.adapter.is_some() {
+            return Ok(());
+        }
+        let estimator = faceanim_take::Retargeted::new(map);
+        if let Some(open) = self.take.as_mut() {
+            open.take.reestimate(&estimator)?;
+            self.save_take();
+        }
+        if let Some(live) = lock(&self.live).as_mut() {
+            live.estimator = Box::new(estimator);
+        }
+        Ok(())
+    }
+}
+
+/// Starts making `character`'s map in the background (again, keeping the rows the user set,
+/// when `remake`); saves it beside the character and re-reads the take through it.
+///
+/// # Errors
+/// [`ApiError::Busy`] when another job runs; [`ApiError::Invalid`] when there is a map and
+/// `remake` is false.
+pub fn start_map(
+    desk: &SharedDesk,
+    character: Arc<Character>,
+    remake: bool,
+) -> Result<(), ApiError> {
+    let job = Job::new(JobKind::MakingMap);
+    let previous = {
+        let mut guard = lock(desk);
+        guard.busy()?;
+        if guard.map.is_some() && !remake {
+            return Err(ApiError::Invalid(
+                "the character has a retarget map: ask to remake it".into(),
+            ));
+        }
+        guard.job = Some(job.clone());
+        guard.map.clone()
+    };
+    let desk = desk.clone();
+    spawn_job(job, move |job| {
+        let map = make(job, &desk, &character, previous.as_deref())?;
+        let message = format!(
+            "{} of ARKit's 52 channels reach its shapes, in {:.1} s",
+            map.answered(),
+            map.made.seconds.unwrap_or(0.0)
+        );
+        Ok(message)
+    });
+    Ok(())
+}
+
+/// Makes the map before a capture when the rig needs one, has none and no adapter reads it.
+pub(super) fn ensure_map(
+    job: &Job,
+    desk: &SharedDesk,
+    character: &Character,
+) -> Result<(), ApiError> {
+    {
+        let guard = lock(desk);
+        if guard.adapter.is_some()
+            || guard.map.is_some()
+            || !faceanim_adapt::bridge::needs_map(character)
+        {
+            return Ok(());
+        }
+    }
+    make(job, desk, character, None).map(|_| ())
+}
+
+/// Makes the map, saves it and installs it on the desk (unless another character was opened
+/// meanwhile).
+fn make(
+    job: &Job,
+    desk: &SharedDesk,
+    character: &Character,
+    previous: Option<&RetargetMap>,
+) -> Result<RetargetMap, ApiError> {
+    job.stage("making the retarget map", 0);
+    let models = face_models()?;
+    let path = lock(desk).map_path.clone();
+    let progress = |done: usize, total: usize| job.progress_of(done, total);
+    let map = faceanim_adapt::bridge::make_map(
+        character,
+        models,
+        previous,
+        true,
+        faceanim_adapt::Control {
+            progress: &progress,
+            cancel: &job.cancel,
+        },
+    )?;
+    faceanim_files::write_atomic(&path, map.to_json().as_bytes())?;
+    let mut guard = lock(desk);
+    if guard.map_path != path {
+        return Err(ApiError::Invalid(format!(
+            "another character was opened meanwhile; the map was saved to {} but is not used",
+            path.display()
+        )));
+    }
+    guard.install_map(map.clone())?;
+    Ok(map)
+}
