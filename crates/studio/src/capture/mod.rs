@@ -664,8 +664,7 @@ impl CaptureDesk {
     ///
     /// # Errors
     /// [`ApiError::Invalid`] when it has no mouth by name, no adapter and no map that moves
-    /// one; the face models' or
-    /// the adapter's error.
+    /// one; the face models' or the adapter's error.
     pub fn mouth(&mut self, character: &Character) -> Result<faceanim_speech::Mouth, ApiError> {
         let table = self.visemes.clone();
         let by_name = faceanim_speech::Mouth::of(character, &table);
