@@ -554,10 +554,7 @@ fn footage_correlations(
         let Some(theirs) = moving.get(c.name()).and_then(Value::as_array) else {
             continue;
         };
-        let mut scores: Vec<f64> = theirs.iter().filter_map(Value::as_f64).collect();
-        scores.sort_by(f64::total_cmp);
-        let span = scores[scores.len() * 95 / 100] - scores[scores.len() * 5 / 100];
-        if span < MOVES {
+        if !support::moves(theirs, MOVES) {
             continue;
         }
         let name = format!("shape_{}", k + 1);

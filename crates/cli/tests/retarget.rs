@@ -81,13 +81,6 @@ fn weights(
         .collect()
 }
 
-/// The moving channels' span test of [`MOVES`].
-fn moves(scores: &[Value]) -> bool {
-    let mut s: Vec<f64> = scores.iter().filter_map(Value::as_f64).collect();
-    s.sort_by(f64::total_cmp);
-    !s.is_empty() && s[s.len() * 95 / 100] - s[s.len() * 5 / 100] >= MOVES
-}
-
 #[test]
 fn ict_heads_whose_names_say_nothing_follow_real_people() {
     let models = FaceModels::load().unwrap();
@@ -117,7 +110,7 @@ fn ict_heads_whose_names_say_nothing_follow_real_people() {
                 let Some(theirs) = moving.get(c.name()).and_then(Value::as_array) else {
                     continue;
                 };
-                if !moves(theirs) {
+                if !support::moves(theirs, MOVES) {
                     continue;
                 }
                 let r = follows(&frames, k, &reference, theirs);
@@ -249,7 +242,7 @@ fn a_full_body_avatar_of_another_topology_follows_people_on_its_own_geometry() {
             else {
                 continue;
             };
-            if !columns.iter().all(|c| moves(c)) {
+            if !columns.iter().all(|c| support::moves(c, MOVES)) {
                 continue;
             }
             let (mut ours, mut theirs) = (Vec::new(), Vec::new());
@@ -287,24 +280,6 @@ fn a_full_body_avatar_of_another_topology_follows_people_on_its_own_geometry() {
     assert!(weak.is_empty(), "{weak:#?}");
 }
 
-/// Polls the studio's capture state until its job ends; returns the state.
-fn after_job(port: u16) -> Value {
-    let started = std::time::Instant::now();
-    loop {
-        let (status, body) = support::request(port, "GET", "/api/capture/state", &[], b"");
-        assert_eq!(status, 200, "{body}");
-        let state: Value = serde_json::from_str(&body).unwrap();
-        if state["job"]["running"] != true {
-            return state;
-        }
-        assert!(
-            started.elapsed().as_secs() < 300,
-            "the job never ends: {state}"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(200));
-    }
-}
-
 #[test]
 fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
     let out = output_dir("retarget-studio");
@@ -317,7 +292,7 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
     std::fs::write(&glb, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
     let project = out.join("avatar.faceanim.json");
     let studio = support::start_on(Some(&glb), &project, &[]);
-    let state = after_job(studio.port);
+    let state = support::settled(studio.port, 300);
     let map = &state["retarget"];
     assert_eq!(map["loaded"], false, "{map}");
     assert_eq!(map["needed"], true, "{map}");
@@ -332,7 +307,7 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
         json!({ "path": photo }).to_string().as_bytes(),
     );
     assert_eq!(status, 200, "{body}");
-    let state = after_job(studio.port);
+    let state = support::settled(studio.port, 300);
     assert!(state["job"]["error"].is_null(), "{}", state["job"]);
     let map = &state["retarget"];
     assert_eq!(map["in_use"], true, "{map}");
@@ -414,7 +389,7 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
 
     // Opened again, and remade: the user's row stays.
     let studio = support::start_on(Some(&glb), &project, &[]);
-    let state = after_job(studio.port);
+    let state = support::settled(studio.port, 300);
     assert_eq!(
         row(state["retarget"]["rows"].as_array().unwrap(), "jawOpen")["from"],
         "user"
@@ -429,7 +404,7 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
         br#"{"remake": true}"#,
     );
     assert_eq!(status, 200, "{body}");
-    let state = after_job(studio.port);
+    let state = support::settled(studio.port, 300);
     assert!(state["job"]["error"].is_null(), "{}", state["job"]);
     assert_eq!(
         row(state["retarget"]["rows"].as_array().unwrap(), "jawOpen")["from"],

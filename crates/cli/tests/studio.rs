@@ -298,26 +298,13 @@ fn capture_mode_refuses_bad_input_with_a_reason() {
     assert!(body.contains("keyframe_every"), "{body}");
 }
 
-/// Waits for the capture job to end and returns the capture state.
-fn settled(port: u16) -> serde_json::Value {
-    for _ in 0..600 {
-        let (_, body) = request(port, "GET", "/api/capture/state", &[], b"");
-        let state: serde_json::Value = serde_json::from_str(&body).unwrap();
-        if state["job"]["running"] != true {
-            return state;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(100));
-    }
-    panic!("the capture job did not end in a minute");
-}
-
 /// Opens `path` in capture mode, waits for it to be read and returns the capture state.
 fn open_and_settle(port: u16, path: &std::path::Path) -> serde_json::Value {
     let open = serde_json::json!({ "path": path }).to_string();
     let json = [("Content-Type", "application/json")];
     let (status, body) = request(port, "POST", "/api/capture/open", &json, open.as_bytes());
     assert_eq!(status, 200, "{body}");
-    settled(port)
+    support::settled(port, 60)
 }
 
 #[test]

@@ -60,7 +60,8 @@ struct State {
     traffic: Traffic,
     arrivals: VecDeque<Instant>,
     last_arrival: Option<Instant>,
-    /// Blendshape name → the character's shapes it sets (none: not the character's), as names arrive.
+    /// A name that is none of the character's own → the shapes it sets by its ARKit meaning
+    /// (none: unmatched), as names arrive.
     lookup: HashMap<String, Vec<usize>>,
     /// The character's shapes each ARKit channel drives by name (for other spellings).
     arkit: HashMap<&'static str, Vec<usize>>,
@@ -108,11 +109,6 @@ impl Marionette {
         let socket = UdpSocket::bind(address).map_err(socket_error)?;
         socket.set_read_timeout(Some(POLL)).map_err(socket_error)?;
         let bound = socket.local_addr().map_err(socket_error)?;
-        let lookup = blendshapes
-            .iter()
-            .enumerate()
-            .map(|(i, n)| (n.clone(), vec![i]))
-            .collect();
         // An ARKit channel drives every shape the name table gives it (both halves of ICT's
         // browInnerUp_L/_R, a merged mouthSmile).
         let mut arkit: HashMap<&'static str, Vec<usize>> = HashMap::new();
@@ -130,7 +126,7 @@ impl Marionette {
             traffic: Traffic::default(),
             arrivals: VecDeque::new(),
             last_arrival: None,
-            lookup,
+            lookup: HashMap::new(),
             arkit,
             own: blendshapes
                 .iter()

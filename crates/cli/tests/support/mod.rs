@@ -556,3 +556,33 @@ pub fn captured_session(video: faceanim_testdata::producers::Footage) -> faceani
     }
     faceanim_take::Session::from_json(&std::fs::read(&path).unwrap()).unwrap()
 }
+
+/// Waits (at most `seconds`) for the studio's capture job to end; returns the capture state.
+pub fn settled(port: u16, seconds: u64) -> serde_json::Value {
+    let started = std::time::Instant::now();
+    loop {
+        let (status, body) = request(port, "GET", "/api/capture/state", &[], b"");
+        assert_eq!(status, 200, "{body}");
+        let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+        if state["job"]["running"] != true {
+            return state;
+        }
+        assert!(
+            started.elapsed().as_secs() < seconds,
+            "the capture job did not end in {seconds} s: {state}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+}
+
+/// Whether MediaPipe's scores of a channel on some footage move: they span at least
+/// `at_least` between their 5th and 95th percentiles (a channel that never changes by that
+/// much is noise around a constant).
+pub fn moves(scores: &[serde_json::Value], at_least: f64) -> bool {
+    let mut s: Vec<f64> = scores
+        .iter()
+        .filter_map(serde_json::Value::as_f64)
+        .collect();
+    s.sort_by(f64::total_cmp);
+    !s.is_empty() && s[s.len() * 95 / 100] - s[s.len() * 5 / 100] >= at_least
+}
