@@ -13,6 +13,7 @@ scripts/setup.sh >target/setup.log 2>&1 &
 setup=$!
 cargo clippy --workspace --all-targets --locked -- -D warnings
 scripts/check-layers.sh
+scripts/check-circles.py
 if ! wait "$setup"; then
   cat target/setup.log >&2
   echo "test.sh: scripts/setup.sh failed (its output is above)" >&2

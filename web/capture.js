@@ -4,10 +4,10 @@
 // recording. The server owns the take; this file draws /api/capture/state and sends edits.
 // Sketch strokes keep working on top: the take is the layer under them (playback's layer).
 
-import * as THREE from 'three';
 import { api } from './api.js';
+import { turnHead } from './head-turn.js';
 import { inCapture, onMode } from './mode.js';
-import { applyLayer, currentFrame, onFrame, pause, setExtent, setFrame, setLayer, setTurn } from './playback.js';
+import { applyLayer, currentFrame, onFrame, pause, setExtent, setFrame, setLayer } from './playback.js';
 import { showError, showFailure } from './status.js';
 import * as store from './store.js';
 import { drawTimeline } from './timeline.js';
@@ -17,11 +17,12 @@ import { visemes } from './visemes.js';
 import { showMap } from './retarget.js';
 import { showControls as showVmcControls, vmc } from './vmc.js';
 import { setSound } from './sound.js';
+import { apply, onShowTakeFrame, onView, post } from './take.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 const input = (id) => /** @type {HTMLInputElement} */ (document.getElementById(id));
 
-/** @type {any} The last /api/capture/state. */
+/** @type {any} The last /api/capture/state, as take.js told it. */
 let view = null;
 /** Name of the blendshape whose curve the diagram draws. */
 let selectedName = 'jawOpen';
@@ -83,9 +84,9 @@ async function refresh() {
   return v;
 }
 
-/** Shows a capture state the server answered with. */
-export function apply(v) {
-  const hadTake = view && view.take ? view.take.id : null;
+/** Draws a capture state the server answered with. */
+onView((v, previous) => {
+  const hadTake = previous && previous.take ? previous.take.id : null;
   view = v;
   const take = v.take;
   const newTake = take && take.id !== hadTake;
@@ -151,7 +152,7 @@ export function apply(v) {
   notify();
   drawTimeline();
   setFrame(newTake ? 0 : currentFrame());
-}
+});
 
 /** The weights under the sketch at `frame`: the live face, else the take (with a slider
  * being dragged shown at once). */
@@ -214,12 +215,6 @@ $('capture-open').onclick = async () => {
 };
 $('capture-close').onclick = () => post('api/capture/close');
 $('job-cancel').onclick = () => post('api/capture/cancel');
-
-/** Sends a capture request; its answer becomes the state. Resolves false on an error. */
-export async function post(path, body) {
-  try { showError(''); apply(await api('POST', path, body)); return true; }
-  catch (e) { showError(String(e.message || e)); return false; }
-}
 
 // ---------- adapter ----------
 // Empty: the studio's default, shown as the placeholder.
@@ -428,17 +423,6 @@ diagram.addEventListener('pointerdown', (e) => {
 });
 new ResizeObserver(drawDiagram).observe(diagram);
 
-/** Turns the character by a captured head pose `[yaw, pitch, roll]` in degrees (the export's
- * convention: R = Ry(yaw)·Rx(−pitch)·Rz(roll); the capture browser test compares the two), or
- * back to rest. Only in this tab: strokes are drawn on the unturned face. */
-const headEuler = new THREE.Euler(0, 0, 0, 'YXZ');
-export function turnHead(head) {
-  if (!(head && inCapture() && input('head-turn').checked)) { setTurn(null); return; }
-  const d = THREE.MathUtils.degToRad;
-  headEuler.set(-d(head[1]), d(head[0]), d(head[2]), 'YXZ');
-  setTurn(new THREE.Quaternion().setFromEuler(headEuler));
-}
-$('head-turn').addEventListener('change', () => setFrame(currentFrame()));
 
 // The input frame, the sliders and the diagram follow the current frame.
 let shownFrame = -1;
@@ -474,14 +458,11 @@ function noPreview() {
   note.hidden = false;
 }
 
-/** The last capture state. */
-export const currentView = () => view;
-
-/** Shows the take's current frame again (after live mode, which drew over it). */
-export function showTakeFrame() {
+// A live source asks for the take's frame again (after live mode, which drew over it).
+onShowTakeFrame(() => {
   shownFrame = -1;
   setFrame(currentFrame());
-}
+});
 
 // The take (or the live face) is the layer under the sketch.
 setLayer(layer);

@@ -4,7 +4,8 @@
 // frames per second and camera-to-screen latency.
 
 import { api } from './api.js';
-import { apply, currentView, post, showTakeFrame, turnHead } from './capture.js';
+import { turnHead } from './head-turn.js';
+import { apply, currentView, post, showTakeFrame } from './take.js';
 import { pushMedian } from './medians.js';
 import { applyLayer, pause } from './playback.js';
 import { onRender } from './scene.js';

@@ -4,7 +4,6 @@
 // element; capture.js says which sound the open take has.
 
 import { currentFrame, isPlaying, onFrame, onPlaying, setClock } from './playback.js';
-import { drawTimeline } from './timeline.js';
 
 const audio = new Audio();
 audio.preload = 'auto';
@@ -25,6 +24,11 @@ let rate = 30;
 /** The sound's loudness per frame of the take, for the timeline; null without one. */
 export function waveform() { return peaks; }
 
+/** @type {Array<() => void>} Called when the waveform is measured. */
+const measuredListeners = [];
+/** Calls `fn` whenever a sound's waveform has been measured (the timeline redraws). */
+export function onWaveform(fn) { measuredListeners.push(fn); }
+
 /** Decodes `url` and measures its peak per frame. */
 async function measure(url) {
   const bytes = await fetch(url).then((r) => r.arrayBuffer());
@@ -38,7 +42,7 @@ async function measure(url) {
     for (let i = Math.floor(f * per); i < Math.min(data.length, Math.floor((f + 1) * per)); i++) most = Math.max(most, Math.abs(data[i]));
     return most;
   });
-  drawTimeline();
+  for (const fn of measuredListeners) fn();
 }
 
 /** Plays `url` with the take, whose frames run at `fps` (null: no sound). */

@@ -5,7 +5,7 @@ import { currentFrame, isPlaying, lastFrame, onFrame, setFrame } from './playbac
 import { api } from './api.js';
 import { showError, showFailure } from './status.js';
 import * as store from './store.js';
-import { waveform } from './sound.js';
+import { onWaveform, waveform } from './sound.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 
@@ -193,6 +193,8 @@ function timelineDrag(event, action, box) {
 }
 
 store.onState(() => drawTimeline());
+// A take's sound, once decoded, draws its waveform under the rows.
+onWaveform(() => drawTimeline());
 // A selection changes only the boxes' look: redrawing would replace the box being pressed.
 store.onSelection(() => {
   for (const row of timeline.querySelectorAll('.row')) {

@@ -5,7 +5,8 @@
 // goes to the marionette frame by frame.
 
 import { api } from './api.js';
-import { currentView, post, showTakeFrame, turnHead } from './capture.js';
+import { turnHead } from './head-turn.js';
+import { currentView, post, showTakeFrame } from './take.js';
 import { applyLayer, characterMeshes, isPlaying, onFrame, pause } from './playback.js';
 import * as store from './store.js';
 import { showError, showFailure } from './status.js';

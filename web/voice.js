@@ -5,7 +5,7 @@
 // take with its sound. Measures voice-to-mouth latency.
 
 import { api } from './api.js';
-import { apply, post, showTakeFrame } from './capture.js';
+import { apply, post, showTakeFrame } from './take.js';
 import { pushMedian } from './medians.js';
 import { applyLayer, pause } from './playback.js';
 import { onRender } from './scene.js';

@@ -116,6 +116,13 @@ impl TrainOptions {
     }
 }
 
+/// At most this many passes of fine-tuning over the training split and the corrections.
+const FINETUNE_EPOCHS: usize = 40;
+/// Fine-tuning stops after this many passes without a better fit to the corrections (one that
+/// keeps the validation error within 5 %): 30 corrections are fitted within a few passes, and
+/// the passes after only cost the user's time.
+const FINETUNE_PATIENCE: usize = 8;
+
 impl Default for TrainOptions {
     fn default() -> TrainOptions {
         TrainOptions {
@@ -794,7 +801,9 @@ pub fn finetune(
     let mut optimizer = adam(&net, options.learning_rate / 3.0)?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(options.seed ^ 0x5eed);
     let mut best = (corrected_before, net.snapshot()?);
-    let max_epochs = options.max_epochs.min(40);
+    let mut best_epoch = 0;
+    let max_epochs = options.max_epochs.min(FINETUNE_EPOCHS);
+    let patience = options.patience.min(FINETUNE_PATIENCE);
     let mut epochs = 0;
     for e in 1..=max_epochs {
         if control.cancelled() {
@@ -813,8 +822,12 @@ pub fn finetune(
         let kept_generality = net.mae(&validation.x, &validation.y)? <= validation_before * 1.05;
         if kept_generality && fit < best.0 {
             best = (fit, net.snapshot()?);
+            best_epoch = e;
         }
         (control.progress)(e, max_epochs);
+        if e - best_epoch >= patience {
+            break;
+        }
     }
     let [hidden_weight, hidden_bias, output_weight, output_bias] = best.1;
     let mut tuned = Adapter {

@@ -48,7 +48,10 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
         "opposites are found from the geometry: {names:?}"
     );
 
+    let started = std::time::Instant::now();
+    let at = |what: &str| eprintln!("byoc: {what} at {:.0} s", started.elapsed().as_secs_f64());
     let data = dataset(ict, &models, SAMPLES, 1);
+    at("dataset");
     assert!(data.len() >= SAMPLES * 99 / 100, "{} kept", data.len());
     // The cache round-trips exactly.
     assert_eq!(
@@ -57,6 +60,7 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
     );
 
     let adapter = train(&data, &TrainOptions::default(), Control::silent()).unwrap();
+    at("trained");
     let report = adapter.report.clone();
     eprintln!("ICT, {SAMPLES} samples: {report:?}");
     // Randomised renders are harder than the front ones, measured on their own.
@@ -141,6 +145,7 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
         Control::silent(),
     )
     .unwrap();
+    at("seed's trained");
     let seed_readings = camera.readings(ict, &models, &seed_loss).unwrap();
     let unseen = |r: &[faceanim_adapt::ShapeReading]| faceanim_adapt::readings::unseen(r).len();
     eprintln!(
@@ -192,6 +197,7 @@ fn the_ict_head_gets_an_adapter_that_reads_its_expressions() {
         Control::silent(),
     )
     .unwrap();
+    at("fine-tuned");
     eprintln!("fine-tuning on 30 corrected id7 frames: {outcome:?}");
     assert!(
         outcome.corrected_after < outcome.corrected_before * 0.9,

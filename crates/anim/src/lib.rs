@@ -19,11 +19,10 @@
 
 pub mod filter;
 pub mod keyframes;
-pub mod livelink;
 pub mod metrics;
 
 use faceanim_rig::Character;
-use faceanim_rig::export::MorphAnimation;
+use faceanim_rig::animation::MorphAnimation;
 use serde::{Deserialize, Serialize};
 
 /// Baked blendshape weights over time. See the crate docs.

@@ -416,7 +416,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
             "--hidden must be between 1 and 4096, got {hidden}"
         );
     }
-    let character = crate::load_or_default(args.character.as_deref())?.character;
+    let character = crate::input::load_or_default(args.character.as_deref())?.character;
     let output = args
         .output
         .clone()
@@ -830,8 +830,7 @@ fn finetune(
     folders: &[HeldOut],
 ) -> anyhow::Result<()> {
     let from = args.from.clone().unwrap_or_else(|| output.to_owned());
-    let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(&from)?)
-        .with_context(|| format!("reading the adapter {}", from.display()))?;
+    let adapter = crate::input::adapter(&from)?;
     adapter.check(character)?;
     let mut corrections = Vec::new();
     for path in &args.finetune {
@@ -928,8 +927,7 @@ fn evaluate(
     fresh: bool,
     folders: &[HeldOut],
 ) -> anyhow::Result<()> {
-    let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(path)?)
-        .with_context(|| format!("reading the adapter {}", path.display()))?;
+    let adapter = crate::input::adapter(path)?;
     if adapter.check(character)? == faceanim_adapt::Fit::OtherShape {
         eprintln!(
             "{} was trained on another shape of this rig: measuring how well it transfers",

@@ -40,7 +40,7 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<()> {
             "--only: {name} is not one of ARKit's 52 names (e.g. eyeBlinkLeft, jawOpen)"
         );
     }
-    let user = crate::load(&args.character)?.character;
+    let user = crate::input::load(&args.character)?.character;
     if args
         .output
         .extension()
@@ -128,7 +128,7 @@ fn templates(choice: &str) -> anyhow::Result<Vec<Character>> {
         "default" | "realistic" => Template::Realistic.characters()?,
         "stylised" | "stylized" | "builtin" => Template::Stylised.characters()?,
         path => {
-            let template = crate::load(Path::new(path))
+            let template = crate::input::load(Path::new(path))
                 .with_context(|| format!("--template {path}"))?
                 .character;
             anyhow::ensure!(

@@ -1,5 +1,8 @@
 //! `faceanim info`: what a character contains, as text for people or JSON for scripts.
 
+use std::path::PathBuf;
+
+use clap::Args;
 use faceanim_rig::Character;
 use serde::Serialize;
 
@@ -310,4 +313,47 @@ impl Report {
         }
         out
     }
+}
+/// `faceanim info`'s arguments.
+#[derive(Debug, Args)]
+pub(crate) struct InfoArgs {
+    /// The character: .glb, .gltf, or a folder of OBJ files (default: the built-in head).
+    pub(crate) character: Option<PathBuf>,
+    /// Print machine-readable JSON instead of text.
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+/// `faceanim info`.
+pub(crate) fn run(args: &InfoArgs) -> anyhow::Result<()> {
+    let imported = crate::input::load_or_default(args.character.as_deref())?;
+    let character = &imported.character;
+    let report = Report::of(character);
+    // Which of its shapes answer to each ARKit channel: its retarget map, when it has one.
+    let map_path = crate::retarget::default_path(args.character.as_deref(), character);
+    let map = crate::retarget::read_beside(&map_path, character)?;
+    if args.json {
+        let mut value = serde_json::to_value(&report)?;
+        value["retarget"] = serde_json::json!({
+            "path": map_path,
+            "needed": faceanim_adapt::bridge::needs_map(character),
+            "rows": map.as_ref().map(|m| &m.rows),
+        });
+        outln!("{}", serde_json::to_string_pretty(&value)?);
+    } else {
+        out!("{}", report.text(character));
+        match &map {
+            Some(map) => out!(
+                "retarget map ({}):\n{}",
+                map_path.display(),
+                crate::retarget::table(map)
+            ),
+            None if faceanim_adapt::bridge::needs_map(character) => outln!(
+                "no retarget map yet: `faceanim retarget` makes one (capture makes it too) at {}",
+                map_path.display()
+            ),
+            None => {}
+        }
+    }
+    Ok(())
 }

@@ -87,7 +87,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         "--fps must be between 1 and 240, got {}",
         args.fps
     );
-    let character = crate::load_or_default(args.character.as_deref())?.character;
+    let character = crate::input::load_or_default(args.character.as_deref())?.character;
     let table = match &args.viseme_table {
         Some(path) => MouthTable::from_json(&read_text(path, "--viseme-table")?)
             .map_err(|e| anyhow::anyhow!("--viseme-table {}: {e}", path.display()))?,
@@ -124,7 +124,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     for note in &lip_sync.notes {
         eprintln!("{}: {note}", args.speech.display());
     }
-    let name = stem(&args.speech);
+    let name = crate::input::stem(&args.speech, "speech");
     let take = Take::from_weights(&character, &name, args.fps, &lip_sync.frames)?;
     let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
     for (path, format) in outputs.iter().zip(formats) {
@@ -204,11 +204,6 @@ fn read_text(path: &Path, option: &str) -> anyhow::Result<String> {
     })
 }
 
-fn stem(path: &Path) -> String {
-    path.file_stem()
-        .map_or_else(|| "speech".to_owned(), |s| s.to_string_lossy().into_owned())
-}
-
 /// `character`'s mouth read through its adapter at `path`: each viseme the built-in head makes
 /// (by `table`), rendered from the front and read by the adapter.
 /// The mouth of a rig whose names say nothing of one, through its retarget map (the one
@@ -230,8 +225,7 @@ fn mouth_by_adapter(
     table: &MouthTable,
     path: &Path,
 ) -> anyhow::Result<Mouth> {
-    let adapter = faceanim_adapt::Adapter::from_bytes(&faceanim_files::read_bytes(path)?)
-        .with_context(|| format!("reading the adapter {}", path.display()))?;
+    let adapter = crate::input::adapter(path)?;
     adapter
         .check(character)
         .with_context(|| format!("the adapter {}", path.display()))?;

@@ -34,21 +34,12 @@ pub fn take_animation<'a>(
     session: &'a Session,
     name: &str,
 ) -> anyhow::Result<Animation<'a>> {
-    if let Some(character) = character {
-        let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();
-        anyhow::ensure!(
-            names == session.blendshapes,
-            "the session is for {} ({} blendshapes); give that character with --character",
-            session.character,
-            session.blendshapes.len()
-        );
-    }
-    let layered = faceanim_take::layer(&session.clip(), None, session.blendshapes.len(), name);
-    Ok(Animation {
+    Ok(Animation::from_take(
         character,
-        animation: layered.animation,
-        clip: layered.clip,
-        arkit: session.arkit_clip(),
-        session: Some(session),
-    })
+        &session.clip(),
+        session.arkit_clip(),
+        Some(session),
+        None,
+        name,
+    )?)
 }

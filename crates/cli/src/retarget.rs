@@ -40,7 +40,7 @@ pub struct RetargetArgs {
 }
 
 pub fn run(args: RetargetArgs) -> anyhow::Result<()> {
-    let character = crate::load_or_default(args.character.as_deref())?.character;
+    let character = crate::input::load_or_default(args.character.as_deref())?.character;
     let path = args
         .output
         .clone()

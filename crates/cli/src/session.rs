@@ -6,7 +6,6 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use faceanim_adapt::Adapter;
 use faceanim_export::Format;
 use faceanim_take::{Session, TakeError};
 
@@ -187,8 +186,7 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
         SessionAction::ApplyPreference => session.apply_preference(),
         SessionAction::ClearPreference => session.clear_preference(),
         SessionAction::Neutral { frame, adapter } => {
-            let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(&adapter)?)
-                .with_context(|| format!("reading the adapter {}", adapter.display()))?;
+            let adapter = crate::input::adapter(&adapter)?;
             let frame = match frame {
                 NeutralFrame::Auto => None,
                 NeutralFrame::Frame(k) => Some(k),
@@ -196,15 +194,14 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
             session.set_neutral(frame, &adapter).map_err(edit)?;
         }
         SessionAction::Reestimate { adapter } => {
-            let adapter = Adapter::from_bytes(&faceanim_files::read_bytes(&adapter)?)
-                .with_context(|| format!("reading the adapter {}", adapter.display()))?;
+            let adapter = crate::input::adapter(&adapter)?;
             session.reestimate(&adapter).map_err(edit)?;
         }
         SessionAction::Export { output, character } => {
             let formats = crate::outputs::formats_of(&output)?;
             // The GLB needs the character; the clip and the CSVs come from the session alone.
             let character = if character.is_some() || formats.contains(&Format::Glb) {
-                Some(crate::load_or_default(character.as_deref())?.character)
+                Some(crate::input::load_or_default(character.as_deref())?.character)
             } else {
                 None
             };

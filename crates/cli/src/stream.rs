@@ -67,7 +67,7 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     };
     let clip = match &args.character {
         Some(path) => {
-            let character = crate::load(path)?.character;
+            let character = crate::input::load(path)?.character;
             faceanim_export::Animation::from_clip(&character, &clip, "stream")
                 .with_context(|| format!("putting {} on {}", args.input.display(), path.display()))?
                 .clip

@@ -1,7 +1,7 @@
 //! `faceanim track`: a face image, image folder or video drives a character — by name, or
 //! through the character's adapter — as open → capture → take → write.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context as _;
@@ -133,7 +133,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     let filtering = args.filtering(args.filter)?;
     // Load the character and its estimator first: a bad one should fail before minutes of
     // video.
-    let character = crate::load_or_default(args.character.as_deref())?.character;
+    let character = crate::input::load_or_default(args.character.as_deref())?.character;
     // Start-up (once per process): the face models, and the threads that run them beside
     // this one (as MediaPipe's graph starts its own with the models; each warms itself on a
     // blank picture, which overlaps the clip's start below). What follows is per clip, and
@@ -150,31 +150,8 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
 
     let workers = Workers::start(&models, threads - 1).context("starting the face models")?;
     let clip_started = Instant::now();
-    // Open and capture.
-    let mut source = FrameSource::open(&args.input, args.fps)?;
-    let info = source.info();
-    let mode = if args.detect_every_frame {
-        TrackingMode::DetectEveryFrame
-    } else {
-        TrackingMode::Track
-    };
-    let bar = match info.frames {
-        Some(n) => indicatif::ProgressBar::new(n as u64),
-        None => indicatif::ProgressBar::no_length(),
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} {pos}/{len} frames [{bar:40}] {per_sec} {eta}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
     let started = Instant::now();
-    let result = faceanim_capture::capture(&models, &workers, &mut source, mode, |n| {
-        bar.set_position(n as u64)
-    })
-    .with_context(|| format!("capturing {}", args.input.display()))?;
-    bar.finish_and_clear();
+    let (source, result) = capture(&args, &models, &workers)?;
     let capture_seconds = started.elapsed().as_secs_f64();
     if let Some(raw) = &args.raw {
         faceanim_files::write_output(raw, &serde_json::to_vec(&result)?)?;
@@ -216,30 +193,8 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
             .set_neutral(args.neutral_frame, estimator.as_ref())
             .map_err(|e| anyhow::anyhow!("--neutral-frame: {e}"))?;
     }
-    let neutral = take.session.neutral();
-    if estimator.calibrated()
-        && let Some(n) = neutral
-    {
-        eprintln!(
-            "neutral face: {} ({}){}",
-            n.parts,
-            match n.chosen {
-                faceanim_take::NeutralChoice::User => "--neutral-frame",
-                faceanim_take::NeutralChoice::Automatic => "each part of the face at its calmest",
-            },
-            if n.chosen == faceanim_take::NeutralChoice::Automatic {
-                "; give --neutral-frame N if another frame is more neutral"
-            } else {
-                ""
-            }
-        );
-        if let Some(warning) = take
-            .session
-            .neutral_check(estimator.as_ref())
-            .and_then(|check| check.warning())
-        {
-            eprintln!("warning: {warning} (--neutral-frame N)");
-        }
+    if estimator.calibrated() {
+        report_neutral(&take, estimator.as_ref());
     }
     let estimate_seconds = started.elapsed().as_secs_f64();
     for &k in &args.keyframes {
@@ -257,11 +212,77 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     }
 
     // Write.
-    let animation = crate::outputs::take_animation(Some(&character), session, &stem(&args.input))?;
+    let animation = crate::outputs::take_animation(
+        Some(&character),
+        session,
+        &crate::input::stem(&args.input, "capture"),
+    )?;
     for (path, format) in args.outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation)?;
     }
 
+    let timing = Timing {
+        frames,
+        fps,
+        found,
+        detector_runs,
+        capture_seconds,
+        estimate_seconds,
+        whole_seconds: clip_started.elapsed().as_secs_f64(),
+    };
+    let summary = summary(
+        &args,
+        &character,
+        &take,
+        estimator.as_ref(),
+        &animation,
+        timing,
+    )?;
+    outln!("{summary}");
+    if found == 0 {
+        eprintln!(
+            "warning: {}: no face was found in any frame; the animation is all zeros",
+            args.input.display()
+        );
+    }
+    Ok(())
+}
+
+/// What capture found in one clip, and how long its parts took.
+#[derive(Clone, Copy)]
+struct Timing {
+    frames: usize,
+    fps: f32,
+    /// Frames with a face.
+    found: usize,
+    detector_runs: usize,
+    /// Opening, decoding and the face models.
+    capture_seconds: f64,
+    /// The take's estimates.
+    estimate_seconds: f64,
+    /// Everything for this clip: opening it, decoding, the face models, the estimates, the
+    /// files written; not the models' loading.
+    whole_seconds: f64,
+}
+
+/// The JSON summary `track` prints: counts, rates, the estimator and the jitter of each filter.
+fn summary(
+    args: &TrackArgs,
+    character: &faceanim_rig::Character,
+    take: &Take,
+    estimator: &dyn Estimator,
+    animation: &faceanim_export::Animation<'_>,
+    timing: Timing,
+) -> anyhow::Result<serde_json::Value> {
+    let session = &take.session;
+    let Timing {
+        frames,
+        fps,
+        found,
+        detector_runs,
+        ..
+    } = timing;
+    let neutral = session.neutral();
     let jitter = |choice: FilterChoice| -> anyhow::Result<f32> {
         let mut variant: Session = session.clone();
         variant.set_filtering(args.filtering(choice)?);
@@ -272,21 +293,18 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         jitter(FilterChoice::OneEuro)?,
         jitter(FilterChoice::Keyframes)?,
     ];
-    // Everything for this clip: opening it, decoding, the face models, the estimates, the
-    // files written, this summary's measures; not the models' loading.
-    let whole_seconds = clip_started.elapsed().as_secs_f64();
-    let summary = serde_json::json!({
+    Ok(serde_json::json!({
         "frames": frames,
         "fps": fps,
         "faces_found": found,
         "detector_runs": detector_runs,
-        "seconds": capture_seconds + estimate_seconds,
-        "frames_per_second": frames as f64 / capture_seconds.max(1e-9),
-        "whole_seconds": whole_seconds,
-        "whole_frames_per_second": frames as f64 / whole_seconds.max(1e-9),
+        "seconds": timing.capture_seconds + timing.estimate_seconds,
+        "frames_per_second": frames as f64 / timing.capture_seconds.max(1e-9),
+        "whole_seconds": timing.whole_seconds,
+        "whole_frames_per_second": frames as f64 / timing.whole_seconds.max(1e-9),
         "estimator": take.estimated_by(),
         "neutral": neutral,
-        "adapter_ms_per_frame": 1000.0 * estimate_seconds / frames.max(1) as f64,
+        "adapter_ms_per_frame": 1000.0 * timing.estimate_seconds / frames.max(1) as f64,
         "character": character.name(),
         "blendshapes_driven": estimator.driven(),
         "blendshapes": character.blendshapes().len(),
@@ -299,15 +317,66 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
             "keyframes": jitters[2],
             "chosen": faceanim_anim::metrics::jitter(&animation.clip.frames),
         },
-    });
-    outln!("{summary}");
-    if found == 0 {
-        eprintln!(
-            "warning: {}: no face was found in any frame; the animation is all zeros",
-            args.input.display()
-        );
+    }))
+}
+
+/// Opens `args.input` and reads every frame's landmarks and scores, with a progress bar.
+fn capture(
+    args: &TrackArgs,
+    models: &FaceModels,
+    workers: &Workers,
+) -> anyhow::Result<(FrameSource, faceanim_capture::Capture)> {
+    let mut source = FrameSource::open(&args.input, args.fps)?;
+    let info = source.info();
+    let mode = if args.detect_every_frame {
+        TrackingMode::DetectEveryFrame
+    } else {
+        TrackingMode::Track
+    };
+    let bar = match info.frames {
+        Some(n) => indicatif::ProgressBar::new(n as u64),
+        None => indicatif::ProgressBar::no_length(),
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {pos}/{len} frames [{bar:40}] {per_sec} {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    let result = faceanim_capture::capture(models, workers, &mut source, mode, |n| {
+        bar.set_position(n as u64)
+    })
+    .with_context(|| format!("capturing {}", args.input.display()))?;
+    bar.finish_and_clear();
+    Ok((source, result))
+}
+
+/// Says which neutral face the take is read against, and warns when it does not look neutral.
+fn report_neutral(take: &Take, estimator: &dyn Estimator) {
+    let Some(n) = take.session.neutral() else {
+        return;
+    };
+    eprintln!(
+        "neutral face: {} ({}){}",
+        n.parts,
+        match n.chosen {
+            faceanim_take::NeutralChoice::User => "--neutral-frame",
+            faceanim_take::NeutralChoice::Automatic => "each part of the face at its calmest",
+        },
+        if n.chosen == faceanim_take::NeutralChoice::Automatic {
+            "; give --neutral-frame N if another frame is more neutral"
+        } else {
+            ""
+        }
+    );
+    if let Some(warning) = take
+        .session
+        .neutral_check(estimator)
+        .and_then(|check| check.warning())
+    {
+        eprintln!("warning: {warning} (--neutral-frame N)");
     }
-    Ok(())
 }
 
 /// The character's adapter (`--adapter`), else its retarget map (`--retarget`, or the one
@@ -333,8 +402,7 @@ fn estimator(
             },
         );
     };
-    let adapter = faceanim_adapt::Adapter::from_bytes(&faceanim_files::read_bytes(path)?)
-        .with_context(|| format!("reading the adapter {}", path.display()))?;
+    let adapter = crate::input::adapter(path)?;
     if adapter.check(character)? == faceanim_adapt::Fit::OtherShape {
         eprintln!(
             "warning: {} was trained on another shape of this rig; it works, but an adapter trained on {} (faceanim adapt) will be more accurate",
@@ -343,11 +411,4 @@ fn estimator(
         );
     }
     Ok(Box::new(adapter))
-}
-
-fn stem(path: &Path) -> String {
-    path.file_stem().map_or_else(
-        || "capture".to_owned(),
-        |s| s.to_string_lossy().into_owned(),
-    )
 }

@@ -191,13 +191,7 @@ fn draco_is_decoded() {
     );
     let report: Value =
         serde_json::from_str(&faceanim_ok(&["info", draco.to_str().unwrap(), "--json"])).unwrap();
-    let original = faceanim_rig::import::import_gltf(
-        &plain,
-        "avatar.glb",
-        &faceanim_rig::import::NoExternalResources,
-    )
-    .unwrap()
-    .character;
+    let original = glb_character(&plain, "avatar.glb");
     assert_eq!(report["vertices"], original.vertex_count());
     let shapes = report["blendshapes"].as_array().unwrap();
     assert_eq!(shapes.len(), original.blendshapes().len());
@@ -235,13 +229,7 @@ fn a_webp_meshopt_quantized_avatar_like_vroids() {
     ] {
         assert!(required.contains(ext), "{required}");
     }
-    let character = faceanim_rig::import::import_gltf(
-        &packed,
-        "avatar-webp-meshopt.glb",
-        &faceanim_rig::import::NoExternalResources,
-    )
-    .unwrap()
-    .character;
+    let character = glb_character(&packed, "avatar-webp-meshopt.glb");
     assert!(
         character.materials().iter().any(|m| m
             .base_color_texture
@@ -267,4 +255,11 @@ fn a_webp_meshopt_quantized_avatar_like_vroids() {
         after.contains("EXT_texture_webp") && !after.contains("meshopt"),
         "{after}"
     );
+}
+
+/// The character in a GLB's bytes, named `name`.
+fn glb_character(bytes: &[u8], name: &str) -> faceanim_rig::Character {
+    faceanim_rig::import::import_gltf(bytes, name, &faceanim_rig::import::NoExternalResources)
+        .unwrap()
+        .character
 }

@@ -36,11 +36,14 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod glb;
+pub mod livelink;
+
 use std::path::Path;
 
 use faceanim_anim::Clip;
 use faceanim_rig::Character;
-use faceanim_rig::export::MorphAnimation;
+use faceanim_rig::animation::MorphAnimation;
 use faceanim_take::Session;
 
 /// The formats an animation leaves in.
@@ -190,6 +193,53 @@ impl<'a> Animation<'a> {
             session: None,
         })
     }
+
+    /// A take as an animation named `name`: its frames (`take`, the session's clip), the
+    /// capture's own ARKit weights (`arkit`, for Live Link Face), the session for the formats
+    /// that are its own, and a sketch's weights layered on top (`faceanim_take::layer`; its
+    /// corrective targets follow the character's own). `character` is needed for a GLB only;
+    /// its first targets must be the take's blendshapes, in order.
+    ///
+    /// # Errors
+    /// [`ExportError::OtherCharacter`] when `character`'s targets are not the take's.
+    pub fn from_take(
+        character: Option<&'a Character>,
+        take: &Clip,
+        arkit: Option<Clip>,
+        session: Option<&'a Session>,
+        sketch: Option<&MorphAnimation>,
+        name: &str,
+    ) -> Result<Animation<'a>, ExportError> {
+        let own = take.blendshapes.len();
+        if let Some(character) = character {
+            let shapes = character.blendshapes();
+            // Only a sketch's corrective targets may follow the take's own.
+            let fits = if sketch.is_some() {
+                shapes.len() >= own
+            } else {
+                shapes.len() == own
+            };
+            if !fits
+                || shapes
+                    .iter()
+                    .zip(&take.blendshapes)
+                    .any(|(b, n)| b.name() != n)
+            {
+                return Err(ExportError::OtherCharacter {
+                    character: character.name().to_owned(),
+                    blendshapes: own,
+                });
+            }
+        }
+        let layered = faceanim_take::layer(take, sketch, own, name);
+        Ok(Animation {
+            character,
+            animation: layered.animation,
+            clip: layered.clip,
+            arkit,
+            session,
+        })
+    }
 }
 
 /// An exported file's bytes, and what the user should know about them.
@@ -213,6 +263,16 @@ pub enum ExportError {
     /// The format needs a take's session and the animation has none.
     #[error("{} needs a capture's session (track with --adapter, or the studio's Capture tab)", .0.describe())]
     NeedsSession(Format),
+    /// The take was made for another character than the one given.
+    #[error(
+        "the take is not {character}'s: its {blendshapes} blendshapes are not that character's; give the take's own character (with --character)"
+    )]
+    OtherCharacter {
+        /// The character given.
+        character: String,
+        /// How many blendshapes the take has.
+        blendshapes: usize,
+    },
     /// The GLB needs the character and the animation has none.
     #[error("the GLB needs the character: give it with --character")]
     NeedsCharacter,
@@ -221,7 +281,7 @@ pub enum ExportError {
     Clip(#[from] faceanim_anim::ClipError),
     /// The GLB writer refused the animation.
     #[error(transparent)]
-    Glb(#[from] faceanim_rig::export::ExportError),
+    Glb(#[from] glb::GlbError),
 }
 
 /// Writes `animation` in `format`.
@@ -238,7 +298,7 @@ pub fn export(format: Format, animation: &Animation<'_>) -> Result<Exported, Exp
             Some(&animation.animation),
         )?,
         Format::LiveLinkCsv => {
-            faceanim_anim::livelink::to_csv(live_link_curves(animation, &mut notes)).into_bytes()
+            livelink::to_csv(live_link_curves(animation, &mut notes)).into_bytes()
         }
         Format::SeedCsv => session(format, animation)?.to_seed_csv().into_bytes(),
         Format::Session => session(format, animation)?.to_json().into_bytes(),
@@ -257,7 +317,7 @@ pub fn glb(
     animation: Option<&MorphAnimation>,
 ) -> Result<Vec<u8>, ExportError> {
     match character.source() {
-        Some(_) => Ok(faceanim_rig::export::export_into_source(
+        Some(_) => Ok(glb::export_into_source(
             character,
             animation.map(std::slice::from_ref).unwrap_or_default(),
         )?),
@@ -275,7 +335,7 @@ pub fn view_glb(
     character: &Character,
     animation: Option<&MorphAnimation>,
 ) -> Result<Vec<u8>, ExportError> {
-    Ok(faceanim_rig::export::export_glb(
+    Ok(glb::export_glb(
         character,
         animation.map(std::slice::from_ref).unwrap_or_default(),
     )?)
@@ -331,6 +391,38 @@ mod tests {
             error.starts_with("take.fbx: the name must end in .json"),
             "{error}"
         );
+    }
+
+    #[test]
+    fn a_take_is_put_only_on_its_own_character() {
+        let character = faceanim_head::default_character();
+        let names = character.blendshape_names();
+        let take = Clip {
+            fps: 30.0,
+            blendshapes: names.clone(),
+            frames: vec![vec![0.25; names.len()]; 3],
+            head: None,
+            head_position: None,
+            presence: None,
+        };
+        let animation =
+            Animation::from_take(Some(&character), &take, None, None, None, "take").unwrap();
+        assert_eq!(animation.clip.frames, take.frames);
+        assert_eq!(animation.animation.weights.len(), 3);
+        // Another character's take (one shape fewer) is refused by name, not written.
+        let other = Clip {
+            blendshapes: names[1..].to_vec(),
+            frames: vec![vec![0.25; names.len() - 1]; 3],
+            ..take.clone()
+        };
+        let refused =
+            Animation::from_take(Some(&character), &other, None, None, None, "take").unwrap_err();
+        assert!(
+            matches!(refused, ExportError::OtherCharacter { blendshapes, .. } if blendshapes == names.len() - 1),
+            "{refused}"
+        );
+        // Without a character (the clip and the CSVs need none) any take is exported.
+        assert!(Animation::from_take(None, &other, None, None, None, "take").is_ok());
     }
 
     #[test]

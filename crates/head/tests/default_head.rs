@@ -111,8 +111,8 @@ fn the_mesh_and_left_right_shapes_are_exact_mirrors() {
 
 #[test]
 fn generation_is_deterministic() {
-    let a = faceanim_rig::export::export_glb(head(), &[]).unwrap();
-    let b = faceanim_rig::export::export_glb(&faceanim_head::default_character(), &[]).unwrap();
+    let a = faceanim_export::glb::export_glb(head(), &[]).unwrap();
+    let b = faceanim_export::glb::export_glb(&faceanim_head::default_character(), &[]).unwrap();
     assert!(a == b, "two builds differ");
 }
 

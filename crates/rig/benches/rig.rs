@@ -43,7 +43,7 @@ fn benches(c: &mut Criterion) {
         });
     });
     group.bench_function("export GLB", |b| {
-        b.iter(|| black_box(faceanim_rig::export::export_glb(&character, &[]).unwrap()))
+        b.iter(|| black_box(faceanim_export::glb::export_glb(&character, &[]).unwrap()))
     });
     group.finish();
 
@@ -66,7 +66,7 @@ fn benches(c: &mut Criterion) {
         .unwrap()
         .character;
     let n = character.blendshapes().len();
-    let animation = faceanim_rig::export::MorphAnimation {
+    let animation = faceanim_rig::animation::MorphAnimation {
         name: "ten seconds".into(),
         times: (0..300).map(|f| f as f32 / 30.0).collect(),
         weights: (0..300)
@@ -81,7 +81,7 @@ fn benches(c: &mut Criterion) {
     group.bench_function("export into the file with a 10 s animation", |b| {
         b.iter(|| {
             black_box(
-                faceanim_rig::export::export_into_source(
+                faceanim_export::glb::export_into_source(
                     &character,
                     std::slice::from_ref(&animation),
                 )

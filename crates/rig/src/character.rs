@@ -9,138 +9,17 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use crate::blendshape::{Blendshape, BlendshapeId};
+use crate::bounds::Aabb;
 use crate::graph::EdgeGraph;
 use crate::names;
 use crate::normals::{self, NormalDeltas};
-use crate::pose::{EvaluationRuns, Runs};
+use crate::runs::{EvaluationRuns, Runs};
 use crate::symmetry::Symmetry;
-
-/// Index of a blendshape within its [`Character`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct BlendshapeId(pub u32);
-
-impl BlendshapeId {
-    /// The index as `usize`, for slices of per-blendshape values (weights).
-    #[must_use]
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
 
 /// Index of a material within its [`Character`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct MaterialId(pub u32);
-
-/// Deltas whose length is below this fraction of the bounding-box diagonal are not stored.
-///
-/// 1e-6 of the size is about 16 f32 ulps of a coordinate of that size: below it a "delta" is
-/// rounding noise from the tool that wrote the file, not a deformation. For a 0.35 m head the
-/// threshold is 0.35 µm, so a round trip through faceanim changes no delta by more than that.
-pub const SPARSE_DELTA_THRESHOLD: f32 = 1e-6;
-
-/// One blendshape: the displacement of each moved vertex at weight 1, stored sparsely.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Blendshape {
-    name: String,
-    /// Moved vertices, strictly increasing.
-    indices: Vec<u32>,
-    /// Displacement of `indices[k]` at weight 1.
-    deltas: Vec<Vec3>,
-}
-
-impl Blendshape {
-    /// A blendshape from dense per-vertex deltas, keeping the vertices that move by more than
-    /// `threshold` (an absolute length, see [`SPARSE_DELTA_THRESHOLD`]).
-    #[must_use]
-    pub fn from_dense(name: impl Into<String>, dense: &[Vec3], threshold: f32) -> Blendshape {
-        let mut indices = Vec::new();
-        let mut deltas = Vec::new();
-        let threshold_sq = threshold * threshold;
-        for (index, delta) in dense.iter().enumerate() {
-            if delta.length_squared() > threshold_sq {
-                indices.push(index as u32);
-                deltas.push(*delta);
-            }
-        }
-        Blendshape {
-            name: name.into(),
-            indices,
-            deltas,
-        }
-    }
-
-    /// A blendshape from sparse parts. `indices` must be strictly increasing and as long as
-    /// `deltas`; [`Character::new`] checks this against the vertex count.
-    #[must_use]
-    pub fn from_sparse(
-        name: impl Into<String>,
-        indices: Vec<u32>,
-        deltas: Vec<Vec3>,
-    ) -> Blendshape {
-        Blendshape {
-            name: name.into(),
-            indices,
-            deltas,
-        }
-    }
-
-    /// The blendshape's name as the file gave it.
-    #[must_use]
-    pub fn name(&self) -> &str {
-        &self.name
-    }
-
-    /// Moved vertices, strictly increasing.
-    #[must_use]
-    pub fn indices(&self) -> &[u32] {
-        &self.indices
-    }
-
-    /// Displacements at weight 1, parallel to [`Blendshape::indices`].
-    #[must_use]
-    pub fn deltas(&self) -> &[Vec3] {
-        &self.deltas
-    }
-
-    /// Number of moved vertices.
-    #[must_use]
-    pub fn moved(&self) -> usize {
-        self.indices.len()
-    }
-
-    /// The largest displacement of any vertex at weight 1.
-    #[must_use]
-    pub fn max_displacement(&self) -> f32 {
-        self.deltas.iter().map(|d| d.length()).fold(0.0, f32::max)
-    }
-
-    /// The displacement of `vertex` at weight 1 (zero where it does not move).
-    #[must_use]
-    pub fn delta_of(&self, vertex: u32) -> Vec3 {
-        match self.indices.binary_search(&vertex) {
-            Ok(k) => self.deltas[k],
-            Err(_) => Vec3::ZERO,
-        }
-    }
-
-    /// Writes the deltas into a dense buffer (zero elsewhere); `out` must have one entry per vertex.
-    pub fn write_dense(&self, out: &mut [Vec3]) {
-        out.fill(Vec3::ZERO);
-        for (&i, &d) in self.indices.iter().zip(&self.deltas) {
-            if let Some(slot) = out.get_mut(i as usize) {
-                *slot = d;
-            }
-        }
-    }
-
-    pub(crate) fn renamed(&self, name: String) -> Blendshape {
-        Blendshape {
-            name,
-            indices: self.indices.clone(),
-            deltas: self.deltas.clone(),
-        }
-    }
-}
 
 /// Encoded image bytes (PNG or JPEG) kept as they came, for rendering and re-export.
 #[derive(Debug, Clone, PartialEq)]
@@ -190,43 +69,6 @@ pub struct Part {
     pub material: MaterialId,
     /// Its triangles, as a range of [`Character::triangles`].
     pub triangles: std::ops::Range<usize>,
-}
-
-/// Axis-aligned bounding box.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Aabb {
-    /// Smallest corner.
-    pub min: Vec3,
-    /// Largest corner.
-    pub max: Vec3,
-}
-
-impl Aabb {
-    /// The box around `points`, or a zero box at the origin when there are none.
-    #[must_use]
-    pub fn around(points: &[Vec3]) -> Aabb {
-        let mut iter = points.iter();
-        let Some(first) = iter.next() else {
-            return Aabb {
-                min: Vec3::ZERO,
-                max: Vec3::ZERO,
-            };
-        };
-        let (min, max) = iter.fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-        Aabb { min, max }
-    }
-
-    /// Length of the diagonal: the character's size `D` that default distances scale with.
-    #[must_use]
-    pub fn diagonal(&self) -> f32 {
-        (self.max - self.min).length()
-    }
-
-    /// Centre of the box.
-    #[must_use]
-    pub fn center(&self) -> Vec3 {
-        (self.min + self.max) * 0.5
-    }
 }
 
 /// A character whose bounds are at least this many times its face region's diagonal is
@@ -858,30 +700,30 @@ fn check_blendshape(shape: &Blendshape, vertex_count: usize) -> Result<(), Model
         name: shape.name().to_owned(),
         problem,
     };
-    if shape.indices.len() != shape.deltas.len() {
+    if shape.indices().len() != shape.deltas().len() {
         return Err(bad(format!(
             "{} indices but {} deltas",
-            shape.indices.len(),
-            shape.deltas.len()
+            shape.indices().len(),
+            shape.deltas().len()
         )));
     }
-    if let Some(w) = shape.indices.windows(2).position(|w| w[0] >= w[1]) {
+    if let Some(w) = shape.indices().windows(2).position(|w| w[0] >= w[1]) {
         return Err(bad(format!(
             "vertex indices are not strictly increasing at entry {}",
             w + 1
         )));
     }
-    if let Some(&last) = shape.indices.last()
+    if let Some(&last) = shape.indices().last()
         && last as usize >= vertex_count
     {
         return Err(bad(format!(
             "moves vertex {last}, but there are only {vertex_count} vertices"
         )));
     }
-    if let Some(k) = shape.deltas.iter().position(|d| !d.is_finite()) {
+    if let Some(k) = shape.deltas().iter().position(|d| !d.is_finite()) {
         return Err(bad(format!(
             "delta of vertex {} is not a finite number",
-            shape.indices[k]
+            shape.indices()[k]
         )));
     }
     Ok(())

@@ -6,8 +6,9 @@
 //! bounding box (whose diagonal is the size `D` that default distances scale with), the edge
 //! graph, the symmetry plane with each vertex's mirror partner, and left/right blendshape pairs.
 //!
-//! This crate is pure: it parses and writes bytes but never opens a file, so it can run in a
+//! This crate is pure: it parses bytes and never opens a file, so it can run in a
 //! server, a test or a browser alike. External glTF resources come through [`import::Resources`].
+//! Writing characters back (GLB, the user's own file with an animation) is `faceanim-export`'s.
 //!
 //! ```
 //! use faceanim_rig::{Blendshape, Character, CharacterParts};
@@ -25,18 +26,16 @@
 //! })?;
 //! let pose = character.pose(&[0.5]);
 //! assert_eq!(pose.positions[2], Vec3::new(0.0, 1.25, 0.0));
-//!
-//! // Round trip through glTF.
-//! let glb = faceanim_rig::export::export_glb(&character, &[])?;
-//! let back = faceanim_rig::import::import_gltf(&glb, "tri.glb", &faceanim_rig::import::NoExternalResources)?;
-//! assert_eq!(back.character.blendshapes()[0].name(), "raise");
+//! assert_eq!(character.find_blendshape("raise").map(|id| id.index()), Some(0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![deny(missing_docs)]
 
+pub mod animation;
+mod blendshape;
+mod bounds;
 mod character;
 mod excerpt;
-pub mod export;
 mod graph;
 pub mod import;
 pub mod json;
@@ -44,13 +43,13 @@ pub mod name_map;
 pub mod names;
 pub mod normals;
 mod pose;
+mod runs;
 pub mod source;
 pub mod symmetry;
 
-pub use character::{
-    Aabb, Blendshape, BlendshapeId, Character, CharacterParts, Material, MaterialId, ModelError,
-    Part, SPARSE_DELTA_THRESHOLD, Texture,
-};
+pub use blendshape::{Blendshape, BlendshapeId, SPARSE_DELTA_THRESHOLD};
+pub use bounds::Aabb;
+pub use character::{Character, CharacterParts, Material, MaterialId, ModelError, Part, Texture};
 pub use excerpt::{QUOTED_CHARS, excerpt};
 /// The vector types of the public API, re-exported so users need not match versions.
 pub use glam;

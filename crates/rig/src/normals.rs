@@ -7,7 +7,7 @@
 
 use glam::Vec3;
 
-use crate::character::Blendshape;
+use crate::blendshape::Blendshape;
 use crate::graph::EdgeGraph;
 
 /// Normal changes below this length are not stored. Normals are unit vectors, so 1e-4 is a turn

@@ -1,5 +1,5 @@
 //! The user's own glTF file, kept beside the character so that an export can be that file with
-//! the animation added (see [`crate::export::export_into_source`]).
+//! the animation added (see `faceanim_export`'s GLB writer).
 //!
 //! faceanim works on one merged mesh ([`crate::Character`]); the user's file has many nodes,
 //! meshes, skins and materials. [`GltfSource`] keeps the file's JSON and its one binary buffer
@@ -76,6 +76,18 @@ pub struct GeneratedShapes {
 }
 
 impl GltfSource {
+    /// The file's JSON document, as read (compression decoded, resources embedded).
+    #[must_use]
+    pub fn document(&self) -> &Value {
+        &self.document
+    }
+
+    /// The file's one binary buffer (external buffers and images embedded).
+    #[must_use]
+    pub fn bin(&self) -> &[u8] {
+        &self.bin
+    }
+
     /// What the file records of generated shapes, if anything.
     #[must_use]
     pub fn generated_shapes(&self) -> Option<GeneratedShapes> {
@@ -132,7 +144,8 @@ impl GltfSource {
 
     /// The rotation of `node` in character space (its world rotation, after the importer's
     /// root transform), from the file's rest pose.
-    pub(crate) fn world_rotation(&self, node: usize) -> Quat {
+    #[must_use]
+    pub fn world_rotation(&self, node: usize) -> Quat {
         let nodes = self.document.get("nodes").and_then(Value::as_array);
         let Some(nodes) = nodes else {
             return Quat::IDENTITY;
@@ -175,7 +188,7 @@ impl GltfSource {
 }
 
 /// A node's local transform from its `matrix` or TRS.
-pub(crate) fn local_matrix(node: &Value) -> Mat4 {
+pub fn local_matrix(node: &Value) -> Mat4 {
     let floats = |key: &str, n: usize| -> Option<Vec<f32>> {
         let a = node.get(key)?.as_array()?;
         (a.len() == n).then(|| a.iter().map(|v| v.as_f64().unwrap_or(0.0) as f32).collect())

@@ -27,7 +27,9 @@
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
-use crate::character::{Aabb, Blendshape, BlendshapeId};
+use crate::bounds::Aabb;
+
+use crate::blendshape::{Blendshape, BlendshapeId};
 use crate::names::{self, Side};
 
 /// An axis plane that maps this fraction of the vertices onto other vertices within

@@ -16,7 +16,7 @@
 
 use std::collections::HashMap;
 
-use faceanim_rig::export::MorphAnimation;
+use faceanim_rig::animation::MorphAnimation;
 use faceanim_rig::{Blendshape, Character, ModelError};
 use glam::Vec3;
 

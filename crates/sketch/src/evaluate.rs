@@ -3,11 +3,10 @@
 
 use std::collections::HashMap;
 
-use faceanim_anim::Clip;
 use faceanim_rig::{Character, Pose};
 use glam::Vec3;
 
-use crate::engine::{Action, ActionId, Sketch};
+use crate::action::{Action, ActionId};
 
 /// Weights and extra per-vertex offsets at one frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -90,7 +89,7 @@ pub fn evaluate<'a>(
         action.to.offsets.add_scaled_to(s, &mut out.offsets);
         if s > 0.0 && s < 1.0 {
             let arcs: Vec<_> = (0..action.sides.len() as u8)
-                .map(|k| Sketch::arc(action, k))
+                .map(|k| action.arc(k))
                 .collect();
             for &(v, kappa, side) in &action.swing {
                 if let (Some(Some(arc)), Some(slot)) =
@@ -99,43 +98,6 @@ pub fn evaluate<'a>(
                     *slot += arc.deviation(kappa, s);
                 }
             }
-        }
-    }
-}
-
-impl Sketch<'_> {
-    /// The weights and offsets at `frame`.
-    #[must_use]
-    pub fn frame(&self, frame: f32) -> FramePose {
-        let mut out = FramePose::new(self.character());
-        self.frame_into(frame, &mut out);
-        out
-    }
-
-    /// Like [`Sketch::frame`], into a reused buffer.
-    pub fn frame_into(&self, frame: f32, out: &mut FramePose) {
-        evaluate(self.character(), self.actions(), frame, out);
-    }
-
-    /// The baked clip: every blendshape's weight at every frame from 0 to the end of the last
-    /// action (arcs and exaggerations are not weights; the glTF export carries them).
-    #[must_use]
-    pub fn bake_clip(&self) -> Clip {
-        let last = self.last_frame().ceil() as usize;
-        let mut pose = FramePose::new(self.character());
-        let frames = (0..=last)
-            .map(|f| {
-                self.frame_into(f as f32, &mut pose);
-                pose.weights.clone()
-            })
-            .collect();
-        Clip {
-            fps: self.fps(),
-            blendshapes: self.character().blendshape_names(),
-            frames,
-            head: None,
-            head_position: None,
-            presence: None,
         }
     }
 }

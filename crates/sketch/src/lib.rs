@@ -49,6 +49,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod action;
 pub mod arc;
 pub mod bake;
 pub mod engine;

@@ -816,7 +816,7 @@ async fn export(State(both): State<Both>, format: Format) -> Result<Response, Ap
         let baked = sketch.bake(&name)?;
         (Some(baked.animation), Some(baked.character))
     } else {
-        let weights = faceanim_rig::export::MorphAnimation {
+        let weights = faceanim_rig::animation::MorphAnimation {
             name: name.clone(),
             times: Vec::new(),
             weights: sketch.bake_clip().frames,
@@ -824,23 +824,16 @@ async fn export(State(both): State<Both>, format: Format) -> Result<Response, Ap
         };
         (Some(weights), None)
     };
-    let layered = faceanim_take::layer(
-        &take_clip,
-        sketch_animation.as_ref(),
-        studio.character.blendshapes().len(),
-        &name,
-    );
     let character = baked_character.as_ref().unwrap_or(&studio.character);
-    let exported = faceanim_export::export(
-        format,
-        &Animation {
-            character: Some(character),
-            animation: layered.animation,
-            clip: layered.clip,
-            arkit,
-            session: session.as_ref(),
-        },
+    let animation = Animation::from_take(
+        Some(character),
+        &take_clip,
+        arkit,
+        session.as_ref(),
+        sketch_animation.as_ref(),
+        &name,
     )?;
+    let exported = faceanim_export::export(format, &animation)?;
     let extension = format.extension_for(Some(&studio.character));
     Ok(download(format, extension, &name, exported))
 }

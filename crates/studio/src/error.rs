@@ -5,7 +5,7 @@ use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use faceanim_take::TakeError;
 
-use crate::capture::JobKind;
+use crate::views::JobKind;
 
 /// A handler's answer: a JSON view, or the error.
 pub(crate) type Answer<T> = Result<axum::Json<T>, ApiError>;

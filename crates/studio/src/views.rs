@@ -351,7 +351,7 @@ pub struct CaptureView {
     /// Live tracking, while on.
     pub live: Option<LiveView>,
     /// The live microphone, while on.
-    pub voice: Option<crate::capture::VoiceView>,
+    pub voice: Option<VoiceView>,
     /// The take, when one is open.
     pub take: Option<TakeView>,
     /// VMC in and out, when the studio was started with them.
@@ -499,7 +499,7 @@ pub struct AdapterView {
 #[derive(Debug, Serialize)]
 pub struct JobView {
     /// What it does.
-    pub kind: crate::capture::JobKind,
+    pub kind: JobKind,
     /// The same, in words for the page.
     pub title: String,
     /// Its current stage.
@@ -677,6 +677,82 @@ impl TakeView {
             neutral_check,
             sound: None,
         }
+    }
+}
+
+/// Where calibration is.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "state", rename_all = "snake_case")]
+pub enum Calibration {
+    /// Not calibrated (the mouth follows loudness until the first refinement).
+    None,
+    /// Listening to the passage.
+    Listening {
+        /// Seconds heard so far.
+        seconds: f32,
+    },
+    /// Aligning the passage and learning the voice.
+    Fitting,
+    /// The voice is learned.
+    Calibrated {
+        /// Visemes the model tells apart (silence included).
+        visemes: usize,
+        /// What was done instead of aligning the passage, if anything.
+        notes: Vec<String>,
+    },
+    /// Calibration failed; the previous model (if any) is kept.
+    Failed {
+        /// Why.
+        message: String,
+    },
+}
+
+/// The live microphone as the page sees it.
+#[derive(Debug, Clone, Serialize)]
+pub struct VoiceView {
+    /// Seconds of sound received.
+    pub seconds: f32,
+    /// How far the mouth is held back behind the voice, milliseconds (for streams whose audio
+    /// arrives later than the picture).
+    pub delay_ms: u32,
+    /// The longest delay allowed, milliseconds.
+    pub max_delay_ms: u32,
+    /// Calibration.
+    pub calibration: Calibration,
+    /// The passage to read while calibrating.
+    pub passage: &'static str,
+    /// Stretches of speech the classifier has learned from (calibration and refinements).
+    pub learned: usize,
+    /// Whether frames are classed into visemes (else loudness alone opens the mouth).
+    pub classifying: bool,
+    /// The last background refinement's failure, if it failed.
+    pub refine_error: Option<String>,
+    /// Seconds recorded, while recording.
+    pub recording: Option<f32>,
+}
+
+/// What a long job does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JobKind {
+    /// Reading a video, photos or an image folder through the capture pipeline.
+    ReadingInput,
+    /// Rendering the training set and training the adapter.
+    TrainingAdapter,
+    /// Fine-tuning the adapter on the take's corrections.
+    FineTuning,
+    /// Registering the template on the character and calibrating its retarget map.
+    MakingMap,
+}
+
+impl std::fmt::Display for JobKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            JobKind::ReadingInput => "reading the input",
+            JobKind::TrainingAdapter => "training the adapter",
+            JobKind::FineTuning => "fine-tuning the adapter",
+            JobKind::MakingMap => "making the retarget map",
+        })
     }
 }
 

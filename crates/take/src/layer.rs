@@ -9,7 +9,7 @@
 //! the two.
 
 use faceanim_anim::Clip;
-use faceanim_rig::export::MorphAnimation;
+use faceanim_rig::animation::MorphAnimation;
 
 /// A take with a sketch over it.
 #[derive(Debug, Clone, PartialEq)]

@@ -481,10 +481,29 @@ pub fn request_bytes(
     for (k, v) in headers {
         text.push_str(&format!("{k}: {v}\r\n"));
     }
+    // A large body waits for the server's go-ahead (`Expect: 100-continue`), as curl sends
+    // one: a server that refuses it (413) answers at once and closes without reading it.
+    let expect = body.len() > 1 << 20;
+    if expect {
+        text.push_str("Expect: 100-continue\r\n");
+    }
     text.push_str("\r\n");
     stream.write_all(text.as_bytes()).unwrap();
-    stream.write_all(body).unwrap();
     let mut response = Vec::new();
+    let go_ahead = !expect || {
+        let mut byte = [0u8; 1];
+        while !response.ends_with(b"\r\n\r\n") && stream.read(&mut byte).unwrap() == 1 {
+            response.push(byte[0]);
+        }
+        let continued = response.starts_with(b"HTTP/1.1 100");
+        if continued {
+            response.clear();
+        }
+        continued
+    };
+    if go_ahead {
+        stream.write_all(body).unwrap();
+    }
     stream.read_to_end(&mut response).unwrap();
     let split = response
         .windows(4)

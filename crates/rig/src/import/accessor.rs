@@ -6,7 +6,7 @@
 
 use gltf::accessor::{DataType, Dimensions};
 
-use super::{ImportErrorKind, MAX_VERTICES};
+use super::types::{ImportErrorKind, MAX_VERTICES};
 
 /// Loaded buffers, indexed like the document's buffers (a GLB's BIN chunk is borrowed).
 pub(crate) struct Buffers<'a>(pub Vec<std::borrow::Cow<'a, [u8]>>);
@@ -247,7 +247,7 @@ pub(crate) fn read_indices(
     }
     // u32 values above 2^24 are not exact in f32, so read integers directly.
     let count = accessor.count();
-    if count > super::MAX_TRIANGLES * 3 {
+    if count > super::types::MAX_TRIANGLES * 3 {
         return Err(ImportErrorKind::TooLarge(format!(
             "accessor {} declares {count} indices",
             accessor.index()

@@ -14,7 +14,7 @@ use std::borrow::Cow;
 
 use serde_json::Value;
 
-use super::ImportErrorKind;
+use super::types::ImportErrorKind;
 
 const EXTENSION: &str = "KHR_draco_mesh_compression";
 

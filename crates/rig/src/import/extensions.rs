@@ -26,8 +26,8 @@ use std::collections::HashMap;
 
 use serde_json::Value;
 
-use super::ImportErrorKind;
 use super::accessor::Buffers;
+use super::types::ImportErrorKind;
 
 /// Required extensions faceanim reads (a `KHR_materials_*` extension only changes how a
 /// surface looks, so it is read as the plain PBR material underneath).
@@ -83,7 +83,7 @@ impl UvTransform {
 pub(crate) fn prepare<'a>(
     json: &[u8],
     bin: Option<&'a [u8]>,
-    resources: &dyn super::Resources,
+    resources: &dyn super::types::Resources,
 ) -> Result<Prepared<'a>, ImportErrorKind> {
     let mut value: Value =
         serde_json::from_slice(json).map_err(|e| ImportErrorKind::InvalidJson(e.to_string()))?;
@@ -122,7 +122,7 @@ pub(crate) fn prepare<'a>(
 fn keep(
     value: &Value,
     buffers: &[Cow<'_, [u8]>],
-    resources: &dyn super::Resources,
+    resources: &dyn super::types::Resources,
     warnings: &mut Vec<String>,
 ) -> (Value, Vec<u8>) {
     let mut doc = value.clone();
@@ -154,14 +154,14 @@ fn keep(
             let Some(uri) = image.get("uri").and_then(Value::as_str).map(str::to_owned) else {
                 continue;
             };
-            match super::gltf::load_uri(&uri, resources) {
+            match super::uri::load_uri(&uri, resources) {
                 Ok(bytes) => {
                     while !bin.len().is_multiple_of(4) {
                         bin.push(0);
                     }
                     new_views.push(serde_json::json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len() }));
                     bin.extend_from_slice(&bytes);
-                    let mime = super::gltf::sniff_image(&bytes)
+                    let mime = super::uri::sniff_image(&bytes)
                         .map(str::to_owned)
                         .or_else(|| {
                             image
@@ -258,7 +258,7 @@ fn check_required(value: &Value) -> Result<(), ImportErrorKind> {
 fn load_buffers<'a>(
     value: &Value,
     bin: Option<&'a [u8]>,
-    resources: &dyn super::Resources,
+    resources: &dyn super::types::Resources,
 ) -> Result<Vec<Cow<'a, [u8]>>, ImportErrorKind> {
     let Some(list) = value.get("buffers") else {
         return Ok(Vec::new());
@@ -284,7 +284,7 @@ fn load_buffers<'a>(
             == Some(true);
         let (data, uri): (Cow<'a, [u8]>, String) = match buffer.get("uri").and_then(Value::as_str) {
             Some(uri) => {
-                let data = super::gltf::load_uri(uri, resources).map_err(|reason| {
+                let data = super::uri::load_uri(uri, resources).map_err(|reason| {
                     ImportErrorKind::MissingBuffer {
                         index,
                         uri: crate::excerpt(uri).into_owned(),

@@ -5,19 +5,16 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use base64::Engine as _;
 use glam::{Mat3, Mat4, Vec3};
 use gltf::accessor::Dimensions;
 use gltf::mesh::Mode;
 
 use super::accessor::{Buffers, read_floats, read_indices};
-use super::{
+use super::types::{
     ImportError, ImportErrorKind, Imported, MAX_BLENDSHAPES, MAX_TRIANGLES, MAX_VERTICES, Resources,
 };
-use crate::character::{
-    Blendshape, Character, CharacterParts, Material, MaterialId, Part, SPARSE_DELTA_THRESHOLD,
-    Texture,
-};
+use crate::blendshape::{Blendshape, SPARSE_DELTA_THRESHOLD};
+use crate::character::{Character, CharacterParts, Material, MaterialId, Part, Texture};
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;
@@ -209,42 +206,6 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKi
     Err(ImportErrorKind::NotGltf(format!(
         "it starts with bytes [{shown}], neither the GLB magic 'glTF' nor a JSON object"
     )))
-}
-
-/// Loads a `data:` URI or, through `resources`, a relative one (percent-decoded).
-pub(super) fn load_uri(uri: &str, resources: &dyn Resources) -> Result<Vec<u8>, String> {
-    if let Some(rest) = uri.strip_prefix("data:") {
-        let (_, payload) = rest
-            .split_once(";base64,")
-            .ok_or("only base64 data URIs are supported")?;
-        return base64::engine::general_purpose::STANDARD
-            .decode(payload)
-            .map_err(|e| format!("bad base64: {e}"));
-    }
-    if uri.contains("://") {
-        return Err("faceanim never downloads; put the file next to the .gltf".into());
-    }
-    resources.load(&percent_decode(uri))
-}
-
-fn percent_decode(s: &str) -> String {
-    let hex = |b: u8| (b as char).to_digit(16);
-    let bytes = s.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%'
-            && i + 2 < bytes.len()
-            && let (Some(hi), Some(lo)) = (hex(bytes[i + 1]), hex(bytes[i + 2]))
-        {
-            out.push((hi * 16 + lo) as u8);
-            i += 3;
-            continue;
-        }
-        out.push(bytes[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
 }
 
 /// How one mesh instance is placed: by its node's matrix, or by a skin whose joints' rest
@@ -940,7 +901,7 @@ impl Builder {
             );
         }
         // Parts are recorded per primitive; their triangle ranges are contiguous by construction.
-        let size = crate::character::Aabb::around(&self.positions).diagonal();
+        let size = crate::bounds::Aabb::around(&self.positions).diagonal();
         let threshold = SPARSE_DELTA_THRESHOLD * size;
         let blendshapes = self
             .shape_names
@@ -1178,19 +1139,6 @@ fn skin_instance(
     })
 }
 
-/// The media type of PNG, JPEG and WebP images, from their first bytes.
-pub(super) fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
-    if bytes.starts_with(b"\x89PNG") {
-        Some("image/png")
-    } else if bytes.starts_with(&[0xFF, 0xD8]) {
-        Some("image/jpeg")
-    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
-        Some("image/webp")
-    } else {
-        None
-    }
-}
-
 /// Loads a glTF image's encoded bytes (from a buffer view, a data URI or an external file).
 fn load_image(
     image: &gltf::Image<'_>,
@@ -1213,11 +1161,12 @@ fn load_image(
                 Some(mime_type.to_owned()),
             )
         }
-        gltf::image::Source::Uri { uri, mime_type } => {
-            (load_uri(uri, resources)?, mime_type.map(str::to_owned))
-        }
+        gltf::image::Source::Uri { uri, mime_type } => (
+            super::uri::load_uri(uri, resources)?,
+            mime_type.map(str::to_owned),
+        ),
     };
-    let sniffed = sniff_image(&bytes);
+    let sniffed = super::uri::sniff_image(&bytes);
     let mime_type = sniffed.map(str::to_owned).ok_or_else(|| match declared {
         Some(declared) => {
             format!("its {declared} image is not one faceanim shows (PNG, JPEG or WebP)")

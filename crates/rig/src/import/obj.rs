@@ -9,10 +9,12 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
-use super::{ImportError, ImportErrorKind, Imported, MAX_BLENDSHAPES, MAX_TRIANGLES, MAX_VERTICES};
-use crate::character::{
-    Aabb, Blendshape, Character, CharacterParts, Material, MaterialId, Part, SPARSE_DELTA_THRESHOLD,
+use super::types::{
+    ImportError, ImportErrorKind, Imported, MAX_BLENDSHAPES, MAX_TRIANGLES, MAX_VERTICES,
 };
+use crate::blendshape::{Blendshape, SPARSE_DELTA_THRESHOLD};
+use crate::bounds::Aabb;
+use crate::character::{Character, CharacterParts, Material, MaterialId, Part};
 
 /// One OBJ file's name (for messages and the blendshape name) and text.
 #[derive(Debug, Clone, Copy)]

@@ -28,7 +28,7 @@ fn import_must_not_panic(bytes: &[u8]) {
     if let Ok(imported) = import_gltf(bytes, "fuzz.glb", &NoExternalResources) {
         let c = imported.character;
         let _ = c.pose(&vec![1.0; c.blendshapes().len()]);
-        let _ = faceanim_rig::export::export_glb(&c, &[]).unwrap();
+        let _ = faceanim_export::glb::export_glb(&c, &[]).unwrap();
     }
 }
 

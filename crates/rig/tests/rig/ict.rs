@@ -1,6 +1,7 @@
 //! The ICT-FaceKit heads from `../shared`: import, symmetry, ARKit coverage, exact round trips.
 
-use faceanim_rig::export::{MorphAnimation, export_glb};
+use faceanim_export::glb::export_glb;
+use faceanim_rig::animation::MorphAnimation;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_rig::symmetry::PairSource;
 use faceanim_rig::{Blendshape, Character};

@@ -3,8 +3,9 @@
 //! every mesh that carries the animated targets; a baked corrective target lands on the meshes
 //! it moves; a VRM stays a VRM; a meshopt-compressed avatar is written decompressed.
 
+use faceanim_export::glb::export_into_source;
 use faceanim_rig::Blendshape;
-use faceanim_rig::export::{MorphAnimation, export_into_source};
+use faceanim_rig::animation::MorphAnimation;
 use faceanim_rig::glam::Vec3;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_testdata::avatar::{Expression, VrmKind, full_body_glb};

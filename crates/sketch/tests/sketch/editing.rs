@@ -4,7 +4,7 @@
 use crate::support::{
     bow, draw, handle_vertex, ict, id, line, near, position, project, target_of, uniform,
 };
-use faceanim_rig::export::export_glb;
+use faceanim_export::glb::export_glb;
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_sketch::bake::EXPORT_TOLERANCE;
 use faceanim_sketch::engine::Input;

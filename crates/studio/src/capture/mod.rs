@@ -22,10 +22,10 @@ use faceanim_anim::filter::OneEuro;
 use faceanim_rig::Character;
 use faceanim_take::{ByName, Estimator, Filtering, Footage, Session, Take, TakeError};
 use faceanim_track::{FaceModels, Workers};
-use serde::Serialize;
 
 use crate::error::ApiError;
 use crate::lock;
+pub use crate::views::JobKind;
 use crate::views::{AdapterView, CaptureView, FilteringView, Group, JobView, TakeView, names};
 
 pub use jobs::{start_capture, start_finetune, start_training};
@@ -33,7 +33,7 @@ use live::Live;
 pub use live::{LiveHandle, LiveResult};
 pub use retarget::start_map;
 pub use vmc::VmcConfig;
-pub use voice::{Calibration, RATE as VOICE_RATE, VoiceHandle, VoiceResult, VoiceView};
+pub use voice::{RATE as VOICE_RATE, VoiceHandle, VoiceResult};
 
 /// Input previews are at most this tall: enough to judge an expression beside the character.
 const PREVIEW_HEIGHT: usize = 360;
@@ -220,31 +220,6 @@ pub(super) fn private_dir<'a>(
             })?,
     };
     Ok(slot.insert(dir).path())
-}
-
-/// What a long job does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum JobKind {
-    /// Reading a video, photos or an image folder through the capture pipeline.
-    ReadingInput,
-    /// Rendering the training set and training the adapter.
-    TrainingAdapter,
-    /// Fine-tuning the adapter on the take's corrections.
-    FineTuning,
-    /// Registering the template on the character and calibrating its retarget map.
-    MakingMap,
-}
-
-impl std::fmt::Display for JobKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            JobKind::ReadingInput => "reading the input",
-            JobKind::TrainingAdapter => "training the adapter",
-            JobKind::FineTuning => "fine-tuning the adapter",
-            JobKind::MakingMap => "making the retarget map",
-        })
-    }
 }
 
 /// One long piece of work: progress, a cancel flag, and how it ended (its message, or its

@@ -22,6 +22,7 @@ use serde::Serialize;
 use super::{CaptureDesk, OpenTake, Previews, Sound, private_dir};
 use crate::error::ApiError;
 use crate::lock;
+use crate::views::{Calibration, VoiceView};
 
 /// Samples per second the page sends.
 pub const RATE: usize = SAMPLE_RATE as usize;
@@ -33,57 +34,6 @@ pub const MAX_DELAY_MS: u32 = 2000;
 const RECORDED_FPS: f32 = 30.0;
 /// The longest recording, seconds (an hour, as for speech files).
 const MAX_RECORDING_SECONDS: usize = 3600;
-
-/// Where calibration is.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "state", rename_all = "snake_case")]
-pub enum Calibration {
-    /// Not calibrated (the mouth follows loudness until the first refinement).
-    None,
-    /// Listening to the passage.
-    Listening {
-        /// Seconds heard so far.
-        seconds: f32,
-    },
-    /// Aligning the passage and learning the voice.
-    Fitting,
-    /// The voice is learned.
-    Calibrated {
-        /// Visemes the model tells apart (silence included).
-        visemes: usize,
-        /// What was done instead of aligning the passage, if anything.
-        notes: Vec<String>,
-    },
-    /// Calibration failed; the previous model (if any) is kept.
-    Failed {
-        /// Why.
-        message: String,
-    },
-}
-
-/// The live microphone as the page sees it.
-#[derive(Debug, Clone, Serialize)]
-pub struct VoiceView {
-    /// Seconds of sound received.
-    pub seconds: f32,
-    /// How far the mouth is held back behind the voice, milliseconds (for streams whose audio
-    /// arrives later than the picture).
-    pub delay_ms: u32,
-    /// The longest delay allowed, milliseconds.
-    pub max_delay_ms: u32,
-    /// Calibration.
-    pub calibration: Calibration,
-    /// The passage to read while calibrating.
-    pub passage: &'static str,
-    /// Stretches of speech the classifier has learned from (calibration and refinements).
-    pub learned: usize,
-    /// Whether frames are classed into visemes (else loudness alone opens the mouth).
-    pub classifying: bool,
-    /// The last background refinement's failure, if it failed.
-    pub refine_error: Option<String>,
-    /// Seconds recorded, while recording.
-    pub recording: Option<f32>,
-}
 
 /// One chunk's answer.
 #[derive(Debug, Serialize)]

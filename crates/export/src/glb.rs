@@ -14,27 +14,13 @@
 use glam::Vec3;
 use serde_json::{Value, json};
 
-use crate::character::Character;
-
-/// A morph-weight animation: at `times[k]` seconds the weights are `weights[k]` (one per
-/// blendshape of the exported character, in its order).
-#[derive(Debug, Clone, PartialEq)]
-pub struct MorphAnimation {
-    /// Animation name shown in DCC tools (an action in Blender).
-    pub name: String,
-    /// Key times in seconds, strictly increasing.
-    pub times: Vec<f32>,
-    /// One weight vector per key.
-    pub weights: Vec<Vec<f32>>,
-    /// Optional rotation of the character's node per key, as a unit quaternion `[x, y, z, w]`
-    /// (a head pose from capture); played with spherical interpolation.
-    pub rotations: Option<Vec<[f32; 4]>>,
-}
+use faceanim_rig::Character;
+use faceanim_rig::animation::MorphAnimation;
 
 /// Why an export could not be written.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
-pub enum ExportError {
+pub enum GlbError {
     /// An animation's data does not fit the character.
     #[error("animation '{name}': {problem}")]
     BadAnimation {
@@ -163,7 +149,7 @@ impl Bin {
 pub fn export_glb(
     character: &Character,
     animations: &[MorphAnimation],
-) -> Result<Vec<u8>, ExportError> {
+) -> Result<Vec<u8>, GlbError> {
     let shape_count = character.blendshapes().len();
     for animation in animations {
         check_animation(animation, shape_count)?;
@@ -296,8 +282,8 @@ pub fn export_glb(
     glb(&root, bin.bytes)
 }
 
-fn check_animation(animation: &MorphAnimation, shape_count: usize) -> Result<(), ExportError> {
-    let bad = |problem: String| ExportError::BadAnimation {
+fn check_animation(animation: &MorphAnimation, shape_count: usize) -> Result<(), GlbError> {
+    let bad = |problem: String| GlbError::BadAnimation {
         name: animation.name.clone(),
         problem,
     };
@@ -402,8 +388,8 @@ fn u32_bytes(values: &[u32]) -> Vec<u8> {
     values.iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
-fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
-    let mut json = serde_json::to_vec(root).map_err(|_| ExportError::TooLarge)?;
+fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, GlbError> {
+    let mut json = serde_json::to_vec(root).map_err(|_| GlbError::TooLarge)?;
     while json.len() % 4 != 0 {
         json.push(b' ');
     }
@@ -411,7 +397,7 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
-    let total32 = u32::try_from(total).map_err(|_| ExportError::TooLarge)?;
+    let total32 = u32::try_from(total).map_err(|_| GlbError::TooLarge)?;
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -435,28 +421,28 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, ExportError> {
 /// scene's root node). Meshopt-compressed input is written decompressed.
 ///
 /// # Errors
-/// [`ExportError::NoSource`] for a character made in code or from OBJ files,
-/// [`ExportError::BadAnimation`] when an animation does not fit, [`ExportError::TooLarge`] past
+/// [`GlbError::NoSource`] for a character made in code or from OBJ files,
+/// [`GlbError::BadAnimation`] when an animation does not fit, [`GlbError::TooLarge`] past
 /// 4 GiB.
 #[expect(clippy::too_many_lines, reason = "one document, amended top to bottom")]
 pub fn export_into_source(
     character: &Character,
     animations: &[MorphAnimation],
-) -> Result<Vec<u8>, ExportError> {
+) -> Result<Vec<u8>, GlbError> {
     let Some(source) = character.source() else {
-        return Err(ExportError::NoSource(character.name().to_owned()));
+        return Err(GlbError::NoSource(character.name().to_owned()));
     };
     let shape_count = character.blendshapes().len();
     for animation in animations {
         check_animation(animation, shape_count)?;
     }
-    let mut doc = source.document.clone();
+    let mut doc = source.document().clone();
     let mut take_array = |key: &str| match doc.get_mut(key).map(Value::take) {
         Some(Value::Array(items)) => items,
         _ => Vec::new(),
     };
     let mut bin = Bin {
-        bytes: source.bin.to_vec(),
+        bytes: source.bin().to_vec(),
         views: take_array("bufferViews"),
         accessors: take_array("accessors"),
     };
@@ -615,7 +601,7 @@ pub fn export_into_source(
     let turn = turn_node
         .filter(|&n| wants_turn && n < nodes.len())
         .map(|n| {
-            let local = crate::source::local_matrix(&nodes[n]);
+            let local = faceanim_rig::source::local_matrix(&nodes[n]);
             let (scale, rotation, translation) = local.to_scale_rotation_translation();
             if let Some(object) = nodes[n].as_object_mut() {
                 object.remove("matrix");

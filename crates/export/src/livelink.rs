@@ -14,7 +14,7 @@
 use faceanim_rig::name_map::NameMap;
 use faceanim_rig::names::ARKIT_52;
 
-use crate::Clip;
+use faceanim_anim::Clip;
 
 const ROTATIONS: [&str; 9] = [
     "HeadYaw",

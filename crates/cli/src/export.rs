@@ -1,0 +1,85 @@
+//! `faceanim export` and `faceanim export-default`: a character as a binary glTF, with a clip's
+//! animation when one is given.
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+use clap::Args;
+
+/// `faceanim export`'s arguments.
+#[derive(Debug, Args)]
+pub(crate) struct ExportArgs {
+    /// The character: .glb, .gltf, or a folder of OBJ files.
+    pub(crate) character: PathBuf,
+    /// Where to write the .glb.
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    /// A clip JSON (DESIGN.md "Baked clip") to add as a morph-weight animation; its
+    /// blendshape names are matched to the character's (ARKit spellings understood).
+    #[arg(long)]
+    pub(crate) clip: Option<PathBuf>,
+}
+
+/// `faceanim export-default`'s arguments.
+#[derive(Debug, Args)]
+pub(crate) struct ExportDefaultArgs {
+    /// Where to write the .glb.
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+}
+
+/// `faceanim export`.
+pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
+    let character = crate::input::load(&args.character)?.character;
+    let glb = match &args.clip {
+        Some(clip_path) => {
+            let clip = faceanim_files::load_clip(clip_path)?;
+            let name = clip_path
+                .file_stem()
+                .map_or_else(|| "clip".to_owned(), |s| s.to_string_lossy().into_owned());
+            let unmatched: Vec<&str> = clip
+                .blendshapes
+                .iter()
+                .filter(|n| character.find_blendshape(n).is_none())
+                .map(String::as_str)
+                .collect();
+            if !unmatched.is_empty() {
+                tracing::warn!(
+                    "{}: no blendshape for {}",
+                    clip_path.display(),
+                    unmatched.join(", ")
+                );
+            }
+            let animation = faceanim_export::Animation::from_clip(&character, &clip, &name)
+                .with_context(|| format!("applying {}", clip_path.display()))?;
+            faceanim_export::export(faceanim_export::Format::Glb, &animation)?.bytes
+        }
+        None => faceanim_export::glb(&character, None)?,
+    };
+    faceanim_files::write_output(&args.output, &glb)?;
+    eprintln!(
+        "wrote {} ({} vertices, {} blendshapes{})",
+        args.output.display(),
+        character.vertex_count(),
+        character.blendshapes().len(),
+        if args.clip.is_some() {
+            ", 1 animation"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}
+
+/// `faceanim export-default`.
+pub(crate) fn run_default(args: &ExportDefaultArgs) -> anyhow::Result<()> {
+    let character = faceanim_head::default_character();
+    faceanim_files::write_output(&args.output, &faceanim_export::glb(&character, None)?)?;
+    eprintln!(
+        "wrote {} ({} vertices, {} blendshapes)",
+        args.output.display(),
+        character.vertex_count(),
+        character.blendshapes().len()
+    );
+    Ok(())
+}

@@ -1,0 +1,71 @@
+//! `faceanim sketch`: a strokes file replayed on a character, written as an animated GLB and
+//! optionally its baked clip.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+/// `faceanim sketch`'s arguments.
+#[derive(Debug, Args)]
+pub(crate) struct SketchArgs {
+    /// `[CHARACTER] STROKES`: the character (default: the built-in head) and the strokes file.
+    #[arg(num_args = 1..=2, required = true, value_names = ["CHARACTER", "STROKES"])]
+    pub(crate) inputs: Vec<PathBuf>,
+    /// Where to write the animated .glb.
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    /// Also write the baked clip (one row of weights per frame) here.
+    #[arg(long)]
+    pub(crate) clip: Option<PathBuf>,
+}
+
+/// `faceanim sketch`.
+pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
+    let (character, strokes) = match args.inputs.as_slice() {
+        [strokes] => (None, strokes),
+        [character, strokes] => (Some(character.as_path()), strokes),
+        _ => anyhow::bail!("give [CHARACTER] STROKES"),
+    };
+    let character = crate::input::load_or_default(character)?.character;
+    let bytes = faceanim_files::read_bytes(strokes)?;
+    let project = faceanim_sketch::Project::from_json(&bytes)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", strokes.display()))?;
+    let (sketch, warnings) = faceanim_sketch::Sketch::from_project(&character, &project);
+    for warning in &warnings {
+        eprintln!("warning: {}: {warning}", strokes.display());
+    }
+    let name = strokes
+        .file_stem()
+        .map_or_else(|| "sketch".to_owned(), |s| s.to_string_lossy().into_owned());
+    for (index, result) in sketch.results().iter().enumerate() {
+        if let Ok(faceanim_sketch::Action {
+            unmirrored: Some(why),
+            ..
+        }) = result
+        {
+            eprintln!("warning: {}: strokes[{index}]: {why}", strokes.display());
+        }
+    }
+    let baked = sketch.bake(&name)?;
+    let extra = baked.character.blendshapes().len() - character.blendshapes().len();
+    let animation = faceanim_export::Animation {
+        character: Some(&baked.character),
+        animation: baked.animation,
+        clip: sketch.bake_clip(),
+        arkit: None,
+        session: None,
+    };
+    crate::outputs::write(&args.output, faceanim_export::Format::Glb, &animation)?;
+    if let Some(path) = &args.clip {
+        crate::outputs::write(path, faceanim_export::Format::ClipJson, &animation)?;
+    }
+    eprintln!(
+        "{}: {} actions, {} frames at {} fps, {} extra targets for arcs and exaggerations",
+        args.output.display(),
+        sketch.actions().count(),
+        animation.clip.frames.len(),
+        sketch.fps(),
+        extra
+    );
+    Ok(())
+}
