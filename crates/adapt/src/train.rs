@@ -119,8 +119,9 @@ impl TrainOptions {
 /// At most this many passes of fine-tuning over the training split and the corrections.
 const FINETUNE_EPOCHS: usize = 40;
 /// Fine-tuning stops after this many passes without a better fit to the corrections (one that
-/// keeps the validation error within 5 %): 30 corrections are fitted within a few passes, and
-/// the passes after only cost the user's time.
+/// keeps the validation error within 5 %). On 30 corrected frames of another ICT identity
+/// (`tests/byoc.rs`) the fit still improves at the 40th pass (0.076 → 0.015), so there every
+/// pass runs; where the fit stops improving, fine-tuning ends sooner.
 const FINETUNE_PATIENCE: usize = 8;
 
 impl Default for TrainOptions {
