@@ -27,6 +27,7 @@
 //! needs no training library; fine-tuning reads its corrections.
 #![deny(missing_docs)]
 
+pub mod ablation;
 pub mod adapter;
 pub mod augment;
 pub mod bridge;

@@ -601,80 +601,6 @@ fn ablation(
     folders: &[HeldOut],
     json: bool,
 ) -> anyhow::Result<()> {
-    let default = Architecture::default();
-    // Each row: the training set's augmentation, the network, its loss and how many networks
-    // are averaged (the seed trains one).
-    let mut rows: Vec<(Augmentation, Architecture, Loss, usize)> = Vec::new();
-    for augmentation in [Augmentation::None, Augmentation::Randomised] {
-        for features in [FeatureSet::Scores, FeatureSet::Landmarks, FeatureSet::Both] {
-            for calibration in [Calibration::None, Calibration::Neutral] {
-                rows.push((
-                    augmentation,
-                    Architecture {
-                        features,
-                        calibration,
-                        ..default
-                    },
-                    base.loss,
-                    base.members,
-                ));
-            }
-        }
-    }
-    let seed = Architecture::global();
-    for architecture in [
-        seed,
-        Architecture {
-            frame: default.frame,
-            ..seed
-        },
-        Architecture {
-            hidden: 100,
-            ..seed
-        },
-        Architecture {
-            hidden: 384,
-            ..seed
-        },
-        Architecture {
-            activation: Activation::Relu,
-            clamp: false,
-            ..default
-        },
-        Architecture {
-            activation: Activation::Relu,
-            ..default
-        },
-        Architecture {
-            clamp: false,
-            ..default
-        },
-    ] {
-        // The censored loss knows the outputs end in [0, 1]: the seed's rows without the
-        // clamp are trained as the seed trains them.
-        let loss = if architecture.clamp {
-            base.loss
-        } else {
-            Loss::SquaredClamped
-        };
-        let members = if architecture.locality == Locality::Global {
-            1
-        } else {
-            base.members
-        };
-        rows.push((Augmentation::Randomised, architecture, loss, members));
-    }
-    if base.loss != Loss::SquaredClamped {
-        rows.push((
-            Augmentation::Randomised,
-            default,
-            Loss::SquaredClamped,
-            base.members,
-        ));
-    }
-    if base.members != 1 {
-        rows.push((Augmentation::Randomised, default, base.loss, 1));
-    }
     // The other augmentation's training set is cached beside the given one.
     let other = |augmentation: Augmentation| -> anyhow::Result<Dataset> {
         let options = DatasetOptions {
@@ -690,22 +616,19 @@ fn ablation(
     let mut datasets: Vec<(Augmentation, Dataset)> =
         vec![(options.augmentation, dataset_given.clone())];
     let mut results = Vec::new();
-    for (augmentation, architecture, loss, members) in rows {
+    for experiment in faceanim_adapt::ablation::experiments(base) {
+        let (augmentation, loss, members) = (
+            experiment.augmentation,
+            experiment.options.loss,
+            experiment.options.members,
+        );
         if !datasets.iter().any(|(a, _)| *a == augmentation) {
             datasets.push((augmentation, other(augmentation)?));
         }
         let Some((_, data)) = datasets.iter().find(|(a, _)| *a == augmentation) else {
             continue;
         };
-        let adapter = train_with_bar(
-            data,
-            &TrainOptions {
-                architecture,
-                loss,
-                members,
-                ..*base
-            },
-        )?;
+        let adapter = train_with_bar(data, &experiment.options)?;
         let heldout = evaluate_held_out(&adapter, folders)?;
         // As trained: a per-shape network's width is known once the shapes are.
         let architecture = adapter.architecture;
