@@ -226,6 +226,10 @@ impl<'a> Animation<'a> {
                     .any(|(b, n)| b.name() != n)
             {
                 return Err(ExportError::OtherCharacter {
+                    take: session.map_or_else(
+                        || "the take".to_owned(),
+                        |s| format!("the take of {}", s.character),
+                    ),
                     character: character.name().to_owned(),
                     blendshapes: own,
                 });
@@ -265,9 +269,11 @@ pub enum ExportError {
     NeedsSession(Format),
     /// The take was made for another character than the one given.
     #[error(
-        "the take is not {character}'s: its {blendshapes} blendshapes are not that character's; give the take's own character (with --character)"
+        "{take} ({blendshapes} blendshapes) is not for {character}: give the take's own character (with --character)"
     )]
     OtherCharacter {
+        /// The take: whose it is, when its session says.
+        take: String,
         /// The character given.
         character: String,
         /// How many blendshapes the take has.
