@@ -150,9 +150,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
 
     let workers = Workers::start(&models, threads - 1).context("starting the face models")?;
     let clip_started = Instant::now();
-    let started = Instant::now();
-    let (source, result) = capture(&args, &models, &workers)?;
-    let capture_seconds = started.elapsed().as_secs_f64();
+    let (source, result, capture_seconds) = capture(&args, &models, &workers)?;
     if let Some(raw) = &args.raw {
         faceanim_files::write_output(raw, &serde_json::to_vec(&result)?)?;
         eprintln!(
@@ -228,7 +226,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         detector_runs,
         capture_seconds,
         estimate_seconds,
-        whole_seconds: clip_started.elapsed().as_secs_f64(),
+        clip_started,
     };
     let summary = summary(
         &args,
@@ -260,9 +258,9 @@ struct Timing {
     capture_seconds: f64,
     /// The take's estimates.
     estimate_seconds: f64,
-    /// Everything for this clip: opening it, decoding, the face models, the estimates, the
-    /// files written; not the models' loading.
-    whole_seconds: f64,
+    /// When this clip began: its whole time counts opening it, decoding, the face models,
+    /// the estimates, the files written and the summary's measures; not the models' loading.
+    clip_started: Instant,
 }
 
 /// The JSON summary `track` prints: counts, rates, the estimator and the jitter of each filter.
@@ -293,6 +291,7 @@ fn summary(
         jitter(FilterChoice::OneEuro)?,
         jitter(FilterChoice::Keyframes)?,
     ];
+    let whole_seconds = timing.clip_started.elapsed().as_secs_f64();
     Ok(serde_json::json!({
         "frames": frames,
         "fps": fps,
@@ -300,8 +299,8 @@ fn summary(
         "detector_runs": detector_runs,
         "seconds": timing.capture_seconds + timing.estimate_seconds,
         "frames_per_second": frames as f64 / timing.capture_seconds.max(1e-9),
-        "whole_seconds": timing.whole_seconds,
-        "whole_frames_per_second": frames as f64 / timing.whole_seconds.max(1e-9),
+        "whole_seconds": whole_seconds,
+        "whole_frames_per_second": frames as f64 / whole_seconds.max(1e-9),
         "estimator": take.estimated_by(),
         "neutral": neutral,
         "adapter_ms_per_frame": 1000.0 * timing.estimate_seconds / frames.max(1) as f64,
@@ -320,12 +319,13 @@ fn summary(
     }))
 }
 
-/// Opens `args.input` and reads every frame's landmarks and scores, with a progress bar.
+/// Opens `args.input` and reads every frame's landmarks and scores, with a progress bar; with
+/// the seconds the reading took (not the opening).
 fn capture(
     args: &TrackArgs,
     models: &FaceModels,
     workers: &Workers,
-) -> anyhow::Result<(FrameSource, faceanim_capture::Capture)> {
+) -> anyhow::Result<(FrameSource, faceanim_capture::Capture, f64)> {
     let mut source = FrameSource::open(&args.input, args.fps)?;
     let info = source.info();
     let mode = if args.detect_every_frame {
@@ -344,12 +344,13 @@ fn capture(
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
         .progress_chars("=> "),
     );
+    let started = Instant::now();
     let result = faceanim_capture::capture(models, workers, &mut source, mode, |n| {
         bar.set_position(n as u64)
     })
     .with_context(|| format!("capturing {}", args.input.display()))?;
     bar.finish_and_clear();
-    Ok((source, result))
+    Ok((source, result, started.elapsed().as_secs_f64()))
 }
 
 /// Says which neutral face the take is read against, and warns when it does not look neutral.
