@@ -17,13 +17,11 @@ import { visemes } from './visemes.js';
 import { showMap } from './retarget.js';
 import { showControls as showVmcControls, vmc } from './vmc.js';
 import { setSound } from './sound.js';
-import { apply, onShowTakeFrame, onView, post } from './take.js';
+import { apply, currentView, onShowTakeFrame, onView, post } from './take.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 const input = (id) => /** @type {HTMLInputElement} */ (document.getElementById(id));
 
-/** @type {any} The last /api/capture/state, as take.js told it. */
-let view = null;
 /** Name of the blendshape whose curve the diagram draws. */
 let selectedName = 'jawOpen';
 /** A slider being dragged: its name and value show on the character before the server has it. */
@@ -31,7 +29,7 @@ let preview = null;
 
 /** Capture mode as scripts and tests see it (`window.studio.capture`). */
 export const capture = {
-  get view() { return view; },
+  get view() { return currentView(); },
   /** Live webcam measurements (live.js). */
   live,
   /** Live microphone measurements (voice.js). */
@@ -72,7 +70,7 @@ export const undo = () => post('api/capture/undo');
 export const redo = () => post('api/capture/redo');
 /** Whether the take has an edit to undo or redo. */
 export function history() {
-  const take = view && view.take;
+  const take = currentView()?.take;
   return { canUndo: !!(take && take.can_undo), canRedo: !!(take && take.can_redo) };
 }
 
@@ -87,7 +85,6 @@ async function refresh() {
 /** Draws a capture state the server answered with. */
 onView((v, previous) => {
   const hadTake = previous && previous.take ? previous.take.id : null;
-  view = v;
   const take = v.take;
   const newTake = take && take.id !== hadTake;
   if (newTake) shownFrame = -1;
@@ -160,16 +157,16 @@ function layer(frame) {
   if (live.running && live.weights) return live.weights;
   if (voice.running && voice.weights) return voice.weights;
   if (vmc.running && vmc.weights) return vmc.weights;
-  const take = view && view.take;
+  const take = currentView()?.take;
   if (!take) return null;
   if (take.ramp && !preview) return take.ramp[Math.min(Math.round(frame), take.ramp.length - 1)];
   const f = Math.min(Math.round(frame), take.frames - 1);
   const row = take.weights[f];
   if (!preview || preview.frame !== f) return row;
   const copy = row.slice();
-  const index = view.blendshapes.indexOf(preview.name);
+  const index = currentView().blendshapes.indexOf(preview.name);
   copy[index] = preview.value;
-  const partner = view.partners[index];
+  const partner = currentView().partners[index];
   if (preview.linked && partner !== null && partner !== undefined) copy[partner] = preview.value;
   return copy;
 }
@@ -242,11 +239,11 @@ input('still-frames').addEventListener('change', async () => {
 // ---------- the current frame: keyframes, corrections, preference ----------
 /** The take's frame under the playhead (a photo has one, however long its ramp plays). */
 const shownFrameIndex = () => {
-  const take = view && view.take;
+  const take = currentView()?.take;
   return take ? Math.min(Math.round(currentFrame()), take.frames - 1) : Math.round(currentFrame());
 };
 $('keyframe').onclick = () => {
-  const take = view && view.take;
+  const take = currentView()?.take;
   if (!take) return;
   const f = shownFrameIndex();
   post('api/capture/keyframe', { frame: f, on: !take.keyframes.includes(f) });
@@ -345,11 +342,11 @@ function markSelected() {
   $('diagram-curve-name').textContent = selectedName;
 }
 function fillSliders() {
-  const take = view && view.take;
+  const take = currentView()?.take;
   const f = shownFrameIndex();
   const row = take ? take.weights[Math.min(f, take.frames - 1)] : null;
   const corrected = take ? take.corrections[String(f)] || {} : {};
-  view.blendshapes.forEach((name, i) => {
+  currentView().blendshapes.forEach((name, i) => {
     const s = sliders.get(name);
     if (!s) return;
     const value = row ? row[i] : 0;
@@ -374,7 +371,7 @@ $('slider-search').addEventListener('input', filterSliders);
 // ---------- frame diagram (the seed's figure 3) ----------
 const diagram = /** @type {HTMLCanvasElement} */ ($('diagram'));
 function drawDiagram() {
-  const take = view && view.take;
+  const take = currentView()?.take;
   const ratio = window.devicePixelRatio || 1;
   const w = diagram.clientWidth, h = diagram.clientHeight;
   if (!w || !h) return;
@@ -391,7 +388,7 @@ function drawDiagram() {
   const yMean = (m) => h - pad - (m / maxMean) * (h - 2 * pad);
   const yCurve = (v) => h - pad - v * (h - 2 * pad);
   // The selected blendshape's curve (scale 0..1) behind the points.
-  const b = view.blendshapes.indexOf(selectedName);
+  const b = currentView().blendshapes.indexOf(selectedName);
   if (b >= 0) {
     g.strokeStyle = '#3fc07a'; g.lineWidth = 1.5; g.beginPath();
     take.weights.forEach((row, f) => { const px = x(f), py = yCurve(row[b]); if (f) g.lineTo(px, py); else g.moveTo(px, py); });
@@ -408,7 +405,7 @@ function drawDiagram() {
   g.beginPath(); g.moveTo(cx, 0); g.lineTo(cx, h); g.stroke();
 }
 function frameAt(clientX) {
-  const take = view && view.take;
+  const take = currentView()?.take;
   if (!take) return 0;
   const rect = diagram.getBoundingClientRect();
   const u = (clientX - rect.left - 8) / Math.max(1, rect.width - 16);
@@ -427,8 +424,8 @@ new ResizeObserver(drawDiagram).observe(diagram);
 // The input frame, the sliders and the diagram follow the current frame.
 let shownFrame = -1;
 onFrame((frame) => {
-  const take = view && view.take;
-  if (!view) return;
+  const take = currentView()?.take;
+  if (!currentView()) return;
   const f = take ? Math.min(Math.round(frame), take.frames - 1) : -1;
   if (!live.running && !vmc.running) turnHead(take ? take.head[f] : null);
   if (take && !live.running && !vmc.running && f !== shownFrame) {
@@ -449,7 +446,7 @@ function noPreview() {
   frameImage.hidden = true;
   frameImage.removeAttribute('src');
   const note = $('capture-input-note');
-  const take = view && view.take;
+  const take = currentView()?.take;
   note.textContent = take && take.sound
     ? 'Lip sync: this take was made from speech; its sound plays with it (the sound row of the timeline).'
     : take && take.estimator === 'received'
