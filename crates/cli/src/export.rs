@@ -34,9 +34,7 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let glb = match &args.clip {
         Some(clip_path) => {
             let clip = faceanim_files::load_clip(clip_path)?;
-            let name = clip_path
-                .file_stem()
-                .map_or_else(|| "clip".to_owned(), |s| s.to_string_lossy().into_owned());
+            let name = crate::input::stem(clip_path, "clip");
             let unmatched: Vec<&str> = clip
                 .blendshapes
                 .iter()

@@ -205,9 +205,7 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
             } else {
                 None
             };
-            let stem = path
-                .file_stem()
-                .map_or_else(|| "session".into(), |s| s.to_string_lossy().into_owned());
+            let stem = crate::input::stem(path, "session");
             let animation = crate::outputs::take_animation(character.as_ref(), &session, &stem)?;
             for (path, format) in output.iter().zip(formats) {
                 crate::outputs::write(path, format, &animation)?;

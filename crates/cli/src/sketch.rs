@@ -34,9 +34,7 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
     for warning in &warnings {
         eprintln!("warning: {}: {warning}", strokes.display());
     }
-    let name = strokes
-        .file_stem()
-        .map_or_else(|| "sketch".to_owned(), |s| s.to_string_lossy().into_owned());
+    let name = crate::input::stem(strokes, "sketch");
     for (index, result) in sketch.results().iter().enumerate() {
         if let Ok(faceanim_sketch::Action {
             unmirrored: Some(why),
