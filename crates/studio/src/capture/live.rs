@@ -12,8 +12,10 @@ use faceanim_take::calibration::LiveNeutral;
 use faceanim_take::{Estimator, Expression, Footage, NeutralChoice};
 use faceanim_track::{Frame, Tracker, TrackingMode};
 
-use super::{CaptureDesk, LIVE_PREVIEW_HEIGHT, Previews, face_models, lock};
+use super::models::face_models;
+use super::open_take::{LIVE_PREVIEW_HEIGHT, Previews};
 use crate::error::ApiError;
+use crate::lock;
 use crate::views::LiveView;
 
 /// Live webcam tracking: the tracker follows the face from frame to frame.
@@ -33,6 +35,68 @@ pub(super) struct Live {
 }
 
 impl Live {
+    /// Live tracking reading faces with `estimator`, smoothed with `smoothing`, each frame's
+    /// face sent to `performer` when there is one.
+    ///
+    /// # Errors
+    /// [`ApiError::Models`] when the face models cannot be loaded.
+    pub(super) fn start(
+        estimator: Box<dyn Estimator>,
+        smoothing: Option<OneEuro>,
+        performer: Option<Arc<Mutex<faceanim_live::Performer>>>,
+    ) -> Result<Live, ApiError> {
+        Ok(Live {
+            tracker: Tracker::new(face_models()?, TrackingMode::Track),
+            estimator,
+            started: Instant::now(),
+            filter: smoothing.map(OneEuroState::new),
+            neutral: LiveNeutral::default(),
+            recording: None,
+            frames: 0,
+            performer,
+        })
+    }
+
+    /// Takes the next frame with a face as the neutral one (the performer's Calibrate).
+    pub(super) fn calibrate(&mut self) {
+        self.neutral.calibrate();
+    }
+
+    /// Starts recording the frames.
+    pub(super) fn start_recording(&mut self) {
+        self.recording = Some(Recording::default());
+    }
+
+    /// Ends the recording: its frames as footage, and their previews.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when not recording, nothing was recorded or no face was seen.
+    pub(super) fn stop_recording(&mut self) -> Result<(Footage, Previews), ApiError> {
+        let recording = self
+            .recording
+            .take()
+            .ok_or(ApiError::Live("not recording"))?;
+        let n = recording.records.len();
+        if n == 0 {
+            return Err(ApiError::Live("nothing was recorded (no frames arrived)"));
+        }
+        if recording.records.iter().all(|r| r.found.is_none()) {
+            return Err(ApiError::Live("no face was seen while recording"));
+        }
+        // The webcam's own rate, rounded: frames were recorded as they arrived.
+        let duration = recording.records.last().map_or(0.0, |r| r.time);
+        let fps = faceanim_take::recorded_fps(0.0, f64::from(duration), n);
+        let names = (0..n).map(|i| format!("webcam_{:06}.png", i + 1)).collect();
+        let footage = Footage {
+            source: "webcam".into(),
+            fps,
+            records: recording.records,
+            frame_names: names,
+            still_frames: None,
+        };
+        Ok((footage, recording.previews))
+    }
+
     /// Smooths the frames from now on with `smoothing` (or not at all).
     pub(super) fn set_smoothing(&mut self, smoothing: Option<OneEuro>) {
         self.filter = smoothing.map(OneEuroState::new);
@@ -84,109 +148,17 @@ pub struct LiveResult {
     pub neutral: Option<NeutralChoice>,
 }
 
-impl CaptureDesk {
-    /// Starts (or restarts) live tracking.
-    ///
-    /// # Errors
-    /// [`ApiError::Models`] when the face models cannot be loaded.
-    pub fn start_live(&mut self, character: &Character) -> Result<(), ApiError> {
-        let models = face_models()?;
-        *lock(&self.live) = Some(Live {
-            tracker: Tracker::new(models, TrackingMode::Track),
-            estimator: self.estimator(character),
-            started: Instant::now(),
-            filter: self.filtering.smoothing.map(OneEuroState::new),
-            neutral: LiveNeutral::default(),
-            recording: None,
-            frames: 0,
-            performer: self.vmc.performer.clone(),
-        });
-        Ok(())
-    }
-
-    /// Takes the next live frame with a face as the neutral one (the performer's Calibrate).
-    ///
-    /// # Errors
-    /// [`ApiError::Live`] when live tracking is off.
-    pub fn calibrate_live(&mut self) -> Result<(), ApiError> {
-        let mut live = lock(&self.live);
-        live.as_mut()
-            .ok_or(ApiError::Live("start live mode first"))?
-            .neutral
-            .calibrate();
-        Ok(())
-    }
-
-    /// Stops live tracking (a recording in progress is dropped).
-    pub fn stop_live(&mut self) {
-        *lock(&self.live) = None;
-    }
-
-    /// The live state, to track frames without holding the desk.
-    #[must_use]
-    pub fn live_handle(&self) -> LiveHandle {
-        LiveHandle {
-            live: self.live.clone(),
-        }
-    }
-
-    /// Starts recording a take from the live frames.
-    ///
-    /// # Errors
-    /// [`ApiError::Live`] when live tracking is off.
-    pub fn start_recording(&mut self) -> Result<(), ApiError> {
-        let mut live = lock(&self.live);
-        let live = live
-            .as_mut()
-            .ok_or(ApiError::Live("start live mode first"))?;
-        live.recording = Some(Recording::default());
-        Ok(())
-    }
-
-    /// Stops recording and makes the recording the take.
-    ///
-    /// # Errors
-    /// [`ApiError::Live`] when nothing was recorded.
-    pub fn stop_recording(&mut self, character: &Character) -> Result<usize, ApiError> {
-        let recording = {
-            let mut live = lock(&self.live);
-            let live = live.as_mut().ok_or(ApiError::Live("live mode is off"))?;
-            live.recording
-                .take()
-                .ok_or(ApiError::Live("not recording"))?
-        };
-        let n = recording.records.len();
-        if n == 0 {
-            return Err(ApiError::Live("nothing was recorded (no frames arrived)"));
-        }
-        if recording.records.iter().all(|r| r.found.is_none()) {
-            return Err(ApiError::Live("no face was seen while recording"));
-        }
-        // The webcam's own rate, rounded: frames were recorded as they arrived.
-        let duration = recording.records.last().map_or(0.0, |r| r.time);
-        let fps = faceanim_take::recorded_fps(0.0, f64::from(duration), n);
-        let names = (0..n).map(|i| format!("webcam_{:06}.png", i + 1)).collect();
-        let take = self.take_of(
-            character,
-            Footage {
-                source: "webcam".into(),
-                fps,
-                records: recording.records,
-                frame_names: names,
-                still_frames: None,
-            },
-        )?;
-        self.set_take(take, recording.previews);
-        Ok(n)
-    }
-}
-
 /// What a live frame needs, taken from the desk so tracking does not block it.
 pub struct LiveHandle {
     live: Arc<Mutex<Option<Live>>>,
 }
 
 impl LiveHandle {
+    /// A handle on `live`.
+    pub(super) fn new(live: Arc<Mutex<Option<Live>>>) -> LiveHandle {
+        LiveHandle { live }
+    }
+
     /// Tracks one webcam frame and returns the character's weights.
     ///
     /// # Errors

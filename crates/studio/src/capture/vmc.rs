@@ -5,13 +5,10 @@
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
 
-use faceanim_live::{Marionette, Names, Performer};
-use faceanim_rig::Character;
-use faceanim_take::{ReceivedFrame, Take};
-
-use super::{CaptureDesk, Previews, lock};
 use crate::error::ApiError;
-use crate::views::{VmcSendView, VmcView, names};
+use crate::lock;
+use crate::views::{VmcSendView, VmcView};
+use faceanim_live::{Marionette, Names, Performer};
 
 /// Where VMC goes in and out, as the studio was started.
 #[derive(Debug, Clone, Copy, Default)]
@@ -51,42 +48,36 @@ impl Vmc {
         }
     }
 
-    /// The links as the studio was started.
-    pub(super) fn config(&self) -> VmcConfig {
-        self.config
-    }
-}
-
-impl CaptureDesk {
-    /// Opens the VMC links of `config` for `character` (again, after the character changed).
+    /// Opens the links of `config` for a character with `blendshapes`; a phone's ARKit values
+    /// reach shapes named otherwise through `map`.
     ///
     /// # Errors
     /// [`ApiError::Vmc`] when the port cannot be bound or the names cover none of the
     /// character's shapes.
-    pub fn open_vmc(&mut self, config: VmcConfig, character: &Character) -> Result<(), ApiError> {
-        // The old socket goes first: the new one binds the same port.
-        self.vmc = Vmc {
+    pub(super) fn open(
+        config: VmcConfig,
+        blendshapes: &[String],
+        map: Option<Arc<faceanim_retarget::RetargetMap>>,
+    ) -> Result<Vmc, ApiError> {
+        let mut vmc = Vmc {
             config,
             ..Vmc::default()
         };
-        let blendshapes = names(character);
         if let Some(address) = config.listen {
-            let marionette = Marionette::listen(address, &blendshapes)?;
-            // A phone's ARKit values reach shapes named otherwise through the map.
-            marionette.set_map(self.map.clone());
-            self.vmc.marionette = Some(marionette);
+            let marionette = Marionette::listen(address, blendshapes)?;
+            marionette.set_map(map);
+            vmc.marionette = Some(marionette);
         }
         if let Some((destination, names)) = config.send {
-            let performer = Performer::new(destination, &blendshapes, names)?;
-            self.vmc.performer = Some(Arc::new(Mutex::new(performer)));
+            let performer = Performer::new(destination, blendshapes, names)?;
+            vmc.performer = Some(Arc::new(Mutex::new(performer)));
         }
-        Ok(())
+        Ok(vmc)
     }
 
-    /// The VMC links' state, when there are any.
-    #[must_use]
-    pub fn vmc_view(&self) -> Option<VmcView> {
-        let sending = self.vmc.performer.as_ref().map(|p| {
+    /// The links' state, when there are any.
+    pub(super) fn view(&self) -> Option<VmcView> {
+        let sending = self.performer.as_ref().map(|p| {
             let performer = lock(p);
             let stats = performer.stats();
             VmcSendView {
@@ -96,7 +87,7 @@ impl CaptureDesk {
                 last_error: stats.last_error.clone(),
             }
         });
-        let marionette = self.vmc.marionette.as_ref();
+        let marionette = self.marionette.as_ref();
         if marionette.is_none() && sending.is_none() {
             return None;
         }
@@ -112,19 +103,18 @@ impl CaptureDesk {
         })
     }
 
-    /// Sends one frame of the character's face (what the page shows while playing a take or
-    /// the sketch) to the marionette; false when the network refused it.
+    /// Sends one frame of the character's face; false when the network refused it.
     ///
     /// # Errors
     /// [`ApiError::Live`] when the studio does not send VMC, [`ApiError::Invalid`] for weights
     /// that are not one finite number per blendshape.
-    pub fn send_vmc_frame(
+    pub(super) fn send(
         &self,
         weights: &[f32],
         head: Option<[f32; 3]>,
         blendshapes: usize,
     ) -> Result<bool, ApiError> {
-        let performer = self.vmc.performer.as_ref().ok_or(ApiError::Live(
+        let performer = self.performer.as_ref().ok_or(ApiError::Live(
             "the studio does not send VMC: start it with --vmc-send HOST:PORT",
         ))?;
         if weights.len() != blendshapes || weights.iter().any(|w| !w.is_finite()) {
@@ -139,49 +129,22 @@ impl CaptureDesk {
             ));
         }
         let mut performer = lock(performer);
-        let time = self.vmc.started.elapsed().as_secs_f32();
+        let time = self.started.elapsed().as_secs_f32();
         Ok(performer.send(weights, head, time))
     }
 
-    fn marionette(&self) -> Result<&Marionette, ApiError> {
-        self.vmc.marionette.as_ref().ok_or(ApiError::Live(
+    /// The marionette, when listening.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when the studio does not listen for VMC.
+    pub(super) fn marionette(&self) -> Result<&Marionette, ApiError> {
+        self.marionette.as_ref().ok_or(ApiError::Live(
             "the studio is not listening for VMC: start it with --vmc-listen [PORT]",
         ))
     }
 
-    /// Starts recording the frames that arrive over VMC.
-    ///
-    /// # Errors
-    /// [`ApiError::Live`] when the studio does not listen for VMC.
-    pub fn start_vmc_recording(&self) -> Result<(), ApiError> {
-        self.marionette()?.start_recording();
-        Ok(())
-    }
-
-    /// Stops recording and makes the frames the take (with their arrival times); returns their
-    /// count.
-    ///
-    /// # Errors
-    /// [`ApiError::Live`] when it was not recording or nothing arrived.
-    pub fn stop_vmc_recording(&mut self, character: &Character) -> Result<usize, ApiError> {
-        let frames = self
-            .marionette()?
-            .stop_recording()
-            .ok_or(ApiError::Live("not recording VMC"))?;
-        if frames.is_empty() {
-            return Err(ApiError::Live("nothing arrived over VMC while recording"));
-        }
-        let count = frames.len();
-        let frames = frames
-            .into_iter()
-            .map(|f| ReceivedFrame {
-                time: f.time,
-                weights: f.weights,
-                head: f.head,
-            })
-            .collect();
-        let take = Take::from_received(character, "vmc", frames, self.filtering)?;
-        self.set_take(take, Previews::new());
-        Ok(count)
+    /// The links as the studio was started.
+    pub(super) fn config(&self) -> VmcConfig {
+        self.config
     }
 }

@@ -13,13 +13,11 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use faceanim_rig::Character;
 use faceanim_speech::Mouth;
 use faceanim_speech::audio::{FRAME_RATE, SAMPLE_RATE};
 use faceanim_speech::listen::{self, CALIBRATION_SECONDS, Listener, PASSAGE, VoiceModel};
 use serde::Serialize;
 
-use super::{CaptureDesk, OpenTake, Previews, Sound, private_dir};
 use crate::error::ApiError;
 use crate::lock;
 use crate::views::{Calibration, VoiceView};
@@ -31,7 +29,7 @@ pub const REFINE_SECONDS: usize = 10;
 /// The longest audio delay the page may set, milliseconds.
 pub const MAX_DELAY_MS: u32 = 2000;
 /// Frames per second of a recorded microphone take.
-const RECORDED_FPS: f32 = 30.0;
+pub(super) const RECORDED_FPS: f32 = 30.0;
 /// The longest recording, seconds (an hour, as for speech files).
 const MAX_RECORDING_SECONDS: usize = 3600;
 
@@ -94,7 +92,102 @@ impl std::fmt::Debug for Voice {
 }
 
 impl Voice {
-    fn view(&self) -> VoiceView {
+    /// A microphone session driving `mouth`, held back by `delay_ms` (checked), reading with
+    /// `model` (a voice learned earlier) when there is one.
+    pub(super) fn start(
+        mouth: Mouth,
+        model: Option<VoiceModel>,
+        delay_ms: u32,
+        performer: Option<Arc<Mutex<faceanim_live::Performer>>>,
+    ) -> Result<Voice, ApiError> {
+        static SESSIONS: AtomicU64 = AtomicU64::new(1);
+        check_delay(delay_ms)?;
+        Ok(Voice {
+            session: SESSIONS.fetch_add(1, Ordering::Relaxed),
+            listener: Listener::new(model.as_ref()),
+            mouth,
+            model,
+            generation: 0,
+            delay: delay_ms as f32 / 1000.0,
+            due: VecDeque::new(),
+            received: 0,
+            calibration: Calibration::None,
+            calibration_samples: Vec::new(),
+            recent: VecDeque::with_capacity(REFINE_SECONDS * RATE),
+            since_refine: 0,
+            refining: false,
+            refine_error: None,
+            recording: None,
+            last: None,
+            performer,
+        })
+    }
+
+    /// The voice learned so far, if any.
+    pub(super) fn model(&self) -> Option<&VoiceModel> {
+        self.model.as_ref()
+    }
+
+    /// The voice learned, kept when the microphone stops.
+    pub(super) fn into_model(self) -> Option<VoiceModel> {
+        self.model
+    }
+
+    /// Holds the mouth back by `delay_ms` from now on.
+    ///
+    /// # Errors
+    /// [`ApiError::Invalid`] out of range.
+    pub(super) fn set_delay(&mut self, delay_ms: u32) -> Result<(), ApiError> {
+        check_delay(delay_ms)?;
+        self.delay = delay_ms as f32 / 1000.0;
+        Ok(())
+    }
+
+    /// Listens to the next [`CALIBRATION_SECONDS`] as the passage read aloud.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when calibration is already under way.
+    pub(super) fn calibrate(&mut self) -> Result<(), ApiError> {
+        if matches!(
+            self.calibration,
+            Calibration::Listening { .. } | Calibration::Fitting
+        ) {
+            return Err(ApiError::Live("calibration is already under way"));
+        }
+        self.calibration = Calibration::Listening { seconds: 0.0 };
+        self.calibration_samples.clear();
+        Ok(())
+    }
+
+    /// Starts recording what is heard.
+    pub(super) fn start_recording(&mut self) {
+        self.recording = Some((Vec::new(), Vec::new()));
+    }
+
+    /// Ends the recording: its sound, and the character's weights at [`RECORDED_FPS`].
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when not recording, or nothing was heard.
+    pub(super) fn stop_recording(&mut self) -> Result<(Vec<i16>, Vec<Vec<f32>>), ApiError> {
+        let (samples, frames) = self
+            .recording
+            .take()
+            .ok_or(ApiError::Live("not recording"))?;
+        if frames.is_empty() {
+            return Err(ApiError::Live("nothing was recorded (no sound arrived)"));
+        }
+        // Frames came every 10 ms: the take samples them at its own rate.
+        let per_frame = FRAME_RATE as f32 / RECORDED_FPS;
+        let count = ((frames.len() as f32 / per_frame).ceil() as usize).max(1);
+        let rows = (0..count)
+            .map(|i| {
+                frames[((i as f32 * per_frame).round() as usize).min(frames.len() - 1)].clone()
+            })
+            .collect();
+        Ok((samples, rows))
+    }
+
+    pub(super) fn view(&self) -> VoiceView {
         VoiceView {
             seconds: self.received as f32 / RATE as f32,
             delay_ms: (self.delay * 1000.0).round() as u32,
@@ -124,160 +217,7 @@ impl Voice {
 /// The live microphone, shared with its background work.
 pub(super) type SharedVoice = Arc<Mutex<Option<Voice>>>;
 
-impl CaptureDesk {
-    /// Starts (or restarts) the live microphone, its mouth held back by `delay_ms`. A voice
-    /// learned earlier in this process is kept.
-    ///
-    /// # Errors
-    /// [`ApiError::Invalid`] when the character has no mouth to drive ([`CaptureDesk::mouth`]),
-    /// or the delay is out of range.
-    pub fn start_voice(&mut self, character: &Character, delay_ms: u32) -> Result<(), ApiError> {
-        static SESSIONS: AtomicU64 = AtomicU64::new(1);
-        check_delay(delay_ms)?;
-        let mouth = self.mouth(character)?;
-        let mut slot = lock(&self.voice);
-        let model = slot
-            .as_ref()
-            .and_then(|v| v.model.clone())
-            .or_else(|| self.voice_model.clone());
-        *slot = Some(Voice {
-            session: SESSIONS.fetch_add(1, Ordering::Relaxed),
-            listener: Listener::new(model.as_ref()),
-            mouth,
-            model,
-            generation: 0,
-            delay: delay_ms as f32 / 1000.0,
-            due: VecDeque::new(),
-            received: 0,
-            calibration: Calibration::None,
-            calibration_samples: Vec::new(),
-            recent: VecDeque::with_capacity(REFINE_SECONDS * RATE),
-            since_refine: 0,
-            refining: false,
-            refine_error: None,
-            recording: None,
-            last: None,
-            performer: self.vmc.performer.clone(),
-        });
-        Ok(())
-    }
-
-    /// Stops the microphone (a recording in progress is dropped); the learned voice is kept
-    /// for the next start.
-    pub fn stop_voice(&mut self) {
-        if let Some(voice) = lock(&self.voice).take()
-            && let Some(model) = voice.model
-        {
-            self.voice_model = Some(model);
-        }
-    }
-
-    /// The microphone's state, while on.
-    #[must_use]
-    pub fn voice_view(&self) -> Option<VoiceView> {
-        lock(&self.voice).as_ref().map(Voice::view)
-    }
-
-    /// Holds the mouth back by `delay_ms` from now on.
-    ///
-    /// # Errors
-    /// [`ApiError::Live`] when the microphone is off; [`ApiError::Invalid`] out of range.
-    pub fn set_voice_delay(&mut self, delay_ms: u32) -> Result<(), ApiError> {
-        check_delay(delay_ms)?;
-        let mut slot = lock(&self.voice);
-        let voice = slot
-            .as_mut()
-            .ok_or(ApiError::Live("start the microphone first"))?;
-        voice.delay = delay_ms as f32 / 1000.0;
-        Ok(())
-    }
-
-    /// Listens to the next [`CALIBRATION_SECONDS`] as the passage read aloud.
-    ///
-    /// # Errors
-    /// [`ApiError::Live`] when the microphone is off or calibration is already under way.
-    pub fn calibrate_voice(&mut self) -> Result<(), ApiError> {
-        let mut slot = lock(&self.voice);
-        let voice = slot
-            .as_mut()
-            .ok_or(ApiError::Live("start the microphone first"))?;
-        if matches!(
-            voice.calibration,
-            Calibration::Listening { .. } | Calibration::Fitting
-        ) {
-            return Err(ApiError::Live("calibration is already under way"));
-        }
-        voice.calibration = Calibration::Listening { seconds: 0.0 };
-        voice.calibration_samples.clear();
-        Ok(())
-    }
-
-    /// Starts or stops recording the microphone; stopping makes the recording the take, with
-    /// its sound.
-    ///
-    /// # Errors
-    /// [`ApiError::Live`] when the microphone is off, not recording, or nothing was heard;
-    /// the take's or the scratch file's error.
-    pub fn record_voice(&mut self, character: &Character, on: bool) -> Result<(), ApiError> {
-        if !on {
-            // Before the recording is taken: a busy desk keeps it for the next try.
-            self.busy()?;
-        }
-        let recording = {
-            let mut slot = lock(&self.voice);
-            let voice = slot
-                .as_mut()
-                .ok_or(ApiError::Live("start the microphone first"))?;
-            if on {
-                voice.recording = Some((Vec::new(), Vec::new()));
-                return Ok(());
-            }
-            voice
-                .recording
-                .take()
-                .ok_or(ApiError::Live("not recording"))?
-        };
-        let (samples, frames) = recording;
-        if frames.is_empty() {
-            return Err(ApiError::Live("nothing was recorded (no sound arrived)"));
-        }
-        // Frames came every 10 ms: the take samples them at its own rate.
-        let per_frame = FRAME_RATE as f32 / RECORDED_FPS;
-        let count = ((frames.len() as f32 / per_frame).ceil() as usize).max(1);
-        let rows: Vec<Vec<f32>> = (0..count)
-            .map(|i| {
-                frames[((i as f32 * per_frame).round() as usize).min(frames.len() - 1)].clone()
-            })
-            .collect();
-        let dir = private_dir(&mut self.uploads, "faceanim-uploads-", "uploads")?;
-        let path = dir.join(format!("microphone-{}.wav", std::process::id()));
-        faceanim_files::write_atomic(
-            &path,
-            &faceanim_speech::audio::wav_bytes(&samples, RATE as u32, 1),
-        )
-        .map_err(ApiError::Disk)?;
-        let take =
-            faceanim_take::Take::from_weights(character, "microphone.wav", RECORDED_FPS, &rows)?;
-        self.take = Some(OpenTake {
-            sound: Some(Sound {
-                path,
-                mime: "audio/wav",
-            }),
-            ..OpenTake::new(take, Previews::new())
-        });
-        self.save_take();
-        Ok(())
-    }
-
-    /// The live microphone, to hear chunks without holding the desk.
-    #[must_use]
-    pub fn voice_handle(&self) -> VoiceHandle {
-        VoiceHandle {
-            voice: self.voice.clone(),
-        }
-    }
-}
-
+/// Checks a delay the page asks for.
 fn check_delay(delay_ms: u32) -> Result<(), ApiError> {
     if delay_ms > MAX_DELAY_MS {
         return Err(ApiError::Invalid(format!(
@@ -293,6 +233,11 @@ pub struct VoiceHandle {
 }
 
 impl VoiceHandle {
+    /// A handle on `voice`.
+    pub(super) fn new(voice: SharedVoice) -> VoiceHandle {
+        VoiceHandle { voice }
+    }
+
     /// Hears one chunk of the microphone (16 kHz mono samples) and returns the mouth now.
     #[must_use]
     pub fn hear(&self, samples: &[i16]) -> VoiceResult {

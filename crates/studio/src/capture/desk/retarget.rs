@@ -8,9 +8,12 @@ use std::sync::Arc;
 use faceanim_retarget::RetargetMap;
 use faceanim_rig::Character;
 
-use super::jobs::spawn_job;
-use super::{CaptureDesk, Job, JobKind, SharedDesk, face_models, lock};
+use super::{CaptureDesk, SharedDesk};
+use crate::capture::job::{Job, spawn_job};
+use crate::capture::models::face_models;
 use crate::error::ApiError;
+use crate::lock;
+use crate::views::JobKind;
 use crate::views::{RetargetRowView, RetargetView};
 
 impl CaptureDesk {
@@ -21,7 +24,7 @@ impl CaptureDesk {
         if !self.map_path.exists() {
             return;
         }
-        let names = super::names(character);
+        let names = crate::views::names(character);
         let loaded = faceanim_files::read_bytes(&self.map_path)
             .map_err(|e| e.to_string())
             .and_then(|bytes| RetargetMap::from_json(&bytes, &names).map_err(|e| e.to_string()));
@@ -191,7 +194,7 @@ fn make(
         true,
         faceanim_adapt::Control {
             progress: &progress,
-            cancel: &job.cancel,
+            cancel: job.cancel_flag(),
         },
     )?;
     faceanim_files::write_atomic(&path, map.to_json().as_bytes())?;

@@ -5,18 +5,25 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use faceanim_adapt::{
-    Adapter, Control, Dataset, DatasetOptions, FaceCamera, Fingerprint, Fit, TrainOptions,
+    Adapter, Dataset, DatasetOptions, FaceCamera, Fingerprint, Fit, TrainOptions,
 };
 use faceanim_media::FrameSource;
 use faceanim_rig::Character;
 use faceanim_take::Footage;
 use faceanim_track::{Tracker, TrackingMode};
 
-use super::{
-    CaptureDesk, FINETUNE_ANCHOR_SAMPLES, Job, JobKind, PREVIEW_HEIGHT, Previews, STILL_FRAMES,
-    SharedDesk, face_models, face_workers, lock, private_dir,
-};
+use super::SharedDesk;
+use crate::capture::job::{Job, spawn_job, with_control};
+use crate::capture::models::{face_models, face_workers};
+use crate::capture::open_take::{PREVIEW_HEIGHT, Previews};
 use crate::error::ApiError;
+use crate::lock;
+use crate::views::JobKind;
+
+/// Frames a photo's 0 → peak → 0 animation lasts.
+const STILL_FRAMES: usize = 30;
+/// Fine-tuning needs the training set as an anchor; without a cached one it renders this many.
+const FINETUNE_ANCHOR_SAMPLES: usize = 2_000;
 
 /// Starts reading `path` (a video, an image or a folder of images) in the background.
 ///
@@ -118,61 +125,6 @@ fn read_input(job: &Job, path: &Path, shown_name: &str) -> Result<(Footage, Prev
 /// Messages about an uploaded file name the file the user picked, not its temporary copy.
 fn rename(message: &str, path: &Path, shown: &str) -> String {
     message.replace(&path.display().to_string(), shown)
-}
-
-impl CaptureDesk {
-    /// Saves an uploaded input (or one photo of a sequence sent as `batch`) to a private
-    /// folder and returns its path. Each upload gets a folder of its own (a sequence's photos
-    /// share their batch's), so that two uploads of the same name at once never share a file.
-    ///
-    /// # Errors
-    /// [`ApiError::Invalid`] for a bad batch name, or the file error.
-    pub fn store_upload(
-        &mut self,
-        name: &str,
-        bytes: &[u8],
-        batch: Option<&str>,
-    ) -> Result<PathBuf, ApiError> {
-        let root = private_dir(&mut self.uploads, "faceanim-capture-", "uploads")?.to_owned();
-        // Photos sent together are one sequence: a folder of their own, read in name order.
-        let dir = match batch {
-            Some(batch) => {
-                if batch.is_empty()
-                    || batch.len() > 64
-                    || !batch.chars().all(|c| c.is_ascii_alphanumeric())
-                {
-                    return Err(ApiError::Invalid(format!(
-                        "batch: '{}' must be 1 to 64 letters and digits",
-                        faceanim_rig::excerpt(batch)
-                    )));
-                }
-                root.join(format!("batch-{batch}"))
-            }
-            None => {
-                self.uploads_stored += 1;
-                root.join(format!("upload-{}", self.uploads_stored))
-            }
-        };
-        std::fs::create_dir_all(&dir).map_err(|source| ApiError::Scratch {
-            what: dir.display().to_string(),
-            source,
-        })?;
-        // Keep only a safe file name (its extension tells images from videos).
-        let clean: String = name
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || c == '.' || c == '-' || c == '_' {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect();
-        let clean = clean.trim_start_matches('.');
-        let path = dir.join(if clean.is_empty() { "input" } else { clean });
-        faceanim_files::write_atomic(&path, bytes)?;
-        Ok(path)
-    }
 }
 
 /// Starts rendering a training set of `samples` expressions (or reusing the cached one) and
@@ -288,36 +240,6 @@ pub fn start_finetune(desk: &SharedDesk, character: Arc<Character>) -> Result<()
         ))
     });
     Ok(())
-}
-
-/// Runs `work` on its own thread and ends `job` with its outcome. A panic (a bug) ends the job
-/// with an error instead of leaving the studio busy for ever.
-pub(super) fn spawn_job(
-    job: Arc<Job>,
-    work: impl FnOnce(&Job) -> Result<String, ApiError> + Send + 'static,
-) {
-    std::thread::spawn(move || {
-        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&job)))
-            .unwrap_or_else(|_| {
-                Err(ApiError::Internal(
-                    "stopped by an internal error (a bug; the studio's log says where)".into(),
-                ))
-            });
-        job.finish(outcome);
-    });
-}
-
-/// Runs `work` with the job's progress and cancel flag.
-fn with_control<T>(
-    job: &Job,
-    work: impl FnOnce(Control<'_>) -> Result<T, faceanim_adapt::AdaptError>,
-) -> Result<T, ApiError> {
-    // The work knows its length best (training: every network's epochs at most).
-    let progress = |done: usize, total: usize| job.progress_of(done, total);
-    Ok(work(Control {
-        progress: &progress,
-        cancel: &job.cancel,
-    })?)
 }
 
 /// The training set: the cached one when it fits (exactly `options` when `exact`, else any
