@@ -13,7 +13,7 @@ mod support;
 
 use std::path::Path;
 
-use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir};
+use support::{assert_valid_gltf, column, faceanim, faceanim_ok, output_dir};
 
 fn ict() -> String {
     faceanim_testdata::shared("characters/ict-face.glb")
@@ -40,17 +40,6 @@ fn read_json(path: &Path) -> serde_json::Value {
 /// `faceanim session SESSION show --json`.
 fn show(session: &str) -> serde_json::Value {
     serde_json::from_str(faceanim_ok(&["session", session, "show", "--json"]).trim()).unwrap()
-}
-
-fn column(clip: &serde_json::Value, name: &str) -> Vec<f64> {
-    let names = clip["blendshapes"].as_array().unwrap();
-    let k = names.iter().position(|n| n == name).unwrap();
-    clip["frames"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|row| row[k].as_f64().unwrap())
-        .collect()
 }
 
 #[test]
@@ -154,6 +143,9 @@ fn adapt_then_track_correct_and_fine_tune() {
 
     // The session: frame 7 is a keyframe (asked for), and so are 0, 5, 10, 15, 20 and 23.
     let session_arg = session.to_str().unwrap();
+    // `faceanim session SESSION ARGS…`.
+    let edit = |args: &[&str]| faceanim(&[&["session", session_arg][..], args].concat());
+    let edit_ok = |args: &[&str]| faceanim_ok(&[&["session", session_arg][..], args].concat());
     let shown = show(session_arg);
     let keys: Vec<u64> = shown["keyframes"]
         .as_array()
@@ -169,14 +161,7 @@ fn adapt_then_track_correct_and_fine_tune() {
     );
     // Saying the open-mouthed frame 11 is neutral reads every other frame against it: frame
     // 11 itself becomes rest. `auto` goes back to each part's calmest frame: the mouth's is a shut one.
-    faceanim_ok(&[
-        "session",
-        session_arg,
-        "neutral",
-        "11",
-        "--adapter",
-        adapter_arg,
-    ]);
+    edit_ok(&["neutral", "11", "--adapter", adapter_arg]);
     let shown = show(session_arg);
     assert_eq!(
         shown["neutral"],
@@ -184,35 +169,15 @@ fn adapt_then_track_correct_and_fine_tune() {
             "parts": {"lids": 11, "gaze": 11, "brows": 11, "mouth": 11}})
     );
     let against_open = dir.path().join("against-open.json");
-    faceanim_ok(&[
-        "session",
-        session_arg,
-        "export",
-        "-o",
-        against_open.to_str().unwrap(),
-    ]);
+    edit_ok(&["export", "-o", against_open.to_str().unwrap()]);
     let against_open = column(&read_json(&against_open), "jawOpen");
     assert!(against_open[11] < 0.2, "{against_open:?}");
-    faceanim_ok(&[
-        "session",
-        session_arg,
-        "neutral",
-        "auto",
-        "--adapter",
-        adapter_arg,
-    ]);
+    edit_ok(&["neutral", "auto", "--adapter", adapter_arg]);
     let shown = show(session_arg);
     assert_eq!(shown["neutral"]["chosen"], "automatic", "{shown}");
     let auto_frame = shown["neutral"]["frame"].as_u64().unwrap() as usize;
     assert!(jaw_curve(auto_frame) < 0.1, "{shown}");
-    let refused = faceanim(&[
-        "session",
-        session_arg,
-        "neutral",
-        "99",
-        "--adapter",
-        adapter_arg,
-    ]);
+    let refused = edit(&["neutral", "99", "--adapter", adapter_arg]);
     assert!(!refused.status.success());
     assert!(
         String::from_utf8_lossy(&refused.stderr).contains("frame 99 is past the end"),
@@ -223,9 +188,7 @@ fn adapt_then_track_correct_and_fine_tune() {
     // Correct jawOpen on frame 20, apply the preference: every other frame shifts by the same
     // amount (clamped to 0..1), and the corrected frame holds the value set.
     let before = dir.path().join("before.json");
-    faceanim_ok(&[
-        "session",
-        session.to_str().unwrap(),
+    edit_ok(&[
         "export",
         "-o",
         before.to_str().unwrap(),
@@ -233,22 +196,10 @@ fn adapt_then_track_correct_and_fine_tune() {
         &ict(),
     ]);
     let before_jaw = column(&read_json(&before), "jawOpen");
-    faceanim_ok(&[
-        "session",
-        session.to_str().unwrap(),
-        "correct",
-        "20",
-        "jawOpen=0.6",
-    ]);
-    faceanim_ok(&["session", session.to_str().unwrap(), "apply-preference"]);
+    edit_ok(&["correct", "20", "jawOpen=0.6"]);
+    edit_ok(&["apply-preference"]);
     let after = out.join("preferred.json");
-    faceanim_ok(&[
-        "session",
-        session.to_str().unwrap(),
-        "export",
-        "-o",
-        after.to_str().unwrap(),
-    ]);
+    edit_ok(&["export", "-o", after.to_str().unwrap()]);
     let after_jaw = column(&read_json(&after), "jawOpen");
     assert!((after_jaw[20] - 0.6).abs() < 1e-6);
     let shift = 0.6 - before_jaw[20];
@@ -263,35 +214,17 @@ fn adapt_then_track_correct_and_fine_tune() {
         );
     }
     // Clearing the preference restores every frame but the corrected one.
-    faceanim_ok(&["session", session.to_str().unwrap(), "clear-preference"]);
+    edit_ok(&["clear-preference"]);
     let cleared = dir.path().join("cleared.json");
-    faceanim_ok(&[
-        "session",
-        session.to_str().unwrap(),
-        "export",
-        "-o",
-        cleared.to_str().unwrap(),
-    ]);
+    edit_ok(&["export", "-o", cleared.to_str().unwrap()]);
     let cleared_jaw = column(&read_json(&cleared), "jawOpen");
     assert!((cleared_jaw[5] - before_jaw[5]).abs() < 1e-6);
 
     // Bad edits name the problem.
-    let bad = faceanim(&[
-        "session",
-        session.to_str().unwrap(),
-        "correct",
-        "99",
-        "jawOpen=0.5",
-    ]);
+    let bad = edit(&["correct", "99", "jawOpen=0.5"]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("frame 99 is past the end"));
-    let bad = faceanim(&[
-        "session",
-        session.to_str().unwrap(),
-        "correct",
-        "2",
-        "noSuchShape=0.5",
-    ]);
+    let bad = edit(&["correct", "2", "noSuchShape=0.5"]);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("noSuchShape"));
 
     // Offline fine-tuning from the session's corrections.
@@ -323,13 +256,7 @@ fn adapt_then_track_correct_and_fine_tune() {
         result["mae_test"].as_f64().unwrap() <= 1.1 * result["mae_test_before"].as_f64().unwrap(),
         "{result}"
     );
-    faceanim_ok(&[
-        "session",
-        session.to_str().unwrap(),
-        "reestimate",
-        "--adapter",
-        tuned.to_str().unwrap(),
-    ]);
+    edit_ok(&["reestimate", "--adapter", tuned.to_str().unwrap()]);
 
     // A photo becomes 0 → peak → 0.
     let photo = faceanim_testdata::shared("images/ict-face-jawopen.png");

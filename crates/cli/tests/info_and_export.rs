@@ -16,7 +16,9 @@ use std::fmt::Write as _;
 
 use faceanim_testdata::shared;
 use serde_json::Value;
-use support::{assert_valid_gltf, blender_report, faceanim, faceanim_ok, output_dir};
+use support::{
+    assert_refused, assert_valid_gltf, blender_report, faceanim, faceanim_ok, output_dir,
+};
 
 #[test]
 fn info_json_on_the_ict_head() {
@@ -76,14 +78,7 @@ fn bad_files_fail_with_the_file_and_the_problem() {
         let path = dir.join(name);
         std::fs::write(&path, bytes).unwrap();
         let out = faceanim(&["info", path.to_str().unwrap()]);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
-        assert!(
-            stderr.starts_with(&format!("error: {}: ", path.display())),
-            "{name}: {stderr}"
-        );
-        assert!(stderr.contains(problem), "{name}: {stderr}");
-        assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+        assert_refused(&out, &path, problem, name);
     }
     let missing = faceanim(&["info", "/no/such/head.glb"]);
     assert_eq!(

@@ -27,8 +27,8 @@ use faceanim_testdata::producers::{BLENDER_AVATAR_EXPRESSIONS, blender_avatar, w
 use faceanim_testdata::{gltf_transform, gltfpack};
 use serde_json::Value;
 use support::{
-    assert_valid_gltf, blender_report, export_with_clip, faceanim_ok, output_dir, request,
-    request_bytes, start_on, stroke_along, threejs_render, track_clip,
+    assert_avatar_drawn, assert_valid_gltf, blender_report, export_with_clip, faceanim_ok,
+    output_dir, request, request_bytes, start_on, stroke_along, threejs_render, track_clip,
 };
 
 /// The Blender avatar's shape keys.
@@ -233,18 +233,7 @@ fn exports_of_blender_avatars_keep_the_file_and_open_everywhere() {
 
     // three.js in Chromium: every primitive skinned, both rigs' bones, the face moving.
     for out in [&outputs[0], &outputs[1], &outputs[4]] {
-        let report = threejs_render(out, "2.4");
-        assert!(report["skinnedMeshes"].as_u64().unwrap() >= 19, "{report}");
-        assert_eq!(report["bones"], 10, "{report}");
-        assert!(report["maxInfluence"].as_f64().unwrap() > 0.5, "{report}");
-        assert!(
-            report["texturedMaterials"].as_u64().unwrap() >= 1,
-            "{report}"
-        );
-        assert!(
-            report["pixels"]["nonBackground"].as_u64().unwrap() > 5_000,
-            "{report}"
-        );
+        assert_avatar_drawn(&threejs_render(out, "2.4"), 19, 10, 5_000);
     }
 }
 

@@ -751,6 +751,33 @@ fn a_photos_ramp_is_shown_and_set_before_export() {
 
 /// VMC out from playback: the page plays the sketch and the studio sends each shown frame to the
 /// marionette (an independent python-osc receiver).
+/// A stroke of `steps` straight steps over `seconds`, from the anchor of `name` (the vertex its
+/// blendshape moves most, in `/api/character/anchors`) to where the blendshape takes it.
+fn straight_stroke(
+    anchors: &serde_json::Value,
+    name: &str,
+    steps: usize,
+    seconds: f64,
+) -> Vec<serde_json::Value> {
+    let anchor = anchors
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|a| a["name"] == name)
+        .unwrap_or_else(|| panic!("no anchor for {name}: {anchors}"));
+    let point = |c: usize, i: usize| {
+        let rest = anchor["rest"][c].as_f64().unwrap();
+        let target = anchor["target"][c].as_f64().unwrap();
+        rest + (target - rest) * i as f64 / steps as f64
+    };
+    (0..=steps)
+        .map(|i| {
+            let t = i as f64 * seconds / steps as f64;
+            serde_json::json!({ "t": t, "p": [point(0, i), point(1, i), point(2, i)] })
+        })
+        .collect()
+}
+
 #[test]
 fn the_page_plays_its_animation_out_over_vmc() {
     let dir = tempfile::tempdir().unwrap();
@@ -765,22 +792,7 @@ fn the_page_plays_its_animation_out_over_vmc() {
     // A jawOpen stroke of the built-in head, from the vertex it moves most to its target.
     let (_, body) = request(studio.port, "GET", "/api/character/anchors", &[], b"");
     let anchors: serde_json::Value = serde_json::from_str(&body).unwrap();
-    let jaw = anchors
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|a| a["name"] == "jawOpen")
-        .unwrap();
-    let point = |k: usize, i: usize| {
-        let (rest, target) = (
-            jaw["rest"][k].as_f64().unwrap(),
-            jaw["target"][k].as_f64().unwrap(),
-        );
-        rest + (target - rest) * i as f64 / 10.0
-    };
-    let samples: Vec<serde_json::Value> = (0..=10)
-        .map(|i| serde_json::json!({ "t": i as f64 * 0.1, "p": [point(0, i), point(1, i), point(2, i)] }))
-        .collect();
+    let samples = straight_stroke(&anchors, "jawOpen", 10, 1.0);
     let stroke = serde_json::json!({ "samples": samples }).to_string();
     let json = [("Content-Type", "application/json")];
     let (status, body) = request(
@@ -838,22 +850,7 @@ fn a_full_body_avatar_in_the_studio_api() {
         .iter()
         .enumerate()
     {
-        let anchor = anchors
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|a| a["name"] == *name)
-            .unwrap();
-        let point = |c: usize, i: usize| {
-            let (rest, target) = (
-                anchor["rest"][c].as_f64().unwrap(),
-                anchor["target"][c].as_f64().unwrap(),
-            );
-            rest + (target - rest) * i as f64 / 20.0
-        };
-        let samples: Vec<serde_json::Value> = (0..=20)
-            .map(|i| serde_json::json!({ "t": i as f64 * 0.025, "p": [point(0, i), point(1, i), point(2, i)] }))
-            .collect();
+        let samples = straight_stroke(&anchors, name, 20, 0.5);
         let stroke = serde_json::json!({ "samples": samples, "start_frame": 40 * k }).to_string();
         let (status, body) = request(port, "POST", "/api/strokes", &json, stroke.as_bytes());
         assert_eq!(status, 200, "{name}: {body}");

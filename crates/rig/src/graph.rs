@@ -70,21 +70,13 @@ impl EdgeGraph {
     /// Vertices sharing an edge with `vertex` (including coincident seam vertices).
     #[must_use]
     pub fn neighbours(&self, vertex: u32) -> &[u32] {
-        let v = vertex as usize;
-        match (self.neighbour_start.get(v), self.neighbour_start.get(v + 1)) {
-            (Some(&s), Some(&e)) => &self.neighbours[s as usize..e as usize],
-            _ => &[],
-        }
+        row(&self.neighbour_start, &self.neighbours, vertex)
     }
 
     /// Triangles that use `vertex`.
     #[must_use]
     pub fn triangles_of(&self, vertex: u32) -> &[u32] {
-        let v = vertex as usize;
-        match (self.triangle_start.get(v), self.triangle_start.get(v + 1)) {
-            (Some(&s), Some(&e)) => &self.triangles[s as usize..e as usize],
-            _ => &[],
-        }
+        row(&self.triangle_start, &self.triangles, vertex)
     }
 
     /// The representative (smallest index) of the vertices at `vertex`'s exact position.
@@ -126,6 +118,16 @@ fn compress(rows: usize, sorted: impl Iterator<Item = (u32, u32)>) -> (Vec<u32>,
         start[i + 1] += start[i];
     }
     (start, values)
+}
+
+/// Row `vertex` of a compressed table: `items[starts[vertex]..starts[vertex + 1]]` (empty for
+/// a vertex past the end).
+fn row<'a>(starts: &[u32], items: &'a [u32], vertex: u32) -> &'a [u32] {
+    let v = vertex as usize;
+    match (starts.get(v), starts.get(v + 1)) {
+        (Some(&s), Some(&e)) => &items[s as usize..e as usize],
+        _ => &[],
+    }
 }
 
 #[cfg(test)]

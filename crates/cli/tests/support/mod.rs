@@ -169,6 +169,35 @@ pub fn faceanim_ok(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
+/// The values of channel `name` in every frame of clip JSON `clip`.
+pub fn column(clip: &serde_json::Value, name: &str) -> Vec<f64> {
+    let names = clip["blendshapes"].as_array().unwrap();
+    let k = names
+        .iter()
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("no channel {name} in {names:?}"));
+    clip["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| row[k].as_f64().unwrap())
+        .collect()
+}
+
+/// Checks that a command refused the file at `path` as a user should see it: exit code 1, an
+/// error starting with the file's path and saying `problem`, and no panic. `case` names the
+/// case in the failure.
+pub fn assert_refused(out: &Output, path: &Path, problem: &str, case: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{case}: {stderr}");
+    assert!(
+        stderr.starts_with(&format!("error: {}: ", path.display())),
+        "{case}: {stderr}"
+    );
+    assert!(stderr.contains(problem), "{case}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{case}: {stderr}");
+}
+
 /// `faceanim export CHARACTER -o OUT --clip CLIP`, which must succeed.
 pub fn export_with_clip(character: &Path, out: &Path, clip: &Path) {
     faceanim_ok(&[
@@ -213,6 +242,26 @@ pub fn threejs_render(file: &Path, time: &str) -> serde_json::Value {
     let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     assert!(report.get("pageErrors").is_none(), "{report}");
     report
+}
+
+/// Checks a [`threejs_render`] report of a full-body avatar: at least `skinned` skinned meshes,
+/// exactly `bones` bones, a texture, the face moving (some morph influence above 0.5) and
+/// at least `pixels` pixels drawn.
+pub fn assert_avatar_drawn(report: &serde_json::Value, skinned: u64, bones: u64, pixels: u64) {
+    assert!(
+        report["skinnedMeshes"].as_u64().unwrap() >= skinned,
+        "{report}"
+    );
+    assert_eq!(report["bones"], bones, "{report}");
+    assert!(
+        report["texturedMaterials"].as_u64().unwrap() >= 1,
+        "{report}"
+    );
+    assert!(report["maxInfluence"].as_f64().unwrap() > 0.5, "{report}");
+    assert!(
+        report["pixels"]["nonBackground"].as_u64().unwrap() > pixels,
+        "{report}"
+    );
 }
 
 /// Runs the Khronos glTF-Validator (npm `gltf-validator`, installed by scripts/setup.sh) and

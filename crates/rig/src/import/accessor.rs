@@ -178,23 +178,16 @@ pub(crate) fn read_floats(
             gltf::accessor::sparse::IndexType::U32 => DataType::U32,
         };
         let isize = component_size(index_type);
-        let (index_bytes, _) = view_slice(
-            buffers,
-            &sparse.indices().view(),
-            sparse.indices().offset(),
-            n,
-            isize,
-        )
-        .map_err(|p| fail(format!("sparse indices: {p}")))?;
         // Sparse data is tightly packed regardless of any byteStride on the view.
-        let (value_bytes, _) = view_slice(
-            buffers,
-            &sparse.values().view(),
-            sparse.values().offset(),
-            n,
-            element_size,
-        )
-        .map_err(|p| fail(format!("sparse values: {p}")))?;
+        let packed = |what: &str, view: &gltf::buffer::View<'_>, offset: usize, size: usize| {
+            view_slice(buffers, view, offset, n, size)
+                .map(|(bytes, _)| bytes)
+                .map_err(|p| fail(format!("sparse {what}: {p}")))
+        };
+        let indices = sparse.indices();
+        let values = sparse.values();
+        let index_bytes = packed("indices", &indices.view(), indices.offset(), isize)?;
+        let value_bytes = packed("values", &values.view(), values.offset(), element_size)?;
         if index_bytes.len() < n * isize || value_bytes.len() < n * element_size {
             return Err(fail("sparse data is shorter than its count".into()));
         }

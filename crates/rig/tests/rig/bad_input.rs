@@ -6,7 +6,7 @@
 use crate::support::{GltfBuilder, tiny_face, tiny_face_gltf};
 use faceanim_rig::import::{NoExternalResources, import_gltf};
 use faceanim_testdata::ict_bytes;
-use serde_json::json;
+use serde_json::{Value, json};
 
 fn error_of(name: &str, bytes: &[u8]) -> String {
     // Only small cases go into the corpus; the truncated 17 MB head stays out of git.
@@ -26,6 +26,14 @@ fn tiny(edit: impl FnOnce(&mut serde_json::Value, &mut GltfBuilder)) -> Vec<u8> 
     let mut root = tiny_face_gltf(&mut b, &tiny_face(), false);
     edit(&mut root, &mut b);
     b.glb(root)
+}
+
+/// Gives the first primitive a material whose base colour is the texture of `image`.
+fn textured(root: &mut Value, image: Value) {
+    root["images"] = json!([image]);
+    root["textures"] = json!([{"source": 0}]);
+    root["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    root["meshes"][0]["primitives"][0]["material"] = json!(0);
 }
 
 #[test]
@@ -188,10 +196,7 @@ fn schema_errors_and_cycles() {
     // An embedded image without its mimeType (gltf's own accessor would panic on it).
     let bytes = tiny(|root, b| {
         let view = b.view(&[0x89, b'P', b'N', b'G']);
-        root["images"] = json!([{"bufferView": view}]);
-        root["textures"] = json!([{"source": 0}]);
-        root["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
-        root["meshes"][0]["primitives"][0]["material"] = json!(0);
+        textured(root, json!({"bufferView": view}));
     });
     assert_eq!(
         error_of("no-mime.glb", &bytes),
@@ -199,10 +204,7 @@ fn schema_errors_and_cycles() {
     );
     // An image with neither a uri nor a buffer view (gltf's accessor would panic on it too).
     let bytes = tiny(|root, _| {
-        root["images"] = json!([{"mimeType": "image/png"}]);
-        root["textures"] = json!([{"source": 0}]);
-        root["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
-        root["meshes"][0]["primitives"][0]["material"] = json!(0);
+        textured(root, json!({"mimeType": "image/png"}));
     });
     assert_eq!(
         error_of("no-source.glb", &bytes),

@@ -55,6 +55,17 @@ fn the_seed_corpus_imports_without_panicking() {
     );
 }
 
+/// Item `which` (modulo their count) of the top-level array `array`, if it has any.
+fn item<'a>(
+    root: &'a mut serde_json::Value,
+    array: &str,
+    which: usize,
+) -> Option<&'a mut serde_json::Value> {
+    let items = root[array].as_array_mut()?;
+    let n = items.len();
+    items.get_mut(which % n.max(1))
+}
+
 /// A small full-body avatar around the tiny face: skinned, textured, the face split into
 /// meshes sharing target names, sparse targets, with a VRM 0.x or 1.0 extension or none,
 /// optionally meshopt-compressed and quantized by gltfpack (made once per kind).
@@ -89,6 +100,41 @@ fn the_avatars_import_before_mutation() {
 
 const HOSTILE: [i64; 10] = [0, 1, 3, 4, 5121, 5126, -1, 65_535, 4_294_967_295, 1 << 40];
 
+/// Where the avatar fuzzing writes hostile values: (top-level array, JSON pointer in an item).
+const AVATAR_FIELDS: [(&str, &str); 10] = [
+    ("bufferViews", "/extensions/EXT_meshopt_compression/count"),
+    (
+        "bufferViews",
+        "/extensions/EXT_meshopt_compression/byteStride",
+    ),
+    (
+        "bufferViews",
+        "/extensions/EXT_meshopt_compression/byteLength",
+    ),
+    (
+        "bufferViews",
+        "/extensions/EXT_meshopt_compression/byteOffset",
+    ),
+    ("bufferViews", "/extensions/EXT_meshopt_compression/buffer"),
+    ("skins", "/joints/0"),
+    ("skins", "/inverseBindMatrices"),
+    ("nodes", "/skin"),
+    ("accessors", "/count"),
+    ("meshes", "/primitives/0/targets/0/POSITION"),
+];
+
+/// Where the glTF fuzzing writes hostile values: (top-level array, key of an item).
+const GLTF_FIELDS: [(&str, &str); 8] = [
+    ("accessors", "count"),
+    ("accessors", "byteOffset"),
+    ("accessors", "bufferView"),
+    ("accessors", "componentType"),
+    ("bufferViews", "byteOffset"),
+    ("bufferViews", "byteLength"),
+    ("bufferViews", "byteStride"),
+    ("buffers", "byteLength"),
+];
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
 
@@ -115,29 +161,14 @@ proptest! {
     #[test]
     fn avatar_hostile_fields(
         kind in 0u8..3,
-        edits in prop::collection::vec((0usize..10, 0usize..64, prop::sample::select(&HOSTILE[..])), 1..4),
+        edits in prop::collection::vec((0..AVATAR_FIELDS.len(), 0usize..64, prop::sample::select(&HOSTILE[..])), 1..4),
     ) {
         let (mut root, bin) = faceanim_testdata::glb::parts(avatar(kind));
         for (field, which, value) in edits {
-            let (array, pointer) = match field {
-                0 => ("bufferViews", "/extensions/EXT_meshopt_compression/count"),
-                1 => ("bufferViews", "/extensions/EXT_meshopt_compression/byteStride"),
-                2 => ("bufferViews", "/extensions/EXT_meshopt_compression/byteLength"),
-                3 => ("bufferViews", "/extensions/EXT_meshopt_compression/byteOffset"),
-                4 => ("bufferViews", "/extensions/EXT_meshopt_compression/buffer"),
-                5 => ("skins", "/joints/0"),
-                6 => ("skins", "/inverseBindMatrices"),
-                7 => ("nodes", "/skin"),
-                8 => ("accessors", "/count"),
-                _ => ("meshes", "/primitives/0/targets/0/POSITION"),
-            };
-            if let Some(items) = root[array].as_array_mut()
-                && !items.is_empty() {
-                    let n = items.len();
-                    if let Some(slot) = items[which % n].pointer_mut(pointer) {
-                        *slot = json!(value);
-                    }
-                }
+            let (array, pointer) = AVATAR_FIELDS[field];
+            if let Some(slot) = item(&mut root, array, which).and_then(|it| it.pointer_mut(pointer)) {
+                *slot = json!(value);
+            }
             // The VRM extensions' bindings too.
             if let Some(bind) = root.pointer_mut("/extensions/VRM/blendShapeMaster/blendShapeGroups/0/binds/0/index") {
                 *bind = json!(value);
@@ -158,25 +189,14 @@ proptest! {
     #[test]
     fn hostile_json_fields(
         sparse: bool,
-        edits in prop::collection::vec((0usize..8, 0usize..12, prop::sample::select(&HOSTILE[..])), 1..4),
+        edits in prop::collection::vec((0..GLTF_FIELDS.len(), 0usize..12, prop::sample::select(&HOSTILE[..])), 1..4),
     ) {
         let mut root = valid_json(sparse);
         for (field, which, value) in edits {
-            let (array, key) = match field {
-                0 => ("accessors", "count"),
-                1 => ("accessors", "byteOffset"),
-                2 => ("accessors", "bufferView"),
-                3 => ("accessors", "componentType"),
-                4 => ("bufferViews", "byteOffset"),
-                5 => ("bufferViews", "byteLength"),
-                6 => ("bufferViews", "byteStride"),
-                _ => ("buffers", "byteLength"),
-            };
-            if let Some(items) = root[array].as_array_mut()
-                && !items.is_empty() {
-                    let n = items.len();
-                    items[which % n][key] = json!(value);
-                }
+            let (array, key) = GLTF_FIELDS[field];
+            if let Some(it) = item(&mut root, array, which) {
+                it[key] = json!(value);
+            }
             // Sparse blocks are a favourite place for lies too.
             if field == 7
                 && let Some(acc) = root["accessors"].as_array_mut().and_then(|a| a.iter_mut().find(|a| a.get("sparse").is_some())) {

@@ -33,12 +33,17 @@ fn animation(shapes: usize, frames: usize, drive: &[usize]) -> MorphAnimation {
     }
 }
 
+/// The character of the glTF `bytes`, read as a file called `name`.
+fn read(bytes: &[u8], name: &str) -> faceanim_rig::Character {
+    import_gltf(bytes, name, &NoExternalResources)
+        .unwrap()
+        .character
+}
+
 #[test]
 fn the_users_avatar_comes_back_whole_with_the_animation() {
     let input = full_body_glb(ict(), VrmKind::None, &[]);
-    let c = import_gltf(&input, "avatar.glb", &NoExternalResources)
-        .unwrap()
-        .character;
+    let c = read(&input, "avatar.glb");
     let jaw = c.find_blendshape("jawOpen").unwrap().index();
     let out = export_into_source(&c, &[animation(c.blendshapes().len(), 300, &[jaw])]).unwrap();
     let (before, after) = (json(&input), json(&out));
@@ -59,9 +64,7 @@ fn the_users_avatar_comes_back_whole_with_the_animation() {
     let node = &after["nodes"][head["target"]["node"].as_u64().unwrap() as usize];
     assert_eq!(node["name"], "Head", "the head bone turns");
     // Read back: the same character, blendshapes and all.
-    let back = import_gltf(&out, "back.glb", &NoExternalResources)
-        .unwrap()
-        .character;
+    let back = read(&out, "back.glb");
     assert_eq!(back.vertex_count(), c.vertex_count());
     assert_eq!(back.blendshapes().len(), c.blendshapes().len());
 }
@@ -69,9 +72,7 @@ fn the_users_avatar_comes_back_whole_with_the_animation() {
 #[test]
 fn a_baked_corrective_target_lands_on_the_meshes_it_moves() {
     let input = full_body_glb(ict(), VrmKind::None, &[]);
-    let c = import_gltf(&input, "avatar.glb", &NoExternalResources)
-        .unwrap()
-        .character;
+    let c = read(&input, "avatar.glb");
     // A corrective moving the lip-corner region a little, as an exaggeration bakes.
     let smile = c
         .blendshape(c.find_blendshape("mouthSmile_L").unwrap())
@@ -100,9 +101,7 @@ fn a_baked_corrective_target_lands_on_the_meshes_it_moves() {
         n
     );
     // Read back, the corrective moves the same vertices by the same amounts in character space.
-    let back = import_gltf(&out, "back.glb", &NoExternalResources)
-        .unwrap()
-        .character;
+    let back = read(&out, "back.glb");
     let id = back
         .find_blendshape("faceanim_arc_0")
         .expect("the corrective is a target");
@@ -126,18 +125,14 @@ fn a_vrm_stays_a_vrm_and_its_expressions_drive_their_bindings() {
     }];
     for kind in [VrmKind::V0, VrmKind::V1] {
         let input = full_body_glb(ict(), kind, &expressions);
-        let c = import_gltf(&input, "avatar.vrm", &NoExternalResources)
-            .unwrap()
-            .character;
+        let c = read(&input, "avatar.vrm");
         let blink = c.find_blendshape("blink").unwrap().index();
         let out =
             export_into_source(&c, &[animation(c.blendshapes().len(), 31, &[blink])]).unwrap();
         let after = json(&out);
         assert_kept(&json(&input), &after, "the export");
         // The last key of the head's channel has eyeBlink_L and eyeBlink_R at 1, nothing else.
-        let back = import_gltf(&out, "back.vrm", &NoExternalResources)
-            .unwrap()
-            .character;
+        let back = read(&out, "back.vrm");
         assert!(back.find_blendshape("blink").is_some(), "{kind:?}");
         let head_node = after["nodes"]
             .as_array()
@@ -166,9 +161,7 @@ fn a_vrm_stays_a_vrm_and_its_expressions_drive_their_bindings() {
 #[test]
 fn a_meshopt_avatar_is_written_decompressed() {
     let input = gltfpack(&full_body_glb(ict(), VrmKind::None, &[]), &["-cc", "-kn"]);
-    let c = import_gltf(&input, "avatar-meshopt.glb", &NoExternalResources)
-        .unwrap()
-        .character;
+    let c = read(&input, "avatar-meshopt.glb");
     let out = export_into_source(&c, &[animation(c.blendshapes().len(), 30, &[0])]).unwrap();
     let (before, after) = (json(&input), json(&out));
     assert_kept(&before, &after, "the export");
@@ -178,8 +171,6 @@ fn a_meshopt_avatar_is_written_decompressed() {
         used.contains("KHR_mesh_quantization"),
         "still quantized: {used}"
     );
-    let back = import_gltf(&out, "back.glb", &NoExternalResources)
-        .unwrap()
-        .character;
+    let back = read(&out, "back.glb");
     assert_eq!(back.vertex_count(), c.vertex_count());
 }
