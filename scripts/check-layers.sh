@@ -20,7 +20,7 @@ cd "$(dirname "$0")/.."
 core=(faceanim-rig faceanim-anim faceanim-sketch faceanim-head faceanim-retarget faceanim-malloc)
 middle=(faceanim-track faceanim-media faceanim-render faceanim-capture faceanim-take
   faceanim-export faceanim-live faceanim-fit faceanim-files)
-speech=(faceanim-sphinx-sys faceanim-speech)
+speech=(faceanim-sphinx-sys faceanim-espeak-sys faceanim-speech)
 learning=(faceanim-adapt)
 front=(faceanim-studio faceanim)
 # Test fixtures: used by tests only.

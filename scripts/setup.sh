@@ -10,7 +10,9 @@
 #   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to;
 #   - CMU PocketSphinx (Debian: the library lip sync links, its US English models, and its
 #     test data — real LibriVox speech with transcripts) and flite, the synthetic voices whose
-#     exact phone timings the viseme accuracy test compares with.
+#     exact phone timings the viseme accuracy test compares with;
+#   - eSpeak NG (Debian: the library lip sync in other languages links, and its program), which
+#     speaks a transcript in its language to align it by synthesis.
 # Safe to run again: it installs only what is not there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,7 +23,7 @@ dpkg -s python3-numpy >/dev/null 2>&1 || packages+=(python3-numpy)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
-for package in libpocketsphinx-dev pocketsphinx-en-us pocketsphinx-testdata flite; do
+for package in libpocketsphinx-dev pocketsphinx-en-us pocketsphinx-testdata flite libespeak-ng-dev espeak-ng; do
   dpkg -s "$package" >/dev/null 2>&1 || packages+=("$package")
 done
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)

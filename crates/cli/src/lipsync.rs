@@ -20,6 +20,11 @@ pub struct LipsyncArgs {
     /// which times them better than recognising them blind.
     #[arg(long, value_name = "TEXT|FILE")]
     pub text: Option<String>,
+    /// The language spoken, as eSpeak NG names it (`en-us`, `es`, `ja`, `de`, `fr`, `ko`,
+    /// `cmn`, … : `espeak-ng --voices`). A transcript in any of them is aligned by synthesis;
+    /// without one, English words are recognised, other languages by their phones.
+    #[arg(long, default_value = faceanim_speech::recognition::ENGLISH)]
+    pub language: String,
     /// Outputs by extension, as `faceanim track` writes them (.glb/.vrm the character with
     /// the animation, .json the clip, .csv Live Link Face, .session.json the take).
     #[arg(short, long = "output", value_name = "OUT")]
@@ -43,6 +48,11 @@ pub struct LipsyncArgs {
     /// language, slower).
     #[arg(long, value_enum, default_value_t = Blind::Words)]
     pub recognise: Blind,
+    /// The face around the mouth too: blinks at phrase boundaries and natural rates, brows
+    /// raised on accented syllables (ARKit blink and brow channels, on any rig through its
+    /// name table).
+    #[arg(long)]
+    pub face: bool,
     /// Print a JSON summary (timing, phones, visemes) on stdout.
     #[arg(long)]
     pub json: bool,
@@ -71,6 +81,9 @@ struct Summary<'a> {
     shapes_moved: usize,
     phones: &'a [faceanim_speech::Phone],
     visemes: &'a [faceanim_speech::visemes::Key],
+    /// With --face: the blinks and brow raises added.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gestures: Option<&'a faceanim_speech::face::Gestures>,
     notes: &'a [String],
 }
 
@@ -87,7 +100,6 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         "--fps must be between 1 and 240, got {}",
         args.fps
     );
-    let character = crate::input::load_or_default(args.character.as_deref())?.character;
     let table = match &args.viseme_table {
         Some(path) => MouthTable::from_json(&read_text(path, "--viseme-table")?)
             .map_err(|e| anyhow::anyhow!("--viseme-table {}: {e}", path.display()))?,
@@ -95,12 +107,18 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     };
     let transcript = args.text.as_deref().map(transcript).transpose()?;
     let started = Instant::now();
-    let sound = Sound::read(&args.speech)?;
-    if let Some((text, from)) = &transcript {
-        faceanim_speech::phones::transcript_words(text, sound.seconds())
-            .map_err(|e| anyhow::anyhow!("--text {from}: {e}"))?;
-    }
-    let transcript = transcript.map(|(text, _)| text);
+    // The character loads while the speech is read: neither needs the other until the
+    // visemes are put on the mouth.
+    let (character, heard) = std::thread::scope(|scope| {
+        let character = scope.spawn(|| crate::input::load_or_default(args.character.as_deref()));
+        let heard = read_speech(&args, transcript.as_ref());
+        let character = character
+            .join()
+            .map_err(|_| anyhow::anyhow!("loading the character stopped"));
+        (character, heard)
+    });
+    let character = character??.character;
+    let (sound, heard) = heard?;
     let mouth = match &args.adapter {
         Some(path) => mouth_by_adapter(&character, &table, path)?,
         None => match Mouth::of(&character, &table) {
@@ -110,16 +128,19 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
             }
         },
     };
-    let lip_sync = faceanim_speech::lip_sync_with(
-        &sound,
-        transcript.as_deref(),
-        &mouth,
-        args.fps,
-        match args.recognise {
-            Blind::Words => faceanim_speech::Recognition::Words,
-            Blind::Phones => faceanim_speech::Recognition::PhoneLoop,
-        },
-    )?;
+    let mut lip_sync = heard.on(&mouth, args.fps);
+    let gestures = args.face.then(|| {
+        let gestures = faceanim_speech::face::gestures(&sound, &lip_sync.phones);
+        let moved =
+            faceanim_speech::face::add(&mut lip_sync.frames, args.fps, &gestures, &character);
+        if moved == 0 {
+            eprintln!(
+                "{}: --face: the character has no blink or brow shapes the name table knows",
+                character.name()
+            );
+        }
+        gestures
+    });
     let seconds = started.elapsed().as_secs_f64();
     for note in &lip_sync.notes {
         eprintln!("{}: {note}", args.speech.display());
@@ -138,6 +159,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         lip_sync.phones.len(),
         match lip_sync.recognition {
             faceanim_speech::Recognition::Transcript => "aligned to the transcript",
+            faceanim_speech::Recognition::Synthesis => "the transcript's, aligned by synthesis",
             faceanim_speech::Recognition::Words => "from the words recognised",
             faceanim_speech::Recognition::PhoneLoop => "from a phone loop",
         },
@@ -163,11 +185,35 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
             shapes_moved: lip_sync.shapes_moved,
             phones: &lip_sync.phones,
             visemes: &lip_sync.track.keys,
+            gestures: gestures.as_ref(),
             notes: &lip_sync.notes,
         };
         outln!("{}", serde_json::to_string(&summary)?);
     }
     Ok(())
+}
+
+/// The sound of `args.speech` and its visemes, aligned to `transcript` (its text, and how to
+/// name it) when there is one.
+fn read_speech(
+    args: &LipsyncArgs,
+    transcript: Option<&(String, String)>,
+) -> anyhow::Result<(Sound, faceanim_speech::Reading)> {
+    let sound = Sound::read(&args.speech)?;
+    if let Some((text, from)) = transcript {
+        faceanim_speech::phones::transcript_words(text, sound.seconds())
+            .map_err(|e| anyhow::anyhow!("--text {from}: {e}"))?;
+    }
+    let heard = faceanim_speech::read(
+        &sound,
+        transcript.map(|(text, _)| text.as_str()),
+        Some(&args.language),
+        match args.recognise {
+            Blind::Words => faceanim_speech::Recognition::Words,
+            Blind::Phones => faceanim_speech::Recognition::PhoneLoop,
+        },
+    )?;
+    Ok((sound, heard))
 }
 
 /// The largest transcript or viseme table read, in bytes: a line of dialogue is a few hundred.

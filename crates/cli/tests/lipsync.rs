@@ -6,7 +6,9 @@
 //! - synthetic voices that say which phone they speak when (`flite -psdur`): the visemes'
 //!   accuracy within ±40 ms, with the transcript and without;
 //! - silence and noise give a closed mouth; empty, cut, non-audio and over-long files give
-//!   errors that name them.
+//!   errors that name them;
+//! - a Spanish line spoken by the `espeak-ng` program, lip-synced from its transcript by
+//!   synthesis, with the face around the mouth (blinks, brows) on the built-in head.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -295,6 +297,68 @@ fn visemes_of_synthetic_voices_match_their_phones_within_40_ms() {
         overall >= 0.8,
         "viseme accuracy within ±40 ms: {overall:.3}\n{report:?}"
     );
+}
+
+#[test]
+fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
+    let out = output_dir("lipsync-languages");
+    let wav = out.join("mama.wav");
+    let line = "Mi mamá me mima mucho. Y el perro de Pablo bebe agua en la playa.";
+    let spoke = Command::new("espeak-ng")
+        .args(["-v", "es+f3", "-s", "140", "-w"])
+        .arg(&wav)
+        .arg(line)
+        .output()
+        .expect("espeak-ng is needed: run scripts/setup.sh");
+    assert!(spoke.status.success(), "{spoke:?}");
+    let (summary, clip) = run_lipsync(
+        &wav,
+        &["--text", line, "--language", "es", "--face"],
+        &out.join("mama.glb"),
+    );
+    assert_eq!(summary["recognition"], "synthesis", "{summary}");
+    assert!(summary["notes"].as_array().unwrap().is_empty(), "{summary}");
+    // Every m, p and b of the line closes the lips.
+    let phones = summary["phones"].as_array().unwrap();
+    let bilabials: Vec<(f64, f64)> = phones
+        .iter()
+        .filter(|p| matches!(p["label"].as_str().unwrap(), "m" | "p" | "b" | "β"))
+        .map(|p| (p["start"].as_f64().unwrap(), p["end"].as_f64().unwrap()))
+        .collect();
+    assert!(bilabials.len() >= 8, "{summary}");
+    let keys = summary["visemes"].as_array().unwrap();
+    for (start, end) in &bilabials {
+        assert!(
+            keys.iter().any(|k| {
+                let t = k["start"].as_f64().unwrap();
+                k["viseme"] == "PP" && t >= start - 0.1 && t <= *end
+            }),
+            "the lips stay open at {start:.2}..{end:.2} s: {keys:?}"
+        );
+    }
+    // The pause between the sentences blinks; the built-in head's lids move.
+    let gestures = &summary["gestures"];
+    assert!(
+        !gestures["blinks"].as_array().unwrap().is_empty(),
+        "{summary}"
+    );
+    let names = clip["blendshapes"].as_array().unwrap();
+    let lid = names.iter().position(|n| n == "eyeBlinkLeft").unwrap();
+    let rows = clip["frames"].as_array().unwrap();
+    assert!(
+        rows.iter().any(|r| r[lid].as_f64().unwrap() > 0.9),
+        "no blink drawn"
+    );
+    assert_valid_gltf(&out.join("mama.glb"));
+    // A language eSpeak NG does not speak is said, and the sound still moves the mouth.
+    let (summary, _) = run_lipsync(
+        &wav,
+        &["--text", line, "--language", "xx-nowhere"],
+        &out.join("nowhere.json"),
+    );
+    let notes = summary["notes"].to_string();
+    assert!(notes.contains("no voice 'xx-nowhere'"), "{notes}");
+    assert_eq!(summary["recognition"], "phone_loop", "{summary}");
 }
 
 fn ffmpeg(args: &[&str]) {

@@ -12,6 +12,8 @@
 //! 4. [`mouth`]: visemes onto the character's own shapes — its visemes by name, or its ARKit
 //!    mouth shapes through a table the user can replace.
 //!
+//! With [`face`], blinks and brows go with the speech too.
+//!
 //! Live, from a microphone, [`listen`] classes each 10 ms as it arrives with a small
 //! classifier learned from the user's own voice (calibrated on a read passage, refined by the
 //! recogniser as they speak).
@@ -27,9 +29,13 @@
 #![deny(missing_docs)]
 
 pub mod audio;
+pub mod face;
+pub mod features;
 pub mod listen;
 pub mod mouth;
 pub mod phones;
+pub mod recognition;
+pub mod synthesis;
 pub mod visemes;
 
 use faceanim_rig::Character;
@@ -88,10 +94,18 @@ pub fn lip_sync(
     fps: f32,
     blind: Recognition,
 ) -> Result<LipSync, SpeechError> {
-    lip_sync_with(sound, transcript, &Mouth::of(character, table)?, fps, blind)
+    lip_sync_with(
+        sound,
+        transcript,
+        None,
+        &Mouth::of(character, table)?,
+        fps,
+        blind,
+    )
 }
 
-/// Lip sync of `sound` through `mouth` (one read through the character's adapter:
+/// Lip sync of `sound` in `language` (an eSpeak NG voice name; English when `None`: see
+/// [`recognition::recognise`]) through `mouth` (one read through the character's adapter:
 /// [`Mouth::from_readings`]), as [`lip_sync`] does.
 ///
 /// # Errors
@@ -99,21 +113,68 @@ pub fn lip_sync(
 pub fn lip_sync_with(
     sound: &Sound,
     transcript: Option<&str>,
+    language: Option<&str>,
     mouth: &Mouth,
     fps: f32,
     blind: Recognition,
 ) -> Result<LipSync, SpeechError> {
-    let (phones, recognition, notes) = phones::recognise(sound, transcript, blind)?;
+    Ok(read(sound, transcript, language, blind)?.on(mouth, fps))
+}
+
+/// A sound's visemes, before they are put on a character: what [`read`] finds.
+#[derive(Debug, Clone)]
+pub struct Reading {
+    /// The visemes over time.
+    pub track: Track,
+    /// The phones found.
+    pub phones: Vec<Phone>,
+    /// How they were found.
+    pub recognition: Recognition,
+    /// What was done instead of what was asked.
+    pub notes: Vec<String>,
+}
+
+/// The visemes of `sound` in `language`, aligned to `transcript` or recognised by `blind` (see
+/// [`recognition::recognise`]): the part of a lip sync that needs no character, so that a caller
+/// can load the character meanwhile.
+///
+/// # Errors
+/// [`SpeechError`] when the recogniser fails.
+pub fn read(
+    sound: &Sound,
+    transcript: Option<&str>,
+    language: Option<&str>,
+    blind: Recognition,
+) -> Result<Reading, SpeechError> {
+    let (phones, recognition, notes) = recognition::recognise(sound, transcript, language, blind)?;
     let track = visemes::track(&phones, &sound.voice_activity(), sound.seconds());
-    let frames = track.sample(fps).iter().map(|v| mouth.weights(v)).collect();
-    Ok(LipSync {
-        fps,
-        frames,
+    Ok(Reading {
         track,
         phones,
         recognition,
-        route: mouth.route,
-        shapes_moved: mouth.moved(),
         notes,
     })
+}
+
+impl Reading {
+    /// The lip sync these visemes make through `mouth` at `fps`.
+    #[must_use]
+    pub fn on(self, mouth: &Mouth, fps: f32) -> LipSync {
+        let frames = self
+            .track
+            .sample(fps)
+            .iter()
+            .map(|v| mouth.weights(v))
+            .collect();
+        LipSync {
+            fps,
+            frames,
+            track: self.track,
+            phones: self.phones,
+            recognition: self.recognition,
+            route: mouth.route,
+            shapes_moved: mouth.moved(),
+            notes: self.notes,
+        }
+    }
 }

@@ -32,8 +32,11 @@ pub enum Recognition {
     /// Any phone after any other (no words assumed: other languages, gibberish, singing), at
     /// about 1.7× real time with CMU's recommended beams.
     PhoneLoop,
-    /// The transcript's words aligned to the sound.
+    /// The transcript's words aligned to the sound by the recogniser (English).
     Transcript,
+    /// The transcript spoken by eSpeak NG in its language and that version's phones carried
+    /// onto the sound by warping one onto the other (any language).
+    Synthesis,
 }
 
 /// Why recognition failed.
@@ -50,6 +53,17 @@ pub enum PhoneError {
         path: String,
         /// What went wrong.
         message: String,
+    },
+    /// The transcript could not be spoken to align it by synthesis.
+    #[error(transparent)]
+    Synthesis(#[from] faceanim_espeak_sys::EspeakError),
+    /// The recording is too long to align by synthesis at once.
+    #[error(
+        "{seconds:.0} s of sound is too long to align to a transcript at once: cut it into lines"
+    )]
+    TooLongToAlign {
+        /// The sound's length.
+        seconds: f32,
     },
     /// The transcript has no word to align.
     #[error("the transcript has no words")]
@@ -99,102 +113,78 @@ pub fn transcript_words(text: &str, seconds: f32) -> Result<Vec<String>, PhoneEr
     Ok(words_of(text))
 }
 
-/// The phones of `sound`: aligned to `transcript` when given (falling back to `blind`, with a
-/// note, when its words are not in the dictionary or the alignment fails), else found by
-/// `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]). The notes say what was done
-/// instead of what was asked.
+/// An English transcript's `words` aligned by the recogniser, or why they could not be (a
+/// The words recognised with the English language model, each aligned again phone by phone
+/// (the recogniser's first pass times words, not the closures and releases inside them).
 ///
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
-pub fn recognise(
-    sound: &Sound,
-    transcript: Option<&str>,
-    blind: Recognition,
-) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
-    let mut notes = Vec::new();
-    if transcript.is_none() && blind == Recognition::Words {
-        // The dictionary is read while the recogniser loads and decodes (the recogniser reads
-        // its own copy): on a short line its reading is a good share of the time.
-        let (segments, dictionary) = std::thread::scope(|scope| {
-            let dictionary = scope.spawn(Dictionary::english);
-            let segments = faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples);
-            (segments, dictionary.join())
-        });
-        let dictionary = dictionary.map_err(|_| PhoneError::Dictionary {
-            path: EN_US.dictionary.to_owned(),
-            message: "reading it stopped".into(),
-        })??;
-        return Ok((
-            phones_of_words(segments?, &dictionary).0,
-            Recognition::Words,
-            notes,
-        ));
-    }
-    // Read once, for the transcript and for recognised words alike.
-    let dictionary = if transcript.is_some() || blind == Recognition::Words {
-        Some(Dictionary::english()?)
-    } else {
-        None
+pub(crate) fn recognise_words(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
+    let segments = faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples)?;
+    // Only the words heard are looked up: reading the whole dictionary would cost more than
+    // recognising a line.
+    let heard: Vec<String> = segments
+        .iter()
+        .map(|s| s.label.split('(').next().unwrap_or("").to_lowercase())
+        .collect();
+    let dictionary = Dictionary::english_words(&heard)?;
+    let words: Vec<String> = heard
+        .into_iter()
+        .filter(|w| dictionary.phones(w).is_some_and(|p| !p.is_empty()))
+        .collect();
+    let phones = match words.is_empty() {
+        false => align_phones(sound, &words, &dictionary)?,
+        true => None,
     };
-    if let (Some(text), Some(dictionary)) = (transcript, &dictionary) {
-        let words = transcript_words(text, sound.seconds())?;
-        let unknown: Vec<&str> = words
-            .iter()
-            .filter(|w| !dictionary.has(w))
-            .map(String::as_str)
-            .collect();
-        if unknown.is_empty() {
-            match align(sound, &words, dictionary) {
-                Ok(phones) if !phones.is_empty() => {
-                    return Ok((phones, Recognition::Transcript, notes));
-                }
-                Ok(_) => notes.push(
-                    "the transcript could not be aligned to the sound: it was recognised without it".into(),
-                ),
-                Err(e) => notes.push(format!(
-                    "the transcript could not be aligned ({e}): it was recognised without it"
-                )),
-            }
-        } else {
-            let shown: Vec<String> = unknown
-                .iter()
-                .take(8)
-                .map(|w| faceanim_rig::excerpt(w).into_owned())
-                .collect();
-            let more = match unknown.len() {
-                n if n > 8 => format!(" and {} more", n - 8),
-                _ => String::new(),
-            };
-            notes.push(format!(
-                "the pronouncing dictionary lacks {}{more}: the speech was recognised without the transcript",
-                shown.join(", ")
-            ));
-        }
-    }
-    if let (Recognition::Words, Some(dictionary)) = (blind, &dictionary) {
-        return Ok((
-            recognise_words(sound, dictionary)?,
-            Recognition::Words,
-            notes,
-        ));
-    }
+    Ok(phones.unwrap_or_else(|| phones_of_words(segments, &dictionary).0))
+}
+
+/// Any phone after any other (no words assumed: other languages, gibberish, singing).
+///
+/// # Errors
+/// [`PhoneError`] when the recogniser or its models are missing or fail.
+pub(crate) fn phone_loop(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
     let segments = faceanim_sphinx_sys::decode(&EN_US.phone_loop(), &sound.samples)?;
-    let phones = segments
+    Ok(segments
         .into_iter()
         .map(|s| Phone {
             label: phone_label(&s.label),
             start: frame_time(s.start),
             end: frame_time(s.end + 1),
         })
-        .collect();
-    Ok((phones, Recognition::PhoneLoop, notes))
+        .collect())
 }
 
-/// Phones through word recognition: the words recognised with the language model, each
-/// spoken as `dictionary` says, their time shared by typical phone lengths.
-fn recognise_words(sound: &Sound, dictionary: &Dictionary) -> Result<Vec<Phone>, PhoneError> {
-    let segments = faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples)?;
-    Ok(phones_of_words(segments, dictionary).0)
+/// word the dictionary lacks, an alignment that failed).
+pub(crate) fn align_english(sound: &Sound, words: &[String]) -> Result<Vec<Phone>, String> {
+    let dictionary = Dictionary::english_words(words).map_err(|e| e.to_string())?;
+    let unknown: Vec<&str> = words
+        .iter()
+        .filter(|w| !dictionary.has(w))
+        .map(String::as_str)
+        .collect();
+    if !unknown.is_empty() {
+        let shown: Vec<String> = unknown
+            .iter()
+            .take(8)
+            .map(|w| faceanim_rig::excerpt(w).into_owned())
+            .collect();
+        let more = match unknown.len() {
+            n if n > 8 => format!(" and {} more", n - 8),
+            _ => String::new(),
+        };
+        return Err(format!(
+            "the pronouncing dictionary lacks {}{more}",
+            shown.join(", ")
+        ));
+    }
+    match align(sound, words, &dictionary) {
+        Ok(phones) if !phones.is_empty() => Ok(phones),
+        Ok(_) => Err("the recogniser could not align the transcript to the sound".into()),
+        Err(e) => Err(format!(
+            "the recogniser could not align the transcript ({e})"
+        )),
+    }
 }
 
 fn frame_time(frame: u32) -> f32 {
@@ -239,10 +229,23 @@ impl Dictionary {
     /// # Errors
     /// [`PhoneError::Dictionary`] naming the file.
     pub fn english() -> Result<Dictionary, PhoneError> {
-        Dictionary::read(Path::new(EN_US.dictionary))
+        Dictionary::read(Path::new(EN_US.dictionary), None)
     }
 
-    fn read(path: &Path) -> Result<Dictionary, PhoneError> {
+    /// Only `words` of Debian's `cmudict-en-us.dict`: a line's words, found without keeping
+    /// the other hundred thousand.
+    ///
+    /// # Errors
+    /// [`PhoneError::Dictionary`] naming the file.
+    pub fn english_words(words: &[String]) -> Result<Dictionary, PhoneError> {
+        let wanted: std::collections::HashSet<&str> = words.iter().map(String::as_str).collect();
+        Dictionary::read(Path::new(EN_US.dictionary), Some(&wanted))
+    }
+
+    fn read(
+        path: &Path,
+        only: Option<&std::collections::HashSet<&str>>,
+    ) -> Result<Dictionary, PhoneError> {
         let text = std::fs::read_to_string(path).map_err(|e| PhoneError::Dictionary {
             path: path.display().to_string(),
             message: format!("{e} (apt-get install pocketsphinx-en-us)"),
@@ -252,7 +255,7 @@ impl Dictionary {
             let mut parts = line.split_whitespace();
             let Some(word) = parts.next() else { continue };
             // Alternative pronunciations are written word(2): the first is kept.
-            if word.contains('(') {
+            if word.contains('(') || only.is_some_and(|only| !only.contains(word)) {
                 continue;
             }
             words
@@ -287,8 +290,87 @@ fn typical_length(phone: &str) -> f32 {
     }
 }
 
-/// Forced alignment: the words in order, with optional silences and fillers between them.
+/// Forced alignment: the words' phones in order, each timed by the acoustic model, with
+/// optional silences and fillers between them; the words alone (their time shared between
+/// their phones by typical lengths) when the phones cannot be aligned.
 fn align(
+    sound: &Sound,
+    words: &[String],
+    dictionary: &Dictionary,
+) -> Result<Vec<Phone>, PhoneError> {
+    match align_phones(sound, words, dictionary)? {
+        Some(phones) => Ok(phones),
+        None => align_words(sound, words, dictionary),
+    }
+}
+
+/// The words' phones in order, each timed by the acoustic model; `None` when the recogniser
+/// could not fit them all to the sound.
+fn align_phones(
+    sound: &Sound,
+    words: &[String],
+    dictionary: &Dictionary,
+) -> Result<Option<Vec<Phone>>, PhoneError> {
+    let sequence: Vec<String> = words
+        .iter()
+        .filter_map(|w| dictionary.phones(w))
+        .flatten()
+        .cloned()
+        .collect();
+    let segments = faceanim_sphinx_sys::decode(&EN_US.phones(sequence.clone()), &sound.samples)?;
+    let phones: Vec<Phone> = segments
+        .iter()
+        .map(|s| Phone {
+            label: s
+                .label
+                .strip_prefix("ph_")
+                .map_or_else(|| "SIL".to_owned(), str::to_ascii_uppercase),
+            start: frame_time(s.start),
+            end: frame_time(s.end + 1),
+        })
+        .collect();
+    let said: Vec<&str> = phones
+        .iter()
+        .map(|p| p.label.as_str())
+        .filter(|l| *l != "SIL")
+        .collect();
+    Ok((said == sequence).then(|| closures(phones)))
+}
+
+/// Short silences the recogniser put inside speech: the hold before a stop's release is the
+/// stop's (the lips of a P are closed in it), any other goes to the phone before it.
+fn closures(phones: Vec<Phone>) -> Vec<Phone> {
+    const SHORTEST_PAUSE: f32 = 0.12;
+    let stop = |label: &str| matches!(label, "P" | "B" | "M" | "T" | "D" | "K" | "G" | "CH" | "JH");
+    let mut out: Vec<Phone> = Vec::with_capacity(phones.len());
+    let mut k = 0;
+    while k < phones.len() {
+        let phone = &phones[k];
+        let inside = k > 0 && k + 1 < phones.len();
+        if phone.label == "SIL" && inside && phone.end - phone.start < SHORTEST_PAUSE {
+            let next = &phones[k + 1];
+            if stop(&next.label) {
+                out.push(Phone {
+                    start: phone.start,
+                    ..next.clone()
+                });
+                k += 2;
+                continue;
+            }
+            if let Some(last) = out.last_mut() {
+                last.end = phone.end;
+                k += 1;
+                continue;
+            }
+        }
+        out.push(phone.clone());
+        k += 1;
+    }
+    out
+}
+
+/// Forced alignment of the words in order, with optional silences and fillers between them.
+fn align_words(
     sound: &Sound,
     words: &[String],
     dictionary: &Dictionary,
@@ -313,8 +395,8 @@ fn align(
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
 pub fn align_start(sound: &Sound, text: &str) -> Result<(Vec<Phone>, usize), PhoneError> {
-    let dictionary = Dictionary::english()?;
     let words = words_of(text);
+    let dictionary = Dictionary::english_words(&words)?;
     if words.is_empty() || words.iter().any(|w| !dictionary.has(w)) {
         return Ok((Vec::new(), 0));
     }

@@ -11,7 +11,8 @@
 //!
 //! Only sound is mouthed: a phone the recogniser put where the recording is quiet
 //! ([`Sound::voice_activity`](crate::audio::Sound::voice_activity)) is silence, so silence,
-//! hum and steady noise give a closed mouth.
+//! hum and steady noise give a closed mouth — except a short consonant beside a heard sound,
+//! whose quiet is its own (the lips held shut before a P's release, the hold of a T).
 
 use faceanim_rig::names::Viseme;
 
@@ -21,8 +22,9 @@ use crate::phones::Phone;
 pub const LEAD: f32 = 0.04;
 /// How early closed lips (P, B, M) and the lip bite (F, V) lead theirs.
 pub const LIP_LEAD: f32 = 0.06;
-/// The shortest shape drawn, seconds.
-pub const MIN_HOLD: f32 = 0.06;
+/// The shortest shape drawn, seconds: a frame at 30 fps (shorter ones merge into a neighbour;
+/// the blends keep a short one from flickering).
+pub const MIN_HOLD: f32 = 0.03;
 /// A pause at least this long closes the mouth; a shorter one relaxes it.
 pub const LONG_PAUSE: f32 = 0.25;
 /// The longest blend from one shape to the next.
@@ -32,9 +34,13 @@ pub const RELEASE: f32 = 0.02;
 /// How far a short pause relaxes the mouth: the previous shape's weight is kept at this.
 pub const RELAXED: f32 = 0.3;
 
-/// The viseme of a phone (ARPAbet, no stress); `Sil` for silence and anything unknown.
+/// The viseme of a phone — ARPAbet (upper case, no stress: the recogniser's) or IPA (any
+/// language's: eSpeak NG's) — ; `Sil` for silence and anything unknown.
 #[must_use]
 pub fn viseme_of(phone: &str) -> Viseme {
+    if phone.is_empty() || !phone.bytes().all(|b| b.is_ascii_uppercase()) {
+        return viseme_of_ipa(phone);
+    }
     match phone {
         "P" | "B" | "M" => Viseme::PP,
         "F" | "V" => Viseme::FF,
@@ -52,6 +58,75 @@ pub fn viseme_of(phone: &str) -> Viseme {
         "UH" | "UW" | "W" => Viseme::Ou,
         // HH takes the shape of the vowel it breathes into (see `segments`).
         _ => Viseme::Sil,
+    }
+}
+
+/// Whether a phone is breath (`HH`, IPA `h`, `ɦ`), which takes the shape of the vowel after it.
+#[must_use]
+pub fn is_breath(phone: &str) -> bool {
+    matches!(phone, "HH" | "h" | "ɦ" | "hʲ" | "ħ")
+}
+
+/// Marks an IPA phone carries that do not change the mouth's shape: stress, length, tone,
+/// nasality, devoicing, aspiration, syllabicity, tone letters and eSpeak NG's `-`.
+fn is_modifier(c: char) -> bool {
+    matches!(
+        c,
+        'ˈ' | 'ˌ'
+            | 'ː'
+            | 'ˑ'
+            | 'ʰ'
+            | 'ʲ'
+            | 'ʷ'
+            | 'ˠ'
+            | 'ˤ'
+            | '-'
+            | '˥'
+            | '˦'
+            | '˧'
+            | '˨'
+            | '˩'
+            | '\''
+    ) || ('\u{0300}'..='\u{036F}').contains(&c)
+        || c.is_ascii_digit()
+}
+
+/// The viseme of an IPA phone, by how it is articulated: the place of a consonant (lips,
+/// lip and teeth, teeth, tongue tip, the back of the tongue, palate), the height, backness and
+/// rounding of a vowel (a diphthong by the vowel it starts from). Affricates go by their
+/// release (`tʃ` as `ʃ`, `ts` as `s`); Spanish `β` (a `b` between vowels) brings the lips
+/// together as `b` does, Japanese `ɸ` (`fu`) only narrows them, as `f` does.
+#[must_use]
+pub fn viseme_of_ipa(phone: &str) -> Viseme {
+    let sound: String = phone.chars().filter(|c| !is_modifier(*c)).collect();
+    let mut chars = sound.chars();
+    let Some(first) = chars.next() else {
+        return Viseme::Sil;
+    };
+    let second = chars.next();
+    let class = |c: char| match c {
+        'p' | 'b' | 'm' | 'ɓ' | 'ʙ' | 'β' => Viseme::PP,
+        'f' | 'v' | 'ɱ' | 'ʋ' | 'ɸ' => Viseme::FF,
+        'θ' | 'ð' => Viseme::TH,
+        't' | 'd' | 'ʈ' | 'ɖ' | 'ɗ' | 'c' | 'ɟ' => Viseme::DD,
+        'n' | 'ɳ' | 'ɲ' | 'l' | 'ɭ' | 'ʎ' | 'ɫ' | 'ɬ' | 'ɮ' | 'ʟ' | 'ɺ' => Viseme::Nn,
+        'k' | 'g' | 'ɡ' | 'ŋ' | 'q' | 'ɢ' | 'x' | 'ɣ' | 'χ' | 'ʁ' | 'ɰ' | 'ʔ' | 'ʕ' | 'ɴ' => {
+            Viseme::Kk
+        }
+        'ʃ' | 'ʒ' | 'ɕ' | 'ʑ' | 'ʂ' | 'ʐ' | 'ç' | 'ʝ' => Viseme::CH,
+        's' | 'z' => Viseme::SS,
+        'r' | 'ɾ' | 'ɹ' | 'ɻ' | 'ɽ' | 'ʀ' | 'ɚ' | 'ɝ' => Viseme::RR,
+        'a' | 'ɑ' | 'ɐ' | 'æ' | 'ä' | 'ɶ' | 'ʌ' | 'ə' | 'ᵻ' => Viseme::Aa,
+        'e' | 'ɛ' | 'ɜ' | 'ɘ' | 'ɤ' => Viseme::E,
+        'i' | 'ɪ' | 'ɨ' | 'j' => Viseme::Ih,
+        'o' | 'ɔ' | 'ɒ' | 'ɵ' | 'ø' | 'œ' => Viseme::Oh,
+        'u' | 'ʊ' | 'ʉ' | 'y' | 'ʏ' | 'ɯ' | 'w' | 'ʍ' | 'ɥ' => Viseme::Ou,
+        _ => Viseme::Sil,
+    };
+    match (first, second.map(class)) {
+        // Affricates: a stop released into a fricative looks like the fricative.
+        ('t' | 'd' | 'ʈ' | 'ɖ', Some(release @ (Viseme::CH | Viseme::SS))) => release,
+        _ => class(first),
     }
 }
 
@@ -96,14 +171,35 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
         let frames = &voiced[a.min(voiced.len())..b.min(voiced.len())];
         frames.iter().filter(|v| **v).count() * 3 >= frames.len().max(1)
     };
+    // A consonant is often quiet itself — the lips of a P held shut, the hold of a T — and is
+    // said when a sound beside it is heard.
+    let vowel = |v: Viseme| {
+        matches!(
+            v,
+            Viseme::Aa | Viseme::E | Viseme::Ih | Viseme::Oh | Viseme::Ou
+        )
+    };
+    let said = |k: usize| {
+        let p = &phones[k];
+        let viseme = viseme_of(&p.label);
+        heard(p)
+            || (viseme != Viseme::Sil
+                && !vowel(viseme)
+                && p.end - p.start < LONG_PAUSE
+                && (k.checked_sub(1).is_some_and(|j| {
+                    heard(&phones[j]) && viseme_of(&phones[j].label) != Viseme::Sil
+                }) || phones
+                    .get(k + 1)
+                    .is_some_and(|n| heard(n) && viseme_of(&n.label) != Viseme::Sil)))
+    };
     let mut runs: Vec<(Viseme, f32, f32)> = Vec::new();
     for (k, p) in phones.iter().enumerate() {
-        let mut viseme = if heard(p) {
+        let mut viseme = if said(k) {
             viseme_of(&p.label)
         } else {
             Viseme::Sil
         };
-        if p.label == "HH" && heard(p) {
+        if is_breath(&p.label) && heard(p) {
             viseme = phones
                 .get(k + 1)
                 .map_or(Viseme::Sil, |next| viseme_of(&next.label));
@@ -289,7 +385,7 @@ mod tests {
 
     #[test]
     fn a_flicker_is_not_drawn_and_the_unheard_is_silence() {
-        let phones = phones("AA 0 0.3, T 0.3 0.33, AA 0.33 0.6, S 0.6 1");
+        let phones = phones("AA 0 0.3, T 0.3 0.32, AA 0.32 0.6, S 0.6 1");
         let mut voiced = vec![true; 100];
         voiced[60..].iter_mut().for_each(|v| *v = false);
         let track = track(&phones, &voiced, 1.0);

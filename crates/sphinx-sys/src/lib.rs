@@ -88,6 +88,20 @@ impl Models<'_> {
     }
 }
 
+impl Models<'_> {
+    /// Exactly `sequence` (ARPAbet phones, as the acoustic model names them: `AH`, `B`), each
+    /// as a word of its own, with silences and fillers allowed between them: forced
+    /// alignment at the level of phones. Segments come back labelled `ph_` and the phone in
+    /// lower case (`ph_ah`).
+    #[must_use]
+    pub fn phones(&self, sequence: Vec<String>) -> Search {
+        Search {
+            acoustic: PathBuf::from(self.acoustic),
+            mode: Mode::Phones(sequence),
+        }
+    }
+}
+
 /// What the decoder searches for.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Search {
@@ -106,6 +120,7 @@ enum Mode {
         jsgf: String,
         dictionary: PathBuf,
     },
+    Phones(Vec<String>),
 }
 
 /// One decoded label and the frames it covers (both ends included, 10 ms each).
@@ -154,6 +169,17 @@ pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxEr
     match &search.mode {
         Mode::PhoneLoop(lm) => check(lm)?,
         Mode::Grammar { dictionary, .. } => check(dictionary)?,
+        Mode::Phones(sequence) => {
+            if sequence.is_empty()
+                || sequence
+                    .iter()
+                    .any(|p| p.is_empty() || !p.bytes().all(|b| b.is_ascii_uppercase()))
+            {
+                return Err(SphinxError::Decoder(format!(
+                    "a phone sequence to align must be ARPAbet phones: {sequence:?}"
+                )));
+            }
+        }
         Mode::Words {
             language_model,
             dictionary,
@@ -291,8 +317,36 @@ mod imp {
         }
     }
 
-    /// A grammar file that is removed when dropped.
+    /// A grammar or dictionary file that is removed when dropped.
     struct Scratch(std::path::PathBuf);
+
+    impl Scratch {
+        /// Writes `text` to a new file in the temporary folder, ending in `.{extension}`.
+        fn write(extension: &str, text: &str) -> Result<Scratch, SphinxError> {
+            static COUNT: AtomicU64 = AtomicU64::new(0);
+            let path = std::env::temp_dir().join(format!(
+                "faceanim-{}-{}.{extension}",
+                std::process::id(),
+                COUNT.fetch_add(1, Ordering::Relaxed)
+            ));
+            std::fs::write(&path, text)
+                .map_err(|e| SphinxError::Decoder(format!("{}: {e}", path.display())))?;
+            Ok(Scratch(path))
+        }
+    }
+
+    /// The settings of a grammar search over `dictionary`'s words, fillers allowed between
+    /// them.
+    fn grammar_args(dictionary: &str, grammar: &Scratch) -> [String; 6] {
+        [
+            "-dict".into(),
+            dictionary.into(),
+            "-jsgf".into(),
+            text(&grammar.0),
+            "-fsgusefiller".into(),
+            "yes".into(),
+        ]
+    }
 
     impl Drop for Scratch {
         fn drop(&mut self) {
@@ -329,38 +383,52 @@ mod imp {
                     ]
                     .map(str::to_owned),
                 );
-                None
+                Vec::new()
             }
             Mode::Words {
                 language_model,
                 dictionary,
             } => {
                 args.extend(
-                    ["-lm", &text(language_model), "-dict", &text(dictionary)].map(str::to_owned),
-                );
-                None
-            }
-            Mode::Grammar { jsgf, dictionary } => {
-                static COUNT: AtomicU64 = AtomicU64::new(0);
-                let path = std::env::temp_dir().join(format!(
-                    "faceanim-{}-{}.jsgf",
-                    std::process::id(),
-                    COUNT.fetch_add(1, Ordering::Relaxed)
-                ));
-                std::fs::write(&path, jsgf)
-                    .map_err(|e| SphinxError::Decoder(format!("{}: {e}", path.display())))?;
-                args.extend(
                     [
+                        "-lm",
+                        &text(language_model),
                         "-dict",
                         &text(dictionary),
-                        "-jsgf",
-                        &text(&path),
-                        "-fsgusefiller",
-                        "yes",
+                        "-fwdflat",
+                        "no",
+                        "-bestpath",
+                        "no",
                     ]
                     .map(str::to_owned),
                 );
-                Some(Scratch(path))
+                Vec::new()
+            }
+            Mode::Grammar { jsgf, dictionary } => {
+                let grammar = Scratch::write("jsgf", jsgf)?;
+                args.extend(grammar_args(&text(dictionary), &grammar));
+                vec![grammar]
+            }
+            Mode::Phones(sequence) => {
+                let mut distinct: Vec<&String> = sequence.iter().collect();
+                distinct.sort();
+                distinct.dedup();
+                let entries: String = distinct
+                    .iter()
+                    .map(|p| format!("ph_{} {p}\n", p.to_ascii_lowercase()))
+                    .collect();
+                let words: Vec<String> = sequence
+                    .iter()
+                    .map(|p| format!("ph_{}", p.to_ascii_lowercase()))
+                    .collect();
+                let jsgf = format!(
+                    "#JSGF V1.0;\ngrammar phones;\npublic <s> = {};\n",
+                    words.join(" ")
+                );
+                let dictionary = Scratch::write("dict", &entries)?;
+                let grammar = Scratch::write("jsgf", &jsgf)?;
+                args.extend(grammar_args(&text(&dictionary.0), &grammar));
+                vec![dictionary, grammar]
             }
         };
         let owned: Vec<CString> = args

@@ -198,6 +198,7 @@ async fn upload(
             faceanim_speech::lip_sync_with(
                 &sound,
                 None,
+                None,
                 &mouth,
                 30.0,
                 faceanim_speech::Recognition::Words,

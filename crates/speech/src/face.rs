@@ -1,0 +1,218 @@
+//! The face around the mouth (`faceanim lipsync --face`): what a speaker's eyes and brows do
+//! while the mouth speaks, so that a lip-synced line does not stare.
+//!
+//! - **Blinks** at phrase boundaries (a pause of at least [`PHRASE_PAUSE`], just after the
+//!   voice stops), and wherever [`LONGEST_WITHOUT`] passes without one, at the next end of a
+//!   vowel; each closes in 80 ms, holds 40 ms and opens in 160 ms.
+//! - **Brows** rise on accents: a syllable clearly louder than the speech around it (its
+//!   loudness [`ACCENT_DB`] over the line's speaking level), at most one every
+//!   [`ACCENT_SPACING`]; they rise over 120 ms, hold for the syllable and settle over 300 ms.
+//!
+//! Both are ARKit channels (`eyeBlinkLeft`/`Right`, `browInnerUp`, `browOuterUpLeft`/`Right`),
+//! so any rig gets them through its name table ([`faceanim_rig::names`]).
+
+use crate::audio::Sound;
+use crate::phones::Phone;
+use crate::visemes::viseme_of;
+
+/// A pause at least this long ends a phrase (and is a moment to blink).
+pub const PHRASE_PAUSE: f32 = 0.25;
+/// The longest a speaker goes without blinking, seconds (people blink about every 3 to 4 s
+/// while talking).
+pub const LONGEST_WITHOUT: f32 = 3.5;
+/// How much louder than the line's speaking level an accented syllable is, dB.
+pub const ACCENT_DB: f32 = 4.0;
+/// The least time between two brow raises, seconds.
+pub const ACCENT_SPACING: f32 = 1.2;
+
+/// The ARKit channels the face moves, in the order of [`Gestures::at`].
+pub const CHANNELS: [&str; 5] = [
+    "eyeBlinkLeft",
+    "eyeBlinkRight",
+    "browInnerUp",
+    "browOuterUpLeft",
+    "browOuterUpRight",
+];
+
+/// Blinks and brow raises over a line.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Gestures {
+    /// When each blink starts closing, seconds.
+    pub blinks: Vec<f32>,
+    /// Each brow raise: (when the accented syllable starts, when it ends), seconds.
+    pub accents: Vec<(f32, f32)>,
+}
+
+/// The gestures that go with `phones` heard in `sound`.
+#[must_use]
+pub fn gestures(sound: &Sound, phones: &[Phone]) -> Gestures {
+    let levels = sound.frame_levels();
+    let heard = sound.voice_activity();
+    let level_of = |p: &Phone| {
+        let (a, b) = ((p.start * 100.0) as usize, (p.end * 100.0).ceil() as usize);
+        let frames = &levels[a.min(levels.len())..b.min(levels.len())];
+        frames.iter().copied().fold(f32::MIN, f32::max)
+    };
+    let is_vowel = |p: &Phone| {
+        use faceanim_rig::names::Viseme;
+        matches!(
+            viseme_of(&p.label),
+            Viseme::Aa | Viseme::E | Viseme::Ih | Viseme::Oh | Viseme::Ou
+        )
+    };
+    let heard_at = |t: f32| heard.get((t * 100.0) as usize).copied().unwrap_or(false);
+    // The line's speaking level: the median loudness of its vowels.
+    let mut vowel_levels: Vec<f32> = phones
+        .iter()
+        .filter(|p| is_vowel(p) && heard_at((p.start + p.end) / 2.0))
+        .map(level_of)
+        .collect();
+    vowel_levels.sort_by(f32::total_cmp);
+    let speaking = vowel_levels.get(vowel_levels.len() / 2).copied();
+    let mut blinks: Vec<f32> = Vec::new();
+    let mut accents: Vec<(f32, f32)> = Vec::new();
+    let mut last_blink = -1.0f32;
+    for (k, p) in phones.iter().enumerate() {
+        let silent = viseme_of(&p.label) == faceanim_rig::names::Viseme::Sil;
+        if silent && p.end - p.start >= PHRASE_PAUSE && k > 0 && p.start - last_blink > 1.0 {
+            last_blink = p.start + 0.05;
+            blinks.push(last_blink);
+        } else if is_vowel(p) && p.end - last_blink > LONGEST_WITHOUT {
+            last_blink = p.end;
+            blinks.push(last_blink);
+        }
+        if let Some(speaking) = speaking
+            && is_vowel(p)
+            && heard_at((p.start + p.end) / 2.0)
+            && level_of(p) >= speaking + ACCENT_DB
+            && accents
+                .last()
+                .is_none_or(|a| p.start - a.0 >= ACCENT_SPACING)
+        {
+            accents.push((p.start, p.end));
+        }
+    }
+    blinks.retain(|&t| t < sound.seconds());
+    Gestures { blinks, accents }
+}
+
+impl Gestures {
+    /// The [`CHANNELS`]' values at `t` seconds.
+    #[must_use]
+    pub fn at(&self, t: f32) -> [f32; 5] {
+        let blink = self
+            .blinks
+            .iter()
+            .map(|&b| {
+                let d = t - b;
+                if !(0.0..0.28).contains(&d) {
+                    0.0
+                } else if d < 0.08 {
+                    d / 0.08
+                } else if d < 0.12 {
+                    1.0
+                } else {
+                    1.0 - (d - 0.12) / 0.16
+                }
+            })
+            .fold(0.0, f32::max);
+        let brows = self
+            .accents
+            .iter()
+            .map(|&(start, end)| {
+                let rise = start - 0.12;
+                if t < rise || t > end + 0.3 {
+                    0.0
+                } else if t < start {
+                    smooth((t - rise) / 0.12)
+                } else if t <= end {
+                    1.0
+                } else {
+                    1.0 - smooth((t - end) / 0.3)
+                }
+            })
+            .fold(0.0, f32::max);
+        [blink, blink, 0.5 * brows, 0.35 * brows, 0.35 * brows]
+    }
+}
+
+/// Adds `gestures` to `frames` (one row of `character`'s weights per frame at `fps`): each
+/// shape takes the larger of its lip-sync weight and what the gestures' channels give it
+/// through the character's name table. Returns how many of its shapes the gestures moved.
+pub fn add(
+    frames: &mut [Vec<f32>],
+    fps: f32,
+    gestures: &Gestures,
+    character: &faceanim_rig::Character,
+) -> usize {
+    let map = character.name_map();
+    let mut moved = vec![false; character.blendshapes().len()];
+    for (k, row) in frames.iter_mut().enumerate() {
+        let values = gestures.at(k as f32 / fps);
+        let weights = map.weights_from_channels(|c| {
+            CHANNELS
+                .iter()
+                .position(|n| *n == c)
+                .map_or(0.0, |i| values[i])
+        });
+        for ((w, g), m) in row.iter_mut().zip(weights).zip(&mut moved) {
+            if g > *w {
+                *w = g;
+            }
+            *m |= g > 0.0;
+        }
+    }
+    moved.into_iter().filter(|m| *m).count()
+}
+
+fn smooth(x: f32) -> f32 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_blink_closes_fast_and_opens_slowly() {
+        let g = Gestures {
+            blinks: vec![1.0],
+            accents: vec![(3.0, 3.2)],
+        };
+        let near = |a: f32, b: f32| (a - b).abs() < 1e-4;
+        assert!(g.at(0.9).iter().all(|v| near(*v, 0.0)));
+        assert!(near(g.at(1.04)[0], 0.5));
+        assert!(near(g.at(1.1)[0], 1.0));
+        assert!(g.at(1.2)[0] > 0.4 && g.at(1.2)[0] < 0.6);
+        assert!(near(g.at(1.3)[0], 0.0));
+        assert!(near(g.at(3.1)[2], 0.5));
+        assert!(near(g.at(3.6)[2], 0.0));
+    }
+
+    #[test]
+    fn pauses_and_long_stretches_blink() {
+        // 8 s of "speech": vowels every 0.2 s, a pause from 4.0 to 4.6 s.
+        let mut phones = Vec::new();
+        let mut t = 0.0;
+        while t < 8.0 {
+            let label = if (4.0..4.6).contains(&t) { "SIL" } else { "AA" };
+            phones.push(Phone {
+                label: label.into(),
+                start: t,
+                end: t + 0.2,
+            });
+            t += 0.2;
+        }
+        let sound = Sound {
+            samples: (0..128_000)
+                .map(|k| ((k as f32 * 0.05).sin() * 8000.0) as i16)
+                .collect(),
+        };
+        let g = gestures(&sound, &phones);
+        assert!(g.blinks.len() >= 2, "{g:?}");
+        for pair in g.blinks.windows(2) {
+            assert!(pair[1] - pair[0] <= LONGEST_WITHOUT + 0.3, "{g:?}");
+        }
+    }
+}

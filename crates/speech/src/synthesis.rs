@@ -1,0 +1,424 @@
+//! Alignment by synthesis: a transcript in any language eSpeak NG speaks, timed on a recording
+//! of it without a recogniser (the approach of aeneas).
+//!
+//! 1. eSpeak NG speaks the transcript in the recording's language ([`faceanim_espeak_sys`]),
+//!    which gives its phones (IPA) and when each is said in that spoken version;
+//! 2. both sounds become the same features — 12 cepstra every 10 ms, normalised over each
+//!    recording (so that the voices' own colour cancels), their change, and loudness;
+//! 3. dynamic time warping finds the cheapest path between the two (a band around the
+//!    diagonal bounds the work);
+//! 4. each phone's start in the spoken version is carried along the path onto the recording,
+//!    and stretches where the recording is quiet for a while become silence.
+//!
+//! Recognition needs no model of the language: what eSpeak NG can say, this can time.
+
+use faceanim_espeak_sys::{PAUSE, Spoken};
+
+use crate::audio::{SAMPLE_RATE, Sound};
+use crate::features::{CEPSTRA, Frontend, HOP, WINDOW};
+use crate::phones::{Phone, PhoneError};
+
+/// Features per frame: cepstra, their change, loudness.
+const DIMS: usize = 2 * CEPSTRA + 1;
+/// The band's half-width as a share of the longer recording's frames, and its bounds.
+const BAND_SHARE: f32 = 0.3;
+const BAND_MIN: usize = 60;
+/// The most cells the warping may visit (about 200 MB of path at one byte each): a line of
+/// dialogue needs a tiny part of it; an hour of audio must be cut into lines.
+const MAX_CELLS: usize = 200_000_000;
+/// A quiet stretch at least this long inside a phone's time is a pause, not a stop closure.
+const PAUSE_SECONDS: f32 = 0.15;
+
+/// The phones of `text` timed on `sound`, spoken as `language` (an eSpeak NG voice: `en-us`,
+/// `es`, `ja`, …) says them; labels are IPA, pauses `SIL`.
+///
+/// # Errors
+/// [`PhoneError::Synthesis`] when eSpeak NG is missing or does not know the language,
+/// [`PhoneError::TooLongToAlign`] for a recording too long to warp at once.
+pub fn align(sound: &Sound, text: &str, language: &str) -> Result<Vec<Phone>, PhoneError> {
+    let spoken = faceanim_espeak_sys::speak(text, language, None)?;
+    if spoken.phones.iter().all(|p| p.ipa == PAUSE) {
+        return Err(PhoneError::EmptyTranscript);
+    }
+    let synthetic = resample(&spoken.samples, spoken.sample_rate, SAMPLE_RATE);
+    let (ours, theirs) = (
+        Frontend::cepstra(&synthetic),
+        Frontend::cepstra(&sound.samples),
+    );
+    // Only speech is warped onto speech: the silence a recording starts and ends with is
+    // its own, however long.
+    let (Some((a0, a1)), Some((b0, b1))) = (speech(&theirs), speech(&ours)) else {
+        return Ok(Vec::new());
+    };
+    let (theirs, ours) = (features(&theirs[a0..=a1]), features(&ours[b0..=b1]));
+    let band = band(theirs.len(), ours.len());
+    let cells = theirs.len().saturating_mul(2 * band + 1);
+    if cells > MAX_CELLS {
+        return Err(PhoneError::TooLongToAlign {
+            seconds: sound.seconds(),
+        });
+    }
+    let path = warp(&theirs, &ours, band);
+    // Where each frame of the spoken version starts on the recording.
+    let mut first = vec![usize::MAX; ours.len()];
+    for &(i, j) in &path {
+        first[j] = first[j].min(i);
+    }
+    let on_recording = |ms: u32| {
+        let j = frame_of(ms as f32 / 1000.0);
+        if j < b0 {
+            return time_of(a0) - time_of(b0 - j) + time_of(0);
+        }
+        let j = (j - b0).min(ours.len() - 1);
+        time_of(a0 + first[j])
+    };
+    let phones = timed(&spoken, sound.seconds(), on_recording);
+    Ok(carve_pauses(phones, &sound.voice_activity()))
+}
+
+/// The phones of `spoken`, each starting where `on_recording` places its start and ending
+/// where the next starts (the last at the end of the recording's speech); labels cleaned.
+fn timed(spoken: &Spoken, seconds: f32, on_recording: impl Fn(u32) -> f32) -> Vec<Phone> {
+    let mut phones: Vec<Phone> = Vec::with_capacity(spoken.phones.len() + 1);
+    let starts: Vec<f32> = spoken
+        .phones
+        .iter()
+        .map(|p| on_recording(p.start_ms))
+        .collect();
+    let spoken_end = spoken.samples.len() as f32 * 1000.0 / spoken.sample_rate as f32;
+    let end_of_speech = on_recording(spoken_end as u32).min(seconds);
+    for (k, phone) in spoken.phones.iter().enumerate() {
+        // eSpeak NG marks a switch of language as a phone "(en)": not a sound.
+        if phone.ipa.starts_with('(') {
+            continue;
+        }
+        let start = starts[k].min(seconds);
+        let end = starts
+            .get(k + 1)
+            .copied()
+            .unwrap_or(end_of_speech)
+            .clamp(start, seconds);
+        let label = if phone.ipa == PAUSE {
+            "SIL".to_owned()
+        } else {
+            phone.ipa.clone()
+        };
+        phones.push(Phone { label, start, end });
+    }
+    if let Some(first) = phones.first()
+        && first.start > 0.0
+    {
+        let start = first.start;
+        phones.insert(
+            0,
+            Phone {
+                label: "SIL".into(),
+                start: 0.0,
+                end: start,
+            },
+        );
+    }
+    if let Some(last) = phones.last()
+        && last.end < seconds
+    {
+        let end = last.end;
+        phones.push(Phone {
+            label: "SIL".into(),
+            start: end,
+            end: seconds,
+        });
+    }
+    phones.retain(|p| p.end > p.start);
+    phones
+}
+
+/// Marks as silence every quiet stretch of at least [`PAUSE_SECONDS`] (one flag per 10 ms in
+/// `voiced`): the phone it fell in keeps its heard part (a pause the transcript did not mark,
+/// or one the voice made longer than the synthesiser did).
+fn carve_pauses(phones: Vec<Phone>, voiced: &[bool]) -> Vec<Phone> {
+    let shortest = (PAUSE_SECONDS * 100.0).round() as usize;
+    let mut pauses = Vec::new();
+    let mut k = 0;
+    while k < voiced.len() {
+        if voiced[k] {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < voiced.len() && !voiced[k] {
+            k += 1;
+        }
+        if k - start >= shortest {
+            // A few frames in from each edge: the ends of the words either side stay theirs.
+            pauses.push((
+                (start + 3) as f32 / 100.0,
+                (k.saturating_sub(3)) as f32 / 100.0,
+            ));
+        }
+    }
+    let mut out = Vec::with_capacity(phones.len() + 2 * pauses.len());
+    for phone in phones {
+        let mut rest = Some(phone);
+        for &(a, b) in &pauses {
+            let Some(p) = rest.take() else { break };
+            if b <= p.start || a >= p.end || p.label == "SIL" {
+                rest = Some(p);
+                continue;
+            }
+            if a > p.start {
+                out.push(Phone {
+                    end: a,
+                    ..p.clone()
+                });
+            }
+            out.push(Phone {
+                label: "SIL".into(),
+                start: a.max(p.start),
+                end: b.min(p.end),
+            });
+            if b < p.end {
+                rest = Some(Phone { start: b, ..p });
+            }
+        }
+        out.extend(rest);
+    }
+    // One silence for a pause that crossed a phone's end.
+    out.dedup_by(|next, kept| {
+        let merge = next.label == "SIL" && kept.label == "SIL";
+        if merge {
+            kept.end = next.end;
+        }
+        merge
+    });
+    out
+}
+
+/// The first and last frames of speech in `frames`: louder than 30 dB under the loudest.
+fn speech(frames: &[([f32; CEPSTRA], f32)]) -> Option<(usize, usize)> {
+    let loudest = frames.iter().map(|f| f.1).fold(f32::MIN, f32::max);
+    let loud = |f: &&([f32; CEPSTRA], f32)| f.1 > loudest - 30.0;
+    let first = frames.iter().position(|f| loud(&f))?;
+    let last = frames.iter().rposition(|f| loud(&f))?;
+    Some((first, last))
+}
+
+/// Linear resampling from `from` to `to` samples a second (speech features need no more).
+fn resample(samples: &[i16], from: u32, to: u32) -> Vec<i16> {
+    if from == to || samples.is_empty() {
+        return samples.to_vec();
+    }
+    let step = from as f64 / to as f64;
+    let count = (samples.len() as f64 / step).floor() as usize;
+    (0..count)
+        .map(|n| {
+            let x = n as f64 * step;
+            let k = x as usize;
+            let f = x - k as f64;
+            let a = f64::from(samples[k]);
+            let b = f64::from(samples[(k + 1).min(samples.len() - 1)]);
+            (a + (b - a) * f).round() as i16
+        })
+        .collect()
+}
+
+/// Each frame's features, normalised over the recording: cepstra to zero mean and unit
+/// deviation over its loud frames, their change, and loudness below the loudest frame.
+fn features(frames: &[([f32; CEPSTRA], f32)]) -> Vec<[f32; DIMS]> {
+    if frames.is_empty() {
+        return Vec::new();
+    }
+    let loudest = frames.iter().map(|f| f.1).fold(f32::MIN, f32::max);
+    let loud: Vec<&[f32; CEPSTRA]> = frames
+        .iter()
+        .filter(|f| f.1 > loudest - 35.0)
+        .map(|f| &f.0)
+        .collect();
+    let n = loud.len().max(1) as f32;
+    let mut mean = [0.0f32; CEPSTRA];
+    let mut deviation = [0.0f32; CEPSTRA];
+    for c in &loud {
+        for k in 0..CEPSTRA {
+            mean[k] += c[k] / n;
+        }
+    }
+    for c in &loud {
+        for k in 0..CEPSTRA {
+            deviation[k] += (c[k] - mean[k]).powi(2) / n;
+        }
+    }
+    for d in &mut deviation {
+        *d = d.sqrt().max(1e-3);
+    }
+    let normal: Vec<[f32; CEPSTRA]> = frames
+        .iter()
+        .map(|(c, _)| std::array::from_fn(|k| (c[k] - mean[k]) / deviation[k]))
+        .collect();
+    (0..frames.len())
+        .map(|t| {
+            let before = &normal[t.saturating_sub(1)];
+            let after = &normal[(t + 1).min(frames.len() - 1)];
+            let mut v = [0.0f32; DIMS];
+            v[..CEPSTRA].copy_from_slice(&normal[t]);
+            for k in 0..CEPSTRA {
+                v[CEPSTRA + k] = (after[k] - before[k]) * 0.5;
+            }
+            // Silence against speech is the strongest cue a warping has: weigh it well.
+            v[DIMS - 1] = ((frames[t].1 - loudest) / 6.0).clamp(-8.0, 0.0);
+            v
+        })
+        .collect()
+}
+
+/// The band's half-width for recordings of `n` and `m` frames.
+fn band(n: usize, m: usize) -> usize {
+    let longer = n.max(m) as f32;
+    ((longer * BAND_SHARE) as usize)
+        .max(BAND_MIN)
+        .max(n.abs_diff(m) + BAND_MIN)
+}
+
+/// The cheapest warping path from (0, 0) to the two ends, as (frame of `a`, frame of `b`)
+/// pairs in order: symmetric steps (a diagonal step costs twice a frame's distance, so that
+/// paths of every shape compare fairly), within `band` frames of the diagonal.
+fn warp(a: &[[f32; DIMS]], b: &[[f32; DIMS]], band: usize) -> Vec<(usize, usize)> {
+    let (n, m) = (a.len(), b.len());
+    let width = 2 * band + 1;
+    // Row i covers columns centre(i) - band ..= centre(i) + band.
+    let centre = |i: usize| (i * m) / n.max(1);
+    let lo = |i: usize| centre(i).saturating_sub(band);
+    let hi = |i: usize| (centre(i) + band).min(m - 1);
+    let distance = |i: usize, j: usize| {
+        a[i].iter()
+            .zip(&b[j])
+            .map(|(x, y)| (x - y) * (x - y))
+            .sum::<f32>()
+            .sqrt()
+    };
+    let mut previous = vec![f32::INFINITY; width];
+    let mut current = vec![f32::INFINITY; width];
+    // 0: diagonal, 1: from the row above, 2: from the left.
+    let mut steps = vec![0u8; n * width];
+    let mut previous_lo = 0usize;
+    for i in 0..n {
+        current.fill(f32::INFINITY);
+        let (l, h) = (lo(i), hi(i));
+        for j in l..=h {
+            let d = distance(i, j);
+            let above = |jj: usize| -> f32 {
+                if i == 0 || jj < previous_lo || jj - previous_lo >= width {
+                    f32::INFINITY
+                } else {
+                    previous[jj - previous_lo]
+                }
+            };
+            let (cost, step) = if i == 0 && j == 0 {
+                (d, 0u8)
+            } else {
+                let diagonal = if j > 0 {
+                    above(j - 1) + 2.0 * d
+                } else {
+                    f32::INFINITY
+                };
+                let vertical = above(j) + d;
+                let horizontal = if j > l {
+                    current[j - 1 - l] + d
+                } else {
+                    f32::INFINITY
+                };
+                if diagonal <= vertical && diagonal <= horizontal {
+                    (diagonal, 0)
+                } else if vertical <= horizontal {
+                    (vertical, 1)
+                } else {
+                    (horizontal, 2)
+                }
+            };
+            current[j - l] = cost;
+            steps[i * width + (j - l)] = step;
+        }
+        std::mem::swap(&mut previous, &mut current);
+        previous_lo = l;
+    }
+    // Back from the end.
+    let mut path = Vec::with_capacity(n + m);
+    let (mut i, mut j) = (n - 1, m - 1);
+    loop {
+        path.push((i, j));
+        if i == 0 && j == 0 {
+            break;
+        }
+        let l = lo(i);
+        match steps[i * width + (j - l)] {
+            0 if i > 0 && j > 0 => {
+                i -= 1;
+                j -= 1;
+            }
+            1 if i > 0 => i -= 1,
+            _ if j > 0 => j -= 1,
+            _ => i -= 1,
+        }
+    }
+    path.reverse();
+    path
+}
+
+/// The frame whose window is centred nearest `seconds`.
+fn frame_of(seconds: f32) -> usize {
+    let centre = WINDOW as f32 / 2.0 / SAMPLE_RATE as f32;
+    ((seconds - centre) * SAMPLE_RATE as f32 / HOP as f32)
+        .round()
+        .max(0.0) as usize
+}
+
+/// The centre of frame `k`, seconds.
+fn time_of(k: usize) -> f32 {
+    (k * HOP) as f32 / SAMPLE_RATE as f32 + WINDOW as f32 / 2.0 / SAMPLE_RATE as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stretched_copy_warps_onto_its_original() {
+        // A ramp of "sounds", and the same ramp with every frame said twice.
+        let a: Vec<[f32; DIMS]> = (0..50).map(|k| [k as f32; DIMS]).collect();
+        let b: Vec<[f32; DIMS]> = (0..100).map(|k| [(k / 2) as f32; DIMS]).collect();
+        let path = warp(&b, &a, band(b.len(), a.len()));
+        assert_eq!(path.first(), Some(&(0, 0)));
+        assert_eq!(path.last(), Some(&(99, 49)));
+        for &(i, j) in &path {
+            assert_eq!(i / 2, j, "{path:?}");
+        }
+    }
+
+    #[test]
+    fn quiet_stretches_inside_phones_become_silence() {
+        let phone = |label: &str, start: f32, end: f32| Phone {
+            label: label.into(),
+            start,
+            end,
+        };
+        // Heard for 0.3 s, quiet for 0.4 s, heard again.
+        let voiced: Vec<bool> = (0..100).map(|k| !(30..70).contains(&k)).collect();
+        let carved = carve_pauses(vec![phone("a", 0.0, 0.6), phone("b", 0.6, 1.0)], &voiced);
+        let labels: Vec<&str> = carved.iter().map(|p| p.label.as_str()).collect();
+        assert_eq!(labels, ["a", "SIL", "b"]);
+        assert!(
+            carved
+                .iter()
+                .any(|p| p.label == "SIL" && p.start <= 0.34 && p.end >= 0.6)
+        );
+        // A short closure (under PAUSE_SECONDS) is left alone.
+        let voiced: Vec<bool> = (0..100).map(|k| !(30..38).contains(&k)).collect();
+        let kept = carve_pauses(vec![phone("p", 0.0, 1.0)], &voiced);
+        assert_eq!(kept.len(), 1);
+    }
+
+    #[test]
+    fn resampling_keeps_the_length_in_seconds() {
+        let samples: Vec<i16> = (0..22_050).map(|k| (k % 100) as i16).collect();
+        let out = resample(&samples, 22_050, 16_000);
+        assert_eq!(out.len(), 16_000);
+    }
+}

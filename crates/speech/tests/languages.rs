@@ -1,0 +1,178 @@
+//! Lip sync of lines in languages other than English, from their transcripts: each line is
+//! spoken by an eSpeak NG voice variant at a slower rate than the one faceanim aligns with (so
+//! the recording is not the alignment's own voice), and the visemes faceanim puts on the
+//! mouth are compared, 10 ms at a time (±40 ms), with the phones the variant reported saying
+//! then: their class (closed lips, lip to teeth, open, spread, round, tongue and teeth) must
+//! agree, every bilabial must close the lips, and the silence around the line must rest.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
+
+use faceanim_rig::names::Viseme;
+use faceanim_speech::Sound;
+use faceanim_speech::visemes::{index, viseme_of_ipa};
+
+/// Lines with bilabials, in their own words.
+const LINES: [(&str, &str, &str); 6] = [
+    (
+        "es",
+        "es+f3",
+        "Mi mamá me mima mucho, y el perro de Pablo bebe agua.",
+    ),
+    ("de", "de+m3", "Meine Mutter mag warme Milch am Abend."),
+    (
+        "fr",
+        "fr+f2",
+        "Ma mère prépare une bonne soupe pour le dîner.",
+    ),
+    ("ja", "ja+m2", "まいにち、ももをたべます。"),
+    ("ko", "ko+f4", "엄마는 매일 밥을 먹어요."),
+    ("it", "it+m4", "Mamma mia, il mare è bellissimo."),
+];
+
+fn class(v: Viseme) -> &'static str {
+    match v {
+        Viseme::PP => "closed",
+        Viseme::FF => "lip-teeth",
+        Viseme::Aa => "open",
+        Viseme::E | Viseme::Ih => "spread",
+        Viseme::Oh | Viseme::Ou => "round",
+        Viseme::Sil => "rest",
+        _ => "tongue",
+    }
+}
+
+#[test]
+fn transcripts_in_six_languages_lip_sync_on_time() {
+    if !faceanim_espeak_sys::available() {
+        panic!("eSpeak NG is needed: run scripts/setup.sh (libespeak-ng-dev) and build again");
+    }
+    let mut report = Vec::new();
+    for (language, voice, line) in LINES {
+        let spoken = faceanim_espeak_sys::speak(line, voice, Some(140)).unwrap();
+        // Half a second of silence either side, at 16 kHz.
+        let step = spoken.sample_rate as f32 / 16_000.0;
+        let mut samples = vec![0i16; 8_000];
+        let count = (spoken.samples.len() as f32 / step) as usize;
+        samples.extend((0..count).map(|n| spoken.samples[(n as f32 * step) as usize]));
+        samples.extend(vec![0i16; 8_000]);
+        let sound = Sound { samples };
+        let reading = faceanim_speech::read(
+            &sound,
+            Some(line),
+            Some(language),
+            faceanim_speech::Recognition::Words,
+        )
+        .unwrap();
+        assert_eq!(
+            reading.recognition,
+            faceanim_speech::Recognition::Synthesis,
+            "{language}: {:?}",
+            reading.notes
+        );
+        let frames = reading.track.sample(100.0);
+        let dominant = |k: i64| -> &'static str {
+            let Some(row) = usize::try_from(k).ok().and_then(|k| frames.get(k)) else {
+                return "rest";
+            };
+            let (best, weight) = row
+                .iter()
+                .enumerate()
+                .fold((0, 0.0f32), |b, (i, w)| if *w > b.1 { (i, *w) } else { b });
+            if weight < 0.2 {
+                "rest"
+            } else {
+                class(Viseme::ALL[best])
+            }
+        };
+        // The variant's phones, on the padded recording.
+        let end = spoken.samples.len() as f32 / spoken.sample_rate as f32;
+        let truth: Vec<(Viseme, f32, f32)> = spoken
+            .phones
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let next = spoken
+                    .phones
+                    .get(k + 1)
+                    .map_or(end, |n| n.start_ms as f32 / 1000.0);
+                (
+                    viseme_of_ipa(&p.ipa),
+                    0.5 + p.start_ms as f32 / 1000.0,
+                    0.5 + next,
+                )
+            })
+            .collect();
+        let (mut hits, mut total, mut closed, mut bilabials) = (0, 0, 0, 0);
+        for &(viseme, start, stop) in &truth {
+            if viseme == Viseme::Sil {
+                continue;
+            }
+            let mut t = start + 0.005;
+            while t < stop {
+                let k = (t * 100.0).round() as i64;
+                total += 1;
+                if (-4..=4).any(|d| dominant(k + d) == class(viseme)) {
+                    hits += 1;
+                }
+                t += 0.01;
+            }
+            if viseme == Viseme::PP {
+                bilabials += 1;
+                let (a, b) = (
+                    ((start - 0.04) * 100.0) as usize,
+                    ((stop + 0.04) * 100.0) as usize,
+                );
+                if (a..=b.min(frames.len() - 1)).any(|k| frames[k][index(Viseme::PP)] >= 0.5) {
+                    closed += 1;
+                }
+            }
+        }
+        let agreement = f64::from(hits) / f64::from(total.max(1));
+        report.push(format!(
+            "{language} ({voice}): agreement {agreement:.3} of {total} frames, P/B/M closed {closed}/{bilabials}"
+        ));
+        assert!(bilabials > 0, "{language}: no bilabial in {line}");
+        assert!(agreement >= 0.8, "{}", report.join("\n"));
+        assert!(closed * 10 >= bilabials * 8, "{}", report.join("\n"));
+        // The silence before and after rests.
+        for k in (0..40).chain(frames.len() - 40..frames.len()) {
+            assert_eq!(dominant(k as i64), "rest", "{language}: frame {k} moves");
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+#[test]
+fn ipa_phones_take_the_shape_of_their_articulation() {
+    let cases = [
+        ("p", Viseme::PP),
+        ("bʲ", Viseme::PP),
+        ("m̩", Viseme::PP),
+        ("ɸ", Viseme::FF),
+        ("β", Viseme::PP),
+        ("v", Viseme::FF),
+        ("θ", Viseme::TH),
+        ("tʃ", Viseme::CH),
+        ("dʑ", Viseme::CH),
+        ("ts", Viseme::SS),
+        ("ɕ", Viseme::CH),
+        ("ŋ", Viseme::Kk),
+        ("ʁ", Viseme::Kk),
+        ("ɾ", Viseme::RR),
+        ("ˈaː", Viseme::Aa),
+        ("aɪ", Viseme::Aa),
+        ("ɛ", Viseme::E),
+        ("iː", Viseme::Ih),
+        ("ɔ̃", Viseme::Oh),
+        ("y", Viseme::Ou),
+        ("ɯ", Viseme::Ou),
+        ("o̞", Viseme::Oh),
+        ("_", Viseme::Sil),
+    ];
+    for (phone, viseme) in cases {
+        assert_eq!(viseme_of_ipa(phone), viseme, "{phone}");
+    }
+    // ARPAbet and IPA are told apart by case.
+    assert_eq!(faceanim_speech::visemes::viseme_of("B"), Viseme::PP);
+    assert_eq!(faceanim_speech::visemes::viseme_of("b"), Viseme::PP);
+    assert_eq!(faceanim_speech::visemes::viseme_of("SIL"), Viseme::Sil);
+}
