@@ -13,7 +13,8 @@ the audio alone:
   shapes' largest weight (all but viseme_sil and viseme_PP);
 - the command's wall-clock time over the sound's length.
 
-Voices: flite's (kal, slt, rms, awb; `-psdur`), festival's (kal_diphone, `utt.save.segs`),
+Voices: flite's (kal, slt, rms, awb; `-psdur`), festival's (English diphone and HTS voices, and Italian
+with `festival-it:`; `utt.save.segs`),
 eSpeak NG's (through its library with ctypes, phoneme events: a voice variant and rate other
 than the ones faceanim aligns with). Languages other than English through eSpeak NG with
 `--language`.
@@ -53,6 +54,13 @@ FOREIGN = {
     "it": ["Buongiorno, come stai?", "Mamma mia, il mare è bellissimo."],
     "pt": ["Bom dia, meu amigo.", "A minha mãe bebe muito café."],
 }
+
+# More Italian for Festival's Italian voices (held out of every choice).
+ITALIAN = [
+    "Il babbo porta il pane buono a casa.",
+    "Paolo beve molto latte ogni mattina.",
+    "Bianca mangia una mela matura nel prato.",
+]
 
 VISEMES = ["sil", "PP", "FF", "TH", "DD", "kk", "CH", "SS", "nn", "RR", "aa", "E", "ih", "oh", "ou"]
 CLASS = {
@@ -120,11 +128,20 @@ def flite(voice, text, wav):
     return phones
 
 
-def festival(voice, text, wav, work):
+# Festival's Italian voices speak SAMPA (stress as a digit, `#` a pause).
+SAMPA = {"E": "ɛ", "O": "ɔ", "dZ": "dʒ", "tS": "tʃ", "S": "ʃ", "Z": "ʒ", "J": "ɲ", "L": "ʎ"}
+
+
+def sampa_viseme(phone):
+    phone = phone.rstrip("0123456789")
+    return None if phone in ("#", "pau") else ipa_viseme(SAMPA.get(phone, phone))
+
+
+def festival(voice, text, wav, work, viseme=ARPABET.get):
     segs = os.path.join(work, "f.segs")
     script = os.path.join(work, "f.scm")
     quoted = text.replace("\\", "\\\\").replace('"', '\\"')
-    with open(script, "w") as f:
+    with open(script, "w", encoding="latin-1") as f:
         f.write(f'({voice})\n(set! utt (Utterance Text "{quoted}"))\n(utt.synth utt)\n'
                 f'(utt.save.wave utt "{wav}" \'riff)\n(utt.save.segs utt "{segs}")\n')
     subprocess.run(["festival", "-b", script], check=True, capture_output=True)
@@ -135,7 +152,7 @@ def festival(voice, text, wav, work):
         if len(parts) != 3:
             continue
         end, phone = float(parts[0]), parts[2]
-        phones.append((phone, start, end, ARPABET.get(phone)))
+        phones.append((phone, start, end, viseme(phone)))
         start = end
     return phones
 
@@ -252,7 +269,7 @@ def score(phones, clip, seconds):
             closed += 1
     silence = 0.0
     for label, start, end, viseme in phones:
-        if viseme is None and label in ("pau", "_", "h#", "sil") and end - start >= 0.3:
+        if viseme is None and label in ("pau", "_", "h#", "sil", "#") and end - start >= 0.3:
             a, b = round((start + 0.1) * fps), round((end - 0.1) * fps)
             for k in range(max(a, 0), min(b, len(frames))):
                 silence = max(silence, max(frames[k][columns[v]] for v in VISEMES
@@ -280,6 +297,8 @@ def main():
             if engine == "espeak" and not voice.startswith("en"):
                 language = voice.split("+")[0]
                 lines = FOREIGN[language]
+            elif engine == "festival-it":
+                language, lines = "it", FOREIGN["it"] + ITALIAN
             totals = {}
             for k, line in enumerate(lines):
                 wav = os.path.join(work, f"{engine}-{voice}-{k}.wav")
@@ -287,6 +306,8 @@ def main():
                     phones = flite(voice, line, wav)
                 elif engine == "festival":
                     phones = festival(voice, line, wav, work)
+                elif engine == "festival-it":
+                    phones = festival(voice, line, wav, work, sampa_viseme)
                 else:
                     espeak = espeak or Espeak()
                     phones = espeak.speak(voice, line, wav, 150)

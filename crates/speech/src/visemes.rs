@@ -6,7 +6,7 @@
 //! - **a minimum hold**: a shape held for less than [`MIN_HOLD`] is not drawn (it would flicker)
 //!   — except a P/B/M closure, which always closes the lips, for at least that long;
 //! - **pauses**: in a short pause (under [`LONG_PAUSE`]) the mouth relaxes towards rest but
-//!   does not close; in a long one it closes;
+//!   does not close; in a long one it closes, within [`CLOSE`] of the last sound;
 //! - **coarticulation**: each shape blends from the previous one over up to [`BLEND`].
 //!
 //! Only sound is mouthed: a phone the recogniser put where the recording is quiet
@@ -29,6 +29,9 @@ pub const MIN_HOLD: f32 = 0.03;
 pub const LONG_PAUSE: f32 = 0.25;
 /// The longest blend from one shape to the next.
 pub const BLEND: f32 = 0.08;
+/// How long the mouth takes to close when the sound stops for a long pause (a speaker's
+/// mouth comes to rest within a couple of frames of the last sound).
+pub const CLOSE: f32 = 0.05;
 /// The shape after closed lips starts forming this long before the lips' release.
 pub const RELEASE: f32 = 0.02;
 /// How far a short pause relaxes the mouth: the previous shape's weight is kept at this.
@@ -238,9 +241,9 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
         if viseme == Viseme::Sil {
             let previous = keys.last().copied();
             if end - start >= LONG_PAUSE || k == 0 || k + 1 == held.len() {
-                // A long pause (or before the first or after the last word): close, soon
-                // after the sound stops.
-                push(&mut keys, (start + 0.5 * BLEND).min(end), Viseme::Sil, 1.0);
+                // A long pause (or before the first or after the last word): close as the
+                // sound stops, over [`CLOSE`].
+                push(&mut keys, start, Viseme::Sil, 1.0);
             } else if let Some(previous) = previous {
                 push(&mut keys, start, previous.viseme, RELAXED * previous.weight);
             }
@@ -313,7 +316,12 @@ impl Track {
         };
         let key = self.keys[k];
         let end = self.keys.get(k + 1).map_or(self.seconds, |n| n.start);
-        let blend = BLEND.min(0.5 * (end - key.start)).max(1e-3);
+        let longest = if key.viseme == Viseme::Sil && key.weight >= 1.0 {
+            CLOSE
+        } else {
+            BLEND
+        };
+        let blend = longest.min(0.5 * (end - key.start)).max(1e-3);
         let t = ((time - key.start) / blend).clamp(0.0, 1.0);
         let mut add = |v: Viseme, w: f32| {
             if v != Viseme::Sil {
