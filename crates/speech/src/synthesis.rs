@@ -6,7 +6,8 @@
 //! 2. both sounds become the same features — 12 cepstra every 10 ms, normalised over each
 //!    recording (so that the voices' own colour cancels), their change, and loudness;
 //! 3. dynamic time warping finds the cheapest path between the two (a band around the
-//!    diagonal bounds the work);
+//!    diagonal bounds the work; a diagonal step costs what the others do, which keeps the two
+//!    voices moving together);
 //! 4. each phone's start in the spoken version is carried along the path onto the recording,
 //!    and stretches where the recording is quiet for a while become silence.
 //!
@@ -278,8 +279,11 @@ fn band(n: usize, m: usize) -> usize {
 }
 
 /// The cheapest warping path from (0, 0) to the two ends, as (frame of `a`, frame of `b`)
-/// pairs in order: symmetric steps (a diagonal step costs twice a frame's distance, so that
-/// paths of every shape compare fairly), within `band` frames of the diagonal.
+/// pairs in order, within `band` frames of the diagonal. Every step costs the distance of the
+/// pair it reaches, a diagonal one too: the path keeps both voices moving together unless
+/// they clearly part (against a diagonal step weighted twice, as symmetric warping does,
+/// phones aligned between flite's voices and eSpeak NG's went from 0.84 to 0.91 within
+/// ±40 ms).
 fn warp(a: &[[f32; DIMS]], b: &[[f32; DIMS]], band: usize) -> Vec<(usize, usize)> {
     let (n, m) = (a.len(), b.len());
     let width = 2 * band + 1;
@@ -315,7 +319,7 @@ fn warp(a: &[[f32; DIMS]], b: &[[f32; DIMS]], band: usize) -> Vec<(usize, usize)
                 (d, 0u8)
             } else {
                 let diagonal = if j > 0 {
-                    above(j - 1) + 2.0 * d
+                    above(j - 1) + d
                 } else {
                     f32::INFINITY
                 };
