@@ -29,6 +29,9 @@ pub const MIN_HOLD: f32 = 0.03;
 pub const LONG_PAUSE: f32 = 0.25;
 /// The longest blend from one shape to the next.
 pub const BLEND: f32 = 0.08;
+/// The longest quiet a consonant makes itself (a stop's closure, a P's lips held shut): one
+/// quiet for longer is a pause the recogniser put a consonant in.
+pub const CLOSURE: f32 = 0.15;
 /// How long the mouth takes to close when the sound stops for a long pause (a speaker's
 /// mouth comes to rest within a couple of frames of the last sound).
 pub const CLOSE: f32 = 0.05;
@@ -174,6 +177,12 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
         let frames = &voiced[a.min(voiced.len())..b.min(voiced.len())];
         frames.iter().filter(|v| **v).count() * 3 >= frames.len().max(1)
     };
+    // How long a phone is quiet, seconds.
+    let quiet = |p: &Phone| {
+        let (a, b) = ((p.start * 100.0) as usize, (p.end * 100.0).ceil() as usize);
+        let frames = &voiced[a.min(voiced.len())..b.min(voiced.len())];
+        frames.iter().filter(|v| !**v).count() as f32 / 100.0
+    };
     // A consonant is often quiet itself — the lips of a P held shut, the hold of a T — and is
     // said when a sound beside it is heard.
     let vowel = |v: Viseme| {
@@ -188,7 +197,7 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
         heard(p)
             || (viseme != Viseme::Sil
                 && !vowel(viseme)
-                && p.end - p.start < LONG_PAUSE
+                && quiet(p) <= CLOSURE
                 && (k.checked_sub(1).is_some_and(|j| {
                     heard(&phones[j]) && viseme_of(&phones[j].label) != Viseme::Sil
                 }) || phones
