@@ -182,8 +182,18 @@ export async function openInput(files) {
   const header = (file) => ({ 'x-filename': encodeURIComponent(file.name) });
   try {
     if (files.length === 1) {
-      if (AUDIO.test(files[0].name)) $('take-info').textContent = `Lip sync of ${files[0].name}…`;
-      apply(await api('POST', 'api/capture/upload', await files[0].arrayBuffer(), header(files[0])));
+      let url = 'api/capture/upload';
+      if (AUDIO.test(files[0].name)) {
+        $('take-info').textContent = `Lip sync of ${files[0].name}…`;
+        // What was said, and in which language, when the user typed them.
+        const query = new URLSearchParams();
+        const text = input('speech-text').value.trim();
+        const language = input('speech-language').value.trim();
+        if (text) query.set('text', text);
+        if (language) query.set('language', language);
+        if ([...query].length) url += `?${query}`;
+      }
+      apply(await api('POST', url, await files[0].arrayBuffer(), header(files[0])));
       return;
     }
     // Several photos are one sequence, in name order, like a folder of frames.

@@ -361,6 +361,49 @@ fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
     assert_eq!(summary["recognition"], "phone_loop", "{summary}");
 }
 
+#[test]
+fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language() {
+    let out = output_dir("lipsync-studio-languages");
+    let wav = out.join("pablo.wav");
+    let line = "El perro de Pablo bebe mucho.";
+    let spoke = Command::new("espeak-ng")
+        .args(["-v", "es+m3", "-s", "150", "-w"])
+        .arg(&wav)
+        .arg(line)
+        .output()
+        .expect("espeak-ng is needed: run scripts/setup.sh");
+    assert!(spoke.status.success(), "{spoke:?}");
+    let bytes = std::fs::read(&wav).unwrap();
+    let studio = start_on(None, &out.join("project.json"), &[]);
+    let upload = |query: &str| {
+        request(
+            studio.port,
+            "POST",
+            &format!("/api/capture/upload?{query}"),
+            &[("x-filename", "pablo.wav")],
+            &bytes,
+        )
+    };
+    let (status, state) = upload("text=El%20perro%20de%20Pablo%20bebe%20mucho.&language=es");
+    assert_eq!(status, 200, "{state}");
+    let state: Value = serde_json::from_str(&state).unwrap();
+    assert!(
+        state["notice"].is_null(),
+        "the transcript was used: {state}"
+    );
+    assert!(peak(&state["take"]["weights"]) > 0.3, "{state}");
+    // Without the language the Spanish words are not English: the note says what was done.
+    let (status, state) = upload("text=El%20perro%20de%20Pablo%20bebe%20mucho.");
+    assert_eq!(status, 200, "{state}");
+    let state: Value = serde_json::from_str(&state).unwrap();
+    let notice = state["notice"].as_str().unwrap_or_default();
+    assert!(notice.starts_with("pablo.wav: "), "{state}");
+    // A language that is not a name is refused, naming the field.
+    let (status, body) = upload("language=es%3Brm");
+    assert_eq!(status, 400, "{body}");
+    assert!(body.contains("language"), "{body}");
+}
+
 fn ffmpeg(args: &[&str]) {
     let out = Command::new("ffmpeg")
         .args(["-v", "error", "-y"])

@@ -150,7 +150,8 @@ fn is_session(name: &str) -> bool {
 }
 
 /// Several photos sent as one sequence: each names the batch, its place and the count; the
-/// last one starts reading the folder.
+/// last one starts reading the folder. Speech may come with its transcript and its language
+/// (an eSpeak NG voice name), as `faceanim lipsync --text --language` takes them.
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct Batch {
@@ -159,6 +160,8 @@ struct Batch {
     index: usize,
     #[serde(default)]
     count: usize,
+    text: Option<String>,
+    language: Option<String>,
 }
 
 async fn upload(
@@ -184,6 +187,19 @@ async fn upload(
                 "{name}: speech opens on its own, not in a sequence of photos"
             )));
         }
+        let text = batch.text.filter(|t| !t.trim().is_empty());
+        let language = batch.language.filter(|l| !l.trim().is_empty());
+        if let Some(language) = &language
+            && (language.len() > 40
+                || !language
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "-+_".contains(c)))
+        {
+            return Err(bad(format!(
+                "language: '{}' is not a language name (en-us, es, ja, …)",
+                faceanim_rig::excerpt(language)
+            )));
+        }
         let path = both.desk().store_upload(&name, &body, None)?;
         let character = both.studio().character.clone();
         let (shown, stored, desk) = (name.clone(), path.clone(), both.desk.clone());
@@ -195,10 +211,14 @@ async fn upload(
             let sound = faceanim_speech::Sound::read(&stored).map_err(|e| {
                 ApiError::Invalid(e.to_string().replace(&stored.display().to_string(), &shown))
             })?;
+            if let Some(text) = &text {
+                faceanim_speech::phones::transcript_words(text, sound.seconds())
+                    .map_err(|e| ApiError::Invalid(format!("text: {e}")))?;
+            }
             faceanim_speech::lip_sync_with(
                 &sound,
-                None,
-                None,
+                text.as_deref(),
+                language.as_deref(),
                 &mouth,
                 30.0,
                 faceanim_speech::Recognition::Words,

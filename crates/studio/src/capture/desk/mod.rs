@@ -286,6 +286,10 @@ impl CaptureDesk {
         let count = lip_sync.frames.len();
         let take = Take::from_weights(character, shown, lip_sync.fps, &lip_sync.frames)?;
         tracing::info!("lip sync of {shown}: {count} frames");
+        if !lip_sync.notes.is_empty() {
+            // What was done instead of what was asked (a transcript that could not be used).
+            self.notice = Some(format!("{shown}: {}", lip_sync.notes.join("; ")));
+        }
         self.take = Some(OpenTake::new(take, Previews::new()).with_sound(sound));
         self.save_take();
         Ok(count)
