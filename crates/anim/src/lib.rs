@@ -145,13 +145,7 @@ impl Clip {
         }
         for (field, rows) in [("head", &self.head), ("head_position", &self.head_position)] {
             let Some(rows) = rows else { continue };
-            if rows.len() != self.frames.len() {
-                problems.push(format!(
-                    "{field}: {} rows for {} frames",
-                    rows.len(),
-                    self.frames.len()
-                ));
-            }
+            problems.extend(count_problem(field, rows.len(), "rows", self.frames.len()));
             for (f, row) in rows.iter().enumerate() {
                 if row.iter().any(|x| !x.is_finite()) {
                     problems.push(format!("{field}[{f}]: not a finite number"));
@@ -159,13 +153,12 @@ impl Clip {
             }
         }
         if let Some(presence) = &self.presence {
-            if presence.len() != self.frames.len() {
-                problems.push(format!(
-                    "presence: {} values for {} frames",
-                    presence.len(),
-                    self.frames.len()
-                ));
-            }
+            problems.extend(count_problem(
+                "presence",
+                presence.len(),
+                "values",
+                self.frames.len(),
+            ));
             for (f, p) in presence.iter().enumerate() {
                 if !(0.0..=1.0).contains(p) {
                     problems.push(format!("presence[{f}]: {p} is not in [0, 1]"));
@@ -250,6 +243,12 @@ impl Clip {
             unmatched,
         })
     }
+}
+
+/// The problem of a per-frame list `field` holding `len` `what` for `frames` frames, if its
+/// length is not the frames'.
+fn count_problem(field: &str, len: usize, what: &str, frames: usize) -> Option<String> {
+    (len != frames).then(|| format!("{field}: {len} {what} for {frames} frames"))
 }
 
 #[cfg(test)]

@@ -304,13 +304,7 @@ fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
     let out = output_dir("lipsync-languages");
     let wav = out.join("mama.wav");
     let line = "Mi mamá me mima mucho. Y el perro de Pablo bebe agua en la playa.";
-    let spoke = Command::new("espeak-ng")
-        .args(["-v", "es+f3", "-s", "140", "-w"])
-        .arg(&wav)
-        .arg(line)
-        .output()
-        .expect("espeak-ng is needed: run scripts/setup.sh");
-    assert!(spoke.status.success(), "{spoke:?}");
+    espeak_ng("es+f3", "140", line, &wav);
     let (summary, clip) = run_lipsync(
         &wav,
         &["--text", line, "--language", "es", "--face"],
@@ -365,14 +359,7 @@ fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
 fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language() {
     let out = output_dir("lipsync-studio-languages");
     let wav = out.join("pablo.wav");
-    let line = "El perro de Pablo bebe mucho.";
-    let spoke = Command::new("espeak-ng")
-        .args(["-v", "es+m3", "-s", "150", "-w"])
-        .arg(&wav)
-        .arg(line)
-        .output()
-        .expect("espeak-ng is needed: run scripts/setup.sh");
-    assert!(spoke.status.success(), "{spoke:?}");
+    espeak_ng("es+m3", "150", "El perro de Pablo bebe mucho.", &wav);
     let bytes = std::fs::read(&wav).unwrap();
     let studio = start_on(None, &out.join("project.json"), &[]);
     let upload = |query: &str| {
@@ -402,6 +389,17 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language() {
     let (status, body) = upload("language=es%3Brm");
     assert_eq!(status, 400, "{body}");
     assert!(body.contains("language"), "{body}");
+}
+
+/// `text` spoken into `wav` by the `espeak-ng` program with `voice` at `rate` words a minute.
+fn espeak_ng(voice: &str, rate: &str, text: &str, wav: &Path) {
+    let spoke = Command::new("espeak-ng")
+        .args(["-v", voice, "-s", rate, "-w"])
+        .arg(wav)
+        .arg(text)
+        .output()
+        .expect("espeak-ng is needed: run scripts/setup.sh");
+    assert!(spoke.status.success(), "{spoke:?}");
 }
 
 fn ffmpeg(args: &[&str]) {
