@@ -21,8 +21,8 @@ pub struct LipsyncArgs {
     #[arg(long, value_name = "TEXT|FILE")]
     pub text: Option<String>,
     /// The language spoken, as eSpeak NG names it (`en-us`, `es`, `ja`, `de`, `fr`, `ko`,
-    /// `cmn`, … : `espeak-ng --voices`). A transcript in any of them is aligned by synthesis;
-    /// without one, English words are recognised, other languages by their phones.
+    /// `it`, `pt`, … : `espeak-ng --voices`). A transcript in any of them is aligned by
+    /// synthesis; without one, English words are recognised, other languages by their phones.
     #[arg(long, default_value = faceanim_speech::recognition::ENGLISH)]
     pub language: String,
     /// Outputs by extension, as `faceanim track` writes them (.glb/.vrm the character with

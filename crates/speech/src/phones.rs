@@ -1,7 +1,9 @@
-//! Phones and when they are said, from PocketSphinx: forced alignment of the transcript's
-//! words when there is one; without one, the words recognised with the language model, or a
-//! phone loop. Words become phones by the CMU dictionary, sharing the word's time by their
-//! typical lengths.
+//! Phones and when they are said, from PocketSphinx (English): a transcript's words become
+//! phones by the CMU dictionary and each phone is timed by forced alignment; without a
+//! transcript, the words recognised with the language model are aligned again the same way,
+//! or any phone after any other is recognised (a phone loop). Where phones cannot be aligned
+//! one by one, a word's time is shared between its phones by their typical lengths. Which
+//! route a line takes is [`crate::recognition`]'s choice.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -113,7 +115,6 @@ pub fn transcript_words(text: &str, seconds: f32) -> Result<Vec<String>, PhoneEr
     Ok(words_of(text))
 }
 
-/// An English transcript's `words` aligned by the recogniser, or why they could not be (a
 /// The words recognised with the English language model, each aligned again phone by phone
 /// (the recogniser's first pass times words, not the closures and releases inside them).
 ///
@@ -155,6 +156,7 @@ pub(crate) fn phone_loop(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
         .collect())
 }
 
+/// An English transcript's `words` aligned by the recogniser, or why they could not be (a
 /// word the dictionary lacks, an alignment that failed).
 pub(crate) fn align_english(sound: &Sound, words: &[String]) -> Result<Vec<Phone>, String> {
     let dictionary = Dictionary::english_words(words).map_err(|e| e.to_string())?;

@@ -93,7 +93,7 @@ fn timed(spoken: &Spoken, seconds: f32, on_recording: impl Fn(u32) -> f32) -> Ve
         if phone.ipa.starts_with('(') {
             continue;
         }
-        let start = starts[k].min(seconds);
+        let start = starts[k].clamp(0.0, seconds);
         let end = starts
             .get(k + 1)
             .copied()
