@@ -13,7 +13,7 @@
 
 use crate::audio::Sound;
 use crate::phones::Phone;
-use crate::visemes::viseme_of;
+use crate::visemes::{self, viseme_of};
 
 /// A pause at least this long ends a phrase (and is a moment to blink).
 pub const PHRASE_PAUSE: f32 = 0.25;
@@ -48,18 +48,8 @@ pub struct Gestures {
 pub fn gestures(sound: &Sound, phones: &[Phone]) -> Gestures {
     let levels = sound.frame_levels();
     let heard = sound.voice_activity();
-    let level_of = |p: &Phone| {
-        let (a, b) = ((p.start * 100.0) as usize, (p.end * 100.0).ceil() as usize);
-        let frames = &levels[a.min(levels.len())..b.min(levels.len())];
-        frames.iter().copied().fold(f32::MIN, f32::max)
-    };
-    let is_vowel = |p: &Phone| {
-        use faceanim_rig::names::Viseme;
-        matches!(
-            viseme_of(&p.label),
-            Viseme::Aa | Viseme::E | Viseme::Ih | Viseme::Oh | Viseme::Ou
-        )
-    };
+    let level_of = |p: &Phone| p.frames(&levels).iter().copied().fold(f32::MIN, f32::max);
+    let is_vowel = |p: &Phone| visemes::is_vowel(viseme_of(&p.label));
     let heard_at = |t: f32| heard.get((t * 100.0) as usize).copied().unwrap_or(false);
     // The line's speaking level: the median loudness of its vowels.
     let mut vowel_levels: Vec<f32> = phones

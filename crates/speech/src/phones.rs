@@ -24,6 +24,17 @@ pub struct Phone {
     pub end: f32,
 }
 
+impl Phone {
+    /// This phone's part of `per_frame`, one value per 10 ms of the sound (a voice-activity
+    /// flag, a loudness): the frames from its start to its end, cut at the list's end.
+    #[must_use]
+    pub fn frames<'a, T>(&self, per_frame: &'a [T]) -> &'a [T] {
+        let a = ((self.start.max(0.0) * 100.0) as usize).min(per_frame.len());
+        let b = ((self.end.max(0.0) * 100.0).ceil() as usize).clamp(a, per_frame.len());
+        &per_frame[a..b]
+    }
+}
+
 /// How the phones were found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -226,28 +237,17 @@ pub struct Dictionary {
 }
 
 impl Dictionary {
-    /// Debian's `cmudict-en-us.dict` (pocketsphinx-en-us).
-    ///
-    /// # Errors
-    /// [`PhoneError::Dictionary`] naming the file.
-    pub fn english() -> Result<Dictionary, PhoneError> {
-        Dictionary::read(Path::new(EN_US.dictionary), None)
-    }
-
-    /// Only `words` of Debian's `cmudict-en-us.dict`: a line's words, found without keeping
-    /// the other hundred thousand.
+    /// Only `words` of Debian's `cmudict-en-us.dict` (pocketsphinx-en-us): a line's words,
+    /// found without keeping the other hundred thousand.
     ///
     /// # Errors
     /// [`PhoneError::Dictionary`] naming the file.
     pub fn english_words(words: &[String]) -> Result<Dictionary, PhoneError> {
         let wanted: std::collections::HashSet<&str> = words.iter().map(String::as_str).collect();
-        Dictionary::read(Path::new(EN_US.dictionary), Some(&wanted))
+        Dictionary::read(Path::new(EN_US.dictionary), &wanted)
     }
 
-    fn read(
-        path: &Path,
-        only: Option<&std::collections::HashSet<&str>>,
-    ) -> Result<Dictionary, PhoneError> {
+    fn read(path: &Path, only: &std::collections::HashSet<&str>) -> Result<Dictionary, PhoneError> {
         let text = std::fs::read_to_string(path).map_err(|e| PhoneError::Dictionary {
             path: path.display().to_string(),
             message: format!("{e} (apt-get install pocketsphinx-en-us)"),
@@ -257,7 +257,7 @@ impl Dictionary {
             let mut parts = line.split_whitespace();
             let Some(word) = parts.next() else { continue };
             // Alternative pronunciations are written word(2): the first is kept.
-            if word.contains('(') || only.is_some_and(|only| !only.contains(word)) {
+            if word.contains('(') || !only.contains(word) {
                 continue;
             }
             words

@@ -67,6 +67,15 @@ pub fn viseme_of(phone: &str) -> Viseme {
     }
 }
 
+/// Whether a viseme is a vowel's (open, spread or round).
+#[must_use]
+pub fn is_vowel(viseme: Viseme) -> bool {
+    matches!(
+        viseme,
+        Viseme::Aa | Viseme::E | Viseme::Ih | Viseme::Oh | Viseme::Ou
+    )
+}
+
 /// Whether a phone is breath (`HH`, IPA `h`, `ɦ`), which takes the shape of the vowel after it.
 #[must_use]
 pub fn is_breath(phone: &str) -> bool {
@@ -173,30 +182,19 @@ pub struct Track {
 pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
     // Phone by phone: its viseme, silenced where nothing is heard.
     let heard = |p: &Phone| {
-        let (a, b) = ((p.start * 100.0) as usize, (p.end * 100.0).ceil() as usize);
-        let frames = &voiced[a.min(voiced.len())..b.min(voiced.len())];
+        let frames = p.frames(voiced);
         frames.iter().filter(|v| **v).count() * 3 >= frames.len().max(1)
     };
     // How long a phone is quiet, seconds.
-    let quiet = |p: &Phone| {
-        let (a, b) = ((p.start * 100.0) as usize, (p.end * 100.0).ceil() as usize);
-        let frames = &voiced[a.min(voiced.len())..b.min(voiced.len())];
-        frames.iter().filter(|v| !**v).count() as f32 / 100.0
-    };
+    let quiet = |p: &Phone| p.frames(voiced).iter().filter(|v| !**v).count() as f32 / 100.0;
     // A consonant is often quiet itself — the lips of a P held shut, the hold of a T — and is
     // said when a sound beside it is heard.
-    let vowel = |v: Viseme| {
-        matches!(
-            v,
-            Viseme::Aa | Viseme::E | Viseme::Ih | Viseme::Oh | Viseme::Ou
-        )
-    };
     let said = |k: usize| {
         let p = &phones[k];
         let viseme = viseme_of(&p.label);
         heard(p)
             || (viseme != Viseme::Sil
-                && !vowel(viseme)
+                && !is_vowel(viseme)
                 && quiet(p) <= CLOSURE
                 && (k.checked_sub(1).is_some_and(|j| {
                     heard(&phones[j]) && viseme_of(&phones[j].label) != Viseme::Sil
@@ -264,11 +262,7 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
             LEAD
         };
         // Short unstressed vowels are not opened fully.
-        let vowel = matches!(
-            viseme,
-            Viseme::Aa | Viseme::E | Viseme::Ih | Viseme::Oh | Viseme::Ou
-        );
-        let weight = if vowel && end - start < 0.08 {
+        let weight = if is_vowel(viseme) && end - start < 0.08 {
             0.75
         } else {
             1.0
