@@ -7,7 +7,8 @@
 #     (npm), the emulated Meta Quest 3 its VR test runs in;
 #   - gltfpack and @gltf-transform/cli (npm), which compress the tests' avatars as people's
 #     downloads are (meshopt, quantization, Draco);
-#   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to;
+#   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to, and
+#     pylivelinkface (PyPI), an independent Live Link Face sender for the phone tests;
 #   - CMU PocketSphinx (Debian: the library lip sync links, its US English models, and its
 #     test data — real LibriVox speech with transcripts) and flite, the synthetic voices whose
 #     exact phone timings the viseme accuracy test compares with;
@@ -43,4 +44,9 @@ fi
 if ! python3 -c 'import pythonosc' >/dev/null 2>&1; then
   echo "setup: installing python-osc (pip)"
   python3 -m pip install --quiet --disable-pip-version-check python-osc==1.10.2
+fi
+
+if ! python3 -c 'import pylivelinkface' >/dev/null 2>&1; then
+  echo "setup: installing pylivelinkface, an independent Live Link Face sender (pip)"
+  python3 -m pip install --quiet --disable-pip-version-check pylivelinkface==0.1 timecode==1.5.1
 fi

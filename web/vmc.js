@@ -1,8 +1,10 @@
-// VMC in the Capture tab: when the studio listens for VMC (`--vmc-listen`), a phone tracker
-// (iFacialMocap, Waidayo) or another performer drives the character live, and Record makes a
-// take of what arrives, with its arrival times, edited and exported like any take. VMC out:
-// when the studio sends VMC (`--vmc-send`), what the viewport plays (a take, the sketch, both)
-// goes to the marionette frame by frame.
+// Live links in the Capture tab: when the studio listens to a phone tracker in its own protocol
+// (`--phone`: Live Link Face, iFacialMocap, VTube Studio) or for VMC (`--vmc-listen`: Waidayo,
+// another performer), what arrives drives the character live, Neutral takes the phone's relaxed
+// face away from every frame (kept for later runs), and Record makes a take of what arrives,
+// with its arrival times, edited and exported like any take. VMC out: when the studio sends VMC
+// (`--vmc-send`), what the viewport plays (a take, the sketch, both) goes to the marionette frame
+// by frame; a phone's frames go on as they arrive.
 
 import { api } from './api.js';
 import { turnHead } from './head-turn.js';
@@ -21,12 +23,25 @@ export const vmc = {
   /** @type {number[]|null} */ head: null,
 };
 
-/** Shows the VMC controls when the studio listens. */
+/** What is listened to, in words: the app, the port and where the phone should send. */
+function describe(state) {
+  const port = state.listening.split(':').pop();
+  const here = state.this_machine.length ? ` (this machine: ${state.this_machine.map((a) => `${a}:${port}`).join(', ')})` : '';
+  const asking = state.phone ? `, asking ${state.phone}` : '';
+  return `${state.source} on ${state.listening}${here}${asking}`;
+}
+
+/** Shows the live-link controls when the studio listens. */
 export function showControls(view) {
   const listening = !!(view && view.vmc && view.vmc.listening);
   $('vmc-row').hidden = !listening;
   $('vmc-stats').hidden = !listening;
-  if (listening && !vmc.running) $('vmc-stats').textContent = `Listening for VMC on ${view.vmc.listening}.`;
+  if (!listening) return;
+  const phone = view.vmc.source !== 'VMC';
+  $('vmc-live').textContent = vmc.running ? `Stop ${view.vmc.source}` : `${view.vmc.source} (live)`;
+  $('vmc-neutral').hidden = !phone;
+  $('vmc-neutral').textContent = view.vmc.neutral ? 'Neutral ✓' : 'Neutral';
+  if (!vmc.running) $('vmc-stats').textContent = `Listening for ${describe(view.vmc)}.`;
 }
 
 /** Reads what arrived, over and over (one request at a time) while live. */
@@ -40,8 +55,10 @@ async function poll() {
       if (state.head) turnHead(state.head);
       applyLayer();
       const age = state.last_packet_ms === null ? 'nothing yet' : `last ${state.last_packet_ms.toFixed(0)} ms ago`;
-      const dropped = state.malformed + state.oversized;
-      $('vmc-stats').textContent = `VMC on ${state.listening}${state.sender ? ` from ${state.sender}` : ''}: ${state.rate.toFixed(0)} packets/s, ${age}; ${state.frames} frames${dropped ? `, ${dropped} bad packets dropped` : ''}${state.unknown ? `, ${state.unknown} unknown messages` : ''}${state.recording !== null ? `; recording ${state.recording}` : ''}.`;
+      const dropped = state.malformed + state.oversized + state.foreign;
+      const lost = state.faces_lost ? `, face lost ${state.faces_lost}×` : '';
+      const out = state.forwarded ? `; out over VMC ${state.forwarded.frames} (median ${state.forwarded.median_ms.toFixed(1)} ms, 95% ${state.forwarded.p95_ms.toFixed(1)} ms)` : '';
+      $('vmc-stats').textContent = `${describe(state)}${state.sender ? ` from ${state.sender}` : ''}: ${state.rate.toFixed(0)} packets/s, ${age}; ${state.frames} frames${lost}${dropped ? `, ${dropped} bad or foreign packets dropped` : ''}${state.unknown ? `, ${state.unknown} unknown messages` : ''}${out}${state.recording !== null ? `; recording ${state.recording}` : ''}.`;
       if (state.recording !== null) $('vmc-record').textContent = `Stop (${state.recording})`;
     } catch (e) { showFailure(e); break; }
     await new Promise((r) => requestAnimationFrame(r));
@@ -52,7 +69,7 @@ function start() {
   showError('');
   Object.assign(vmc, { running: true, weights: null, head: null });
   pause();
-  $('vmc-live').textContent = 'Stop VMC';
+  $('vmc-live').textContent = 'Stop';
   button('vmc-record').disabled = false;
   poll();
 }
@@ -60,13 +77,19 @@ function start() {
 async function stop() {
   vmc.running = false;
   vmc.weights = null;
-  $('vmc-live').textContent = 'VMC (live)';
+  showControls(currentView());
   $('vmc-record').textContent = 'Record';
   button('vmc-record').disabled = true;
   showTakeFrame();
 }
 
 $('vmc-live').onclick = () => (vmc.running ? stop() : start());
+$('vmc-neutral').onclick = async () => {
+  try {
+    const state = await api('POST', 'api/capture/vmc/neutral', {});
+    if (state) $('vmc-neutral').textContent = state.neutral ? 'Neutral ✓' : 'Neutral';
+  } catch (e) { showFailure(e); }
+};
 $('vmc-record').onclick = async () => {
   const view = currentView();
   const recording = view && view.vmc && view.vmc.recording !== null;

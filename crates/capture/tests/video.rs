@@ -2,10 +2,8 @@
 //! open, and a blank frame with no face), through the whole capture pipeline.
 #![allow(
     clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
     clippy::float_cmp,
-    reason = "tests (exact frame rates and copied keys compare exactly)"
+    reason = "tests: exact rates compare exactly"
 )]
 
 use faceanim_capture::{Filtering, capture};

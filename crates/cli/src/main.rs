@@ -15,6 +15,7 @@ mod info;
 mod input;
 mod lipsync;
 mod outputs;
+mod phone;
 mod render;
 mod retarget;
 mod session;

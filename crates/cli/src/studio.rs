@@ -23,18 +23,21 @@ pub(crate) struct StudioArgs {
     /// from the page.
     #[arg(long)]
     pub(crate) adapter: Option<PathBuf>,
-    /// Listen for VMC (a phone tracker such as iFacialMocap or Waidayo, or another performer)
+    /// Listen for VMC (Waidayo, iFacialMocap's Windows edition, another performer; for the
+    /// phone apps' own protocols see --phone)
     /// on this UDP port, all interfaces, or on ADDR:PORT; the Capture tab's VMC button shows
     /// it live and records takes from it. Without a value: 39539, VMC's default.
     #[arg(long, num_args = 0..=1, default_missing_value = "39539", value_name = "[ADDR:]PORT")]
     pub(crate) vmc_listen: Option<String>,
-    /// Send the live webcam face over VMC to a marionette (VSeeFace, Warudo, VNyan, Unity,
+    /// Send the live face (webcam or phone) over VMC to a marionette (VSeeFace, Warudo, VNyan, Unity,
     /// Unreal) at HOST:PORT.
     #[arg(long, value_name = "HOST:PORT")]
     pub(crate) vmc_send: Option<String>,
     /// The names --vmc-send uses.
     #[arg(long, value_enum, default_value_t = crate::stream::NameChoice::Own)]
     pub(crate) vmc_names: crate::stream::NameChoice,
+    #[command(flatten)]
+    pub(crate) phone: crate::phone::PhoneArgs,
 }
 
 /// `faceanim studio`.
@@ -48,11 +51,18 @@ pub(crate) fn run(args: StudioArgs) -> anyhow::Result<()> {
         vmc_listen,
         vmc_send,
         vmc_names,
+        phone,
     } = args;
+    let vmc_listen = vmc_listen
+        .map(|a| crate::stream::listen_address(&a))
+        .transpose()?
+        .map(|address| faceanim_studio::capture::Listen {
+            address,
+            source: faceanim_live::Source::vmc(),
+            settings_file: None,
+        });
     let vmc = faceanim_studio::capture::VmcConfig {
-        listen: vmc_listen
-            .map(|a| crate::stream::listen_address(&a))
-            .transpose()?,
+        listen: phone.listen()?.or(vmc_listen),
         send: vmc_send
             .map(|a| crate::stream::destination(&a).map(|d| (d, vmc_names.into())))
             .transpose()?,

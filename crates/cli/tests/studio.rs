@@ -473,54 +473,48 @@ fn capture_mode_in_a_real_browser() {
     assert!(adapter.exists());
 }
 
-/// VMC in: a phone tracker (an independent python-osc sender) plays 300 frames of ARKit
-/// weights and head turns at 60 Hz; the studio records them as a take whose frames are what
-/// was sent, with their arrival times, and that exports like a webcam take; then a flood of bad
-/// datagrams is counted and survived.
-#[test]
-fn a_phone_trackers_vmc_stream_becomes_a_take() {
-    let dir = tempfile::tempdir().unwrap();
-    let port = support::free_udp_port();
-    let listen = format!("127.0.0.1:{port}");
-    let studio = start_with(
-        &dir.path().join("vmc.faceanim.json"),
-        &["--vmc-listen".as_ref(), listen.as_ref()],
-    );
-    let json = [("Content-Type", "application/json")];
-    let vmc = |studio: &Studio| -> serde_json::Value {
-        let (status, body) = request(studio.port, "GET", "/api/capture/vmc", &[], b"");
-        assert_eq!(status, 200, "{body}");
-        serde_json::from_str(&body).unwrap()
-    };
-    assert_eq!(vmc(&studio)["listening"], listen.as_str());
+/// The studio's live link (`GET /api/capture/vmc`).
+fn live_view(studio: &Studio) -> serde_json::Value {
+    let (status, body) = request(studio.port, "GET", "/api/capture/vmc", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    serde_json::from_str(&body).unwrap()
+}
+
+/// Starts (`true`) or stops recording what arrives over the live link; the capture state.
+fn record_live(studio: &Studio, on: bool) -> serde_json::Value {
     let (status, body) = request(
         studio.port,
         "POST",
         "/api/capture/vmc/record",
-        &json,
-        br#"{"on": true}"#,
+        &[("Content-Type", "application/json")],
+        format!("{{\"on\": {on}}}").as_bytes(),
     );
     assert_eq!(status, 200, "{body}");
-    let sent = support::vmc_send(port, 300, 60.0, 0, &dir.path().join("sent.json"));
+    serde_json::from_str(&body).unwrap()
+}
+
+/// The live link's state once `frames` are recorded (or after five seconds).
+fn recorded(studio: &Studio, frames: usize) -> serde_json::Value {
+    let mut state = live_view(studio);
     for _ in 0..100 {
-        if vmc(&studio)["recording"] == 300 {
+        if state["recording"] == frames {
             break;
         }
         std::thread::sleep(std::time::Duration::from_millis(50));
+        state = live_view(studio);
     }
-    let (status, body) = request(
-        studio.port,
-        "POST",
-        "/api/capture/vmc/record",
-        &json,
-        br#"{"on": false}"#,
-    );
-    assert_eq!(status, 200, "{body}");
-    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
-    let take = &state["take"];
-    assert_eq!(take["frames"], 300, "{}", state["vmc"]);
-    assert_eq!(take["estimator"], "received");
-    let names = support::strings(&state["blendshapes"]);
+    state
+}
+
+/// The take in `capture` holds what a test sender sent (`sent["frames"][k]["values"]`, in
+/// ARKit's capitalised names) on the ICT head, the head's yaw as `yaw` of what was sent.
+fn take_follows(
+    capture: &serde_json::Value,
+    sent: &serde_json::Value,
+    yaw: impl Fn(&serde_json::Value) -> f64,
+) {
+    let take = &capture["take"];
+    let names = support::strings(&capture["blendshapes"]);
     let column = |name: &str| names.iter().position(|n| *n == name).unwrap();
     for (k, frame) in sent["frames"].as_array().unwrap().iter().enumerate() {
         let estimate = &take["estimates"][k];
@@ -536,12 +530,38 @@ fn a_phone_trackers_vmc_stream_becomes_a_take() {
                 "frame {k} {own}: sent {want}, took {got}"
             );
         }
-        let yaw = take["head"][k][0].as_f64().unwrap();
+        let got = take["head"][k][0].as_f64().unwrap();
+        let want = yaw(frame);
         assert!(
-            (yaw - frame["yaw"].as_f64().unwrap()).abs() < 1e-2,
-            "frame {k}: yaw {yaw}"
+            (got - want).abs() < 1e-2,
+            "frame {k}: yaw {got}, sent {want}"
         );
     }
+}
+
+/// VMC in: a phone tracker (an independent python-osc sender) plays 300 frames of ARKit
+/// weights and head turns at 60 Hz; the studio records them as a take whose frames are what
+/// was sent, with their arrival times, and that exports like a webcam take; then a flood of bad
+/// datagrams is counted and survived.
+#[test]
+fn a_phone_trackers_vmc_stream_becomes_a_take() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = support::free_udp_port();
+    let listen = format!("127.0.0.1:{port}");
+    let studio = start_with(
+        &dir.path().join("vmc.faceanim.json"),
+        &["--vmc-listen".as_ref(), listen.as_ref()],
+    );
+    let vmc = live_view;
+    assert_eq!(vmc(&studio)["listening"], listen.as_str());
+    record_live(&studio, true);
+    let sent = support::vmc_send(port, 300, 60.0, 0, &dir.path().join("sent.json"));
+    recorded(&studio, 300);
+    let state = record_live(&studio, false);
+    let take = &state["take"];
+    assert_eq!(take["frames"], 300, "{}", state["vmc"]);
+    assert_eq!(take["estimator"], "received");
+    take_follows(&state, &sent, |frame| frame["yaw"].as_f64().unwrap());
     // Arrival times, kept: 299 intervals of about 1/60 s, rising.
     let (_, body) = request(studio.port, "GET", "/api/capture/session.json", &[], b"");
     let session: serde_json::Value = serde_json::from_str(&body).unwrap();
@@ -1068,4 +1088,136 @@ fn the_neutral_face_of_a_take_and_of_the_live_webcam() {
     let state: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert_eq!(state["live"]["calibrating"], false, "{body}");
     assert_eq!(state["live"]["neutral"], "user", "{body}");
+}
+
+/// A phone tracker in its own protocol: PyPI's pylivelinkface (not faceanim's packet code)
+/// plays a minute of Live Link Face at 60 fps to the studio (`--phone live-link-face`), which
+/// shows it, records it as a take and sends every frame on over VMC as it arrives, to
+/// python-osc standing in for a VTuber app: no frame is lost, and each frame's delay from
+/// datagram in to VMC out is reported. The neutral the page's button takes is kept.
+#[test]
+fn a_live_link_face_phone_drives_the_studio_and_goes_out_over_vmc() {
+    const FRAMES: usize = 3600;
+    let dir = tempfile::tempdir().unwrap();
+    let port = support::free_udp_port();
+    let (mut app, app_port) = support::vmc_receiver(FRAMES, 120.0, &dir.path().join("app.json"));
+    let settings = dir.path().join("settings/phone.json");
+    let studio = start_with(
+        &dir.path().join("phone.faceanim.json"),
+        &[
+            "--phone".as_ref(),
+            "live-link-face".as_ref(),
+            "--phone-port".as_ref(),
+            port.to_string().as_ref(),
+            "--phone-settings".as_ref(),
+            settings.as_os_str(),
+            "--vmc-send".as_ref(),
+            format!("127.0.0.1:{app_port}").as_ref(),
+            "--vmc-names".as_ref(),
+            "arkit".as_ref(),
+        ],
+    );
+    let neutral = |studio: &Studio| {
+        let json = [("Content-Type", "application/json")];
+        request(
+            studio.port,
+            "POST",
+            "/api/capture/vmc/neutral",
+            &json,
+            b"{}",
+        )
+    };
+    let view = live_view;
+    let before = view(&studio);
+    assert_eq!(before["source"], "Live Link Face");
+    assert_eq!(before["listening"], format!("0.0.0.0:{port}"));
+    assert_eq!(before["neutral"], false);
+    // Neutral before any face: refused with the reason.
+    let (status, body) = neutral(&studio);
+    assert_eq!(status, 400, "{body}");
+    assert!(body.contains("no face has arrived"), "{body}");
+    record_live(&studio, true);
+    let sent_path = dir.path().join("sent.json");
+    support::succeeded(
+        "livelinkface_send.py",
+        Command::new("python3")
+            .arg(repo().join("tools/livelinkface_send.py"))
+            .args(["--to", &port.to_string(), "--frames", &FRAMES.to_string()])
+            .args(["--fps", "60", "--out"])
+            .arg(&sent_path)
+            .output()
+            .expect("python3 with pylivelinkface (scripts/setup.sh installs it)"),
+    );
+    let sent: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&sent_path).unwrap()).unwrap();
+    let state = recorded(&studio, FRAMES);
+    assert_eq!(state["packets"], FRAMES, "{state}");
+    assert_eq!(state["frames"], FRAMES, "{state}");
+    assert_eq!(
+        state["malformed"].as_u64().unwrap() + state["foreign"].as_u64().unwrap(),
+        0
+    );
+    let forwarded = &state["forwarded"];
+    assert_eq!(forwarded["frames"], FRAMES, "{state}");
+    assert_eq!(forwarded["dropped"], 0, "{state}");
+    eprintln!(
+        "{FRAMES} Live Link Face frames at 60 fps over {:.1} s: datagram in to VMC out median {:.3} ms, 95th percentile {:.3} ms",
+        sent["seconds"].as_f64().unwrap(),
+        forwarded["median_ms"].as_f64().unwrap(),
+        forwarded["p95_ms"].as_f64().unwrap()
+    );
+    let capture = record_live(&studio, false);
+    assert_eq!(capture["take"]["frames"], FRAMES);
+    // The app's radians, in degrees.
+    take_follows(&capture, &sent, |frame| {
+        frame["values"]["HeadYaw"].as_f64().unwrap().to_degrees()
+    });
+    // The VTuber app had every frame, as it arrived.
+    assert!(app.wait().unwrap().success());
+    let received: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("app.json")).unwrap()).unwrap();
+    let applied: Vec<&serde_json::Value> = received["datagrams"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|d| {
+            d["messages"]
+                .as_array()
+                .is_some_and(|m| m.iter().any(|m| m["address"] == "/VMC/Ext/Blend/Apply"))
+        })
+        .collect();
+    assert_eq!(applied.len(), FRAMES);
+    // Values that moved are sent (and every one on every 30th frame): the jaw of each frame
+    // that sent one is the phone's.
+    let mut jaws = 0;
+    for (k, datagram) in applied.iter().enumerate() {
+        let jaw = datagram["messages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["address"] == "/VMC/Ext/Blend/Val" && m["args"][0][1] == "JawOpen");
+        if let Some(m) = jaw {
+            let got = m["args"][1][1].as_f64().unwrap();
+            let want = sent["frames"][k]["values"]["JawOpen"].as_f64().unwrap();
+            assert!(
+                (got - want).abs() < 1e-4,
+                "frame {k}: JawOpen {got}, sent {want}"
+            );
+            jaws += 1;
+        }
+    }
+    assert!(jaws > FRAMES / 2, "{jaws} frames sent the jaw");
+    // Neutral: taken from the last face and kept for the next run.
+    let (status, body) = neutral(&studio);
+    assert_eq!(status, 200, "{body}");
+    assert_eq!(view(&studio)["neutral"], true);
+    let kept: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&settings).unwrap()).unwrap();
+    assert_eq!(kept["head_unit"], "radians");
+    let neutral_yaw = kept["neutral"]["head"][0].as_f64().unwrap();
+    let last_yaw = sent["frames"][FRAMES - 1]["values"]["HeadYaw"]
+        .as_f64()
+        .unwrap()
+        .to_degrees();
+    assert!((neutral_yaw - last_yaw).abs() < 1e-3);
 }

@@ -1,9 +1,13 @@
 //! # faceanim-live: the VMC protocol over OSC
 //!
 //! VTuber apps and engines (VSeeFace, Warudo, VNyan, VMagicMirror, Unity's and Unreal's VMC
-//! receivers) and phone face trackers (iFacialMocap, Waidayo) speak the [VMC
+//! receivers) and some trackers (Waidayo, iFacialMocap's Windows edition) speak the [VMC
 //! protocol](https://protocol.vmc.info/): OSC messages in UDP datagrams, sent by a *performer*
-//! (which tracks) to a *marionette* (which shows the avatar), port 39539 by default.
+//! (which tracks) to a *marionette* (which shows the avatar), port 39539 by default. The phone
+//! apps themselves speak their own protocols, which a marionette also reads ([`phone`]): Live
+//! Link Face (binary, port 11111), iFacialMocap, MeowFace and Facemotion3d (text, port 49983,
+//! after a handshake to the phone) and VTube Studio's phone app (JSON, asked for at the phone's
+//! port 21412 every second).
 //!
 //! - [`Performer`] sends the character's face: one OSC bundle per frame with `/VMC/Ext/OK`,
 //!   `/VMC/Ext/T`, `/VMC/Ext/Root/Pos`, the head as `/VMC/Ext/Bone/Pos` (Unity's left-handed
@@ -13,7 +17,10 @@
 //!   ([`Names`]). Sending never blocks: a datagram the network refuses is counted and dropped.
 //! - [`Marionette`] listens on a UDP port on its own thread and turns what arrives into frames
 //!   of the character's weights with the head pose and the arrival time; malformed, truncated,
-//!   unknown and oversized datagrams are counted and dropped, never a panic.
+//!   foreign, unknown and oversized datagrams are counted and dropped, never a panic. A phone's
+//!   frames can go straight on to a [`Performer`] ([`Marionette::forward_to`]), timed from
+//!   datagram in to VMC out; a lost face returns the character to neutral, and a calibrated
+//!   neutral ([`Marionette::calibrate`]) is taken away from every frame.
 //!
 //! ```
 //! use faceanim_live::{Marionette, Names, Performer};
@@ -35,8 +42,11 @@
 mod marionette;
 mod names;
 mod performer;
+pub mod phone;
 
-pub use marionette::{Marionette, ReceivedFrame, Traffic};
+pub use marionette::{
+    Forwarding, Marionette, Neutral, ReceivedFrame, Source, SourceSettings, Traffic,
+};
 pub use names::{Names, VRM_PRESETS};
 pub use performer::{Performer, SendStats};
 
@@ -61,6 +71,34 @@ pub enum LiveError {
         /// Which names.
         what: &'static str,
     },
+}
+
+/// This machine's addresses on its local network, for the user to type into a phone app
+/// (none when it has no route off the machine). Found by asking the system which address it
+/// would send from; nothing is sent.
+#[must_use]
+pub fn lan_addresses() -> Vec<std::net::IpAddr> {
+    let mut found = Vec::new();
+    // Documentation and private ranges: the route is looked up, no datagram leaves.
+    for probe in [
+        "192.0.2.1:9",
+        "10.255.255.254:9",
+        "172.31.255.254:9",
+        "192.168.255.254:9",
+    ] {
+        let Ok(socket) = std::net::UdpSocket::bind("0.0.0.0:0") else {
+            continue;
+        };
+        if socket.connect(probe).is_ok()
+            && let Ok(local) = socket.local_addr()
+            && !local.ip().is_loopback()
+            && !local.ip().is_unspecified()
+            && !found.contains(&local.ip())
+        {
+            found.push(local.ip());
+        }
+    }
+    found
 }
 
 /// The head pose `[yaw, pitch, roll]` (degrees, faceanim's convention: see

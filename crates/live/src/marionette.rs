@@ -1,4 +1,5 @@
-//! The marionette: VMC frames in from a phone tracker or another performer.
+//! The marionette: frames in from a phone tracker (VMC, or the phone apps' own protocols, see
+//! [`crate::phone`]) or another performer.
 
 use std::collections::{HashMap, VecDeque};
 use std::net::{SocketAddr, UdpSocket};
@@ -8,16 +9,108 @@ use std::time::{Duration, Instant};
 
 use rosc::{OscMessage, OscPacket, OscType};
 
-use crate::{LiveError, head_angles};
+use crate::phone::{self, AngleUnit, Packet, Protocol, Reading};
+use crate::{LiveError, Performer, head_angles};
 
 /// Datagrams larger than this are not VMC frames (a frame of 124 blendshapes is about 6 KiB).
 const MAX_DATAGRAM: usize = 32 * 1024;
 /// Bundles nested deeper than this are refused.
 const MAX_DEPTH: usize = 8;
+/// ARKit's channels.
+const ARKIT_COUNT: usize = faceanim_rig::names::ARKIT_52.len();
 /// Frames kept for [`Marionette::wait_for_frames`].
 const HISTORY: usize = 1024;
 /// How often the receiving thread looks at its stop flag.
 const POLL: Duration = Duration::from_millis(50);
+/// How often a phone that must be asked is asked again (VTube Studio's request lasts a little
+/// longer, so that a late one leaves no gap).
+const ASK_EVERY: Duration = Duration::from_secs(1);
+/// Frames whose forwarding delay is kept for the median and 95th percentile.
+const DELAYS: usize = 4096;
+
+/// A source's neutral face: the head pose and ARKit values of a relaxed face, taken away from
+/// what arrives (a value at rest reads 0 and full still reads 1).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Neutral {
+    /// Head yaw, pitch, roll in degrees.
+    pub head: [f32; 3],
+    /// ARKit's 52 values, in `ARKIT_52`'s order.
+    pub channels: Vec<f32>,
+}
+
+impl Neutral {
+    fn value(&self, channel: usize, value: f32) -> f32 {
+        let rest = self.channels.get(channel).copied().unwrap_or(0.0);
+        if rest <= 0.0 || rest >= 0.95 {
+            return value;
+        }
+        ((value - rest) / (1.0 - rest)).clamp(0.0, 1.0)
+    }
+}
+
+/// How a source's angles are read and what its neutral face is: a user's settings, kept
+/// between runs (see `faceanim studio --phone`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SourceSettings {
+    /// The head's angles' unit.
+    pub head_unit: AngleUnit,
+    /// The eyes' angles' unit.
+    pub eye_unit: AngleUnit,
+    /// The neutral face, once calibrated.
+    #[serde(default)]
+    pub neutral: Option<Neutral>,
+}
+
+impl SourceSettings {
+    /// The protocol's own units, no neutral.
+    #[must_use]
+    pub fn of(protocol: Protocol) -> SourceSettings {
+        SourceSettings {
+            head_unit: protocol.default_units(),
+            eye_unit: protocol.default_units(),
+            neutral: None,
+        }
+    }
+}
+
+/// What a marionette listens to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Source {
+    /// The protocol.
+    pub protocol: Protocol,
+    /// The phone to ask for frames (iFacialMocap's handshake, VTube Studio's request); the
+    /// others send unasked.
+    pub phone: Option<SocketAddr>,
+    /// Units and neutral.
+    pub settings: SourceSettings,
+}
+
+impl Source {
+    /// VMC, as performers send it.
+    #[must_use]
+    pub fn vmc() -> Source {
+        Source {
+            protocol: Protocol::Vmc,
+            phone: None,
+            settings: SourceSettings::of(Protocol::Vmc),
+        }
+    }
+}
+
+/// How long frames took from their datagram's arrival to leaving again over VMC.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct Forwarding {
+    /// Frames sent on.
+    pub frames: u64,
+    /// Frames the network refused.
+    pub dropped: u64,
+    /// The median delay of the last frames, in milliseconds.
+    pub median_ms: f64,
+    /// Their 95th percentile, in milliseconds.
+    pub p95_ms: f64,
+}
 
 /// One frame received: the character's weights (every blendshape, in its order, holding the
 /// last value sent), the head pose and when it arrived.
@@ -38,8 +131,16 @@ pub struct Traffic {
     pub packets: u64,
     /// Frames completed (`/VMC/Ext/Blend/Apply`).
     pub frames: u64,
-    /// Datagrams that are not OSC, truncated, or whose messages have the wrong arguments.
+    /// What is listened to.
+    pub protocol: Option<Protocol>,
+    /// Datagrams that are not OSC, truncated, or whose messages have the wrong arguments
+    /// (a phone's frame cut short or with a field that cannot be read).
     pub malformed: u64,
+    /// Datagrams of another kind (Live Link Face's MetaHuman Animator packets, another
+    /// protocol).
+    pub foreign: u64,
+    /// Times the tracker said it lost the face (the character went back to neutral).
+    pub faces_lost: u64,
     /// Messages with addresses the marionette does not know.
     pub unknown: u64,
     /// Datagrams too large to be a frame.
@@ -52,6 +153,8 @@ pub struct Traffic {
     pub rate: f32,
     /// Milliseconds since the last datagram.
     pub last_packet_ms: Option<f64>,
+    /// Frames sent on over VMC as they arrived, and how long that took.
+    pub forwarded: Option<Forwarding>,
 }
 
 #[derive(Debug)]
@@ -80,9 +183,18 @@ struct State {
     head: Option<[f32; 3]>,
     history: VecDeque<ReceivedFrame>,
     recording: Option<Vec<ReceivedFrame>>,
+    /// Units and neutral of a phone's frames.
+    settings: SourceSettings,
+    /// The last face a phone sent, as sent (for calibrating).
+    raw: Option<Reading>,
+    /// Where frames go on as they arrive, and the delays of the last ones (ms).
+    forward: Option<Arc<Mutex<Performer>>>,
+    delays: VecDeque<f64>,
+    forwarding: Forwarding,
 }
 
-/// Listens for VMC on a UDP port (see the crate docs). Stops listening when dropped.
+/// Listens for VMC or a phone's protocol on a UDP port (see the crate docs). Stops listening
+/// when dropped.
 #[derive(Debug)]
 pub struct Marionette {
     address: SocketAddr,
@@ -105,6 +217,20 @@ impl Marionette {
     /// # Errors
     /// [`LiveError::Socket`] when the address cannot be bound.
     pub fn listen(address: SocketAddr, blendshapes: &[String]) -> Result<Marionette, LiveError> {
+        Marionette::listen_to(&Source::vmc(), address, blendshapes)
+    }
+
+    /// Listens on `address` for `source`: VMC as [`Marionette::listen`] does, or a phone
+    /// app's own frames (ARKit values, reaching shapes named otherwise by their ARKit meaning
+    /// or through the map), asking the phone for them when its protocol needs that.
+    ///
+    /// # Errors
+    /// [`LiveError::Socket`] when the address cannot be bound.
+    pub fn listen_to(
+        source: &Source,
+        address: SocketAddr,
+        blendshapes: &[String],
+    ) -> Result<Marionette, LiveError> {
         let socket_error = |source| LiveError::Socket { address, source };
         let socket = UdpSocket::bind(address).map_err(socket_error)?;
         socket.set_read_timeout(Some(POLL)).map_err(socket_error)?;
@@ -123,7 +249,10 @@ impl Marionette {
         }
         let state = Arc::new(Mutex::new(State {
             started: Instant::now(),
-            traffic: Traffic::default(),
+            traffic: Traffic {
+                protocol: Some(source.protocol),
+                ..Traffic::default()
+            },
             arrivals: VecDeque::new(),
             last_arrival: None,
             lookup: HashMap::new(),
@@ -141,16 +270,22 @@ impl Marionette {
             head: None,
             history: VecDeque::new(),
             recording: None,
+            settings: source.settings.clone(),
+            raw: None,
+            forward: None,
+            delays: VecDeque::new(),
+            forwarding: Forwarding::default(),
         }));
         let stop = Arc::new(AtomicBool::new(false));
         let thread = {
             let (state, stop) = (state.clone(), stop.clone());
+            let (protocol, phone) = (source.protocol, source.phone);
             std::thread::Builder::new()
-                .name(format!("vmc {bound}"))
-                .spawn(move || receive(&socket, &state, &stop))
+                .name(format!("{} {bound}", protocol.label()))
+                .spawn(move || receive(&socket, protocol, phone, &state, &stop))
                 .map_err(socket_error)?
         };
-        tracing::info!("listening for VMC on {bound}");
+        tracing::info!("listening for {} on {bound}", source.protocol.label());
         Ok(Marionette {
             address: bound,
             state,
@@ -183,6 +318,40 @@ impl Marionette {
         self.address
     }
 
+    /// Sends every frame on to `performer` as soon as it is made (the phone's face out to a
+    /// VTuber app), timing each from its datagram's arrival; `None` stops.
+    pub fn forward_to(&self, performer: Option<Arc<Mutex<Performer>>>) {
+        lock(&self.state).forward = performer;
+    }
+
+    /// Takes the phone's last face as its neutral from now on and returns the settings to
+    /// keep; `None` when no phone face has arrived yet.
+    #[must_use]
+    pub fn calibrate(&self) -> Option<SourceSettings> {
+        let mut state = lock(&self.state);
+        let raw = state.raw.clone()?;
+        let mut channels = state
+            .settings
+            .neutral
+            .as_ref()
+            .map_or_else(|| vec![0.0; ARKIT_COUNT], |n| n.channels.clone());
+        channels.resize(ARKIT_COUNT, 0.0);
+        for &(c, v) in &raw.channels {
+            channels[c] = v;
+        }
+        state.settings.neutral = Some(Neutral {
+            head: raw.head.unwrap_or_default(),
+            channels,
+        });
+        Some(state.settings.clone())
+    }
+
+    /// The source's settings as they are now.
+    #[must_use]
+    pub fn settings(&self) -> SourceSettings {
+        lock(&self.state).settings.clone()
+    }
+
     /// What arrived so far, with the packet rate and the last packet's age now.
     #[must_use]
     pub fn traffic(&self) -> Traffic {
@@ -194,6 +363,21 @@ impl Marionette {
         traffic.last_packet_ms = state
             .last_arrival
             .map(|t| now.duration_since(t).as_secs_f64() * 1000.0);
+        if state.forward.is_some() || state.forwarding.frames > 0 {
+            let mut delays: Vec<f64> = state.delays.iter().copied().collect();
+            delays.sort_by(f64::total_cmp);
+            let at = |q: f64| {
+                delays
+                    .get(((delays.len() as f64 - 1.0) * q).round() as usize)
+                    .copied()
+                    .unwrap_or(0.0)
+            };
+            traffic.forwarded = Some(Forwarding {
+                median_ms: at(0.5),
+                p95_ms: at(0.95),
+                ..state.forwarding.clone()
+            });
+        }
         traffic
     }
 
@@ -255,11 +439,25 @@ fn forget_old(arrivals: &mut VecDeque<Instant>, now: Instant) {
     }
 }
 
-/// The receiving thread: every datagram is counted, decoded and applied, or counted as dropped.
-fn receive(socket: &UdpSocket, state: &Mutex<State>, stop: &AtomicBool) {
+/// The receiving thread: every datagram is counted, decoded and applied, or counted as
+/// dropped; a phone that must be asked is asked every second.
+fn receive(
+    socket: &UdpSocket,
+    protocol: Protocol,
+    phone: Option<SocketAddr>,
+    state: &Mutex<State>,
+    stop: &AtomicBool,
+) {
     // One byte more than the largest accepted datagram tells an oversized one from a full one.
     let mut buffer = vec![0u8; MAX_DATAGRAM + 1];
+    let mut asked: Option<Instant> = None;
     while !stop.load(Ordering::Relaxed) {
+        if let Some(phone) = phone
+            && asked.is_none_or(|t| t.elapsed() >= ASK_EVERY)
+        {
+            ask(socket, protocol, phone, state);
+            asked = Some(Instant::now());
+        }
         let (length, sender) = match socket.recv_from(&mut buffer) {
             Ok(received) => received,
             Err(e)
@@ -286,16 +484,119 @@ fn receive(socket: &UdpSocket, state: &Mutex<State>, stop: &AtomicBool) {
             state.traffic.oversized += 1;
             continue;
         }
-        match rosc::decoder::decode_udp(&buffer[..length]) {
-            Ok((_, packet)) => {
-                let time = now.duration_since(state.started).as_secs_f64();
-                if !apply(&mut state, &packet, time, 0) {
-                    state.traffic.malformed += 1;
+        let time = now.duration_since(state.started).as_secs_f64();
+        let made = state.traffic.frames;
+        if protocol == Protocol::Vmc {
+            match rosc::decoder::decode_udp(&buffer[..length]) {
+                Ok((_, packet)) => {
+                    if !apply(&mut state, &packet, time, 0) {
+                        state.traffic.malformed += 1;
+                    }
+                }
+                Err(_) => state.traffic.malformed += 1,
+            }
+        } else {
+            let units = (state.settings.head_unit, state.settings.eye_unit);
+            match phone::decode(protocol, &buffer[..length], units.0, units.1) {
+                Ok(Packet::Face(reading)) => apply_reading(&mut state, reading, time),
+                Ok(Packet::FaceLost) => {
+                    state.traffic.faces_lost += 1;
+                    state.raw = None;
+                    state.channels.fill(0.0);
+                    state.current.fill(0.0);
+                    state.head = Some([0.0; 3]);
+                    complete_frame(&mut state, time);
+                }
+                Err(refused) => {
+                    tracing::debug!("{refused}");
+                    match refused {
+                        phone::Refused::Foreign { .. } => state.traffic.foreign += 1,
+                        _ => state.traffic.malformed += 1,
+                    }
                 }
             }
-            Err(_) => state.traffic.malformed += 1,
+        }
+        if state.traffic.frames > made {
+            forward(&mut state, now);
         }
     }
+}
+
+/// Asks the phone for frames: iFacialMocap's handshake until frames come, VTube Studio's
+/// request every second.
+fn ask(socket: &UdpSocket, protocol: Protocol, phone: SocketAddr, state: &Mutex<State>) {
+    let request = match protocol {
+        Protocol::IFacialMocap => {
+            let quiet = lock(state)
+                .last_arrival
+                .is_none_or(|t| t.elapsed() > 2 * ASK_EVERY);
+            if !quiet {
+                return;
+            }
+            phone::IFACIALMOCAP_HANDSHAKE.to_owned()
+        }
+        Protocol::VTubeStudio => {
+            let port = socket.local_addr().map_or(0, |a| a.port());
+            phone::vtube_studio_request(port, 1.5 * ASK_EVERY.as_secs_f32())
+        }
+        Protocol::Vmc | Protocol::LiveLinkFace => return,
+    };
+    if let Err(e) = socket.send_to(request.as_bytes(), phone) {
+        tracing::debug!("asking {phone} for frames: {e}");
+    }
+}
+
+/// A phone's face: its values become the character's weights (by name, or through the map)
+/// and a frame is made.
+fn apply_reading(state: &mut State, reading: Reading, time: f64) {
+    let neutral = state.settings.neutral.clone();
+    for &(channel, value) in &reading.channels {
+        let value = neutral.as_ref().map_or(value, |n| n.value(channel, value));
+        state.channels[channel] = value;
+        state.through_map = true;
+        let name = faceanim_rig::names::ARKIT_52[channel];
+        if let Some(shapes) = state.arkit.get(name) {
+            for &i in shapes {
+                state.current[i] = value;
+            }
+        } else if let Some(&i) = state.own.get(name) {
+            state.current[i] = value;
+        }
+    }
+    if let Some(head) = reading.head {
+        let rest = neutral.as_ref().map_or([0.0; 3], |n| n.head);
+        state.head = Some([head[0] - rest[0], head[1] - rest[1], head[2] - rest[2]]);
+    }
+    state.raw = Some(reading);
+    complete_frame(state, time);
+}
+
+/// Sends the frame just made on over VMC, timing it from its datagram's arrival.
+fn forward(state: &mut State, arrived: Instant) {
+    let Some(performer) = state.forward.clone() else {
+        return;
+    };
+    let Some(frame) = state.history.back() else {
+        return;
+    };
+    let sent = lock_performer(&performer).send(&frame.weights, frame.head, frame.time as f32);
+    if sent {
+        state.forwarding.frames += 1;
+        if state.delays.len() >= DELAYS {
+            state.delays.pop_front();
+        }
+        state
+            .delays
+            .push_back(arrived.elapsed().as_secs_f64() * 1000.0);
+    } else {
+        state.forwarding.dropped += 1;
+    }
+}
+
+fn lock_performer(performer: &Mutex<Performer>) -> MutexGuard<'_, Performer> {
+    performer
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// Applies a packet; false when it is malformed (bad arguments, bundles nested too deep).
@@ -361,31 +662,7 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             true
         }
         "/VMC/Ext/Blend/Apply" => {
-            state.traffic.frames += 1;
-            let weights = match &state.map {
-                Some(map) if state.through_map => {
-                    let mut weights = map.weights(&state.channels);
-                    for (i, w) in weights.iter_mut().enumerate() {
-                        if state.direct[i] {
-                            *w = state.current[i];
-                        }
-                    }
-                    weights
-                }
-                _ => state.current.clone(),
-            };
-            let frame = ReceivedFrame {
-                time,
-                weights,
-                head: state.head,
-            };
-            if let Some(recording) = state.recording.as_mut() {
-                recording.push(frame.clone());
-            }
-            if state.history.len() >= HISTORY {
-                state.history.pop_front();
-            }
-            state.history.push_back(frame);
+            complete_frame(state, time);
             true
         }
         "/VMC/Ext/Bone/Pos" => {
@@ -408,6 +685,36 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             true
         }
     }
+}
+
+/// The weights and head of what arrived so far become a frame (kept, and recorded while
+/// recording).
+fn complete_frame(state: &mut State, time: f64) {
+    state.traffic.frames += 1;
+    let weights = match &state.map {
+        Some(map) if state.through_map => {
+            let mut weights = map.weights(&state.channels);
+            for (i, w) in weights.iter_mut().enumerate() {
+                if state.direct[i] {
+                    *w = state.current[i];
+                }
+            }
+            weights
+        }
+        _ => state.current.clone(),
+    };
+    let frame = ReceivedFrame {
+        time,
+        weights,
+        head: state.head,
+    };
+    if let Some(recording) = state.recording.as_mut() {
+        recording.push(frame.clone());
+    }
+    if state.history.len() >= HISTORY {
+        state.history.pop_front();
+    }
+    state.history.push_back(frame);
 }
 
 #[cfg(test)]

@@ -2,10 +2,8 @@
 //! errors a user sees for inputs that are not any of them.
 #![allow(
     clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
     clippy::float_cmp,
-    reason = "tests (exact frame rates and copied keys compare exactly)"
+    reason = "tests: exact rates compare exactly"
 )]
 
 use std::path::Path;

@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex};
 
 use axum::Router;
 use axum::body::Bytes;
-use axum::extract::{DefaultBodyLimit, Path, State};
+use axum::extract::{Path, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::middleware;
 use axum::response::{IntoResponse, Response};
@@ -39,44 +39,48 @@ const CHARACTER_LIMIT: usize = 512 * 1024 * 1024;
 
 pub fn router(both: Both, port: u16) -> Router {
     let shared = both.studio.clone();
-    let api = Router::new()
-        .route("/api/state", get(view))
-        .route("/api/character", get(character_info))
-        .route("/api/character/anchors", get(anchors))
-        .route("/api/project", get(project).put(put_project))
-        .route("/api/project/new", post(new_project))
-        .route("/api/project/save", post(save))
-        .route("/api/project/reopen", post(reopen))
-        .route("/api/settings", put(put_settings))
-        .route("/api/fps", put(put_fps))
-        .route("/api/strokes", post(add_stroke))
-        .route(
-            "/api/strokes/{index}",
-            axum::routing::patch(edit_stroke).delete(delete_stroke),
-        )
-        .route("/api/candidates", post(candidates))
-        .route("/api/undo", post(undo))
-        .route("/api/redo", post(redo))
-        .route(
-            "/api/export.glb",
-            get(|s: State<Shared>| export(s, Format::Glb)),
-        )
-        .route("/api/view.glb", get(view_glb))
-        .route(
-            "/api/export.json",
-            get(|s: State<Shared>| export(s, Format::ClipJson)),
-        )
-        .route(
-            "/api/export.csv",
-            get(|s: State<Shared>| export(s, Format::LiveLinkCsv)),
-        )
-        .layer(DefaultBodyLimit::max(JSON_LIMIT))
-        .with_state(shared.clone());
-    let upload = Router::new()
-        .route("/api/character/upload", post(upload_character))
-        .route("/api/character/generate-shapes", post(generate_shapes))
-        .layer(DefaultBodyLimit::max(CHARACTER_LIMIT))
-        .with_state(both.clone());
+    let api = http::body_limit(
+        Router::new()
+            .route("/api/state", get(view))
+            .route("/api/character", get(character_info))
+            .route("/api/character/anchors", get(anchors))
+            .route("/api/project", get(project).put(put_project))
+            .route("/api/project/new", post(new_project))
+            .route("/api/project/save", post(save))
+            .route("/api/project/reopen", post(reopen))
+            .route("/api/settings", put(put_settings))
+            .route("/api/fps", put(put_fps))
+            .route("/api/strokes", post(add_stroke))
+            .route(
+                "/api/strokes/{index}",
+                axum::routing::patch(edit_stroke).delete(delete_stroke),
+            )
+            .route("/api/candidates", post(candidates))
+            .route("/api/undo", post(undo))
+            .route("/api/redo", post(redo))
+            .route(
+                "/api/export.glb",
+                get(|s: State<Shared>| export(s, Format::Glb)),
+            )
+            .route("/api/view.glb", get(view_glb))
+            .route(
+                "/api/export.json",
+                get(|s: State<Shared>| export(s, Format::ClipJson)),
+            )
+            .route(
+                "/api/export.csv",
+                get(|s: State<Shared>| export(s, Format::LiveLinkCsv)),
+            ),
+        JSON_LIMIT,
+    )
+    .with_state(shared.clone());
+    let upload = http::body_limit(
+        Router::new()
+            .route("/api/character/upload", post(upload_character))
+            .route("/api/character/generate-shapes", post(generate_shapes)),
+        CHARACTER_LIMIT,
+    )
+    .with_state(both.clone());
     Router::new()
         .merge(api)
         .merge(upload)

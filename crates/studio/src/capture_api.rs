@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use axum::Router;
 use axum::body::Bytes;
-use axum::extract::{DefaultBodyLimit, Path, Query, State};
+use axum::extract::{Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, header};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post, put};
@@ -17,7 +17,7 @@ use serde::Deserialize;
 
 use crate::capture::{self, CaptureDesk, SharedDesk};
 use crate::error::{Answer, ApiError};
-use crate::http::{Unread, download, json_body, uploaded_name};
+use crate::http::{self, Unread, download, json_body, uploaded_name};
 use crate::views::CaptureView;
 use crate::{Studio, lock};
 
@@ -79,6 +79,7 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/vmc", get(vmc_view))
         .route("/api/capture/vmc/record", post(vmc_record))
         .route("/api/capture/vmc/send", post(vmc_send))
+        .route("/api/capture/vmc/neutral", post(vmc_neutral))
         .route(
             "/api/capture/session.json",
             get(|b: State<Both>| export(b, Format::Session)),
@@ -100,14 +101,16 @@ pub fn router(both: Both) -> Router {
             get(|b: State<Both>| export(b, Format::SeedCsv)),
         )
         .with_state(both.clone());
-    let upload = Router::new()
-        .route("/api/capture/upload", post(upload))
-        .layer(DefaultBodyLimit::max(INPUT_LIMIT))
-        .with_state(both.clone());
-    let live = Router::new()
-        .route("/api/capture/live/frame", post(live_frame))
-        .layer(DefaultBodyLimit::max(FRAME_LIMIT))
-        .with_state(both);
+    let upload = http::body_limit(
+        Router::new().route("/api/capture/upload", post(upload)),
+        INPUT_LIMIT,
+    )
+    .with_state(both.clone());
+    let live = http::body_limit(
+        Router::new().route("/api/capture/live/frame", post(live_frame)),
+        FRAME_LIMIT,
+    )
+    .with_state(both);
     Router::new().merge(api).merge(upload).merge(live)
 }
 
@@ -585,6 +588,15 @@ async fn vmc_record(State(both): State<Both>, body: Bytes) -> Answer<CaptureView
         both.desk().stop_vmc_recording(&character)?;
     }
     Ok(state_of(&both))
+}
+
+async fn vmc_neutral(
+    State(both): State<Both>,
+    _unread: Unread,
+) -> Answer<Option<crate::views::VmcView>> {
+    let desk = both.desk();
+    desk.calibrate_phone()?;
+    Ok(axum::Json(desk.vmc_view()))
 }
 
 #[derive(Deserialize)]

@@ -141,6 +141,43 @@ pub(crate) fn download(
     (headers, exported.bytes).into_response()
 }
 
+/// `router` with its bodies limited to `max` bytes. A request that declares a longer body
+/// (`Content-Length`) is refused with 413 before any of it is read, so a client that waits
+/// for the go-ahead (`Expect: 100-continue`) is never told to send it; one that streams
+/// without declaring its length is cut off by axum's own limit at `max`.
+pub(crate) fn body_limit<S: Clone + Send + Sync + 'static>(
+    router: axum::Router<S>,
+    max: usize,
+) -> axum::Router<S> {
+    router
+        .layer(axum::extract::DefaultBodyLimit::max(max))
+        .layer(axum::middleware::from_fn(
+            move |request: Request, next: Next| refuse_declared_over(max, request, next),
+        ))
+}
+
+async fn refuse_declared_over(max: usize, request: Request, next: Next) -> Response {
+    let declared = request
+        .headers()
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse::<u64>().ok());
+    match declared {
+        Some(length) if length > max as u64 => {
+            let mut answer = error_answer(
+                StatusCode::PAYLOAD_TOO_LARGE,
+                format!("the body is {length} bytes; this route takes at most {max}"),
+            );
+            // The unread body is not wanted: say so, so the client stops sending it.
+            answer
+                .headers_mut()
+                .insert(header::CONNECTION, HeaderValue::from_static("close"));
+            answer
+        }
+        _ => next.run(request).await,
+    }
+}
+
 /// Refuses requests not addressed to this studio by its own name (DNS rebinding) and
 /// cross-site requests from other origins.
 pub(crate) async fn only_local(port: u16, request: Request, next: Next) -> Response {

@@ -403,6 +403,14 @@ pub struct RetargetRowView {
 pub struct VmcView {
     /// The address listened on, when listening.
     pub listening: Option<String>,
+    /// What is listened to (`VMC`, `Live Link Face`, `iFacialMocap`, `VTube Studio`).
+    pub source: Option<&'static str>,
+    /// The phone asked for frames, for the protocols that ask.
+    pub phone: Option<String>,
+    /// This machine's addresses on the local network, to type into the phone app.
+    pub this_machine: Vec<String>,
+    /// Whether a neutral face is calibrated (and taken away from every frame).
+    pub neutral: bool,
     /// What arrived: datagrams, frames, the dropped `malformed`, `unknown` and `oversized`
     /// ones, `unmatched` names, the `sender`, the `rate` and the `last_packet_ms`.
     #[serde(flatten)]

@@ -1,20 +1,33 @@
-//! VMC in the studio: a marionette that phone trackers (iFacialMocap, Waidayo) or other
-//! performers drive live, recorded as takes like the webcam's; and a performer that sends the
-//! live webcam face out to VTuber apps and engines.
+//! Live links in the studio: a marionette that a phone tracker (in its own protocol: Live Link
+//! Face, iFacialMocap, VTube Studio; or over VMC: Waidayo) or another performer drives live,
+//! recorded as takes like the webcam's; and a performer that sends the live face (webcam or
+//! phone) out to VTuber apps and engines.
 
 use std::net::SocketAddr;
+use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use crate::error::ApiError;
 use crate::lock;
 use crate::views::{VmcSendView, VmcView};
-use faceanim_live::{Marionette, Names, Performer};
+use faceanim_live::{Marionette, Names, Performer, Source};
 
-/// Where VMC goes in and out, as the studio was started.
-#[derive(Debug, Clone, Copy, Default)]
+/// What the studio listens to, as it was started.
+#[derive(Debug, Clone)]
+pub struct Listen {
+    /// The address.
+    pub address: SocketAddr,
+    /// The protocol, the phone to ask and the user's settings (units, neutral).
+    pub source: Source,
+    /// Where a calibrated neutral is kept (`--phone-settings`); none for VMC.
+    pub settings_file: Option<PathBuf>,
+}
+
+/// Where live frames go in and out, as the studio was started.
+#[derive(Debug, Clone, Default)]
 pub struct VmcConfig {
-    /// Listen for a performer here (`--vmc-listen`).
-    pub listen: Option<SocketAddr>,
+    /// Listen here (`--vmc-listen`, `--phone`).
+    pub listen: Option<Listen>,
     /// Send the live face here under these names (`--vmc-send`, `--vmc-names`).
     pub send: Option<(SocketAddr, Names)>,
 }
@@ -60,17 +73,24 @@ impl Vmc {
         map: Option<Arc<faceanim_retarget::RetargetMap>>,
     ) -> Result<Vmc, ApiError> {
         let mut vmc = Vmc {
-            config,
+            config: config.clone(),
             ..Vmc::default()
         };
-        if let Some(address) = config.listen {
-            let marionette = Marionette::listen(address, blendshapes)?;
+        if let Some(listen) = &config.listen {
+            let marionette = Marionette::listen_to(&listen.source, listen.address, blendshapes)?;
             marionette.set_map(map);
             vmc.marionette = Some(marionette);
         }
         if let Some((destination, names)) = config.send {
             let performer = Performer::new(destination, blendshapes, names)?;
             vmc.performer = Some(Arc::new(Mutex::new(performer)));
+        }
+        // A phone's face goes out as it arrives, as the webcam's does (a VMC performer's is
+        // not echoed back).
+        if let (Some(marionette), Some(listen)) = (&vmc.marionette, &config.listen)
+            && listen.source.protocol != faceanim_live::phone::Protocol::Vmc
+        {
+            marionette.forward_to(vmc.performer.clone());
         }
         Ok(vmc)
     }
@@ -93,8 +113,16 @@ impl Vmc {
         }
         let traffic = marionette.map(Marionette::traffic).unwrap_or_default();
         let latest = marionette.and_then(Marionette::latest);
+        let listen = self.config.listen.as_ref();
         Some(VmcView {
             listening: marionette.map(|m| m.address().to_string()),
+            source: listen.map(|l| l.source.protocol.label()),
+            phone: listen.and_then(|l| l.source.phone).map(|a| a.to_string()),
+            this_machine: faceanim_live::lan_addresses()
+                .iter()
+                .map(ToString::to_string)
+                .collect(),
+            neutral: marionette.is_some_and(|m| m.settings().neutral.is_some()),
             traffic,
             recording: marionette.and_then(Marionette::recorded),
             weights: latest.as_ref().map(|f| f.weights.clone()),
@@ -139,12 +167,42 @@ impl Vmc {
     /// [`ApiError::Live`] when the studio does not listen for VMC.
     pub(super) fn marionette(&self) -> Result<&Marionette, ApiError> {
         self.marionette.as_ref().ok_or(ApiError::Live(
-            "the studio is not listening for VMC: start it with --vmc-listen [PORT]",
+            "the studio is not listening for a phone or VMC: start it with --phone or --vmc-listen",
         ))
+    }
+
+    /// Takes the phone's face as it is now for its neutral, kept in the settings file.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when nothing listens or no phone face has arrived,
+    /// [`ApiError::Disk`] when the settings cannot be saved.
+    pub(super) fn calibrate(&self) -> Result<(), ApiError> {
+        let settings = self.marionette()?.calibrate().ok_or(ApiError::Live(
+            "no face has arrived from the phone yet: look at it, relaxed, and try again",
+        ))?;
+        if let Some(path) = self
+            .config
+            .listen
+            .as_ref()
+            .and_then(|l| l.settings_file.as_ref())
+        {
+            let json = serde_json::to_vec_pretty(&settings)
+                .map_err(|e| ApiError::Internal(e.to_string()))?;
+            if let Some(folder) = path.parent() {
+                std::fs::create_dir_all(folder).map_err(|source| {
+                    faceanim_files::FileError::Io {
+                        path: folder.to_path_buf(),
+                        source,
+                    }
+                })?;
+            }
+            faceanim_files::write_atomic(path, &json)?;
+        }
+        Ok(())
     }
 
     /// The links as the studio was started.
     pub(super) fn config(&self) -> VmcConfig {
-        self.config
+        self.config.clone()
     }
 }

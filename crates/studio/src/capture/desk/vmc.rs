@@ -44,6 +44,15 @@ impl CaptureDesk {
         self.vmc.send(weights, head, blendshapes)
     }
 
+    /// Takes the phone's face as it is now for its neutral, from now on and in later runs.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when nothing listens or no phone face arrived yet,
+    /// [`ApiError::Disk`] when the settings cannot be saved.
+    pub fn calibrate_phone(&self) -> Result<(), ApiError> {
+        self.vmc.calibrate()
+    }
+
     fn marionette(&self) -> Result<&Marionette, ApiError> {
         self.vmc.marionette()
     }
