@@ -11,9 +11,10 @@
 #   Fcl_MTH_* with the vowels A I U E O, Fcl_ALL_* emotions, Fcl_HA_* teeth-only keys, and a few
 #   keys that move nothing), over 100 in all;
 # - a body of several materials and a hair mesh without shape keys;
-# - two armatures (so the file has several skins): the body's, with the head bone, in
-#   centimetres under an object scaled by 0.01 as Mixamo's and Character Creator's are, and the
-#   hair's own;
+# - two armatures (so the file has several skins): the body's, with spine, neck and head bones
+#   and, below the head, eye bones at the eyes' centres and a jaw bone at the jaw's hinge (as
+#   Ready Player Me's and Character Creator's skeletons have them), in centimetres under an
+#   object scaled by 0.01 as Mixamo's and Character Creator's are, and the hair's own;
 # - materials using clearcoat, specular and emission strength, so that KHR_materials_* extensions
 #   are written, and one image texture.
 #
@@ -316,6 +317,33 @@ def armature(name, bones):
     return obj
 
 
+# The eyes' centres (the eye material's vertices, each side) and the jaw's hinge (behind the
+# eyes, below them: where the ear meets the cheek).
+eye_material = [i for i, m in enumerate(mesh.materials) if m.name == "Face_Eyes"]
+eye_points = [
+    mesh.vertices[v].co.copy()
+    for poly in mesh.polygons
+    if poly.material_index in eye_material
+    for v in poly.vertices
+]
+
+
+def centre(points):
+    return sum(points, Vector()) / len(points)
+
+
+left_points = [p for p in eye_points if p.x > 0]
+right_points = [p for p in eye_points if p.x < 0]
+if left_points and right_points:
+    left_eye, right_eye = centre(left_points), centre(right_points)
+else:
+    left_eye = Vector((3.2, -8.0, head_top - 11.0))
+    right_eye = Vector((-3.2, -8.0, head_top - 11.0))
+middle_eye = (left_eye + right_eye) / 2
+hinge = Vector((0.0, middle_eye.y + 8.0, middle_eye.z - 6.0))
+chin = Vector((0.0, middle_eye.y - 2.0, middle_eye.z - 13.0))
+look = Vector((0.0, -2.0, 0.0))
+
 body_rig = armature(
     "Armature",
     [
@@ -324,6 +352,9 @@ body_rig = armature(
         ("Chest", (0, 0, 115), (0, 0, 130), "Spine"),
         ("Neck", (0, 0, 130), (0, 0, neck_height + 5), "Chest"),
         ("Head", (0, 0, neck_height + 5), (0, 0, head_top), "Neck"),
+        ("LeftEye", tuple(left_eye), tuple(left_eye + look), "Head"),
+        ("RightEye", tuple(right_eye), tuple(right_eye + look), "Head"),
+        ("Jaw", tuple(hinge), tuple(chin), "Head"),
         ("LeftUpperLeg", (8, 0, 90), (8, 0, 45), "Hips"),
         ("RightUpperLeg", (-8, 0, 90), (-8, 0, 45), "Hips"),
     ],

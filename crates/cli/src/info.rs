@@ -37,6 +37,9 @@ struct FileReport {
     materials: usize,
     textures: usize,
     vrm: bool,
+    /// The bones exports turn (head pose, gaze, jaw), by name: `head`, `neck`, `upper_spine`,
+    /// `left_eye`, `right_eye`, `jaw`.
+    bones: std::collections::BTreeMap<&'static str, String>,
     /// The blendshapes `faceanim generate-shapes` made, as the file records them.
     #[serde(skip_serializing_if = "Option::is_none")]
     generated: Option<GeneratedReport>,
@@ -194,6 +197,7 @@ impl Report {
                 materials: s.count("materials"),
                 textures: s.count("textures"),
                 vrm: s.is_vrm(),
+                bones: bone_names(s),
                 generated: s.generated_shapes().map(|g| GeneratedReport {
                     shapes: g.shapes,
                     template: g.template,
@@ -244,6 +248,14 @@ impl Report {
                 f.textures,
                 if f.vrm { ", VRM" } else { "" }
             );
+            if !f.bones.is_empty() {
+                let list: Vec<String> = f.bones.iter().map(|(k, v)| format!("{k} {v}")).collect();
+                let _ = writeln!(
+                    out,
+                    "  bones        {} (exports turn them)",
+                    list.join(", ")
+                );
+            }
             if let Some(g) = &f.generated {
                 let _ = writeln!(
                     out,
@@ -356,4 +368,22 @@ pub(crate) fn run(args: &InfoArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The face's bones of `source`, by role, named as the file names them (`node N` unnamed).
+fn bone_names(
+    source: &faceanim_rig::source::GltfSource,
+) -> std::collections::BTreeMap<&'static str, String> {
+    let name = |n: usize| {
+        source
+            .document()
+            .pointer(&format!("/nodes/{n}/name"))
+            .and_then(serde_json::Value::as_str)
+            .map_or_else(|| format!("node {n}"), str::to_owned)
+    };
+    source
+        .bones()
+        .found()
+        .map(|(bone, n)| (bone.name(), name(n)))
+        .collect()
 }

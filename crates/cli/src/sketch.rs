@@ -52,6 +52,7 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
         clip: sketch.bake_clip(),
         arkit: None,
         session: None,
+        bones: None,
     };
     crate::outputs::write(&args.output, faceanim_export::Format::Glb, &animation)?;
     if let Some(path) = &args.clip {

@@ -144,6 +144,7 @@ fn use_session(bytes: &[u8], character: &faceanim_rig::Character, glb: bool) {
         clip: layered.clip,
         arkit: session.arkit_clip(),
         session: Some(&session),
+        bones: None,
     };
     for format in faceanim_export::Format::ALL {
         if format != faceanim_export::Format::Glb || glb {

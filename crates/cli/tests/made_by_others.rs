@@ -233,7 +233,7 @@ fn exports_of_blender_avatars_keep_the_file_and_open_everywhere() {
 
     // three.js in Chromium: every primitive skinned, both rigs' bones, the face moving.
     for out in [&outputs[0], &outputs[1], &outputs[4]] {
-        assert_avatar_drawn(&threejs_render(out, "2.4"), 19, 10, 5_000);
+        assert_avatar_drawn(&threejs_render(out, "2.4"), 19, 13, 5_000);
     }
 }
 
@@ -312,4 +312,88 @@ fn strokes_through_the_studio_api_animate_the_blender_avatar() {
     let input = faceanim_testdata::glb::json(blender_avatar());
     let output = faceanim_testdata::glb::json(&std::fs::read(&exported).unwrap());
     assert_kept(&input, &output, "the studio's download");
+}
+
+/// What Blender reads back of `file`'s bones at `seconds`: each named bone's turn from rest
+/// in glTF's frame (Y up), as a quaternion (`tools/blender_bones.py`, Blender's own importer).
+fn blender_bone_turns(file: &Path, seconds: f32, bones: &[&str]) -> Vec<(String, glam::Quat)> {
+    let seconds = seconds.to_string();
+    let mut arguments = vec![file.as_os_str(), seconds.as_ref()];
+    arguments.extend(bones.iter().map(std::ffi::OsStr::new));
+    let report = support::blender_script("blender_bones.py", &arguments, "FACEANIM_BONES ");
+    // Blender holds glTF's +Y as +Z: a turn in Blender's world is C·q·C⁻¹ with C = Rx(90°).
+    let c = glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+    bones
+        .iter()
+        .map(|bone| {
+            let q = &report["bones"][*bone];
+            let q = glam::Quat::from_xyzw(
+                q[1].as_f64().unwrap() as f32,
+                q[2].as_f64().unwrap() as f32,
+                q[3].as_f64().unwrap() as f32,
+                q[0].as_f64().unwrap() as f32,
+            );
+            ((*bone).to_owned(), c.inverse() * q * c)
+        })
+        .collect()
+}
+
+/// The angle between two rotations, in degrees.
+fn degrees_between(a: glam::Quat, b: glam::Quat) -> f32 {
+    2.0 * a.dot(b).abs().min(1.0).acos().to_degrees()
+}
+
+/// A head pose, gaze and an open jaw exported onto the Blender avatar's bones, read back by
+/// Blender: the head turns by the whole pose, shared with the neck (half) and the chest (a share
+/// of the yaw); both eyes look left and up on their bones; the jaw opens about its hinge.
+#[test]
+fn head_eyes_and_jaw_go_on_the_blender_avatars_bones() {
+    let dir = output_dir("made-by-others-bones");
+    let head = [30.0f32, -10.0, 5.0];
+    let frames: Vec<Value> = (0..10)
+        .map(|_| serde_json::json!([1.0, 1.0, 1.0, 1.0, 0.6]))
+        .collect();
+    let clip = serde_json::json!({
+        "fps": 30,
+        "blendshapes": ["eyeLookOut_L", "eyeLookIn_R", "eyeLookUp_L", "eyeLookUp_R", "jawOpen"],
+        "frames": frames,
+        "head": vec![head; 10],
+    });
+    let clip_path = dir.join("look.json");
+    std::fs::write(&clip_path, clip.to_string()).unwrap();
+    let avatar = faceanim_testdata::producers::blender_avatar_path();
+    let out = dir.join("bones.glb");
+    export_with_clip(&avatar, &out, &clip_path);
+    assert_valid_gltf(&out);
+    let turns = blender_bone_turns(
+        &out,
+        0.1,
+        &["Chest", "Neck", "Head", "LeftEye", "RightEye", "Jaw"],
+    );
+    let turn = |bone: &str| turns.iter().find(|(b, _)| b == bone).unwrap().1;
+    let q = glam::Quat::from_array(faceanim_anim::head_rotation(head));
+    // The head ends where the pose says, its turn shared down the spine.
+    assert!(degrees_between(turn("Head"), q) < 0.5, "{turns:?}");
+    let chest = glam::Quat::from_rotation_y((0.2 * 30.0f32).to_radians());
+    assert!(degrees_between(turn("Chest"), chest) < 0.5, "{turns:?}");
+    let neck = chest * glam::Quat::IDENTITY.slerp(chest.inverse() * q, 0.5);
+    assert!(degrees_between(turn("Neck"), neck) < 0.5, "{turns:?}");
+    // Both eyes to the character's left (30° at eyeLook 1) and up (25°), as the head turned.
+    let look = glam::Quat::from_array(faceanim_anim::head_rotation([30.0, 25.0, 0.0]));
+    for eye in ["LeftEye", "RightEye"] {
+        assert!(
+            degrees_between(turn(eye), q * look) < 0.5,
+            "{eye}: {turns:?}"
+        );
+    }
+    // The jaw opens about the character's left-right axis, chin down, by a share of the angle
+    // its own jawOpen shape opens.
+    let (axis, angle) = (q.inverse() * turn("Jaw")).to_axis_angle();
+    let opened = angle.to_degrees() * axis.x.signum();
+    assert!(
+        axis.x.abs() > 0.99,
+        "the jaw turned about {axis}: {turns:?}"
+    );
+    assert!((0.6..=24.0).contains(&opened), "the jaw opened {opened}°");
+    eprintln!("Blender read the jaw opened {opened:.1}° at jawOpen 0.6");
 }

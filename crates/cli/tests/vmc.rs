@@ -96,11 +96,12 @@ fn a_streamed_clip_decodes_exactly_at_its_rate() {
             .map(|m| m["address"].as_str().unwrap())
             .collect();
         assert_eq!(
-            addresses[..4],
+            addresses[..5],
             [
                 "/VMC/Ext/OK",
                 "/VMC/Ext/T",
                 "/VMC/Ext/Root/Pos",
+                "/VMC/Ext/Bone/Pos",
                 "/VMC/Ext/Bone/Pos"
             ],
             "frame {k}"
@@ -116,19 +117,22 @@ fn a_streamed_clip_decodes_exactly_at_its_rate() {
         let ok = args_of(&messages[0]);
         assert!(ok.iter().all(|(t, _)| t == "i") && ok[0].1 == 1, "{ok:?}");
         assert_eq!(args_of(&messages[1])[0].0, "f");
-        // The head: bone name, position, rotation; all floats after the name.
-        let head = args_of(&messages[3]);
-        assert_eq!(head[0], ("s".to_owned(), Value::from("Head")));
-        assert!(head[1..].iter().all(|(t, _)| t == "f") && head.len() == 8);
-        let q: Vec<f64> = head[4..].iter().map(|(_, v)| v.as_f64().unwrap()).collect();
-        // Yaw alone, in Unity's left-handed frame (glTF's X mirrored): (0, −sin, 0, cos) of half.
-        let half = f64::from(yaw[k]).to_radians() / 2.0;
-        let expected = [0.0, -half.sin(), 0.0, half.cos()];
-        for (a, b) in q.iter().zip(expected) {
-            assert!(
-                (a - b).abs() < 1e-5,
-                "frame {k}: head {q:?}, expected {expected:?}"
-            );
+        // The head pose: neck then head, each bone's name, position and rotation (floats), half
+        // the yaw each, in Unity's left-handed frame (glTF's X mirrored): (0, −sin, 0, cos) of
+        // a quarter of the yaw.
+        let quarter = f64::from(yaw[k]).to_radians() / 4.0;
+        let expected = [0.0, -quarter.sin(), 0.0, quarter.cos()];
+        for (message, bone) in messages[3..5].iter().zip(["Neck", "Head"]) {
+            let pose = args_of(message);
+            assert_eq!(pose[0], ("s".to_owned(), Value::from(bone)));
+            assert!(pose[1..].iter().all(|(t, _)| t == "f") && pose.len() == 8);
+            let q: Vec<f64> = pose[4..].iter().map(|(_, v)| v.as_f64().unwrap()).collect();
+            for (a, b) in q.iter().zip(expected) {
+                assert!(
+                    (a - b).abs() < 1e-5,
+                    "frame {k}: {bone} {q:?}, expected {expected:?}"
+                );
+            }
         }
         for message in messages
             .iter()

@@ -417,17 +417,33 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, GlbError> {
 /// whose mesh carries an animated target (all meshes that share a target name move together;
 /// a VRM expression moves its bindings); blendshapes the character has beyond the file's own
 /// (the sketch's baked corrective targets) are appended as morph targets to the meshes whose
-/// vertices they move, with `targetNames` extended; a head turn goes on the head bone (or the
+/// vertices they move, with `targetNames` extended; a head turn goes on the neck and head bones
+/// and a share of it on the upper spine (see [`crate::bones`]; without a head bone, on the
 /// scene's root node). Meshopt-compressed input is written decompressed.
 ///
 /// # Errors
 /// [`GlbError::NoSource`] for a character made in code or from OBJ files,
 /// [`GlbError::BadAnimation`] when an animation does not fit, [`GlbError::TooLarge`] past
 /// 4 GiB.
-#[expect(clippy::too_many_lines, reason = "one document, amended top to bottom")]
 pub fn export_into_source(
     character: &Character,
     animations: &[MorphAnimation],
+) -> Result<Vec<u8>, GlbError> {
+    export_into_source_with(character, animations, &[])
+}
+
+/// [`export_into_source`], with what each animation does to the eyes and the jaw (`keys`, by
+/// animation; missing ones do nothing): gaze on the eye bones and `jawOpen` on the jaw bone
+/// where the file has them (see [`crate::bones`]); a head turn is shared between upper spine,
+/// neck and head.
+///
+/// # Errors
+/// As [`export_into_source`].
+#[expect(clippy::too_many_lines, reason = "one document, amended top to bottom")]
+pub fn export_into_source_with(
+    character: &Character,
+    animations: &[MorphAnimation],
+    keys: &[Option<&crate::bones::BoneKeys>],
 ) -> Result<Vec<u8>, GlbError> {
     let Some(source) = character.source() else {
         return Err(GlbError::NoSource(character.name().to_owned()));
@@ -590,34 +606,17 @@ pub fn export_into_source(
             channels_for.push((n, m));
         }
     }
-    // The node that turns with the head, as TRS (an animated node may not have a matrix).
-    let turn_node = source.head_node().or_else(|| {
-        let scene = doc.get("scene").and_then(Value::as_u64).unwrap_or(0) as usize;
-        doc.pointer(&format!("/scenes/{scene}/nodes/0"))
-            .and_then(Value::as_u64)
-            .map(|n| n as usize)
-    });
-    let wants_turn = animations.iter().any(|a| a.rotations.is_some());
-    let turn = turn_node
-        .filter(|&n| wants_turn && n < nodes.len())
-        .map(|n| {
-            let local = faceanim_rig::source::local_matrix(&nodes[n]);
-            let (scale, rotation, translation) = local.to_scale_rotation_translation();
-            if let Some(object) = nodes[n].as_object_mut() {
-                object.remove("matrix");
-            }
-            nodes[n]["translation"] = exact(&translation.to_array());
-            nodes[n]["rotation"] = exact(&rotation.normalize().to_array());
-            nodes[n]["scale"] = exact(&scale.to_array());
-            // The parent's rotation in character space: a turn q of the head in character space
-            // is the local rotation P⁻¹ q P R.
-            let node_world = source.world_rotation(n);
-            let parent = node_world * rotation.normalize().inverse();
-            (n, parent, rotation.normalize())
-        });
+    // The bones the animations turn, as TRS (an animated node may not have a matrix).
+    let key_of = |a: usize| keys.get(a).copied().flatten();
+    let wants = [
+        animations.iter().any(|a| a.rotations.is_some()),
+        (0..animations.len()).any(|a| key_of(a).is_some_and(|k| k.gaze.is_some())),
+        (0..animations.len()).any(|a| key_of(a).is_some_and(|k| k.jaw.is_some())),
+    ];
+    let rig = crate::bones::Rig::prepare(character, source, &mut nodes, wants);
 
     let mut new_animations = Vec::new();
-    for animation in animations {
+    for (a, animation) in animations.iter().enumerate() {
         let input = bin.key_times(&animation.times);
         let mut samplers = Vec::new();
         let mut channels = Vec::new();
@@ -633,16 +632,10 @@ pub fn export_into_source(
             samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
             channels.push(json!({ "sampler": samplers.len() - 1, "target": { "node": node, "path": "weights" } }));
         }
-        if let (Some(rotations), Some((node, parent, rest))) = (&animation.rotations, turn) {
-            let flat: Vec<f32> = rotations
-                .iter()
-                .flat_map(|q| {
-                    let q = glam::Quat::from_array(*q);
-                    (parent.inverse() * q * parent * rest)
-                        .normalize()
-                        .to_array()
-                })
-                .collect();
+        for (node, rotations) in
+            rig.channels(&animation.times, animation.rotations.as_deref(), key_of(a))
+        {
+            let flat: Vec<f32> = rotations.iter().flatten().copied().collect();
             let output = bin.floats(&flat, "VEC4", None, None);
             samplers.push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
             channels.push(json!({ "sampler": samplers.len() - 1, "target": { "node": node, "path": "rotation" } }));

@@ -8,7 +8,9 @@
 //!
 //! - **GLB** — the user's own file with one morph-weight animation added (every node, skin,
 //!   material and texture kept; the sketch's baked corrective targets for arcs and
-//!   exaggerations appended to the meshes they move; the head turn on the head bone): what
+//!   exaggerations appended to the meshes they move; the head turn shared between the upper
+//!   spine, neck and head bones, gaze on the eye bones and `jawOpen` on the jaw bone where the
+//!   file has them, see [`bones`]): what
 //!   Blender, Unity, Unreal and three.js play. A character made in code or from OBJ files is
 //!   written as one mesh, as is the studio's own view ([`view_glb`]).
 //! - **Live Link Face CSV** speaks ARKit: it gets the character's own weights when the
@@ -36,6 +38,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod bones;
 pub mod glb;
 pub mod livelink;
 
@@ -167,6 +170,9 @@ pub struct Animation<'a> {
     pub arkit: Option<Clip>,
     /// The take's session, when the animation is a take's.
     pub session: Option<&'a Session>,
+    /// What the eyes and the jaw do, for their bones; `None`: read from `arkit`, else from
+    /// `clip` by its names' ARKit meaning.
+    pub bones: Option<bones::BoneKeys>,
 }
 
 impl<'a> Animation<'a> {
@@ -182,6 +188,8 @@ impl<'a> Animation<'a> {
         let retarget = clip.retarget(character, name)?;
         let names: Vec<String> = character.blendshape_names();
         Ok(Animation {
+            // The clip's own gaze and jaw: a character without eyeLook shapes still has eyes.
+            bones: Some(bones::BoneKeys::from_clip(clip)),
             character: Some(character),
             clip: Clip {
                 blendshapes: names,
@@ -242,6 +250,7 @@ impl<'a> Animation<'a> {
             clip: layered.clip,
             arkit,
             session,
+            bones: None,
         })
     }
 }
@@ -299,10 +308,21 @@ pub fn export(format: Format, animation: &Animation<'_>) -> Result<Exported, Exp
     let mut notes = Vec::new();
     let bytes = match format {
         Format::ClipJson => animation.clip.to_json().into_bytes(),
-        Format::Glb => glb(
-            animation.character.ok_or(ExportError::NeedsCharacter)?,
-            Some(&animation.animation),
-        )?,
+        Format::Glb => {
+            // Gaze and jaw for the bones, from the capture's own ARKit values when there are
+            // any, else from the frames by their names' ARKit meaning.
+            let keys =
+                bones::BoneKeys::from_clip(animation.arkit.as_ref().unwrap_or(&animation.clip));
+            let character = animation.character.ok_or(ExportError::NeedsCharacter)?;
+            match character.source() {
+                Some(_) => glb::export_into_source_with(
+                    character,
+                    std::slice::from_ref(&animation.animation),
+                    &[Some(&keys)],
+                )?,
+                None => view_glb(character, Some(&animation.animation))?,
+            }
+        }
         Format::LiveLinkCsv => {
             livelink::to_csv(live_link_curves(animation, &mut notes)).into_bytes()
         }

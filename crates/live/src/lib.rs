@@ -10,8 +10,8 @@
 //! port 21412 every second).
 //!
 //! - [`Performer`] sends the character's face: one OSC bundle per frame with `/VMC/Ext/OK`,
-//!   `/VMC/Ext/T`, `/VMC/Ext/Root/Pos`, the head as `/VMC/Ext/Bone/Pos` (Unity's left-handed
-//!   convention, see [`unity_rotation`]), `/VMC/Ext/Blend/Val` for every blendshape that moved
+//!   `/VMC/Ext/T`, `/VMC/Ext/Root/Pos`, the head pose as `/VMC/Ext/Bone/Pos` `Neck` and `Head`
+//!   (half the turn each; Unity's left-handed convention, see [`unity_rotation`]), `/VMC/Ext/Blend/Val` for every blendshape that moved
 //!   (every one on every 30th frame, so a late marionette catches up) and
 //!   `/VMC/Ext/Blend/Apply`. Names are the character's own, ARKit's or VRM 0.x presets
 //!   ([`Names`]). Sending never blocks: a datagram the network refuses is counted and dropped.
@@ -110,6 +110,15 @@ pub fn lan_addresses() -> Vec<std::net::IpAddr> {
 pub fn unity_rotation(head: [f32; 3]) -> [f32; 4] {
     let [x, y, z, w] = faceanim_anim::head_rotation(head);
     [x, -y, -z, w]
+}
+
+/// A head turn `q` (`[x, y, z, w]`) shared between neck and head, half each: the neck's
+/// local rotation and the head's after it (their product is `q`).
+#[must_use]
+pub fn neck_and_head(q: [f32; 4]) -> [[f32; 4]; 2] {
+    let q = glam::Quat::from_array(q).normalize();
+    let neck = glam::Quat::IDENTITY.slerp(q, 0.5).normalize();
+    [neck.to_array(), (neck.inverse() * q).normalize().to_array()]
 }
 
 /// The inverse of [`unity_rotation`]: a Unity rotation `[x, y, z, w]` as `[yaw, pitch, roll]`

@@ -181,6 +181,8 @@ struct State {
     direct: Vec<bool>,
     current: Vec<f32>,
     head: Option<[f32; 3]>,
+    /// The neck's rotation in this frame (Unity's), which the head's follows.
+    neck: Option<[f32; 4]>,
     history: VecDeque<ReceivedFrame>,
     recording: Option<Vec<ReceivedFrame>>,
     /// Units and neutral of a phone's frames.
@@ -268,6 +270,7 @@ impl Marionette {
             direct: vec![false; blendshapes.len()],
             current: vec![0.0; blendshapes.len()],
             head: None,
+            neck: None,
             history: VecDeque::new(),
             recording: None,
             settings: source.settings.clone(),
@@ -663,6 +666,7 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
         }
         "/VMC/Ext/Blend/Apply" => {
             complete_frame(state, time);
+            state.neck = None;
             true
         }
         "/VMC/Ext/Bone/Pos" => {
@@ -673,8 +677,20 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             let Some(values) = values else {
                 return false;
             };
-            if bone == "Head" {
-                state.head = head_angles([values[3], values[4], values[5], values[6]]);
+            let rotation = [values[3], values[4], values[5], values[6]];
+            match bone.as_str() {
+                // A sender that shares the turn with the neck sends it first.
+                "Neck" => state.neck = Some(rotation),
+                "Head" => {
+                    let turn = match state.neck {
+                        Some(neck) => (glam::Quat::from_array(neck)
+                            * glam::Quat::from_array(rotation))
+                        .to_array(),
+                        None => rotation,
+                    };
+                    state.head = head_angles(turn);
+                }
+                _ => {}
             }
             true
         }

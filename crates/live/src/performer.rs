@@ -122,11 +122,12 @@ impl Performer {
             "/VMC/Ext/Root/Pos",
             pose("root", [0.0, 0.0, 0.0, 1.0]),
         ));
+        // The turn shared between neck and head, half each (as VMagicMirror does): each
+        // bone's local rotation, the head's after the neck's.
         if let Some(head) = head {
-            content.push(message(
-                "/VMC/Ext/Bone/Pos",
-                pose("Head", unity_rotation(head)),
-            ));
+            let [neck, head] = crate::neck_and_head(unity_rotation(head));
+            content.push(message("/VMC/Ext/Bone/Pos", pose("Neck", neck)));
+            content.push(message("/VMC/Ext/Bone/Pos", pose("Head", head)));
         }
 
         for ((name, source), last) in self.table.iter().zip(&mut self.last) {

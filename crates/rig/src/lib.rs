@@ -33,6 +33,7 @@
 
 pub mod animation;
 mod blendshape;
+pub mod bones;
 mod bounds;
 mod character;
 mod excerpt;

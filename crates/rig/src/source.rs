@@ -47,7 +47,7 @@ pub struct GltfSource {
     pub(crate) bin: Arc<[u8]>,
     pub(crate) shapes: Vec<Vec<Binding>>,
     pub(crate) vertices: Vec<Option<Origin>>,
-    pub(crate) head_node: Option<usize>,
+    pub(crate) bones: crate::bones::FaceBones,
     /// Applied by the importer before the file's own transforms (VRM 0.x's half turn).
     pub(crate) root_transform: Mat4,
 }
@@ -59,7 +59,7 @@ impl std::fmt::Debug for GltfSource {
             .field("meshes", &self.count("meshes"))
             .field("bin_bytes", &self.bin.len())
             .field("shapes", &self.shapes.len())
-            .field("head_node", &self.head_node)
+            .field("bones", &self.bones)
             .finish_non_exhaustive()
     }
 }
@@ -132,7 +132,19 @@ impl GltfSource {
     /// joint named like a head bone, else none (the scene's root turns instead).
     #[must_use]
     pub fn head_node(&self) -> Option<usize> {
-        self.head_node
+        self.bones.get(crate::bones::Bone::Head)
+    }
+
+    /// The face's bones: head, neck, upper spine, eyes and jaw, where the file has them.
+    #[must_use]
+    pub fn bones(&self) -> crate::bones::FaceBones {
+        self.bones
+    }
+
+    /// How the file's eyes follow a gaze (VRM's lookAt).
+    #[must_use]
+    pub fn gaze(&self) -> crate::bones::Gaze {
+        crate::bones::gaze(&self.document)
     }
 
     /// Whether the file is a VRM (0.x or 1.0).
@@ -146,25 +158,23 @@ impl GltfSource {
     /// root transform), from the file's rest pose.
     #[must_use]
     pub fn world_rotation(&self, node: usize) -> Quat {
-        let nodes = self.document.get("nodes").and_then(Value::as_array);
-        let Some(nodes) = nodes else {
-            return Quat::IDENTITY;
-        };
-        let mut parent = vec![None; nodes.len()];
-        for (i, n) in nodes.iter().enumerate() {
-            for c in n
-                .get("children")
-                .and_then(Value::as_array)
-                .into_iter()
-                .flatten()
-            {
-                if let Some(c) = c.as_u64().and_then(|c| usize::try_from(c).ok())
-                    && c < parent.len()
-                {
-                    parent[c] = Some(i);
-                }
-            }
+        let (_, rotation, _) = self.world_matrix(node).to_scale_rotation_translation();
+        if rotation.is_finite() {
+            rotation.normalize()
+        } else {
+            Quat::IDENTITY
         }
+    }
+
+    /// The transform of `node` in character space (the importer's root transform and every
+    /// ancestor's), from the file's rest pose.
+    #[must_use]
+    pub fn world_matrix(&self, node: usize) -> Mat4 {
+        let nodes = self.document.get("nodes").and_then(Value::as_array);
+        let Some(nodes) = nodes.filter(|n| node < n.len()) else {
+            return self.root_transform;
+        };
+        let parent = crate::bones::parents(nodes);
         let mut chain = Vec::new();
         let mut at = Some(node);
         while let Some(i) = at {
@@ -178,12 +188,7 @@ impl GltfSource {
         for &i in chain.iter().rev() {
             world *= local_matrix(&nodes[i]);
         }
-        let (_, rotation, _) = world.to_scale_rotation_translation();
-        if rotation.is_finite() {
-            rotation.normalize()
-        } else {
-            Quat::IDENTITY
-        }
+        world
     }
 }
 

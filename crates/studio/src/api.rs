@@ -434,6 +434,7 @@ async fn export(State(shared): State<Shared>, format: Format) -> Result<Response
                 clip,
                 arkit: None,
                 session: None,
+                bones: None,
             },
         )?
     } else {

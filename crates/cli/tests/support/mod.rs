@@ -289,17 +289,31 @@ pub fn validate_gltf(file: &Path) -> serde_json::Value {
 /// returns its report: the Blender version, each mesh object with its shape keys, the armatures
 /// and the actions.
 pub fn blender_report(file: &Path) -> serde_json::Value {
+    blender_script(
+        "blender_shape_keys.py",
+        &[file.as_os_str()],
+        "FACEANIM_REPORT ",
+    )
+}
+
+/// Runs `tools/SCRIPT -- ARGUMENTS…` in Blender (headless) and returns the JSON it printed
+/// after `prefix`.
+pub fn blender_script(
+    script: &str,
+    arguments: &[&std::ffi::OsStr],
+    prefix: &str,
+) -> serde_json::Value {
     let out = Command::new("blender")
         .args(["-b", "--factory-startup", "--python"])
-        .arg(repo().join("tools/blender_shape_keys.py"))
+        .arg(repo().join("tools").join(script))
         .arg("--")
-        .arg(file)
+        .args(arguments)
         .output()
         .expect("Blender is needed for this test: run scripts/setup.sh (apt-get install blender python3-numpy)");
     let stdout = String::from_utf8_lossy(&out.stdout);
     let line = stdout
         .lines()
-        .find_map(|l| l.strip_prefix("FACEANIM_REPORT "))
+        .find_map(|l| l.strip_prefix(prefix))
         .unwrap_or_else(|| {
             panic!(
                 "Blender printed no report:\n{stdout}\n{}",

@@ -72,7 +72,7 @@ fn import(
         )));
     }
     let mut builder = Builder::new(source_name);
-    builder.head_node = head_node(&prepared.kept.0);
+    builder.bones = crate::bones::find(&prepared.kept.0);
     builder.kept = Some(prepared.kept);
     builder.warnings = prepared.warnings;
     builder.uv_transforms = prepared.uv_transforms;
@@ -324,7 +324,7 @@ struct Builder {
     expression_binds: Vec<(usize, Vec<crate::source::Binding>)>,
     /// The file to write back, and the node a head pose turns.
     kept: Option<(serde_json::Value, Vec<u8>)>,
-    head_node: Option<usize>,
+    bones: crate::bones::FaceBones,
 }
 
 impl Builder {
@@ -357,7 +357,7 @@ impl Builder {
             origins: Vec::new(),
             expression_binds: Vec::new(),
             kept: None,
-            head_node: None,
+            bones: crate::bones::FaceBones::default(),
         }
     }
 
@@ -959,7 +959,7 @@ impl Builder {
                     bin: bin.into(),
                     shapes,
                     vertices: self.origins,
-                    head_node: self.head_node,
+                    bones: self.bones,
                     root_transform: self.root_transform,
                 })
             }
@@ -970,52 +970,6 @@ impl Builder {
             warnings,
         })
     }
-}
-
-/// The node a captured head pose turns: the VRM humanoid's head bone, else a skin joint whose
-/// name ends in "head" (`Head`, `mixamorig:Head`, `J_Bip_C_Head`, `CC_Base_Head`).
-fn head_node(doc: &serde_json::Value) -> Option<usize> {
-    let index = |v: Option<&serde_json::Value>| {
-        v.and_then(serde_json::Value::as_u64)
-            .and_then(|n| usize::try_from(n).ok())
-    };
-    let nodes = doc.get("nodes").and_then(serde_json::Value::as_array)?;
-    let valid = |n: usize| (n < nodes.len()).then_some(n);
-    if let Some(n) = index(doc.pointer("/extensions/VRMC_vrm/humanoid/humanBones/head/node")) {
-        return valid(n);
-    }
-    if let Some(bones) = doc
-        .pointer("/extensions/VRM/humanoid/humanBones")
-        .and_then(serde_json::Value::as_array)
-        && let Some(n) = bones
-            .iter()
-            .find(|b| b.get("bone").and_then(serde_json::Value::as_str) == Some("head"))
-            .and_then(|b| index(b.get("node")))
-    {
-        return valid(n);
-    }
-    let joints: std::collections::HashSet<usize> = doc
-        .get("skins")
-        .and_then(serde_json::Value::as_array)
-        .into_iter()
-        .flatten()
-        .flat_map(|s| {
-            s.get("joints")
-                .and_then(serde_json::Value::as_array)
-                .into_iter()
-                .flatten()
-        })
-        .filter_map(|j| index(Some(j)))
-        .collect();
-    let mut candidates: Vec<usize> = joints.into_iter().collect();
-    candidates.sort_unstable();
-    candidates.into_iter().find(|&j| {
-        nodes
-            .get(j)
-            .and_then(|n| n.get("name"))
-            .and_then(serde_json::Value::as_str)
-            .is_some_and(|name| name.to_ascii_lowercase().ends_with("head"))
-    })
 }
 
 fn target_names(mesh: &gltf::Mesh<'_>) -> Vec<Option<String>> {
