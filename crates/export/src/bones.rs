@@ -20,8 +20,6 @@ pub const SPINE_SHARE: f32 = 0.2;
 pub const SPINE_LAG: f32 = 0.2;
 /// The share of the head's turn the neck takes where the rig has one.
 pub const NECK_SHARE: f32 = 0.5;
-/// The gaze, in degrees, of an ARKit eyeLook value of 1 (sideways and up or down).
-pub const EYE_RANGE: [f32; 2] = [30.0, 25.0];
 /// How far a jaw opens at `jawOpen` 1 when the character has no jaw-open shape to measure.
 pub const DEFAULT_JAW_DEGREES: f32 = 20.0;
 
@@ -47,30 +45,14 @@ impl BoneKeys {
         };
         let value =
             |row: &[f32], c: Option<usize>| c.and_then(|c| row.get(c)).copied().unwrap_or(0.0);
-        let look: Vec<Option<usize>> = [
-            "eyeLookInLeft",
-            "eyeLookOutLeft",
-            "eyeLookUpLeft",
-            "eyeLookDownLeft",
-            "eyeLookInRight",
-            "eyeLookOutRight",
-            "eyeLookUpRight",
-            "eyeLookDownRight",
-        ]
-        .iter()
-        .map(|c| column(c))
-        .collect();
-        let gaze = look.iter().any(Option::is_some).then(|| {
+        let looks = clip
+            .blendshapes
+            .iter()
+            .any(|n| faceanim_rig::names::arkit_name(n).is_some_and(|a| a.starts_with("eyeLook")));
+        let gaze = looks.then(|| {
             clip.frames
                 .iter()
-                .map(|row| {
-                    let v = |i: usize| value(row, look[i]);
-                    [
-                        // The left eye looks to the character's left by looking out.
-                        [(v(1) - v(0)) * EYE_RANGE[0], (v(2) - v(3)) * EYE_RANGE[1]],
-                        [(v(4) - v(5)) * EYE_RANGE[0], (v(6) - v(7)) * EYE_RANGE[1]],
-                    ]
-                })
+                .map(|row| faceanim_rig::bones::gaze_from_arkit(|c| value(row, column(c))))
                 .collect()
         });
         let jaw = column("jawOpen").map(|c| {

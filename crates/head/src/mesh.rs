@@ -186,22 +186,32 @@ pub fn build() -> Mesh {
     eye(&mut b, false);
     teeth(&mut b, Part::UpperTeeth, 0.058, 0.0225, -0.0590, -0.0500);
     teeth(&mut b, Part::LowerTeeth, 0.056, 0.0205, -0.0690, -0.0600);
-    ellipsoid(
-        &mut b,
-        Part::Cavity,
-        Vec3::new(0.0, -0.061, 0.050),
-        Vec3::new(0.025, 0.017, 0.026),
-        24,
-        12,
-    );
-    ellipsoid(
-        &mut b,
-        Part::Tongue,
-        Vec3::new(0.0, -0.0655, 0.050),
-        Vec3::new(0.0155, 0.0055, 0.021),
-        20,
-        10,
-    );
+    // The mouth's dark cavity, then the tongue lying in it: centre, radii, segments, rings.
+    for (part, centre, radii, segments, rings) in [
+        (
+            Part::Cavity,
+            [0.0, -0.061, 0.050],
+            [0.025, 0.017, 0.026],
+            24,
+            12,
+        ),
+        (
+            Part::Tongue,
+            [0.0, -0.0655, 0.050],
+            [0.0155, 0.0055, 0.021],
+            20,
+            10,
+        ),
+    ] {
+        ellipsoid(
+            &mut b,
+            part,
+            Vec3::from(centre),
+            Vec3::from(radii),
+            segments,
+            rings,
+        );
+    }
     let (vertices, triangles) = compact(b.vertices, b.triangles);
     let mirror = mirror_map(&vertices);
     let colours = vertices.iter().map(colour).collect();

@@ -582,7 +582,18 @@ fn forward(state: &mut State, arrived: Instant) {
     let Some(frame) = state.history.back() else {
         return;
     };
-    let sent = lock_performer(&performer).send(&frame.weights, frame.head, frame.time as f32);
+    // The eyes from the phone's eyeLook values (as exports turn eye bones; the apps' own eye
+    // angles differ in sign and unit from one app to the next).
+    let eyes = state.raw.is_some().then(|| {
+        faceanim_rig::bones::gaze_from_arkit(|c| {
+            faceanim_retarget::channel_index(c).map_or(0.0, |i| state.channels[i])
+        })
+    });
+    let pose = crate::Pose {
+        head: frame.head,
+        eyes,
+    };
+    let sent = lock_performer(&performer).send_pose(&frame.weights, pose, frame.time as f32);
     if sent {
         state.forwarding.frames += 1;
         if state.delays.len() >= DELAYS {

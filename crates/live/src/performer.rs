@@ -7,6 +7,17 @@ use rosc::{OscBundle, OscMessage, OscPacket, OscTime, OscType};
 use crate::names::{Names, Source};
 use crate::{LiveError, unity_rotation};
 
+/// What a frame sends besides the blendshapes.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Pose {
+    /// The head pose `[yaw, pitch, roll]` in degrees (faceanim's convention), sent as `Neck`
+    /// and `Head`.
+    pub head: Option<[f32; 3]>,
+    /// Each eye's gaze `[yaw, pitch]` in degrees, left eye then right, relative to the head
+    /// (yaw towards the character's left, pitch up), sent as `LeftEye` and `RightEye`.
+    pub eyes: Option<[[f32; 2]; 2]>,
+}
+
 /// Every this many frames all values are sent, moved or not, so a marionette that starts late
 /// or lost a datagram catches up.
 const REFRESH_EVERY: u64 = 30;
@@ -88,9 +99,10 @@ impl Performer {
         &self.stats
     }
 
-    /// The bundle for one frame: `weights` (the character's, in its order), the head pose
-    /// (`[yaw, pitch, roll]` in degrees) and the performer's clock `time` in seconds.
-    pub fn bundle(&mut self, weights: &[f32], head: Option<[f32; 3]>, time: f32) -> OscBundle {
+    /// The bundle for one frame: `weights` (the character's, in its order), the `pose` of head
+    /// and eyes, and the performer's clock `time` in seconds.
+    pub fn bundle(&mut self, weights: &[f32], pose: Pose, time: f32) -> OscBundle {
+        let Pose { head, eyes } = pose;
         let refresh = self.stats.frames.is_multiple_of(REFRESH_EVERY);
         self.stats.frames += 1;
         let message = |addr: &str, args: Vec<OscType>| {
@@ -129,6 +141,12 @@ impl Performer {
             content.push(message("/VMC/Ext/Bone/Pos", pose("Neck", neck)));
             content.push(message("/VMC/Ext/Bone/Pos", pose("Head", head)));
         }
+        if let Some(eyes) = eyes {
+            for (bone, [yaw, pitch]) in ["LeftEye", "RightEye"].into_iter().zip(eyes) {
+                let turn = unity_rotation([yaw, pitch, 0.0]);
+                content.push(message("/VMC/Ext/Bone/Pos", pose(bone, turn)));
+            }
+        }
 
         for ((name, source), last) in self.table.iter().zip(&mut self.last) {
             let value = source.value(weights).clamp(0.0, 1.0);
@@ -151,7 +169,12 @@ impl Performer {
     /// Sends one frame (see [`Performer::bundle`]); false when the network refused it, which is
     /// counted and never blocks.
     pub fn send(&mut self, weights: &[f32], head: Option<[f32; 3]>, time: f32) -> bool {
-        let bundle = self.bundle(weights, head, time);
+        self.send_pose(weights, Pose { head, eyes: None }, time)
+    }
+
+    /// [`Performer::send`] with the eyes' gaze too, as the `LeftEye` and `RightEye` bones.
+    pub fn send_pose(&mut self, weights: &[f32], pose: Pose, time: f32) -> bool {
+        let bundle = self.bundle(weights, pose, time);
         let sent = rosc::encoder::encode(&OscPacket::Bundle(bundle))
             .map_err(|e| e.to_string())
             .and_then(|bytes| {
@@ -169,6 +192,58 @@ impl Performer {
                 self.stats.last_error = Some(e);
                 false
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Names;
+
+    #[test]
+    fn the_head_goes_on_neck_and_head_and_the_gaze_on_the_eyes() {
+        let names = vec!["jawOpen".to_owned()];
+        let mut performer =
+            Performer::new("127.0.0.1:9".parse().unwrap(), &names, Names::Own).unwrap();
+        let pose = Pose {
+            head: Some([20.0, 0.0, 0.0]),
+            eyes: Some([[30.0, 0.0], [0.0, 10.0]]),
+        };
+        let bundle = performer.bundle(&[0.5], pose, 0.0);
+        let bones: Vec<(String, [f32; 4])> = bundle
+            .content
+            .iter()
+            .filter_map(|p| match p {
+                OscPacket::Message(m) if m.addr == "/VMC/Ext/Bone/Pos" => {
+                    let name = match &m.args[0] {
+                        OscType::String(s) => s.clone(),
+                        _ => return None,
+                    };
+                    let f = |k: usize| match m.args[k] {
+                        OscType::Float(v) => v,
+                        _ => f32::NAN,
+                    };
+                    Some((name, [f(4), f(5), f(6), f(7)]))
+                }
+                _ => None,
+            })
+            .collect();
+        let names: Vec<&str> = bones.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["Neck", "Head", "LeftEye", "RightEye"]);
+        // Half the yaw on each of neck and head; each eye its own gaze.
+        let expected = [
+            [10.0, 0.0, 0.0],
+            [10.0, 0.0, 0.0],
+            [30.0, 0.0, 0.0],
+            [0.0, 10.0, 0.0],
+        ];
+        for ((bone, q), angles) in bones.iter().zip(expected) {
+            let want = unity_rotation(angles);
+            assert!(
+                q.iter().zip(want).all(|(x, y)| (x - y).abs() < 1e-5),
+                "{bone}: {q:?}, expected {want:?}"
+            );
         }
     }
 }

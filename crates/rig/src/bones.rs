@@ -73,6 +73,29 @@ impl FaceBones {
     }
 }
 
+/// The gaze, in degrees, of an ARKit eyeLook value of 1 (sideways, and up or down).
+pub const EYE_RANGE: [f32; 2] = [30.0, 25.0];
+
+/// Each eye's gaze `[yaw, pitch]` in degrees (left eye, right eye; yaw towards the
+/// character's left, pitch up) from ARKit's eyeLook values, `value(channel)` (0 for a channel
+/// not there): the left eye looks to the character's left by looking out, the right eye in.
+#[must_use]
+pub fn gaze_from_arkit(value: impl Fn(&str) -> f32) -> [[f32; 2]; 2] {
+    let eye = |side: &str, left: bool| {
+        let v = |way: &str| value(&format!("eyeLook{way}{side}"));
+        let towards_left = if left {
+            v("Out") - v("In")
+        } else {
+            v("In") - v("Out")
+        };
+        [
+            towards_left * EYE_RANGE[0],
+            (v("Up") - v("Down")) * EYE_RANGE[1],
+        ]
+    };
+    [eye("Left", true), eye("Right", false)]
+}
+
 /// How far a gaze in degrees turns the eyes: VRM's `lookAt` range maps (bone type), each an
 /// input's largest value and the output it gives, in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -203,7 +203,17 @@ impl LiveHandle {
         let head = record.head;
         // Out at once: the frame's weights go to the marionette before anything else is done.
         if let Some(performer) = &live.performer {
-            lock(performer).send(&weights, head, time);
+            // The gaze from MediaPipe's own eyeLook scores, as the eye bones take it.
+            let eyes = found.then(|| {
+                faceanim_rig::bones::gaze_from_arkit(|c| {
+                    record
+                        .scores
+                        .iter()
+                        .find(|(n, _)| *n == c)
+                        .map_or(0.0, |(_, v)| *v)
+                })
+            });
+            lock(performer).send_pose(&weights, faceanim_live::Pose { head, eyes }, time);
         }
         let recorded = match live.recording.as_mut() {
             Some(recording) => {
