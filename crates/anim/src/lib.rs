@@ -4,7 +4,7 @@
 //! named blendshapes, at a frame rate, with an optional head rotation per frame. Sketches bake
 //! into clips, capture produces them, metrics compare them and exporters write them.
 //!
-//! The JSON form (DESIGN.md, "Baked clip") is
+//! The JSON form (docs/formats.md, "Clip") is
 //! `{"fps": 30, "blendshapes": [names], "frames": [[w, ...], ...], "head": [[yaw, pitch, roll], ...]}`,
 //! and for clips from capture two more optional per-frame fields: `"head_position"` (metres
 //! from the camera) and `"presence"` (0..1; 0 marks a frame where no face was found).

@@ -14,7 +14,7 @@ pub(crate) struct ExportArgs {
     /// Where to write the .glb.
     #[arg(short, long)]
     pub(crate) output: PathBuf,
-    /// A clip JSON (DESIGN.md "Baked clip") to add as a morph-weight animation; its
+    /// A clip JSON (docs/formats.md) to add as a morph-weight animation; its
     /// blendshape names are matched to the character's (ARKit spellings understood).
     #[arg(long)]
     pub(crate) clip: Option<PathBuf>,

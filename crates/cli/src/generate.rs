@@ -40,7 +40,10 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<()> {
             "--only: {name} is not one of ARKit's 52 names (e.g. eyeBlinkLeft, jawOpen)"
         );
     }
-    let user = crate::input::load(&args.character)?.character;
+    // A head without shapes is what this command is for: no warning telling to run it.
+    let user =
+        crate::input::load_saying(&args.character, |w| !w.contains("faceanim generate-shapes"))?
+            .character;
     if args
         .output
         .extension()

@@ -37,12 +37,60 @@ struct FileReport {
     materials: usize,
     textures: usize,
     vrm: bool,
+    /// The file's animations (a take or sketch faceanim exported, or the file's own).
+    animations: Vec<AnimationReport>,
     /// The bones exports turn (head pose, gaze, jaw), by name: `head`, `neck`, `upper_spine`,
     /// `left_eye`, `right_eye`, `jaw`.
     bones: std::collections::BTreeMap<&'static str, String>,
     /// The blendshapes `faceanim generate-shapes` made, as the file records them.
     #[serde(skip_serializing_if = "Option::is_none")]
     generated: Option<GeneratedReport>,
+}
+
+#[derive(Debug, Serialize)]
+struct AnimationReport {
+    name: String,
+    /// Its channels: morph weights and bone rotations.
+    channels: usize,
+    /// Its length in seconds (the latest key time its samplers declare).
+    seconds: f64,
+}
+
+impl AnimationReport {
+    fn all_of(doc: &serde_json::Value) -> Vec<AnimationReport> {
+        use serde_json::Value;
+        let accessors = doc.get("accessors").and_then(Value::as_array);
+        let end_of = |sampler: &Value| {
+            let accessor = sampler.get("input").and_then(Value::as_u64)?;
+            accessors?
+                .get(usize::try_from(accessor).ok()?)?
+                .pointer("/max/0")?
+                .as_f64()
+        };
+        doc.get("animations")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+            .enumerate()
+            .map(|(k, a)| AnimationReport {
+                name: a
+                    .get("name")
+                    .and_then(Value::as_str)
+                    .map_or_else(|| format!("animation {k}"), str::to_owned),
+                channels: a
+                    .get("channels")
+                    .and_then(Value::as_array)
+                    .map_or(0, Vec::len),
+                seconds: a
+                    .get("samplers")
+                    .and_then(Value::as_array)
+                    .into_iter()
+                    .flatten()
+                    .filter_map(end_of)
+                    .fold(0.0, f64::max),
+            })
+            .collect()
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -198,6 +246,7 @@ impl Report {
                 textures: s.count("textures"),
                 vrm: s.is_vrm(),
                 bones: bone_names(s),
+                animations: AnimationReport::all_of(s.document()),
                 generated: s.generated_shapes().map(|g| GeneratedReport {
                     shapes: g.shapes,
                     template: g.template,
@@ -248,6 +297,13 @@ impl Report {
                 f.textures,
                 if f.vrm { ", VRM" } else { "" }
             );
+            for a in &f.animations {
+                let _ = writeln!(
+                    out,
+                    "  animation    {}: {:.2} s, {} channels",
+                    a.name, a.seconds, a.channels
+                );
+            }
             if !f.bones.is_empty() {
                 let list: Vec<String> = f.bones.iter().map(|(k, v)| format!("{k} {v}")).collect();
                 let _ = writeln!(

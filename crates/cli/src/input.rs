@@ -38,8 +38,17 @@ pub(crate) fn load_or_default(
 }
 
 pub(crate) fn load(path: &Path) -> anyhow::Result<faceanim_rig::import::Imported> {
+    load_saying(path, |_| true)
+}
+
+/// [`load`], warning only of what `worth` lets through (`generate-shapes` does not tell its
+/// user to run `generate-shapes`).
+pub(crate) fn load_saying(
+    path: &Path,
+    worth: impl Fn(&str) -> bool,
+) -> anyhow::Result<faceanim_rig::import::Imported> {
     let imported = faceanim_files::load_character(path)?;
-    for warning in &imported.warnings {
+    for warning in imported.warnings.iter().filter(|w| worth(w)) {
         tracing::warn!("{}: {warning}", path.display());
     }
     Ok(imported)

@@ -65,7 +65,7 @@ enum Command {
     /// Converts OBJ folders and .gltf files to a single .glb that Blender, Unity, Unreal and
     /// three.js open directly. Example: faceanim export ict-obj/ -o ict.glb --clip take.json
     Export(export::ExportArgs),
-    /// Replay a strokes file (DESIGN.md format: samples, handle edits, settings) on a character
+    /// Replay a strokes file (docs/formats.md: samples, handle edits, settings) on a character
     /// and write the animation: a GLB whose extra morph targets carry arcs and exaggerations,
     /// and optionally the baked clip of blendshape weights.
     ///
@@ -84,7 +84,7 @@ enum Command {
     /// scores and head pose per frame (MediaPipe's face models, run on the CPU), mapped by name
     /// onto the character's blendshapes, or through its adapter.
     ///
-    /// Outputs by extension (repeat -o for several): .json the clip (DESIGN.md), .glb the
+    /// Outputs by extension (repeat -o for several): .json the clip (docs/formats.md), .glb the
     /// character with the animation (head pose on its root), .csv Live Link Face, .byoc.csv
     /// the seed's CSV, .session.json the session. Prints a JSON summary with the jitter of
     /// each filter so you can choose.
@@ -158,6 +158,8 @@ fn main() -> ExitCode {
             tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| filter.into()),
         )
         .with_writer(std::io::stderr)
+        // Colours only for a person at a terminal, never into a pipe or a log file.
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .without_time()
         .init();
     tracing::debug!(spare_heap, "allocator keeps spare heap");

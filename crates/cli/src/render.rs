@@ -39,12 +39,7 @@ pub(crate) fn run(args: &RenderArgs) -> anyhow::Result<()> {
             let (name, value) = pair
                 .split_once('=')
                 .ok_or_else(|| anyhow::anyhow!("--weights: '{pair}' is not NAME=VALUE"))?;
-            let id = character.find_blendshape(name.trim()).ok_or_else(|| {
-                anyhow::anyhow!(
-                    "--weights: '{name}' is not a blendshape of {}",
-                    character.name()
-                )
-            })?;
+            let name = name.trim();
             let value: f32 = value
                 .trim()
                 .parse()
@@ -53,7 +48,34 @@ pub(crate) fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 value.is_finite(),
                 "--weights: '{value}' is not a finite number"
             );
-            w[id.index()] = value;
+            if let Some(id) = character.find_blendshape(name) {
+                w[id.index()] = value;
+                continue;
+            }
+            // An ARKit channel in any spelling: the shapes that answer to it by name, as
+            // `info` lists them (browInnerUp → browInnerUp_L and _R).
+            let channel = faceanim_rig::names::arkit_name(name).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--weights: '{name}' is neither a blendshape of {} nor an ARKit channel",
+                    character.name()
+                )
+            })?;
+            let driven = character
+                .name_map()
+                .weights_from_channels(|c| if c == channel { value } else { 0.0 });
+            let mut any = false;
+            for (weight, from) in w.iter_mut().zip(driven) {
+                if from != 0.0 {
+                    *weight = from;
+                    any = true;
+                }
+            }
+            anyhow::ensure!(
+                any || value == 0.0,
+                "--weights: no blendshape of {} answers to the ARKit channel {channel} by name \
+                 (`faceanim info` lists what drives what; `faceanim retarget` maps it)",
+                character.name()
+            );
         }
         let pose = character.pose(&w);
         let camera = faceanim_render::Camera::front(&character.head_bounds(), 0.75);

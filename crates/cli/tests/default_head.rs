@@ -91,9 +91,29 @@ fn render_writes_a_contact_sheet_and_single_poses() {
     ]);
     assert_eq!(out.status.code(), Some(1));
     assert!(
-        String::from_utf8_lossy(&out.stderr)
-            .contains("'wiggleEars' is not a blendshape of faceanim-default")
+        String::from_utf8_lossy(&out.stderr).contains(
+            "'wiggleEars' is neither a blendshape of faceanim-default nor an ARKit channel"
+        )
     );
+
+    // An ARKit channel that a head has as two halves (ICT's browInnerUp_L and _R) poses both,
+    // as `info` says it drives them.
+    let ict = faceanim_testdata::shared("characters/ict-face.glb");
+    let render = |weights: &[&str], name: &str| {
+        let out = dir.join(name);
+        let mut args = vec!["render", ict.to_str().unwrap(), "--size", "128"];
+        args.extend(weights);
+        args.extend(["-o", out.to_str().unwrap()]);
+        faceanim_ok(&args);
+        std::fs::read(out).unwrap()
+    };
+    let by_channel = render(&["--weights", "browInnerUp=1"], "brows-channel.png");
+    let by_halves = render(
+        &["--weights", "browInnerUp_L=1,browInnerUp_R=1"],
+        "brows-halves.png",
+    );
+    assert_eq!(by_channel, by_halves);
+    assert_ne!(by_channel, render(&[], "ict-neutral.png"));
 }
 
 /// The face model reads the built-in head's shapes when another renderer draws them (issue 17,

@@ -365,6 +365,23 @@ fn head_eyes_and_jaw_go_on_the_blender_avatars_bones() {
     let out = dir.join("bones.glb");
     export_with_clip(&avatar, &out, &clip_path);
     assert_valid_gltf(&out);
+    // `info` finds the bones and the animation just written.
+    let info: Value =
+        serde_json::from_str(&faceanim_ok(&["info", out.to_str().unwrap(), "--json"])).unwrap();
+    let file = &info["file"];
+    assert_eq!(file["animations"].as_array().unwrap().len(), 1, "{file}");
+    assert!((file["animations"][0]["seconds"].as_f64().unwrap() - 0.3).abs() < 1e-3);
+    let bones = [
+        ("head", "Head"),
+        ("neck", "Neck"),
+        ("upper_spine", "Chest"),
+        ("left_eye", "LeftEye"),
+        ("right_eye", "RightEye"),
+        ("jaw", "Jaw"),
+    ];
+    for (role, bone) in bones {
+        assert_eq!(file["bones"][role], bone, "{file}");
+    }
     let turns = blender_bone_turns(
         &out,
         0.1,

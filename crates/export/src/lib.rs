@@ -53,7 +53,7 @@ use faceanim_take::Session;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Format {
-    /// The clip JSON of DESIGN.md: every blendshape's weight per frame, by name.
+    /// The clip JSON (docs/formats.md): every blendshape's weight per frame, by name.
     ClipJson,
     /// The character with the animation, as a binary glTF.
     Glb,

@@ -6,7 +6,7 @@
 //! replayed on the command line give the same animation. Editing an input re-solves that action
 //! and those created after it.
 //!
-//! Semantics of chains and layers (DESIGN.md): a stroke that starts within `hook_radius` of the
+//! Semantics of chains and layers: a stroke that starts within `hook_radius` of the
 //! end of a chain's last action continues that chain — it snaps to that point, inherits the
 //! reference vertex, starts from the previous target pose and, unless placed, begins when the
 //! previous action ends. Within a chain each action moves the face from the previous action's

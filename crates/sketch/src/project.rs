@@ -1,4 +1,4 @@
-//! The strokes file (DESIGN.md, "Strokes / sketch project"), its validation, and validated
+//! The strokes file (docs/formats.md, "Strokes / sketch project"), its validation, and validated
 //! [`Stroke`]s.
 //!
 //! Malformed data (NaN, time running backwards, unknown fields, a bad version) is an error that

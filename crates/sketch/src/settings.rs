@@ -1,5 +1,5 @@
 //! The paper's parameters (section 3.9), with defaults relative to the character's size `D`
-//! (the diagonal of its bounding box), as DESIGN.md records from the authors' code.
+//! (the diagonal of its bounding box), as the authors' code sets them.
 
 use serde::{Deserialize, Serialize};
 

@@ -3,7 +3,7 @@
 //! One axum server on 127.0.0.1 serves the page (embedded from `web/`, so the binary runs from
 //! anywhere with no Node.js or build step) and a small HTTP/JSON API that the page and scripts
 //! use alike (see `API.md` beside this crate). The engines stay in Rust: the server keeps the
-//! project (the strokes file of DESIGN.md) as the single source of truth and rebuilds the
+//! project (the strokes file of docs/formats.md) as the single source of truth and rebuilds the
 //! sketch from it on each change, which takes milliseconds and makes undo/redo exact.
 //!
 //! Capture mode ([`capture`]) adds a face video, photos or the webcam as the animation's
