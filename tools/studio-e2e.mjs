@@ -278,6 +278,11 @@ try {
   await shot('09-blendshape-list');
   const unexpected = consoleErrors.filter((e) => !e.includes('status of 400'));
   check(unexpected.length === 0, `page errors: ${unexpected.join('; ')}`);
+  // Whether the page told this display about `?fast` (slow frames while drawing), and where.
+  measurements.slow_hint = await page.evaluate(() => ({
+    shown: !document.getElementById('slow-hint').hidden,
+    href: document.getElementById('slow-hint-link').href,
+  }));
   console.log(JSON.stringify(measurements));
 } finally {
   await browser.close();

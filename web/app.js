@@ -20,6 +20,7 @@
 //   vmc.js       VMC in: a phone tracker or another app drives the character
 //   xr.js        immersive sketching in a headset (WebXR): pens, the seed's states, navigation
 //   xrpanel.js   the VR world's panels: the timeline and the settings
+//   slow-hint.js tells a slow display about the `?fast` viewport
 // The server owns the project and the engines; the page draws what the API describes. This
 // file starts the page and publishes `window.studio`, the read-only hook scripts and tests use
 // (crates/studio/API.md).
@@ -34,6 +35,7 @@ import { drawStats, project } from './scene.js';
 import './inspector.js';
 import './settings.js';
 import './shapes.js';
+import './slow-hint.js';
 import { showFailure } from './status.js';
 import * as store from './store.js';
 import { faceAt, strokeLatency } from './strokes.js';

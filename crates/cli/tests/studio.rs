@@ -122,6 +122,11 @@ fn an_animator_session_in_a_real_browser() {
     let studio = start(&dir.path().join("session.faceanim.json"));
     let measured = browser_script("studio-e2e.mjs", &studio, "", &output_dir("studio"), &[]);
     assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
+    // Where a slow display is sent: this page with `?fast`.
+    let hint = &measured["slow_hint"];
+    let href = hint["href"].as_str().unwrap();
+    assert!(href.ends_with("/?fast"), "{hint}");
+    eprintln!("the slow-display hint was {}shown", if hint["shown"] == true { "" } else { "not " });
     // The project was saved where the studio was pointed, and nowhere else.
     assert!(dir.path().join("session.faceanim.json").exists());
 }
@@ -142,6 +147,8 @@ fn an_animator_session_on_the_built_in_head_in_the_viewport_for_machines_without
         &[],
     );
     assert!(measured["smile_weight"].as_f64().unwrap() > 0.5);
+    // The fast viewport is the one the slow-display hint points to: it never shows it.
+    assert_eq!(measured["slow_hint"]["shown"], false, "{measured}");
 }
 
 #[test]
