@@ -126,7 +126,10 @@ fn an_animator_session_in_a_real_browser() {
     let hint = &measured["slow_hint"];
     let href = hint["href"].as_str().unwrap();
     assert!(href.ends_with("/?fast"), "{hint}");
-    eprintln!("the slow-display hint was {}shown", if hint["shown"] == true { "" } else { "not " });
+    eprintln!(
+        "the slow-display hint was {}shown",
+        if hint["shown"] == true { "" } else { "not " }
+    );
     // The project was saved where the studio was pointed, and nowhere else.
     assert!(dir.path().join("session.faceanim.json").exists());
 }

@@ -38,17 +38,18 @@ impl BoneKeys {
     /// The keys of `clip`, whose columns are read by their ARKit meaning in any spelling.
     #[must_use]
     pub fn from_clip(clip: &Clip) -> BoneKeys {
-        let column = |channel: &str| {
-            clip.blendshapes
-                .iter()
-                .position(|n| faceanim_rig::names::arkit_name(n) == Some(channel))
-        };
-        let value =
-            |row: &[f32], c: Option<usize>| c.and_then(|c| row.get(c)).copied().unwrap_or(0.0);
-        let looks = clip
+        // Each column's ARKit meaning, read once (a take has thousands of frames).
+        let meaning: Vec<Option<&str>> = clip
             .blendshapes
             .iter()
-            .any(|n| faceanim_rig::names::arkit_name(n).is_some_and(|a| a.starts_with("eyeLook")));
+            .map(|n| faceanim_rig::names::arkit_name(n))
+            .collect();
+        let column = |channel: &str| meaning.iter().position(|m| *m == Some(channel));
+        let value =
+            |row: &[f32], c: Option<usize>| c.and_then(|c| row.get(c)).copied().unwrap_or(0.0);
+        let looks = meaning
+            .iter()
+            .any(|m| m.is_some_and(|a| a.starts_with("eyeLook")));
         let gaze = looks.then(|| {
             clip.frames
                 .iter()
