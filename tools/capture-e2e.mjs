@@ -328,6 +328,17 @@ try {
   const smileColumn = layered.blendshapes.indexOf('mouthSmile_L');
   check(Math.max(...layered.frames.map((row) => row[smileColumn])) > 0.5, 'the stroke did not reach the layered clip');
   await shot('11-stroke-over-take');
+  // "Sketch over the take" off: the page shows, and the downloads hold, the take alone.
+  await page.uncheck('#sketch-over-take');
+  const alone = await page.evaluate(() => fetch(document.getElementById('capture-export-json').getAttribute('href')).then((r) => r.json()));
+  const aloneSmile = Math.max(...alone.frames.map((row) => row[smileColumn]));
+  check(aloneSmile < 0.3, `the take alone still smiles ${aloneSmile}`);
+  const shownFrame = await page.evaluate(() => Math.round(window.studio.frame));
+  const shownAlone = await page.evaluate((n) => Array.from(window.studio.meshes[0].morphTargetInfluences.slice(0, n)), alone.blendshapes.length);
+  const worstAlone = Math.max(...shownAlone.map((w, i) => Math.abs(w - alone.frames[shownFrame][i])));
+  check(worstAlone < 1e-4, `the page shows weights ${worstAlone} away from the take alone`);
+  await page.check('#sketch-over-take');
+  check((await page.getAttribute('#capture-export-glb', 'href')) === 'api/capture/export.glb', 'the layered download link came back');
 
   // 13. Speech: a recording opened as the take is lip-synced, and plays with its sound; the
   //     stroke stays on top; scrubbing sounds a slice at the frame.

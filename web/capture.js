@@ -7,7 +7,7 @@
 import { api } from './api.js';
 import { turnHead } from './head-turn.js';
 import { inCapture, onMode } from './mode.js';
-import { applyLayer, currentFrame, onFrame, pause, setExtent, setFrame, setLayer } from './playback.js';
+import { applyLayer, currentFrame, onFrame, pause, setExtent, setFrame, setLayer, showSketch } from './playback.js';
 import { showError, showFailure } from './status.js';
 import * as store from './store.js';
 import { drawTimeline } from './timeline.js';
@@ -473,3 +473,15 @@ onShowTakeFrame(() => {
 
 // The take (or the live face) is the layer under the sketch.
 setLayer(layer);
+
+// "Sketch over the take": off, the page plays and the downloads hold the take alone.
+const sketchOverTake = /** @type {HTMLInputElement} */ (document.getElementById('sketch-over-take'));
+sketchOverTake.addEventListener('change', () => {
+  showSketch(sketchOverTake.checked);
+  for (const link of document.querySelectorAll('.exports a[id^="capture-export"]')) {
+    const url = new URL(/** @type {HTMLAnchorElement} */ (link).getAttribute('href'), location.href);
+    if (sketchOverTake.checked) url.searchParams.delete('sketch');
+    else url.searchParams.set('sketch', 'false');
+    link.setAttribute('href', url.pathname.replace(/^\//, '') + url.search);
+  }
+});

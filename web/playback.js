@@ -32,6 +32,8 @@ let extent = 0;
 let layer = null;
 /** While a stroke or handle is dragged the character stays at rest (no captured turn). */
 let resting = false;
+/** Whether the sketch's weights are added over the layer (off: the layer alone). */
+let sketchShown = true;
 /** @type {THREE.Quaternion|null} The turn asked for (a captured head pose), when not resting. */
 let turn = null;
 /** @type {((frame: number) => void)[]} */
@@ -54,6 +56,10 @@ export function onFrame(listener) { frameListeners.push(listener); }
 /** Sets the weights added under the sketch's at a frame (`fn(frame)` → weights of the
  * character's own targets, or null), or none. */
 export function setLayer(fn) { layer = fn; applyLayer(); }
+
+/** Shows the sketch over the layer, or (false) the layer alone; with no layer the sketch always
+ * shows. */
+export function showSketch(on) { sketchShown = on; applyLayer(); }
 
 /** Makes playback cover `frames` frames at least (a captured take's length). */
 export function setExtent(frames) { extent = frames; }
@@ -144,9 +150,10 @@ export function applyLayer() {
     const influences = mesh.morphTargetInfluences;
     const sketch = mesh.userData.sketch;
     if (!influences || !sketch) continue;
+    const own = weights && !sketchShown ? 0 : 1;
     for (let i = 0; i < influences.length; i++) {
       const w = weights && i < weights.length ? weights[i] : 0;
-      influences[i] = Math.min(1, Math.max(0, sketch[i] + w));
+      influences[i] = Math.min(1, Math.max(0, own * sketch[i] + w));
     }
   }
 }

@@ -769,6 +769,45 @@ fn a_photos_ramp_is_shown_and_set_before_export() {
         45,
         "the export is what the page plays"
     );
+    // A stroke drawn over the take is in the export, unless the take is asked for alone.
+    let (_, body) = request(studio.port, "GET", "/api/character/anchors", &[], b"");
+    let anchors: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let stroke =
+        serde_json::json!({ "samples": straight_stroke(&anchors, "mouthSmile_L", 10, 0.5) });
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/strokes",
+        &json,
+        stroke.to_string().as_bytes(),
+    );
+    assert_eq!(status, 200, "{body}");
+    let get_clip = |query: &str| -> serde_json::Value {
+        let (status, body) = request(
+            studio.port,
+            "GET",
+            &format!("/api/capture/export.json{query}"),
+            &[],
+            b"",
+        );
+        assert_eq!(status, 200, "{body}");
+        serde_json::from_str(&body).unwrap()
+    };
+    let smile = |clip: &serde_json::Value| support::column(clip, "mouthSmile_L");
+    let peak = |v: Vec<f64>| v.into_iter().fold(0.0, f64::max);
+    assert!(
+        peak(smile(&get_clip(""))) > peak(smile(&clip)) + 0.3,
+        "the stroke is layered"
+    );
+    assert_eq!(get_clip("?sketch=false"), clip, "the take alone");
+    let (status, body) = request(
+        studio.port,
+        "GET",
+        "/api/capture/export.json?sketch=maybe",
+        &[],
+        b"",
+    );
+    assert_eq!(status, 400, "{body}");
     let (status, body) = request(
         studio.port,
         "PUT",

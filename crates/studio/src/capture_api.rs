@@ -82,23 +82,23 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/vmc/neutral", post(vmc_neutral))
         .route(
             "/api/capture/session.json",
-            get(|b: State<Both>| export(b, Format::Session)),
+            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::Session)),
         )
         .route(
             "/api/capture/export.glb",
-            get(|b: State<Both>| export(b, Format::Glb)),
+            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::Glb)),
         )
         .route(
             "/api/capture/export.json",
-            get(|b: State<Both>| export(b, Format::ClipJson)),
+            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::ClipJson)),
         )
         .route(
             "/api/capture/export.csv",
-            get(|b: State<Both>| export(b, Format::LiveLinkCsv)),
+            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::LiveLinkCsv)),
         )
         .route(
             "/api/capture/export.byoc.csv",
-            get(|b: State<Both>| export(b, Format::SeedCsv)),
+            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::SeedCsv)),
         )
         .with_state(both.clone());
     let upload = http::body_limit(
@@ -823,10 +823,28 @@ async fn voice_chunk(
 
 // ---------- exports ----------
 
-/// The take in `format`, with the sketch's strokes layered on top (`faceanim_take::layer`):
-/// the GLB carries the strokes' baked arcs and exaggerations and the captured head turn; the
-/// seed's CSV and the session are the take's own.
-async fn export(State(both): State<Both>, format: Format) -> Result<Response, ApiError> {
+/// Which layers an export of the take holds.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Layers {
+    /// The sketch's strokes over the take (`?sketch=false`: the take alone, as the page shows
+    /// it with "Sketch over the take" off).
+    #[serde(default = "layered")]
+    sketch: bool,
+}
+
+fn layered() -> bool {
+    true
+}
+
+/// The take in `format`, with the sketch's strokes layered on top (`faceanim_take::layer`)
+/// unless `?sketch=false`: the GLB carries the strokes' baked arcs and exaggerations and the
+/// captured head turn; the seed's CSV and the session are the take's own.
+async fn export(
+    State(both): State<Both>,
+    Query(layers): Query<Layers>,
+    format: Format,
+) -> Result<Response, ApiError> {
     // What the export needs of the take, read under the desk's lock (the session itself only
     // for the formats that are the session's own).
     let (take_clip, arkit, session, name) = {
@@ -843,20 +861,21 @@ async fn export(State(both): State<Both>, format: Format) -> Result<Response, Ap
     let studio = both.studio();
     let (sketch, _) = studio.sketch();
     // The sketch's corrective targets matter to the GLB only; the rest needs its weights.
-    let (sketch_animation, baked_character) = if studio.project().strokes.is_empty() {
-        (None, None)
-    } else if format == Format::Glb {
-        let baked = sketch.bake(&name)?;
-        (Some(baked.animation), Some(baked.character))
-    } else {
-        let weights = faceanim_rig::animation::MorphAnimation {
-            name: name.clone(),
-            times: Vec::new(),
-            weights: sketch.bake_clip().frames,
-            rotations: None,
+    let (sketch_animation, baked_character) =
+        if !layers.sketch || studio.project().strokes.is_empty() {
+            (None, None)
+        } else if format == Format::Glb {
+            let baked = sketch.bake(&name)?;
+            (Some(baked.animation), Some(baked.character))
+        } else {
+            let weights = faceanim_rig::animation::MorphAnimation {
+                name: name.clone(),
+                times: Vec::new(),
+                weights: sketch.bake_clip().frames,
+                rotations: None,
+            };
+            (Some(weights), None)
         };
-        (Some(weights), None)
-    };
     let character = baked_character.as_ref().unwrap_or(&studio.character);
     let animation = Animation::from_take(
         Some(character),
