@@ -577,15 +577,7 @@ fn the_studio_answers_every_upload_and_survives_a_bad_take() {
     let project = dir.path().join("fuzz.faceanim.json");
     let studio = start_on(None, &project, &[]);
     let port = studio.port;
-    let upload = |name: &str, body: &[u8]| {
-        request(
-            port,
-            "POST",
-            "/api/capture/upload",
-            &[("x-filename", name)],
-            body,
-        )
-    };
+    let upload = |name: &str, body: &[u8]| support::upload(port, name, body);
     let photo = photo_session();
     let mut mutator = Mutator::new(48);
     for k in 0..300 {

@@ -232,6 +232,33 @@ fn capture_mode_refuses_bad_input_with_a_reason() {
         body.contains("\"take\":null"),
         "a refused session left a take: {body}"
     );
+    // A clip JSON (what `track -o take.json` or the Clip JSON download wrote) opens as a take of
+    // its frames, by name, with its head pose; one naming nothing of this character is refused.
+    let upload = |name: &str, bytes: &[u8]| support::upload(port, name, bytes);
+    let (status, body) = upload(
+        "take.json",
+        br#"{"fps": 30, "blendshapes": ["jawOpen", "EyeBlinkLeft"],
+        "frames": [[0.5, 1.0], [0.25, 0.0], [0.0, 0.0]], "head": [[10, 0, 0], [5, 0, 0], [0, 0, 0]]}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let take = &state["take"];
+    assert_eq!(take["frames"], 3, "{take}");
+    let names = support::strings(&state["blendshapes"]);
+    let at = |name: &str| names.iter().position(|n| n == name).unwrap();
+    assert_eq!(take["estimates"][0][at("jawOpen")], 0.5, "{take}");
+    assert_eq!(take["estimates"][0][at("eyeBlink_L")], 1.0, "{take}");
+    assert_eq!(take["estimates"][1][at("jawOpen")], 0.25, "{take}");
+    assert_eq!(take["head"][0][0], 10.0, "{take}");
+    let (status, body) = upload(
+        "robot.json",
+        br#"{"fps": 30, "blendshapes": ["beep"], "frames": [[1.0]]}"#,
+    );
+    assert_eq!(status, 400);
+    assert!(
+        body.contains("robot.json") && body.contains("beep"),
+        "{body}"
+    );
     // Live frames must be the size they claim.
     let (_, body) = request(port, "POST", "/api/capture/live/start", &[], b"");
     assert!(body.contains("\"live\""), "{body}");

@@ -513,6 +513,17 @@ pub fn start_on(
     Studio { child, port }
 }
 
+/// `POST /api/capture/upload` of `bytes` as a file called `name`; the status and body.
+pub fn upload(port: u16, name: &str, bytes: &[u8]) -> (u16, String) {
+    request(
+        port,
+        "POST",
+        "/api/capture/upload",
+        &[("x-filename", name)],
+        bytes,
+    )
+}
+
 /// One raw HTTP/1.1 request; returns the status code and body.
 pub fn request(
     port: u16,

@@ -236,10 +236,20 @@ impl CaptureDesk {
         shown: &str,
     ) -> Result<usize, ApiError> {
         self.busy()?;
-        let session = Session::from_json(bytes).map_err(|source| ApiError::Session {
-            what: faceanim_rig::excerpt(shown).into_owned(),
-            source,
-        })?;
+        let session = match Session::from_json(bytes) {
+            Ok(session) => session,
+            // A clip JSON (what `faceanim track -o take.json`, `lipsync` or this tab's Clip
+            // JSON wrote) opens as a take of its frames.
+            Err(source) => match faceanim_anim::Clip::from_json(bytes) {
+                Ok(clip) => return self.open_clip(character, &clip, shown),
+                Err(_) => {
+                    return Err(ApiError::Session {
+                        what: faceanim_rig::excerpt(shown).into_owned(),
+                        source,
+                    });
+                }
+            },
+        };
         let names = names(character);
         if session.blendshapes != names {
             let lacking: Vec<&str> = names
@@ -268,6 +278,40 @@ impl CaptureDesk {
         tracing::info!("opened the session {shown}: {frames} frames");
         self.set_take(take, Previews::new());
         Ok(frames)
+    }
+
+    /// Makes `clip` the take: its columns put on `character` by name (ARKit spellings match),
+    /// its head pose kept, one frame per row at its rate, unfiltered. Returns its frame count.
+    ///
+    /// # Errors
+    /// [`ApiError::Invalid`] naming `shown` when no column is one of the character's, or the
+    /// take's error.
+    fn open_clip(
+        &mut self,
+        character: &Character,
+        clip: &faceanim_anim::Clip,
+        shown: &str,
+    ) -> Result<usize, ApiError> {
+        let retarget = clip
+            .retarget(character, shown)
+            .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?;
+        let step = 1.0 / f64::from(clip.fps);
+        let frames: Vec<faceanim_take::ReceivedFrame> = retarget
+            .animation
+            .weights
+            .into_iter()
+            .enumerate()
+            .map(|(k, weights)| faceanim_take::ReceivedFrame {
+                time: k as f64 * step,
+                weights,
+                head: clip.head.as_ref().and_then(|h| h.get(k).copied()),
+            })
+            .collect();
+        let count = frames.len();
+        let take = Take::from_received(character, shown, frames, Filtering::new(1, None)?)?;
+        tracing::info!("opened the clip {shown}: {count} frames");
+        self.set_take(take, Previews::new());
+        Ok(count)
     }
 
     /// Makes `lip_sync` (of the speech `shown`, kept as `sound`) the take: its frames the
