@@ -38,6 +38,9 @@ pub(super) struct Vmc {
     config: VmcConfig,
     marionette: Option<Marionette>,
     pub(super) performer: Option<Arc<Mutex<Performer>>>,
+    /// This machine's LAN addresses, found once when listening starts (the page polls the
+    /// view every frame while live).
+    this_machine: Vec<String>,
     /// The clock of the frames the page sends.
     started: std::time::Instant,
 }
@@ -48,6 +51,7 @@ impl Default for Vmc {
             config: VmcConfig::default(),
             marionette: None,
             performer: None,
+            this_machine: Vec::new(),
             started: std::time::Instant::now(),
         }
     }
@@ -80,6 +84,10 @@ impl Vmc {
             let marionette = Marionette::listen_to(&listen.source, listen.address, blendshapes)?;
             marionette.set_map(map);
             vmc.marionette = Some(marionette);
+            vmc.this_machine = faceanim_live::lan_addresses()
+                .iter()
+                .map(ToString::to_string)
+                .collect();
         }
         if let Some((destination, names)) = config.send {
             let performer = Performer::new(destination, blendshapes, names)?;
@@ -118,10 +126,7 @@ impl Vmc {
             listening: marionette.map(|m| m.address().to_string()),
             source: listen.map(|l| l.source.protocol.label()),
             phone: listen.and_then(|l| l.source.phone).map(|a| a.to_string()),
-            this_machine: faceanim_live::lan_addresses()
-                .iter()
-                .map(ToString::to_string)
-                .collect(),
+            this_machine: self.this_machine.clone(),
             neutral: marionette.is_some_and(|m| m.settings().neutral.is_some()),
             traffic,
             recording: marionette.and_then(Marionette::recorded),
