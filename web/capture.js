@@ -138,7 +138,7 @@ onView((v, previous) => {
   $('take-info').textContent = take
     ? `${take.source}: ${take.frames} frame(s) at ${take.fps} fps, ${take.keyframes.length} keyframes, ${take.corrected.length} corrected; ${take.sound ? 'lip-synced from its speech' : ESTIMATED[take.estimator] || take.estimator}${take.preference ? '; preference applied' : ''}.`
     : '';
-  if (!take) $('capture-input-note').textContent = 'Open a video, photos, a session or the webcam (right).';
+  if (!take) $('capture-input-note').textContent = 'Open a video, photos, speech, a take (session, clip, animated GLB or VRM, Live Link CSV) or the webcam (right).';
   $('capture-input-note').hidden = (!!take && !frameImage.hidden) || live.running;
   for (const id of ['keyframe', 'uncorrect-frame', 'apply-preference', 'clear-preference']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !take;
   showNeutralFrame(v);
@@ -175,7 +175,7 @@ function layer(frame) {
 const ESTIMATED = { adapter: 'estimated by the adapter', by_name: 'estimated by ARKit name', retarget: 'read through the retarget map', session_file: 'opened from a session' };
 
 // ---------- input ----------
-/** Opens `files` as the take: one video, session or speech file, or a sequence of photos. */
+/** Opens `files` as the take: one video, speech file or take file, or a sequence of photos. */
 export async function openInput(files) {
   if (!files.length) return;
   showError('');
@@ -197,7 +197,7 @@ export async function openInput(files) {
       return;
     }
     // Several photos are one sequence, in name order, like a folder of frames.
-    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, one speech file, one session, or any number of PNG or JPEG photos');
+    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, one speech file, one take (session, clip, GLB, VRM or Live Link CSV), or any number of PNG or JPEG photos');
     const batch = Date.now().toString(36) + Math.random().toString(36).slice(2, 8);
     for (const [index, file] of files.entries()) {
       $('take-info').textContent = `Sending ${file.name} (${index + 1} of ${files.length})…`;

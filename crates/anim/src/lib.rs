@@ -86,7 +86,8 @@ pub enum ClipError {
 pub struct Retarget {
     /// The animation, one weight per character blendshape per frame.
     pub animation: MorphAnimation,
-    /// Clip columns that match no blendshape of the character (their weights are dropped).
+    /// Clip columns that match no blendshape of the character, or answer to one that another
+    /// column fills (of its exact name, else the first): their weights are dropped.
     pub unmatched: Vec<String>,
 }
 
@@ -183,17 +184,33 @@ impl Clip {
     }
 
     /// Maps the clip onto `character`'s blendshapes by name (exact, else the same ARKit shape
-    /// under another spelling), one key per frame. Character blendshapes the clip does not
+    /// under another spelling; where several columns answer to one blendshape, the exact name
+    /// wins, else the first column), one key per frame. Character blendshapes the clip does not
     /// mention stay at 0. A head rotation, if the clip has one, turns the character's root.
     ///
     /// # Errors
     /// [`ClipError::NothingInCommon`] when no name matches.
     pub fn retarget(&self, character: &Character, name: &str) -> Result<Retarget, ClipError> {
-        let columns: Vec<Option<usize>> = self
+        let mut columns: Vec<Option<usize>> = self
             .blendshapes
             .iter()
             .map(|n| character.find_blendshape(n).map(|id| id.index()))
             .collect();
+        // Several columns may answer to one blendshape (a file's `eyeBlink_L` and its VRoid
+        // `Fcl_EYE_Close_L` both to `eyeBlinkLeft`): the one of its exact name fills it, else
+        // the first; the others are dropped, not left to overwrite it with whatever they hold.
+        let blendshapes = character.blendshapes();
+        for k in 0..columns.len() {
+            let Some(c) = columns[k] else { continue };
+            let exact = |j: usize| blendshapes[c].name() == self.blendshapes[j];
+            let chosen = (0..columns.len())
+                .filter(|&j| columns[j] == Some(c))
+                .find(|&j| exact(j))
+                .or_else(|| columns.iter().position(|&other| other == Some(c)));
+            if chosen != Some(k) {
+                columns[k] = None;
+            }
+        }
         if columns.iter().all(Option::is_none) && !self.blendshapes.is_empty() {
             return Err(ClipError::NothingInCommon {
                 character: character.name().to_owned(),
@@ -252,6 +269,7 @@ fn count_problem(field: &str, len: usize, what: &str, frames: usize) -> Option<S
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp, reason = "weights are copied exactly")]
 mod tests {
     use super::*;
 
@@ -278,6 +296,42 @@ mod tests {
         assert!(
             matches!(Clip::from_json(json), Err(ClipError::Syntax(m)) if m.contains("unknown field `weights`"))
         );
+    }
+
+    #[test]
+    fn columns_answering_to_one_blendshape_do_not_overwrite_it() {
+        use faceanim_rig::{Blendshape, CharacterParts};
+        use glam::Vec3;
+        let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
+        let blink =
+            Blendshape::from_dense("eyeBlinkLeft", &[Vec3::ZERO, Vec3::ZERO, Vec3::Y], 1e-6);
+        let character = Character::new(CharacterParts {
+            name: "tri".into(),
+            positions,
+            triangles: vec![[0, 1, 2]],
+            blendshapes: vec![blink],
+            ..CharacterParts::default()
+        })
+        .unwrap();
+        let clip = |names: [&str; 2]| Clip {
+            fps: 30.0,
+            blendshapes: names.iter().map(|n| (*n).to_owned()).collect(),
+            frames: vec![vec![0.25, 0.75]],
+            head: None,
+            head_position: None,
+            presence: None,
+        };
+        // The exact name fills it, wherever it stands.
+        let exact = clip(["eyeBlink_L", "eyeBlinkLeft"])
+            .retarget(&character, "t")
+            .unwrap();
+        assert_eq!(exact.animation.weights[0], [0.75]);
+        assert_eq!(exact.unmatched, ["eyeBlink_L"]);
+        // Two spellings, neither exact: the first.
+        let first = clip(["eyeBlink_L", "EyeBlinkLeft"])
+            .retarget(&character, "t")
+            .unwrap();
+        assert_eq!(first.animation.weights[0], [0.25]);
     }
 
     #[test]

@@ -535,6 +535,28 @@ fn the_studio_lip_syncs_dropped_speech_and_layers_a_stroke_on_it() {
     let (status, clip) = request_bytes(studio.port, "GET", "/api/capture/export.json", &[], b"");
     assert_eq!(status, 200);
     drop(studio);
+    // Closed and opened again, the take plays with its sound: kept beside the project, not in
+    // a temporary folder.
+    let kept = out.join(".project.json.take.sound.wav");
+    assert_eq!(
+        std::fs::read(&kept).unwrap(),
+        bytes,
+        "the sound is not kept beside the project"
+    );
+    let studio = start_on(None, &out.join("project.json"), &[]);
+    let (_, state) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    let state: Value = serde_json::from_str(&state).unwrap();
+    assert_eq!(state["take"]["frames"], frames as u64, "{}", state["take"]);
+    let sound = state["take"]["sound"]
+        .as_str()
+        .unwrap_or_else(|| panic!("the reopened take has no sound: {}", state["take"]));
+    let (status, played) = request_bytes(studio.port, "GET", &format!("/{sound}"), &[], b"");
+    assert_eq!(
+        (status, played == bytes),
+        (200, true),
+        "the reopened take's sound"
+    );
+    drop(studio);
     let exported = out.join("layered.glb");
     std::fs::write(&exported, glb).unwrap();
     assert_valid_gltf(&exported);

@@ -9,7 +9,9 @@
 //! - morph targets as *sparse* accessors holding only moved vertices (compact, and read by all
 //!   four), with `mesh.extras.targetNames` naming them;
 //! - animations as `weights` channels with LINEAR interpolation, one key per clip frame, and
-//!   optionally a `rotation` channel on the same node (a captured head pose).
+//!   optionally a `rotation` channel on the same node (a captured head pose); each marked as
+//!   faceanim's in its `extras` (`{"faceanim": {"take": true}}`), so that the file opens again
+//!   as that take and a later export replaces it rather than adding a copy.
 
 use glam::Vec3;
 use serde_json::{Value, json};
@@ -251,7 +253,8 @@ pub fn export_glb(
                     .push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
                 channels.push(json!({ "sampler": 1, "target": { "node": 0, "path": "rotation" } }));
             }
-            json!({ "name": animation.name, "samplers": samplers, "channels": channels })
+            json!({ "name": animation.name, "samplers": samplers, "channels": channels,
+                    "extras": { faceanim_rig::file_animation::EXTRAS_KEY: { "take": true } } })
         })
         .collect();
 
@@ -413,7 +416,8 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, GlbError> {
 
 /// Writes `animations` into the user's own file: every node, mesh, skin, material, texture,
 /// image, sampler, camera, extension and `extras` of the file stays as it was (same counts,
-/// names and order; animations already there are kept); the weight channels go on each node
+/// names and order; the file's animations are kept, and one faceanim wrote before under the
+/// same name is replaced); the weight channels go on each node
 /// whose mesh carries an animated target (all meshes that share a target name move together;
 /// a VRM expression moves its bindings); blendshapes the character has beyond the file's own
 /// (the sketch's baked corrective targets) are appended as morph targets to the meshes whose
@@ -642,7 +646,8 @@ pub fn export_into_source_with(
         }
         if !channels.is_empty() {
             new_animations.push(
-                json!({ "name": animation.name, "samplers": samplers, "channels": channels }),
+                json!({ "name": animation.name, "samplers": samplers, "channels": channels,
+                        "extras": { faceanim_rig::file_animation::EXTRAS_KEY: { "take": true } } }),
             );
         }
     }
@@ -654,7 +659,22 @@ pub fn export_into_source_with(
     doc["buffers"] = json!([{ "byteLength": bin.bytes.len() }]);
     if !new_animations.is_empty() {
         match doc.get_mut("animations").and_then(Value::as_array_mut) {
-            Some(list) => list.extend(new_animations),
+            // An animation faceanim wrote under the same name is the one this export remakes
+            // (a take reopened and exported again): replaced, not duplicated. The file's own
+            // animations are kept whatever their names.
+            Some(list) => {
+                let ours = |a: &Value| {
+                    a.pointer(&format!(
+                        "/extras/{}",
+                        faceanim_rig::file_animation::EXTRAS_KEY
+                    ))
+                    .is_some()
+                };
+                list.retain(|old| {
+                    !(ours(old) && new_animations.iter().any(|new| new["name"] == old["name"]))
+                });
+                list.extend(new_animations);
+            }
             None => doc["animations"] = json!(new_animations),
         }
     }

@@ -41,6 +41,7 @@
 pub mod bones;
 pub mod glb;
 pub mod livelink;
+pub mod reopen;
 
 use std::path::Path;
 

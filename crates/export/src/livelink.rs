@@ -10,6 +10,10 @@
 //! shape for both its channels (`mouthSmile`); ARKit shapes the clip lacks are written as 0. The eyes' angles
 //! are derived from the eyeLook weights (at weight 1: 30° sideways, 25° up or down), since a
 //! clip carries no eye bones.
+//!
+//! [`from_csv`] reads such a file back (the app's recordings and ours) as a clip of ARKit
+//! names with the head's angles: the rate from the timecodes' frame numbers, a frame the
+//! recording skipped held from the one before.
 
 use faceanim_rig::name_map::NameMap;
 use faceanim_rig::names::ARKIT_52;
@@ -114,9 +118,269 @@ pub fn to_csv(clip: &Clip) -> String {
     out
 }
 
+/// The frame rates a Live Link Face timecode counts in, slowest first.
+const RATES: [f32; 7] = [24.0, 25.0, 30.0, 48.0, 50.0, 60.0, 120.0];
+/// The longest recording read: one hour at the fastest rate.
+const MAX_FRAMES: usize = 3600 * 120;
+
+/// Why a Live Link Face CSV could not be read: the line (1 is the header) and what is wrong.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("line {line}: {problem}")]
+pub struct CsvError {
+    /// The line, counting the header as 1.
+    pub line: usize,
+    /// What is wrong there.
+    pub problem: String,
+}
+
+/// A timecode: whole seconds, the frame within the second, and the fraction of a frame.
+type Timecode = (u64, u32, f32);
+
+/// One row of a recording: its timecode, its curves' weights, the head's yaw, pitch, roll.
+type Row = (Timecode, Vec<f32>, [f32; 3]);
+
+/// `HH:MM:SS:FF` or `HH:MM:SS:FF.mmm` as a [`Timecode`].
+fn parse_timecode(text: &str) -> Option<Timecode> {
+    let mut parts = text.trim().split(':');
+    let mut next = || parts.next()?.parse::<u64>().ok();
+    let (h, m, s) = (next()?, next()?, next()?);
+    let last = parts.next()?;
+    if parts.next().is_some() || m >= 60 || s >= 60 {
+        return None;
+    }
+    let (frame, fraction) = match last.split_once('.') {
+        Some((f, sub)) => (f.parse().ok()?, format!("0.{sub}").parse().ok()?),
+        None => (last.parse().ok()?, 0.0),
+    };
+    Some((h * 3600 + m * 60 + s, frame, fraction))
+}
+
+/// Reads a Live Link Face CSV (see the module docs): the 52 ARKit curves it has by their
+/// ARKit names, the head's yaw, pitch and roll (radians in the file) in degrees.
+///
+/// # Errors
+/// A [`CsvError`] naming the line and the column or value.
+pub fn from_csv(text: &str) -> Result<Clip, CsvError> {
+    let at = |line: usize, problem: String| CsvError { line, problem };
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = lines.next() else {
+        return Err(at(1, "the file is empty".into()));
+    };
+    let columns: Vec<&str> = header.split(',').map(str::trim).collect();
+    if !columns[0].eq_ignore_ascii_case("timecode") {
+        return Err(at(
+            1,
+            format!(
+                "the first column is '{}', not Timecode: not a Live Link Face CSV",
+                faceanim_rig::excerpt(columns[0])
+            ),
+        ));
+    }
+    let channel_of = |name: &str| ARKIT_52.iter().position(|a| a.eq_ignore_ascii_case(name));
+    let channels: Vec<(usize, usize)> = columns
+        .iter()
+        .enumerate()
+        .filter_map(|(c, name)| channel_of(name).map(|k| (c, k)))
+        .collect();
+    if channels.is_empty() {
+        return Err(at(
+            1,
+            "no column is an ARKit blendshape (EyeBlinkLeft, JawOpen, …)".into(),
+        ));
+    }
+    let head_columns: Option<Vec<usize>> = ROTATIONS[..3]
+        .iter()
+        .map(|r| columns.iter().position(|c| c.eq_ignore_ascii_case(r)))
+        .collect();
+    let mut rows: Vec<Row> = Vec::new();
+    for (index, line) in lines {
+        let number = index + 1;
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if fields.len() != columns.len() {
+            return Err(at(
+                number,
+                format!("{} values for {} columns", fields.len(), columns.len()),
+            ));
+        }
+        let time = parse_timecode(fields[0]).ok_or_else(|| {
+            at(
+                number,
+                format!(
+                    "Timecode '{}' is not HH:MM:SS:FF.mmm",
+                    faceanim_rig::excerpt(fields[0])
+                ),
+            )
+        })?;
+        let value = |c: usize| -> Result<f32, CsvError> {
+            fields[c]
+                .parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    at(
+                        number,
+                        format!(
+                            "{}: '{}' is not a number",
+                            columns[c],
+                            faceanim_rig::excerpt(fields[c])
+                        ),
+                    )
+                })
+        };
+        let mut weights = vec![0.0f32; channels.len()];
+        for (w, &(c, _)) in weights.iter_mut().zip(&channels) {
+            *w = value(c)?;
+        }
+        let mut head = [0.0f32; 3];
+        if let Some(hc) = &head_columns {
+            for (h, &c) in head.iter_mut().zip(hc) {
+                *h = value(c)?.to_degrees();
+            }
+        }
+        rows.push((time, weights, head));
+        if rows.len() > MAX_FRAMES {
+            return Err(at(number, format!("more than {MAX_FRAMES} frames")));
+        }
+    }
+    let Some(first) = rows.first().map(|r| r.0) else {
+        return Err(at(2, "the recording has no frames".into()));
+    };
+    // The rate: the slowest the timecodes' frame numbers fit in (a recording under a second
+    // long shows too few of them to tell: Live Link Face records at 60).
+    let highest = rows.iter().map(|r| r.0.1).max().unwrap_or(0) as f32;
+    let spans_a_second = rows.iter().any(|r| r.0.0 != first.0);
+    let rate = RATES
+        .into_iter()
+        .find(|&r| r > highest && (spans_a_second || r >= 60.0))
+        .ok_or_else(|| {
+            at(
+                2,
+                format!("frame number {highest} in a timecode: faster than 120 fps"),
+            )
+        })?;
+    let count_of =
+        |(s, f, sub): (u64, u32, f32)| s as f64 * f64::from(rate) + f64::from(f) + f64::from(sub);
+    let start = count_of(first);
+    let mut frames: Vec<Vec<f32>> = Vec::new();
+    let mut heads: Vec<[f32; 3]> = Vec::new();
+    for (k, (time, weights, head)) in rows.into_iter().enumerate() {
+        let index = (count_of(time) - start).round();
+        if index < frames.len() as f64 - 1.0 || index >= MAX_FRAMES as f64 {
+            return Err(at(
+                k + 2,
+                "the timecode goes back before the row above it".into(),
+            ));
+        }
+        let index = index as usize;
+        // Frames the recording skipped hold the one before.
+        while frames.len() < index {
+            frames.push(frames.last().cloned().unwrap_or_else(|| weights.clone()));
+            heads.push(heads.last().copied().unwrap_or(head));
+        }
+        frames.truncate(index);
+        heads.truncate(index);
+        frames.push(weights);
+        heads.push(head);
+    }
+    Ok(Clip {
+        fps: rate,
+        blendshapes: channels
+            .iter()
+            .map(|&(_, k)| ARKIT_52[k].to_owned())
+            .collect(),
+        frames,
+        head: head_columns.map(|_| heads),
+        head_position: None,
+        presence: None,
+    })
+}
+
 #[cfg(test)]
+#[allow(clippy::float_cmp, reason = "rates and copied values are exact")]
 mod tests {
     use super::*;
+
+    #[test]
+    fn what_is_written_reads_back() {
+        let frames: Vec<Vec<f32>> = (0..75)
+            .map(|f| vec![f as f32 / 74.0, 1.0 - f as f32 / 74.0])
+            .collect();
+        let clip = Clip {
+            fps: 30.0,
+            blendshapes: vec!["jawOpen".into(), "eyeBlinkLeft".into()],
+            frames: frames.clone(),
+            head: Some((0..75).map(|f| [f as f32 * 0.2, -3.0, 1.5]).collect()),
+            head_position: None,
+            presence: None,
+        };
+        let back = from_csv(&to_csv(&clip)).unwrap();
+        assert_eq!(back.fps, 30.0);
+        assert_eq!(back.frames.len(), 75);
+        assert_eq!(back.blendshapes.len(), 52);
+        let jaw = back
+            .blendshapes
+            .iter()
+            .position(|n| n == "jawOpen")
+            .unwrap();
+        let blink = back
+            .blendshapes
+            .iter()
+            .position(|n| n == "eyeBlinkLeft")
+            .unwrap();
+        for (f, row) in frames.iter().enumerate() {
+            assert!((back.frames[f][jaw] - row[0]).abs() < 1e-5);
+            assert!((back.frames[f][blink] - row[1]).abs() < 1e-5);
+            let head = back.head.as_ref().unwrap()[f];
+            assert!((head[0] - f as f32 * 0.2).abs() < 1e-3 && (head[1] + 3.0).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn a_recording_from_the_middle_of_the_day_with_a_skipped_frame() {
+        let header = "Timecode,BlendShapeCount,JawOpen,MouthClose,HeadYaw,HeadPitch,HeadRoll";
+        let text = format!(
+            "{header}\n16:33:39:58.500,5,0.1,0,0,0,0\n16:33:39:59.500,5,0.2,0,0,0,0\n16:33:40:01.500,5,0.4,0,0,0,0\n"
+        );
+        let clip = from_csv(&text).unwrap();
+        assert_eq!(clip.fps, 60.0);
+        let jaw: Vec<f32> = clip.frames.iter().map(|r| r[0]).collect();
+        assert_eq!(jaw, [0.1, 0.2, 0.2, 0.4]);
+    }
+
+    #[test]
+    fn bad_files_name_the_line_and_column() {
+        let header = "Timecode,BlendShapeCount,JawOpen";
+        assert_eq!(from_csv("").unwrap_err().line, 1);
+        assert!(
+            from_csv("name,value\n")
+                .unwrap_err()
+                .problem
+                .contains("not a Live Link Face CSV")
+        );
+        assert!(
+            from_csv("Timecode,Foo\n")
+                .unwrap_err()
+                .problem
+                .contains("ARKit")
+        );
+        let e = from_csv(&format!("{header}\n00:00:00:00.000,1,x\n")).unwrap_err();
+        assert_eq!(
+            (e.line, e.problem.as_str()),
+            (2, "JawOpen: 'x' is not a number")
+        );
+        let e = from_csv(&format!("{header}\n00:00:00:00.000,1\n")).unwrap_err();
+        assert!(e.problem.contains("2 values for 3 columns"));
+        let e = from_csv(&format!("{header}\n0:0:0\n")).unwrap_err();
+        assert!(e.problem.contains("values") || e.problem.contains("Timecode"));
+        let e = from_csv(&format!(
+            "{header}\n00:00:01:00.000,1,0\n00:00:00:00.000,1,0\n"
+        ))
+        .unwrap_err();
+        assert_eq!(e.line, 3);
+    }
 
     #[test]
     fn header_order_timecode_and_values() {

@@ -37,6 +37,7 @@ pub mod bones;
 mod bounds;
 mod character;
 mod excerpt;
+pub mod file_animation;
 mod graph;
 pub mod import;
 pub mod json;

@@ -50,6 +50,8 @@ pub struct GltfSource {
     pub(crate) bones: crate::bones::FaceBones,
     /// Applied by the importer before the file's own transforms (VRM 0.x's half turn).
     pub(crate) root_transform: Mat4,
+    /// The file's morph-weight animations, as stored.
+    pub(crate) animations: Vec<crate::file_animation::FileAnimation>,
 }
 
 impl std::fmt::Debug for GltfSource {
@@ -76,6 +78,27 @@ pub struct GeneratedShapes {
 }
 
 impl GltfSource {
+    /// The file's animations that move morph targets (a take or sketch exported before, or the
+    /// file's own), in the file's order.
+    #[must_use]
+    pub fn animations(&self) -> &[crate::file_animation::FileAnimation] {
+        &self.animations
+    }
+
+    /// The animation that opens as a take: the last one faceanim wrote (exports add theirs
+    /// after the file's own), else the file's first; played on the character's blendshapes
+    /// (see [`crate::file_animation::FileAnimation::sample`]), with its rate.
+    #[must_use]
+    pub fn take(&self) -> Option<(crate::animation::MorphAnimation, f32)> {
+        let animation = self
+            .animations
+            .iter()
+            .rev()
+            .find(|a| a.ours)
+            .or_else(|| self.animations.first())?;
+        Some((animation.sample(&self.shapes), animation.fps()))
+    }
+
     /// The file's JSON document, as read (compression decoded, resources embedded).
     #[must_use]
     pub fn document(&self) -> &Value {

@@ -136,20 +136,43 @@ async fn open_path(State(both): State<Both>, body: Bytes) -> Answer<CaptureView>
     }
     let character = both.studio().character.clone();
     let shown = path.display().to_string();
-    if is_session(&shown) {
+    if is_take(&shown) {
         let bytes = faceanim_files::read_bytes(&path)?;
-        both.desk().open_session(&character, &bytes, &shown)?;
+        open_take(&both, character, bytes.into(), shown).await?;
     } else {
         capture::start_capture(&both.desk, character, path, shown)?;
     }
     Ok(state_of(&both))
 }
 
-/// Whether a file named `name` is a session (JSON) rather than a video or an image.
-fn is_session(name: &str) -> bool {
-    std::path::Path::new(name)
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+/// Opens `bytes` (the file `shown`) as the take: a session or clip JSON at once, a GLB, VRM
+/// or Live Link CSV read off the async threads (a full-body avatar takes a moment).
+async fn open_take(
+    both: &Both,
+    character: Arc<faceanim_rig::Character>,
+    bytes: Bytes,
+    shown: String,
+) -> Result<(), ApiError> {
+    if !faceanim_export::reopen::reads(&shown) {
+        both.desk().open_session(&character, &bytes, &shown)?;
+        return Ok(());
+    }
+    let name = shown.clone();
+    let reopened =
+        tokio::task::spawn_blocking(move || faceanim_export::reopen::clip_of_file(&name, &bytes))
+            .await
+            .map_err(|e| ApiError::Internal(e.to_string()))??;
+    both.desk().open_reopened(&character, &reopened, &shown)?;
+    Ok(())
+}
+
+/// Whether a file named `name` opens as a take (a session or clip JSON, an animated GLB or VRM,
+/// a Live Link Face CSV) rather than being footage to capture.
+fn is_take(name: &str) -> bool {
+    faceanim_export::reopen::reads(name)
+        || std::path::Path::new(name)
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"))
 }
 
 /// Several photos sent as one sequence: each names the batch, its place and the count; the
@@ -174,14 +197,14 @@ async fn upload(
     body: Bytes,
 ) -> Answer<CaptureView> {
     let name = uploaded_name(&headers, &body, "upload")?;
-    if is_session(&name) {
+    if is_take(&name) {
         if batch.batch.is_some() {
             return Err(bad(format!(
-                "{name}: a session opens on its own, not in a sequence of photos"
+                "{name}: a take opens on its own, not in a sequence of photos"
             )));
         }
         let character = both.studio().character.clone();
-        both.desk().open_session(&character, &body, &name)?;
+        open_take(&both, character, body, name).await?;
         return Ok(state_of(&both));
     }
     if let Some(mime) = capture::audio_mime(&name) {

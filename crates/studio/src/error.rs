@@ -76,6 +76,9 @@ pub enum ApiError {
     /// An export could not be made.
     #[error(transparent)]
     Export(#[from] faceanim_export::ExportError),
+    /// A GLB, VRM or Live Link CSV could not be read back as a take.
+    #[error(transparent)]
+    Reopen(#[from] faceanim_export::reopen::ReopenError),
     /// The face models could not be loaded.
     #[error("loading the face models: {0}")]
     Models(String),
@@ -107,6 +110,7 @@ impl ApiError {
             | ApiError::Take(_)
             | ApiError::Session { .. }
             | ApiError::Import(_)
+            | ApiError::Reopen(_)
             | ApiError::NoTake
             | ApiError::Live(_) => StatusCode::BAD_REQUEST,
             ApiError::NoStroke { .. } | ApiError::NoPreview(_) => StatusCode::NOT_FOUND,

@@ -85,6 +85,7 @@ fn import(
         builder.root_transform = Mat4::from_rotation_y(std::f32::consts::PI);
     }
     builder.read_scene(&document, &buffers, resources)?;
+    builder.animations = super::animations::read(&document, &buffers, &mut builder.warnings);
     if let Some(vrm) = &prepared.vrm {
         builder.add_expressions(vrm)?;
     }
@@ -325,6 +326,8 @@ struct Builder {
     /// The file to write back, and the node a head pose turns.
     kept: Option<(serde_json::Value, Vec<u8>)>,
     bones: crate::bones::FaceBones,
+    /// The file's morph-weight animations.
+    animations: Vec<crate::file_animation::FileAnimation>,
 }
 
 impl Builder {
@@ -358,6 +361,7 @@ impl Builder {
             expression_binds: Vec::new(),
             kept: None,
             bones: crate::bones::FaceBones::default(),
+            animations: Vec::new(),
         }
     }
 
@@ -961,6 +965,7 @@ impl Builder {
                     vertices: self.origins,
                     bones: self.bones,
                     root_transform: self.root_transform,
+                    animations: self.animations,
                 })
             }
             None => character,

@@ -7,6 +7,7 @@
 //! bad input, which the proptest fuzzer in `tests/fuzz_import.rs` checks.
 
 mod accessor;
+mod animations;
 mod draco;
 mod extensions;
 mod gltf;

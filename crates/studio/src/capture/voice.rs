@@ -42,7 +42,8 @@ pub struct VoiceResult {
     pub weights: Option<Vec<f32>>,
     /// How open the mouth is, 0..1, in that frame.
     pub open: f32,
-    /// The loudness of the newest frame, dB relative to full scale.
+    /// The loudness of the newest frame heard, dB relative to full scale (a chunk too short
+    /// to complete a frame answers the one before it: never a made-up silence).
     pub level_db: f32,
     /// Milliseconds the server spent.
     pub server_ms: f64,
@@ -79,6 +80,8 @@ pub(super) struct Voice {
     /// Recording: the sound and the character's weights of each 10 ms frame, as heard.
     recording: Option<(Vec<i16>, Vec<Vec<f32>>)>,
     last: Option<(Vec<f32>, f32)>,
+    /// The newest heard frame's loudness, dB.
+    level_db: f32,
     performer: Option<Arc<Mutex<faceanim_live::Performer>>>,
 }
 
@@ -119,6 +122,7 @@ impl Voice {
             refine_error: None,
             recording: None,
             last: None,
+            level_db: -100.0,
             performer,
         })
     }
@@ -265,9 +269,8 @@ impl VoiceHandle {
             sound.extend_from_slice(samples);
             frames
         });
-        let mut level_db = -100.0;
         for heard in voice.listener.push(samples) {
-            level_db = heard.level_db;
+            voice.level_db = heard.level_db;
             let weights = voice.mouth.weights(&heard.visemes);
             if let Some(frames) = recorded.as_mut() {
                 frames.push(weights.clone());
@@ -298,7 +301,7 @@ impl VoiceHandle {
             live: true,
             weights,
             open,
-            level_db,
+            level_db: voice.level_db,
             server_ms: started.elapsed().as_secs_f64() * 1000.0,
             voice: Some(voice.view()),
         }

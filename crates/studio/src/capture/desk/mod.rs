@@ -21,7 +21,7 @@ use faceanim_take::{ByName, Estimator, Filtering, Footage, Session, Take, TakeEr
 use crate::capture::job::Job;
 use crate::capture::live::Live;
 use crate::capture::models::face_models;
-use crate::capture::open_take::{OpenTake, Previews, Sound};
+use crate::capture::open_take::{OpenTake, Previews, Sound, audio_mime};
 use crate::capture::vmc::Vmc;
 use crate::capture::voice::SharedVoice;
 use crate::error::ApiError;
@@ -83,6 +83,9 @@ fn playable(session: Session) -> Result<Take, String> {
 }
 
 /// Renames the file at `path` to `NAME.broken-SECONDS.EXT` beside it; returns the new path.
+/// The sounds a take keeps beside its autosave, by ending (those [`audio_mime`] knows).
+const KEPT_SOUND_EXTENSIONS: [&str; 8] = ["wav", "mp3", "ogg", "oga", "opus", "flac", "m4a", "aac"];
+
 fn set_aside(path: &std::path::Path) -> std::io::Result<PathBuf> {
     let seconds = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
@@ -176,7 +179,10 @@ impl CaptureDesk {
     fn restore_take(&mut self, character: &Character) {
         let bytes = match std::fs::read(&self.take_path) {
             Ok(bytes) => bytes,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                self.open_own_animation(character);
+                return;
+            }
             Err(e) => {
                 tracing::warn!("{}: {e}; not opened", self.take_path.display());
                 return;
@@ -201,7 +207,12 @@ impl CaptureDesk {
                     take.session.source,
                     self.take_path.display()
                 );
-                self.take = Some(OpenTake::new(take, Previews::new()));
+                // A lip-sync take plays with the sound kept beside it.
+                let open = OpenTake::new(take, Previews::new());
+                self.take = Some(match self.kept_sound() {
+                    Some(sound) => open.with_sound(sound),
+                    None => open,
+                });
             }
             Err(why) => {
                 let aside = set_aside(&self.take_path);
@@ -280,6 +291,58 @@ impl CaptureDesk {
         Ok(frames)
     }
 
+    /// Makes a file read back by [`faceanim_export::reopen::clip_of_file`] (a GLB, VRM or glTF
+    /// with a morph-weight animation, a Live Link Face CSV) the take, by name onto `character`.
+    /// Returns its frame count.
+    ///
+    /// # Errors
+    /// [`ApiError::Busy`] when a job is running, [`ApiError::Invalid`] when no column is one of
+    /// the character's, or the take's error.
+    pub fn open_reopened(
+        &mut self,
+        character: &Character,
+        reopened: &faceanim_export::reopen::Reopened,
+        shown: &str,
+    ) -> Result<usize, ApiError> {
+        self.busy()?;
+        let count = self.open_clip(character, &reopened.clip, shown)?;
+        self.notice = Some(format!(
+            "Opened {}'s {} as the take.",
+            faceanim_rig::excerpt(shown),
+            reopened.what
+        ));
+        Ok(count)
+    }
+
+    /// With no take to restore, the character's own file's morph-weight animation (a take or
+    /// sketch exported before) opens as the take, ready to correct and export again (under
+    /// its name: the export replaces it).
+    fn open_own_animation(&mut self, character: &Character) {
+        let Some((animation, fps)) = character
+            .source()
+            .and_then(faceanim_rig::source::GltfSource::take)
+        else {
+            return;
+        };
+        let clip = faceanim_anim::Clip {
+            fps,
+            blendshapes: names(character),
+            frames: animation.weights,
+            head: None,
+            head_position: None,
+            presence: None,
+        };
+        match self.open_clip(character, &clip, &animation.name) {
+            Ok(count) => {
+                self.notice = Some(format!(
+                    "Opened the file's animation '{}' ({count} frames at {fps} fps) as the take.",
+                    faceanim_rig::excerpt(&animation.name)
+                ));
+            }
+            Err(e) => tracing::warn!("the file's animation was not opened: {e}"),
+        }
+    }
+
     /// Makes `clip` the take: its columns put on `character` by name (ARKit spellings match),
     /// its head pose kept, one frame per row at its rate, unfiltered. Returns its frame count.
     ///
@@ -334,13 +397,84 @@ impl CaptureDesk {
             // What was done instead of what was asked (a transcript that could not be used).
             self.notice = Some(format!("{shown}: {}", lip_sync.notes.join("; ")));
         }
+        let sound = self.keep_sound(sound);
         self.take = Some(OpenTake::new(take, Previews::new()).with_sound(sound));
         self.save_take();
         Ok(count)
     }
 
-    /// Writes the take (or, with none, removes the autosave).
+    /// Where the take's sound is kept beside its autosave, for a sound file ending in
+    /// `extension` (`.project.take.sound.wav`): with the project, not in a temporary folder, so
+    /// a lip-sync take plays with its sound after the studio is closed and opened again.
+    fn kept_sound_path(&self, extension: &str) -> PathBuf {
+        let stem = self
+            .take_path
+            .file_stem()
+            .map_or_else(|| "take".into(), |s| s.to_string_lossy().into_owned());
+        self.take_path
+            .with_file_name(format!("{stem}.sound.{extension}"))
+    }
+
+    /// The take's sound kept beside the autosave, if there is one.
+    fn kept_sound(&self) -> Option<Sound> {
+        KEPT_SOUND_EXTENSIONS.iter().find_map(|extension| {
+            let path = self.kept_sound_path(extension);
+            let mime = audio_mime(&path.to_string_lossy())?;
+            path.is_file().then_some(Sound { path, mime })
+        })
+    }
+
+    /// Copies `sound` (an upload's private copy, a recording) beside the autosave and returns
+    /// the kept copy; on failure the page is told, and the sound plays from where it is until
+    /// the studio closes.
+    pub(super) fn keep_sound(&mut self, sound: Sound) -> Sound {
+        let extension = sound
+            .path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .filter(|e| KEPT_SOUND_EXTENSIONS.contains(&e.as_str()));
+        let Some(extension) = extension else {
+            return sound;
+        };
+        self.remove_kept_sound();
+        let kept = self.kept_sound_path(&extension);
+        let copied = faceanim_files::read_bytes(&sound.path)
+            .and_then(|bytes| faceanim_files::write_atomic(&kept, &bytes));
+        match copied {
+            Ok(()) => Sound {
+                path: kept,
+                mime: sound.mime,
+            },
+            Err(e) => {
+                let why = format!(
+                    "The take's sound could not be kept with the project ({e}): it plays until the studio closes."
+                );
+                tracing::warn!("{why}");
+                self.notice = Some(why);
+                sound
+            }
+        }
+    }
+
+    /// Removes a kept sound (the take it belonged to was replaced or closed).
+    fn remove_kept_sound(&self) {
+        for extension in KEPT_SOUND_EXTENSIONS {
+            let path = self.kept_sound_path(extension);
+            match std::fs::remove_file(&path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    tracing::warn!("{}: {e}; not removed", path.display());
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Writes the take (or, with none, removes the autosave), and keeps its sound beside it
+    /// only while it has one.
     fn save_take(&self) {
+        if self.take.as_ref().is_none_or(|open| open.sound.is_none()) {
+            self.remove_kept_sound();
+        }
         let result = match &self.take {
             Some(open) => faceanim_files::write_atomic(
                 &self.take_path,

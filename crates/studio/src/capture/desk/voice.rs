@@ -105,6 +105,7 @@ impl CaptureDesk {
             path,
             mime: "audio/wav",
         };
+        let sound = self.keep_sound(sound);
         self.take = Some(OpenTake::new(take, Previews::new()).with_sound(sound));
         self.save_take();
         Ok(())

@@ -1,0 +1,236 @@
+//! What faceanim writes opens again (issue 48): a take exported as a GLB into a full-body
+//! avatar that Blender built and wrote (`tools/blender_avatar.py`), opened by `faceanim
+//! studio` on that file, plays its frames as a take; the studio's own GLB and Live Link Face
+//! CSV downloads open again as takes with the same weights; a second export replaces the
+//! animation it remakes instead of piling up copies; files that are no take are named.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    reason = "tests panic to fail"
+)]
+
+mod support;
+
+use faceanim_testdata::producers::blender_avatar_path;
+use support::{export_with_clip, faceanim_ok, output_dir, request, request_bytes, start_on};
+
+/// The clip's columns: ARKit names the avatar has as its own (`eyeBlink_L` is ICT's
+/// spelling), and one of its VRoid-style shapes that no ARKit channel names.
+const COLUMNS: [&str; 4] = ["jawOpen", "eyeBlink_L", "mouthSmile_R", "Fcl_MTH_A"];
+const FRAMES: usize = 40;
+
+fn weight(column: usize, frame: usize) -> f32 {
+    let t = frame as f32 / (FRAMES - 1) as f32;
+    let phase = column as f32 * 0.9;
+    (0.5 + 0.45 * (std::f32::consts::TAU * t + phase).sin()).clamp(0.0, 1.0)
+}
+
+/// The open take's weights of `name` as it plays, one per frame.
+fn take_column(state: &serde_json::Value, name: &str) -> Vec<f64> {
+    let names = support::strings(&state["blendshapes"]);
+    let at = names
+        .iter()
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("no {name} in {names:?}"));
+    state["take"]["weights"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no take: {state}"))
+        .iter()
+        .map(|row| row[at].as_f64().unwrap())
+        .collect()
+}
+
+fn assert_same(state: &serde_json::Value, columns: &[&str], what: &str) {
+    assert_eq!(state["take"]["frames"], FRAMES, "{what}: {}", state["take"]);
+    for name in columns {
+        let c = COLUMNS.iter().position(|n| n == name).unwrap();
+        let got = take_column(state, name);
+        let worst = got
+            .iter()
+            .enumerate()
+            .map(|(f, w)| (w - f64::from(weight(c, f))).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-3,
+            "{what}: {name} is {worst} away from what was written"
+        );
+    }
+}
+
+#[test]
+fn a_take_exported_into_the_users_avatar_opens_again_plays_and_exports_the_same() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = output_dir("round_trip");
+    let avatar = blender_avatar_path();
+    let clip = serde_json::json!({
+        "fps": 30,
+        "blendshapes": COLUMNS,
+        "frames": (0..FRAMES).map(|f| (0..COLUMNS.len()).map(|c| weight(c, f)).collect::<Vec<_>>()).collect::<Vec<_>>(),
+    });
+    let clip_path = dir.path().join("take.json");
+    std::fs::write(&clip_path, clip.to_string()).unwrap();
+    let take = out.join("take.glb");
+    export_with_clip(&avatar, &take, &clip_path);
+
+    // `info` lists the animation.
+    let info: serde_json::Value =
+        serde_json::from_str(&faceanim_ok(&["info", take.to_str().unwrap(), "--json"])).unwrap();
+    let animations = info["file"]["animations"]
+        .as_array()
+        .unwrap_or_else(|| panic!("{info}"));
+    assert_eq!(animations.len(), 1, "{animations:?}");
+    assert!(
+        (animations[0]["seconds"].as_f64().unwrap() - (FRAMES - 1) as f64 / 30.0).abs() < 1e-3,
+        "{animations:?}"
+    );
+
+    // The studio on the exported file opens its animation as the take.
+    let project = dir.path().join("project");
+    let studio = start_on(Some(&take), &project, &[]);
+    let port = studio.port;
+    let (status, body) = request(port, "GET", "/api/capture/state", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_same(&state, &COLUMNS, "the studio on take.glb");
+    assert!(
+        state["notice"]
+            .as_str()
+            .is_some_and(|n| n.contains("animation")),
+        "the page is not told where the take came from: {}",
+        state["notice"]
+    );
+
+    // A correction (the mouth shut at frame 10), then its GLB download: it holds the take once
+    // (the export replaces the animation it came from) and opens again (uploaded, as the
+    // page's file picker sends it) to the corrected weights.
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/correct",
+        &[],
+        br#"{"frame": 10, "name": "jawOpen", "value": 0.05}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let corrected: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let corrected_jaw = take_column(&corrected, "jawOpen");
+    assert!((corrected_jaw[10] - 0.05).abs() < 1e-3, "{corrected_jaw:?}");
+    let (status, glb) = request_bytes(port, "GET", "/api/capture/export.glb", &[], b"");
+    assert_eq!(status, 200);
+    let again = out.join("again.glb");
+    std::fs::write(&again, &glb).unwrap();
+    support::assert_valid_gltf(&again);
+    let info: serde_json::Value =
+        serde_json::from_str(&faceanim_ok(&["info", again.to_str().unwrap(), "--json"])).unwrap();
+    let names: Vec<&str> = info["file"]["animations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["take"], "the take is not in the file once");
+    let (status, body) = support::upload(port, "again.glb", &glb);
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    for name in COLUMNS {
+        let (got, want) = (take_column(&state, name), take_column(&corrected, name));
+        let worst = got
+            .iter()
+            .zip(&want)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-3,
+            "the studio's GLB reopened: {name} is {worst} from the corrected take"
+        );
+    }
+
+    // Its Live Link Face CSV opens again: the ARKit channels come back (of the take opened
+    // last, the uncorrected file's, which `assert_same` knows).
+    let (status, body) = support::upload(port, "take.glb", &std::fs::read(&take).unwrap());
+    assert_eq!(status, 200, "{body}");
+    let (status, csv) = request_bytes(port, "GET", "/api/capture/export.csv", &[], b"");
+    assert_eq!(status, 200);
+    let (status, body) = support::upload(port, "take.csv", &csv);
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_same(
+        &state,
+        &["jawOpen", "eyeBlink_L", "mouthSmile_R"],
+        "the Live Link CSV reopened",
+    );
+
+    // What is no take is named, and the take stays.
+    for (name, bytes, says) in [
+        ("broken.glb", b"glTF not really".to_vec(), "broken.glb"),
+        (
+            "avatar.glb",
+            std::fs::read(&avatar).unwrap(),
+            "no animation of morph targets",
+        ),
+        (
+            "notes.csv",
+            b"name,value\nx,1\n".to_vec(),
+            "not a Live Link Face CSV",
+        ),
+        (
+            "short.csv",
+            b"Timecode,BlendShapeCount,JawOpen\n00:00:00:00.000,1\n".to_vec(),
+            "short.csv: line 2: 2 values for 3 columns",
+        ),
+    ] {
+        let (status, body) = support::upload(port, name, &bytes);
+        assert_eq!(status, 400, "{name}: {body}");
+        assert!(body.contains(says), "{name}: {body}");
+    }
+    let (_, body) = request(port, "GET", "/api/capture/state", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(
+        state["take"]["frames"], FRAMES,
+        "a refused file closed the take"
+    );
+}
+
+/// An animation an animator keyed in Blender (shape keys on its timeline, Bezier curves at
+/// 24 fps, written by Blender's own glTF exporter) opens as a take at its own rate, every
+/// frame as Blender played it.
+#[test]
+fn an_animation_keyed_in_blender_opens_as_a_take() {
+    let dir = tempfile::tempdir().unwrap();
+    let keyed = output_dir("round_trip").join("keyed-in-blender.glb");
+    let avatar = blender_avatar_path();
+    let report = support::blender_script(
+        "blender_keyed.py",
+        &[avatar.as_os_str(), keyed.as_os_str()],
+        "FACEANIM_KEYED ",
+    );
+    let studio = start_on(None, &dir.path().join("project"), &[]);
+    let (status, body) = support::upload(
+        studio.port,
+        "keyed-in-blender.glb",
+        &std::fs::read(&keyed).unwrap(),
+    );
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["take"]["fps"], 24.0, "{}", state["take"]["fps"]);
+    assert_eq!(state["take"]["frames"], 25, "{}", state["take"]["frames"]);
+    // Onto the built-in head by name: ICT's `eyeBlink_L` is ARKit's `eyeBlinkLeft`.
+    for (name, ours) in [("jawOpen", "jawOpen"), ("eyeBlink_L", "eyeBlinkLeft")] {
+        let blender: Vec<f64> = report["curves"][name]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let got = take_column(&state, ours);
+        let worst = got
+            .iter()
+            .zip(&blender)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-3,
+            "{name}: {worst} from Blender's curve\n{got:?}\n{blender:?}"
+        );
+    }
+}

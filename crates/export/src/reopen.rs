@@ -1,0 +1,133 @@
+//! What faceanim writes opens again: a GLB or VRM with a morph-weight animation (an export, or
+//! a file animated in another tool) and a Live Link Face CSV read back as a [`Clip`] by name,
+//! ready to be a take on any character whose blendshapes answer to those names. (Clip JSON and
+//! session files are read by their own crates.)
+//!
+//! ```
+//! use faceanim_export::{Animation, Format, export, reopen};
+//!
+//! let character = faceanim_head::default_character();
+//! let clip = faceanim_anim::Clip {
+//!     fps: 30.0,
+//!     blendshapes: vec!["jawOpen".into()],
+//!     frames: vec![vec![0.0], vec![0.5], vec![1.0]],
+//!     head: None,
+//!     head_position: None,
+//!     presence: None,
+//! };
+//! let animation = Animation::from_clip(&character, &clip, "open")?;
+//! let glb = export(Format::Glb, &animation)?;
+//! let back = reopen::clip_of_file("open.glb", &glb.bytes)?;
+//! let jaw = back.clip.blendshapes.iter().position(|n| n == "jawOpen").unwrap();
+//! assert!((back.clip.frames[1][jaw] - 0.5).abs() < 1e-6);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use faceanim_anim::Clip;
+use faceanim_rig::import::{ImportError, NoExternalResources, import_gltf};
+
+/// A file read back as a clip.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reopened {
+    /// Its frames by blendshape name, at its rate.
+    pub clip: Clip,
+    /// What was read: `animation 'take' (2.4 s at 30 fps)`, `Live Link Face recording`.
+    pub what: String,
+}
+
+/// Why a file could not be read back as a take; each names the file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReopenError {
+    /// An ending that is no take's.
+    #[error(
+        "{0}: a take opens from .glb, .vrm or .gltf (its animation), .csv (Live Link Face) or .json (a clip or a session)"
+    )]
+    UnknownExtension(String),
+    /// The glTF could not be read.
+    #[error(transparent)]
+    Import(#[from] ImportError),
+    /// The glTF holds no animation that moves morph targets.
+    #[error(
+        "{0}: it has no animation of morph targets to open as a take (its blendshapes are the character's: open it with `faceanim studio` to animate it)"
+    )]
+    NoAnimation(String),
+    /// The CSV is not a Live Link Face recording.
+    #[error("{name}: {source}")]
+    Csv {
+        /// The file.
+        name: String,
+        /// The line and the problem.
+        source: crate::livelink::CsvError,
+    },
+}
+
+/// Whether a file named `name` is one [`clip_of_file`] reads.
+#[must_use]
+pub fn reads(name: &str) -> bool {
+    extension(name).is_some_and(|e| ["glb", "vrm", "gltf", "csv"].contains(&e.as_str()))
+}
+
+fn extension(name: &str) -> Option<String> {
+    let lower = name.to_ascii_lowercase();
+    if lower.ends_with(".byoc.csv") {
+        // The seed's CSV is weights without names: only a session of the same character
+        // gives it meaning.
+        return None;
+    }
+    std::path::Path::new(&lower)
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+}
+
+/// Reads `bytes` (the file `name`) as a clip: a glTF's morph-weight animation (the last one
+/// faceanim wrote, else its first) played at its keys' rate on its own blendshapes' names, or
+/// a Live Link Face CSV.
+///
+/// # Errors
+/// A [`ReopenError`] naming the file.
+pub fn clip_of_file(name: &str, bytes: &[u8]) -> Result<Reopened, ReopenError> {
+    match extension(name).as_deref() {
+        Some("glb" | "vrm" | "gltf") => {
+            let imported = import_gltf(bytes, name, &NoExternalResources)?;
+            let character = imported.character;
+            let Some((animation, fps)) = character
+                .source()
+                .and_then(faceanim_rig::source::GltfSource::take)
+            else {
+                return Err(ReopenError::NoAnimation(name.to_owned()));
+            };
+            let seconds = animation.times.last().copied().unwrap_or(0.0);
+            Ok(Reopened {
+                what: format!(
+                    "animation '{}' ({seconds:.2} s at {fps} fps)",
+                    faceanim_rig::excerpt(&animation.name)
+                ),
+                clip: Clip {
+                    fps,
+                    blendshapes: character.blendshape_names(),
+                    frames: animation.weights,
+                    head: None,
+                    head_position: None,
+                    presence: None,
+                },
+            })
+        }
+        Some("csv") => {
+            let text = String::from_utf8_lossy(bytes);
+            let clip = crate::livelink::from_csv(&text).map_err(|source| ReopenError::Csv {
+                name: name.to_owned(),
+                source,
+            })?;
+            Ok(Reopened {
+                what: format!(
+                    "Live Link Face recording ({} frames at {} fps)",
+                    clip.frames.len(),
+                    clip.fps
+                ),
+                clip,
+            })
+        }
+        _ => Err(ReopenError::UnknownExtension(name.to_owned())),
+    }
+}

@@ -1,0 +1,324 @@
+//! The morph-weight animations a glTF file already holds (a take or sketch faceanim exported,
+//! or one made in Blender, Maya or a capture tool), read so that they open again as takes.
+//!
+//! Each animation keeps, per animated mesh, its `weights` channel as the file stores it (key
+//! times, one weight per morph target per key, the sampler's interpolation). [`FileAnimation::
+//! sample`] plays them at a steady rate and reads each blendshape back through its bindings: a
+//! raw target's weight as it is, a VRM expression's as its bound target's weight over the
+//! binding's weight.
+//!
+//! ```
+//! use faceanim_rig::file_animation::{FileAnimation, Interpolation, WeightsTrack};
+//! use faceanim_rig::source::Binding;
+//!
+//! // One mesh with two targets, keyed at 0 and 1 s.
+//! let track = WeightsTrack::new(0, vec![0.0, 1.0], vec![0.0, 0.0, 1.0, 0.5], 2, Interpolation::Linear)?;
+//! let animation = FileAnimation { name: "smile".into(), tracks: vec![track], ours: false };
+//! // Blendshape 0 is target 1 of mesh 0.
+//! let played = animation.sample(&[vec![Binding { mesh: 0, target: 1, weight: 1.0 }]]);
+//! assert_eq!(played.times.len(), 31); // 30 frames a second, from 0 to 1 s
+//! assert!((played.weights[15][0] - 0.25).abs() < 1e-6);
+//! # Ok::<(), String>(())
+//! ```
+
+use crate::animation::MorphAnimation;
+use crate::source::Binding;
+
+/// The key in an animation's `extras` that marks it as faceanim's (`{"faceanim": {"take":
+/// true}}`), written by the GLB exporter.
+pub const EXTRAS_KEY: &str = "faceanim";
+
+/// The rate an animation plays at when its keys keep no steady one.
+pub const DEFAULT_FPS: f32 = 30.0;
+/// The longest animation played back: one hour.
+const MAX_SECONDS: f32 = 3600.0;
+
+/// How a sampler goes from key to key (glTF's `interpolation`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interpolation {
+    /// Held until the next key.
+    Step,
+    /// Straight lines between keys.
+    Linear,
+    /// Hermite curves: each key stores an in-tangent, the value and an out-tangent.
+    CubicSpline,
+}
+
+/// One mesh's `weights` channel as the file stores it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WeightsTrack {
+    mesh: u32,
+    times: Vec<f32>,
+    values: Vec<f32>,
+    targets: usize,
+    interpolation: Interpolation,
+}
+
+impl WeightsTrack {
+    /// A track of `mesh`: `values` holds `targets` weights per key (three times that for a
+    /// cubic spline: in-tangents, values, out-tangents).
+    ///
+    /// # Errors
+    /// A sentence when the times are not finite and increasing or the values do not fit them.
+    pub fn new(
+        mesh: u32,
+        times: Vec<f32>,
+        values: Vec<f32>,
+        targets: usize,
+        interpolation: Interpolation,
+    ) -> Result<WeightsTrack, String> {
+        if times.is_empty() {
+            return Err("it has no keys".into());
+        }
+        if let Some(k) = times
+            .iter()
+            .position(|t| !t.is_finite() || *t < 0.0)
+            .or_else(|| times.windows(2).position(|w| w[1] <= w[0]).map(|k| k + 1))
+        {
+            return Err(format!(
+                "key {k}'s time {} is not after the one before it",
+                times[k]
+            ));
+        }
+        let per_key = match interpolation {
+            Interpolation::CubicSpline => 3 * targets,
+            _ => targets,
+        };
+        if targets == 0 || values.len() != times.len() * per_key {
+            return Err(format!(
+                "{} weights for {} keys of {targets} morph targets",
+                values.len(),
+                times.len()
+            ));
+        }
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err("a weight is not a number".into());
+        }
+        Ok(WeightsTrack {
+            mesh,
+            times,
+            values,
+            targets,
+            interpolation,
+        })
+    }
+
+    /// The mesh it animates.
+    #[must_use]
+    pub fn mesh(&self) -> u32 {
+        self.mesh
+    }
+
+    /// Its last key's time, seconds.
+    #[must_use]
+    pub fn end(&self) -> f32 {
+        self.times.last().copied().unwrap_or(0.0)
+    }
+
+    fn value(&self, key: usize, target: usize) -> f32 {
+        match self.interpolation {
+            Interpolation::CubicSpline => self.values[(3 * key + 1) * self.targets + target],
+            _ => self.values[key * self.targets + target],
+        }
+    }
+
+    /// Target `target`'s weight at `t` seconds (held before the first key and after the last).
+    #[must_use]
+    pub fn at(&self, t: f32, target: usize) -> f32 {
+        if target >= self.targets {
+            return 0.0;
+        }
+        let last = self.times.len() - 1;
+        let next = self.times.partition_point(|&k| k <= t);
+        if next == 0 {
+            return self.value(0, target);
+        }
+        if next > last {
+            return self.value(last, target);
+        }
+        let k = next - 1;
+        let (t0, t1) = (self.times[k], self.times[next]);
+        let span = t1 - t0;
+        let s = (t - t0) / span;
+        match self.interpolation {
+            Interpolation::Step => self.value(k, target),
+            Interpolation::Linear => {
+                let (a, b) = (self.value(k, target), self.value(next, target));
+                a + (b - a) * s
+            }
+            Interpolation::CubicSpline => {
+                let out_tangent = self.values[(3 * k + 2) * self.targets + target];
+                let in_tangent = self.values[(3 * next) * self.targets + target];
+                let (s2, s3) = (s * s, s * s * s);
+                (2.0 * s3 - 3.0 * s2 + 1.0) * self.value(k, target)
+                    + (s3 - 2.0 * s2 + s) * span * out_tangent
+                    + (-2.0 * s3 + 3.0 * s2) * self.value(next, target)
+                    + (s3 - s2) * span * in_tangent
+            }
+        }
+    }
+
+    /// The most common step between keys, seconds.
+    fn step(&self) -> Option<f32> {
+        let mut steps: Vec<f32> = self.times.windows(2).map(|w| w[1] - w[0]).collect();
+        if steps.is_empty() {
+            return None;
+        }
+        steps.sort_unstable_by(f32::total_cmp);
+        Some(steps[steps.len() / 2])
+    }
+}
+
+/// One of the file's animations that moves morph targets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FileAnimation {
+    /// Its name in the file (or `animation N`).
+    pub name: String,
+    /// Its `weights` channels, one per animated mesh.
+    pub tracks: Vec<WeightsTrack>,
+    /// Whether faceanim wrote it (its `extras` say so): a take or sketch exported before.
+    pub ours: bool,
+}
+
+impl FileAnimation {
+    /// The rate its keys were written at: the most common step between keys when it is a
+    /// whole number of frames a second from 24 to 240 (faceanim and capture tools write one key
+    /// per frame), else [`DEFAULT_FPS`] (keys set by hand, further apart, are played between).
+    #[must_use]
+    pub fn fps(&self) -> f32 {
+        let Some(step) = self
+            .tracks
+            .iter()
+            .max_by_key(|t| t.times.len())
+            .and_then(WeightsTrack::step)
+        else {
+            return DEFAULT_FPS;
+        };
+        let rate = 1.0 / step;
+        let whole = rate.round();
+        if (24.0..=240.0).contains(&whole) && (rate - whole).abs() < 0.01 * whole {
+            whole
+        } else {
+            DEFAULT_FPS
+        }
+    }
+
+    /// Its first key's time, seconds (Blender writes frame 1 at 1/fps).
+    #[must_use]
+    pub fn start(&self) -> f32 {
+        self.tracks
+            .iter()
+            .map(|t| t.times[0])
+            .fold(f32::INFINITY, f32::min)
+            .min(self.seconds())
+    }
+
+    /// Its last key's time, seconds.
+    #[must_use]
+    pub fn seconds(&self) -> f32 {
+        self.tracks
+            .iter()
+            .map(WeightsTrack::end)
+            .fold(0.0, f32::max)
+    }
+
+    /// Plays it at [`FileAnimation::fps`] from its first key to its last (as a take from 0),
+    /// each blendshape read through the first of its `bindings` whose mesh the animation moves
+    /// (0 where none is).
+    #[must_use]
+    pub fn sample(&self, bindings: &[Vec<Binding>]) -> MorphAnimation {
+        let fps = self.fps();
+        let start = self.start();
+        let frames = ((self.seconds() - start).min(MAX_SECONDS) * fps).round() as usize + 1;
+        let reads: Vec<Option<(&WeightsTrack, usize, f32)>> = bindings
+            .iter()
+            .map(|binds| {
+                binds.iter().find_map(|b| {
+                    let track = self.tracks.iter().find(|t| t.mesh == b.mesh)?;
+                    (b.weight.abs() > 1e-6).then_some((track, b.target as usize, b.weight))
+                })
+            })
+            .collect();
+        let times: Vec<f32> = (0..frames).map(|k| k as f32 / fps).collect();
+        let weights = times
+            .iter()
+            .map(|&t| {
+                reads
+                    .iter()
+                    .map(|read| {
+                        read.map_or(0.0, |(track, target, weight)| {
+                            (track.at(start + t, target) / weight).clamp(0.0, 1.0)
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        MorphAnimation {
+            name: self.name.clone(),
+            times,
+            weights,
+            rotations: None,
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::float_cmp, reason = "keys and whole rates are exact")]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cubic_spline_passes_through_its_keys_and_follows_its_tangents() {
+        // Value 0 then 1 with zero tangents: a smoothstep.
+        let track = WeightsTrack::new(
+            0,
+            vec![0.0, 1.0],
+            vec![0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+            1,
+            Interpolation::CubicSpline,
+        )
+        .unwrap();
+        assert_eq!(track.at(0.0, 0), 0.0);
+        assert_eq!(track.at(1.0, 0), 1.0);
+        assert!((track.at(0.5, 0) - 0.5).abs() < 1e-6);
+        assert!((track.at(0.25, 0) - 0.15625).abs() < 1e-6);
+    }
+
+    #[test]
+    fn steps_hold_and_the_rate_comes_from_the_keys() {
+        let times: Vec<f32> = (0..25).map(|k| k as f32 / 24.0).collect();
+        let values: Vec<f32> = (0..25).map(|k| (k % 2) as f32).collect();
+        let track = WeightsTrack::new(3, times, values, 1, Interpolation::Step).unwrap();
+        assert_eq!(track.at(0.5 / 24.0, 0), 0.0);
+        assert_eq!(track.at(1.5 / 24.0, 0), 1.0);
+        let animation = FileAnimation {
+            name: "blink".into(),
+            tracks: vec![track],
+            ours: false,
+        };
+        assert_eq!(animation.fps(), 24.0);
+        // A VRM expression bound at 0.5: the target at 0.5 reads as the expression at 1.
+        let played = animation.sample(&[
+            vec![Binding {
+                mesh: 3,
+                target: 0,
+                weight: 0.5,
+            }],
+            vec![],
+        ]);
+        assert_eq!(played.times.len(), 25);
+        assert_eq!(played.weights[1], vec![1.0, 0.0]);
+        assert_eq!(played.weights[2], vec![0.0, 0.0]);
+    }
+
+    #[test]
+    fn bad_tracks_are_refused_with_a_reason() {
+        assert!(WeightsTrack::new(0, vec![], vec![], 1, Interpolation::Linear).is_err());
+        let back = WeightsTrack::new(0, vec![0.0, 0.0], vec![0.0, 1.0], 1, Interpolation::Linear);
+        assert!(back.unwrap_err().contains("key 1"));
+        let short = WeightsTrack::new(0, vec![0.0, 1.0], vec![0.0], 1, Interpolation::Linear);
+        assert!(short.unwrap_err().contains("1 weights for 2 keys"));
+        let nan = WeightsTrack::new(0, vec![0.0], vec![f32::NAN], 1, Interpolation::Linear);
+        assert!(nan.is_err());
+    }
+}
