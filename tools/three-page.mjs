@@ -1,7 +1,7 @@
 // A page of ours in headless Chromium with three.js (the copy the studio ships,
 // web/vendor/three) and one model, for the tools that render with three.js
 // (threejs-render.mjs, heldout-stills.mjs). Nothing is fetched from the network: the page, the
-// model and three.js are answered from here.
+// model, three.js and meshoptimizer's decoder (/meshopt_decoder.mjs) are answered from here.
 import { readFile } from 'node:fs/promises';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -32,6 +32,10 @@ export async function withThreePage({ html, model, width, height }, work) {
       const url = new URL(route.request().url());
       if (url.pathname === '/') return route.fulfill({ body: html, contentType: 'text/html' });
       if (url.pathname === '/model.glb') return route.fulfill({ body: model, contentType: 'model/gltf-binary' });
+      // meshoptimizer's own decoder (npm `meshoptimizer`), for files with EXT_meshopt_compression.
+      if (url.pathname === '/meshopt_decoder.mjs') {
+        return route.fulfill({ body: await readFile(path.join(here, 'node_modules/meshoptimizer/meshopt_decoder.mjs')), contentType: 'text/javascript' });
+      }
       if (url.pathname.startsWith('/three/')) {
         const local = path.join(three, url.pathname.slice('/three/'.length));
         if (!local.startsWith(three)) return route.fulfill({ status: 404 });

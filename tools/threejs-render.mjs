@@ -19,6 +19,7 @@ ${IMPORT_MAP}
 </head><body><script type="module">
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { MeshoptDecoder } from '/meshopt_decoder.mjs';
 const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
 renderer.setSize(480, 640);
 renderer.setClearColor(0x202428);
@@ -27,7 +28,7 @@ const scene = new THREE.Scene();
 scene.add(new THREE.HemisphereLight(0xffffff, 0x404040, 2.5));
 const sun = new THREE.DirectionalLight(0xffffff, 2); sun.position.set(1, 2, 3); scene.add(sun);
 try {
-  const gltf = await new GLTFLoader().loadAsync('/model.glb');
+  const gltf = await new GLTFLoader().setMeshoptDecoder(MeshoptDecoder).loadAsync('/model.glb');
   scene.add(gltf.scene);
   let channels = 0;
   if (gltf.animations.length) {

@@ -18,6 +18,8 @@ pub(crate) struct ExportArgs {
     /// blendshape names are matched to the character's (ARKit spellings understood).
     #[arg(long)]
     pub(crate) clip: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) glb: crate::outputs::GlbArgs,
 }
 
 /// `faceanim export-default`'s arguments.
@@ -50,8 +52,22 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
             }
             let animation = faceanim_export::Animation::from_clip(&character, &clip, &name)
                 .with_context(|| format!("applying {}", clip_path.display()))?;
-            faceanim_export::export(faceanim_export::Format::Glb, &animation)?.bytes
+            let exported = faceanim_export::export_with(
+                faceanim_export::Format::Glb,
+                &animation,
+                args.glb.compression(),
+            )?;
+            for note in &exported.notes {
+                eprintln!("{}: {note}", args.output.display());
+            }
+            exported.bytes
         }
+        None if character.source().is_some() => faceanim_export::glb::export_into_source_with(
+            &character,
+            &[],
+            &[],
+            args.glb.compression(),
+        )?,
         None => faceanim_export::glb(&character, None)?,
     };
     faceanim_files::write_output(&args.output, &glb)?;

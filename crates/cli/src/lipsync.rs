@@ -29,6 +29,8 @@ pub struct LipsyncArgs {
     /// the animation, .json the clip, .csv Live Link Face, .session.json the take).
     #[arg(short, long = "output", value_name = "OUT")]
     pub outputs: Vec<PathBuf>,
+    #[command(flatten)]
+    pub glb: crate::outputs::GlbArgs,
     /// Also write the clip (JSON) here.
     #[arg(long)]
     pub clip: Option<PathBuf>,
@@ -149,7 +151,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     let take = Take::from_weights(&character, &name, args.fps, &lip_sync.frames)?;
     let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
     for (path, format) in outputs.iter().zip(formats) {
-        crate::outputs::write(path, format, &animation)?;
+        crate::outputs::write(path, format, &animation, args.glb)?;
     }
     eprintln!(
         "{:.2} s of speech in {:.2} s ({:.2}× real time): {} phones ({}), {} visemes on {} of {} shapes ({})",

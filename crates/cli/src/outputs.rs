@@ -3,8 +3,30 @@
 
 use std::path::{Path, PathBuf};
 
+use faceanim_export::glb::Compression;
 use faceanim_export::{Animation, Format};
 use faceanim_take::Session;
+
+/// How GLB outputs are written (every command that writes one flattens these).
+#[derive(Debug, Clone, Copy, Default, clap::Args)]
+pub struct GlbArgs {
+    /// Write the GLB plain. A character read meshopt-compressed (gltfpack, VRoid's optimiser) is
+    /// otherwise written compressed again, as it came, so it keeps its size; plain is for tools
+    /// without a meshopt decoder (Blender's importer).
+    #[arg(long)]
+    pub uncompressed: bool,
+}
+
+impl GlbArgs {
+    /// The compression asked for.
+    pub fn compression(self) -> Compression {
+        if self.uncompressed {
+            Compression::None
+        } else {
+            Compression::AsRead
+        }
+    }
+}
 
 /// The formats `paths` ask for, by their endings; the first name that asks for none is an
 /// error.
@@ -15,9 +37,14 @@ pub fn formats_of(paths: &[PathBuf]) -> anyhow::Result<Vec<Format>> {
         .collect::<Result<_, _>>()?)
 }
 
-/// Writes `animation` to `path` in `format`.
-pub fn write(path: &Path, format: Format, animation: &Animation<'_>) -> anyhow::Result<()> {
-    let exported = faceanim_export::export(format, animation)
+/// Writes `animation` to `path` in `format` (a GLB as `glb` says).
+pub fn write(
+    path: &Path,
+    format: Format,
+    animation: &Animation<'_>,
+    glb: GlbArgs,
+) -> anyhow::Result<()> {
+    let exported = faceanim_export::export_with(format, animation, glb.compression())
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     for note in &exported.notes {
         eprintln!("{}: {note}", path.display());

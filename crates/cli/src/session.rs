@@ -80,6 +80,8 @@ pub enum SessionAction {
         /// The character, for .glb.
         #[arg(long)]
         character: Option<PathBuf>,
+        #[command(flatten)]
+        glb: crate::outputs::GlbArgs,
     },
 }
 
@@ -197,7 +199,11 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
             let adapter = crate::input::adapter(&adapter)?;
             session.reestimate(&adapter).map_err(edit)?;
         }
-        SessionAction::Export { output, character } => {
+        SessionAction::Export {
+            output,
+            character,
+            glb,
+        } => {
             let formats = crate::outputs::formats_of(&output)?;
             // The GLB needs the character; the clip and the CSVs come from the session alone.
             let character = if character.is_some() || formats.contains(&Format::Glb) {
@@ -208,7 +214,7 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
             let stem = crate::input::stem(path, "session");
             let animation = crate::outputs::take_animation(character.as_ref(), &session, &stem)?;
             for (path, format) in output.iter().zip(formats) {
-                crate::outputs::write(path, format, &animation)?;
+                crate::outputs::write(path, format, &animation, glb)?;
             }
             return Ok(());
         }

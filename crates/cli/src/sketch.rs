@@ -17,6 +17,8 @@ pub(crate) struct SketchArgs {
     /// Also write the baked clip (one row of weights per frame) here.
     #[arg(long)]
     pub(crate) clip: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) glb: crate::outputs::GlbArgs,
 }
 
 /// `faceanim sketch`.
@@ -54,9 +56,19 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
         session: None,
         bones: None,
     };
-    crate::outputs::write(&args.output, faceanim_export::Format::Glb, &animation)?;
+    crate::outputs::write(
+        &args.output,
+        faceanim_export::Format::Glb,
+        &animation,
+        args.glb,
+    )?;
     if let Some(path) = &args.clip {
-        crate::outputs::write(path, faceanim_export::Format::ClipJson, &animation)?;
+        crate::outputs::write(
+            path,
+            faceanim_export::Format::ClipJson,
+            &animation,
+            args.glb,
+        )?;
     }
     eprintln!(
         "{}: {} actions, {} frames at {} fps, {} extra targets for arcs and exaggerations",

@@ -36,6 +36,8 @@ pub struct TrackArgs {
     /// or .session.json; repeatable.
     #[arg(short, long = "output")]
     pub outputs: Vec<PathBuf>,
+    #[command(flatten)]
+    pub glb: crate::outputs::GlbArgs,
     /// Also keep every frame's landmarks, scores and pose here (JSON).
     #[arg(long)]
     pub raw: Option<PathBuf>,
@@ -216,7 +218,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         &crate::input::stem(&args.input, "capture"),
     )?;
     for (path, format) in args.outputs.iter().zip(formats) {
-        crate::outputs::write(path, format, &animation)?;
+        crate::outputs::write(path, format, &animation, args.glb)?;
     }
 
     let timing = Timing {

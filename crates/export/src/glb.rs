@@ -423,7 +423,8 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, GlbError> {
 /// (the sketch's baked corrective targets) are appended as morph targets to the meshes whose
 /// vertices they move, with `targetNames` extended; a head turn goes on the neck and head bones
 /// and a share of it on the upper spine (see [`crate::bones`]; without a head bone, on the
-/// scene's root node). Meshopt-compressed input is written decompressed.
+/// scene's root node). Meshopt-compressed input is written compressed again (see
+/// [`Compression`]).
 ///
 /// # Errors
 /// [`GlbError::NoSource`] for a character made in code or from OBJ files,
@@ -433,13 +434,24 @@ pub fn export_into_source(
     character: &Character,
     animations: &[MorphAnimation],
 ) -> Result<Vec<u8>, GlbError> {
-    export_into_source_with(character, animations, &[])
+    export_into_source_with(character, animations, &[], Compression::AsRead)
+}
+
+/// How a GLB written into the user's own file is compressed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Compression {
+    /// As the file was read: meshopt-compressed views (`EXT_meshopt_compression`) compressed
+    /// again, so the avatar keeps its size; a plain file stays plain.
+    #[default]
+    AsRead,
+    /// Plain buffer views, for tools without a meshopt decoder (Blender's importer).
+    None,
 }
 
 /// [`export_into_source`], with what each animation does to the eyes and the jaw (`keys`, by
 /// animation; missing ones do nothing): gaze on the eye bones and `jawOpen` on the jaw bone
 /// where the file has them (see [`crate::bones`]); a head turn is shared between upper spine,
-/// neck and head.
+/// neck and head; compressed as `compression` says.
 ///
 /// # Errors
 /// As [`export_into_source`].
@@ -448,6 +460,7 @@ pub fn export_into_source_with(
     character: &Character,
     animations: &[MorphAnimation],
     keys: &[Option<&crate::bones::BoneKeys>],
+    compression: Compression,
 ) -> Result<Vec<u8>, GlbError> {
     let Some(source) = character.source() else {
         return Err(GlbError::NoSource(character.name().to_owned()));
@@ -678,7 +691,11 @@ pub fn export_into_source_with(
             None => doc["animations"] = json!(new_animations),
         }
     }
-    glb(&doc, bin.bytes)
+    let bytes = match compression {
+        Compression::AsRead if source.meshopt() => crate::meshopt::compress(&mut doc, bin.bytes),
+        _ => bin.bytes,
+    };
+    glb(&doc, bytes)
 }
 
 /// Gives each primitive of `mesh` that has no morph targets as many all-zero ones as its

@@ -41,6 +41,7 @@
 pub mod bones;
 pub mod glb;
 pub mod livelink;
+mod meshopt;
 pub mod reopen;
 
 use std::path::Path;
@@ -300,12 +301,25 @@ pub enum ExportError {
     Glb(#[from] glb::GlbError),
 }
 
-/// Writes `animation` in `format`.
+/// Writes `animation` in `format` (a GLB compressed as its input was).
 ///
 /// # Errors
 /// [`ExportError::NeedsSession`] for the seed's CSV or the session without a session;
 /// [`ExportError::Glb`] when the animation does not fit the character.
 pub fn export(format: Format, animation: &Animation<'_>) -> Result<Exported, ExportError> {
+    export_with(format, animation, glb::Compression::AsRead)
+}
+
+/// [`export`], with a GLB written into the user's file compressed as `compression` says; a
+/// note says when it is meshopt-compressed, and how to write it plain.
+///
+/// # Errors
+/// As [`export`].
+pub fn export_with(
+    format: Format,
+    animation: &Animation<'_>,
+    compression: glb::Compression,
+) -> Result<Exported, ExportError> {
     let mut notes = Vec::new();
     let bytes = match format {
         Format::ClipJson => animation.clip.to_json().into_bytes(),
@@ -316,11 +330,22 @@ pub fn export(format: Format, animation: &Animation<'_>) -> Result<Exported, Exp
                 bones::BoneKeys::from_clip(animation.arkit.as_ref().unwrap_or(&animation.clip));
             let character = animation.character.ok_or(ExportError::NeedsCharacter)?;
             match character.source() {
-                Some(_) => glb::export_into_source_with(
-                    character,
-                    std::slice::from_ref(&animation.animation),
-                    &[Some(&keys)],
-                )?,
+                Some(source) => {
+                    if source.meshopt() && compression == glb::Compression::AsRead {
+                        notes.push(
+                            "meshopt-compressed as the file was read (EXT_meshopt_compression); \
+                             --uncompressed writes it plain for tools without a meshopt decoder \
+                             (Blender's importer)"
+                                .to_owned(),
+                        );
+                    }
+                    glb::export_into_source_with(
+                        character,
+                        std::slice::from_ref(&animation.animation),
+                        &[Some(&keys)],
+                        compression,
+                    )?
+                }
                 None => view_glb(character, Some(&animation.animation))?,
             }
         }

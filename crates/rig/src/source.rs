@@ -52,6 +52,8 @@ pub struct GltfSource {
     pub(crate) root_transform: Mat4,
     /// The file's morph-weight animations, as stored.
     pub(crate) animations: Vec<crate::file_animation::FileAnimation>,
+    /// Whether the file's buffer views were meshopt-compressed.
+    pub(crate) meshopt: bool,
 }
 
 impl std::fmt::Debug for GltfSource {
@@ -78,6 +80,13 @@ pub struct GeneratedShapes {
 }
 
 impl GltfSource {
+    /// Whether the file's buffer views were compressed with meshopt (`EXT_meshopt_compression`,
+    /// as gltfpack and VRoid's optimisers write): the GLB exporter compresses them again.
+    #[must_use]
+    pub fn meshopt(&self) -> bool {
+        self.meshopt
+    }
+
     /// The file's animations that move morph targets (a take or sketch exported before, or the
     /// file's own), in the file's order.
     #[must_use]

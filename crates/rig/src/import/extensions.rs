@@ -56,6 +56,8 @@ pub(crate) struct Prepared<'a> {
     pub kept: (Value, Vec<u8>),
     /// What was worked around, one sentence each.
     pub warnings: Vec<String>,
+    /// Whether the file's buffer views were meshopt-compressed (exports compress them again).
+    pub meshopt: bool,
 }
 
 /// A texture-coordinate transform (`KHR_texture_transform`): scale, then rotate, then offset.
@@ -95,6 +97,16 @@ pub(crate) fn prepare<'a>(
     check_required(&value)?;
     let mut warnings = Vec::new();
     let mut buffers = load_buffers(&value, bin, resources)?;
+    let meshopt = value
+        .get("extensionsUsed")
+        .and_then(Value::as_array)
+        .is_some_and(|used| {
+            used.iter().any(|e| {
+                e.as_str().is_some_and(|e| {
+                    e == "EXT_meshopt_compression" || e == "KHR_meshopt_compression"
+                })
+            })
+        });
     decode_meshopt(&mut value, &mut buffers)?;
     super::draco::decode(&mut value, &mut buffers)?;
     let kept = keep(&value, &buffers, resources, &mut warnings);
@@ -113,6 +125,7 @@ pub(crate) fn prepare<'a>(
         vrm,
         kept,
         warnings,
+        meshopt,
     })
 }
 

@@ -74,6 +74,7 @@ fn import(
     let mut builder = Builder::new(source_name);
     builder.bones = crate::bones::find(&prepared.kept.0);
     builder.kept = Some(prepared.kept);
+    builder.meshopt = prepared.meshopt;
     builder.warnings = prepared.warnings;
     builder.uv_transforms = prepared.uv_transforms;
     if prepared
@@ -328,6 +329,8 @@ struct Builder {
     bones: crate::bones::FaceBones,
     /// The file's morph-weight animations.
     animations: Vec<crate::file_animation::FileAnimation>,
+    /// Whether the file was meshopt-compressed.
+    meshopt: bool,
 }
 
 impl Builder {
@@ -362,6 +365,7 @@ impl Builder {
             kept: None,
             bones: crate::bones::FaceBones::default(),
             animations: Vec::new(),
+            meshopt: false,
         }
     }
 
@@ -966,6 +970,7 @@ impl Builder {
                     bones: self.bones,
                     root_transform: self.root_transform,
                     animations: self.animations,
+                    meshopt: self.meshopt,
                 })
             }
             None => character,

@@ -169,18 +169,31 @@ fn a_vrm_stays_a_vrm_and_its_expressions_drive_their_bindings() {
 }
 
 #[test]
-fn a_meshopt_avatar_is_written_decompressed() {
+fn a_meshopt_avatar_is_written_compressed_as_it_was_read_or_plain_when_asked() {
+    use faceanim_export::glb::{Compression, export_into_source_with};
     let input = gltfpack(&full_body_glb(ict(), VrmKind::None, &[]), &["-cc", "-kn"]);
     let c = read(&input, "avatar-meshopt.glb");
-    let out = export_into_source(&c, &[animation(c.blendshapes().len(), 30, &[0])]).unwrap();
+    let animations = [animation(c.blendshapes().len(), 30, &[0])];
+    let out = export_into_source(&c, &animations).unwrap();
     let (before, after) = (json(&input), json(&out));
     assert_kept(&before, &after, "the export");
     let used = after["extensionsUsed"].to_string();
-    assert!(!used.contains("meshopt"), "{used}");
+    assert!(used.contains("EXT_meshopt_compression"), "{used}");
     assert!(
         used.contains("KHR_mesh_quantization"),
         "still quantized: {used}"
     );
+    assert!(
+        out.len() * 2 < input.len() * 3,
+        "{} bytes for an input of {}",
+        out.len(),
+        input.len()
+    );
     let back = read(&out, "back.glb");
     assert_eq!(back.vertex_count(), c.vertex_count());
+    assert_eq!(back.positions(), c.positions());
+    let plain = export_into_source_with(&c, &animations, &[], Compression::None).unwrap();
+    let used = json(&plain)["extensionsUsed"].to_string();
+    assert!(!used.contains("meshopt"), "{used}");
+    assert_eq!(read(&plain, "plain.glb").positions(), c.positions());
 }
