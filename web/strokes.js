@@ -15,7 +15,7 @@ import * as store from './store.js';
 
 const canvas = renderer.domElement;
 
-/** @type {null | {plane: THREE.Plane, t0: number, samples: any[], pending: number[][], line: THREE.Line, found: any, frame: number, asked?: Promise<void>}} */
+/** @type {null | {plane: THREE.Plane, t0: number, samples: any[], pending: {p: number[], at: number}[], line: THREE.Line, found: any, frame: number, asked?: Promise<void>}} */
 let stroke = null;
 let lastStrokeMs = 0;
 
@@ -79,10 +79,20 @@ canvas.addEventListener('pointerdown', (event) => {
   const line = new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: 0xffe080, depthTest: false }));
   line.renderOrder = 13;
   world.add(line);
-  const drawing = { plane: planeFacingCamera(hit), t0: performance.now(), samples: [{ t: 0, p: hit.toArray() }], pending: [], line, found: null, frame: Math.round(currentFrame()) };
+  const drawing = { plane: planeFacingCamera(hit), t0: eventTime(event), samples: [{ t: 0, p: hit.toArray() }], pending: [], line, found: null, frame: Math.round(currentFrame()) };
   stroke = drawing;
   drawing.asked = api('POST', 'api/candidates', { point: hit.toArray(), frame: drawing.frame }).then((found) => { drawing.found = found; showCandidates(found, false); }).catch(() => {});
 });
+
+/**
+ * When an input event happened, on `performance.now()`'s clock: its own `timeStamp` (when the
+ * hand moved, even if the page handles it late), else now.
+ */
+function eventTime(/** @type {Event} */ event) {
+  const now = performance.now();
+  const t = event.timeStamp;
+  return Number.isFinite(t) && t > 0 && t <= now + 1 && now - t < 10000 ? t : now;
+}
 
 let hoverTimer = 0;
 canvas.addEventListener('pointermove', (event) => {
@@ -101,15 +111,19 @@ canvas.addEventListener('pointermove', (event) => {
   for (const e of events.length ? events : [event]) {
     const p = onPlane(rayFrom(e), plane);
     if (!p) continue;
-    if (stroke) stroke.pending.push(p.toArray());
+    if (stroke) stroke.pending.push({ p: p.toArray(), at: eventTime(e) });
     else handles.moveTo(p);
   }
   if (stroke) {
-    // Coalesced points of this event share its arrival time span: spread them evenly between
-    // the previous sample's time and now (event timestamps are not reliable across devices).
-    const now = (performance.now() - stroke.t0) / 1000;
+    // A stroke's timing is the hand's, not the page's: each point at its input event's own
+    // time, so that a slow display (which handles the moves late, in bunches) does not stretch
+    // the stroke. Where the events' times cannot be trusted (missing, out of order), the points
+    // are spread evenly between the previous sample and now.
     const previous = stroke.samples[stroke.samples.length - 1].t;
-    stroke.pending.forEach((q, i) => stroke.samples.push({ t: previous + (now - previous) * (i + 1) / stroke.pending.length, p: q }));
+    const times = stroke.pending.map((q) => (q.at - stroke.t0) / 1000);
+    const trusted = times.every((t, i) => t >= (i ? times[i - 1] : previous));
+    const now = trusted && times.length ? times[times.length - 1] : (performance.now() - stroke.t0) / 1000;
+    stroke.pending.forEach((q, i) => stroke.samples.push({ t: trusted ? times[i] : previous + (now - previous) * (i + 1) / stroke.pending.length, p: q.p }));
     stroke.pending = [];
     showReadout(event, now);
     const nearest = nearestCandidate(event.clientX, event.clientY);
