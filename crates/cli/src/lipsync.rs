@@ -52,7 +52,8 @@ pub struct LipsyncArgs {
     pub recognise: Blind,
     /// The face around the mouth too: blinks at phrase boundaries and natural rates, brows
     /// raised on accented syllables (ARKit blink and brow channels, on any rig through its
-    /// name table).
+    /// name table), and the head: a nod on each accent and a slight turn per phrase (on the
+    /// head and neck bones, or the root).
     #[arg(long)]
     pub face: bool,
     /// Print a JSON summary (timing, phones, visemes) on stdout.
@@ -83,7 +84,7 @@ struct Summary<'a> {
     shapes_moved: usize,
     phones: &'a [faceanim_speech::Phone],
     visemes: &'a [faceanim_speech::visemes::Key],
-    /// With --face: the blinks and brow raises added.
+    /// With --face: the blinks, brow raises, accents and phrases added.
     #[serde(skip_serializing_if = "Option::is_none")]
     gestures: Option<&'a faceanim_speech::face::Gestures>,
     notes: &'a [String],
@@ -148,7 +149,29 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         eprintln!("{}: {note}", args.speech.display());
     }
     let name = crate::input::stem(&args.speech, "speech");
-    let take = Take::from_weights(&character, &name, args.fps, &lip_sync.frames)?;
+    // With the face, the head moves too (nods on accents, a turn per phrase).
+    let take = match &gestures {
+        Some(gestures) => {
+            let step = 1.0 / f64::from(args.fps);
+            let frames = lip_sync
+                .frames
+                .iter()
+                .enumerate()
+                .map(|(k, weights)| faceanim_take::ReceivedFrame {
+                    time: k as f64 * step,
+                    weights: weights.clone(),
+                    head: Some(gestures.head_at(k as f32 / args.fps)),
+                })
+                .collect();
+            Take::from_received(
+                &character,
+                &name,
+                frames,
+                faceanim_take::Filtering::new(1, None)?,
+            )?
+        }
+        None => Take::from_weights(&character, &name, args.fps, &lip_sync.frames)?,
+    };
     let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
     for (path, format) in outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation, args.glb)?;

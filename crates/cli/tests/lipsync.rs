@@ -343,6 +343,35 @@ fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
         rows.iter().any(|r| r[lid].as_f64().unwrap() > 0.9),
         "no blink drawn"
     );
+    // The head turns a little with each of the two sentences (one way, then the other), is
+    // still before the voice starts, and nods on the accents.
+    let head: Vec<[f64; 3]> = clip["head"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no head motion with --face: {}", clip["head"]))
+        .iter()
+        .map(|h| [0, 1, 2].map(|i| h[i].as_f64().unwrap()))
+        .collect();
+    assert_eq!(head.len(), rows.len());
+    let phrases = gestures["phrases"].as_array().unwrap();
+    assert_eq!(phrases.len(), 2, "{gestures}");
+    let yaw_at = |t: f64| head[((t * 30.0) as usize).min(head.len() - 1)][0];
+    let middle = |p: &Value| (p[0].as_f64().unwrap() + p[1].as_f64().unwrap()) / 2.0;
+    let (first, second) = (yaw_at(middle(&phrases[0])), yaw_at(middle(&phrases[1])));
+    assert!(
+        first > 1.0 && second < -1.0,
+        "the head's yaw in the two sentences: {first:.2}°, {second:.2}°"
+    );
+    assert!(head[0].iter().all(|a| a.abs() < 0.5), "{:?}", head[0]);
+    let deepest = head.iter().map(|h| h[1]).fold(0.0, f64::min);
+    let accents = gestures["accents"].as_array().unwrap().len();
+    assert!(
+        accents == 0 || deepest < -2.0,
+        "{accents} accents, the chin dips {deepest:.2}°"
+    );
+    assert!(
+        head.iter().all(|h| h.iter().all(|a| a.abs() <= 3.5)),
+        "too much head motion"
+    );
     assert_valid_gltf(&out.join("mama.glb"));
     // A language eSpeak NG does not speak is said, and the sound still moves the mouth.
     let (summary, _) = run_lipsync(

@@ -8,8 +8,15 @@
 //!   loudness [`ACCENT_DB`] over the line's speaking level), at most one every
 //!   [`ACCENT_SPACING`]; they rise over 120 ms, hold for the syllable and settle over 300 ms.
 //!
-//! Both are ARKit channels (`eyeBlinkLeft`/`Right`, `browInnerUp`, `browOuterUpLeft`/`Right`),
-//! so any rig gets them through its name table ([`faceanim_rig::names`]).
+//! - **The head** nods on the same accents (the chin dips [`NOD_DEGREES`] as the syllable
+//!   starts and comes back over 0.45 s, a speaker's beat) and turns slightly while a phrase is
+//!   spoken ([`SWAY_DEGREES`] of yaw and half that of roll, to one side and then the other from
+//!   phrase to phrase, easing back in the pauses) ([`Gestures::head_at`]).
+//!
+//! Blinks and brows are ARKit channels (`eyeBlinkLeft`/`Right`, `browInnerUp`,
+//! `browOuterUpLeft`/`Right`), so any rig gets them through its name table
+//! ([`faceanim_rig::names`]); the head goes where a captured head pose goes (the head and neck
+//! bones, or the character's root).
 
 use crate::audio::Sound;
 use crate::phones::Phone;
@@ -24,6 +31,10 @@ pub const LONGEST_WITHOUT: f32 = 3.5;
 pub const ACCENT_DB: f32 = 4.0;
 /// The least time between two brow raises, seconds.
 pub const ACCENT_SPACING: f32 = 1.2;
+/// How far the chin dips on an accent, degrees.
+pub const NOD_DEGREES: f32 = 3.0;
+/// How far the head turns while a phrase is spoken, degrees of yaw.
+pub const SWAY_DEGREES: f32 = 2.0;
 
 /// The ARKit channels the face moves, in the order of [`Gestures::at`].
 pub const CHANNELS: [&str; 5] = [
@@ -41,6 +52,8 @@ pub struct Gestures {
     pub blinks: Vec<f32>,
     /// Each brow raise: (when the accented syllable starts, when it ends), seconds.
     pub accents: Vec<(f32, f32)>,
+    /// Each phrase: (when its first sound starts, when its last ends), seconds.
+    pub phrases: Vec<(f32, f32)>,
 }
 
 /// The gestures that go with `phones` heard in `sound`.
@@ -62,8 +75,15 @@ pub fn gestures(sound: &Sound, phones: &[Phone]) -> Gestures {
     let mut blinks: Vec<f32> = Vec::new();
     let mut accents: Vec<(f32, f32)> = Vec::new();
     let mut last_blink = -1.0f32;
+    let mut phrases: Vec<(f32, f32)> = Vec::new();
     for (k, p) in phones.iter().enumerate() {
         let silent = viseme_of(&p.label) == faceanim_rig::names::Viseme::Sil;
+        if !silent {
+            match phrases.last_mut() {
+                Some(phrase) if p.start - phrase.1 < PHRASE_PAUSE => phrase.1 = p.end,
+                _ => phrases.push((p.start, p.end)),
+            }
+        }
         if silent && p.end - p.start >= PHRASE_PAUSE && k > 0 && p.start - last_blink > 1.0 {
             last_blink = p.start + 0.05;
             blinks.push(last_blink);
@@ -83,7 +103,11 @@ pub fn gestures(sound: &Sound, phones: &[Phone]) -> Gestures {
         }
     }
     blinks.retain(|&t| t < sound.seconds());
-    Gestures { blinks, accents }
+    Gestures {
+        blinks,
+        accents,
+        phrases,
+    }
 }
 
 impl Gestures {
@@ -123,6 +147,46 @@ impl Gestures {
             })
             .fold(0.0, f32::max);
         [blink, blink, 0.5 * brows, 0.35 * brows, 0.35 * brows]
+    }
+
+    /// The head's `[yaw, pitch, roll]` at `t` seconds, degrees (faceanim's convention: pitch
+    /// up is positive, so a nod is negative).
+    #[must_use]
+    pub fn head_at(&self, t: f32) -> [f32; 3] {
+        let nod = self
+            .accents
+            .iter()
+            .map(|&(start, _)| {
+                let d = t - start;
+                if !(-0.15..=0.45).contains(&d) {
+                    0.0
+                } else if d < 0.0 {
+                    smooth((d + 0.15) / 0.15)
+                } else {
+                    1.0 - smooth(d / 0.45)
+                }
+            })
+            .fold(0.0, f32::max);
+        let mut turn = 0.0;
+        for (k, &(start, end)) in self.phrases.iter().enumerate() {
+            let side = if k % 2 == 0 { 1.0 } else { -1.0 };
+            let on = if t < start || t > end + 0.5 {
+                0.0
+            } else if t < start + 0.6 {
+                smooth((t - start) / 0.6)
+            } else if t <= end {
+                1.0
+            } else {
+                1.0 - smooth((t - end) / 0.5)
+            };
+            turn += side * on;
+        }
+        let turn = turn.clamp(-1.0, 1.0);
+        [
+            SWAY_DEGREES * turn,
+            -NOD_DEGREES * nod,
+            0.5 * SWAY_DEGREES * turn,
+        ]
     }
 }
 
@@ -169,6 +233,7 @@ mod tests {
         let g = Gestures {
             blinks: vec![1.0],
             accents: vec![(3.0, 3.2)],
+            phrases: vec![(0.5, 2.0), (2.6, 4.0)],
         };
         let near = |a: f32, b: f32| (a - b).abs() < 1e-4;
         assert!(g.at(0.9).iter().all(|v| near(*v, 0.0)));
@@ -178,6 +243,14 @@ mod tests {
         assert!(near(g.at(1.3)[0], 0.0));
         assert!(near(g.at(3.1)[2], 0.5));
         assert!(near(g.at(3.6)[2], 0.0));
+        // The head: still before speech, turned one way in the first phrase and the other in
+        // the second, nodding on the accent.
+        assert!(g.head_at(0.2).iter().all(|a| near(*a, 0.0)));
+        assert!(near(g.head_at(1.5)[0], SWAY_DEGREES));
+        assert!(near(g.head_at(3.0)[1], -NOD_DEGREES));
+        assert!(near(g.head_at(3.5)[0], -SWAY_DEGREES));
+        assert!(near(g.head_at(3.5)[1], 0.0));
+        assert!(near(g.head_at(4.6)[0], 0.0));
     }
 
     #[test]
@@ -200,6 +273,12 @@ mod tests {
                 .collect(),
         };
         let g = gestures(&sound, &phones);
+        // Two phrases, either side of the pause.
+        assert_eq!(g.phrases.len(), 2, "{g:?}");
+        assert!(
+            (g.phrases[0].1 - 4.0).abs() < 1e-3 && (g.phrases[1].0 - 4.6).abs() < 1e-3,
+            "{g:?}"
+        );
         assert!(g.blinks.len() >= 2, "{g:?}");
         for pair in g.blinks.windows(2) {
             assert!(pair[1] - pair[0] <= LONGEST_WITHOUT + 0.3, "{g:?}");
