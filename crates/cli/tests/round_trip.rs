@@ -234,3 +234,88 @@ fn an_animation_keyed_in_blender_opens_as_a_take() {
         );
     }
 }
+
+/// A sketch exported as a GLB (strokes drawn through the studio's API on the Blender avatar)
+/// opens again in `faceanim studio` as a take that plays the sketch's frames, and exports
+/// again to the same weights.
+#[test]
+fn a_sketched_glb_opens_again_as_a_take_and_exports_the_same() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = output_dir("round_trip");
+    let avatar = blender_avatar_path();
+    let character = faceanim_rig::import::import_gltf(
+        &std::fs::read(&avatar).unwrap(),
+        "blender.glb",
+        &faceanim_rig::import::NoExternalResources,
+    )
+    .unwrap()
+    .character;
+    let studio = start_on(Some(&avatar), &dir.path().join("sketch.json"), &[]);
+    let mut targets = Vec::new();
+    for (shape, start) in [("jawOpen", 0), ("mouthSmile_L", 20)] {
+        let mut stroke: serde_json::Value =
+            serde_json::from_str(&support::stroke_along(&character, shape, 30, 1.0 / 60.0))
+                .unwrap();
+        stroke["start_frame"] = start.into();
+        let stroke = stroke.to_string();
+        let (status, body) = request(studio.port, "POST", "/api/strokes", &[], stroke.as_bytes());
+        assert_eq!(status, 200, "{body}");
+        let sketch: serde_json::Value = serde_json::from_str(&body).unwrap();
+        let actions = sketch["actions"].as_array().unwrap();
+        targets.push(
+            actions[actions.len() - 1]["sides"][0]["target"]
+                .as_str()
+                .unwrap()
+                .to_owned(),
+        );
+    }
+    let (status, glb) = request_bytes(studio.port, "GET", "/api/export.glb", &[], b"");
+    assert_eq!(status, 200);
+    let (status, baked) = request_bytes(studio.port, "GET", "/api/export.json", &[], b"");
+    assert_eq!(status, 200);
+    drop(studio);
+    let sketched = out.join("sketched.glb");
+    std::fs::write(&sketched, &glb).unwrap();
+    let baked: serde_json::Value = serde_json::from_slice(&baked).unwrap();
+    let frames = baked["frames"].as_array().unwrap().len();
+    assert!(frames > 10, "{frames} frames");
+    let baked_column = |name: &str| -> Vec<f64> {
+        let at = support::strings(&baked["blendshapes"])
+            .iter()
+            .position(|n| n == name)
+            .unwrap();
+        baked["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|row| row[at].as_f64().unwrap())
+            .collect()
+    };
+
+    let studio = start_on(Some(&sketched), &dir.path().join("again.json"), &[]);
+    let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["take"]["frames"], frames, "{}", state["take"]);
+    let (status, again) = request_bytes(studio.port, "GET", "/api/capture/export.glb", &[], b"");
+    assert_eq!(status, 200);
+    let (status, body) = support::upload(studio.port, "again.glb", &again);
+    assert_eq!(status, 200, "{body}");
+    let reopened: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(targets[0], "jawOpen");
+    for name in &targets {
+        let want = baked_column(name);
+        assert!(
+            want.iter().fold(0.0, |a: f64, b| a.max(*b)) > 0.5,
+            "{name}: {want:?}"
+        );
+        for (what, state) in [("the sketched GLB", &state), ("its export", &reopened)] {
+            let got = take_column(state, name);
+            let worst = got
+                .iter()
+                .zip(&want)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-3, "{what}: {name} is {worst} from the sketch");
+        }
+    }
+}
