@@ -1286,6 +1286,24 @@ fn a_live_link_face_phone_drives_the_studio_and_goes_out_over_vmc() {
         }
     }
     assert!(jaws > FRAMES / 2, "{jaws} frames sent the jaw");
+    // And the jaw bone, for avatars that open their mouth with one: turned down as far as the
+    // phone's JawOpen says, on every frame.
+    for (k, datagram) in applied.iter().enumerate() {
+        let bone = datagram["messages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["address"] == "/VMC/Ext/Bone/Pos" && m["args"][0][1] == "Jaw")
+            .unwrap_or_else(|| panic!("frame {k} has no Jaw bone: {datagram}"));
+        let w = bone["args"][7][1].as_f64().unwrap();
+        let degrees = 2.0 * w.clamp(-1.0, 1.0).acos().to_degrees();
+        let want = f64::from(faceanim_live::JAW_DEGREES)
+            * sent["frames"][k]["values"]["JawOpen"].as_f64().unwrap();
+        assert!(
+            (degrees - want).abs() < 0.05,
+            "frame {k}: the jaw bone turned {degrees:.3}°, for {want:.3}°"
+        );
+    }
     // Neutral: taken from the last face and kept for the next run.
     let (status, body) = neutral(&studio);
     assert_eq!(status, 200, "{body}");

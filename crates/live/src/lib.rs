@@ -48,7 +48,7 @@ pub use marionette::{
     Forwarding, Marionette, Neutral, ReceivedFrame, Source, SourceSettings, Traffic,
 };
 pub use names::{Names, VRM_PRESETS};
-pub use performer::{Performer, Pose, SendStats};
+pub use performer::{JAW_DEGREES, Performer, Pose, SendStats};
 
 /// The VMC protocol's default port (the marionette's).
 pub const DEFAULT_PORT: u16 = 39539;

@@ -589,9 +589,14 @@ fn forward(state: &mut State, arrived: Instant) {
             faceanim_retarget::channel_index(c).map_or(0.0, |i| state.channels[i])
         })
     });
+    let jaw = state
+        .raw
+        .is_some()
+        .then(|| faceanim_retarget::channel_index("jawOpen").map_or(0.0, |i| state.channels[i]));
     let pose = crate::Pose {
         head: frame.head,
         eyes,
+        jaw,
     };
     let sent = lock_performer(&performer).send_pose(&frame.weights, pose, frame.time as f32);
     if sent {

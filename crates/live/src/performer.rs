@@ -16,7 +16,14 @@ pub struct Pose {
     /// Each eye's gaze `[yaw, pitch]` in degrees, left eye then right, relative to the head
     /// (yaw towards the character's left, pitch up), sent as `LeftEye` and `RightEye`.
     pub eyes: Option<[[f32; 2]; 2]>,
+    /// How open the jaw is (ARKit `jawOpen`, 0..1), sent as the `Jaw` bone turned down by
+    /// [`JAW_DEGREES`] at 1 — for avatars whose mouth opens with a jaw bone.
+    pub jaw: Option<f32>,
 }
+
+/// How far the `Jaw` bone turns at `jawOpen` 1 (the receiving avatar is not known here: the
+/// exporter's default for a jaw without a jaw-open shape to measure).
+pub const JAW_DEGREES: f32 = 20.0;
 
 /// Every this many frames all values are sent, moved or not, so a marionette that starts late
 /// or lost a datagram catches up.
@@ -102,7 +109,7 @@ impl Performer {
     /// The bundle for one frame: `weights` (the character's, in its order), the `pose` of head
     /// and eyes, and the performer's clock `time` in seconds.
     pub fn bundle(&mut self, weights: &[f32], pose: Pose, time: f32) -> OscBundle {
-        let Pose { head, eyes } = pose;
+        let Pose { head, eyes, jaw } = pose;
         let refresh = self.stats.frames.is_multiple_of(REFRESH_EVERY);
         self.stats.frames += 1;
         let message = |addr: &str, args: Vec<OscType>| {
@@ -147,6 +154,10 @@ impl Performer {
                 content.push(message("/VMC/Ext/Bone/Pos", pose(bone, turn)));
             }
         }
+        if let Some(open) = jaw {
+            let turn = unity_rotation([0.0, -JAW_DEGREES * open.clamp(0.0, 1.0), 0.0]);
+            content.push(message("/VMC/Ext/Bone/Pos", pose("Jaw", turn)));
+        }
 
         for ((name, source), last) in self.table.iter().zip(&mut self.last) {
             let value = source.value(weights).clamp(0.0, 1.0);
@@ -169,10 +180,18 @@ impl Performer {
     /// Sends one frame (see [`Performer::bundle`]); false when the network refused it, which is
     /// counted and never blocks.
     pub fn send(&mut self, weights: &[f32], head: Option<[f32; 3]>, time: f32) -> bool {
-        self.send_pose(weights, Pose { head, eyes: None }, time)
+        self.send_pose(
+            weights,
+            Pose {
+                head,
+                ..Pose::default()
+            },
+            time,
+        )
     }
 
-    /// [`Performer::send`] with the eyes' gaze too, as the `LeftEye` and `RightEye` bones.
+    /// [`Performer::send`] with the eyes' gaze and the jaw too, as the `LeftEye`, `RightEye`
+    /// and `Jaw` bones.
     pub fn send_pose(&mut self, weights: &[f32], pose: Pose, time: f32) -> bool {
         let bundle = self.bundle(weights, pose, time);
         let sent = rosc::encoder::encode(&OscPacket::Bundle(bundle))
@@ -209,6 +228,7 @@ mod tests {
         let pose = Pose {
             head: Some([20.0, 0.0, 0.0]),
             eyes: Some([[30.0, 0.0], [0.0, 10.0]]),
+            jaw: Some(0.5),
         };
         let bundle = performer.bundle(&[0.5], pose, 0.0);
         let bones: Vec<(String, [f32; 4])> = bundle
@@ -230,13 +250,15 @@ mod tests {
             })
             .collect();
         let names: Vec<&str> = bones.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(names, ["Neck", "Head", "LeftEye", "RightEye"]);
+        assert_eq!(names, ["Neck", "Head", "LeftEye", "RightEye", "Jaw"]);
         // Half the yaw on each of neck and head; each eye its own gaze.
         let expected = [
             [10.0, 0.0, 0.0],
             [10.0, 0.0, 0.0],
             [30.0, 0.0, 0.0],
             [0.0, 10.0, 0.0],
+            // The jaw half open: turned down half of its range.
+            [0.0, -JAW_DEGREES / 2.0, 0.0],
         ];
         for ((bone, q), angles) in bones.iter().zip(expected) {
             let want = unity_rotation(angles);

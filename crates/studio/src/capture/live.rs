@@ -203,17 +203,18 @@ impl LiveHandle {
         let head = record.head;
         // Out at once: the frame's weights go to the marionette before anything else is done.
         if let Some(performer) = &live.performer {
-            // The gaze from MediaPipe's own eyeLook scores, as the eye bones take it.
-            let eyes = found.then(|| {
-                faceanim_rig::bones::gaze_from_arkit(|c| {
-                    record
-                        .scores
-                        .iter()
-                        .find(|(n, _)| *n == c)
-                        .map_or(0.0, |(_, v)| *v)
-                })
-            });
-            lock(performer).send_pose(&weights, faceanim_live::Pose { head, eyes }, time);
+            // The gaze from MediaPipe's own eyeLook scores, as the eye bones take it, and the
+            // jaw from its jawOpen.
+            let score = |c: &str| {
+                record
+                    .scores
+                    .iter()
+                    .find(|(n, _)| *n == c)
+                    .map_or(0.0, |(_, v)| *v)
+            };
+            let eyes = found.then(|| faceanim_rig::bones::gaze_from_arkit(score));
+            let jaw = found.then(|| score("jawOpen"));
+            lock(performer).send_pose(&weights, faceanim_live::Pose { head, eyes, jaw }, time);
         }
         let recorded = match live.recording.as_mut() {
             Some(recording) => {
