@@ -11,6 +11,7 @@
 #   Fcl_MTH_* with the vowels A I U E O, Fcl_ALL_* emotions, Fcl_HA_* teeth-only keys, and a few
 #   keys that move nothing), over 100 in all;
 # - a body of several materials and a hair mesh without shape keys;
+# - the brows' material cut out by alpha (alphaMode MASK, cutoff 0.4);
 # - two armatures (so the file has several skins): the body's, with spine, neck and head bones
 #   and, below the head, eye bones at the eyes' centres and a jaw bone at the jaw's hinge (as
 #   Ready Player Me's and Character Creator's skeletons have them), in centimetres under an
@@ -88,7 +89,12 @@ for key, index in sorted(palette.items(), key=lambda kv: kv[1]):
         extra = {"Clearcoat": 0.6, "Clearcoat Roughness": 0.2}
     if index == 3:
         extra = {"Specular": 0.9, "Specular Tint": 0.3}
-    mesh.materials.append(material(name, key, **extra))
+    m = material(name, key, **extra)
+    if index == 2:
+        # Brows cut out by their alpha, as VRoid's and most anime avatars' are (glTF MASK).
+        m.blend_method = "CLIP"
+        m.alpha_threshold = 0.4
+    mesh.materials.append(m)
 mesh.polygons.foreach_set("material_index", part_of_face)
 
 # --- VRoid-style shape keys, mixed from the head's own ------------------------------------------

@@ -257,15 +257,7 @@ fn a_webp_meshopt_quantized_avatar_like_vroids() {
         "the export is {output} bytes for an input of {input}"
     );
     let plain = dir.join("animated-plain.glb");
-    faceanim_ok(&[
-        "export",
-        file.to_str().unwrap(),
-        "-o",
-        plain.to_str().unwrap(),
-        "--clip",
-        clip.to_str().unwrap(),
-        "--uncompressed",
-    ]);
+    support::export_with_clip_and(&file, &plain, &clip, &["--uncompressed"]);
     let plain_bytes = std::fs::read(&plain).unwrap();
     assert!(
         !json_chunk(&plain)["extensionsUsed"]

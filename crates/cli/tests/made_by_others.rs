@@ -223,15 +223,12 @@ fn exports_of_blender_avatars_keep_the_file_and_open_everywhere() {
         );
     }
     let plain = dir.join("blender-gltfpack-plain.glb");
-    faceanim_ok(&[
-        "export",
-        dir.join("blender-gltfpack.glb").to_str().unwrap(),
-        "-o",
-        plain.to_str().unwrap(),
-        "--clip",
-        clip.to_str().unwrap(),
-        "--uncompressed",
-    ]);
+    support::export_with_clip_and(
+        &dir.join("blender-gltfpack.glb"),
+        &plain,
+        &clip,
+        &["--uncompressed"],
+    );
 
     // Blender 3.4 reopens the plain, the VRM 1.0 and gltfpack's exports with both armatures,
     // the face's every shape key (on one object), and the animation.
@@ -319,6 +316,22 @@ fn strokes_through_the_studio_api_animate_the_blender_avatar() {
     let stroke = stroke_along(&character, "jawOpen", 45, 1.0 / 90.0);
 
     let studio = start_on(Some(&file), &dir.join("project.json"), &[]);
+    // The page's view keeps the brows cut out by their alpha (glTF MASK, as Blender wrote
+    // them from an alpha-clip material), so lashes and brows are not drawn as blocks.
+    let (status, view) = request_bytes(studio.port, "GET", "/api/view.glb", &[], b"");
+    assert_eq!(status, 200);
+    let view = faceanim_testdata::glb::json(&view);
+    let brows = view["materials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == "Face_Brows")
+        .unwrap_or_else(|| panic!("{}", view["materials"]));
+    assert_eq!(brows["alphaMode"], "MASK", "{brows}");
+    assert!(
+        (brows["alphaCutoff"].as_f64().unwrap() - 0.4).abs() < 1e-6,
+        "{brows}"
+    );
     let (status, state) = request(studio.port, "POST", "/api/strokes", &[], stroke.as_bytes());
     assert_eq!(status, 200, "{state}");
     let (status, download) = request_bytes(studio.port, "GET", "/api/export.glb", &[], b"");

@@ -41,16 +41,20 @@ fn take_column(state: &serde_json::Value, name: &str) -> Vec<f64> {
         .collect()
 }
 
+/// The largest difference between two curves, frame by frame.
+fn worst_gap(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
 fn assert_same(state: &serde_json::Value, columns: &[&str], what: &str) {
     assert_eq!(state["take"]["frames"], FRAMES, "{what}: {}", state["take"]);
     for name in columns {
         let c = COLUMNS.iter().position(|n| n == name).unwrap();
-        let got = take_column(state, name);
-        let worst = got
-            .iter()
-            .enumerate()
-            .map(|(f, w)| (w - f64::from(weight(c, f))).abs())
-            .fold(0.0, f64::max);
+        let written: Vec<f64> = (0..FRAMES).map(|f| f64::from(weight(c, f))).collect();
+        let worst = worst_gap(&take_column(state, name), &written);
         assert!(
             worst < 1e-3,
             "{what}: {name} is {worst} away from what was written"
@@ -133,12 +137,7 @@ fn a_take_exported_into_the_users_avatar_opens_again_plays_and_exports_the_same(
     assert_eq!(status, 200, "{body}");
     let state: serde_json::Value = serde_json::from_str(&body).unwrap();
     for name in COLUMNS {
-        let (got, want) = (take_column(&state, name), take_column(&corrected, name));
-        let worst = got
-            .iter()
-            .zip(&want)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let worst = worst_gap(&take_column(&state, name), &take_column(&corrected, name));
         assert!(
             worst < 1e-3,
             "the studio's GLB reopened: {name} is {worst} from the corrected take"
@@ -223,11 +222,7 @@ fn an_animation_keyed_in_blender_opens_as_a_take() {
             .map(|v| v.as_f64().unwrap())
             .collect();
         let got = take_column(&state, ours);
-        let worst = got
-            .iter()
-            .zip(&blender)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let worst = worst_gap(&got, &blender);
         assert!(
             worst < 1e-3,
             "{name}: {worst} from Blender's curve\n{got:?}\n{blender:?}"
@@ -279,18 +274,6 @@ fn a_sketched_glb_opens_again_as_a_take_and_exports_the_same() {
     let baked: serde_json::Value = serde_json::from_slice(&baked).unwrap();
     let frames = baked["frames"].as_array().unwrap().len();
     assert!(frames > 10, "{frames} frames");
-    let baked_column = |name: &str| -> Vec<f64> {
-        let at = support::strings(&baked["blendshapes"])
-            .iter()
-            .position(|n| n == name)
-            .unwrap();
-        baked["frames"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|row| row[at].as_f64().unwrap())
-            .collect()
-    };
 
     let studio = start_on(Some(&sketched), &dir.path().join("again.json"), &[]);
     let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
@@ -303,18 +286,13 @@ fn a_sketched_glb_opens_again_as_a_take_and_exports_the_same() {
     let reopened: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert_eq!(targets[0], "jawOpen");
     for name in &targets {
-        let want = baked_column(name);
+        let want = support::column(&baked, name);
         assert!(
             want.iter().fold(0.0, |a: f64, b| a.max(*b)) > 0.5,
             "{name}: {want:?}"
         );
         for (what, state) in [("the sketched GLB", &state), ("its export", &reopened)] {
-            let got = take_column(state, name);
-            let worst = got
-                .iter()
-                .zip(&want)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
+            let worst = worst_gap(&take_column(state, name), &want);
             assert!(worst < 1e-3, "{what}: {name} is {worst} from the sketch");
         }
     }

@@ -369,8 +369,17 @@ fn materials_json(character: &Character, bin: &mut Bin) -> (Vec<Value>, Vec<Valu
             if m.double_sided {
                 material["doubleSided"] = json!(true);
             }
-            if m.base_color[3] < 1.0 {
-                material["alphaMode"] = json!("BLEND");
+            match m.alpha {
+                // Lashes, brows and hair cut out by their texture (as VRoid writes them).
+                faceanim_rig::AlphaMode::Mask { cutoff } => {
+                    material["alphaMode"] = json!("MASK");
+                    material["alphaCutoff"] = json!(f64::from(cutoff));
+                }
+                faceanim_rig::AlphaMode::Blend => material["alphaMode"] = json!("BLEND"),
+                faceanim_rig::AlphaMode::Opaque if m.base_color[3] < 1.0 => {
+                    material["alphaMode"] = json!("BLEND");
+                }
+                faceanim_rig::AlphaMode::Opaque => {}
             }
             material
         })

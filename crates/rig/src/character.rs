@@ -45,6 +45,24 @@ pub struct Material {
     pub roughness: f32,
     /// Render back faces too.
     pub double_sided: bool,
+    /// How the base colour's alpha is used (glTF's `alphaMode`): lashes, brows and hair cards
+    /// are cut out by their texture's alpha.
+    pub alpha: AlphaMode,
+}
+
+/// How a material's alpha is used, as glTF's `alphaMode` says.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    #[default]
+    Opaque,
+    /// Cut out: drawn where alpha is at least `cutoff`, not at all elsewhere.
+    Mask {
+        /// The alpha below which nothing is drawn (glTF's `alphaCutoff`, 0.5 by default).
+        cutoff: f32,
+    },
+    /// Blended over what is behind.
+    Blend,
 }
 
 impl Default for Material {
@@ -56,6 +74,7 @@ impl Default for Material {
             metallic: 0.0,
             roughness: 0.7,
             double_sided: false,
+            alpha: AlphaMode::Opaque,
         }
     }
 }

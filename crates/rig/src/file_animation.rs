@@ -22,7 +22,7 @@
 //! ```
 
 use crate::animation::MorphAnimation;
-use crate::source::Binding;
+use crate::binding::Binding;
 
 /// The key in an animation's `extras` that marks it as faceanim's (`{"faceanim": {"take":
 /// true}}`), written by the GLB exporter.

@@ -32,6 +32,7 @@
 #![deny(missing_docs)]
 
 pub mod animation;
+mod binding;
 mod blendshape;
 pub mod bones;
 mod bounds;
@@ -51,7 +52,9 @@ pub mod symmetry;
 
 pub use blendshape::{Blendshape, BlendshapeId, SPARSE_DELTA_THRESHOLD};
 pub use bounds::Aabb;
-pub use character::{Character, CharacterParts, Material, MaterialId, ModelError, Part, Texture};
+pub use character::{
+    AlphaMode, Character, CharacterParts, Material, MaterialId, ModelError, Part, Texture,
+};
 pub use excerpt::{QUOTED_CHARS, excerpt};
 /// The vector types of the public API, re-exported so users need not match versions.
 pub use glam;

@@ -14,17 +14,7 @@ use std::sync::Arc;
 use glam::{Mat3, Mat4, Quat};
 use serde_json::Value;
 
-/// One morph target a blendshape drives, with its weight (1 for a raw target; a VRM binding's
-/// weight for an expression).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Binding {
-    /// The mesh's index in the file.
-    pub mesh: u32,
-    /// The morph target's index in that mesh.
-    pub target: u32,
-    /// How much of it the blendshape at weight 1 applies.
-    pub weight: f32,
-}
+pub use crate::binding::Binding;
 
 /// Where a character vertex came from in the file.
 #[derive(Debug, Clone, Copy, PartialEq)]

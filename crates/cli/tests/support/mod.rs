@@ -200,14 +200,21 @@ pub fn assert_refused(out: &Output, path: &Path, problem: &str, case: &str) {
 
 /// `faceanim export CHARACTER -o OUT --clip CLIP`, which must succeed.
 pub fn export_with_clip(character: &Path, out: &Path, clip: &Path) {
-    faceanim_ok(&[
+    export_with_clip_and(character, out, clip, &[]);
+}
+
+/// [`export_with_clip`] with `more` arguments (`--uncompressed`).
+pub fn export_with_clip_and(character: &Path, out: &Path, clip: &Path, more: &[&str]) {
+    let mut args = vec![
         "export",
         character.to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
         "--clip",
         clip.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(more);
+    faceanim_ok(&args);
 }
 
 /// `faceanim track INPUT --character CHARACTER [MORE…] -o OUT`, which must succeed; returns the

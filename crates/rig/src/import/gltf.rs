@@ -832,6 +832,13 @@ impl Builder {
             metallic: pbr.metallic_factor(),
             roughness: pbr.roughness_factor(),
             double_sided: material.double_sided(),
+            alpha: match material.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => crate::AlphaMode::Opaque,
+                gltf::material::AlphaMode::Mask => crate::AlphaMode::Mask {
+                    cutoff: material.alpha_cutoff().unwrap_or(0.5),
+                },
+                gltf::material::AlphaMode::Blend => crate::AlphaMode::Blend,
+            },
         });
         self.material_map.insert(key, id);
         id
