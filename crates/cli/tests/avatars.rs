@@ -227,6 +227,14 @@ fn a_webp_meshopt_quantized_avatar_like_vroids() {
             .is_some_and(|t| t.mime_type == "image/webp")),
         "the WebP texture is kept"
     );
+    // The software renderer (the face's renders for generate-shapes, the retarget map and the
+    // adapter) draws it: gltf-transform's WebP (libwebp through sharp) decodes.
+    let appearance = faceanim_render::Appearance::of(&character);
+    assert!(
+        appearance.warnings().is_empty(),
+        "{:?}",
+        appearance.warnings()
+    );
     let view = dir.join("view.glb");
     std::fs::write(&view, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
     let report = assert_valid_gltf(&view);

@@ -297,3 +297,49 @@ fn a_sketched_glb_opens_again_as_a_take_and_exports_the_same() {
         }
     }
 }
+
+/// A VRM's expression binds the file's own morph target (`aa` binds `Fcl_MTH_A`): a take of it
+/// exported, reopened and exported again gives the target the same weight, not twice it.
+#[test]
+fn a_vrm_take_reopens_without_counting_a_target_twice() {
+    use faceanim_testdata::avatar::VrmKind;
+    let dir = tempfile::tempdir().unwrap();
+    let vrm = dir.path().join("avatar.vrm");
+    std::fs::write(
+        &vrm,
+        faceanim_testdata::producers::with_vrm(
+            &std::fs::read(blender_avatar_path()).unwrap(),
+            VrmKind::V1,
+        ),
+    )
+    .unwrap();
+    let clip = dir.path().join("aa.json");
+    std::fs::write(
+        &clip,
+        r#"{"fps": 30, "blendshapes": ["aa"], "frames": [[0.0], [0.5], [1.0], [0.25]]}"#,
+    )
+    .unwrap();
+    let first = dir.path().join("first.vrm");
+    export_with_clip(&vrm, &first, &clip);
+    let studio = start_on(Some(&first), &dir.path().join("project.json"), &[]);
+    let (status, again) = request_bytes(studio.port, "GET", "/api/capture/export.glb", &[], b"");
+    assert_eq!(status, 200);
+    drop(studio);
+    let read = |name: &str, bytes: &[u8]| {
+        support::column(
+            &serde_json::to_value(
+                faceanim_export::reopen::clip_of_file(name, bytes)
+                    .unwrap()
+                    .clip,
+            )
+            .unwrap(),
+            "Fcl_MTH_A",
+        )
+    };
+    let (once, twice) = (
+        read("first.vrm", &std::fs::read(&first).unwrap()),
+        read("again.vrm", &again),
+    );
+    assert!((once[1] - 0.5).abs() < 1e-3, "{once:?}");
+    assert!(worst_gap(&once, &twice) < 1e-3, "{once:?} became {twice:?}");
+}

@@ -175,15 +175,18 @@ fn image_kind(head: &[u8]) -> Option<&'static str> {
         Some("png")
     } else if head.starts_with(&[0xff, 0xd8, 0xff]) {
         Some("jpeg")
+    } else if head.len() >= 12 && head.starts_with(b"RIFF") && &head[8..12] == b"WEBP" {
+        Some("webp")
     } else {
         None
     }
 }
 
-/// Decodes a PNG or JPEG held in memory; `path` is only for messages.
+/// Decodes a PNG, JPEG or WebP (lossy or lossless, the first frame of an animation; alpha
+/// dropped) held in memory — the textures avatars ship; `path` is only for messages.
 ///
 /// # Errors
-/// [`MediaError::BadImage`] for anything that is not a complete PNG or JPEG.
+/// [`MediaError::BadImage`] for anything that is not a complete PNG, JPEG or WebP.
 pub fn decode_image(path: &Path, bytes: &[u8]) -> Result<Image, MediaError> {
     let bad = |message: String| MediaError::BadImage {
         path: path.to_owned(),
@@ -191,8 +194,9 @@ pub fn decode_image(path: &Path, bytes: &[u8]) -> Result<Image, MediaError> {
     };
     match image_kind(bytes) {
         Some("png") => decode_png(bytes).map_err(bad),
+        Some("webp") => decode_webp(bytes).map_err(bad),
         Some(_) => decode_jpeg(bytes).map_err(bad),
-        None => Err(bad("neither PNG nor JPEG".into())),
+        None => Err(bad("neither PNG, JPEG nor WebP".into())),
     }
 }
 
@@ -228,6 +232,30 @@ fn decode_png(bytes: &[u8]) -> Result<Image, String> {
             }
         }
     }
+    Ok(Image { width, height, rgb })
+}
+
+fn decode_webp(bytes: &[u8]) -> Result<Image, String> {
+    let mut decoder =
+        image_webp::WebPDecoder::new(std::io::Cursor::new(bytes)).map_err(|e| e.to_string())?;
+    let (width, height) = decoder.dimensions();
+    let (width, height) = (width as usize, height as usize);
+    if width == 0 || height == 0 || width.saturating_mul(height) > MAX_PIXELS {
+        return Err(format!("{width}×{height} pixels is not a size we read"));
+    }
+    let size = decoder
+        .output_buffer_size()
+        .ok_or("image too large for memory")?;
+    let mut buffer = vec![0; size];
+    decoder.read_image(&mut buffer).map_err(|e| e.to_string())?;
+    let rgb = if decoder.has_alpha() {
+        buffer
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect()
+    } else {
+        buffer
+    };
     Ok(Image { width, height, rgb })
 }
 
@@ -761,6 +789,32 @@ fn read_video_frame(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_webp_with_alpha_decodes_to_its_colours() {
+        // Lossless WebP, written by image-webp's own encoder: a red half and a blue half, the
+        // blue one transparent (its colour kept, the alpha dropped).
+        let (width, height) = (8u32, 4u32);
+        let rgba: Vec<u8> = (0..width * height)
+            .flat_map(|i| {
+                if i % width < 4 {
+                    [255, 0, 0, 255]
+                } else {
+                    [0, 0, 255, 0]
+                }
+            })
+            .collect();
+        let mut webp = Vec::new();
+        image_webp::WebPEncoder::new(&mut webp)
+            .encode(&rgba, width, height, image_webp::ColorType::Rgba8)
+            .unwrap();
+        let image = decode_image(Path::new("texture.webp"), &webp).unwrap();
+        assert_eq!((image.width, image.height), (8, 4));
+        assert_eq!(&image.rgb[..3], &[255, 0, 0]);
+        assert_eq!(&image.rgb[7 * 3..8 * 3], &[0, 0, 255]);
+        let broken = decode_image(Path::new("broken.webp"), &webp[..webp.len() / 2]).unwrap_err();
+        assert!(broken.to_string().contains("broken.webp"), "{broken}");
+    }
 
     /// ffmpeg 5.1's log for a 400×300 H.264 clip, as `-v level+info` prints it.
     const LOG: &str = "[info] Input #0, mov,mp4,m4a,3gp,3g2,mj2, from 'clip.mp4':

@@ -21,7 +21,7 @@ use crate::symmetry::Symmetry;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct MaterialId(pub u32);
 
-/// Encoded image bytes (PNG or JPEG) kept as they came, for rendering and re-export.
+/// Encoded image bytes (PNG, JPEG or WebP) kept as they came, for rendering and re-export.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Texture {
     /// `image/png` or `image/jpeg`.

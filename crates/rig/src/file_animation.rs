@@ -224,19 +224,31 @@ impl FileAnimation {
 
     /// Plays it at [`FileAnimation::fps`] from its first key to its last (as a take from 0),
     /// each blendshape read through the first of its `bindings` whose mesh the animation moves
-    /// (0 where none is).
+    /// (0 where none is, or where an earlier blendshape already reads one of its targets: a
+    /// VRM expression whose target is also the file's own raw shape).
     #[must_use]
     pub fn sample(&self, bindings: &[Vec<Binding>]) -> MorphAnimation {
         let fps = self.fps();
         let start = self.start();
         let frames = ((self.seconds() - start).min(MAX_SECONDS) * fps).round() as usize + 1;
+        // Each morph target is read into one blendshape: the first that binds it (a raw
+        // target's own, before the VRM expressions that bind it too), so that exporting the
+        // take again gives each target the weight it had, not that weight twice.
+        let mut claimed: std::collections::HashSet<(u32, u32)> = std::collections::HashSet::new();
         let reads: Vec<Option<(&WeightsTrack, usize, f32)>> = bindings
             .iter()
             .map(|binds| {
-                binds.iter().find_map(|b| {
+                if binds.iter().any(|b| claimed.contains(&(b.mesh, b.target))) {
+                    return None;
+                }
+                let read = binds.iter().find_map(|b| {
                     let track = self.tracks.iter().find(|t| t.mesh == b.mesh)?;
                     (b.weight.abs() > 1e-6).then_some((track, b.target as usize, b.weight))
-                })
+                });
+                if read.is_some() {
+                    claimed.extend(binds.iter().map(|b| (b.mesh, b.target)));
+                }
+                read
             })
             .collect();
         let times: Vec<f32> = (0..frames).map(|k| k as f32 / fps).collect();
@@ -309,6 +321,15 @@ mod tests {
         assert_eq!(played.times.len(), 25);
         assert_eq!(played.weights[1], vec![1.0, 0.0]);
         assert_eq!(played.weights[2], vec![0.0, 0.0]);
+        // A raw target and an expression binding it: the raw shape reads it, the expression
+        // stays 0 (exported again, the target is not counted twice).
+        let raw = Binding {
+            mesh: 3,
+            target: 0,
+            weight: 1.0,
+        };
+        let played = animation.sample(&[vec![raw], vec![raw]]);
+        assert_eq!(played.weights[1], vec![1.0, 0.0]);
     }
 
     #[test]
