@@ -188,6 +188,18 @@ fn image_kind(head: &[u8]) -> Option<&'static str> {
 /// # Errors
 /// [`MediaError::BadImage`] for anything that is not a complete PNG, JPEG or WebP.
 pub fn decode_image(path: &Path, bytes: &[u8]) -> Result<Image, MediaError> {
+    decode_image_alpha(path, bytes).map(|(image, _)| image)
+}
+
+/// [`decode_image`], with the image's alpha (one byte a pixel) when it has one: a PNG or WebP
+/// texture that cuts lashes, brows or hair out.
+///
+/// # Errors
+/// As [`decode_image`].
+pub fn decode_image_alpha(
+    path: &Path,
+    bytes: &[u8],
+) -> Result<(Image, Option<Vec<u8>>), MediaError> {
     let bad = |message: String| MediaError::BadImage {
         path: path.to_owned(),
         message,
@@ -195,7 +207,7 @@ pub fn decode_image(path: &Path, bytes: &[u8]) -> Result<Image, MediaError> {
     match image_kind(bytes) {
         Some("png") => decode_png(bytes).map_err(bad),
         Some("webp") => decode_webp(bytes).map_err(bad),
-        Some(_) => decode_jpeg(bytes).map_err(bad),
+        Some(_) => decode_jpeg(bytes).map(|image| (image, None)).map_err(bad),
         None => Err(bad("neither PNG, JPEG nor WebP".into())),
     }
 }
@@ -203,7 +215,7 @@ pub fn decode_image(path: &Path, bytes: &[u8]) -> Result<Image, MediaError> {
 /// Images larger than this (in pixels) are refused rather than allocated.
 const MAX_PIXELS: usize = 8192 * 8192;
 
-fn decode_png(bytes: &[u8]) -> Result<Image, String> {
+fn decode_png(bytes: &[u8]) -> Result<(Image, Option<Vec<u8>>), String> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     // 16-bit to 8, palettes and low bit depths to whole bytes.
     decoder.set_transformations(png::Transformations::normalize_to_color8());
@@ -223,6 +235,7 @@ fn decode_png(bytes: &[u8]) -> Result<Image, String> {
     let channels = frame.color_type.samples();
     let row = frame.line_size;
     let mut rgb = Vec::with_capacity(width * height * 3);
+    let mut alpha = matches!(channels, 2 | 4).then(|| Vec::with_capacity(width * height));
     for y in 0..height {
         let line = &buffer[y * row..y * row + width * channels];
         for pixel in line.chunks_exact(channels) {
@@ -230,12 +243,15 @@ fn decode_png(bytes: &[u8]) -> Result<Image, String> {
                 1 | 2 => rgb.extend([pixel[0]; 3]),
                 _ => rgb.extend(&pixel[..3]),
             }
+            if let Some(alpha) = alpha.as_mut() {
+                alpha.push(pixel[channels - 1]);
+            }
         }
     }
-    Ok(Image { width, height, rgb })
+    Ok((Image { width, height, rgb }, alpha))
 }
 
-fn decode_webp(bytes: &[u8]) -> Result<Image, String> {
+fn decode_webp(bytes: &[u8]) -> Result<(Image, Option<Vec<u8>>), String> {
     let mut decoder =
         image_webp::WebPDecoder::new(std::io::Cursor::new(bytes)).map_err(|e| e.to_string())?;
     let (width, height) = decoder.dimensions();
@@ -248,15 +264,18 @@ fn decode_webp(bytes: &[u8]) -> Result<Image, String> {
         .ok_or("image too large for memory")?;
     let mut buffer = vec![0; size];
     decoder.read_image(&mut buffer).map_err(|e| e.to_string())?;
-    let rgb = if decoder.has_alpha() {
-        buffer
-            .chunks_exact(4)
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .collect()
+    let (rgb, alpha) = if decoder.has_alpha() {
+        (
+            buffer
+                .chunks_exact(4)
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect(),
+            Some(buffer.chunks_exact(4).map(|p| p[3]).collect()),
+        )
     } else {
-        buffer
+        (buffer, None)
     };
-    Ok(Image { width, height, rgb })
+    Ok((Image { width, height, rgb }, alpha))
 }
 
 fn decode_jpeg(bytes: &[u8]) -> Result<Image, String> {
@@ -793,7 +812,7 @@ mod tests {
     #[test]
     fn a_webp_with_alpha_decodes_to_its_colours() {
         // Lossless WebP, written by image-webp's own encoder: a red half and a blue half, the
-        // blue one transparent (its colour kept, the alpha dropped).
+        // blue one transparent (its colour kept, its alpha given apart).
         let (width, height) = (8u32, 4u32);
         let rgba: Vec<u8> = (0..width * height)
             .flat_map(|i| {
@@ -808,8 +827,10 @@ mod tests {
         image_webp::WebPEncoder::new(&mut webp)
             .encode(&rgba, width, height, image_webp::ColorType::Rgba8)
             .unwrap();
-        let image = decode_image(Path::new("texture.webp"), &webp).unwrap();
+        let (image, alpha) = decode_image_alpha(Path::new("texture.webp"), &webp).unwrap();
         assert_eq!((image.width, image.height), (8, 4));
+        let alpha = alpha.unwrap();
+        assert_eq!((alpha[0], alpha[7]), (255, 0));
         assert_eq!(&image.rgb[..3], &[255, 0, 0]);
         assert_eq!(&image.rgb[7 * 3..8 * 3], &[0, 0, 255]);
         let broken = decode_image(Path::new("broken.webp"), &webp[..webp.len() / 2]).unwrap_err();

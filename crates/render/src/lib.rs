@@ -252,9 +252,24 @@ struct Texels {
     width: usize,
     height: usize,
     rgb: Vec<u8>,
+    /// Per texel, its alpha, for a material that cuts out by it (`None`: opaque).
+    alpha: Option<Vec<u8>>,
+    /// The alpha below which nothing is drawn: the material's `MASK` cutoff (a `BLEND`
+    /// material is drawn where its alpha is at least a half).
+    cutoff: f32,
 }
 
 impl Texels {
+    /// Whether the texel nearest (`u`, `v`) is cut out.
+    fn cut(&self, u: f32, v: f32) -> bool {
+        let Some(alpha) = &self.alpha else {
+            return false;
+        };
+        let x = ((u.rem_euclid(1.0) * self.width as f32) as usize).min(self.width - 1);
+        let y = ((v.rem_euclid(1.0) * self.height as f32) as usize).min(self.height - 1);
+        f32::from(alpha[y * self.width + x]) < self.cutoff * 255.0
+    }
+
     /// Bilinear sample at (`u`, `v`) with glTF's repeat wrapping, in display (sRGB) space, 0..1.
     fn sample(&self, u: f32, v: f32) -> Vec3 {
         let x = u.rem_euclid(1.0) * self.width as f32 - 0.5;
@@ -322,11 +337,19 @@ impl Appearance {
                     return None;
                 }
                 let name = std::path::PathBuf::from(format!("{label} base-colour texture"));
-                match faceanim_media::decode_image(&name, &texture.bytes) {
-                    Ok(image) => Some(Texels {
+                // Lashes, brows and hair cards cut out by their alpha, as the material says.
+                let cutoff = match material.alpha {
+                    faceanim_rig::AlphaMode::Opaque => None,
+                    faceanim_rig::AlphaMode::Mask { cutoff } => Some(cutoff),
+                    faceanim_rig::AlphaMode::Blend => Some(0.5),
+                };
+                match faceanim_media::decode_image_alpha(&name, &texture.bytes) {
+                    Ok((image, alpha)) => Some(Texels {
                         width: image.width,
                         height: image.height,
                         rgb: image.rgb,
+                        alpha: alpha.filter(|_| cutoff.is_some()),
+                        cutoff: cutoff.unwrap_or(0.0),
                     }),
                     Err(error) => {
                         warnings.push(format!("{error}; showing its base colour instead"));
@@ -630,19 +653,24 @@ pub fn render_shaded(
                 let z = w0 * pa.z + w1 * pb.z + w2 * pc.z;
                 let i = (y * s + x) as usize;
                 if z < depth[i] {
+                    // Perspective-correct texture coordinates: uv/w and 1/w interpolated in
+                    // screen space.
+                    let uv = texture.map(|(texels, uvs)| {
+                        let (qa, qb, qc) = (w0 / pa.w, w1 / pb.w, w2 / pc.w);
+                        let q = qa + qb + qc;
+                        let (ua, ub, uc) = (uvs[a], uvs[b], uvs[c]);
+                        let u = (qa * ua[0] + qb * ub[0] + qc * uc[0]) / q;
+                        let v = (qa * ua[1] + qb * ub[1] + qc * uc[1]) / q;
+                        (texels, u, v)
+                    });
+                    if uv.is_some_and(|(texels, u, v)| texels.cut(u, v)) {
+                        continue; // cut out: what is behind shows through
+                    }
                     depth[i] = z;
                     let lit = flat.unwrap_or_else(|| shade[a] * w0 + shade[b] * w1 + shade[c] * w2);
-                    colour[i] = match texture {
+                    colour[i] = match uv {
                         None => lit * factor,
-                        Some((texels, uvs)) => {
-                            // Perspective-correct: interpolate uv/w and 1/w in screen space.
-                            let (qa, qb, qc) = (w0 / pa.w, w1 / pb.w, w2 / pc.w);
-                            let q = qa + qb + qc;
-                            let (ua, ub, uc) = (uvs[a], uvs[b], uvs[c]);
-                            let u = (qa * ua[0] + qb * ub[0] + qc * uc[0]) / q;
-                            let v = (qa * ua[1] + qb * ub[1] + qc * uc[1]) / q;
-                            lit * factor * texels.sample(u, v)
-                        }
+                        Some((texels, u, v)) => lit * factor * texels.sample(u, v),
                     };
                 }
             }

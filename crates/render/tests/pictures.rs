@@ -21,6 +21,11 @@ fn png(colours: &[[u8; 3]]) -> Vec<u8> {
 
 /// A square facing +Z, UVs across it, with a material of `texture` (or none).
 fn card(texture: Option<Vec<u8>>) -> Character {
+    card_of(texture, "image/png", faceanim_rig::AlphaMode::Opaque)
+}
+
+/// [`card`] with a texture of any type and the material's alpha mode.
+fn card_of(texture: Option<Vec<u8>>, mime: &str, alpha: faceanim_rig::AlphaMode) -> Character {
     Character::new(CharacterParts {
         name: "card".into(),
         positions: vec![
@@ -36,9 +41,10 @@ fn card(texture: Option<Vec<u8>>) -> Character {
         materials: vec![Material {
             name: "paper".into(),
             base_color_texture: texture.map(|bytes| Texture {
-                mime_type: "image/png".into(),
+                mime_type: mime.into(),
                 bytes: Arc::from(bytes),
             }),
+            alpha,
             ..Material::default()
         }],
         parts: vec![Part {
@@ -74,6 +80,59 @@ fn a_texture_shows_where_its_uvs_put_it() {
     assert!(r > 2 * b, "left {:?}", pixel(&image, 45, 70));
     let [r, _, b] = pixel(&image, 83, 70);
     assert!(b > 2 * r, "right {:?}", pixel(&image, 83, 70));
+}
+
+#[test]
+fn a_cut_out_texture_shows_what_is_behind_where_its_alpha_is_low() {
+    // A WebP (image-webp's encoder): the left texel opaque red, the right one transparent blue,
+    // as lashes and brows are painted.
+    let mut webp = Vec::new();
+    image_webp::WebPEncoder::new(&mut webp)
+        .encode(
+            &[220, 30, 30, 255, 30, 30, 220, 0],
+            2,
+            1,
+            image_webp::ColorType::Rgba8,
+        )
+        .unwrap();
+    let shown = |alpha| {
+        let card = card_of(Some(webp.clone()), "image/webp", alpha);
+        let appearance = Appearance::of(&card);
+        assert!(
+            appearance.warnings().is_empty(),
+            "{:?}",
+            appearance.warnings()
+        );
+        let camera = Camera::front(&card.bounds(), 1.0);
+        let image = render(&card, &card.pose(&[]), &camera, &appearance, 128);
+        (pixel(&image, 45, 70), pixel(&image, 83, 70))
+    };
+    // Opaque: both halves drawn.
+    let (left, right) = shown(faceanim_rig::AlphaMode::Opaque);
+    assert!(
+        left[0] > 2 * left[2] && right[2] > 2 * right[0],
+        "{left:?} {right:?}"
+    );
+    // Cut out: the right half is the background, the left still red.
+    let (background, _) = {
+        let card = card(None);
+        let image = render(
+            &card,
+            &card.pose(&[]),
+            &Camera::front(&card.bounds(), 1.0),
+            &Appearance::of(&card),
+            128,
+        );
+        (pixel(&image, 2, 2), ())
+    };
+    for alpha in [
+        faceanim_rig::AlphaMode::Mask { cutoff: 0.5 },
+        faceanim_rig::AlphaMode::Blend,
+    ] {
+        let (left, right) = shown(alpha);
+        assert!(left[0] > 2 * left[2], "{alpha:?}: {left:?}");
+        assert_eq!(right, background, "{alpha:?}: the cut-out half is drawn");
+    }
 }
 
 #[test]
