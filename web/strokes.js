@@ -119,11 +119,18 @@ canvas.addEventListener('pointermove', (event) => {
     // time, so that a slow display (which handles the moves late, in bunches) does not stretch
     // the stroke. Where the events' times cannot be trusted (missing, out of order), the points
     // are spread evenly between the previous sample and now.
+    // Times strictly increase (the stroke's rule, sketch::project): events stamped alike (a
+    // coarse clock) are a tenth of a millisecond apart.
     const previous = stroke.samples[stroke.samples.length - 1].t;
     const times = stroke.pending.map((q) => (q.at - stroke.t0) / 1000);
     const trusted = times.every((t, i) => t >= (i ? times[i - 1] : previous));
-    const now = trusted && times.length ? times[times.length - 1] : (performance.now() - stroke.t0) / 1000;
-    stroke.pending.forEach((q, i) => stroke.samples.push({ t: trusted ? times[i] : previous + (now - previous) * (i + 1) / stroke.pending.length, p: q.p }));
+    const now = Math.max(trusted && times.length ? times[times.length - 1] : (performance.now() - stroke.t0) / 1000, previous);
+    let last = previous;
+    stroke.pending.forEach((q, i) => {
+      const t = trusted ? times[i] : previous + (now - previous) * (i + 1) / stroke.pending.length;
+      last = Math.max(t, last + 1e-4);
+      stroke.samples.push({ t: last, p: q.p });
+    });
     stroke.pending = [];
     showReadout(event, now);
     const nearest = nearestCandidate(event.clientX, event.clientY);
