@@ -6,7 +6,8 @@
 #   - Chromium (Debian) and playwright-core (npm), to test the studio in a real browser, and iwer
 #     (npm), the emulated Meta Quest 3 its VR test runs in;
 #   - gltfpack and @gltf-transform/cli (npm), which compress the tests' avatars as people's
-#     downloads are (meshopt, quantization, Draco);
+#     downloads are (meshopt, quantization, Draco), and meshoptimizer's own decoder (npm), with
+#     which three.js opens the meshopt-compressed exports;
 #   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to, and
 #     pylivelinkface (PyPI), an independent Live Link Face sender for the phone tests;
 #   - CMU PocketSphinx (Debian: the library lip sync links, its US English models, and its
