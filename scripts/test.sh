@@ -20,6 +20,10 @@ if ! wait "$setup"; then
   exit 1
 fi
 cat target/setup.log
+# The page's modules parse (a syntax error would only show as a page that never loads).
+for module in web/*.js; do
+  node --input-type=module --check <"$module" || { echo "test.sh: $module does not parse" >&2; exit 1; }
+done
 cargo test --workspace --doc --locked
 # The kernel faceanim adds to its vendored tract-tflite, against its contract in scalar code.
 cargo test -p tract-tflite --lib --locked faceanim

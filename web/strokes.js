@@ -125,11 +125,11 @@ canvas.addEventListener('pointermove', (event) => {
     const times = stroke.pending.map((q) => (q.at - stroke.t0) / 1000);
     const trusted = times.every((t, i) => t >= (i ? times[i - 1] : previous));
     const now = Math.max(trusted && times.length ? times[times.length - 1] : (performance.now() - stroke.t0) / 1000, previous);
-    let last = previous;
+    let latest = previous;
     stroke.pending.forEach((q, i) => {
       const t = trusted ? times[i] : previous + (now - previous) * (i + 1) / stroke.pending.length;
-      last = Math.max(t, last + 1e-4);
-      stroke.samples.push({ t: last, p: q.p });
+      latest = Math.max(t, latest + 1e-4);
+      stroke.samples.push({ t: latest, p: q.p });
     });
     stroke.pending = [];
     showReadout(event, now);
