@@ -63,17 +63,21 @@ fn pixel(image: &Image, x: u32, y: u32) -> [u8; 3] {
     [image.rgb[i], image.rgb[i + 1], image.rgb[i + 2]]
 }
 
-#[test]
-fn a_texture_shows_where_its_uvs_put_it() {
-    let card = card(Some(png(&[[220, 30, 30], [30, 30, 220]])));
-    let appearance = Appearance::of(&card);
+/// `card` from the front, 128 pixels square, its texture decoded without a warning.
+fn front(card: &Character) -> Image {
+    let appearance = Appearance::of(card);
     assert!(
         appearance.warnings().is_empty(),
         "{:?}",
         appearance.warnings()
     );
     let camera = Camera::front(&card.bounds(), 1.0);
-    let image = render(&card, &card.pose(&[]), &camera, &appearance, 128);
+    render(card, &card.pose(&[]), &camera, &appearance, 128)
+}
+
+#[test]
+fn a_texture_shows_where_its_uvs_put_it() {
+    let image = front(&card(Some(png(&[[220, 30, 30], [30, 30, 220]]))));
     // The left half of the card is red, the right half blue (texels are blended only in the
     // middle).
     let [r, _, b] = pixel(&image, 45, 70);
@@ -96,15 +100,7 @@ fn a_cut_out_texture_shows_what_is_behind_where_its_alpha_is_low() {
         )
         .unwrap();
     let shown = |alpha| {
-        let card = card_of(Some(webp.clone()), "image/webp", alpha);
-        let appearance = Appearance::of(&card);
-        assert!(
-            appearance.warnings().is_empty(),
-            "{:?}",
-            appearance.warnings()
-        );
-        let camera = Camera::front(&card.bounds(), 1.0);
-        let image = render(&card, &card.pose(&[]), &camera, &appearance, 128);
+        let image = front(&card_of(Some(webp.clone()), "image/webp", alpha));
         (pixel(&image, 45, 70), pixel(&image, 83, 70))
     };
     // Opaque: both halves drawn.
@@ -114,17 +110,7 @@ fn a_cut_out_texture_shows_what_is_behind_where_its_alpha_is_low() {
         "{left:?} {right:?}"
     );
     // Cut out: the right half is the background, the left still red.
-    let (background, _) = {
-        let card = card(None);
-        let image = render(
-            &card,
-            &card.pose(&[]),
-            &Camera::front(&card.bounds(), 1.0),
-            &Appearance::of(&card),
-            128,
-        );
-        (pixel(&image, 2, 2), ())
-    };
+    let background = pixel(&front(&card(None)), 2, 2);
     for alpha in [
         faceanim_rig::AlphaMode::Mask { cutoff: 0.5 },
         faceanim_rig::AlphaMode::Blend,
