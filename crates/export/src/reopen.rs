@@ -33,6 +33,8 @@ pub struct Reopened {
     pub clip: Clip,
     /// What was read: `animation 'take' (2.4 s at 30 fps)`, `Live Link Face recording`.
     pub what: String,
+    /// The animation's name in the file (the file's stem for a Live Link recording).
+    pub name: String,
 }
 
 /// Why a file could not be read back as a take; each names the file.
@@ -80,6 +82,32 @@ fn extension(name: &str) -> Option<String> {
         .map(|e| e.to_string_lossy().into_owned())
 }
 
+/// The morph-weight animation `character`'s own file holds (the last one faceanim wrote, else
+/// its first) as a clip of the character's blendshapes by name; `None` for a file without one
+/// (or a character made in code).
+#[must_use]
+pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
+    let (animation, fps) = character
+        .source()
+        .and_then(faceanim_rig::source::GltfSource::take)?;
+    let seconds = animation.times.last().copied().unwrap_or(0.0);
+    Some(Reopened {
+        what: format!(
+            "animation '{}' ({seconds:.2} s at {fps} fps)",
+            faceanim_rig::excerpt(&animation.name)
+        ),
+        name: animation.name,
+        clip: Clip {
+            fps,
+            blendshapes: character.blendshape_names(),
+            frames: animation.weights,
+            head: None,
+            head_position: None,
+            presence: None,
+        },
+    })
+}
+
 /// Reads `bytes` (the file `name`) as a clip: a glTF's morph-weight animation (the last one
 /// faceanim wrote, else its first) played at its keys' rate on its own blendshapes' names, or
 /// a Live Link Face CSV.
@@ -90,28 +118,8 @@ pub fn clip_of_file(name: &str, bytes: &[u8]) -> Result<Reopened, ReopenError> {
     match extension(name).as_deref() {
         Some("glb" | "vrm" | "gltf") => {
             let imported = import_gltf(bytes, name, &NoExternalResources)?;
-            let character = imported.character;
-            let Some((animation, fps)) = character
-                .source()
-                .and_then(faceanim_rig::source::GltfSource::take)
-            else {
-                return Err(ReopenError::NoAnimation(name.to_owned()));
-            };
-            let seconds = animation.times.last().copied().unwrap_or(0.0);
-            Ok(Reopened {
-                what: format!(
-                    "animation '{}' ({seconds:.2} s at {fps} fps)",
-                    faceanim_rig::excerpt(&animation.name)
-                ),
-                clip: Clip {
-                    fps,
-                    blendshapes: character.blendshape_names(),
-                    frames: animation.weights,
-                    head: None,
-                    head_position: None,
-                    presence: None,
-                },
-            })
+            animation_of(&imported.character)
+                .ok_or_else(|| ReopenError::NoAnimation(name.to_owned()))
         }
         Some("csv") => {
             let text = String::from_utf8_lossy(bytes);
@@ -120,6 +128,9 @@ pub fn clip_of_file(name: &str, bytes: &[u8]) -> Result<Reopened, ReopenError> {
                 source,
             })?;
             Ok(Reopened {
+                name: std::path::Path::new(name)
+                    .file_stem()
+                    .map_or_else(String::new, |s| s.to_string_lossy().into_owned()),
                 what: format!(
                     "Live Link Face recording ({} frames at {} fps)",
                     clip.frames.len(),

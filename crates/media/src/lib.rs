@@ -215,6 +215,14 @@ pub fn decode_image_alpha(
 /// Images larger than this (in pixels) are refused rather than allocated.
 const MAX_PIXELS: usize = 8192 * 8192;
 
+/// Refuses an image of no pixels, or of more than [`MAX_PIXELS`], before it is allocated.
+fn check_size(width: usize, height: usize) -> Result<(), String> {
+    if width == 0 || height == 0 || width.saturating_mul(height) > MAX_PIXELS {
+        return Err(format!("{width}×{height} pixels is not a size we read"));
+    }
+    Ok(())
+}
+
 fn decode_png(bytes: &[u8]) -> Result<(Image, Option<Vec<u8>>), String> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     // 16-bit to 8, palettes and low bit depths to whole bytes.
@@ -224,9 +232,7 @@ fn decode_png(bytes: &[u8]) -> Result<(Image, Option<Vec<u8>>), String> {
         let info = reader.info();
         (info.width as usize, info.height as usize)
     };
-    if width == 0 || height == 0 || width.saturating_mul(height) > MAX_PIXELS {
-        return Err(format!("{width}×{height} pixels is not a size we read"));
-    }
+    check_size(width, height)?;
     let size = reader
         .output_buffer_size()
         .ok_or("image too large for memory")?;
@@ -256,9 +262,7 @@ fn decode_webp(bytes: &[u8]) -> Result<(Image, Option<Vec<u8>>), String> {
         image_webp::WebPDecoder::new(std::io::Cursor::new(bytes)).map_err(|e| e.to_string())?;
     let (width, height) = decoder.dimensions();
     let (width, height) = (width as usize, height as usize);
-    if width == 0 || height == 0 || width.saturating_mul(height) > MAX_PIXELS {
-        return Err(format!("{width}×{height} pixels is not a size we read"));
-    }
+    check_size(width, height)?;
     let size = decoder
         .output_buffer_size()
         .ok_or("image too large for memory")?;

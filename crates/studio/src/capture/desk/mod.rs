@@ -318,26 +318,12 @@ impl CaptureDesk {
     /// sketch exported before) opens as the take, ready to correct and export again (under
     /// its name: the export replaces it).
     fn open_own_animation(&mut self, character: &Character) {
-        let Some((animation, fps)) = character
-            .source()
-            .and_then(faceanim_rig::source::GltfSource::take)
-        else {
+        let Some(reopened) = faceanim_export::reopen::animation_of(character) else {
             return;
         };
-        let clip = faceanim_anim::Clip {
-            fps,
-            blendshapes: names(character),
-            frames: animation.weights,
-            head: None,
-            head_position: None,
-            presence: None,
-        };
-        match self.open_clip(character, &clip, &animation.name) {
-            Ok(count) => {
-                self.notice = Some(format!(
-                    "Opened the file's animation '{}' ({count} frames at {fps} fps) as the take.",
-                    faceanim_rig::excerpt(&animation.name)
-                ));
+        match self.open_clip(character, &reopened.clip, &reopened.name) {
+            Ok(_) => {
+                self.notice = Some(format!("Opened the file's {} as the take.", reopened.what));
             }
             Err(e) => tracing::warn!("the file's animation was not opened: {e}"),
         }
