@@ -4,8 +4,8 @@
 #   - the pure core (character, animation, sketch, default head, the retarget map, the allocator
 #     setting) knows no HTTP server, async runtime, video or neural network;
 #   - the middle band (face tracking, media, rendering, capture, the take layer, the exporter,
-#     VMC, shape generation, the file-system edge) may run MediaPipe's models with tract, but
-#     knows no HTTP server, async runtime or training library;
+#     VMC, shape generation, the file-system edge, the batch's bookkeeping) may run MediaPipe's
+#     models with tract, but knows no HTTP server, async runtime or training library;
 #   - speech (the recogniser's bindings and lip sync) knows neither the face models nor HTTP,
 #     async runtimes or training: audio is its own domain;
 #   - learning (the adapter and the retarget map's calibration) may train, but knows no HTTP
@@ -19,7 +19,7 @@ cd "$(dirname "$0")/.."
 
 core=(faceanim-rig faceanim-anim faceanim-sketch faceanim-head faceanim-retarget faceanim-malloc)
 middle=(faceanim-track faceanim-media faceanim-render faceanim-capture faceanim-take
-  faceanim-export faceanim-live faceanim-fit faceanim-files)
+  faceanim-export faceanim-live faceanim-fit faceanim-files faceanim-batch)
 speech=(faceanim-sphinx-sys faceanim-espeak-sys faceanim-speech)
 learning=(faceanim-adapt)
 front=(faceanim-studio faceanim)

@@ -47,6 +47,11 @@ if ! python3 -c 'import pythonosc' >/dev/null 2>&1; then
   python3 -m pip install --quiet --disable-pip-version-check python-osc==1.10.2
 fi
 
+if ! python3 -c 'import ray, yaml' >/dev/null 2>&1; then
+  echo "setup: installing Ray, for the batch driver's test on a local cluster (pip)"
+  python3 -m pip install --quiet --disable-pip-version-check ray==2.52.1 pyyaml
+fi
+
 if ! python3 -c 'import pylivelinkface' >/dev/null 2>&1; then
   echo "setup: installing pylivelinkface, an independent Live Link Face sender (pip)"
   python3 -m pip install --quiet --disable-pip-version-check pylivelinkface==0.1 timecode==1.5.1

@@ -1,21 +1,16 @@
 //! Writes a contact sheet of randomised training pictures of the ICT head (what the adapter
 //! learns from): `cargo run --release -p faceanim-adapt --example show_conditions -- OUT.png`.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
-use faceanim_adapt::FaceCamera;
+mod common;
+
 use faceanim_adapt::augment::{Condition, Jitter};
-use faceanim_adapt::sampling::{WeightSampler, exclusive_pairs};
-use faceanim_track::FaceModels;
 use rand::SeedableRng as _;
 
 fn main() {
     let out = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "conditions.png".into());
-    let models = FaceModels::load().unwrap();
-    let ict = faceanim_testdata::ict();
-    let camera = FaceCamera::frame(ict, &models).unwrap();
-    let pairs = exclusive_pairs(ict, &[]).unwrap();
-    let draws = WeightSampler::new(ict.blendshapes().len(), &pairs).draw(16, 9);
+    let (_models, ict, camera, draws) = common::ict_training(16, 9);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
     let mut sheet = faceanim_render::Image::filled(4 * 256, 4 * 256, [0, 0, 0]);
     let mut pose = faceanim_rig::Pose::default();

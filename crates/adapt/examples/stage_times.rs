@@ -3,18 +3,14 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 use std::time::Instant;
 
-use faceanim_adapt::FaceCamera;
+mod common;
+
 use faceanim_adapt::augment::{Condition, Jitter};
-use faceanim_adapt::sampling::{WeightSampler, exclusive_pairs};
-use faceanim_track::{FaceModels, Frame, Region};
+use faceanim_track::{Frame, Region};
 use rand::SeedableRng as _;
 
 fn main() {
-    let models = FaceModels::load().unwrap();
-    let ict = faceanim_testdata::ict();
-    let camera = FaceCamera::frame(ict, &models).unwrap();
-    let pairs = exclusive_pairs(ict, &[]).unwrap();
-    let draws = WeightSampler::new(ict.blendshapes().len(), &pairs).draw(64, 3);
+    let (models, ict, camera, draws) = common::ict_training(64, 3);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let mut pose = faceanim_rig::Pose::default();
     let (mut t_pose, mut t_render, mut t_models) = (0.0, 0.0, 0.0);

@@ -8,6 +8,7 @@
 mod print;
 
 mod adapt;
+mod batch;
 mod eval;
 mod export;
 mod generate;
@@ -139,6 +140,13 @@ enum Command {
     /// Examples: faceanim retarget avatar.vrm; faceanim retarget avatar.vrm --set
     /// jawOpen=Fcl_MTH_A:0.8
     Retarget(retarget::RetargetArgs),
+    /// Run a manifest of jobs (JSON Lines or CSV: lipsync, track, generate-shapes rows), each
+    /// row once: unchanged rows are skipped, edited outputs kept, bad rows reported (exit 42).
+    ///
+    /// On this machine (--jobs), or as one worker of an array job (--index, or the engine's
+    /// JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX, SLURM_ARRAY_TASK_ID); docs/batch.md
+    /// has the Ray driver and the Kubernetes Job. Example: faceanim batch lines.jsonl --jobs 4
+    Batch(batch::BatchArgs),
     /// Compare a clip with a reference clip: DTW distance, jitter and MAE (the seeds' metrics).
     ///
     /// Example: faceanim eval take.json reference.json --json
@@ -164,7 +172,7 @@ fn main() -> ExitCode {
         .init();
     tracing::debug!(spare_heap, "allocator keeps spare heap");
     match run(cli.command) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         // The reader of standard output went away (`faceanim … | head`): nothing more to say.
         Err(error) if is_broken_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
@@ -199,8 +207,10 @@ fn is_broken_pipe(error: &anyhow::Error) -> bool {
     })
 }
 
-fn run(command: Command) -> anyhow::Result<()> {
-    match command {
+fn run(command: Command) -> anyhow::Result<ExitCode> {
+    let done = match command {
+        // The one command whose exit status says more than success or failure: a worker's row.
+        Command::Batch(args) => return batch::run(&args),
         Command::Studio(args) => studio::run(args),
         Command::Info(args) => info::run(&args),
         Command::Export(args) => export::run(&args),
@@ -215,5 +225,6 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::GenerateShapes(args) => generate::run(&args),
         Command::Retarget(args) => retarget::run(args),
         Command::Eval(args) => eval::run(&args),
-    }
+    };
+    done.map(|()| ExitCode::SUCCESS)
 }

@@ -122,19 +122,8 @@ pub fn encode_video<'a>(
 /// # Panics
 /// When the file is missing or does not import.
 #[must_use]
-#[expect(
-    clippy::expect_used,
-    reason = "test support: a missing fixture must stop the test loudly"
-)]
 pub fn ict_id7() -> &'static Character {
-    static ID7: OnceLock<Character> = OnceLock::new();
-    ID7.get_or_init(|| {
-        let bytes = std::fs::read(shared("characters/ict-face-id7.glb"))
-            .expect("ict-face-id7.glb is readable");
-        import_gltf(&bytes, "ict-face-id7.glb", &NoExternalResources)
-            .expect("ict-face-id7.glb imports")
-            .character
-    })
+    ict_identity("ict-face-id7.glb")
 }
 
 /// The four ICT identities in `../shared/characters`: the generic face and three real people,

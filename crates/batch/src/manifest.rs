@@ -1,0 +1,863 @@
+//! The manifest: one row per job, as JSON Lines or CSV, checked row by row before any work
+//! starts.
+//!
+//! A JSON Lines row is an object:
+//!
+//! ```json
+//! {"id": "hero_0001", "kind": "lipsync", "speech": "audio/hero_0001.wav",
+//!  "text": "Over here!", "language": "en-us", "character": "hero.vrm",
+//!  "outputs": ["out/hero_0001.glb", "out/hero_0001.json"], "options": {"face": true}}
+//! ```
+//!
+//! A CSV manifest has a header naming the same fields; `outputs` holds the outputs separated by
+//! `;`, and every column that is not a field is an option of the row's command (an empty cell
+//! gives none). Paths are relative to the manifest's folder. A row's problem is the row's: it
+//! is named with its line and field, and the other rows still run; only a manifest that cannot
+//! be read at all stops the batch.
+
+use std::collections::{BTreeMap, HashMap};
+use std::ffi::OsString;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use crate::BatchError;
+
+/// The largest manifest read, in bytes (a million rows of a few hundred bytes).
+pub const MAX_MANIFEST_BYTES: u64 = 512 << 20;
+
+/// What a row asks faceanim to do: one of its commands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Kind {
+    /// `faceanim lipsync`: speech drives the mouth.
+    Lipsync,
+    /// `faceanim track`: a video, photos or a folder of images drive the face.
+    Track,
+    /// `faceanim generate-shapes`: ARKit's shapes made on a head without them.
+    GenerateShapes,
+}
+
+impl Kind {
+    /// Every kind, in the order the documentation lists them.
+    pub const ALL: [Kind; 3] = [Kind::Lipsync, Kind::Track, Kind::GenerateShapes];
+
+    /// The kind's name in a manifest, which is also its command's name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Lipsync => "lipsync",
+            Kind::Track => "track",
+            Kind::GenerateShapes => "generate-shapes",
+        }
+    }
+
+    fn from_name(name: &str) -> Option<Kind> {
+        Kind::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// The fields a row of this kind may have (besides `id`, `kind`, `outputs` and `options`);
+    /// the first is required and is the command's positional input.
+    #[must_use]
+    pub fn fields(self) -> &'static [Field] {
+        match self {
+            Kind::Lipsync => &[
+                Field::Speech,
+                Field::Character,
+                Field::Text,
+                Field::Transcript,
+                Field::Language,
+                Field::Adapter,
+                Field::VisemeTable,
+            ],
+            Kind::Track => &[
+                Field::Video,
+                Field::Character,
+                Field::Adapter,
+                Field::Retarget,
+            ],
+            Kind::GenerateShapes => &[Field::Character, Field::Template],
+        }
+    }
+
+    /// Options a row may not give because they name files the batch must know of: inputs are
+    /// fields and outputs are `outputs`, so that both are hashed and written once.
+    fn reserved_options(self) -> &'static [&'static str] {
+        match self {
+            Kind::Lipsync => &["output", "clip", "o"],
+            Kind::Track => &["output", "session", "raw", "o"],
+            Kind::GenerateShapes => &["output", "o"],
+        }
+    }
+
+    /// How many outputs a row of this kind writes at most.
+    fn max_outputs(self) -> usize {
+        match self {
+            Kind::GenerateShapes => 1,
+            Kind::Lipsync | Kind::Track => 16,
+        }
+    }
+}
+
+impl fmt::Display for Kind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A field of a row besides its id, kind, outputs and options.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Field {
+    /// The speech to lip-sync (a file).
+    Speech,
+    /// The video, photo or folder of images to track.
+    Video,
+    /// The character (a file or an OBJ folder; the built-in head when left out).
+    Character,
+    /// What was said, as words.
+    Text,
+    /// What was said, as a text file.
+    Transcript,
+    /// The language spoken (eSpeak NG's name).
+    Language,
+    /// The character's adapter.
+    Adapter,
+    /// The character's retarget map.
+    Retarget,
+    /// A viseme table (JSON).
+    VisemeTable,
+    /// generate-shapes' template: `default`, `stylised` or a file.
+    Template,
+}
+
+/// Every field with its name in a manifest.
+const FIELD_NAMES: [(Field, &str); 10] = [
+    (Field::Speech, "speech"),
+    (Field::Video, "video"),
+    (Field::Character, "character"),
+    (Field::Text, "text"),
+    (Field::Transcript, "transcript"),
+    (Field::Language, "language"),
+    (Field::Adapter, "adapter"),
+    (Field::Retarget, "retarget"),
+    (Field::VisemeTable, "viseme_table"),
+    (Field::Template, "template"),
+];
+
+impl Field {
+    /// The field's name in a manifest.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        FIELD_NAMES
+            .iter()
+            .find(|(field, _)| *field == self)
+            .map_or("", |(_, name)| name)
+    }
+
+    fn from_name(name: &str) -> Option<Field> {
+        FIELD_NAMES
+            .iter()
+            .find(|(_, n)| *n == name)
+            .map(|(field, _)| *field)
+    }
+
+    /// Whether the field names a file (or folder) whose contents the output depends on.
+    #[must_use]
+    pub fn is_path(self, value: &str) -> bool {
+        match self {
+            Field::Text | Field::Language => false,
+            Field::Template => !matches!(value, "default" | "stylised"),
+            _ => true,
+        }
+    }
+
+    /// The command's flag for the field; `None` for the positional input.
+    fn flag(self, kind: Kind) -> Option<&'static str> {
+        match (self, kind) {
+            (Field::Speech | Field::Video, _) | (Field::Character, Kind::GenerateShapes) => None,
+            (Field::Character, _) => Some("--character"),
+            // The command reads a file given to --text (a value without spaces that names one).
+            (Field::Text | Field::Transcript, _) => Some("--text"),
+            (Field::Language, _) => Some("--language"),
+            (Field::Adapter, _) => Some("--adapter"),
+            (Field::Retarget, _) => Some("--retarget"),
+            (Field::VisemeTable, _) => Some("--viseme-table"),
+            (Field::Template, _) => Some("--template"),
+        }
+    }
+}
+
+/// An option of the row's command, as the manifest gives it.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[serde(untagged)]
+pub enum OptionValue {
+    /// A switch, given when true.
+    Flag(bool),
+    /// One value.
+    Value(String),
+    /// The option given once per value.
+    List(Vec<String>),
+}
+
+/// One job of the manifest, checked.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Row {
+    /// The row's place among the rows (0-based): what `--index` and `JOB_COMPLETION_INDEX`
+    /// name.
+    pub index: usize,
+    /// The manifest line it starts on (1-based).
+    pub line: usize,
+    /// The row's id, unique in the manifest.
+    pub id: String,
+    /// What it asks for.
+    pub kind: Kind,
+    /// Its fields, as written.
+    pub fields: BTreeMap<&'static str, String>,
+    /// Its outputs, as written (relative to the manifest's folder).
+    pub outputs: Vec<String>,
+    /// Options passed to the command, by their flag's name.
+    pub options: BTreeMap<String, OptionValue>,
+    /// The manifest's folder, which relative paths start from.
+    #[serde(skip)]
+    pub base: PathBuf,
+}
+
+impl Row {
+    /// The value of `field`, when the row gives it.
+    #[must_use]
+    pub fn field(&self, field: Field) -> Option<&str> {
+        self.fields.get(field.name()).map(String::as_str)
+    }
+
+    /// `path` (as written in the manifest) from the manifest's folder.
+    #[must_use]
+    pub fn resolve(&self, path: &str) -> PathBuf {
+        self.base.join(path)
+    }
+
+    /// The files the row reads, each with the field that names it, from the manifest's folder.
+    #[must_use]
+    pub fn input_files(&self) -> Vec<(Field, PathBuf)> {
+        self.kind
+            .fields()
+            .iter()
+            .filter_map(|&field| {
+                let value = self.field(field)?;
+                field.is_path(value).then(|| (field, self.resolve(value)))
+            })
+            .collect()
+    }
+
+    /// The outputs, from the manifest's folder.
+    #[must_use]
+    pub fn output_paths(&self) -> Vec<PathBuf> {
+        self.outputs.iter().map(|o| self.resolve(o)).collect()
+    }
+
+    /// The command line that runs the row (without the program's name), writing to `outputs`
+    /// (the row's outputs, or where they are staged): the kind's subcommand, its positional
+    /// input, a flag per field, `-o` per output, then the options.
+    #[must_use]
+    pub fn command(&self, outputs: &[PathBuf]) -> Vec<OsString> {
+        let mut args: Vec<OsString> = vec![self.kind.name().into()];
+        for &field in self.kind.fields() {
+            let Some(value) = self.field(field) else {
+                continue;
+            };
+            let value: OsString = if field.is_path(value) {
+                self.resolve(value).into()
+            } else {
+                value.into()
+            };
+            match field.flag(self.kind) {
+                None => args.push(value),
+                Some(flag) => {
+                    args.push(flag.into());
+                    args.push(value);
+                }
+            }
+        }
+        for output in outputs {
+            args.push("-o".into());
+            args.push(output.into());
+        }
+        for (name, value) in &self.options {
+            let flag = format!("--{name}");
+            match value {
+                OptionValue::Flag(true) => args.push(flag.into()),
+                OptionValue::Flag(false) => {}
+                OptionValue::Value(v) => {
+                    args.push(flag.into());
+                    args.push(v.into());
+                }
+                OptionValue::List(values) => {
+                    for v in values {
+                        args.push(flag.clone().into());
+                        args.push(v.into());
+                    }
+                }
+            }
+        }
+        args
+    }
+}
+
+/// Why a row cannot run: its line, the field at fault when there is one, and the problem.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error, serde::Serialize)]
+#[error("line {line}{}: {problem}", field.as_ref().map(|f| format!(", field `{f}`")).unwrap_or_default())]
+pub struct RowError {
+    /// The manifest line the row starts on.
+    pub line: usize,
+    /// The field at fault.
+    pub field: Option<String>,
+    /// What is wrong.
+    pub problem: String,
+}
+
+/// A row of the manifest: checked, or why not.
+#[derive(Debug, Clone)]
+pub struct Entry {
+    /// The row's place among the rows (0-based).
+    pub index: usize,
+    /// The line it starts on.
+    pub line: usize,
+    /// Its id, when it has a usable one.
+    pub id: Option<String>,
+    /// The row, or its first problem.
+    pub row: Result<Row, RowError>,
+}
+
+/// A manifest read and checked.
+#[derive(Debug, Clone)]
+pub struct Manifest {
+    /// The manifest file.
+    pub path: PathBuf,
+    /// Its rows, in order.
+    pub entries: Vec<Entry>,
+}
+
+impl Manifest {
+    /// Reads and checks the manifest at `path`: CSV when its name ends in `.csv`, JSON Lines
+    /// otherwise. Every row is checked (fields, values, input files present, ids and outputs
+    /// unique); a bad row stays in [`Manifest::entries`] with its problem.
+    ///
+    /// # Errors
+    /// [`BatchError`] when the file cannot be read, is not UTF-8, has no rows, or (CSV) has no
+    /// usable header.
+    pub fn read(path: &Path) -> Result<Manifest, BatchError> {
+        let size = std::fs::metadata(path)
+            .map_err(|source| BatchError::io(path, source))?
+            .len();
+        if size > MAX_MANIFEST_BYTES {
+            return Err(BatchError::manifest(
+                path,
+                format!("{size} bytes; a manifest is at most {MAX_MANIFEST_BYTES} bytes"),
+            ));
+        }
+        let bytes = std::fs::read(path).map_err(|source| BatchError::io(path, source))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            BatchError::manifest(
+                path,
+                format!(
+                    "not UTF-8 text (byte {} is not)",
+                    e.utf8_error().valid_up_to()
+                ),
+            )
+        })?;
+        // A manifest named without a folder: paths in it are the working folder's, as given.
+        let base = path.parent().unwrap_or(Path::new("")).to_owned();
+        let is_csv = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+        let raw = if is_csv {
+            csv_rows(&text).map_err(|problem| BatchError::manifest(path, problem))?
+        } else {
+            jsonl_rows(&text)
+        };
+        if raw.is_empty() {
+            return Err(BatchError::manifest(path, "has no rows".to_owned()));
+        }
+        Ok(Manifest {
+            path: path.to_owned(),
+            entries: check_rows(raw, &base),
+        })
+    }
+
+    /// The checked rows.
+    pub fn rows(&self) -> impl Iterator<Item = &Row> {
+        self.entries.iter().filter_map(|e| e.row.as_ref().ok())
+    }
+
+    /// Marks the row at `index` bad (a check only the caller can make, such as an output's
+    /// format).
+    pub fn reject(&mut self, index: usize, field: &str, problem: String) {
+        if let Some(entry) = self.entries.get_mut(index)
+            && entry.row.is_ok()
+        {
+            entry.row = Err(RowError {
+                line: entry.line,
+                field: Some(field.to_owned()),
+                problem,
+            });
+        }
+    }
+}
+
+/// A row before its check: its line and its values by name.
+struct RawRow {
+    line: usize,
+    values: Result<Vec<(String, Value)>, RowError>,
+    /// From a CSV manifest, whose columns that are not fields are options (a JSON row gives
+    /// them in `options`, so a stray key of it is a mistake).
+    csv: bool,
+}
+
+fn jsonl_rows(text: &str) -> Vec<RawRow> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(k, l)| {
+            let line = k + 1;
+            let values = match serde_json::from_str::<Value>(l) {
+                Ok(Value::Object(map)) => Ok(map.into_iter().collect()),
+                Ok(_) => Err(RowError {
+                    line,
+                    field: None,
+                    problem: "a row is a JSON object".to_owned(),
+                }),
+                Err(e) => Err(RowError {
+                    line,
+                    field: None,
+                    problem: format!("not JSON: {e}"),
+                }),
+            };
+            RawRow {
+                line,
+                values,
+                csv: false,
+            }
+        })
+        .collect()
+}
+
+/// The rows of a CSV manifest (RFC 4180: fields quoted with `"`, quotes doubled inside), each
+/// cell under its header's name; empty cells are left out.
+fn csv_rows(text: &str) -> Result<Vec<RawRow>, String> {
+    let records = csv_records(text)?;
+    let mut records = records.into_iter();
+    let Some((_, header)) = records.next() else {
+        return Ok(Vec::new());
+    };
+    let header: Vec<String> = header.into_iter().map(|h| h.trim().to_owned()).collect();
+    let mut seen = HashMap::new();
+    for (k, name) in header.iter().enumerate() {
+        if name.is_empty() {
+            return Err(format!("line 1: column {} has no name", k + 1));
+        }
+        if let Some(first) = seen.insert(name.as_str(), k) {
+            return Err(format!(
+                "line 1: column `{name}` is named twice (columns {} and {})",
+                first + 1,
+                k + 1
+            ));
+        }
+    }
+    for needed in ["id", "kind", "outputs"] {
+        if !seen.contains_key(needed) {
+            return Err(format!("line 1: the header has no `{needed}` column"));
+        }
+    }
+    Ok(records
+        .filter(|(_, cells)| !(cells.len() == 1 && cells[0].trim().is_empty()))
+        .map(|(line, cells)| {
+            let values = if cells.len() == header.len() {
+                Ok(header
+                    .iter()
+                    .zip(cells)
+                    .filter(|(_, cell)| !cell.trim().is_empty())
+                    .map(|(name, cell)| (name.clone(), csv_value(name, cell.trim())))
+                    .collect())
+            } else {
+                Err(RowError {
+                    line,
+                    field: None,
+                    problem: format!("{} cells for {} columns", cells.len(), header.len()),
+                })
+            };
+            RawRow {
+                line,
+                values,
+                csv: true,
+            }
+        })
+        .collect())
+}
+
+/// A CSV cell as the value a JSON row would give: `outputs` split on `;`, `true`/`false`
+/// switches.
+fn csv_value(column: &str, cell: &str) -> Value {
+    match (column, cell) {
+        ("outputs", _) => Value::Array(
+            cell.split(';')
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(|s| Value::String(s.to_owned()))
+                .collect(),
+        ),
+        (_, "true") => Value::Bool(true),
+        (_, "false") => Value::Bool(false),
+        _ => Value::String(cell.to_owned()),
+    }
+}
+
+/// The records of a CSV text, each with the line it starts on.
+fn csv_records(text: &str) -> Result<Vec<(usize, Vec<String>)>, String> {
+    let mut records = Vec::new();
+    let mut cells = Vec::new();
+    let mut cell = String::new();
+    let mut quoted = false;
+    let mut line = 1;
+    let mut start = 1;
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (true, '"') if chars.peek() == Some(&'"') => {
+                chars.next();
+                cell.push('"');
+            }
+            (true, '"') => quoted = false,
+            (true, c) => {
+                if c == '\n' {
+                    line += 1;
+                }
+                cell.push(c);
+            }
+            (false, '"') if cell.trim().is_empty() => {
+                cell.clear();
+                quoted = true;
+            }
+            (false, ',') => cells.push(std::mem::take(&mut cell)),
+            (false, '\r') if chars.peek() == Some(&'\n') => {}
+            (false, '\n') => {
+                cells.push(std::mem::take(&mut cell));
+                records.push((start, std::mem::take(&mut cells)));
+                line += 1;
+                start = line;
+            }
+            (false, c) => cell.push(c),
+        }
+    }
+    if quoted {
+        return Err(format!("line {start}: a quoted cell is never closed"));
+    }
+    if !cell.is_empty() || !cells.is_empty() {
+        cells.push(cell);
+        records.push((start, cells));
+    }
+    Ok(records)
+}
+
+/// Checks every row, then what rows share: ids and outputs are each one row's.
+fn check_rows(raw: Vec<RawRow>, base: &Path) -> Vec<Entry> {
+    let mut ids: HashMap<String, usize> = HashMap::new();
+    let mut outputs: HashMap<PathBuf, usize> = HashMap::new();
+    raw.into_iter()
+        .enumerate()
+        .map(|(index, raw)| {
+            let line = raw.line;
+            let id = raw.values.as_ref().ok().and_then(|values| {
+                values.iter().find_map(|(k, v)| match (k.as_str(), v) {
+                    ("id", Value::String(id)) if valid_id(id) => Some(id.clone()),
+                    _ => None,
+                })
+            });
+            let row = raw
+                .values
+                .and_then(|values| check_row(index, line, values, raw.csv, base))
+                .and_then(|row| {
+                    let fail = |field: &str, problem: String| RowError {
+                        line,
+                        field: Some(field.to_owned()),
+                        problem,
+                    };
+                    if let Some(first) = ids.get(&row.id) {
+                        return Err(fail(
+                            "id",
+                            format!("`{}` is already the id of line {first}", row.id),
+                        ));
+                    }
+                    for (path, written) in row.output_paths().into_iter().zip(&row.outputs) {
+                        if let Some(first) = outputs.get(&normal(&path)) {
+                            return Err(fail(
+                                "outputs",
+                                format!("{written} is already written by line {first}"),
+                            ));
+                        }
+                    }
+                    ids.insert(row.id.clone(), line);
+                    for path in row.output_paths() {
+                        outputs.insert(normal(&path), line);
+                    }
+                    Ok(row)
+                });
+            Entry {
+                index,
+                line,
+                id,
+                row,
+            }
+        })
+        .collect()
+}
+
+/// `path` with `.` steps removed, so that `out/a.json` and `./out/a.json` are one output.
+fn normal(path: &Path) -> PathBuf {
+    path.components()
+        .filter(|c| !matches!(c, std::path::Component::CurDir))
+        .collect()
+}
+
+fn valid_id(id: &str) -> bool {
+    !id.is_empty()
+        && id.len() <= 128
+        && id
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+}
+
+fn check_row(
+    index: usize,
+    line: usize,
+    values: Vec<(String, Value)>,
+    csv: bool,
+    base: &Path,
+) -> Result<Row, RowError> {
+    let fail = |field: &str, problem: String| RowError {
+        line,
+        field: Some(field.to_owned()),
+        problem,
+    };
+    let mut values: BTreeMap<String, Value> = values.into_iter().collect();
+    let id = match values.remove("id") {
+        Some(Value::String(id)) if valid_id(&id) => id,
+        Some(Value::String(id)) => {
+            return Err(fail(
+                "id",
+                format!(
+                    "`{id}` is not an id: 1 to 128 letters, digits, `_`, `-` or `.` (it names files and logs)"
+                ),
+            ));
+        }
+        Some(other) => return Err(fail("id", format!("a string, not {other}"))),
+        None => return Err(fail("id", "missing: every row has an id".to_owned())),
+    };
+    let kinds = || {
+        Kind::ALL
+            .iter()
+            .map(|k| k.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let kind = match values.remove("kind") {
+        Some(Value::String(name)) => Kind::from_name(&name)
+            .ok_or_else(|| fail("kind", format!("`{name}` is not a kind: {}", kinds())))?,
+        Some(other) => return Err(fail("kind", format!("a string, not {other}"))),
+        None => return Err(fail("kind", format!("missing: one of {}", kinds()))),
+    };
+    let outputs = match values.remove("outputs") {
+        Some(Value::String(one)) => vec![one],
+        Some(Value::Array(many)) => many
+            .into_iter()
+            .map(|v| match v {
+                Value::String(s) => Ok(s),
+                other => Err(fail("outputs", format!("a path is a string, not {other}"))),
+            })
+            .collect::<Result<_, _>>()?,
+        Some(other) => {
+            return Err(fail(
+                "outputs",
+                format!("a path or a list of paths, not {other}"),
+            ));
+        }
+        None => return Err(fail("outputs", "missing: what the row writes".to_owned())),
+    };
+    if outputs.is_empty() {
+        return Err(fail(
+            "outputs",
+            "empty: the row must write something".to_owned(),
+        ));
+    }
+    if outputs.len() > kind.max_outputs() {
+        return Err(fail(
+            "outputs",
+            format!(
+                "{} outputs; a {kind} row writes at most {}",
+                outputs.len(),
+                kind.max_outputs()
+            ),
+        ));
+    }
+    for output in &outputs {
+        if output.trim().is_empty() || output == "-" || output.ends_with('/') {
+            return Err(fail("outputs", format!("`{output}` does not name a file")));
+        }
+    }
+    let options = match values.remove("options") {
+        Some(Value::Object(map)) => map.into_iter().collect(),
+        Some(other) => return Err(fail("options", format!("an object, not {other}"))),
+        None => Vec::new(),
+    };
+    let mut fields = BTreeMap::new();
+    let mut extra = Vec::new();
+    for (name, value) in values {
+        let Some(field) = Field::from_name(&name) else {
+            extra.push((name, value));
+            continue;
+        };
+        if !kind.fields().contains(&field) {
+            return Err(fail(
+                &name,
+                format!(
+                    "a {kind} row has no `{name}`; its fields: {}",
+                    field_names(kind)
+                ),
+            ));
+        }
+        let Value::String(text) = value else {
+            return Err(fail(&name, format!("a string, not {value}")));
+        };
+        if text.trim().is_empty() {
+            return Err(fail(&name, "empty".to_owned()));
+        }
+        fields.insert(field.name(), text);
+    }
+    // JSON rows put options under `options`; a CSV's extra columns are options, a JSON row's
+    // extra keys are mistakes.
+    let mut all_options = options;
+    for (name, value) in extra {
+        if !csv {
+            return Err(fail(
+                &name,
+                format!(
+                    "not a field of a {kind} row ({}, outputs, options)",
+                    field_names(kind)
+                ),
+            ));
+        }
+        all_options.push((name, value));
+    }
+    let required = kind.fields()[0];
+    if !fields.contains_key(required.name()) {
+        return Err(fail(
+            required.name(),
+            format!("missing: a {kind} row names its {}", required.name()),
+        ));
+    }
+    if fields.contains_key("text") && fields.contains_key("transcript") {
+        return Err(fail(
+            "transcript",
+            "give the words (`text`) or a file of them (`transcript`), not both".to_owned(),
+        ));
+    }
+    if let Some(language) = fields.get("language")
+        && !language
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-')
+    {
+        return Err(fail(
+            "language",
+            format!("`{language}` is not a language name (en-us, es, ja, …)"),
+        ));
+    }
+    if let Some(text) = fields.get("text")
+        && !text.contains(char::is_whitespace)
+        && base.join(text).exists()
+    {
+        // The command reads a file given to --text: one word that names a file would be read.
+        return Err(fail(
+            "text",
+            format!("`{text}` names a file: give it as `transcript`"),
+        ));
+    }
+    let options = all_options
+        .into_iter()
+        .map(|(name, value)| option(kind, &name, value).map_err(|p| fail(&name, p)))
+        .collect::<Result<BTreeMap<_, _>, _>>()?;
+    let row = Row {
+        index,
+        line,
+        id,
+        kind,
+        fields,
+        outputs,
+        options,
+        base: base.to_owned(),
+    };
+    for (field, path) in row.input_files() {
+        if !path.exists() {
+            return Err(fail(
+                field.name(),
+                format!("{}: no such file", path.display()),
+            ));
+        }
+        // A user's file is never written over: no output may be one of the row's inputs.
+        let same = |output: &Path| {
+            normal(output) == normal(&path)
+                || matches!((output.canonicalize(), path.canonicalize()), (Ok(a), Ok(b)) if a == b)
+        };
+        if let Some(written) = row.outputs.iter().find(|o| same(&row.resolve(o))) {
+            return Err(fail(
+                "outputs",
+                format!(
+                    "{written} is the row's {}: it would be written over",
+                    field.name()
+                ),
+            ));
+        }
+    }
+    Ok(row)
+}
+
+fn field_names(kind: Kind) -> String {
+    kind.fields()
+        .iter()
+        .map(|f| f.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// An option by its flag's name (`viseme_table` and `viseme-table` are one), its value checked.
+fn option(kind: Kind, name: &str, value: Value) -> Result<(String, OptionValue), String> {
+    let flag = name.replace('_', "-");
+    if flag.is_empty()
+        || !flag.starts_with(|c: char| c.is_ascii_lowercase())
+        || !flag
+            .chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-')
+    {
+        return Err(format!("`{name}` is not an option's name"));
+    }
+    if kind.reserved_options().contains(&flag.as_str()) {
+        return Err(format!(
+            "`{name}` writes a file: name it in `outputs`, so that it is written once and recorded"
+        ));
+    }
+    if Field::from_name(&flag.replace('-', "_")).is_some() {
+        return Err(format!("`{name}` is a field, not an option"));
+    }
+    let scalar = |v: Value| match v {
+        Value::String(s) => Ok(s),
+        Value::Number(n) => Ok(n.to_string()),
+        other => Err(format!("a string or a number, not {other}")),
+    };
+    let value = match value {
+        Value::Bool(b) => OptionValue::Flag(b),
+        Value::Null => OptionValue::Flag(false),
+        Value::Array(items) => {
+            OptionValue::List(items.into_iter().map(scalar).collect::<Result<_, _>>()?)
+        }
+        other => OptionValue::Value(scalar(other)?),
+    };
+    Ok((flag, value))
+}

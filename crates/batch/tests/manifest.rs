@@ -1,0 +1,184 @@
+//! The manifest's checks: every bad row named by its line and field, the others kept; CSV as
+//! spreadsheets write it.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    reason = "tests panic to fail"
+)]
+
+use std::path::Path;
+
+use faceanim_batch::manifest::{Kind, Manifest, OptionValue};
+use proptest::prelude::*;
+
+/// A folder with a speech file and a transcript, and a manifest named `name` holding `text`.
+fn manifest(name: &str, text: &str) -> (tempfile::TempDir, Manifest) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a.wav"), b"RIFF").unwrap();
+    std::fs::write(dir.path().join("words.txt"), b"Hello there").unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).unwrap();
+    let manifest = Manifest::read(&path).unwrap();
+    (dir, manifest)
+}
+
+/// The problem of row `index`: (line, field, problem).
+fn problem(manifest: &Manifest, index: usize) -> (usize, Option<String>, String) {
+    let error = manifest.entries[index]
+        .row
+        .as_ref()
+        .expect_err("the row should be refused");
+    (error.line, error.field.clone(), error.problem.clone())
+}
+
+#[test]
+fn every_bad_row_is_named_by_its_line_and_field_and_the_good_ones_kept() {
+    let rows = [
+        r#"{"id": "ok", "kind": "lipsync", "speech": "a.wav", "text": "Hi there", "outputs": ["o/ok.json"]}"#,
+        r#"{"kind": "lipsync", "speech": "a.wav", "outputs": "o/1.json"}"#,
+        r#"{"id": "k", "kind": "dance", "speech": "a.wav", "outputs": "o/2.json"}"#,
+        r#"{"id": "s", "kind": "lipsync", "speach": "a.wav", "outputs": "o/3.json"}"#,
+        r#"{"id": "v", "kind": "lipsync", "speech": "a.wav", "video": "a.wav", "outputs": "o/4.json"}"#,
+        "",
+        r#"{"id": "t", "kind": "lipsync", "speech": "a.wav", "text": "x y", "transcript": "words.txt", "outputs": "o/5.json"}"#,
+        r#"{"id": "m", "kind": "lipsync", "speech": "gone.wav", "outputs": "o/6.json"}"#,
+        r#"{"id": "o", "kind": "lipsync", "speech": "a.wav", "outputs": []}"#,
+        r#"{"id": "d", "kind": "lipsync", "speech": "a.wav", "outputs": "./o/ok.json"}"#,
+        r#"{"id": "ok", "kind": "lipsync", "speech": "a.wav", "outputs": "o/7.json"}"#,
+        r#"{"id": "c", "kind": "lipsync", "speech": "a.wav", "outputs": "o/8.json", "options": {"clip": "x.json"}}"#,
+        r#"{"id": "f", "kind": "lipsync", "speech": "a.wav", "outputs": "o/9.json", "options": {"character": "x.glb"}}"#,
+        "not json",
+        "[1, 2]",
+        r#"{"id": "w", "kind": "lipsync", "speech": "a.wav", "text": "words.txt", "outputs": "o/10.json"}"#,
+        r#"{"id": "sp ace", "kind": "lipsync", "speech": "a.wav", "outputs": "o/11.json"}"#,
+        r#"{"id": "g", "kind": "generate-shapes", "character": "a.wav", "outputs": ["x.glb", "y.glb"]}"#,
+        r#"{"id": "in", "kind": "generate-shapes", "character": "./a.wav", "outputs": "a.wav"}"#,
+        r#"{"id": "ok2", "kind": "lipsync", "speech": "a.wav", "transcript": "words.txt", "language": "es", "outputs": "o/12.json", "options": {"fps": 60, "face": true, "recognise": "phones"}}"#,
+    ];
+    let (_dir, manifest) = manifest("lines.jsonl", &rows.join("\n"));
+    // The blank line is no row: 19 rows, and each keeps the line it is on.
+    assert_eq!(manifest.entries.len(), 19);
+    let expected: [(usize, Option<&str>, &str); 17] = [
+        (2, Some("id"), "missing"),
+        (3, Some("kind"), "`dance` is not a kind"),
+        (4, Some("speach"), "not a field of a lipsync row"),
+        (5, Some("video"), "a lipsync row has no `video`"),
+        (7, Some("transcript"), "not both"),
+        (8, Some("speech"), "gone.wav: no such file"),
+        (9, Some("outputs"), "empty"),
+        (10, Some("outputs"), "already written by line 1"),
+        (11, Some("id"), "already the id of line 1"),
+        (12, Some("clip"), "name it in `outputs`"),
+        (13, Some("character"), "is a field"),
+        (14, None, "not JSON"),
+        (15, None, "a JSON object"),
+        (16, Some("text"), "give it as `transcript`"),
+        (17, Some("id"), "not an id"),
+        (18, Some("outputs"), "at most 1"),
+        (
+            19,
+            Some("outputs"),
+            "a.wav is the row's character: it would be written over",
+        ),
+    ];
+    for (k, (line, field, words)) in expected.into_iter().enumerate() {
+        let (got_line, got_field, got) = problem(&manifest, k + 1);
+        assert_eq!(got_line, line, "{got}");
+        assert_eq!(got_field.as_deref(), field, "line {line}: {got}");
+        assert!(got.contains(words), "line {line}: {got}");
+    }
+    let good: Vec<_> = manifest.rows().map(|r| r.id.as_str()).collect();
+    assert_eq!(good, ["ok", "ok2"]);
+    let row = manifest.rows().nth(1).unwrap();
+    assert_eq!((row.index, row.line, row.kind), (18, 20, Kind::Lipsync));
+    assert_eq!(row.options["face"], OptionValue::Flag(true));
+    // The command line: the speech, a flag per field, -o per output, the options.
+    let command: Vec<String> = row
+        .command(&[Path::new("staged.json").to_owned()])
+        .into_iter()
+        .map(|a| a.into_string().unwrap())
+        .collect();
+    let base = row.base.display().to_string();
+    assert_eq!(
+        command,
+        [
+            "lipsync".to_owned(),
+            format!("{base}/a.wav"),
+            "--text".to_owned(),
+            format!("{base}/words.txt"),
+            "--language".to_owned(),
+            "es".to_owned(),
+            "-o".to_owned(),
+            "staged.json".to_owned(),
+            "--face".to_owned(),
+            "--fps".to_owned(),
+            "60".to_owned(),
+            "--recognise".to_owned(),
+            "phones".to_owned(),
+        ]
+    );
+}
+
+#[test]
+fn a_csv_manifest_reads_as_spreadsheets_write_it() {
+    let text = "id,kind,speech,text,outputs,fps,face\r\n\
+        a,lipsync,a.wav,\"Well, \"\"hello\"\" there\",o/a.json; o/a.csv,60,true\r\n\
+        b,lipsync,a.wav,\"Two\nlines\",o/b.json,,\r\n\
+        c,lipsync,a.wav,too,few\r\n\
+        d,lipsync,,,o/d.json,,\r\n";
+    let (_dir, manifest) = manifest("lines.csv", text);
+    assert_eq!(manifest.entries.len(), 4);
+    let a = manifest.entries[0].row.as_ref().unwrap();
+    assert_eq!(
+        a.field(faceanim_batch::manifest::Field::Text),
+        Some("Well, \"hello\" there")
+    );
+    assert_eq!(a.outputs, ["o/a.json", "o/a.csv"]);
+    assert_eq!(a.options["fps"], OptionValue::Value("60".to_owned()));
+    assert_eq!(a.options["face"], OptionValue::Flag(true));
+    let b = manifest.entries[1].row.as_ref().unwrap();
+    assert!(b.options.is_empty(), "empty cells give no option");
+    assert_eq!(b.line, 3);
+    // A quoted cell over two lines: the next row starts on line 5.
+    assert_eq!(
+        problem(&manifest, 2),
+        (5, None, "5 cells for 7 columns".to_owned())
+    );
+    assert_eq!(problem(&manifest, 3).1.as_deref(), Some("speech"));
+
+    let dir = tempfile::tempdir().unwrap();
+    for (text, words) in [
+        ("id,kind\na,lipsync\n", "no `outputs` column"),
+        ("id,kind,outputs,id\n", "named twice"),
+        ("id,kind,outputs\n\"a,lipsync,o.json\n", "never closed"),
+        ("", "has no rows"),
+    ] {
+        let path = dir.path().join("bad.csv");
+        std::fs::write(&path, text).unwrap();
+        let error = Manifest::read(&path).unwrap_err().to_string();
+        assert!(
+            error.contains("bad.csv") && error.contains(words),
+            "{error}"
+        );
+    }
+}
+
+proptest! {
+    /// Whatever a cell holds (commas, quotes, line breaks, spaces inside), quoted as a
+    /// spreadsheet quotes it, it reads back the same.
+    #[test]
+    fn csv_cells_read_back_as_written(words in "[a-zA-Z ,\"\n']{1,40}") {
+        let quoted = format!("\"{}\"", words.replace('"', "\"\""));
+        let text = format!("id,kind,speech,text,outputs\na,lipsync,a.wav,{quoted},o.json\n");
+        let (_dir, manifest) = manifest("lines.csv", &text);
+        let row = manifest.entries[0].row.as_ref();
+        if words.trim().is_empty() {
+            prop_assert!(row.is_ok_and(|r| r.field(faceanim_batch::manifest::Field::Text).is_none()));
+        } else {
+            // A cell is read trimmed, as its value.
+            let text = row.unwrap().field(faceanim_batch::manifest::Field::Text).unwrap().to_owned();
+            prop_assert_eq!(text, words.trim());
+        }
+    }
+}
