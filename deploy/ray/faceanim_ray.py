@@ -43,15 +43,16 @@ class TransientFailure(Exception):
     """A row that failed for the machine's reasons: worth running again."""
 
 
-def _die_with_parent():
-    """In the worker's child: die when the Ray worker dies (Linux), so that a killed worker
-    leaves no faceanim running its row beside the retry."""
+PR_SET_PDEATHSIG = 1
+
+
+def _prctl():
+    """libc's prctl, loaded in the calling process (the Ray worker): a child forked from a
+    threaded process may only do what takes no lock, and loading a library takes the loader's."""
     try:
-        libc = ctypes.CDLL("libc.so.6", use_errno=True)
-        PR_SET_PDEATHSIG = 1
-        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
-    except OSError:
-        pass
+        return ctypes.CDLL("libc.so.6", use_errno=True).prctl
+    except (OSError, AttributeError):
+        return None
 
 
 def _events(stderr):
@@ -75,13 +76,21 @@ def run_row(faceanim, manifest, index, flags):
     """Runs row `index` with the worker contract; returns its result, raises on a transient
     failure."""
     started = time.monotonic()
+    prctl = _prctl()
+
+    def die_with_parent():
+        # In the child, before faceanim starts: it dies when this Ray worker dies (Linux), so a
+        # killed worker leaves no faceanim running its row beside the retry.
+        if prctl is not None:
+            prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+
     process = subprocess.run(
         [faceanim, "batch", manifest, "--index", str(index), "--progress", "json", *flags],
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
-        preexec_fn=_die_with_parent,
+        preexec_fn=die_with_parent,
     )
     events, other = _events(process.stderr)
     rows = [e for e in events if e.get("event") == "row"]

@@ -370,10 +370,12 @@ impl Manifest {
         let is_csv = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+        // Spreadsheets (Excel's "CSV UTF-8") start their files with a byte-order mark.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
         let raw = if is_csv {
-            csv_rows(&text).map_err(|problem| BatchError::manifest(path, problem))?
+            csv_rows(text).map_err(|problem| BatchError::manifest(path, problem))?
         } else {
-            jsonl_rows(&text)
+            jsonl_rows(text)
         };
         if raw.is_empty() {
             return Err(BatchError::manifest(path, "has no rows".to_owned()));

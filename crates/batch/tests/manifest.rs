@@ -122,7 +122,8 @@ fn every_bad_row_is_named_by_its_line_and_field_and_the_good_ones_kept() {
 
 #[test]
 fn a_csv_manifest_reads_as_spreadsheets_write_it() {
-    let text = "id,kind,speech,text,outputs,fps,face\r\n\
+    // As Excel writes "CSV UTF-8": a byte-order mark first, CRLF line ends.
+    let text = "\u{feff}id,kind,speech,text,outputs,fps,face\r\n\
         a,lipsync,a.wav,\"Well, \"\"hello\"\" there\",o/a.json; o/a.csv,60,true\r\n\
         b,lipsync,a.wav,\"Two\nlines\",o/b.json,,\r\n\
         c,lipsync,a.wav,too,few\r\n\

@@ -498,7 +498,7 @@ fn on_a_ray_cluster_every_row_is_done_once_though_a_worker_is_killed() {
     )
     .unwrap();
     let cluster = RayCluster::start();
-    let driver = Command::new("python3")
+    let mut driver = Command::new("python3")
         .arg(support::repo().join("deploy/ray/faceanim_ray.py"))
         .arg(dir.join("lines.jsonl"))
         .args([
@@ -516,6 +516,13 @@ fn on_a_ray_cluster_every_row_is_done_once_though_a_worker_is_killed() {
     let deadline = Instant::now() + Duration::from_secs(240);
     loop {
         assert!(Instant::now() < deadline, "the stuck row never started");
+        if driver.try_wait().unwrap().is_some() {
+            let out = driver.wait_with_output().unwrap();
+            panic!(
+                "the driver ended before the stuck row started: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
         let log = std::fs::read_to_string(&starts).unwrap_or_default();
         let pid = log
             .lines()
@@ -539,6 +546,16 @@ fn on_a_ray_cluster_every_row_is_done_once_though_a_worker_is_killed() {
                     .unwrap()
                     .success()
             );
+            // The row's process dies with its worker (the driver's parent-death signal): no
+            // leftover runs beside the retry.
+            let gone = Instant::now() + Duration::from_secs(20);
+            while Path::new(&format!("/proc/{pid}")).exists() {
+                assert!(
+                    Instant::now() < gone,
+                    "the killed worker's row process {pid} lives on"
+                );
+                std::thread::sleep(Duration::from_millis(20));
+            }
             break;
         }
         std::thread::sleep(Duration::from_millis(20));

@@ -434,8 +434,10 @@ fn head_eyes_and_jaw_go_on_the_blender_avatars_bones() {
     assert!(degrees_between(turn("Chest"), chest) < 0.5, "{turns:?}");
     let neck = chest * glam::Quat::IDENTITY.slerp(chest.inverse() * q, 0.5);
     assert!(degrees_between(turn("Neck"), neck) < 0.5, "{turns:?}");
-    // Both eyes to the character's left (30° at eyeLook 1) and up (25°), as the head turned.
-    let look = glam::Quat::from_array(faceanim_anim::head_rotation([30.0, 25.0, 0.0]));
+    // Both eyes to the character's left and up, as far as eyeLook 1 turns them, as the head
+    // turned.
+    let [sideways, up] = faceanim_rig::bones::EYE_RANGE;
+    let look = glam::Quat::from_array(faceanim_anim::head_rotation([sideways, up, 0.0]));
     for eye in ["LeftEye", "RightEye"] {
         assert!(
             degrees_between(turn(eye), q * look) < 0.5,

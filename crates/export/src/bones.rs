@@ -336,9 +336,10 @@ mod tests {
         let keys = BoneKeys::from_clip(&clip);
         let gaze = keys.gaze.unwrap();
         // Both eyes towards the character's left: the left eye out, the right eye in.
-        assert!((gaze[0][0][0] - 30.0).abs() < 1e-5);
-        assert!((gaze[0][1][0] - 15.0).abs() < 1e-5);
-        assert!((gaze[0][0][1] - 5.0).abs() < 1e-5);
+        let [sideways, up] = faceanim_rig::bones::EYE_RANGE;
+        assert!((gaze[0][0][0] - sideways).abs() < 1e-5);
+        assert!((gaze[0][1][0] - 0.5 * sideways).abs() < 1e-5);
+        assert!((gaze[0][0][1] - 0.2 * up).abs() < 1e-5);
         assert_eq!(gaze[1], [[0.0; 2]; 2]);
         assert_eq!(keys.jaw, Some(vec![0.4, 0.0]));
         let none = BoneKeys::from_clip(&Clip {

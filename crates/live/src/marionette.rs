@@ -582,8 +582,9 @@ fn forward(state: &mut State, arrived: Instant) {
     let Some(frame) = state.history.back() else {
         return;
     };
-    // The eyes from the phone's eyeLook values (as exports turn eye bones; the apps' own eye
-    // angles differ in sign and unit from one app to the next).
+    // The eyes from the phone's eyeLook values, as exports turn eye bones: the apps' own eye
+    // angles differ in sign and unit from one app to the next, and Live Link Face's are those
+    // values at the same range (tests/phones.rs).
     let eyes = state.raw.is_some().then(|| {
         faceanim_rig::bones::gaze_from_arkit(|c| {
             faceanim_retarget::channel_index(c).map_or(0.0, |i| state.channels[i])

@@ -212,3 +212,63 @@ fn ifacialmocap_and_vtube_studio_phones_are_asked_and_read() {
     assert_eq!(marionette.traffic().faces_lost, 1);
     assert_eq!(Protocol::VTubeStudio.default_port(), VTUBE_STUDIO_PORT);
 }
+
+/// The gaze faceanim turns eyes by from ARKit's `eyeLook*` values (`EYE_RANGE` degrees at 1) is
+/// the gaze the phone itself reports: in the real recording, Live Link Face's own eye angles
+/// are its eyeLook values times one range, sideways and up or down alike, so the eyeLook values
+/// (which every app sends) carry the phones' eye angles, and faceanim's range is theirs.
+#[test]
+fn the_phones_own_eye_angles_are_its_eye_look_values_at_faceanims_gaze_range() {
+    use faceanim_live::phone::{AngleUnit, Packet, decode};
+    // Per eye and axis: faceanim's gaze from the eyeLook values, and the phone's own angle.
+    let mut pairs = vec![Vec::new(); 4];
+    let radians = AngleUnit::Radians;
+    for datagram in llv_recording() {
+        let decoded = decode(Protocol::LiveLinkFace, &datagram, radians, radians);
+        let Ok(Packet::Face(reading)) = decoded else {
+            continue;
+        };
+        let value = |channel: &str| {
+            reading
+                .channels
+                .iter()
+                .find(|(i, _)| faceanim_rig::names::ARKIT_52[*i] == channel)
+                .map_or(0.0, |(_, v)| *v)
+        };
+        let ours = faceanim_rig::bones::gaze_from_arkit(value);
+        let theirs = reading.eyes.unwrap();
+        for eye in 0..2 {
+            for axis in 0..2 {
+                // The app turns yaw towards the character's right and pitch down: the other way.
+                pairs[eye * 2 + axis]
+                    .push((f64::from(ours[eye][axis]), -f64::from(theirs[eye][axis])));
+            }
+        }
+    }
+    for (k, pairs) in pairs.iter().enumerate() {
+        let n = pairs.len() as f64;
+        let (mx, my) = (
+            pairs.iter().map(|p| p.0).sum::<f64>() / n,
+            pairs.iter().map(|p| p.1).sum::<f64>() / n,
+        );
+        let sxx: f64 = pairs.iter().map(|p| (p.0 - mx).powi(2)).sum();
+        let sxy: f64 = pairs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+        let slope = sxy / sxx;
+        // The eyes move (over 10° in the recording), one degree of ours is one of theirs, and
+        // past a constant (the eyes' slight convergence) nothing is left over.
+        let spread = (sxx / n).sqrt();
+        let residual = (pairs
+            .iter()
+            .map(|p| (p.1 - my - slope * (p.0 - mx)).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt();
+        let which = ["left yaw", "left pitch", "right yaw", "right pitch"][k];
+        assert!(spread > 2.0, "{which}: the eyes hardly move ({spread:.2}°)");
+        assert!(
+            (0.95..=1.05).contains(&slope),
+            "{which}: {slope:.3} of the phone's degrees per one of ours"
+        );
+        assert!(residual < 0.5, "{which}: {residual:.2}° left over");
+    }
+}

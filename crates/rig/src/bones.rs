@@ -73,8 +73,11 @@ impl FaceBones {
     }
 }
 
-/// The gaze, in degrees, of an ARKit eyeLook value of 1 (sideways, and up or down).
-pub const EYE_RANGE: [f32; 2] = [30.0, 25.0];
+/// The gaze, in degrees, of an ARKit eyeLook value of 1 (sideways, and up or down): the phones'
+/// own. Live Link Face sends each eye's angles beside its eyeLook values, and in a real
+/// recording they are those values times 35°, sideways and up or down alike (r 0.9997;
+/// `crates/live/tests/phones.rs` holds the two together).
+pub const EYE_RANGE: [f32; 2] = [35.0, 35.0];
 
 /// Each eye's gaze `[yaw, pitch]` in degrees (left eye, right eye; yaw towards the
 /// character's left, pitch up) from ARKit's eyeLook values, `value(channel)` (0 for a channel
