@@ -315,9 +315,7 @@ pub fn lock(row: &Row) -> Result<std::fs::File, BatchError> {
             std::fs::create_dir_all(dir).map_err(|source| BatchError::io(dir, source))?;
         }
     }
-    let first = row.output_paths().swap_remove(0);
-    let name = first.file_name().unwrap_or_default().to_string_lossy();
-    let path = first.with_file_name(format!(".{name}.lock"));
+    let path = beside_first_output(row, ".", ".lock");
     let file = std::fs::OpenOptions::new()
         .create(true)
         .truncate(false)
@@ -332,9 +330,14 @@ pub fn lock(row: &Row) -> Result<std::fs::File, BatchError> {
 /// The record of `row`: beside its first output.
 #[must_use]
 pub fn record_path(row: &Row) -> PathBuf {
-    let first = row.output_paths().swap_remove(0);
+    beside_first_output(row, "", RECORD_SUFFIX)
+}
+
+/// A file beside `row`'s first output, named after it with `prefix` and `suffix`.
+fn beside_first_output(row: &Row, prefix: &str, suffix: &str) -> PathBuf {
+    let first = row.resolve(&row.outputs[0]);
     let name = first.file_name().unwrap_or_default().to_string_lossy();
-    first.with_file_name(format!("{name}{RECORD_SUFFIX}"))
+    first.with_file_name(format!("{prefix}{name}{suffix}"))
 }
 
 /// `row`'s record, when it has a readable one (an unreadable record is none: its outputs are
