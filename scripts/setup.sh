@@ -15,9 +15,29 @@
 #     exact phone timings the viseme accuracy test compares with;
 #   - eSpeak NG (Debian: the library lip sync in other languages links, and its program), which
 #     speaks a transcript in its language to align it by synthesis.
-# Safe to run again: it installs only what is not there.
+# Safe to run again: it installs only what is not there. `scripts/setup.sh libraries` installs
+# only what faceanim's build links (PocketSphinx, eSpeak NG: their bindings' build scripts look
+# for them), so that the rest can install while faceanim builds (scripts/test.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+apt_install() {
+  (($#)) || return 0
+  local sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  echo "setup: installing $* (apt-get)"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null
+}
+
+if [ "${1:-}" = libraries ]; then
+  packages=()
+  for package in libpocketsphinx-dev pocketsphinx-en-us libespeak-ng-dev; do
+    dpkg -s "$package" >/dev/null 2>&1 || packages+=("$package")
+  done
+  apt_install "${packages[@]}"
+  exit 0
+fi
 
 packages=()
 command -v blender >/dev/null 2>&1 || packages+=(blender)
@@ -29,13 +49,7 @@ for package in libpocketsphinx-dev pocketsphinx-en-us pocketsphinx-testdata flit
   dpkg -s "$package" >/dev/null 2>&1 || packages+=("$package")
 done
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
-if ((${#packages[@]})); then
-  sudo=""
-  [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  echo "setup: installing ${packages[*]} (apt-get)"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${packages[@]}" >/dev/null
-fi
+apt_install "${packages[@]}"
 
 if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ ! -d tools/node_modules/iwer ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
   echo "setup: installing the glTF-Validator, playwright-core, gltfpack and gltf-transform (npm ci in tools/)"

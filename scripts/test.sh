@@ -5,15 +5,34 @@
 # $FACEANIM_SHARED).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-
-# The installs (downloads and dpkg, mostly waiting) run while clippy compiles; nothing clippy
-# checks needs them (the recogniser's bindings are checked, not linked).
 mkdir -p target
+
+# What faceanim's build links (PocketSphinx, eSpeak NG) first: their bindings' build scripts
+# look for them. The rest (Blender, Chromium, the Node tools, the Python peers; downloads and
+# dpkg, mostly waiting) installs while faceanim builds.
+scripts/setup.sh libraries
 scripts/setup.sh >target/setup.log 2>&1 &
 setup=$!
-cargo clippy --workspace --all-targets --locked -- -D warnings
 scripts/check-layers.sh
 scripts/check-circles.py
+
+# One build serves the lints and the tests: faceanim's own crates are compiled by clippy-driver
+# (rustc with clippy's lints, every warning an error), the dependencies by rustc once, instead of
+# a `cargo clippy` pass that checks every dependency a second time. Every target clippy's
+# --all-targets covers is built: libraries, binaries, tests and examples by the test build,
+# benches by `cargo build --benches`.
+RUSTC_WORKSPACE_WRAPPER="$(command -v clippy-driver)"
+export RUSTC_WORKSPACE_WRAPPER
+export CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__"
+nextest=false
+cargo nextest --version >/dev/null 2>&1 && nextest=true
+if $nextest; then
+  cargo nextest run --workspace --locked --no-run
+else
+  cargo test --workspace --locked --no-run
+fi
+cargo build --workspace --benches --locked
+
 if ! wait "$setup"; then
   cat target/setup.log >&2
   echo "test.sh: scripts/setup.sh failed (its output is above)" >&2
@@ -28,7 +47,7 @@ cargo test --workspace --doc --locked
 # The kernel faceanim adds to its vendored tract-tflite, against its contract in scalar code.
 cargo test -p tract-tflite --lib --locked faceanim
 # Last, so that the run ends on the summary of every test.
-if cargo nextest --version >/dev/null 2>&1; then
+if $nextest; then
   cargo nextest run --workspace --locked --no-fail-fast
 else
   cargo test --workspace --locked --no-fail-fast

@@ -61,6 +61,19 @@ pub fn head_rotation([yaw, pitch, roll]: [f32; 3]) -> [f32; 4] {
     q.normalize().to_array()
 }
 
+/// The inverse of [`head_rotation`]: a rotation `[x, y, z, w]` as `[yaw, pitch, roll]` in
+/// degrees; `None` for one that is not a finite, non-zero quaternion.
+#[must_use]
+pub fn head_angles(q: [f32; 4]) -> Option<[f32; 3]> {
+    let q = glam::Quat::from_array(q);
+    let length = q.length();
+    if !length.is_finite() || length < 1e-6 {
+        return None;
+    }
+    let (yaw, x_angle, roll) = (q / length).to_euler(glam::EulerRot::YXZ);
+    Some([yaw.to_degrees(), -x_angle.to_degrees(), roll.to_degrees()])
+}
+
 /// Problems with a clip, each with the JSON path it concerns.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]

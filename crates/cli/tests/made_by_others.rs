@@ -454,4 +454,57 @@ fn head_eyes_and_jaw_go_on_the_blender_avatars_bones() {
     );
     assert!((0.6..=24.0).contains(&opened), "the jaw opened {opened}°");
     eprintln!("Blender read the jaw opened {opened:.1}° at jawOpen 0.6");
+
+    // The eyes turn once: by bone, their eyeLook shapes held still in the file.
+    let bytes = std::fs::read(&out).unwrap();
+    let imported = faceanim_rig::import::import_gltf(
+        &bytes,
+        "bones.glb",
+        &faceanim_rig::import::NoExternalResources,
+    )
+    .unwrap();
+    let source = imported.character.source().unwrap();
+    let stored = source.animations()[0].sample(source.shapes());
+    let names = imported.character.blendshape_names();
+    let column = |names: &[String], name: &str| names.iter().position(|n| n == name).unwrap();
+    for name in ["eyeLookOut_L", "eyeLookIn_R", "eyeLookUp_L", "eyeLookUp_R"] {
+        let c = column(&names, name);
+        assert!(
+            stored.weights.iter().all(|row| row[c] == 0.0),
+            "{name} moves beside the eye bones"
+        );
+    }
+    // Opened again, the take has its head pose and its gaze back from the bones.
+    let back = faceanim_export::reopen::clip_of_file("bones.glb", &bytes).unwrap();
+    let poses = back
+        .clip
+        .head
+        .as_ref()
+        .expect("the head pose was not read back");
+    for pose in poses {
+        for (read, written) in pose.iter().zip(head) {
+            assert!(
+                (read - written).abs() < 0.05,
+                "head {pose:?}, written {head:?}"
+            );
+        }
+    }
+    for (name, written) in [
+        ("eyeLookOut_L", 1.0),
+        ("eyeLookIn_R", 1.0),
+        ("eyeLookUp_L", 1.0),
+        ("eyeLookUp_R", 1.0),
+        ("eyeLookIn_L", 0.0),
+        ("eyeLookDown_R", 0.0),
+        ("jawOpen", 0.6),
+    ] {
+        let c = column(&back.clip.blendshapes, name);
+        for row in &back.clip.frames {
+            assert!(
+                (row[c] - written).abs() < 1e-3,
+                "{name}: {} for {written}",
+                row[c]
+            );
+        }
+    }
 }

@@ -228,6 +228,35 @@ fn an_animation_keyed_in_blender_opens_as_a_take() {
             "{name}: {worst} from Blender's curve\n{got:?}\n{blender:?}"
         );
     }
+    // The head the animator turned comes back as the take's head pose, frame by frame as
+    // Blender played it (its world holds glTF's +Y as +Z: a turn there is C·q·C⁻¹, C = Rx(90°)).
+    let reopened = faceanim_export::reopen::clip_of_file(
+        "keyed-in-blender.glb",
+        &std::fs::read(&keyed).unwrap(),
+    )
+    .unwrap();
+    let poses = reopened.clip.head.expect("the head's turn was not read");
+    let c = glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+    let blender = report["head"].as_array().unwrap();
+    assert_eq!(poses.len(), blender.len());
+    let mut largest = 0.0f32;
+    for (k, (pose, q)) in poses.iter().zip(blender).enumerate() {
+        let q = glam::Quat::from_xyzw(
+            q[1].as_f64().unwrap() as f32,
+            q[2].as_f64().unwrap() as f32,
+            q[3].as_f64().unwrap() as f32,
+            q[0].as_f64().unwrap() as f32,
+        );
+        let want = c.inverse() * q * c;
+        let got = glam::Quat::from_array(faceanim_anim::head_rotation(*pose));
+        let apart = 2.0 * got.dot(want).abs().min(1.0).acos().to_degrees();
+        assert!(
+            apart < 0.5,
+            "frame {k}: head {pose:?} is {apart}° from Blender's"
+        );
+        largest = largest.max(2.0 * want.w.abs().min(1.0).acos().to_degrees());
+    }
+    assert!(largest > 15.0, "the head hardly turned: {largest}°");
 }
 
 /// A sketch exported as a GLB (strokes drawn through the studio's API on the Blender avatar)

@@ -1169,27 +1169,44 @@ fn the_neutral_face_of_a_take_and_of_the_live_webcam() {
     assert_eq!(state["live"]["neutral"], "user", "{body}");
 }
 
+/// The studio on the ICT head listening to a Live Link Face phone on `port`, its settings
+/// (the neutral) kept in `settings`, with `more` arguments.
+fn start_with_live_link_face(
+    project: &std::path::Path,
+    port: u16,
+    settings: &std::path::Path,
+    more: &[&std::ffi::OsStr],
+) -> Studio {
+    let port = port.to_string();
+    let mut arguments: Vec<&std::ffi::OsStr> = vec![
+        "--phone".as_ref(),
+        "live-link-face".as_ref(),
+        "--phone-port".as_ref(),
+        port.as_ref(),
+        "--phone-settings".as_ref(),
+        settings.as_os_str(),
+    ];
+    arguments.extend_from_slice(more);
+    start_with(project, &arguments)
+}
+
 /// A phone tracker in its own protocol: PyPI's pylivelinkface (not faceanim's packet code)
-/// plays a minute of Live Link Face at 60 fps to the studio (`--phone live-link-face`), which
+/// plays ten seconds of Live Link Face at 60 fps to the studio (`--phone live-link-face`), which
 /// shows it, records it as a take and sends every frame on over VMC as it arrives, to
 /// python-osc standing in for a VTuber app: no frame is lost, and each frame's delay from
 /// datagram in to VMC out is reported. The neutral the page's button takes is kept.
 #[test]
 fn a_live_link_face_phone_drives_the_studio_and_goes_out_over_vmc() {
-    const FRAMES: usize = 3600;
+    const FRAMES: usize = 600;
     let dir = tempfile::tempdir().unwrap();
     let port = support::free_udp_port();
     let (mut app, app_port) = support::vmc_receiver(FRAMES, 120.0, &dir.path().join("app.json"));
     let settings = dir.path().join("settings/phone.json");
-    let studio = start_with(
+    let studio = start_with_live_link_face(
         &dir.path().join("phone.faceanim.json"),
+        port,
+        &settings,
         &[
-            "--phone".as_ref(),
-            "live-link-face".as_ref(),
-            "--phone-port".as_ref(),
-            port.to_string().as_ref(),
-            "--phone-settings".as_ref(),
-            settings.as_os_str(),
             "--vmc-send".as_ref(),
             format!("127.0.0.1:{app_port}").as_ref(),
             "--vmc-names".as_ref(),
@@ -1317,6 +1334,38 @@ fn a_live_link_face_phone_drives_the_studio_and_goes_out_over_vmc() {
         .unwrap()
         .to_degrees();
     assert!((neutral_yaw - last_yaw).abs() < 1e-3);
+}
+
+/// The Capture tab's phone panel in a real browser (`tools/phone-panel-e2e.mjs`): it says what
+/// the studio listens to and where the phone should send; live, a Live Link Face phone
+/// (pylivelinkface) moves the character's mouth in the viewport while the panel counts its
+/// packets per second and the age of the last one; Neutral is taken and kept.
+#[test]
+fn the_phone_panel_in_a_real_browser() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = support::free_udp_port();
+    let settings = dir.path().join("settings/phone.json");
+    let studio = start_with_live_link_face(
+        &dir.path().join("panel.faceanim.json"),
+        port,
+        &settings,
+        &[],
+    );
+    let measured = browser_script(
+        "phone-panel-e2e.mjs",
+        &studio,
+        "",
+        &output_dir("phone-panel"),
+        &[
+            port.to_string().into(),
+            repo().join("tools/livelinkface_send.py").into(),
+        ],
+    );
+    eprintln!("the phone panel: {measured}");
+    // The neutral the page took is kept for the next run.
+    let kept: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&settings).unwrap()).unwrap();
+    assert!(kept["neutral"].is_object(), "{kept}");
 }
 
 /// iFacialMocap from the command line: the studio sends the app's handshake to the phone

@@ -9,7 +9,7 @@
 
 use faceanim_anim::Clip;
 use faceanim_rig::Character;
-use faceanim_rig::bones::{Bone, FaceBones, Gaze};
+use faceanim_rig::bones::{Bone, FaceBones, Gaze, Joint};
 use faceanim_rig::source::GltfSource as Source;
 use glam::{EulerRot, Quat, Vec3};
 use serde_json::Value;
@@ -66,44 +66,27 @@ impl BoneKeys {
     }
 }
 
-/// A bone made ready to turn: its node written as TRS, with the rotations that place it.
-#[derive(Debug, Clone, Copy)]
-struct Joint {
-    node: usize,
-    /// Its parent's rotation in character space, at rest.
-    parent: Quat,
-    /// Its own local rotation at rest.
-    rest: Quat,
+/// A bone made ready to turn: its node written as TRS (an animated node may not have a
+/// matrix), with the rotations that place it.
+fn prepare_joint(source: &Source, nodes: &mut [Value], node: usize) -> Option<Joint> {
+    let joint = source.joint(node)?;
+    let value = nodes.get_mut(node)?;
+    let (scale, _, translation) =
+        faceanim_rig::source::local_matrix(value).to_scale_rotation_translation();
+    if let Some(object) = value.as_object_mut() {
+        object.remove("matrix");
+    }
+    // As f64 of the same f32 values, as the rest of the file writes numbers.
+    let exact = |v: &[f32]| Value::from(v.iter().map(|&x| f64::from(x)).collect::<Vec<f64>>());
+    value["translation"] = exact(&translation.to_array());
+    value["rotation"] = exact(&joint.rest.to_array());
+    value["scale"] = exact(&scale.to_array());
+    Some(joint)
 }
 
-impl Joint {
-    fn prepare(source: &Source, nodes: &mut [Value], node: usize) -> Option<Joint> {
-        let value = nodes.get_mut(node)?;
-        let local = faceanim_rig::source::local_matrix(value);
-        let (scale, rotation, translation) = local.to_scale_rotation_translation();
-        let rotation = rotation.normalize();
-        if let Some(object) = value.as_object_mut() {
-            object.remove("matrix");
-        }
-        // As f64 of the same f32 values, as the rest of the file writes numbers.
-        let exact = |v: &[f32]| Value::from(v.iter().map(|&x| f64::from(x)).collect::<Vec<f64>>());
-        value["translation"] = exact(&translation.to_array());
-        value["rotation"] = exact(&rotation.to_array());
-        value["scale"] = exact(&scale.to_array());
-        let parent = source.world_rotation(node) * rotation.inverse();
-        Some(Joint {
-            node,
-            parent,
-            rest: rotation,
-        })
-    }
-
-    /// Its local rotation for a turn `q` in character space (beyond its ancestors').
-    fn local(self, q: Quat) -> [f32; 4] {
-        (self.parent.inverse() * q * self.parent * self.rest)
-            .normalize()
-            .to_array()
-    }
+/// `joint`'s local rotation for a turn `q` in character space, as written.
+fn local(joint: Joint, q: Quat) -> [f32; 4] {
+    joint.local(q).to_array()
 }
 
 /// The rotation channels (node, one rotation per key) of one animation.
@@ -132,16 +115,9 @@ impl Rig {
     ) -> Rig {
         let [wants_turn, wants_gaze, wants_jaw] = wants;
         let bones: FaceBones = source.bones();
-        let mut joint = |n: Option<usize>| n.and_then(|n| Joint::prepare(source, nodes, n));
+        let mut joint = |n: Option<usize>| n.and_then(|n| prepare_joint(source, nodes, n));
         let head = if wants_turn {
-            let root = || {
-                let doc = source.document();
-                let scene = doc.get("scene").and_then(Value::as_u64).unwrap_or(0);
-                doc.pointer(&format!("/scenes/{scene}/nodes/0"))
-                    .and_then(Value::as_u64)
-                    .and_then(|n| usize::try_from(n).ok())
-            };
-            joint(bones.get(Bone::Head).or_else(root))
+            joint(faceanim_rig::turns::turned_head(source))
         } else {
             None
         };
@@ -183,6 +159,11 @@ impl Rig {
         }
     }
 
+    /// Whether it turns eye bones with the gaze.
+    pub(crate) fn turns_eyes(&self) -> bool {
+        self.eyes.is_some()
+    }
+
     /// The rotation channels of an animation with key `times`, head `rotations` and `keys`.
     pub(crate) fn channels(
         &self,
@@ -220,12 +201,12 @@ impl Rig {
                     spine
                 };
                 if let Some(j) = self.spine {
-                    spine_keys.push(j.local(spine));
+                    spine_keys.push(local(j, spine));
                 }
                 if let Some(j) = self.neck {
-                    neck_keys.push(j.local(spine.inverse() * neck));
+                    neck_keys.push(local(j, spine.inverse() * neck));
                 }
-                head_keys.push(head.local(neck.inverse() * q));
+                head_keys.push(local(head, neck.inverse() * q));
             }
             for (joint, keys) in [
                 (self.spine, spine_keys),
@@ -249,9 +230,10 @@ impl Rig {
                             Gaze::Bones(look) => look.eye([yaw, pitch], side == 0),
                             _ => [yaw, pitch],
                         };
-                        joint.local(Quat::from_array(faceanim_anim::head_rotation([
-                            yaw, pitch, 0.0,
-                        ])))
+                        local(
+                            *joint,
+                            Quat::from_array(faceanim_anim::head_rotation([yaw, pitch, 0.0])),
+                        )
                     })
                     .collect();
                 out.push((joint.node, turns));
@@ -265,7 +247,7 @@ impl Rig {
                         .get(k.min(open.len().saturating_sub(1)))
                         .copied()
                         .unwrap_or(0.0);
-                    joint.local(Quat::from_rotation_x((degrees * open).to_radians()))
+                    local(joint, Quat::from_rotation_x((degrees * open).to_radians()))
                 })
                 .collect();
             out.push((joint.node, turns));

@@ -640,18 +640,32 @@ pub fn export_into_source_with(
         (0..animations.len()).any(|a| key_of(a).is_some_and(|k| k.jaw.is_some())),
     ];
     let rig = crate::bones::Rig::prepare(character, source, &mut nodes, wants);
+    // Where the eye bones turn with the gaze, the eyeLook shapes hold still: the eyes turn
+    // once (by bone, as VRM's lookAt says), not twice.
+    let looks: Vec<bool> = character
+        .blendshape_names()
+        .iter()
+        .map(|n| faceanim_rig::names::arkit_name(n).is_some_and(|a| a.starts_with("eyeLook")))
+        .collect();
 
     let mut new_animations = Vec::new();
     for (a, animation) in animations.iter().enumerate() {
         let input = bin.key_times(&animation.times);
         let mut samplers = Vec::new();
         let mut channels = Vec::new();
+        let eyes_by_bone = rig.turns_eyes() && key_of(a).is_some_and(|k| k.gaze.is_some());
+        let moves = |shape: usize| !(eyes_by_bone && looks.get(shape).copied().unwrap_or(false));
         for &(node, mesh) in &channels_for {
             let slots = &contributions[&mesh];
             let mut flat = Vec::with_capacity(animation.weights.len() * slots.len());
             for key in &animation.weights {
                 for slot in slots {
-                    flat.push(slot.iter().map(|&(shape, w)| key[shape] * w).sum::<f32>());
+                    flat.push(
+                        slot.iter()
+                            .filter(|&&(shape, _)| moves(shape))
+                            .map(|&(shape, w)| key[shape] * w)
+                            .sum::<f32>(),
+                    );
                 }
             }
             let output = bin.floats(&flat, "SCALAR", None, None);

@@ -83,14 +83,44 @@ fn extension(name: &str) -> Option<String> {
 }
 
 /// The morph-weight animation `character`'s own file holds (the last one faceanim wrote, else
-/// its first) as a clip of the character's blendshapes by name; `None` for a file without one
-/// (or a character made in code).
+/// its first) as a clip of the character's blendshapes by name, with the head pose and the
+/// gaze its bones turn; `None` for a file without one (or a character made in code).
 #[must_use]
 pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
-    let (animation, fps) = character
-        .source()
-        .and_then(faceanim_rig::source::GltfSource::take)?;
+    let faceanim_rig::source::Take {
+        animation,
+        fps,
+        gaze,
+    } = character.source()?.take()?;
     let seconds = animation.times.last().copied().unwrap_or(0.0);
+    let blendshapes = character.blendshape_names();
+    let mut frames = animation.weights;
+    // Eyes turned by bone give the eyeLook shapes their values back (the export holds those
+    // shapes still where the bones turn the eyes, not to turn them twice).
+    if let Some(gaze) = gaze {
+        let columns: Vec<(usize, &str)> = blendshapes
+            .iter()
+            .enumerate()
+            .filter_map(|(c, n)| Some((c, faceanim_rig::names::arkit_name(n)?)))
+            .filter(|(_, a)| a.starts_with("eyeLook"))
+            .collect();
+        for (row, eyes) in frames.iter_mut().zip(gaze) {
+            let looks = faceanim_rig::bones::arkit_from_gaze(eyes);
+            for &(c, channel) in &columns {
+                if let (Some(slot), Some((_, v))) =
+                    (row.get_mut(c), looks.iter().find(|(n, _)| *n == channel))
+                {
+                    *slot = slot.max(*v);
+                }
+            }
+        }
+    }
+    let head = animation.rotations.map(|turns| {
+        turns
+            .into_iter()
+            .map(|q| faceanim_anim::head_angles(q).unwrap_or([0.0; 3]))
+            .collect()
+    });
     Some(Reopened {
         what: format!(
             "animation '{}' ({seconds:.2} s at {fps} fps)",
@@ -99,9 +129,9 @@ pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
         name: animation.name,
         clip: Clip {
             fps,
-            blendshapes: character.blendshape_names(),
-            frames: animation.weights,
-            head: None,
+            blendshapes,
+            frames,
+            head,
             head_position: None,
             presence: None,
         },

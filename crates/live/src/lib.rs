@@ -126,14 +126,7 @@ pub fn neck_and_head(q: [f32; 4]) -> [[f32; 4]; 2] {
 #[must_use]
 pub fn head_angles(unity: [f32; 4]) -> Option<[f32; 3]> {
     let [x, y, z, w] = unity;
-    let q = glam::Quat::from_xyzw(x, -y, -z, w);
-    let length = q.length();
-    if !length.is_finite() || length < 1e-6 {
-        return None;
-    }
-    // R = Ry(yaw) · Rx(−pitch) · Rz(roll).
-    let (yaw, x_angle, roll) = (q / length).to_euler(glam::EulerRot::YXZ);
-    Some([yaw.to_degrees(), -x_angle.to_degrees(), roll.to_degrees()])
+    faceanim_anim::head_angles([x, -y, -z, w])
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@
 //! the jaw are nodes below the head named with "eye" and a side (`LeftEye`, `CC_Base_L_Eye`,
 //! `J_Adj_L_FaceEye`) and with "jaw" (`CC_Base_JawRoot`, `FACIAL_C_Jaw`).
 
+use glam::Quat;
 use serde_json::Value;
 
 /// A bone a face animation turns.
@@ -99,6 +100,53 @@ pub fn gaze_from_arkit(value: impl Fn(&str) -> f32) -> [[f32; 2]; 2] {
     [eye("Left", true), eye("Right", false)]
 }
 
+/// The inverse of [`gaze_from_arkit`]: the eyeLook values (each 0..1, by ARKit name) of each
+/// eye's gaze `[yaw, pitch]` in degrees; of each pair of opposite ways one is 0.
+#[must_use]
+pub fn arkit_from_gaze(gaze: [[f32; 2]; 2]) -> [(&'static str, f32); 8] {
+    let share = |degrees: f32, range: f32| (degrees / range).clamp(0.0, 1.0);
+    let [[left_yaw, left_pitch], [right_yaw, right_pitch]] = gaze;
+    [
+        ("eyeLookOutLeft", share(left_yaw, EYE_RANGE[0])),
+        ("eyeLookInLeft", share(-left_yaw, EYE_RANGE[0])),
+        ("eyeLookUpLeft", share(left_pitch, EYE_RANGE[1])),
+        ("eyeLookDownLeft", share(-left_pitch, EYE_RANGE[1])),
+        ("eyeLookInRight", share(right_yaw, EYE_RANGE[0])),
+        ("eyeLookOutRight", share(-right_yaw, EYE_RANGE[0])),
+        ("eyeLookUpRight", share(right_pitch, EYE_RANGE[1])),
+        ("eyeLookDownRight", share(-right_pitch, EYE_RANGE[1])),
+    ]
+}
+
+/// A bone as the face's rules turn it. A turn `q` in character space, beyond what its turned
+/// ancestors already turn, is the local rotation `P⁻¹·q·P·R`, where `P` is its parent's
+/// rotation in character space at rest and `R` its own local rotation at rest; [`Joint::turn`]
+/// reads a local rotation back as that turn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Joint {
+    /// Its node.
+    pub node: usize,
+    /// Its parent's rotation in character space, at rest.
+    pub parent: Quat,
+    /// Its own local rotation at rest.
+    pub rest: Quat,
+}
+
+impl Joint {
+    /// Its local rotation for a turn `q` in character space.
+    #[must_use]
+    pub fn local(self, q: Quat) -> Quat {
+        (self.parent.inverse() * q * self.parent * self.rest).normalize()
+    }
+
+    /// The turn in character space that its local rotation `local` makes (the inverse of
+    /// [`Joint::local`]).
+    #[must_use]
+    pub fn turn(self, local: Quat) -> Quat {
+        (self.parent * local * self.rest.inverse() * self.parent.inverse()).normalize()
+    }
+}
+
 /// How far a gaze in degrees turns the eyes: VRM's `lookAt` range maps (bone type), each an
 /// input's largest value and the output it gives, in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -131,25 +179,51 @@ impl RangeMap {
         }
         degrees.signum() * (degrees.abs().min(self.input_max) / self.input_max) * self.output
     }
+
+    /// The input that [`RangeMap::map`]s to `degrees` of the bone (signed; at most
+    /// `input_max`).
+    #[must_use]
+    pub fn unmap(self, degrees: f32) -> f32 {
+        if self.input_max <= 0.0 || self.output.abs() < 1e-6 {
+            return 0.0;
+        }
+        degrees.signum() * (degrees.abs() / self.output.abs()).min(1.0) * self.input_max
+    }
 }
 
 impl LookAt {
+    /// The range maps that serve a turn `[yaw, pitch]` of the eye `left` says (whose outer
+    /// side is the character's left): outer or inner, up or down by its signs.
+    fn maps(&self, [yaw, pitch]: [f32; 2], left: bool) -> [RangeMap; 2] {
+        let outward = if left { yaw >= 0.0 } else { yaw < 0.0 };
+        [
+            if outward {
+                self.horizontal_outer
+            } else {
+                self.horizontal_inner
+            },
+            if pitch >= 0.0 {
+                self.vertical_up
+            } else {
+                self.vertical_down
+            },
+        ]
+    }
+
     /// An eye's turn for a gaze `[yaw, pitch]` (degrees; yaw towards the character's left,
     /// pitch up): `left` says which eye, whose outer side is the character's left.
     #[must_use]
-    pub fn eye(&self, [yaw, pitch]: [f32; 2], left: bool) -> [f32; 2] {
-        let outward = if left { yaw >= 0.0 } else { yaw < 0.0 };
-        let horizontal = if outward {
-            self.horizontal_outer
-        } else {
-            self.horizontal_inner
-        };
-        let vertical = if pitch >= 0.0 {
-            self.vertical_up
-        } else {
-            self.vertical_down
-        };
-        [horizontal.map(yaw), vertical.map(pitch)]
+    pub fn eye(&self, gaze: [f32; 2], left: bool) -> [f32; 2] {
+        let [horizontal, vertical] = self.maps(gaze, left);
+        [horizontal.map(gaze[0]), vertical.map(gaze[1])]
+    }
+
+    /// The gaze `[yaw, pitch]` that turns an eye by `turn` degrees (the inverse of
+    /// [`LookAt::eye`] within its range maps' inputs).
+    #[must_use]
+    pub fn gaze(&self, turn: [f32; 2], left: bool) -> [f32; 2] {
+        let [horizontal, vertical] = self.maps(turn, left);
+        [horizontal.unmap(turn[0]), vertical.unmap(turn[1])]
     }
 }
 
@@ -466,6 +540,31 @@ mod tests {
     }
 
     #[test]
+    fn gaze_reads_back_as_the_eye_look_values_it_came_from() {
+        let written = [
+            ("eyeLookOutLeft", 0.4),
+            ("eyeLookUpLeft", 0.7),
+            ("eyeLookInRight", 0.4),
+            ("eyeLookDownRight", 0.2),
+        ];
+        let value = |c: &str| written.iter().find(|(n, _)| *n == c).map_or(0.0, |w| w.1);
+        for (channel, read) in arkit_from_gaze(gaze_from_arkit(value)) {
+            assert!((read - value(channel)).abs() < 1e-6, "{channel}: {read}");
+        }
+    }
+
+    #[test]
+    fn a_joints_turn_reads_back_from_its_local_rotation() {
+        let joint = Joint {
+            node: 0,
+            parent: Quat::from_rotation_x(1.2) * Quat::from_rotation_z(0.3),
+            rest: Quat::from_rotation_y(-0.7),
+        };
+        let q = Quat::from_rotation_y(0.5) * Quat::from_rotation_x(-0.2);
+        assert!(joint.turn(joint.local(q)).angle_between(q) < 1e-5);
+    }
+
+    #[test]
     fn vrm_bones_and_look_at_by_the_specification() {
         let doc = json!({
             "nodes": [{}, {}, {}, {}, {}],
@@ -499,6 +598,13 @@ mod tests {
         assert!((look.eye([45.0, 0.0], false)[0] - 4.0).abs() < 1e-6);
         // Past the input's range, the full output.
         assert!((look.eye([0.0, 200.0], true)[1] - 4.0).abs() < 1e-6);
+        // Read back, each way by its own map.
+        for gaze in [[30.0, 20.0], [-30.0, -20.0], [10.0, -45.0]] {
+            for left in [true, false] {
+                let back = look.gaze(look.eye(gaze, left), left);
+                assert!((back[0] - gaze[0]).abs() < 1e-4 && (back[1] - gaze[1]).abs() < 1e-4);
+            }
+        }
         let expression =
             json!({ "extensions": { "VRMC_vrm": { "lookAt": { "type": "expression" } } } });
         assert_eq!(gaze(&expression), Gaze::Expressions);

@@ -13,7 +13,7 @@
 //!
 //! // One mesh with two targets, keyed at 0 and 1 s.
 //! let track = WeightsTrack::new(0, vec![0.0, 1.0], vec![0.0, 0.0, 1.0, 0.5], 2, Interpolation::Linear)?;
-//! let animation = FileAnimation { name: "smile".into(), tracks: vec![track], ours: false };
+//! let animation = FileAnimation { name: "smile".into(), tracks: vec![track], ours: false, turns: vec![] };
 //! // Blendshape 0 is target 1 of mesh 0.
 //! let played = animation.sample(&[vec![Binding { mesh: 0, target: 1, weight: 1.0 }]]);
 //! assert_eq!(played.times.len(), 31); // 30 frames a second, from 0 to 1 s
@@ -67,19 +67,7 @@ impl WeightsTrack {
         targets: usize,
         interpolation: Interpolation,
     ) -> Result<WeightsTrack, String> {
-        if times.is_empty() {
-            return Err("it has no keys".into());
-        }
-        if let Some(k) = times
-            .iter()
-            .position(|t| !t.is_finite() || *t < 0.0)
-            .or_else(|| times.windows(2).position(|w| w[1] <= w[0]).map(|k| k + 1))
-        {
-            return Err(format!(
-                "key {k}'s time {} is not after the one before it",
-                times[k]
-            ));
-        }
+        check_times(&times)?;
         let per_key = match interpolation {
             Interpolation::CubicSpline => 3 * targets,
             _ => targets,
@@ -128,18 +116,12 @@ impl WeightsTrack {
         if target >= self.targets {
             return 0.0;
         }
-        let last = self.times.len() - 1;
-        let next = self.times.partition_point(|&k| k <= t);
-        if next == 0 {
-            return self.value(0, target);
-        }
-        if next > last {
-            return self.value(last, target);
-        }
-        let k = next - 1;
-        let (t0, t1) = (self.times[k], self.times[next]);
-        let span = t1 - t0;
-        let s = (t - t0) / span;
+        let (k, s) = match segment(&self.times, t) {
+            Segment::At(k) => return self.value(k, target),
+            Segment::Between(k, s) => (k, s),
+        };
+        let next = k + 1;
+        let span = self.times[next] - self.times[k];
         match self.interpolation {
             Interpolation::Step => self.value(k, target),
             Interpolation::Linear => {
@@ -149,11 +131,12 @@ impl WeightsTrack {
             Interpolation::CubicSpline => {
                 let out_tangent = self.values[(3 * k + 2) * self.targets + target];
                 let in_tangent = self.values[(3 * next) * self.targets + target];
-                let (s2, s3) = (s * s, s * s * s);
-                (2.0 * s3 - 3.0 * s2 + 1.0) * self.value(k, target)
-                    + (s3 - 2.0 * s2 + s) * span * out_tangent
-                    + (-2.0 * s3 + 3.0 * s2) * self.value(next, target)
-                    + (s3 - s2) * span * in_tangent
+                hermite(
+                    s,
+                    span,
+                    [self.value(k, target), out_tangent],
+                    [self.value(next, target), in_tangent],
+                )
             }
         }
     }
@@ -169,6 +152,152 @@ impl WeightsTrack {
     }
 }
 
+/// Key times that are finite, from 0 and strictly increasing, or why not.
+fn check_times(times: &[f32]) -> Result<(), String> {
+    if times.is_empty() {
+        return Err("it has no keys".into());
+    }
+    if let Some(k) = times
+        .iter()
+        .position(|t| !t.is_finite() || *t < 0.0)
+        .or_else(|| times.windows(2).position(|w| w[1] <= w[0]).map(|k| k + 1))
+    {
+        return Err(format!(
+            "key {k}'s time {} is not after the one before it",
+            times[k]
+        ));
+    }
+    Ok(())
+}
+
+/// glTF's cubic spline `s` (0..1) of the way between a key `[value, out-tangent]` and the
+/// next `[value, in-tangent]`, `span` seconds apart.
+fn hermite<T>(s: f32, span: f32, [p0, m0]: [T; 2], [p1, m1]: [T; 2]) -> T
+where
+    T: Copy + std::ops::Add<Output = T> + std::ops::Mul<f32, Output = T>,
+{
+    let (s2, s3) = (s * s, s * s * s);
+    p0 * (2.0 * s3 - 3.0 * s2 + 1.0)
+        + m0 * ((s3 - 2.0 * s2 + s) * span)
+        + p1 * (-2.0 * s3 + 3.0 * s2)
+        + m1 * ((s3 - s2) * span)
+}
+
+/// Where a time falls among a track's keys.
+enum Segment {
+    /// On key `k` (or held before the first key or after the last).
+    At(usize),
+    /// Between key `k` and the next, `s` (0..1) of the way.
+    Between(usize, f32),
+}
+
+fn segment(times: &[f32], t: f32) -> Segment {
+    let last = times.len() - 1;
+    let next = times.partition_point(|&k| k <= t);
+    if next == 0 {
+        return Segment::At(0);
+    }
+    if next > last {
+        return Segment::At(last);
+    }
+    let k = next - 1;
+    Segment::Between(k, (t - times[k]) / (times[next] - times[k]))
+}
+
+/// One node's `rotation` channel as the file stores it (a head, neck or eye bone turned).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RotationTrack {
+    node: u32,
+    times: Vec<f32>,
+    /// `[x, y, z, w]` per key (in-tangent, value and out-tangent for a cubic spline).
+    values: Vec<[f32; 4]>,
+    interpolation: Interpolation,
+}
+
+impl RotationTrack {
+    /// A track of `node`: `values` holds one quaternion `[x, y, z, w]` per key (three for a
+    /// cubic spline: in-tangent, value, out-tangent).
+    ///
+    /// # Errors
+    /// A sentence when the times are not finite and increasing, the values do not fit them or
+    /// a rotation is not one.
+    pub fn new(
+        node: u32,
+        times: Vec<f32>,
+        values: Vec<[f32; 4]>,
+        interpolation: Interpolation,
+    ) -> Result<RotationTrack, String> {
+        check_times(&times)?;
+        let per_key = if interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
+        if values.len() != times.len() * per_key {
+            return Err(format!(
+                "{} rotations for {} keys",
+                values.len(),
+                times.len()
+            ));
+        }
+        if values.iter().flatten().any(|v| !v.is_finite()) {
+            return Err("a rotation is not a number".into());
+        }
+        Ok(RotationTrack {
+            node,
+            times,
+            values,
+            interpolation,
+        })
+    }
+
+    /// The node it turns.
+    #[must_use]
+    pub fn node(&self) -> u32 {
+        self.node
+    }
+
+    fn value(&self, key: usize) -> glam::Quat {
+        let at = match self.interpolation {
+            Interpolation::CubicSpline => 3 * key + 1,
+            _ => key,
+        };
+        glam::Quat::from_array(self.values[at])
+    }
+
+    /// The node's local rotation at `t` seconds (held before the first key and after the
+    /// last; spherical between linear keys, as glTF plays them).
+    #[must_use]
+    pub fn at(&self, t: f32) -> glam::Quat {
+        let q = match segment(&self.times, t) {
+            Segment::At(k) => self.value(k),
+            Segment::Between(k, s) => match self.interpolation {
+                Interpolation::Step => self.value(k),
+                Interpolation::Linear => self
+                    .value(k)
+                    .normalize()
+                    .slerp(self.value(k + 1).normalize(), s),
+                Interpolation::CubicSpline => {
+                    let span = self.times[k + 1] - self.times[k];
+                    let v = |i: usize| glam::Vec4::from_array(self.values[i]);
+                    glam::Quat::from_vec4(hermite(
+                        s,
+                        span,
+                        [v(3 * k + 1), v(3 * k + 2)],
+                        [v(3 * k + 4), v(3 * k + 3)],
+                    ))
+                }
+            },
+        };
+        let length = q.length();
+        if length > 1e-6 && length.is_finite() {
+            q / length
+        } else {
+            glam::Quat::IDENTITY
+        }
+    }
+}
+
 /// One of the file's animations that moves morph targets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FileAnimation {
@@ -178,6 +307,8 @@ pub struct FileAnimation {
     pub tracks: Vec<WeightsTrack>,
     /// Whether faceanim wrote it (its `extras` say so): a take or sketch exported before.
     pub ours: bool,
+    /// Its `rotation` channels (the bones it turns beside the morph targets).
+    pub turns: Vec<RotationTrack>,
 }
 
 impl FileAnimation {
@@ -307,6 +438,7 @@ mod tests {
             name: "blink".into(),
             tracks: vec![track],
             ours: false,
+            turns: vec![],
         };
         assert_eq!(animation.fps(), 24.0);
         // A VRM expression bound at 0.5: the target at 0.5 reads as the expression at 1.
@@ -330,6 +462,41 @@ mod tests {
         };
         let played = animation.sample(&[vec![raw], vec![raw]]);
         assert_eq!(played.weights[1], vec![1.0, 0.0]);
+    }
+
+    #[test]
+    fn rotations_turn_the_short_way_between_keys() {
+        let half = std::f32::consts::FRAC_PI_2;
+        let keys = [glam::Quat::IDENTITY, glam::Quat::from_rotation_y(half)];
+        let linear = RotationTrack::new(
+            4,
+            vec![0.0, 1.0],
+            keys.iter().map(|q| q.to_array()).collect(),
+            Interpolation::Linear,
+        )
+        .unwrap();
+        let mid = glam::Quat::from_rotation_y(half / 2.0);
+        assert!(linear.at(0.5).angle_between(mid) < 1e-5);
+        assert!(linear.at(2.0).angle_between(keys[1]) < 1e-6);
+        // A cubic spline with zero tangents passes through its keys.
+        let zero = [0.0; 4];
+        let cubic = RotationTrack::new(
+            4,
+            vec![0.0, 1.0],
+            vec![
+                zero,
+                keys[0].to_array(),
+                zero,
+                zero,
+                keys[1].to_array(),
+                zero,
+            ],
+            Interpolation::CubicSpline,
+        )
+        .unwrap();
+        assert!(cubic.at(1.0).angle_between(keys[1]) < 1e-6);
+        assert!(cubic.at(0.5).angle_between(mid) < 1e-3);
+        assert!(RotationTrack::new(4, vec![0.0, 1.0], vec![zero], Interpolation::Step).is_err());
     }
 
     #[test]

@@ -49,6 +49,7 @@ mod pose;
 mod runs;
 pub mod source;
 pub mod symmetry;
+pub mod turns;
 
 pub use blendshape::{Blendshape, BlendshapeId, SPARSE_DELTA_THRESHOLD};
 pub use bounds::Aabb;

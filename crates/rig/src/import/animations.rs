@@ -1,4 +1,4 @@
-//! The file's morph-weight animations, read as they are stored (see
+//! The file's morph-weight animations (with the bones they turn), read as they are stored (see
 //! [`crate::file_animation`]). A channel that cannot be read is left out with a warning: the
 //! character still opens.
 
@@ -6,7 +6,7 @@ use gltf::accessor::Dimensions;
 use gltf::animation::{Interpolation as GltfInterpolation, Property};
 
 use super::accessor::{Buffers, read_floats};
-use crate::file_animation::{FileAnimation, Interpolation, WeightsTrack};
+use crate::file_animation::{FileAnimation, Interpolation, RotationTrack, WeightsTrack};
 
 /// Every animation of `doc` that moves morph targets, with its `weights` channels.
 pub(super) fn read(
@@ -21,8 +21,36 @@ pub(super) fn read(
             .name()
             .map_or_else(|| format!("animation {a}"), str::to_owned);
         let mut tracks: Vec<WeightsTrack> = Vec::new();
+        let mut turns: Vec<RotationTrack> = Vec::new();
+        let unread = |c: usize, why: String, what: &str| {
+            format!(
+                "animations[{a}].channels[{c}] ('{}'): {why}; its {what} are not read",
+                crate::excerpt(&name)
+            )
+        };
         for (c, channel) in animation.channels().enumerate() {
             let target = channel.target();
+            let sampler = channel.sampler();
+            let interpolation = match sampler.interpolation() {
+                GltfInterpolation::Step => Interpolation::Step,
+                GltfInterpolation::Linear => Interpolation::Linear,
+                GltfInterpolation::CubicSpline => Interpolation::CubicSpline,
+            };
+            if target.property() == Property::Rotation {
+                let node = target.node().index() as u32;
+                let read = keys(buffers, &sampler, Dimensions::Vec4).and_then(|(times, values)| {
+                    let quats = values
+                        .chunks_exact(4)
+                        .map(|q| [q[0], q[1], q[2], q[3]])
+                        .collect();
+                    RotationTrack::new(node, times, quats, interpolation)
+                });
+                match read {
+                    Ok(track) => turns.push(track),
+                    Err(why) => warnings.push(unread(c, why, "rotations")),
+                }
+                continue;
+            }
             if target.property() != Property::MorphTargetWeights {
                 continue;
             }
@@ -39,25 +67,12 @@ pub(super) fn read(
                 .map(|p| p.morph_targets().len())
                 .max()
                 .unwrap_or(0);
-            let sampler = channel.sampler();
-            let interpolation = match sampler.interpolation() {
-                GltfInterpolation::Step => Interpolation::Step,
-                GltfInterpolation::Linear => Interpolation::Linear,
-                GltfInterpolation::CubicSpline => Interpolation::CubicSpline,
-            };
-            let read = read_floats(buffers, &sampler.input(), Some(Dimensions::Scalar))
-                .map_err(|e| e.to_string())
-                .and_then(|times| {
-                    let values = read_floats(buffers, &sampler.output(), Some(Dimensions::Scalar))
-                        .map_err(|e| e.to_string())?;
-                    WeightsTrack::new(mesh_index, times, values, targets, interpolation)
-                });
+            let read = keys(buffers, &sampler, Dimensions::Scalar).and_then(|(times, values)| {
+                WeightsTrack::new(mesh_index, times, values, targets, interpolation)
+            });
             match read {
                 Ok(track) => tracks.push(track),
-                Err(why) => warnings.push(format!(
-                    "animations[{a}].channels[{c}] ('{}'): {why}; its weights are not read",
-                    crate::excerpt(&name)
-                )),
+                Err(why) => warnings.push(unread(c, why, "weights")),
             }
         }
         let ours = animation
@@ -66,8 +81,26 @@ pub(super) fn read(
             .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
             .is_some_and(|extras| extras.get(crate::file_animation::EXTRAS_KEY).is_some());
         if !tracks.is_empty() {
-            out.push(FileAnimation { name, tracks, ours });
+            out.push(FileAnimation {
+                name,
+                tracks,
+                ours,
+                turns,
+            });
         }
     }
     out
+}
+
+/// A sampler's key times and its values (`dimensions` each).
+fn keys(
+    buffers: &Buffers<'_>,
+    sampler: &gltf::animation::Sampler<'_>,
+    dimensions: Dimensions,
+) -> Result<(Vec<f32>, Vec<f32>), String> {
+    let times = read_floats(buffers, &sampler.input(), Some(Dimensions::Scalar))
+        .map_err(|e| e.to_string())?;
+    let values =
+        read_floats(buffers, &sampler.output(), Some(dimensions)).map_err(|e| e.to_string())?;
+    Ok((times, values))
 }

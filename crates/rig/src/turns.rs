@@ -1,0 +1,123 @@
+//! What a file's animation turns, read back as a take's head pose and gaze: the inverse of the
+//! rules faceanim's export turns bones by (`faceanim_export::bones`). A head pose is the turns
+//! of the upper spine, the neck and the head (or of the scene's root, for a character without
+//! a head bone) in character space, one after the other; each eye's gaze is its bone's turn,
+//! read through a VRM's lookAt range maps where it has them. Files keyed in other tools read
+//! the same way: whatever turns those bones is the head pose and the gaze.
+
+use glam::{EulerRot, Quat};
+
+use crate::bones::{Bone, Gaze, Joint};
+use crate::file_animation::{FileAnimation, RotationTrack};
+use crate::source::GltfSource;
+
+/// The node a captured head pose turns in `source`: its head bone, else the scene's first
+/// root node (the whole character).
+#[must_use]
+pub fn turned_head(source: &GltfSource) -> Option<usize> {
+    source.bones().get(Bone::Head).or_else(|| {
+        let doc = source.document();
+        let scene = doc
+            .get("scene")
+            .and_then(serde_json::Value::as_u64)
+            .unwrap_or(0);
+        doc.pointer(&format!("/scenes/{scene}/nodes/0"))
+            .and_then(serde_json::Value::as_u64)
+            .and_then(|n| usize::try_from(n).ok())
+    })
+}
+
+/// A bone with the track that turns it in an animation.
+struct Turned<'a> {
+    joint: Joint,
+    track: &'a RotationTrack,
+}
+
+impl Turned<'_> {
+    fn find<'a>(
+        source: &GltfSource,
+        animation: &'a FileAnimation,
+        node: Option<usize>,
+    ) -> Option<Turned<'a>> {
+        let node = node?;
+        let track = animation.turns.iter().find(|t| t.node() as usize == node)?;
+        Some(Turned {
+            joint: source.joint(node)?,
+            track,
+        })
+    }
+
+    fn at(&self, t: f32) -> Quat {
+        self.joint.turn(self.track.at(t))
+    }
+}
+
+/// The head's turn in character space (`[x, y, z, w]`) at each of `times` (seconds from the
+/// animation's `start`), where `animation` turns the head, the neck or the upper spine.
+#[must_use]
+pub fn head(
+    source: &GltfSource,
+    animation: &FileAnimation,
+    start: f32,
+    times: &[f32],
+) -> Option<Vec<[f32; 4]>> {
+    let bones = source.bones();
+    let head_bone = bones.get(Bone::Head);
+    let chain: Vec<Turned<'_>> = [
+        head_bone.and(bones.get(Bone::UpperSpine)),
+        head_bone.and(bones.get(Bone::Neck)),
+        turned_head(source),
+    ]
+    .into_iter()
+    .filter_map(|node| Turned::find(source, animation, node))
+    .collect();
+    if chain.is_empty() {
+        return None;
+    }
+    Some(
+        times
+            .iter()
+            .map(|&t| {
+                chain
+                    .iter()
+                    .fold(Quat::IDENTITY, |q, bone| q * bone.at(start + t))
+                    .normalize()
+                    .to_array()
+            })
+            .collect(),
+    )
+}
+
+/// Each eye's gaze `[yaw, pitch]` in degrees (left eye, right eye; yaw towards the character's
+/// left, pitch up) at each of `times`, where `animation` turns both eye bones of a file whose
+/// eyes turn by bone.
+#[must_use]
+pub fn gaze(
+    source: &GltfSource,
+    animation: &FileAnimation,
+    start: f32,
+    times: &[f32],
+) -> Option<Vec<[[f32; 2]; 2]>> {
+    let look = source.gaze();
+    if look == Gaze::Expressions {
+        return None;
+    }
+    let bones = source.bones();
+    let left = Turned::find(source, animation, bones.get(Bone::LeftEye))?;
+    let right = Turned::find(source, animation, bones.get(Bone::RightEye))?;
+    let eye = |bone: &Turned<'_>, t: f32, is_left: bool| {
+        // The export turns an eye by Ry(yaw)·Rx(−pitch).
+        let (yaw, x, _) = bone.at(t).to_euler(EulerRot::YXZ);
+        let turn = [yaw.to_degrees(), -x.to_degrees()];
+        match look {
+            Gaze::Bones(look) => look.gaze(turn, is_left),
+            _ => turn,
+        }
+    };
+    Some(
+        times
+            .iter()
+            .map(|&t| [eye(&left, start + t, true), eye(&right, start + t, false)])
+            .collect(),
+    )
+}
