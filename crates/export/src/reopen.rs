@@ -87,7 +87,7 @@ fn extension(name: &str) -> Option<String> {
 /// gaze its bones turn; `None` for a file without one (or a character made in code).
 #[must_use]
 pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
-    let faceanim_rig::source::Take {
+    let faceanim_rig::turns::Take {
         animation,
         fps,
         gaze,

@@ -69,18 +69,6 @@ pub struct GeneratedShapes {
     pub template: String,
 }
 
-/// A file's animation played as a take (see [`GltfSource::take`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Take {
-    /// Its weights per frame, and the head's turn in character space where it turns the head.
-    pub animation: crate::animation::MorphAnimation,
-    /// Its rate, frames a second.
-    pub fps: f32,
-    /// Each eye's gaze `[yaw, pitch]` in degrees per frame (left eye, right eye), where it
-    /// turns the eye bones.
-    pub gaze: Option<Vec<[[f32; 2]; 2]>>,
-}
-
 impl GltfSource {
     /// Whether the file's buffer views were compressed with meshopt (`EXT_meshopt_compression`,
     /// as gltfpack and VRoid's optimisers write): the GLB exporter compresses them again.
@@ -94,28 +82,6 @@ impl GltfSource {
     #[must_use]
     pub fn animations(&self) -> &[crate::file_animation::FileAnimation] {
         &self.animations
-    }
-
-    /// The animation that opens as a take: the last one faceanim wrote (exports add theirs
-    /// after the file's own), else the file's first; played on the character's blendshapes
-    /// (see [`crate::file_animation::FileAnimation::sample`]) with the head's turn it makes
-    /// (`rotations`) and the eyes' gaze (see [`crate::turns`]), at its rate.
-    #[must_use]
-    pub fn take(&self) -> Option<Take> {
-        let animation = self
-            .animations
-            .iter()
-            .rev()
-            .find(|a| a.ours)
-            .or_else(|| self.animations.first())?;
-        let mut played = animation.sample(&self.shapes);
-        let start = animation.start();
-        played.rotations = crate::turns::head(self, animation, start, &played.times);
-        Some(Take {
-            gaze: crate::turns::gaze(self, animation, start, &played.times),
-            animation: played,
-            fps: animation.fps(),
-        })
     }
 
     /// The file's JSON document, as read (compression decoded, resources embedded).

@@ -1,15 +1,52 @@
-//! What a file's animation turns, read back as a take's head pose and gaze: the inverse of the
-//! rules faceanim's export turns bones by (`faceanim_export::bones`). A head pose is the turns
-//! of the upper spine, the neck and the head (or of the scene's root, for a character without
-//! a head bone) in character space, one after the other; each eye's gaze is its bone's turn,
-//! read through a VRM's lookAt range maps where it has them. Files keyed in other tools read
-//! the same way: whatever turns those bones is the head pose and the gaze.
+//! The take a file's animation opens as ([`GltfSource::take`]), with what it turns read back as
+//! the take's head pose and gaze: the inverse of the rules faceanim's export turns bones by
+//! (`faceanim_export::bones`). A head pose is the turns of the upper spine, the neck and the
+//! head (or of the scene's root, for a character without a head bone) in character space, one
+//! after the other; each eye's gaze is its bone's turn, read through a VRM's lookAt range maps
+//! where it has them. Files keyed in other tools read the same way: whatever turns those bones
+//! is the head pose and the gaze.
 
 use glam::{EulerRot, Quat};
 
 use crate::bones::{Bone, Gaze, Joint};
 use crate::file_animation::{FileAnimation, RotationTrack};
 use crate::source::GltfSource;
+
+/// A file's animation played as a take (see [`GltfSource::take`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Take {
+    /// Its weights per frame, and the head's turn in character space where it turns the head.
+    pub animation: crate::animation::MorphAnimation,
+    /// Its rate, frames a second.
+    pub fps: f32,
+    /// Each eye's gaze `[yaw, pitch]` in degrees per frame (left eye, right eye), where it
+    /// turns the eye bones.
+    pub gaze: Option<Vec<[[f32; 2]; 2]>>,
+}
+
+impl GltfSource {
+    /// The animation that opens as a take: the last one faceanim wrote (exports add theirs
+    /// after the file's own), else the file's first; played on the character's blendshapes
+    /// (see [`crate::file_animation::FileAnimation::sample`]) with the head's turn it makes
+    /// (`rotations`) and the eyes' gaze (see [`crate::turns`]), at its rate.
+    #[must_use]
+    pub fn take(&self) -> Option<Take> {
+        let animation = self
+            .animations
+            .iter()
+            .rev()
+            .find(|a| a.ours)
+            .or_else(|| self.animations.first())?;
+        let mut played = animation.sample(&self.shapes);
+        let start = animation.start();
+        played.rotations = head(self, animation, start, &played.times);
+        Some(Take {
+            gaze: gaze(self, animation, start, &played.times),
+            animation: played,
+            fps: animation.fps(),
+        })
+    }
+}
 
 /// The node a captured head pose turns in `source`: its head bone, else the scene's first
 /// root node (the whole character).
