@@ -382,6 +382,62 @@ fn degrees_between(a: glam::Quat, b: glam::Quat) -> f32 {
     2.0 * a.dot(b).abs().min(1.0).acos().to_degrees()
 }
 
+/// The Blender avatar made a VRM 0.x (its scene turned to face −Z, lookAt by bone with the
+/// specification's default curves: 90° of gaze turns the eyes 10°) and a VRM 1.0: a head pose
+/// and a gaze written onto each as bones open again as the same head pose and eyeLook values.
+#[test]
+fn head_and_gaze_come_back_from_vrm_bones() {
+    let dir = output_dir("made-by-others-vrm-bones");
+    let head = [-25.0f32, 12.0, -6.0];
+    let looks = [
+        "eyeLookIn_L",
+        "eyeLookOut_R",
+        "eyeLookDown_L",
+        "eyeLookDown_R",
+    ];
+    let written = [0.8f32, 0.8, 0.5, 0.5];
+    let clip = serde_json::json!({
+        "fps": 30,
+        "blendshapes": looks,
+        "frames": vec![written; 6],
+        "head": vec![head; 6],
+    });
+    let clip_path = dir.join("look.json");
+    std::fs::write(&clip_path, clip.to_string()).unwrap();
+    for kind in [VrmKind::V0, VrmKind::V1] {
+        let name = format!("{kind:?}.vrm");
+        let avatar = dir.join(format!("avatar-{name}"));
+        std::fs::write(&avatar, with_vrm(blender_avatar(), kind)).unwrap();
+        let out = dir.join(&name);
+        export_with_clip(&avatar, &out, &clip_path);
+        let back =
+            faceanim_export::reopen::clip_of_file(&name, &std::fs::read(&out).unwrap()).unwrap();
+        for pose in back.clip.head.as_ref().expect("no head pose") {
+            for (read, want) in pose.iter().zip(head) {
+                assert!(
+                    (read - want).abs() < 0.05,
+                    "{name}: head {pose:?}, written {head:?}"
+                );
+            }
+        }
+        for (look, want) in looks.iter().zip(written) {
+            let c = back
+                .clip
+                .blendshapes
+                .iter()
+                .position(|n| n == look)
+                .unwrap();
+            for row in &back.clip.frames {
+                assert!(
+                    (row[c] - want).abs() < 1e-3,
+                    "{name}: {look} {} for {want}",
+                    row[c]
+                );
+            }
+        }
+    }
+}
+
 /// A head pose, gaze and an open jaw exported onto the Blender avatar's bones, read back by
 /// Blender: the head turns by the whole pose, shared with the neck (half) and the chest (a share
 /// of the yaw); both eyes look left and up on their bones; the jaw opens about its hinge.
