@@ -21,34 +21,19 @@ pub(super) fn read(
             .name()
             .map_or_else(|| format!("animation {a}"), str::to_owned);
         let mut tracks: Vec<WeightsTrack> = Vec::new();
-        let mut turns: Vec<RotationTrack> = Vec::new();
         let unread = |c: usize, why: String, what: &str| {
             format!(
                 "animations[{a}].channels[{c}] ('{}'): {why}; its {what} are not read",
                 crate::excerpt(&name)
             )
         };
+        // Rotation channels are read only for an animation that moves morph targets (a body's
+        // own animations are no take).
+        let mut rotations = Vec::new();
         for (c, channel) in animation.channels().enumerate() {
             let target = channel.target();
-            let sampler = channel.sampler();
-            let interpolation = match sampler.interpolation() {
-                GltfInterpolation::Step => Interpolation::Step,
-                GltfInterpolation::Linear => Interpolation::Linear,
-                GltfInterpolation::CubicSpline => Interpolation::CubicSpline,
-            };
             if target.property() == Property::Rotation {
-                let node = target.node().index() as u32;
-                let read = keys(buffers, &sampler, Dimensions::Vec4).and_then(|(times, values)| {
-                    let quats = values
-                        .chunks_exact(4)
-                        .map(|q| [q[0], q[1], q[2], q[3]])
-                        .collect();
-                    RotationTrack::new(node, times, quats, interpolation)
-                });
-                match read {
-                    Ok(track) => turns.push(track),
-                    Err(why) => warnings.push(unread(c, why, "rotations")),
-                }
+                rotations.push((c, channel));
                 continue;
             }
             if target.property() != Property::MorphTargetWeights {
@@ -67,12 +52,32 @@ pub(super) fn read(
                 .map(|p| p.morph_targets().len())
                 .max()
                 .unwrap_or(0);
+            let sampler = channel.sampler();
             let read = keys(buffers, &sampler, Dimensions::Scalar).and_then(|(times, values)| {
-                WeightsTrack::new(mesh_index, times, values, targets, interpolation)
+                WeightsTrack::new(mesh_index, times, values, targets, interpolation(&sampler))
             });
             match read {
                 Ok(track) => tracks.push(track),
                 Err(why) => warnings.push(unread(c, why, "weights")),
+            }
+        }
+        if tracks.is_empty() {
+            continue;
+        }
+        let mut turns: Vec<RotationTrack> = Vec::new();
+        for (c, channel) in rotations {
+            let sampler = channel.sampler();
+            let node = channel.target().node().index() as u32;
+            let read = keys(buffers, &sampler, Dimensions::Vec4).and_then(|(times, values)| {
+                let quats = values
+                    .chunks_exact(4)
+                    .map(|q| [q[0], q[1], q[2], q[3]])
+                    .collect();
+                RotationTrack::new(node, times, quats, interpolation(&sampler))
+            });
+            match read {
+                Ok(track) => turns.push(track),
+                Err(why) => warnings.push(unread(c, why, "rotations")),
             }
         }
         let ours = animation
@@ -80,14 +85,12 @@ pub(super) fn read(
             .as_ref()
             .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
             .is_some_and(|extras| extras.get(crate::file_animation::EXTRAS_KEY).is_some());
-        if !tracks.is_empty() {
-            out.push(FileAnimation {
-                name,
-                tracks,
-                ours,
-                turns,
-            });
-        }
+        out.push(FileAnimation {
+            name,
+            tracks,
+            ours,
+            turns,
+        });
     }
     out
 }
@@ -103,4 +106,13 @@ fn keys(
     let values =
         read_floats(buffers, &sampler.output(), Some(dimensions)).map_err(|e| e.to_string())?;
     Ok((times, values))
+}
+
+/// How `sampler` goes from key to key.
+fn interpolation(sampler: &gltf::animation::Sampler<'_>) -> Interpolation {
+    match sampler.interpolation() {
+        GltfInterpolation::Step => Interpolation::Step,
+        GltfInterpolation::Linear => Interpolation::Linear,
+        GltfInterpolation::CubicSpline => Interpolation::CubicSpline,
+    }
 }
