@@ -21,6 +21,19 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# What faceanim's build links: CMU PocketSphinx with its US English models (lip sync's
+# recogniser) and eSpeak NG (transcripts in any language).
+libraries=(libpocketsphinx-dev pocketsphinx-en-us libespeak-ng-dev)
+
+packages=()
+# Adds to `packages` those of the Debian packages named that are not installed.
+want() {
+  local package
+  for package in "$@"; do
+    dpkg -s "$package" >/dev/null 2>&1 || packages+=("$package")
+  done
+}
+
 apt_install() {
   (($#)) || return 0
   local sudo=""
@@ -31,23 +44,21 @@ apt_install() {
 }
 
 if [ "${1:-}" = libraries ]; then
-  packages=()
-  for package in libpocketsphinx-dev pocketsphinx-en-us libespeak-ng-dev; do
-    dpkg -s "$package" >/dev/null 2>&1 || packages+=("$package")
-  done
+  if ! command -v dpkg >/dev/null 2>&1; then
+    echo "setup: lip sync needs CMU PocketSphinx 0.8 (libpocketsphinx, with its en-us models) and eSpeak NG (libespeak-ng); install them with your system's packages, or faceanim's speech features will say they are missing" >&2
+    exit 0
+  fi
+  want "${libraries[@]}"
   apt_install "${packages[@]}"
   exit 0
 fi
 
-packages=()
 command -v blender >/dev/null 2>&1 || packages+=(blender)
-dpkg -s python3-numpy >/dev/null 2>&1 || packages+=(python3-numpy)
+want python3-numpy
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
-for package in libpocketsphinx-dev pocketsphinx-en-us pocketsphinx-testdata flite libespeak-ng-dev espeak-ng; do
-  dpkg -s "$package" >/dev/null 2>&1 || packages+=("$package")
-done
+want "${libraries[@]}" pocketsphinx-testdata flite espeak-ng
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 apt_install "${packages[@]}"
 
