@@ -13,8 +13,9 @@ import path from 'node:path';
 
 const [url, out, phonePort, sender] = process.argv.slice(2);
 fs.mkdirSync(out, { recursive: true });
-const fail = (message) => { console.error(`phone-panel-e2e: ${message}`); process.exit(1); };
-const check = (ok, message) => { if (!ok) fail(message); };
+// A failure throws, so that the phone is stopped and the browser closed before node exits with
+// the message.
+const check = (ok, message) => { if (!ok) throw new Error(`phone-panel-e2e: ${message}`); };
 
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
@@ -50,15 +51,15 @@ try {
   const seen = await page.evaluate(async () => {
     const s = window.studio;
     const jaw = s.character.blendshapes.indexOf('jawOpen');
-    let max = 0, min = 1, texts = [];
+    let max = 0, min = 1, last = '';
     const start = performance.now();
     while (performance.now() - start < 4000) {
       const w = s.meshes[0].morphTargetInfluences[jaw];
       max = Math.max(max, w); min = Math.min(min, w);
-      texts.push(document.getElementById('vmc-stats').textContent);
+      last = document.getElementById('vmc-stats').textContent;
       await new Promise((r) => requestAnimationFrame(r));
     }
-    return { max, min, last: texts[texts.length - 1], jaw };
+    return { max, min, last, jaw };
   });
   check(seen.jaw >= 0, 'the built-in head has no jawOpen');
   check(seen.max - seen.min > 0.3, `the mouth did not follow the phone: jawOpen ${seen.min.toFixed(2)}..${seen.max.toFixed(2)}`);
@@ -76,7 +77,7 @@ try {
   await page.waitForFunction(() => !document.getElementById('vmc-stats').textContent.includes('packets/s'), null, { timeout: 10000 });
   const stopped = await page.textContent('#vmc-stats');
   check(stopped.startsWith('Listening for Live Link Face'), `Stop did not end the live view: ${stopped}`);
-  if (errors.length) fail(`page errors: ${errors.join('; ')}`);
+  check(!errors.length, `page errors: ${errors.join('; ')}`);
   console.log(JSON.stringify({ packets_per_second: rate, last_packet_ms: age, jaw_open_min: seen.min, jaw_open_max: seen.max }));
 } finally {
   if (phone && phone.exitCode === null) phone.kill();

@@ -410,30 +410,41 @@ fn head_and_gaze_come_back_from_vrm_bones() {
         std::fs::write(&avatar, with_vrm(blender_avatar(), kind)).unwrap();
         let out = dir.join(&name);
         export_with_clip(&avatar, &out, &clip_path);
-        let back =
-            faceanim_export::reopen::clip_of_file(&name, &std::fs::read(&out).unwrap()).unwrap();
-        for pose in back.clip.head.as_ref().expect("no head pose") {
-            for (read, want) in pose.iter().zip(head) {
-                assert!(
-                    (read - want).abs() < 0.05,
-                    "{name}: head {pose:?}, written {head:?}"
-                );
-            }
+        let values: Vec<(&str, f32)> = looks.into_iter().zip(written).collect();
+        assert_reopened(&name, &std::fs::read(&out).unwrap(), head, &values);
+    }
+}
+
+/// `file` (its bytes, named `name`) opened again as a take holds the head pose `head` (within
+/// 0.05°) and each `(shape, value)` (within 1e-3) at every frame.
+fn assert_reopened(name: &str, file: &[u8], head: [f32; 3], values: &[(&str, f32)]) {
+    let back = faceanim_export::reopen::clip_of_file(name, file).unwrap();
+    let poses = back
+        .clip
+        .head
+        .as_ref()
+        .expect("the head pose was not read back");
+    for pose in poses {
+        for (read, written) in pose.iter().zip(head) {
+            assert!(
+                (read - written).abs() < 0.05,
+                "{name}: head {pose:?}, written {head:?}"
+            );
         }
-        for (look, want) in looks.iter().zip(written) {
-            let c = back
-                .clip
-                .blendshapes
-                .iter()
-                .position(|n| n == look)
-                .unwrap();
-            for row in &back.clip.frames {
-                assert!(
-                    (row[c] - want).abs() < 1e-3,
-                    "{name}: {look} {} for {want}",
-                    row[c]
-                );
-            }
+    }
+    for &(shape, written) in values {
+        let c = back
+            .clip
+            .blendshapes
+            .iter()
+            .position(|n| n == shape)
+            .unwrap_or_else(|| panic!("{name}: no {shape}"));
+        for row in &back.clip.frames {
+            assert!(
+                (row[c] - written).abs() < 1e-3,
+                "{name}: {shape} {} for {written}",
+                row[c]
+            );
         }
     }
 }
@@ -522,45 +533,26 @@ fn head_eyes_and_jaw_go_on_the_blender_avatars_bones() {
     let source = imported.character.source().unwrap();
     let stored = source.animations()[0].sample(source.shapes());
     let names = imported.character.blendshape_names();
-    let column = |names: &[String], name: &str| names.iter().position(|n| n == name).unwrap();
     for name in ["eyeLookOut_L", "eyeLookIn_R", "eyeLookUp_L", "eyeLookUp_R"] {
-        let c = column(&names, name);
+        let c = names.iter().position(|n| n == name).unwrap();
         assert!(
             stored.weights.iter().all(|row| row[c] == 0.0),
             "{name} moves beside the eye bones"
         );
     }
     // Opened again, the take has its head pose and its gaze back from the bones.
-    let back = faceanim_export::reopen::clip_of_file("bones.glb", &bytes).unwrap();
-    let poses = back
-        .clip
-        .head
-        .as_ref()
-        .expect("the head pose was not read back");
-    for pose in poses {
-        for (read, written) in pose.iter().zip(head) {
-            assert!(
-                (read - written).abs() < 0.05,
-                "head {pose:?}, written {head:?}"
-            );
-        }
-    }
-    for (name, written) in [
-        ("eyeLookOut_L", 1.0),
-        ("eyeLookIn_R", 1.0),
-        ("eyeLookUp_L", 1.0),
-        ("eyeLookUp_R", 1.0),
-        ("eyeLookIn_L", 0.0),
-        ("eyeLookDown_R", 0.0),
-        ("jawOpen", 0.6),
-    ] {
-        let c = column(&back.clip.blendshapes, name);
-        for row in &back.clip.frames {
-            assert!(
-                (row[c] - written).abs() < 1e-3,
-                "{name}: {} for {written}",
-                row[c]
-            );
-        }
-    }
+    assert_reopened(
+        "bones.glb",
+        &bytes,
+        head,
+        &[
+            ("eyeLookOut_L", 1.0),
+            ("eyeLookIn_R", 1.0),
+            ("eyeLookUp_L", 1.0),
+            ("eyeLookUp_R", 1.0),
+            ("eyeLookIn_L", 0.0),
+            ("eyeLookDown_R", 0.0),
+            ("jawOpen", 0.6),
+        ],
+    );
 }
