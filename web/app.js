@@ -16,6 +16,7 @@
 //   voice.js     the microphone drives the mouth in real time (voice-worklet.js: its samples)
 //   visemes.js   lip sync's viseme table, edited
 //   retarget.js  the retarget map: which of the character's shapes answer to each ARKit channel
+//   face-marks.js marking the face by hand where the face model finds none
 //   medians.js   running medians of live measurements
 //   vmc.js       VMC in: a phone tracker or another app drives the character
 //   xr.js        immersive sketching in a headset (WebXR): pens, the seed's states, navigation

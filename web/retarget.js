@@ -5,6 +5,7 @@
 
 import { api } from './api.js';
 import { showError } from './status.js';
+import { showMarks } from './face-marks.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 
@@ -12,6 +13,9 @@ const FROM = { by_name: 'by name', geometry: 'geometry', user: 'set by you', non
 
 /** Where answers go: the Capture tab's state (given by `showMap`). */
 let applyState = (/** @type {any} */ _view) => {};
+
+/** Whether the last map said that no face was found (the section opens once when it does). */
+let noFace = false;
 
 /** A row's shapes as the field shows them. */
 const written = (/** @type {[string, number][]} */ shapes) =>
@@ -48,6 +52,9 @@ export function showMap(/** @type {any} */ map, /** @type {(view: any) => void} 
   const make = /** @type {HTMLButtonElement} */ ($('retarget-make'));
   make.textContent = map.loaded ? 'Make again' : 'Make map';
   make.disabled = busy;
+  showMarks(map, apply, busy);
+  if (map.no_face && !noFace) /** @type {HTMLDetailsElement} */ ($('retarget-section')).open = true;
+  noFace = map.no_face;
   const table = $('retarget-rows');
   if (document.activeElement && table.contains(document.activeElement)) return;
   table.replaceChildren(...map.rows.map((/** @type {any} */ row) => {

@@ -52,7 +52,9 @@ pub enum BridgeError {
 
 /// `character`'s retarget map: by name, by geometry from the shipped template for what its
 /// names leave out, and calibrated on the character unless `calibrate` is false. A user's
-/// rows in `previous` are kept.
+/// rows in `previous` are kept. The face is found by the face model, or taken from `points`
+/// where the user marked it ([`faceanim_fit::points`]); a face the face model cannot read on
+/// the character's renders leaves the map uncalibrated (MediaPipe's scores as they are).
 ///
 /// # Errors
 /// [`BridgeError`] naming what failed.
@@ -60,16 +62,24 @@ pub fn make_map(
     character: &Character,
     models: &FaceModels,
     previous: Option<&RetargetMap>,
+    points: Option<&faceanim_fit::FacePoints>,
     calibrate: bool,
     control: Control<'_>,
 ) -> Result<RetargetMap, BridgeError> {
     let started = Instant::now();
     let templates = faceanim_fit::Template::Realistic.characters()?;
     let templates: Vec<&Character> = templates.iter().collect();
-    let mut map = faceanim_fit::retarget_map(character, &templates, models, previous)?;
+    let mut map = faceanim_fit::retarget_map(character, &templates, models, previous, points)?;
     if calibrate {
         let camera = FaceCamera::frame(character, models)?;
-        map.calibration = Some(camera.calibrate(character, models, &map, control)?);
+        match camera.calibrate(character, models, &map, control) {
+            Ok(calibration) => map.calibration = Some(calibration),
+            Err(AdaptError::NoNeutralFace) => tracing::warn!(
+                "{}: the face model does not read its renders, so the map is not calibrated",
+                character.name()
+            ),
+            Err(e) => return Err(e.into()),
+        }
     }
     map.made.seconds = Some((started.elapsed().as_secs_f32() * 10.0).round() / 10.0);
     Ok(map)

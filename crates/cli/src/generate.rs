@@ -26,6 +26,11 @@ pub struct GenerateArgs {
     /// Only these ARKit shapes (comma-separated ARKit names).
     #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub only: Vec<String>,
+    /// Where the head's face is, when the face model cannot find it: a file of ten points
+    /// marked on it (default: NAME.face-points.json beside the head, when there is one; the
+    /// studio writes it).
+    #[arg(long, value_name = "FILE")]
+    pub face_points: Option<PathBuf>,
     /// Print a JSON report on stdout.
     #[arg(long)]
     pub json: bool,
@@ -60,6 +65,11 @@ pub fn run(args: &GenerateArgs) -> anyhow::Result<()> {
     let models = faceanim_track::FaceModels::load().context("loading the face models")?;
     let options = Options {
         only: (!args.only.is_empty()).then(|| args.only.clone()),
+        points: crate::retarget::face_points(
+            Some(&args.character),
+            &user,
+            args.face_points.as_deref(),
+        )?,
     };
     let (with, generated) =
         faceanim_fit::with_generated_shapes(&user, &templates, &models, &options)

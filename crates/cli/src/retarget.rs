@@ -26,6 +26,11 @@ pub struct RetargetArgs {
     /// out), or `CHANNEL=` for nothing; repeatable. The channel then moves those shapes alone.
     #[arg(long = "set", value_name = "CHANNEL=SHAPES")]
     pub set: Vec<String>,
+    /// Where the character's face is, when the face model cannot find it: a file of ten points
+    /// marked on it (default: NAME.face-points.json beside the character, when there is one;
+    /// the studio writes it).
+    #[arg(long, value_name = "FILE")]
+    pub face_points: Option<PathBuf>,
     /// Skip the calibration on the character's renders (MediaPipe's scores are used as they
     /// are).
     #[arg(long)]
@@ -48,9 +53,20 @@ pub fn run(args: RetargetArgs) -> anyhow::Result<()> {
     let models = FaceModels::load().context("loading the face models")?;
     let names = character.blendshape_names();
     let existing = read(&path, &names)?;
+    let points = face_points(
+        args.character.as_deref(),
+        &character,
+        args.face_points.as_deref(),
+    )?;
     let mut map = match existing {
         Some(map) if !args.remake && (map.calibration.is_some() || args.no_calibration) => map,
-        previous => make(&character, &models, previous.as_ref(), !args.no_calibration)?,
+        previous => make(
+            &character,
+            &models,
+            previous.as_ref(),
+            points.as_ref(),
+            !args.no_calibration,
+        )?,
     };
     for set in &args.set {
         let (channel, shapes) = parse_set(set)?;
@@ -172,6 +188,35 @@ pub fn default_path(character_path: Option<&Path>, character: &Character) -> Pat
     )
 }
 
+/// The points marked on `character`'s face: those in `given`, else those beside its file
+/// (`NAME.face-points.json`) when there are any.
+///
+/// # Errors
+/// The file cannot be read, or is not a points file (naming the field).
+pub fn face_points(
+    character_path: Option<&Path>,
+    character: &Character,
+    given: Option<&Path>,
+) -> anyhow::Result<Option<faceanim_fit::FacePoints>> {
+    let path = match given {
+        Some(path) => path.to_owned(),
+        None => {
+            let beside = faceanim_fit::points::default_path(
+                character_path.and_then(Path::parent),
+                character.name(),
+            );
+            if !beside.exists() {
+                return Ok(None);
+            }
+            beside
+        }
+    };
+    let bytes = faceanim_files::read_bytes(&path)?;
+    let points = faceanim_fit::FacePoints::from_json(&bytes)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(Some(points))
+}
+
 /// The map at `path` if there is one that fits `character` (one of another character is said
 /// and ignored).
 ///
@@ -203,6 +248,7 @@ fn make(
     character: &Character,
     models: &FaceModels,
     previous: Option<&RetargetMap>,
+    points: Option<&faceanim_fit::FacePoints>,
     calibrate: bool,
 ) -> anyhow::Result<RetargetMap> {
     eprintln!(
@@ -231,6 +277,7 @@ fn make(
         character,
         models,
         previous,
+        points,
         calibrate,
         faceanim_adapt::Control {
             progress: &progress,
@@ -278,7 +325,8 @@ pub fn for_capture(
     if !faceanim_adapt::bridge::needs_map(character) {
         return Ok(None);
     }
-    let map = make(character, models, None, true)?;
+    let points = face_points(character_path, character, None)?;
+    let map = make(character, models, None, points.as_ref(), true)?;
     match faceanim_files::write_atomic(&path, map.to_json().as_bytes()) {
         Ok(()) => eprintln!(
             "saved {} (edit it, or faceanim retarget --set)",

@@ -48,6 +48,7 @@ fn map_of(character: &Character, models: &FaceModels) -> faceanim_retarget::Reta
         character,
         models,
         None,
+        None,
         true,
         faceanim_adapt::Control::silent(),
     )

@@ -1446,3 +1446,78 @@ fn live_view_names(studio: &Studio) -> serde_json::Value {
     assert_eq!(status, 200, "{body}");
     serde_json::from_str::<serde_json::Value>(&body).unwrap()["blendshapes"].clone()
 }
+
+/// A face the face model cannot read, marked by hand in a real browser
+/// (`tools/face-marks-e2e.mjs`): an ICT head (identity 48) with its shapes renamed so its rig
+/// needs a map, upside down (a file written Z-up) so that no face is found on it. Making the map
+/// says so and asks for the marks; ten clicks (and an undo) later the map is made from them,
+/// and the marks are kept beside the character where a user clicked them.
+#[test]
+fn a_face_is_marked_by_hand_when_none_is_found() {
+    use faceanim_fit::{FaceLandmarks, FacePoint};
+    let dir = tempfile::tempdir().unwrap();
+    let original = faceanim_testdata::ict_identity("ict-face-id48.glb");
+    let flip = glam::Quat::from_rotation_z(std::f32::consts::PI);
+    let mut parts = original.to_parts();
+    parts.name = "upside-down".into();
+    parts.positions = parts.positions.iter().map(|p| flip * *p).collect();
+    parts.normals = None;
+    parts.normal_deltas = None;
+    parts.blendshapes = parts
+        .blendshapes
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            faceanim_rig::Blendshape::from_sparse(
+                format!("shape_{k}"),
+                b.indices().to_vec(),
+                b.deltas().iter().map(|d| flip * *d).collect(),
+            )
+        })
+        .collect();
+    let head = faceanim_rig::Character::new(parts).unwrap();
+    let path = dir.path().join("upside-down.glb");
+    std::fs::write(&path, faceanim_export::view_glb(&head, None).unwrap()).unwrap();
+    // Where a user would click: MediaPipe's points on the head the right way up, turned.
+    let models = faceanim_track::FaceModels::load().unwrap();
+    let found = FaceLandmarks::find(original, &models).unwrap();
+    let points: serde_json::Map<String, serde_json::Value> = FacePoint::ALL
+        .iter()
+        .map(|p| {
+            let at = found.points[p.landmark()]
+                .unwrap()
+                .on(original.triangles(), original.positions());
+            (
+                p.key().to_owned(),
+                serde_json::json!((flip * at).to_array()),
+            )
+        })
+        .collect();
+    let studio = start_on(Some(&path), &dir.path().join("marks.faceanim.json"), &[]);
+    let measured = browser_script(
+        "face-marks-e2e.mjs",
+        &studio,
+        "",
+        &output_dir("face-marks"),
+        &[serde_json::Value::Object(points.clone()).to_string().into()],
+    );
+    eprintln!("marked by hand: {measured}");
+    assert!(
+        measured["geometry_rows"].as_u64().unwrap() >= 40,
+        "{measured}"
+    );
+    // Kept beside the character, each within 2 % of the eyes' span of where it was clicked.
+    let kept = faceanim_fit::FacePoints::from_json(
+        &std::fs::read(dir.path().join("upside-down.face-points.json")).unwrap(),
+    )
+    .unwrap();
+    let given = |p: FacePoint| {
+        let v = &points[p.key()];
+        glam::Vec3::from_array(std::array::from_fn(|i| v[i].as_f64().unwrap() as f32))
+    };
+    let span = given(FacePoint::RightEyeOuter).distance(given(FacePoint::LeftEyeOuter));
+    for p in FacePoint::ALL {
+        let off = kept.at(p).distance(given(p));
+        assert!(off < 0.02 * span, "{}: {off} from the click", p.key());
+    }
+}

@@ -17,7 +17,10 @@ const RENDER: u32 = 512;
 /// mouth corners, brows.
 const SKIN: [usize; 12] = [1, 4, 10, 152, 234, 454, 61, 291, 105, 334, 50, 280];
 /// The first iris landmark: those from here on lie on the eyes.
-const IRISES: usize = 468;
+pub(crate) const IRISES: usize = 468;
+/// A face found on a front render turned or tilted further than this (degrees) is no face
+/// looking along +Z.
+const UPRIGHT_DEGREES: f32 = 40.0;
 
 /// A point on a character's surface: a triangle and barycentric weights of its corners.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,61 +58,8 @@ impl FaceLandmarks {
     /// [`FitError::NoFace`] when the landmark model finds no face on the render (a face it
     /// cannot read: too stylised, turned away, hidden), [`FitError::Model`] if a model fails.
     pub fn find(character: &Character, models: &FaceModels) -> Result<FaceLandmarks, FitError> {
-        let neutral = character.pose(&[]);
-        // Small holes (a few triangles missing) would show the background through the face
-        // and hide it from the face model: the render closes them; the landmarks are still
-        // lifted onto the character's own triangles.
-        let patched = patched(character);
-        let shown = patched.as_ref().unwrap_or(character);
-        let appearance = Appearance::of(shown);
-        let mut found = None;
-        for view in views(character) {
-            let camera = Camera::front(&view, 0.75);
-            let image = faceanim_render::render(shown, &neutral, &camera, &appearance, RENDER);
-            let frame = Frame {
-                width: RENDER as usize,
-                height: RENDER as usize,
-                rgb: &image.rgb,
-            };
-            let face = models
-                .find_face(&frame)
-                .map_err(|e| FitError::Model(e.to_string()))?
-                .filter(|f| f.presence >= 0.5);
-            if let Some(face) = face {
-                found = Some((camera, face));
-                break;
-            }
-        }
-        let (camera, face) = found.ok_or_else(|| FitError::NoFace(character.name().to_owned()))?;
-        let triangles = character.triangles();
-        let caster = RayCaster::new(character.positions(), triangles, &camera);
-        let cast = |p: &[f32; 3], on: &dyn Fn(u32) -> bool| {
-            caster.cast(&camera, RENDER as f32, p[0], p[1], on)
-        };
-        // The skin: the pieces of the mesh under landmarks that can only be skin. A landmark
-        // on the lid's edge can see past it to the eyeball; cast again, it lands on the lid.
-        let (piece, _) = crate::mesh::pieces(triangles, character.vertex_count());
-        let piece_of = |t: u32| piece[triangles[t as usize][0] as usize];
-        let skin: Vec<u32> = SKIN
-            .iter()
-            .filter_map(|&i| face.landmarks.get(i))
-            .filter_map(|p| cast(p, &|_| true))
-            .map(|hit| piece_of(hit.triangle))
-            .collect();
-        let on_skin = |t: u32| skin.is_empty() || skin.contains(&piece_of(t));
-        let points = face
-            .landmarks
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                if i < IRISES {
-                    cast(p, &on_skin)
-                } else {
-                    cast(p, &|_| true)
-                }
-            })
-            .collect();
-        Ok(FaceLandmarks { points })
+        detect(character, models, &views(character))?
+            .ok_or_else(|| FitError::NoFace(character.name().to_owned()))
     }
 
     /// How many landmarks met the mesh.
@@ -175,6 +125,95 @@ fn views(character: &Character) -> Vec<Aabb> {
         }
     }
     views
+}
+
+/// The face found on a front render of each of `views` in turn, its landmarks lifted onto the
+/// mesh; `None` when no view shows one.
+pub(crate) fn detect(
+    character: &Character,
+    models: &FaceModels,
+    views: &[Aabb],
+) -> Result<Option<FaceLandmarks>, FitError> {
+    let neutral = character.pose(&[]);
+    // Small holes (a few triangles missing) would show the background through the face
+    // and hide it from the face model: the render closes them; the landmarks are still
+    // lifted onto the character's own triangles.
+    let patched = patched(character);
+    let shown = patched.as_ref().unwrap_or(character);
+    let appearance = Appearance::of(shown);
+    let mut found = None;
+    for view in views {
+        let camera = Camera::front(view, 0.75);
+        let image = faceanim_render::render(shown, &neutral, &camera, &appearance, RENDER);
+        let frame = Frame {
+            width: RENDER as usize,
+            height: RENDER as usize,
+            rgb: &image.rgb,
+        };
+        let face = models
+            .find_face(&frame)
+            .map_err(|e| FitError::Model(e.to_string()))?
+            .filter(|f| f.presence >= 0.5 && upright(character, f));
+        if let Some(face) = face {
+            found = Some((camera, face));
+            break;
+        }
+    }
+    let Some((camera, face)) = found else {
+        return Ok(None);
+    };
+    let triangles = character.triangles();
+    let caster = RayCaster::new(character.positions(), triangles, &camera);
+    let cast = |p: &[f32; 3], on: &dyn Fn(u32) -> bool| {
+        caster.cast(&camera, RENDER as f32, p[0], p[1], on)
+    };
+    // The skin: the pieces of the mesh under landmarks that can only be skin. A landmark
+    // on the lid's edge can see past it to the eyeball; cast again, it lands on the lid.
+    let (piece, _) = crate::mesh::pieces(triangles, character.vertex_count());
+    let piece_of = |t: u32| piece[triangles[t as usize][0] as usize];
+    let skin: Vec<u32> = SKIN
+        .iter()
+        .filter_map(|&i| face.landmarks.get(i))
+        .filter_map(|p| cast(p, &|_| true))
+        .map(|hit| piece_of(hit.triangle))
+        .collect();
+    let on_skin = |t: u32| skin.is_empty() || skin.contains(&piece_of(t));
+    let points = face
+        .landmarks
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            if i < IRISES {
+                cast(p, &on_skin)
+            } else {
+                cast(p, &|_| true)
+            }
+        })
+        .collect();
+    Ok(Some(FaceLandmarks { points }))
+}
+
+/// Whether `face`, found on a front render of `character` at rest, looks at the camera
+/// upright. The model can read a face into a profile or the back of a head; it reports such
+/// a face turned or tilted far (a quarter-turned ICT head: yaw 22°, pitch 28°, roll 49°,
+/// where faces that are there read within a few degrees of 0).
+fn upright(character: &Character, face: &faceanim_track::Face) -> bool {
+    let Some(pose) = face.pose else {
+        return true;
+    };
+    let turned = [pose.yaw, pose.pitch, pose.roll]
+        .iter()
+        .any(|a| a.abs() > UPRIGHT_DEGREES);
+    if turned {
+        tracing::info!(
+            "{}: the face the model found on a front render is turned (yaw {:.0}°, pitch {:.0}°, roll {:.0}°): not taken",
+            character.name(),
+            pose.yaw,
+            pose.pitch,
+            pose.roll
+        );
+    }
+    !turned
 }
 
 /// Triangles binned by where they fall on the picture, so a ray tests only its own cell's.
@@ -306,6 +345,41 @@ fn intersect(origin: Vec3, direction: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_face_read_into_a_profile_is_not_taken() {
+        let character = Character::new(faceanim_rig::CharacterParts {
+            name: "head".into(),
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            triangles: vec![[0, 1, 2]],
+            ..faceanim_rig::CharacterParts::default()
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+        let face = |yaw: f32, pitch: f32, roll: f32| faceanim_track::Face {
+            detection_score: 0.9,
+            presence: 1.0,
+            landmarks: Vec::new(),
+            scores: Vec::new(),
+            region: faceanim_track::Region {
+                cx: 0.0,
+                cy: 0.0,
+                size: 1.0,
+                rotation: 0.0,
+            },
+            pose: Some(faceanim_track::HeadPose {
+                yaw,
+                pitch,
+                roll,
+                translation: [0.0; 3],
+                pixels_per_cm: 10.0,
+            }),
+        };
+        // As the model read the real face of ICT identity 3 facing the camera, and a face it
+        // read into that head's profile.
+        assert!(upright(&character, &face(-1.0, -1.7, -0.8)));
+        assert!(!upright(&character, &face(21.8, 28.1, 49.2)));
+        assert!(!upright(&character, &face(-60.0, 0.0, 0.0)));
+    }
 
     #[test]
     fn a_ray_meets_the_nearer_of_two_triangles() {

@@ -6,7 +6,8 @@
 //!
 //! 1. **The face** ([`landmarks`]): both heads are rendered neutral from the front, MediaPipe's
 //!    face landmark model reads each render, and each of the 478 landmarks is followed back
-//!    along its camera ray onto the mesh.
+//!    along its camera ray onto the mesh. Where the model finds no face, the user marks ten
+//!    points on it and the template's landmarks are carried there ([`points`]).
 //! 2. **Registration** ([`register`]): the similarity that best maps the template's landmarks
 //!    onto the head's, then non-rigid ICP with a stiffness schedule, so that the template's
 //!    surface lies on the head's.
@@ -22,6 +23,7 @@
 pub mod landmarks;
 mod mapping;
 mod mesh;
+pub mod points;
 pub mod register;
 mod sparse;
 pub mod templates;
@@ -34,6 +36,7 @@ use glam::Vec3;
 
 pub use landmarks::{FaceLandmarks, SurfacePoint};
 pub use mapping::{MIN_EXPLAINED, SPARSITY, retarget_map};
+pub use points::{FacePoint, FacePoints, PointsError};
 pub use register::Similarity;
 pub use templates::Template;
 
@@ -43,7 +46,9 @@ pub enum FitError {
     /// The landmark model found no face on the character's front render.
     #[error(
         "{0}: no face was found on its front render (the face must look along +Z, glTF's \
-         front, and be readable as a face)"
+         front, and be readable as a face); mark ten points on its face instead: in the \
+         studio (Capture, Retarget map, Mark the face), or in {0}.face-points.json beside its \
+         file (docs/characters.md)"
     )]
     NoFace(String),
     /// Too few landmarks landed on both meshes to place the template.
@@ -97,6 +102,8 @@ pub enum FitError {
 pub struct Options {
     /// Only these ARKit channels (canonical names); every one the templates have when `None`.
     pub only: Option<Vec<String>>,
+    /// Where the user marked the face, when the face model cannot find it (see [`points`]).
+    pub points: Option<FacePoints>,
 }
 
 /// What was made, and how well each template fitted.
@@ -205,7 +212,7 @@ pub fn generate(
             wanted,
         });
     }
-    let user_marks = FaceLandmarks::find(user, models)?;
+    let user_marks = FaceLandmarks::locate(user, models, options.points.as_ref(), templates)?;
     let on_user = OnUser::new(user)?;
     let mut shapes = Vec::new();
     let mut fits = Vec::new();

@@ -17,7 +17,7 @@ use faceanim_rig::Character;
 use faceanim_track::FaceModels;
 use glam::Vec3;
 
-use crate::{FaceLandmarks, FitError, OnUser, channel_deltas};
+use crate::{FaceLandmarks, FacePoints, FitError, OnUser, channel_deltas};
 
 /// The price of a shape in the solve, per unit of its size (see [`Solve`]).
 pub const SPARSITY: f32 = 0.04;
@@ -73,7 +73,8 @@ impl Region {
 
 /// `character`'s retarget map: by name, then by geometry from `templates` (the first that has
 /// a channel gives it) for the channels its names leave out, if any of its shapes is free to
-/// take them. Rows a user set in `previous` (a map of the same character) are kept.
+/// take them. Rows a user set in `previous` (a map of the same character) are kept. The face
+/// is found by the face model, or taken from `points` where the user marked it.
 ///
 /// # Errors
 /// [`FitError`] when the face cannot be found or the template not placed.
@@ -82,6 +83,7 @@ pub fn retarget_map(
     templates: &[&Character],
     models: &FaceModels,
     previous: Option<&RetargetMap>,
+    points: Option<&FacePoints>,
 ) -> Result<RetargetMap, FitError> {
     let names: Vec<String> = character.blendshape_names();
     let parts = character.expression_parts();
@@ -101,7 +103,7 @@ pub fn retarget_map(
         map.set_geometry(Vec::new(), None, Mode::Frame);
         return Ok(map);
     }
-    let user_marks = FaceLandmarks::find(character, models)?;
+    let user_marks = FaceLandmarks::locate(character, models, points, templates)?;
     let on_user = OnUser::new(character)?;
     // Each channel's displacement on the character, from the first template that has it; and
     // every channel's, for the regions.

@@ -157,6 +157,8 @@ async fn generate_shapes(State(both): State<Both>, _unread: Unread) -> Answer<Ge
             ),
         )
     };
+    // Where the user marked the face, when the face model could not find it.
+    let points = lock(&both.desk).face_points().cloned();
     let (imported, path, shapes) = tokio::task::spawn_blocking(move || {
         let models =
             faceanim_track::FaceModels::load().map_err(|e| ApiError::Models(e.to_string()))?;
@@ -166,7 +168,7 @@ async fn generate_shapes(State(both): State<Both>, _unread: Unread) -> Answer<Ge
             &character,
             &templates,
             &models,
-            &faceanim_fit::Options::default(),
+            &faceanim_fit::Options { only: None, points },
         )?;
         let shapes: Vec<String> = generated
             .shapes

@@ -66,6 +66,7 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/adapter/finetune", post(finetune))
         .route("/api/capture/retarget", post(make_map))
         .route("/api/capture/retarget/row", put(map_row))
+        .route("/api/capture/face-points", put(face_points))
         .route("/api/capture/live/start", post(live_start))
         .route("/api/capture/live/stop", post(live_stop))
         .route("/api/capture/live/record", post(live_record))
@@ -547,7 +548,7 @@ async fn make_map(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> 
         json_body(&body, "retarget")?
     };
     let character = both.studio().character.clone();
-    capture::start_map(&both.desk, character, remake)?;
+    capture::start_map(&both.desk, character, remake, None)?;
     Ok(state_of(&both))
 }
 
@@ -563,6 +564,21 @@ struct MapRow {
 async fn map_row(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let MapRow { channel, shapes } = json_body(&body, "retarget row")?;
     both.desk().set_map_row(&channel, shapes)?;
+    Ok(state_of(&both))
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FacePointsBody {
+    /// Each point marked on the face, in the character's space.
+    points: std::collections::BTreeMap<faceanim_fit::FacePoint, [f32; 3]>,
+}
+
+/// Keeps the user's marks on the character's face and makes its map again from them.
+async fn face_points(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
+    let FacePointsBody { points } = json_body(&body, "face points")?;
+    let character = both.studio().character.clone();
+    capture::start_map(&both.desk, character, true, Some(points))?;
     Ok(state_of(&both))
 }
 

@@ -381,6 +381,23 @@ pub struct RetargetView {
     pub seconds: Option<f32>,
     /// The 52 channels in ARKit's order.
     pub rows: Vec<RetargetRowView>,
+    /// The points the user marks on the face where the face model finds none, in the order
+    /// they are asked for.
+    pub marks: Vec<FaceMarkView>,
+    /// Where the user marked them, in the character's space, when they did.
+    pub face_points: Option<std::collections::BTreeMap<faceanim_fit::FacePoint, [f32; 3]>>,
+    /// The last map was not made because the face model found no face: the page asks for
+    /// the marks.
+    pub no_face: bool,
+}
+
+/// A point the user marks on the face.
+#[derive(Debug, Serialize)]
+pub struct FaceMarkView {
+    /// Its name (the key the page sends it under).
+    pub point: faceanim_fit::FacePoint,
+    /// What to click, in words.
+    pub describe: &'static str,
 }
 
 /// One ARKit channel's row of the map.

@@ -42,6 +42,10 @@ pub struct CaptureDesk {
     map: Option<Arc<faceanim_retarget::RetargetMap>>,
     /// Why the map beside the character is not used.
     map_note: Option<String>,
+    /// Where the user marked the character's face (kept beside the map), when they did.
+    face_points: Option<faceanim_fit::FacePoints>,
+    /// The last map was not made because the face model found no face on the character.
+    no_face: bool,
     take: Option<OpenTake>,
     job: Option<Arc<Job>>,
     live: Arc<Mutex<Option<Live>>>,
@@ -131,6 +135,8 @@ impl CaptureDesk {
             adapter_note: None,
             map: None,
             map_note: None,
+            face_points: None,
+            no_face: false,
             take: None,
             job: None,
             live: Arc::new(Mutex::new(None)),

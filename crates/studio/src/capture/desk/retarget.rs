@@ -14,13 +14,28 @@ use crate::capture::models::face_models;
 use crate::error::ApiError;
 use crate::lock;
 use crate::views::JobKind;
-use crate::views::{RetargetRowView, RetargetView};
+use crate::views::{FaceMarkView, RetargetRowView, RetargetView};
 
 impl CaptureDesk {
     /// Reads the map beside the character, when there is one that fits it.
     pub(super) fn load_map(&mut self, character: &Character) {
         self.map = None;
         self.map_note = None;
+        self.no_face = false;
+        self.face_points = None;
+        let points_path = self.points_path(character);
+        if points_path.exists() {
+            let read = faceanim_files::read_bytes(&points_path)
+                .map_err(|e| e.to_string())
+                .and_then(|b| faceanim_fit::FacePoints::from_json(&b).map_err(|e| e.to_string()));
+            match read {
+                Ok(points) => self.face_points = Some(points),
+                Err(e) => {
+                    tracing::warn!("{}: {e}", points_path.display());
+                    self.map_note = Some(format!("{} is not used: {e}", points_path.display()));
+                }
+            }
+        }
         if !self.map_path.exists() {
             return;
         }
@@ -35,6 +50,37 @@ impl CaptureDesk {
                 self.map_note = Some(format!("{} is not used: {e}", self.map_path.display()));
             }
         }
+    }
+
+    /// Where the marks on `character`'s face are kept: beside its map.
+    fn points_path(&self, character: &Character) -> std::path::PathBuf {
+        faceanim_fit::points::default_path(self.map_path.parent(), character.name())
+    }
+
+    /// Where the user marked the character's face, when they did.
+    #[must_use]
+    pub fn face_points(&self) -> Option<&faceanim_fit::FacePoints> {
+        self.face_points.as_ref()
+    }
+
+    /// Keeps the user's marks on `character`'s face (saved beside the map): the next map, and
+    /// shapes generated in the studio, place the template by them.
+    ///
+    /// # Errors
+    /// [`ApiError::Busy`] while a job runs; [`ApiError::Invalid`] naming the point that is
+    /// missing or wrong; the save's error.
+    pub fn set_face_points(
+        &mut self,
+        character: &Character,
+        points: BTreeMap<faceanim_fit::FacePoint, [f32; 3]>,
+    ) -> Result<(), ApiError> {
+        self.busy()?;
+        let points =
+            faceanim_fit::FacePoints::new(points).map_err(|e| ApiError::Invalid(e.to_string()))?;
+        faceanim_files::write_atomic(&self.points_path(character), points.to_json().as_bytes())?;
+        self.face_points = Some(points);
+        self.no_face = false;
+        Ok(())
     }
 
     /// The character's retarget map, when it has one.
@@ -74,6 +120,15 @@ impl CaptureDesk {
             note: self.map_note.clone(),
             seconds: self.map.as_ref().and_then(|m| m.made.seconds),
             rows,
+            marks: faceanim_fit::FacePoint::ALL
+                .iter()
+                .map(|&point| FaceMarkView {
+                    point,
+                    describe: point.describe(),
+                })
+                .collect(),
+            face_points: self.face_points.as_ref().map(|p| p.points.clone()),
+            no_face: self.no_face,
         }
     }
 
@@ -122,15 +177,18 @@ impl CaptureDesk {
 }
 
 /// Starts making `character`'s map in the background (again, keeping the rows the user set,
-/// when `remake`); saves it beside the character and re-reads the take through it.
+/// when `remake`); saves it beside the character and re-reads the take through it. With
+/// `marks`, the user's marks on the face are kept first ([`CaptureDesk::set_face_points`])
+/// and the map is made from them.
 ///
 /// # Errors
 /// [`ApiError::Busy`] when another job runs; [`ApiError::Invalid`] when there is a map and
-/// `remake` is false.
+/// `remake` is false, or naming the mark that is wrong.
 pub fn start_map(
     desk: &SharedDesk,
     character: Arc<Character>,
     remake: bool,
+    marks: Option<BTreeMap<faceanim_fit::FacePoint, [f32; 3]>>,
 ) -> Result<(), ApiError> {
     let job = Job::new(JobKind::MakingMap);
     let previous = {
@@ -140,6 +198,9 @@ pub fn start_map(
             return Err(ApiError::Invalid(
                 "the character has a retarget map: ask to remake it".into(),
             ));
+        }
+        if let Some(marks) = marks {
+            guard.set_face_points(&character, marks)?;
         }
         guard.job = Some(job.clone());
         guard.map.clone()
@@ -185,18 +246,35 @@ fn make(
 ) -> Result<RetargetMap, ApiError> {
     job.stage("making the retarget map", 0);
     let models = face_models()?;
-    let path = lock(desk).map_path.clone();
+    let (path, points) = {
+        let guard = lock(desk);
+        (guard.map_path.clone(), guard.face_points.clone())
+    };
     let progress = |done: usize, total: usize| job.progress_of(done, total);
-    let map = faceanim_adapt::bridge::make_map(
+    let made = faceanim_adapt::bridge::make_map(
         character,
         models,
         previous,
+        points.as_ref(),
         true,
         faceanim_adapt::Control {
             progress: &progress,
             cancel: job.cancel_flag(),
         },
-    )?;
+    );
+    let no_face = matches!(
+        made,
+        Err(faceanim_adapt::bridge::BridgeError::Fit(
+            faceanim_fit::FitError::NoFace(_)
+        ))
+    );
+    {
+        let mut guard = lock(desk);
+        if guard.map_path == path {
+            guard.no_face = no_face;
+        }
+    }
+    let map = made?;
     faceanim_files::write_atomic(&path, map.to_json().as_bytes())?;
     let mut guard = lock(desk);
     if guard.map_path != path {
