@@ -287,10 +287,11 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
     std::fs::write(out.join("summary.json"), format!("{report:#}")).unwrap();
     for (e, what) in map_heldout.iter().zip(what) {
         eprintln!(
-            "map, {what}: MAE {:.4} (mean {:.4}, all zeros {:.4}); {}",
+            "map, {what}: MAE {:.4} (mean {:.4}, all zeros {:.4}; one to three shapes {:.4}); {}",
             e["mae"].as_f64().unwrap(),
             e["mae_mean_baseline"].as_f64().unwrap(),
             e["mae_zero_baseline"].as_f64().unwrap(),
+            readable_mae(e),
             groups(e)
         );
         assert!(
@@ -303,6 +304,22 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
         // renders do not reach its artist's weights that closely through any per-channel
         // response (one fitted on the test stills themselves gave 0.107): the remaining error
         // is in which channels MediaPipe moves together, not in their scale.
+        //
+        // Where that error is: a quarter of the seed's stills are its dense group, every shape
+        // at a random weight, and those hold it. On the held-out stills with their neutral: one
+        // shape 0.027, two 0.049, three 0.063, dense 0.324. The dense group draws antagonists
+        // together (browInnerUp with browDown, a side's smile with its frown, funnel with
+        // stretch), which cancel on the face: the map reads the near-neutral face they make
+        // (for 20 of 25 shapes it answers under a third of the truth's mean there). Tried on
+        // these stills, with 600 of the character's own renders: a linear map from all 52
+        // scores to the weights (ridge) gives 0.116 held out, 0.15–0.16 on three.js (on the
+        // character's own renders 0.06–0.10: it does not carry across renderers); weights
+        // fitted still by still to the landmarks, through how each shape moves them on the
+        // renders, give 0.018/0.037/0.057 on one, two, three shapes held out but 0.41 dense.
+        // Reading only what the face shows, the dense quarter alone costs about 0.08: an
+        // estimator gets under it only by guessing the draw, as the adapter learns to from
+        // 20,000 renders of it. So the bar the 0.08 becomes here is on the stills a
+        // face can be read from: the one-, two- and three-shape groups, below.
         //
         // Without their neutral picture the held-out stills gave 0.175, worse than answering
         // nothing (0.133): read against the calmest still of each part, two channels whose
@@ -319,6 +336,11 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
             assert!(
                 mae <= 0.14 && mae < 0.7 * mean,
                 "map, {what}: MAE {mae}: {e}"
+            );
+            let readable = readable_mae(e);
+            assert!(
+                readable <= 0.08,
+                "map, {what}: MAE {readable} over the one-, two- and three-shape stills: {e}"
             );
         }
     }
@@ -339,6 +361,20 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
     if let Some(adapter) = &report["adapter"].as_object() {
         adapter_bars(adapter);
     }
+}
+
+/// The mean of an evaluation's MAE over its one-, two- and three-shape groups (the stills
+/// hold as many of each): the stills whose weights a face can show.
+fn readable_mae(e: &Value) -> f64 {
+    let sparse: Vec<f64> = e["groups"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|g| g["group"] != "uniform")
+        .map(|g| g["mae"].as_f64().unwrap())
+        .collect();
+    assert_eq!(sparse.len(), 3, "{e}");
+    sparse.iter().sum::<f64>() / 3.0
 }
 
 /// `to`: the stills of `from` (linked, or copied where links cannot be made) with a
