@@ -49,7 +49,7 @@ impl BoneKeys {
             |row: &[f32], c: Option<usize>| c.and_then(|c| row.get(c)).copied().unwrap_or(0.0);
         let looks = meaning
             .iter()
-            .any(|m| m.is_some_and(|a| a.starts_with("eyeLook")));
+            .any(|m| m.is_some_and(faceanim_rig::names::is_gaze));
         let gaze = looks.then(|| {
             clip.frames
                 .iter()

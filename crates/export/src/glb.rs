@@ -645,7 +645,7 @@ pub fn export_into_source_with(
     let looks: Vec<bool> = character
         .blendshape_names()
         .iter()
-        .map(|n| faceanim_rig::names::arkit_name(n).is_some_and(|a| a.starts_with("eyeLook")))
+        .map(|n| faceanim_rig::names::arkit_name(n).is_some_and(faceanim_rig::names::is_gaze))
         .collect();
 
     let mut new_animations = Vec::new();

@@ -102,7 +102,7 @@ pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
             .iter()
             .enumerate()
             .filter_map(|(c, n)| Some((c, faceanim_rig::names::arkit_name(n)?)))
-            .filter(|(_, a)| a.starts_with("eyeLook"))
+            .filter(|(_, a)| faceanim_rig::names::is_gaze(a))
             .collect();
         for (row, eyes) in frames.iter_mut().zip(gaze) {
             let looks = faceanim_rig::bones::arkit_from_gaze(eyes);

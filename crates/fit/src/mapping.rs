@@ -53,7 +53,7 @@ enum Region {
 
 impl Region {
     fn of_channel(name: &str) -> Region {
-        if name.starts_with("eyeLook") {
+        if faceanim_rig::names::is_gaze(name) {
             Region::Gaze
         } else if name.starts_with("eye") {
             Region::Lids

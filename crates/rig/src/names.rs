@@ -422,6 +422,19 @@ pub fn arkit_name(name: &str) -> Option<&'static str> {
     }
 }
 
+/// Whether the ARKit channel called `arkit` (its canonical name: one of [`ARKIT_52`], or
+/// MediaPipe's score of the same name) says where the eyes look — the eight `eyeLook*` — rather
+/// than an expression of the face.
+///
+/// ```
+/// assert!(faceanim_rig::names::is_gaze("eyeLookUpLeft"));
+/// assert!(!faceanim_rig::names::is_gaze("eyeBlinkLeft"));
+/// ```
+#[must_use]
+pub fn is_gaze(arkit: &str) -> bool {
+    arkit.starts_with("eyeLook")
+}
+
 /// Whether `name` is ARKit's own name for `channel`, in any case or separator
 /// (`browInnerUp`, `BrowInnerUp`, `brow_inner_up`), not a synonym from another convention
 /// (VRoid's `Fcl_BRW_Sorrow` also means browInnerUp, but is an expression of its own).

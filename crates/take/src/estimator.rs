@@ -177,7 +177,7 @@ impl Retargeted {
             // Where the eyes look is no expression over a resting face: looking at the
             // camera is rest, whatever the neutral frame's eyes did.
             let base = match neutral {
-                Some(n) if !name.starts_with("eyeLook") => score(n, c),
+                Some(n) if !faceanim_rig::names::is_gaze(name) => score(n, c),
                 _ => 0.0,
             };
             score(expression, c) - base
@@ -194,7 +194,7 @@ impl Retargeted {
             .into_iter()
             .zip(faceanim_rig::names::ARKIT_52)
             .map(|(v, name)| {
-                if name.starts_with("eyeLook") {
+                if faceanim_rig::names::is_gaze(name) {
                     rise(name).clamp(0.0, 1.0)
                 } else {
                     v

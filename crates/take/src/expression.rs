@@ -99,7 +99,7 @@ impl FacePart {
     /// to.
     #[must_use]
     pub fn of_score(name: &str) -> FacePart {
-        if name.starts_with("eyeLook") {
+        if faceanim_rig::names::is_gaze(name) {
             FacePart::Gaze
         } else if name.starts_with("eye") {
             FacePart::Lids
