@@ -782,18 +782,7 @@ fn a_rig_without_mouth_names_lip_syncs_through_its_map_or_its_adapter() {
     if let Some(normals) = parts.normal_deltas.as_mut() {
         normals.reverse();
     }
-    parts.blendshapes = parts
-        .blendshapes
-        .iter()
-        .enumerate()
-        .map(|(k, b)| {
-            faceanim_rig::Blendshape::from_sparse(
-                format!("shape_{k}"),
-                b.indices().to_vec(),
-                b.deltas().to_vec(),
-            )
-        })
-        .collect();
+    parts.blendshapes = support::renamed_shapes(&parts.blendshapes, glam::Quat::IDENTITY);
     let jaw = format!("shape_{}", count - 1 - jaw_was);
     let character = faceanim_rig::Character::new(parts).unwrap();
     let glb = out.join("unnamed.glb");

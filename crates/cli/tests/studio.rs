@@ -1463,18 +1463,7 @@ fn a_face_is_marked_by_hand_when_none_is_found() {
     parts.positions = parts.positions.iter().map(|p| flip * *p).collect();
     parts.normals = None;
     parts.normal_deltas = None;
-    parts.blendshapes = parts
-        .blendshapes
-        .iter()
-        .enumerate()
-        .map(|(k, b)| {
-            faceanim_rig::Blendshape::from_sparse(
-                format!("shape_{k}"),
-                b.indices().to_vec(),
-                b.deltas().iter().map(|d| flip * *d).collect(),
-            )
-        })
-        .collect();
+    parts.blendshapes = support::renamed_shapes(&parts.blendshapes, flip);
     let head = faceanim_rig::Character::new(parts).unwrap();
     let path = dir.path().join("upside-down.glb");
     std::fs::write(&path, faceanim_export::view_glb(&head, None).unwrap()).unwrap();

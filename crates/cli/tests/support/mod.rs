@@ -13,6 +13,25 @@ use std::net::TcpStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 
+/// `shapes` renamed `shape_0`, `shape_1`… in their order (names that say nothing), each delta
+/// turned by `turn`.
+pub fn renamed_shapes(
+    shapes: &[faceanim_rig::Blendshape],
+    turn: glam::Quat,
+) -> Vec<faceanim_rig::Blendshape> {
+    shapes
+        .iter()
+        .enumerate()
+        .map(|(k, b)| {
+            faceanim_rig::Blendshape::from_sparse(
+                format!("shape_{k}"),
+                b.indices().to_vec(),
+                b.deltas().iter().map(|d| turn * *d).collect(),
+            )
+        })
+        .collect()
+}
+
 pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
