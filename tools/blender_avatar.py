@@ -13,9 +13,10 @@
 # - a body of several materials and a hair mesh without shape keys;
 # - the brows' material cut out by alpha (alphaMode MASK, cutoff 0.4);
 # - two armatures (so the file has several skins): the body's, with spine, neck and head bones
-#   and, below the head, eye bones at the eyes' centres and a jaw bone at the jaw's hinge (as
-#   Ready Player Me's and Character Creator's skeletons have them), in centimetres under an
-#   object scaled by 0.01 as Mixamo's and Character Creator's are, and the hair's own;
+#   and, below the head, eye bones at the eyes' centres (the eyeballs weighted to them) and a
+#   jaw bone at the jaw's hinge (as Ready Player Me's and Character Creator's skeletons have
+#   them), in centimetres under an object scaled by 0.01 as Mixamo's and Character Creator's
+#   are, and the hair's own;
 # - materials using clearcoat, specular and emission strength, so that KHR_materials_* extensions
 #   are written, and one image texture.
 #
@@ -376,17 +377,18 @@ hair_rig = armature(
 
 
 def skin(obj, rig, weights_of):
-    for name in {n for v in obj.data.vertices for n, _ in weights_of(v.co)}:
+    for name in {n for v in obj.data.vertices for n, _ in weights_of(v)}:
         obj.vertex_groups.new(name=name)
     for v in obj.data.vertices:
-        for name, w in weights_of(v.co):
+        for name, w in weights_of(v):
             obj.vertex_groups[name].add([v.index], w, "REPLACE")
     modifier = obj.modifiers.new("Armature", "ARMATURE")
     modifier.object = rig
     obj.parent = rig
 
 
-def body_weights(co):
+def body_weights(v):
+    co = v.co
     z = co.z
     if z < 90:
         return [("LeftUpperLeg" if co.x >= 0 else "RightUpperLeg", 1.0)]
@@ -397,14 +399,22 @@ def body_weights(co):
     return [("Neck", 1.0)]
 
 
-def face_weights(co):
+# The eyeballs turn with their bones (as VRoid's and Character Creator's do).
+eye_vertices = {v for poly in mesh.polygons if poly.material_index in eye_material for v in poly.vertices}
+
+
+def face_weights(v):
+    co = v.co
+    if v.index in eye_vertices:
+        return [("LeftEye" if co.x > 0 else "RightEye", 1.0)]
     if co.z < neck_height + 3:
         t = max(0.0, (co.z - neck_height + 5) / 8)
         return [("Neck", 1 - t), ("Head", t)] if t > 0 else [("Neck", 1.0)]
     return [("Head", 1.0)]
 
 
-def hair_weights(co):
+def hair_weights(v):
+    co = v.co
     if co.y < -2:
         return [("HairFront", 0.7), ("HairRoot", 0.3)]
     if co.y > 2:

@@ -10,7 +10,7 @@
 //   inspector.js the selected action's numbers   shapes.js    the blendshape list
 //   capture.js   capture mode: the take, its corrections, the frame diagram
 //   take.js      the take's state as the server last sent it, and sending edits to it
-//   head-turn.js the captured head turn on the character
+//   head-turn.js the captured head on the character: its bones where it has them, else whole
 //   sound.js     a lip-sync take's sound, played and scrubbed with the animation
 //   live.js      capture from the webcam in real time
 //   voice.js     the microphone drives the mouth in real time (voice-worklet.js: its samples)

@@ -31,6 +31,7 @@ export function vertexLitMaterial(/** @type {any} */ source) {
       #ifdef FAST_MAP
       varying vec2 texCoord;
       #endif
+      #include <skinning_pars_vertex>
       vec3 encodeSrgb(vec3 c) {
         c = clamp(c, 0.0, 1.0);
         return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
@@ -40,7 +41,13 @@ export function vertexLitMaterial(/** @type {any} */ source) {
         return encodeSrgb(base * irradiance / 3.14159265);
       }
       void main() {
-        vec3 n = normalize(normalMatrix * normal);
+        // A view skinned to the face's bones turns them here (three.js's own skinning chunks).
+        vec3 objectNormal = vec3(normal);
+        vec3 transformed = vec3(position);
+        #include <skinbase_vertex>
+        #include <skinnormal_vertex>
+        #include <skinning_vertex>
+        vec3 n = normalize(normalMatrix * objectNormal);
         vec3 up = normalize((viewMatrix * vec4(0.0, 1.0, 0.0, 0.0)).xyz);
         vec3 toKey = normalize((viewMatrix * vec4(keyDirection, 0.0)).xyz);
         vec3 base = albedo;
@@ -52,7 +59,7 @@ export function vertexLitMaterial(/** @type {any} */ source) {
         #ifdef FAST_MAP
         texCoord = uv;
         #endif
-        gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+        gl_Position = projectionMatrix * modelViewMatrix * vec4(transformed, 1.0);
       }`,
     fragmentShader: `
       varying vec3 litFront, litBack;

@@ -216,7 +216,7 @@ function send(pixels, width, height, format, captured, sent) {
       if (!response.ok) throw new Error(result.error || response.statusText);
       if (!live.running || !result.live) return;
       live.weights = result.weights;
-      if (result.head) turnHead(result.head);
+      if (result.head || result.bones) turnHead(result.head, result.bones);
       live.server_ms = result.server_ms;
       live.frames++;
       fpsWindow.count++;

@@ -36,6 +36,13 @@ let resting = false;
 let sketchShown = true;
 /** @type {THREE.Quaternion|null} The turn asked for (a captured head pose), when not resting. */
 let turn = null;
+/** @type {THREE.Skeleton|null} The face's bones, where the view is skinned to them (a file with a
+ * head bone: see `faceanim_export::bones::ViewRig`). */
+let skeleton = null;
+/** @type {number[][]|null} Each of the skeleton's joints' rotation asked for, when not resting. */
+let pose = null;
+/** @type {number[][]|null} Each joint's rotation the sketch's animation gives at the frame. */
+let sketchPose = null;
 /** @type {((frame: number) => void)[]} */
 const frameListeners = [];
 
@@ -83,28 +90,37 @@ export async function loadBaked() {
   if (generation !== bakeGeneration) return;
   if (root) { world.remove(root); root.traverse((o) => { if (o.isMesh) o.geometry.dispose(); }); }
   meshes = [];
+  skeleton = null;
+  sketchPose = null;
   root = gltf.scene;
   root.traverse((o) => {
     if (!o.isMesh) return;
+    if (o.isSkinnedMesh) skeleton = o.skeleton;
     if (FAST) { const m = o.material; o.material = vertexLitMaterial(m); m.dispose(); blendOnCpu(o); }
     o.material.side = THREE.DoubleSide;
     meshes.push(o);
   });
   world.add(root);
   if (gltf.animations.length && meshes.length) {
-    // The clip targets the node by name; bind its weight tracks to each mesh (primitive) directly.
+    // The clip targets the node by name; bind its weight tracks to each mesh (primitive)
+    // directly. Its rotation tracks turn the skeleton's joints (the eyes and jaw the sketch's
+    // gaze and jawOpen turn, as the export does), found by name under the root.
     const clip = gltf.animations[0];
-    for (const track of clip.tracks) { track.name = '.morphTargetInfluences'; }
-    // Once, held at its last frame beyond its end: under a longer take the sketch's last pose
-    // stays, as in the export (a repeating action would start the strokes over).
-    players = meshes.map((m) => {
-      const mixer = new THREE.AnimationMixer(m);
-      const action = mixer.clipAction(clip);
+    const weights = clip.tracks.filter((t) => t.name.endsWith('.morphTargetInfluences'));
+    for (const track of weights) { track.name = '.morphTargetInfluences'; }
+    const turns = clip.tracks.filter((t) => t.name.endsWith('.quaternion'));
+    const once = (target, tracks) => {
+      const mixer = new THREE.AnimationMixer(target);
+      const action = mixer.clipAction(new THREE.AnimationClip(clip.name, clip.duration, tracks));
+      // Once, held at its last frame beyond its end: under a longer take the sketch's last pose
+      // stays, as in the export (a repeating action would start the strokes over).
       action.setLoop(THREE.LoopOnce, 1);
       action.clampWhenFinished = true;
       action.play();
       return { mixer, action };
-    });
+    };
+    players = meshes.map((m) => once(m, weights));
+    if (skeleton && turns.length) players.push(once(root, turns));
   } else {
     players = [];
   }
@@ -124,6 +140,7 @@ export function setFrame(f) {
   // The mixer writes a track only when its value changes, so the sketch's own values go back
   // before it runs, and are kept after it for the layer to add to.
   for (const mesh of meshes) { if (mesh.userData.sketch && mesh.morphTargetInfluences) mesh.morphTargetInfluences.splice(0, Infinity, ...mesh.userData.sketch); }
+  if (skeleton) skeleton.bones.forEach((b, k) => { if (sketchPose) b.quaternion.fromArray(sketchPose[k]); else b.quaternion.identity(); });
   for (const { mixer, action } of players) {
     // A finished action is paused at its end; it must follow the frame asked for again.
     action.paused = false;
@@ -133,6 +150,9 @@ export function setFrame(f) {
     const influences = mesh.morphTargetInfluences;
     if (influences) mesh.userData.sketch = players.length ? influences.slice() : influences.map(() => 0);
   }
+  // The sketch's own turns of the joints (rest where it turns none), under a captured pose.
+  sketchPose = skeleton ? skeleton.bones.map((b) => b.quaternion.toArray()) : null;
+  applyTurn();
   applyLayer();
   $('frame-label').textContent = `/ ${last}`;
   const field = /** @type {HTMLInputElement} */ ($('current-frame'));
@@ -158,9 +178,20 @@ export function applyLayer() {
   }
 }
 
+/** The names of the view's joints in order (`faceanim_head`…), or null where the view is not
+ * skinned to the face's bones (a head pose then turns the whole character). */
+export const jointNames = () => (skeleton ? skeleton.bones.map((b) => b.name) : null);
+
 /** Turns the character by `quaternion` (a captured head pose), or back to rest with null. */
 export function setTurn(quaternion) {
   turn = quaternion;
+  applyTurn();
+}
+
+/** Turns the skeleton's joints (`[x, y, z, w]` each, in its joints' order, as the server sends
+ * them), or back to rest with null. */
+export function setPose(rotations) {
+  pose = rotations;
   applyTurn();
 }
 
@@ -175,6 +206,14 @@ function applyTurn() {
   if (!root) return;
   if (turn && !resting) root.quaternion.copy(turn);
   else root.quaternion.identity();
+  if (skeleton) {
+    // A captured pose replaces the sketch's (the export takes a take's gaze and jaw too).
+    skeleton.bones.forEach((bone, k) => {
+      const q = (pose && !resting ? pose[k] : null) || (sketchPose ? sketchPose[k] : null);
+      if (q && q.length === 4) bone.quaternion.fromArray(q);
+      else bone.quaternion.identity();
+    });
+  }
   root.updateMatrixWorld(true);
   invalidate();
 }

@@ -52,7 +52,7 @@ async function poll() {
       if (!vmc.running || !state) break;
       vmc.weights = state.weights;
       vmc.head = state.head;
-      if (state.head) turnHead(state.head);
+      if (state.head || state.bones) turnHead(state.head, state.bones);
       applyLayer();
       const age = state.last_packet_ms === null ? 'nothing yet' : `last ${state.last_packet_ms.toFixed(0)} ms ago`;
       const dropped = state.malformed + state.oversized + state.foreign;

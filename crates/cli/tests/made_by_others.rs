@@ -306,13 +306,7 @@ fn strokes_through_the_studio_api_animate_the_blender_avatar() {
     }
     let file = dir.join("blender.glb");
     std::fs::write(&file, blender_avatar()).unwrap();
-    let character = faceanim_rig::import::import_gltf(
-        blender_avatar(),
-        "blender.glb",
-        &faceanim_rig::import::NoExternalResources,
-    )
-    .unwrap()
-    .character;
+    let character = faceanim_testdata::producers::blender_avatar_character();
     let stroke = stroke_along(&character, "jawOpen", 45, 1.0 / 90.0);
 
     let studio = start_on(Some(&file), &dir.join("project.json"), &[]);

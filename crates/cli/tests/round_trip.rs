@@ -267,13 +267,7 @@ fn a_sketched_glb_opens_again_as_a_take_and_exports_the_same() {
     let dir = tempfile::tempdir().unwrap();
     let out = output_dir("round_trip");
     let avatar = blender_avatar_path();
-    let character = faceanim_rig::import::import_gltf(
-        &std::fs::read(&avatar).unwrap(),
-        "blender.glb",
-        &faceanim_rig::import::NoExternalResources,
-    )
-    .unwrap()
-    .character;
+    let character = faceanim_testdata::producers::blender_avatar_character();
     let studio = start_on(Some(&avatar), &dir.path().join("sketch.json"), &[]);
     let mut targets = Vec::new();
     for (shape, start) in [("jawOpen", 0), ("mouthSmile_L", 20)] {

@@ -974,7 +974,21 @@ fn a_full_body_avatar_in_the_studio_api() {
         "the download is the user's file"
     );
     let (_, view) = get_bytes(port, "/api/view.glb");
-    assert_eq!(nodes_in(&view), 1, "the page's view is one mesh");
+    let view = faceanim_testdata::glb::json(&view);
+    assert_eq!(
+        view["meshes"].as_array().unwrap().len(),
+        1,
+        "the page's view is one mesh"
+    );
+    // Skinned to the face's bones only: the mesh's node and its small skeleton.
+    let joints: Vec<&str> = view["nodes"].as_array().unwrap()[1..]
+        .iter()
+        .map(|n| n["name"].as_str().unwrap())
+        .collect();
+    assert!(
+        joints.contains(&"faceanim_head") && joints.iter().all(|n| n.starts_with("faceanim_")),
+        "{joints:?}"
+    );
 }
 
 /// A `GET`'s head (status line and headers) and its body as bytes (a GLB is not text), failing
@@ -1386,7 +1400,9 @@ fn an_ifacialmocap_phone_is_asked_and_drives_the_studio() {
         .unwrap();
     let port = support::free_udp_port();
     let address = phone.local_addr().unwrap().to_string();
-    let studio = start_with(
+    // On a full-body avatar (Blender's): the phone's head turns its spine, neck and head.
+    let studio = start_on(
+        Some(&faceanim_testdata::producers::blender_avatar_path()),
         &dir.path().join("ifm.faceanim.json"),
         &[
             "--phone".as_ref(),
@@ -1436,6 +1452,28 @@ fn an_ifacialmocap_phone_is_asked_and_drives_the_studio() {
     );
     assert!(
         (state["head"][0].as_f64().unwrap() - 29.0).abs() < 1e-4,
+        "{state}"
+    );
+    // The view's bones (rest, head, neck, upper spine, eyes, jaw): spine, neck and head share the
+    // 29° turn as the export shares it, and the jaw opens with jawOpen.
+    let bone = |k: usize| {
+        let q: Vec<f32> = state["bones"][k]
+            .as_array()
+            .unwrap_or_else(|| panic!("no bones: {state}"))
+            .iter()
+            .map(|v| v.as_f64().unwrap() as f32)
+            .collect();
+        glam::Quat::from_slice(&q)
+    };
+    let [head, neck, spine, jaw] = [1, 2, 3, 6].map(bone);
+    let whole = spine * neck * head;
+    let asked = glam::Quat::from_rotation_y(29f32.to_radians());
+    assert!(whole.angle_between(asked) < 1e-3, "{state}");
+    let yaw = |q: glam::Quat| q.to_euler(glam::EulerRot::YXZ).0.to_degrees();
+    assert!((yaw(spine) - 0.2 * 29.0).abs() < 1e-2, "{state}");
+    assert!((yaw(neck) - yaw(head)).abs() < 1e-2, "{state}");
+    assert!(
+        jaw.angle_between(glam::Quat::IDENTITY) > 1f32.to_radians(),
         "{state}"
     );
 }
@@ -1509,4 +1547,60 @@ fn a_face_is_marked_by_hand_when_none_is_found() {
         let off = kept.at(p).distance(given(p));
         assert!(off < 0.02 * span, "{}: {off} from the click", p.key());
     }
+}
+
+/// The face's bones in the studio's view, in a real browser (`tools/bones-view-e2e.mjs`): the
+/// Blender avatar with a take that turns the head, looks aside and opens the jaw (exported into
+/// the file, opened by `faceanim studio` on it); the view is skinned to spine, neck, head, eyes
+/// and jaw, each turned as the take's `bones` say, on the GPU path and with `?fast`; a jawOpen
+/// stroke turns the jaw joint in the Sketch tab.
+#[test]
+fn the_studio_turns_neck_head_eyes_and_jaw_on_the_avatars_bones() {
+    let dir = tempfile::tempdir().unwrap();
+    let avatar = faceanim_testdata::producers::blender_avatar_path();
+    let frames = 6;
+    let clip = serde_json::json!({
+        "fps": 30,
+        "blendshapes": ["eyeLookOutLeft", "eyeLookInRight", "jawOpen"],
+        "frames": (0..frames).map(|f| { let t = f as f64 / (frames - 1) as f64; vec![t, t, 0.8 * t] }).collect::<Vec<_>>(),
+        "head": (0..frames).map(|f| { let t = f as f64 / (frames - 1) as f64; [30.0 * t, -10.0 * t, 5.0 * t] }).collect::<Vec<_>>(),
+    });
+    let clip_path = dir.path().join("turn.json");
+    std::fs::write(&clip_path, clip.to_string()).unwrap();
+    let take = dir.path().join("turn.glb");
+    support::export_with_clip(&avatar, &take, &clip_path);
+    let studio = start_on(Some(&take), &dir.path().join("project"), &[]);
+    let (status, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let bones = state["take"]["bones"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no bones: {}", state["take"]));
+    assert_eq!(bones.len(), frames, "one pose per frame");
+    // A sketch on top: one jawOpen stroke (its jaw joint shows in the Sketch tab).
+    let character = faceanim_testdata::producers::blender_avatar_character();
+    let stroke = support::stroke_along(&character, "jawOpen", 30, 1.0 / 60.0);
+    let (status, body) = request(studio.port, "POST", "/api/strokes", &[], stroke.as_bytes());
+    assert_eq!(status, 200, "{body}");
+    // The skinned view (with the stroke's jaw on its joint) is valid glTF (the Khronos validator: no joint listed without a share).
+    let (status, view) = support::request_bytes(studio.port, "GET", "/api/view.glb", &[], b"");
+    assert_eq!(status, 200);
+    let view_path = dir.path().join("view.glb");
+    std::fs::write(&view_path, view).unwrap();
+    let report = assert_valid_gltf(&view_path);
+    let joint_warnings = report["issues"]["messages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["code"] == "ACCESSOR_JOINTS_USED_ZERO_WEIGHT")
+        .count();
+    assert_eq!(joint_warnings, 0, "joints listed without a share");
+    let measured = browser_script(
+        "bones-view-e2e.mjs",
+        &studio,
+        "",
+        &output_dir("bones-view"),
+        &[(frames - 1).to_string().into(), "40".into()],
+    );
+    eprintln!("the face's bones in the view: {measured}");
 }

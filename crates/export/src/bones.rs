@@ -9,17 +9,13 @@
 
 use faceanim_anim::Clip;
 use faceanim_rig::Character;
+use faceanim_rig::animation::MorphAnimation;
 use faceanim_rig::bones::{Bone, FaceBones, Gaze, Joint};
 use faceanim_rig::source::GltfSource as Source;
-use glam::{EulerRot, Quat, Vec3};
+use glam::{Quat, Vec3};
 use serde_json::Value;
 
-/// The share of the head's yaw the upper spine follows.
-pub const SPINE_SHARE: f32 = 0.2;
-/// How slowly the spine follows (seconds, the time constant of its smoothing).
-pub const SPINE_LAG: f32 = 0.2;
-/// The share of the head's turn the neck takes where the rig has one.
-pub const NECK_SHARE: f32 = 0.5;
+pub use faceanim_rig::bones::{NECK_SHARE, SPINE_LAG, SPINE_SHARE};
 /// How far a jaw opens at `jawOpen` 1 when the character has no jaw-open shape to measure.
 pub const DEFAULT_JAW_DEGREES: f32 = 20.0;
 
@@ -113,9 +109,21 @@ impl Rig {
         nodes: &mut [Value],
         wants: [bool; 3],
     ) -> Rig {
+        Rig::build(character, source, wants, |n| {
+            prepare_joint(source, nodes, n)
+        })
+    }
+
+    /// The bones `wants` needs (as [`Rig::prepare`]), each made by `make` from its node.
+    fn build(
+        character: &Character,
+        source: &Source,
+        wants: [bool; 3],
+        mut make: impl FnMut(usize) -> Option<Joint>,
+    ) -> Rig {
         let [wants_turn, wants_gaze, wants_jaw] = wants;
         let bones: FaceBones = source.bones();
-        let mut joint = |n: Option<usize>| n.and_then(|n| prepare_joint(source, nodes, n));
+        let mut joint = |n: Option<usize>| n.and_then(&mut make);
         let head = if wants_turn {
             joint(faceanim_rig::turns::turned_head(source))
         } else {
@@ -145,7 +153,9 @@ impl Rig {
             None
         };
         let jaw = if wants_jaw {
-            joint(bones.get(Bone::Jaw)).map(|j| (j, jaw_degrees(character, source, j.node)))
+            bones.get(Bone::Jaw).and_then(|node| {
+                joint(Some(node)).map(|j| (j, jaw_degrees(character, source, node)))
+            })
         } else {
             None
         };
@@ -176,37 +186,25 @@ impl Rig {
             let mut spine_keys = Vec::with_capacity(rotations.len());
             let mut neck_keys = Vec::with_capacity(rotations.len());
             let mut head_keys = Vec::with_capacity(rotations.len());
-            let mut spine_yaw: Option<f32> = None;
+            let mut split = faceanim_rig::bones::HeadSplit::default();
             for (k, q) in rotations.iter().enumerate() {
-                let q = Quat::from_array(*q).normalize();
-                let (yaw, _, _) = q.to_euler(EulerRot::YXZ);
                 let dt = k
                     .checked_sub(1)
                     .and_then(|p| Some(times.get(k)? - times.get(p)?))
-                    .unwrap_or(0.0)
-                    .max(0.0);
-                let target = SPINE_SHARE * yaw;
-                let follow = 1.0 - (-dt / SPINE_LAG).exp();
-                let now = spine_yaw.map_or(target, |s| s + (target - s) * follow);
-                spine_yaw = Some(now);
-                let spine = if self.spine.is_some() {
-                    Quat::from_rotation_y(now)
-                } else {
-                    Quat::IDENTITY
-                };
-                let above = spine.inverse() * q;
-                let neck = if self.neck.is_some() {
-                    spine * Quat::IDENTITY.slerp(above, NECK_SHARE)
-                } else {
-                    spine
-                };
+                    .unwrap_or(0.0);
+                let [spine, neck, head_turn] = split.share(
+                    Quat::from_array(*q),
+                    dt,
+                    self.spine.is_some(),
+                    self.neck.is_some(),
+                );
                 if let Some(j) = self.spine {
                     spine_keys.push(local(j, spine));
                 }
                 if let Some(j) = self.neck {
-                    neck_keys.push(local(j, spine.inverse() * neck));
+                    neck_keys.push(local(j, neck));
                 }
-                head_keys.push(local(head, neck.inverse() * q));
+                head_keys.push(local(head, head_turn));
             }
             for (joint, keys) in [
                 (self.spine, spine_keys),
@@ -254,6 +252,205 @@ impl Rig {
         }
         out
     }
+}
+
+/// The face's bones as the studio's view carries them: a small skeleton of the bones a head
+/// pose, the gaze and the jaw turn (the rest of the character on one bone at the origin), each
+/// with no rotation at rest and at its bone's place in character space, and each vertex's share
+/// of them summed from the file's own skinning (a vertex on a hair bone under the head follows
+/// the head). Its poses are the export's turns ([`Rig::channels`]) of the same bones, so the
+/// view turns what the exported file turns.
+#[derive(Debug, Clone)]
+pub struct ViewRig {
+    /// The view's joints: the rest first, then the face's bones in [`Bone::ALL`]'s order where
+    /// the rig turns them.
+    pub joints: Vec<ViewJoint>,
+    rig: Rig,
+}
+
+/// One joint of a [`ViewRig`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewJoint {
+    /// The face's bone it is, `None` for the rest of the character.
+    pub bone: Option<Bone>,
+    /// Its node in the character's file (`None` for the rest).
+    pub node: Option<usize>,
+    /// Its parent joint (`None` for the rest).
+    pub parent: Option<usize>,
+    /// Where it is in character space.
+    pub pivot: Vec3,
+}
+
+impl ViewRig {
+    /// The view's skeleton of `character`, when its file has a head bone (without one, a head
+    /// pose turns the whole character and the view turns it so).
+    #[must_use]
+    pub fn of(character: &Character) -> Option<ViewRig> {
+        let source = character.source()?;
+        let bones = source.bones();
+        bones.get(Bone::Head)?;
+        let mut joints = vec![ViewJoint {
+            bone: None,
+            node: None,
+            parent: None,
+            pivot: Vec3::ZERO,
+        }];
+        let rig = Rig::build(character, source, [true; 3], |node| {
+            joints.push(ViewJoint {
+                bone: bones.found().find(|(_, n)| *n == node).map(|(b, _)| b),
+                node: Some(node),
+                parent: None,
+                pivot: source.world_matrix(node).transform_point3(Vec3::ZERO),
+            });
+            Some(Joint {
+                node: joints.len() - 1,
+                parent: Quat::IDENTITY,
+                rest: Quat::IDENTITY,
+            })
+        });
+        let parents = node_parents(source);
+        let joint_of = nearest_joints(&joints, &parents);
+        for joint in joints.iter_mut().skip(1) {
+            let above = joint.node.and_then(|n| parents.get(n).copied().flatten());
+            joint.parent = Some(above.and_then(|n| joint_of.get(n).copied()).unwrap_or(0));
+        }
+        Some(ViewRig { joints, rig })
+    }
+
+    /// Each vertex's four joints and shares (summing to 1): the file's skinning, each node it
+    /// is placed by counted on the nearest of the view's joints at or above it.
+    #[must_use]
+    pub fn skin(&self, character: &Character) -> (Vec<[u8; 4]>, Vec<[f32; 4]>) {
+        let Some(source) = character.source() else {
+            let n = character.vertex_count();
+            return (vec![[0; 4]; n], vec![[1.0, 0.0, 0.0, 0.0]; n]);
+        };
+        // Each node's joint, found once (a file has far fewer nodes than vertices).
+        let joint_of = nearest_joints(&self.joints, &node_parents(source));
+        let origins = source.origins();
+        (0..character.vertex_count())
+            .map(|v| {
+                let mut share = vec![0.0f32; self.joints.len()];
+                if let Some(Some(origin)) = origins.get(v) {
+                    for &(node, w) in &origin.placed_by {
+                        if w > 0.0 {
+                            let j = joint_of.get(node as usize).copied().unwrap_or(0);
+                            share[j] += w;
+                        }
+                    }
+                }
+                let mut order: Vec<usize> = (0..share.len()).collect();
+                order.sort_by(|&a, &b| share[b].total_cmp(&share[a]));
+                let mut joints = [0u8; 4];
+                let mut weights = [0.0f32; 4];
+                // A joint with no share is written as joint 0 (glTF asks unused ones to be).
+                for (k, &j) in order.iter().take(4).enumerate() {
+                    if share[j] > 0.0 {
+                        joints[k] = u8::try_from(j).unwrap_or(0);
+                        weights[k] = share[j];
+                    }
+                }
+                let total: f32 = weights.iter().sum();
+                if total > 0.0 {
+                    weights.iter_mut().for_each(|w| *w /= total);
+                } else {
+                    (joints, weights) = ([0; 4], [1.0, 0.0, 0.0, 0.0]);
+                }
+                (joints, weights)
+            })
+            .unzip()
+    }
+
+    /// Per frame (one per `head`, at `fps`), each joint's rotation `[x, y, z, w]` as the
+    /// export turns the bones: `head` shared between spine, neck and head, the gaze on the eyes
+    /// and `jawOpen` on the jaw from `keys`. A frame without a head pose holds the head at rest.
+    #[must_use]
+    pub fn poses(
+        &self,
+        fps: f32,
+        head: &[Option<[f32; 3]>],
+        keys: &BoneKeys,
+    ) -> Vec<Vec<[f32; 4]>> {
+        let step = if fps > 0.0 { 1.0 / fps } else { 0.0 };
+        let times: Vec<f32> = (0..head.len()).map(|k| k as f32 * step).collect();
+        let rotations: Vec<[f32; 4]> = head
+            .iter()
+            .map(|h| h.map_or([0.0, 0.0, 0.0, 1.0], faceanim_anim::head_rotation))
+            .collect();
+        let channels = self.rig.channels(&times, Some(&rotations), Some(keys));
+        let mut frames = vec![vec![[0.0, 0.0, 0.0, 1.0]; self.joints.len()]; head.len()];
+        for (joint, keys) in channels {
+            for (frame, q) in frames.iter_mut().zip(keys) {
+                if let Some(slot) = frame.get_mut(joint) {
+                    *slot = q;
+                }
+            }
+        }
+        frames
+    }
+
+    /// The joints `animation` of `character` turns (its weights by their names' ARKit meaning:
+    /// the gaze on the eyes, `jawOpen` on the jaw, as a GLB export of the same weights turns the
+    /// file's bones; its head rotations on spine, neck and head), with one rotation per key.
+    #[must_use]
+    pub fn turns(
+        &self,
+        character: &Character,
+        animation: &MorphAnimation,
+    ) -> Vec<(usize, Vec<[f32; 4]>)> {
+        let keys = BoneKeys::from_clip(&Clip {
+            fps: 30.0,
+            blendshapes: character.blendshape_names(),
+            frames: animation.weights.clone(),
+            head: None,
+            head_position: None,
+            presence: None,
+        });
+        self.rig.channels(
+            &animation.times,
+            animation.rotations.as_deref(),
+            Some(&keys),
+        )
+    }
+
+    /// One live frame's rotations (as [`ViewRig::poses`]: the spine takes its share at once).
+    #[must_use]
+    pub fn pose(
+        &self,
+        head: Option<[f32; 3]>,
+        gaze: Option<[[f32; 2]; 2]>,
+        jaw: Option<f32>,
+    ) -> Vec<[f32; 4]> {
+        let keys = BoneKeys {
+            gaze: gaze.map(|g| vec![g]),
+            jaw: jaw.map(|j| vec![j.clamp(0.0, 1.0)]),
+        };
+        self.poses(0.0, &[head], &keys).pop().unwrap_or_default()
+    }
+}
+
+/// Each node's parent in `source`'s file.
+fn node_parents(source: &Source) -> Vec<Option<usize>> {
+    let nodes = source.document().get("nodes").and_then(Value::as_array);
+    nodes.map_or_else(Vec::new, |n| faceanim_rig::bones::parents(n))
+}
+
+/// For each node, the nearest of `joints` at or above it (0, the rest, for none).
+fn nearest_joints(joints: &[ViewJoint], parents: &[Option<usize>]) -> Vec<usize> {
+    (0..parents.len())
+        .map(|node| {
+            let mut at = Some(node);
+            // A file whose parents loop is cut after as many steps as it has nodes.
+            for _ in 0..=parents.len() {
+                let Some(n) = at else { break };
+                if let Some(j) = joints.iter().position(|j| j.node == Some(n)) {
+                    return j;
+                }
+                at = parents.get(n).copied().flatten();
+            }
+            0
+        })
+        .collect()
 }
 
 /// How far the character's own jaw-open shape turns the chin about the jaw bone (degrees,

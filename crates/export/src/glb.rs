@@ -42,6 +42,7 @@ pub enum GlbError {
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
+const UNSIGNED_BYTE: u32 = 5121;
 const UNSIGNED_SHORT: u32 = 5123;
 const UNSIGNED_INT: u32 = 5125;
 
@@ -84,6 +85,7 @@ impl Bin {
             "SCALAR" => 1,
             "VEC2" => 2,
             "VEC3" => 3,
+            "MAT4" => 16,
             _ => 4,
         };
         let view = self.view(&f32_bytes(values), target);
@@ -152,6 +154,19 @@ pub fn export_glb(
     character: &Character,
     animations: &[MorphAnimation],
 ) -> Result<Vec<u8>, GlbError> {
+    export_glb_skinned(character, animations, None)
+}
+
+/// [`export_glb`], the mesh skinned to `skeleton` where one is given (the studio's view: see
+/// [`crate::bones::ViewRig`]); its joints are nodes 1 onwards, named `faceanim_` and the bone (`faceanim_head`).
+///
+/// # Errors
+/// As [`export_glb`].
+pub fn export_glb_skinned(
+    character: &Character,
+    animations: &[MorphAnimation],
+    skeleton: Option<&crate::bones::ViewRig>,
+) -> Result<Vec<u8>, GlbError> {
     let shape_count = character.blendshapes().len();
     for animation in animations {
         check_animation(animation, shape_count)?;
@@ -189,6 +204,17 @@ pub fn export_glb(
         let flat: Vec<f32> = colors.iter().flatten().copied().collect();
         attributes["COLOR_0"] = json!(bin.floats(&flat, "VEC4", Some(ARRAY_BUFFER), None));
     }
+    let skin = skeleton.map(|rig| {
+        let (joints, weights) = rig.skin(character);
+        let flat: Vec<u8> = joints.iter().flatten().copied().collect();
+        let view = bin.view(&flat, Some(ARRAY_BUFFER));
+        attributes["JOINTS_0"] = json!(bin.accessor(
+            json!({ "bufferView": view, "componentType": UNSIGNED_BYTE, "count": n, "type": "VEC4" })
+        ));
+        let flat: Vec<f32> = weights.iter().flatten().copied().collect();
+        attributes["WEIGHTS_0"] = json!(bin.floats(&flat, "VEC4", Some(ARRAY_BUFFER), None));
+        skin_json(rig, &mut bin)
+    });
 
     let targets: Vec<Value> = character
         .blendshapes()
@@ -253,16 +279,31 @@ pub fn export_glb(
                     .push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
                 channels.push(json!({ "sampler": 1, "target": { "node": 0, "path": "rotation" } }));
             }
+            // The eyes and the jaw on the skeleton's joints, as the export turns the file's.
+            for (joint, turns) in skeleton.map(|rig| rig.turns(character, animation)).unwrap_or_default() {
+                let flat: Vec<f32> = turns.iter().flatten().copied().collect();
+                let output = bin.floats(&flat, "VEC4", None, None);
+                samplers
+                    .push(json!({ "input": input, "output": output, "interpolation": "LINEAR" }));
+                channels.push(json!({ "sampler": samplers.len() - 1, "target": { "node": joint + 1, "path": "rotation" } }));
+            }
             json!({ "name": animation.name, "samplers": samplers, "channels": channels,
                     "extras": { faceanim_rig::file_animation::EXTRAS_KEY: { "take": true } } })
         })
         .collect();
 
+    let mut nodes = vec![json!({ "name": character.name(), "mesh": 0 })];
+    let mut scene_nodes = vec![0];
+    if let Some((skin_nodes, _)) = &skin {
+        nodes[0]["skin"] = json!(0);
+        scene_nodes.push(1);
+        nodes.extend(skin_nodes.iter().cloned());
+    }
     let mut root = json!({
         "asset": { "version": "2.0", "generator": concat!("faceanim ", env!("CARGO_PKG_VERSION")) },
         "scene": 0,
-        "scenes": [{ "nodes": [0] }],
-        "nodes": [{ "name": character.name(), "mesh": 0 }],
+        "scenes": [{ "nodes": scene_nodes }],
+        "nodes": nodes,
         "meshes": [mesh],
         "materials": materials,
         "accessors": bin.accessors,
@@ -271,6 +312,9 @@ pub fn export_glb(
     });
     if !animations_json.is_empty() {
         root["animations"] = json!(animations_json);
+    }
+    if let Some((_, skin)) = skin {
+        root["skins"] = json!([skin]);
     }
     if textures.iter().any(|t| t.get("extensions").is_some()) {
         root["extensionsUsed"] = json!(["EXT_texture_webp"]);
@@ -283,6 +327,43 @@ pub fn export_glb(
             json!([{ "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 }]);
     }
     glb(&root, bin.bytes)
+}
+
+/// The joint nodes (numbered from 1, the rest first) and the skin of `rig`: each joint at its
+/// place, unturned, its inverse bind matrix the move back from there.
+fn skin_json(rig: &crate::bones::ViewRig, bin: &mut Bin) -> (Vec<Value>, Value) {
+    let mut nodes: Vec<Value> = rig
+        .joints
+        .iter()
+        .map(|joint| {
+            let above = joint
+                .parent
+                .and_then(|p| rig.joints.get(p))
+                .map_or(Vec3::ZERO, |p| p.pivot);
+            let name = joint.bone.map_or("rest", faceanim_rig::bones::Bone::name);
+            json!({ "name": format!("faceanim_{name}"),
+                    "translation": exact(&(joint.pivot - above).to_array()) })
+        })
+        .collect();
+    for (j, joint) in rig.joints.iter().enumerate() {
+        if let Some(node) = joint.parent.and_then(|p| nodes.get_mut(p)) {
+            let children = node
+                .as_object_mut()
+                .map(|o| o.entry("children").or_insert_with(|| json!([])));
+            if let Some(Value::Array(list)) = children {
+                list.push(json!(j + 1));
+            }
+        }
+    }
+    let inverse: Vec<f32> = rig
+        .joints
+        .iter()
+        .flat_map(|j| glam::Mat4::from_translation(-j.pivot).to_cols_array())
+        .collect();
+    let matrices = bin.floats(&inverse, "MAT4", None, None);
+    let joints: Vec<usize> = (1..=rig.joints.len()).collect();
+    let skin = json!({ "joints": joints, "inverseBindMatrices": matrices, "skeleton": 1 });
+    (nodes, skin)
 }
 
 fn check_animation(animation: &MorphAnimation, shape_count: usize) -> Result<(), GlbError> {

@@ -379,7 +379,9 @@ pub fn glb(
 
 /// The character as faceanim sees it, as one mesh whose targets are the character's own in
 /// order, with `animation`: what the studio's page plays and picks on (its vertex and target
-/// indices are the character's), whatever file the character came from.
+/// indices are the character's), whatever file the character came from. Where the file has a
+/// head bone the mesh is skinned to the face's bones ([`bones::ViewRig`]), so the page turns
+/// spine, neck, head, eyes and jaw as the export does.
 ///
 /// # Errors
 /// [`ExportError::Glb`] when the animation does not fit the character.
@@ -387,9 +389,10 @@ pub fn view_glb(
     character: &Character,
     animation: Option<&MorphAnimation>,
 ) -> Result<Vec<u8>, ExportError> {
-    Ok(glb::export_glb(
+    Ok(glb::export_glb_skinned(
         character,
         animation.map(std::slice::from_ref).unwrap_or_default(),
+        bones::ViewRig::of(character).as_ref(),
     )?)
 }
 

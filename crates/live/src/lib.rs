@@ -112,13 +112,18 @@ pub fn unity_rotation(head: [f32; 3]) -> [f32; 4] {
     [x, -y, -z, w]
 }
 
-/// A head turn `q` (`[x, y, z, w]`) shared between neck and head, half each: the neck's
-/// local rotation and the head's after it (their product is `q`).
+/// A head turn `q` (`[x, y, z, w]`) shared between neck and head as exports share it
+/// ([`faceanim_rig::bones::HeadSplit`], without the spine): the neck's local rotation and the
+/// head's after it (their product is `q`).
 #[must_use]
 pub fn neck_and_head(q: [f32; 4]) -> [[f32; 4]; 2] {
-    let q = glam::Quat::from_array(q).normalize();
-    let neck = glam::Quat::IDENTITY.slerp(q, 0.5).normalize();
-    [neck.to_array(), (neck.inverse() * q).normalize().to_array()]
+    let [_, neck, head] = faceanim_rig::bones::HeadSplit::default().share(
+        glam::Quat::from_array(q),
+        0.0,
+        false,
+        true,
+    );
+    [neck.to_array(), head.to_array()]
 }
 
 /// The inverse of [`unity_rotation`]: a Unity rotation `[x, y, z, w]` as `[yaw, pitch, roll]`

@@ -122,6 +122,10 @@ pub struct ReceivedFrame {
     pub weights: Vec<f32>,
     /// Head yaw, pitch, roll in degrees, once a head pose arrived.
     pub head: Option<[f32; 3]>,
+    /// Each eye's gaze `[yaw, pitch]` in degrees (left, right), from a phone's eyeLook values.
+    pub eyes: Option<[[f32; 2]; 2]>,
+    /// `jawOpen`, from a phone.
+    pub jaw: Option<f32>,
 }
 
 /// What arrived so far.
@@ -582,22 +586,10 @@ fn forward(state: &mut State, arrived: Instant) {
     let Some(frame) = state.history.back() else {
         return;
     };
-    // The eyes from the phone's eyeLook values, as exports turn eye bones: the apps' own eye
-    // angles differ in sign and unit from one app to the next, and Live Link Face's are those
-    // values at the same range (tests/phones.rs).
-    let eyes = state.raw.is_some().then(|| {
-        faceanim_rig::bones::gaze_from_arkit(|c| {
-            faceanim_retarget::channel_index(c).map_or(0.0, |i| state.channels[i])
-        })
-    });
-    let jaw = state
-        .raw
-        .is_some()
-        .then(|| faceanim_retarget::channel_index("jawOpen").map_or(0.0, |i| state.channels[i]));
     let pose = crate::Pose {
         head: frame.head,
-        eyes,
-        jaw,
+        eyes: frame.eyes,
+        jaw: frame.jaw,
     };
     let sent = lock_performer(&performer).send_pose(&frame.weights, pose, frame.time as f32);
     if sent {
@@ -736,10 +728,17 @@ fn complete_frame(state: &mut State, time: f64) {
         }
         _ => state.current.clone(),
     };
+    // The eyes from the phone's eyeLook values, as exports turn eye bones: the apps' own eye
+    // angles differ in sign and unit from one app to the next, and Live Link Face's are those
+    // values at the same range (tests/phones.rs).
+    let channel = |c: &str| faceanim_retarget::channel_index(c).map_or(0.0, |i| state.channels[i]);
+    let phone = state.raw.is_some();
     let frame = ReceivedFrame {
         time,
         weights,
         head: state.head,
+        eyes: phone.then(|| faceanim_rig::bones::gaze_from_arkit(channel)),
+        jaw: phone.then(|| channel("jawOpen")),
     };
     if let Some(recording) = state.recording.as_mut() {
         recording.push(frame.clone());

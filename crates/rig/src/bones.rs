@@ -118,6 +118,52 @@ pub fn arkit_from_gaze(gaze: [[f32; 2]; 2]) -> [(&'static str, f32); 8] {
     ]
 }
 
+/// The share of the head's yaw the upper spine follows.
+pub const SPINE_SHARE: f32 = 0.2;
+/// How slowly the spine follows (seconds, the time constant of its smoothing).
+pub const SPINE_LAG: f32 = 0.2;
+/// The share of the head's turn the neck takes where the rig has one (half, as VMagicMirror
+/// shares it).
+pub const NECK_SHARE: f32 = 0.5;
+
+/// A captured head pose shared between upper spine, neck and head, frame after frame: the
+/// spine follows [`SPINE_SHARE`] of the yaw, smoothed over [`SPINE_LAG`]; the neck takes
+/// [`NECK_SHARE`] of the rest; the head what remains. The one rule the export, the studio's
+/// view and VMC turn bones by.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HeadSplit {
+    /// The spine's yaw so far (radians), once a frame was shared.
+    spine_yaw: Option<f32>,
+}
+
+impl HeadSplit {
+    /// Shares the head's turn `q` (character space) `dt` seconds after the last frame, on a rig
+    /// with (`spine`) an upper spine and (`neck`) a neck bone: each bone's turn in character
+    /// space beyond what its ancestors turn, `[spine, neck, head]` (identity for a bone the rig
+    /// lacks); their product is `q`.
+    pub fn share(&mut self, q: Quat, dt: f32, spine: bool, neck: bool) -> [Quat; 3] {
+        let q = q.normalize();
+        let (yaw, _, _) = q.to_euler(glam::EulerRot::YXZ);
+        let target = SPINE_SHARE * yaw;
+        let follow = 1.0 - (-dt.max(0.0) / SPINE_LAG).exp();
+        let now = self.spine_yaw.map_or(target, |s| s + (target - s) * follow);
+        self.spine_yaw = Some(now);
+        let spine_turn = if spine {
+            Quat::from_rotation_y(now)
+        } else {
+            Quat::IDENTITY
+        };
+        let above = spine_turn.inverse() * q;
+        let neck_turn = if neck {
+            Quat::IDENTITY.slerp(above, NECK_SHARE).normalize()
+        } else {
+            Quat::IDENTITY
+        };
+        let head_turn = (neck_turn.inverse() * above).normalize();
+        [spine_turn, neck_turn, head_turn]
+    }
+}
+
 /// A bone as the face's rules turn it. A turn `q` in character space, beyond what its turned
 /// ancestors already turn, is the local rotation `P⁻¹·q·P·R`, where `P` is its parent's
 /// rotation in character space at rest and `R` its own local rotation at rest; [`Joint::turn`]

@@ -28,6 +28,9 @@ pub struct Origin {
     /// Maps a displacement in character space back into the mesh's own space (the inverse of
     /// the node transform or rest-pose skinning that placed it).
     pub to_local: Mat3,
+    /// The nodes that place it and each one's share (the skin's joints and `WEIGHTS_0`, or its
+    /// mesh's node with all of it); unused entries have share 0.
+    pub placed_by: [(u32, f32); 4],
 }
 
 /// The user's file and how the character maps onto it. See the module docs.

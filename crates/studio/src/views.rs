@@ -438,6 +438,8 @@ pub struct VmcView {
     pub weights: Option<Vec<f32>>,
     /// The head pose in the last frame (yaw, pitch, roll in degrees).
     pub head: Option<[f32; 3]>,
+    /// The view's bones in the last frame (see [`TakeView::bones`]).
+    pub bones: Option<Vec<[f32; 4]>>,
     /// Sending, when the studio sends the live face.
     pub sending: Option<VmcSendView>,
 }
@@ -651,6 +653,11 @@ pub struct TakeView {
     pub neutral_warning: Option<String>,
     /// For a lip-sync take: where the page fetches its sound to play with it.
     pub sound: Option<String>,
+    /// Per frame, for a character whose file has a head bone: each joint of the view's skeleton
+    /// (`faceanim_export::bones::ViewRig`, the skin of `GET /api/view.glb`) as its rotation
+    /// `[x, y, z, w]`: the head pose shared between spine, neck and head, the gaze on the
+    /// eyes, `jawOpen` on the jaw, as the export turns the file's bones.
+    pub bones: Option<Vec<Vec<[f32; 4]>>>,
 }
 
 impl TakeView {
@@ -701,6 +708,7 @@ impl TakeView {
                 .and_then(faceanim_take::NeutralCheck::warning),
             neutral_check,
             sound: None,
+            bones: None,
         }
     }
 }

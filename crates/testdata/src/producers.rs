@@ -56,6 +56,25 @@ pub fn blender_avatar() -> &'static [u8] {
     })
 }
 
+/// The Blender-made avatar as faceanim imports it (see [`blender_avatar`]).
+///
+/// # Panics
+/// When Blender is missing or fails, or the file does not import.
+#[must_use]
+#[expect(
+    clippy::panic,
+    reason = "test support: a missing producer must stop the test loudly"
+)]
+pub fn blender_avatar_character() -> faceanim_rig::Character {
+    faceanim_rig::import::import_gltf(
+        blender_avatar(),
+        "blender.glb",
+        &faceanim_rig::import::NoExternalResources,
+    )
+    .unwrap_or_else(|e| panic!("the Blender avatar does not import: {e}"))
+    .character
+}
+
 /// Where the Blender-made avatar is cached, made there first if it is not yet.
 ///
 /// # Panics

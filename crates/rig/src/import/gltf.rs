@@ -213,12 +213,17 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKi
 /// How one mesh instance is placed: by its node's matrix, or by a skin whose joints' rest
 /// matrices each primitive's own `JOINTS_0`/`WEIGHTS_0` blend per vertex.
 enum Instance {
-    Rigid(Mat4),
+    /// Placed by a node's world matrix (the node, when one places it).
+    Rigid(Mat4, Option<u32>),
     Skinned {
         /// `joint_world · inverse_bind` of each joint, in the skin's order.
         joints: Vec<Mat4>,
+        /// Each joint's node, in the skin's order.
+        joint_nodes: Vec<u32>,
         /// The node's own world matrix, for a vertex with no weights (or a primitive without them).
         node: Mat4,
+        /// That node's index.
+        node_index: u32,
     },
 }
 
@@ -230,15 +235,20 @@ impl Instance {
         label: &str,
         buffers: &Buffers<'_>,
     ) -> Result<Placement, ImportErrorKind> {
-        let (joints, node) = match self {
-            Instance::Rigid(m) => return Ok(Placement::Rigid(*m)),
-            Instance::Skinned { joints, node } => (joints, *node),
+        let (joints, joint_nodes, node, node_index) = match self {
+            Instance::Rigid(m, node) => return Ok(Placement::Rigid(*m, *node)),
+            Instance::Skinned {
+                joints,
+                joint_nodes,
+                node,
+                node_index,
+            } => (joints, joint_nodes, *node, *node_index),
         };
         let (Some(j_acc), Some(w_acc)) = (
             primitive.get(&gltf::Semantic::Joints(0)),
             primitive.get(&gltf::Semantic::Weights(0)),
         ) else {
-            return Ok(Placement::Rigid(node));
+            return Ok(Placement::Rigid(node, Some(node_index)));
         };
         if let Some(positions) = primitive.get(&gltf::Semantic::Positions) {
             check_count(&j_acc, positions.count(), &format!("JOINTS_0 of {label}"))?;
@@ -249,10 +259,12 @@ impl Instance {
         check_finite(&weights, 4, &format!("WEIGHTS_0 of {label}"))?;
         let count = j_acc.count().min(w_acc.count());
         let mut per_vertex = Vec::with_capacity(count);
+        let mut shares = Vec::with_capacity(count);
         for v in 0..count {
             let mut m = Mat4::ZERO;
             let mut total = 0.0;
-            for k in 0..4 {
+            let mut by = [(node_index, 0.0); 4];
+            for (k, slot) in by.iter_mut().enumerate() {
                 let w = weights.get(4 * v + k).copied().unwrap_or(0.0);
                 if w == 0.0 {
                     continue;
@@ -266,17 +278,27 @@ impl Instance {
                 })?;
                 m += *jm * w;
                 total += w;
+                *slot = (joint_nodes.get(j).copied().unwrap_or(node_index), w);
             }
-            per_vertex.push(if total > 0.0 { m * (1.0 / total) } else { node });
+            if total > 0.0 {
+                per_vertex.push(m * (1.0 / total));
+                shares.push(by.map(|(n, w)| (n, w / total)));
+            } else {
+                per_vertex.push(node);
+                let mut whole = [(node_index, 0.0); 4];
+                whole[0].1 = 1.0;
+                shares.push(whole);
+            }
         }
-        Ok(Placement::Skinned(per_vertex))
+        Ok(Placement::Skinned(per_vertex, shares))
     }
 }
 
-/// Per-vertex transform of one primitive: one matrix, or per-vertex skinning matrices.
+/// Per-vertex transform of one primitive: one matrix (and the node that places it), or
+/// per-vertex skinning matrices (and the joints' nodes and shares).
 enum Placement {
-    Rigid(Mat4),
-    Skinned(Vec<Mat4>),
+    Rigid(Mat4, Option<u32>),
+    Skinned(Vec<Mat4>, Vec<[(u32, f32); 4]>),
 }
 
 impl Placement {
@@ -287,9 +309,23 @@ impl Placement {
 
     fn matrix(&self, vertex: usize) -> Mat4 {
         match self {
-            Placement::Rigid(m) => *m,
-            Placement::Skinned(per_vertex) => {
+            Placement::Rigid(m, _) => *m,
+            Placement::Skinned(per_vertex, _) => {
                 per_vertex.get(vertex).copied().unwrap_or(Mat4::IDENTITY)
+            }
+        }
+    }
+
+    /// The nodes that place `vertex` and their shares (none for meshes no node places).
+    fn placed_by(&self, vertex: usize) -> [(u32, f32); 4] {
+        match self {
+            Placement::Rigid(_, node) => {
+                let mut whole = [(node.unwrap_or(u32::MAX), 0.0); 4];
+                whole[0].1 = if node.is_some() { 1.0 } else { 0.0 };
+                whole
+            }
+            Placement::Skinned(_, shares) => {
+                shares.get(vertex).copied().unwrap_or([(u32::MAX, 0.0); 4])
             }
         }
     }
@@ -417,7 +453,7 @@ impl Builder {
             for mesh in doc.meshes() {
                 self.read_mesh(
                     &mesh,
-                    &Instance::Rigid(self.root_transform),
+                    &Instance::Rigid(self.root_transform, None),
                     buffers,
                     resources,
                 )?;
@@ -426,7 +462,7 @@ impl Builder {
         for (node, mesh) in instances {
             let instance = match node.skin() {
                 Some(skin) => skin_instance(&skin, &node, &world, buffers)?,
-                None => Instance::Rigid(world[node.index()]),
+                None => Instance::Rigid(world[node.index()], Some(node.index() as u32)),
             };
             self.read_mesh(&mesh, &instance, buffers, resources)?;
         }
@@ -583,6 +619,7 @@ impl Builder {
                     accessor: position_accessor.index() as u32,
                     local: i as u32,
                     to_local,
+                    placed_by: placement.placed_by(i),
                 }));
         }
 
@@ -1101,6 +1138,8 @@ fn skin_instance(
         None => vec![Mat4::IDENTITY; joints.len()],
     };
     Ok(Instance::Skinned {
+        joint_nodes: joints.iter().map(|&j| j as u32).collect(),
+        node_index: node.index() as u32,
         joints: joints
             .iter()
             .enumerate()

@@ -140,6 +140,10 @@ pub struct LiveResult {
     pub found: bool,
     /// Head yaw, pitch, roll in degrees.
     pub head: Option<[f32; 3]>,
+    /// The view's bones in this frame, for a character whose file has a head bone (see
+    /// `faceanim_export::bones::ViewRig`): the head pose on spine, neck and head, the gaze on
+    /// the eyes, `jawOpen` on the jaw.
+    pub bones: Option<Vec<[f32; 4]>>,
     /// Milliseconds the server spent on the frame.
     pub server_ms: f64,
     /// Frames recorded so far, while recording.
@@ -151,12 +155,16 @@ pub struct LiveResult {
 /// What a live frame needs, taken from the desk so tracking does not block it.
 pub struct LiveHandle {
     live: Arc<Mutex<Option<Live>>>,
+    skeleton: Option<Arc<faceanim_export::bones::ViewRig>>,
 }
 
 impl LiveHandle {
     /// A handle on `live`.
-    pub(super) fn new(live: Arc<Mutex<Option<Live>>>) -> LiveHandle {
-        LiveHandle { live }
+    pub(super) fn new(
+        live: Arc<Mutex<Option<Live>>>,
+        skeleton: Option<Arc<faceanim_export::bones::ViewRig>>,
+    ) -> LiveHandle {
+        LiveHandle { live, skeleton }
     }
 
     /// Tracks one webcam frame and returns the character's weights.
@@ -172,6 +180,7 @@ impl LiveHandle {
                 weights: Vec::new(),
                 found: false,
                 head: None,
+                bones: None,
                 server_ms: started.elapsed().as_secs_f64() * 1000.0,
                 recorded: None,
                 neutral: None,
@@ -201,21 +210,22 @@ impl LiveHandle {
             filter.filter(time, &mut weights);
         }
         let head = record.head;
+        // The gaze from MediaPipe's own eyeLook scores, as the eye bones take it, and the jaw
+        // from its jawOpen.
+        let score = |c: &str| {
+            record
+                .scores
+                .iter()
+                .find(|(n, _)| *n == c)
+                .map_or(0.0, |(_, v)| *v)
+        };
+        let eyes = found.then(|| faceanim_rig::bones::gaze_from_arkit(score));
+        let jaw = found.then(|| score("jawOpen"));
         // Out at once: the frame's weights go to the marionette before anything else is done.
         if let Some(performer) = &live.performer {
-            // The gaze from MediaPipe's own eyeLook scores, as the eye bones take it, and the
-            // jaw from its jawOpen.
-            let score = |c: &str| {
-                record
-                    .scores
-                    .iter()
-                    .find(|(n, _)| *n == c)
-                    .map_or(0.0, |(_, v)| *v)
-            };
-            let eyes = found.then(|| faceanim_rig::bones::gaze_from_arkit(score));
-            let jaw = found.then(|| score("jawOpen"));
             lock(performer).send_pose(&weights, faceanim_live::Pose { head, eyes, jaw }, time);
         }
+        let bones = self.skeleton.as_ref().map(|s| s.pose(head, eyes, jaw));
         let recorded = match live.recording.as_mut() {
             Some(recording) => {
                 let start = *recording.started.get_or_insert(time);
@@ -233,6 +243,7 @@ impl LiveHandle {
             weights,
             found,
             head,
+            bones,
             server_ms: started.elapsed().as_secs_f64() * 1000.0,
             recorded,
             neutral: live.neutral.chosen(),

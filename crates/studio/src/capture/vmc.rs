@@ -104,7 +104,10 @@ impl Vmc {
     }
 
     /// The links' state, when there are any.
-    pub(super) fn view(&self) -> Option<VmcView> {
+    pub(super) fn view(
+        &self,
+        skeleton: Option<&faceanim_export::bones::ViewRig>,
+    ) -> Option<VmcView> {
         let sending = self.performer.as_ref().map(|p| {
             let performer = lock(p);
             let stats = performer.stats();
@@ -131,6 +134,9 @@ impl Vmc {
             traffic,
             recording: marionette.and_then(Marionette::recorded),
             weights: latest.as_ref().map(|f| f.weights.clone()),
+            bones: skeleton
+                .zip(latest.as_ref())
+                .map(|(s, f)| s.pose(f.head, f.eyes, f.jaw)),
             head: latest.and_then(|f| f.head),
             sending,
         })

@@ -41,7 +41,7 @@ impl CaptureDesk {
     /// The live state, to track frames without holding the desk.
     #[must_use]
     pub fn live_handle(&self) -> LiveHandle {
-        LiveHandle::new(self.live.clone())
+        LiveHandle::new(self.live.clone(), self.skeleton.clone())
     }
 
     /// Starts recording a take from the live frames.

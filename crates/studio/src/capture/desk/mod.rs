@@ -62,6 +62,9 @@ pub struct CaptureDesk {
     take_path: PathBuf,
     /// VMC in and out.
     vmc: Vmc,
+    /// The face's bones as the page's view of the character turns them (for a character whose
+    /// file has a head bone).
+    skeleton: Option<Arc<faceanim_export::bones::ViewRig>>,
     /// The live microphone.
     voice: SharedVoice,
     /// The voice learned by a microphone session that was stopped, for the next one.
@@ -110,6 +113,20 @@ fn map_path(adapter_path: &std::path::Path, character: &Character) -> PathBuf {
     faceanim_adapt::bridge::default_map_path(adapter_path.parent(), character.name())
 }
 
+/// Per frame of `session`, the view's bones as its export turns them: the head pose shared
+/// between spine, neck and head, gaze and jaw from the capture's own ARKit values (else from the
+/// frames by their names' ARKit meaning).
+fn take_bones(skeleton: &faceanim_export::bones::ViewRig, session: &Session) -> Vec<Vec<[f32; 4]>> {
+    let clip = session.clip();
+    let keys =
+        faceanim_export::bones::BoneKeys::from_clip(session.arkit_clip().as_ref().unwrap_or(&clip));
+    let head: Vec<Option<[f32; 3]>> = match &clip.head {
+        Some(head) => head.iter().copied().map(Some).collect(),
+        None => vec![None; clip.frames.len()],
+    };
+    skeleton.poses(clip.fps, &head, &keys)
+}
+
 /// A shared capture desk.
 pub type SharedDesk = Arc<Mutex<CaptureDesk>>;
 
@@ -150,6 +167,7 @@ impl CaptureDesk {
             uploads_stored: 0,
             notice: None,
             vmc: Vmc::default(),
+            skeleton: faceanim_export::bones::ViewRig::of(character).map(Arc::new),
         };
         desk.load_adapter(character);
         desk.load_map(character);
@@ -669,6 +687,7 @@ impl CaptureDesk {
         }
         self.take = None;
         *lock(&self.live) = None;
+        self.skeleton = faceanim_export::bones::ViewRig::of(character).map(Arc::new);
         self.map_path = map_path(&adapter_path, character);
         self.adapter_path = adapter_path;
         self.load_adapter(character);
@@ -796,6 +815,10 @@ impl CaptureDesk {
                     .sound
                     .as_ref()
                     .map(|_| format!("api/capture/sound?take={}", open.id()));
+                view.bones = self
+                    .skeleton
+                    .as_deref()
+                    .map(|skeleton| take_bones(skeleton, &open.take.session));
                 view
             }),
         }

@@ -26,7 +26,7 @@ impl CaptureDesk {
     /// The VMC links' state, when there are any.
     #[must_use]
     pub fn vmc_view(&self) -> Option<VmcView> {
-        self.vmc.view()
+        self.vmc.view(self.skeleton.as_deref())
     }
 
     /// Sends one frame of the character's face (what the page shows while playing a take or
