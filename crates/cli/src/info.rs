@@ -54,6 +54,9 @@ struct AnimationReport {
     channels: usize,
     /// Its length in seconds (the latest key time its samplers declare).
     seconds: f64,
+    /// For a sketch faceanim exported: how many strokes it keeps (it opens as them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    strokes: Option<usize>,
 }
 
 impl AnimationReport {
@@ -88,6 +91,14 @@ impl AnimationReport {
                     .flatten()
                     .filter_map(end_of)
                     .fold(0.0, f64::max),
+                strokes: a
+                    .pointer(&format!(
+                        "/extras/{}/{}/strokes",
+                        faceanim_rig::file_animation::EXTRAS_KEY,
+                        faceanim_rig::file_animation::STROKES_KEY
+                    ))
+                    .and_then(Value::as_array)
+                    .map(Vec::len),
             })
             .collect()
     }
@@ -298,9 +309,13 @@ impl Report {
                 if f.vrm { ", VRM" } else { "" }
             );
             for a in &f.animations {
+                let sketch = a
+                    .strokes
+                    .map(|n| format!(", a sketch of {n} stroke{}", if n == 1 { "" } else { "s" }))
+                    .unwrap_or_default();
                 let _ = writeln!(
                     out,
-                    "  animation    {}: {:.2} s, {} channels",
+                    "  animation    {}: {:.2} s, {} channels{sketch}",
                     a.name, a.seconds, a.channels
                 );
             }

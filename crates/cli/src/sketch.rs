@@ -55,6 +55,8 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
         arkit: None,
         session: None,
         bones: None,
+        // The strokes go with the sketch, so the file opens again as them.
+        strokes: serde_json::from_slice(&bytes).ok(),
     };
     crate::outputs::write(
         &args.output,

@@ -145,6 +145,7 @@ fn use_session(bytes: &[u8], character: &faceanim_rig::Character, glb: bool) {
         arkit: session.arkit_clip(),
         session: Some(&session),
         bones: None,
+        strokes: None,
     };
     for format in faceanim_export::Format::ALL {
         if format != faceanim_export::Format::Glb || glb {

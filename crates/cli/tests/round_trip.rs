@@ -260,10 +260,11 @@ fn an_animation_keyed_in_blender_opens_as_a_take() {
 }
 
 /// A sketch exported as a GLB (strokes drawn through the studio's API on the Blender avatar)
-/// opens again in `faceanim studio` as a take that plays the sketch's frames, and exports
-/// again to the same weights.
+/// opens again in `faceanim studio` as its strokes, ready to edit, baking to the same weights,
+/// and its export opens as the strokes again (the animation replaced, not added); the same
+/// file without its strokes opens as a take that plays the sketch's frames.
 #[test]
-fn a_sketched_glb_opens_again_as_a_take_and_exports_the_same() {
+fn a_sketched_glb_opens_again_as_its_strokes_and_exports_the_same() {
     let dir = tempfile::tempdir().unwrap();
     let out = output_dir("round_trip");
     let avatar = blender_avatar_path();
@@ -298,15 +299,63 @@ fn a_sketched_glb_opens_again_as_a_take_and_exports_the_same() {
     let frames = baked["frames"].as_array().unwrap().len();
     assert!(frames > 10, "{frames} frames");
 
+    // It opens again as its two strokes (kept in the animation's extras), ready to edit, and
+    // not also as a take; its sketch bakes to the same weights and exports the same again.
     let studio = start_on(Some(&sketched), &dir.path().join("again.json"), &[]);
+    let (_, body) = request(studio.port, "GET", "/api/state", &[], b"");
+    let sketch: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(sketch["actions"].as_array().unwrap().len(), 2, "{body}");
+    let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    let capture: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert!(capture["take"].is_null(), "{}", capture["take"]);
+    assert!(
+        capture["notice"]
+            .as_str()
+            .is_some_and(|n| n.contains("Sketch tab")),
+        "{}",
+        capture["notice"]
+    );
+    let (status, rebaked) = request_bytes(studio.port, "GET", "/api/export.json", &[], b"");
+    assert_eq!(status, 200);
+    let rebaked: serde_json::Value = serde_json::from_slice(&rebaked).unwrap();
+    let (status, again) = request_bytes(studio.port, "GET", "/api/export.glb", &[], b"");
+    assert_eq!(status, 200);
+    drop(studio);
+    let again_path = out.join("sketched-again.glb");
+    std::fs::write(&again_path, &again).unwrap();
+    let info: serde_json::Value = serde_json::from_str(&faceanim_ok(&[
+        "info",
+        again_path.to_str().unwrap(),
+        "--json",
+    ]))
+    .unwrap();
+    let animations = info["file"]["animations"].as_array().unwrap();
+    assert_eq!(
+        animations.len(),
+        1,
+        "the re-export replaces the sketch's animation"
+    );
+    assert_eq!(animations[0]["strokes"], 2, "{animations:?}");
+    let studio = start_on(Some(&again_path), &dir.path().join("third.json"), &[]);
+    let (_, body) = request(studio.port, "GET", "/api/state", &[], b"");
+    let third: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(third["actions"].as_array().unwrap().len(), 2, "{body}");
+    drop(studio);
+
+    // The same file without its strokes (as another tool may write it back) opens as a take of
+    // the same weights.
+    let (mut doc, bin) = faceanim_testdata::glb::parts(&glb);
+    for animation in doc["animations"].as_array_mut().unwrap() {
+        if let Some(ours) = animation.pointer_mut("/extras/faceanim") {
+            ours.as_object_mut().unwrap().remove("strokes");
+        }
+    }
+    let plain = out.join("sketched-plain.glb");
+    std::fs::write(&plain, faceanim_testdata::glb::assemble(&doc, &bin)).unwrap();
+    let studio = start_on(Some(&plain), &dir.path().join("plain.json"), &[]);
     let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
     let state: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert_eq!(state["take"]["frames"], frames, "{}", state["take"]);
-    let (status, again) = request_bytes(studio.port, "GET", "/api/capture/export.glb", &[], b"");
-    assert_eq!(status, 200);
-    let (status, body) = support::upload(studio.port, "again.glb", &again);
-    assert_eq!(status, 200, "{body}");
-    let reopened: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert_eq!(targets[0], "jawOpen");
     for name in &targets {
         let want = support::column(&baked, name);
@@ -314,10 +363,16 @@ fn a_sketched_glb_opens_again_as_a_take_and_exports_the_same() {
             want.iter().fold(0.0, |a: f64, b| a.max(*b)) > 0.5,
             "{name}: {want:?}"
         );
-        for (what, state) in [("the sketched GLB", &state), ("its export", &reopened)] {
-            let worst = worst_gap(&take_column(state, name), &want);
-            assert!(worst < 1e-3, "{what}: {name} is {worst} from the sketch");
-        }
+        let worst = worst_gap(&support::column(&rebaked, name), &want);
+        assert!(
+            worst < 1e-3,
+            "the sketch reopened: {name} is {worst} from the sketch"
+        );
+        let worst = worst_gap(&take_column(&state, name), &want);
+        assert!(
+            worst < 1e-3,
+            "the file without its strokes: {name} is {worst} from the sketch"
+        );
     }
 }
 

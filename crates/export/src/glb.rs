@@ -504,6 +504,53 @@ fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, GlbError> {
     Ok(out)
 }
 
+/// `bytes` (a GLB this module wrote) with `strokes` kept in the `extras` of the animation
+/// named `name` that faceanim wrote (`{"faceanim": {"take": true, "strokes": …}}`), so that a
+/// sketch opens again as its strokes. Unchanged when there is no such animation.
+///
+/// # Errors
+/// [`GlbError::TooLarge`] past 4 GiB.
+pub fn with_strokes(bytes: Vec<u8>, name: &str, strokes: &Value) -> Result<Vec<u8>, GlbError> {
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .and_then(|b| b.try_into().ok())
+            .map(|b: [u8; 4]| u32::from_le_bytes(b) as usize)
+    };
+    let Some(json_len) = word(12) else {
+        return Ok(bytes);
+    };
+    let Some(mut root) = bytes
+        .get(20..20 + json_len)
+        .and_then(|j| serde_json::from_slice::<Value>(j).ok())
+    else {
+        return Ok(bytes);
+    };
+    let bin_at = 20 + json_len;
+    let bin = word(bin_at)
+        .and_then(|len| bytes.get(bin_at + 8..bin_at + 8 + len))
+        .map_or_else(Vec::new, <[u8]>::to_vec);
+    let key = faceanim_rig::file_animation::EXTRAS_KEY;
+    let target = root
+        .get_mut("animations")
+        .and_then(Value::as_array_mut)
+        .and_then(|list| {
+            list.iter_mut()
+                .rev()
+                .find(|a| a["name"] == name && a.pointer(&format!("/extras/{key}")).is_some())
+        })
+        .and_then(|a| a.pointer_mut(&format!("/extras/{key}")))
+        .and_then(Value::as_object_mut);
+    let Some(ours) = target else {
+        return Ok(bytes);
+    };
+    ours.insert(
+        faceanim_rig::file_animation::STROKES_KEY.to_owned(),
+        strokes.clone(),
+    );
+    glb(&root, bin)
+}
+
 /// Writes `animations` into the user's own file: every node, mesh, skin, material, texture,
 /// image, sampler, camera, extension and `extras` of the file stays as it was (same counts,
 /// names and order; the file's animations are kept, and one faceanim wrote before under the

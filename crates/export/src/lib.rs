@@ -175,6 +175,9 @@ pub struct Animation<'a> {
     /// What the eyes and the jaw do, for their bones; `None`: read from `arkit`, else from
     /// `clip` by its names' ARKit meaning.
     pub bones: Option<bones::BoneKeys>,
+    /// The sketch the animation was made from (its project's JSON), kept in the GLB so that it
+    /// opens again as strokes to edit.
+    pub strokes: Option<serde_json::Value>,
 }
 
 impl<'a> Animation<'a> {
@@ -201,6 +204,7 @@ impl<'a> Animation<'a> {
             animation: retarget.animation,
             arkit: None,
             session: None,
+            strokes: None,
         })
     }
 
@@ -253,6 +257,7 @@ impl<'a> Animation<'a> {
             arkit,
             session,
             bones: None,
+            strokes: None,
         })
     }
 }
@@ -329,7 +334,7 @@ pub fn export_with(
             let keys =
                 bones::BoneKeys::from_clip(animation.arkit.as_ref().unwrap_or(&animation.clip));
             let character = animation.character.ok_or(ExportError::NeedsCharacter)?;
-            match character.source() {
+            let bytes = match character.source() {
                 Some(source) => {
                     if source.meshopt() && compression == glb::Compression::AsRead {
                         notes.push(
@@ -347,6 +352,10 @@ pub fn export_with(
                     )?
                 }
                 None => view_glb(character, Some(&animation.animation))?,
+            };
+            match &animation.strokes {
+                Some(strokes) => glb::with_strokes(bytes, &animation.animation.name, strokes)?,
+                None => bytes,
             }
         }
         Format::LiveLinkCsv => {

@@ -13,7 +13,7 @@
 //!
 //! // One mesh with two targets, keyed at 0 and 1 s.
 //! let track = WeightsTrack::new(0, vec![0.0, 1.0], vec![0.0, 0.0, 1.0, 0.5], 2, Interpolation::Linear)?;
-//! let animation = FileAnimation { name: "smile".into(), tracks: vec![track], ours: false, turns: vec![] };
+//! let animation = FileAnimation { name: "smile".into(), tracks: vec![track], ours: false, turns: vec![], strokes: None };
 //! // Blendshape 0 is target 1 of mesh 0.
 //! let played = animation.sample(&[vec![Binding { mesh: 0, target: 1, weight: 1.0 }]]);
 //! assert_eq!(played.times.len(), 31); // 30 frames a second, from 0 to 1 s
@@ -27,6 +27,9 @@ use crate::binding::Binding;
 /// The key in an animation's `extras` that marks it as faceanim's (`{"faceanim": {"take":
 /// true}}`), written by the GLB exporter.
 pub const EXTRAS_KEY: &str = "faceanim";
+
+/// The key under [`EXTRAS_KEY`] that keeps the strokes a sketched animation was made from.
+pub const STROKES_KEY: &str = "strokes";
 
 /// The rate an animation plays at when its keys keep no steady one.
 pub const DEFAULT_FPS: f32 = 30.0;
@@ -309,6 +312,10 @@ pub struct FileAnimation {
     pub ours: bool,
     /// Its `rotation` channels (the bones it turns beside the morph targets).
     pub turns: Vec<RotationTrack>,
+    /// The strokes it was sketched from, where faceanim kept them (`extras.faceanim.strokes`:
+    /// a sketch project, see the sketch crate's `ProjectFile`), so the sketch opens again as
+    /// strokes to edit.
+    pub strokes: Option<serde_json::Value>,
 }
 
 impl FileAnimation {
@@ -439,6 +446,7 @@ mod tests {
             tracks: vec![track],
             ours: false,
             turns: vec![],
+            strokes: None,
         };
         assert_eq!(animation.fps(), 24.0);
         // A VRM expression bound at 0.5: the target at 0.5 reads as the expression at 1.

@@ -31,12 +31,7 @@ impl GltfSource {
     /// (`rotations`) and the eyes' gaze (see [`crate::turns`]), at its rate.
     #[must_use]
     pub fn take(&self) -> Option<Take> {
-        let animation = self
-            .animations
-            .iter()
-            .rev()
-            .find(|a| a.ours)
-            .or_else(|| self.animations.first())?;
+        let animation = self.opened_animation()?;
         let mut played = animation.sample(&self.shapes);
         let start = animation.start();
         played.rotations = head(self, animation, start, &played.times);
@@ -45,6 +40,26 @@ impl GltfSource {
             animation: played,
             fps: animation.fps(),
         })
+    }
+}
+
+impl GltfSource {
+    /// The animation that opens (as a take, or as strokes): the last one faceanim wrote, else
+    /// the file's first.
+    #[must_use]
+    pub fn opened_animation(&self) -> Option<&FileAnimation> {
+        self.animations
+            .iter()
+            .rev()
+            .find(|a| a.ours)
+            .or_else(|| self.animations.first())
+    }
+
+    /// The strokes the animation that opens was sketched from, where faceanim kept them in the
+    /// file (a sketch project's JSON): it opens as those strokes, to edit, rather than as a take.
+    #[must_use]
+    pub fn strokes(&self) -> Option<&serde_json::Value> {
+        self.opened_animation()?.strokes.as_ref()
     }
 }
 

@@ -395,6 +395,10 @@ async fn redo(State(shared): State<Shared>, _unread: Unread) -> axum::Json<State
 /// An export the browser saves as `NAME.EXTENSION` (its notes go to the log); `extension` is
 /// the format's for this character ([`Format::extension_for`]: a VRM stays `.vrm`).
 fn file_stem(studio: &Studio) -> String {
+    // A sketch the character's file kept is written back under its own name, replacing it.
+    if let Some(name) = studio.file_sketch_name() {
+        return name.to_owned();
+    }
     studio.project_path.file_stem().map_or_else(
         || "faceanim".to_owned(),
         |s| s.to_string_lossy().replace('"', ""),
@@ -437,6 +441,8 @@ async fn export(State(shared): State<Shared>, format: Format) -> Result<Response
                 arkit: None,
                 session: None,
                 bones: None,
+                // The strokes go with the sketch, so the file opens again as them.
+                strokes: serde_json::to_value(studio.project()).ok(),
             },
         )?
     } else {

@@ -117,12 +117,19 @@ pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<
         }
     }
     let take_path = state::take_autosave_path(&config.project_path);
-    let mut desk = capture::CaptureDesk::new(&config.character, config.adapter_path, take_path);
-    desk.open_visemes(state::visemes_path(&config.project_path));
-    desk.open_vmc(config.vmc, &config.character)
-        .map_err(StudioError::Vmc)?;
+    let visemes_path = state::visemes_path(&config.project_path);
     let studio =
         Studio::open(config.character, config.project_path).map_err(StudioError::Project)?;
+    let character = studio.character.clone();
+    let mut desk = capture::CaptureDesk::new(
+        &character,
+        config.adapter_path,
+        take_path,
+        studio.sketch_from_file(),
+    );
+    desk.open_visemes(visemes_path);
+    desk.open_vmc(config.vmc, &character)
+        .map_err(StudioError::Vmc)?;
     let both = capture_api::Both {
         studio: Arc::new(Mutex::new(studio)),
         desk: Arc::new(Mutex::new(desk)),

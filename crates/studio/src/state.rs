@@ -30,6 +30,9 @@ pub struct Studio {
     pub project_path: PathBuf,
     /// Where every edit is written at once, so a crash loses nothing.
     pub autosave_path: PathBuf,
+    /// The name of the animation whose kept sketch the project is, when it came from the
+    /// character's own file.
+    sketch_from_file: Option<String>,
 }
 
 /// A new studio project. It selects targets by segment rather than by the paper's Eq. 1: a
@@ -45,6 +48,21 @@ fn empty_project() -> ProjectFile {
             ..Settings::default()
         },
         strokes: Vec::new(),
+    }
+}
+
+/// The sketch `character`'s own file keeps with its animation (a sketched GLB faceanim
+/// wrote), when it is a project faceanim can replay; it opens as strokes, not as a take.
+#[must_use]
+pub fn file_sketch(character: &Character) -> Option<ProjectFile> {
+    let strokes = character.source()?.strokes()?;
+    let bytes = serde_json::to_vec(strokes).ok()?;
+    match parse_project(&bytes, "the file's sketch") {
+        Ok(file) => Some(file),
+        Err(e) => {
+            tracing::warn!("{}: {e}; its animation opens as a take", character.name());
+            None
+        }
     }
 }
 
@@ -84,10 +102,22 @@ impl Studio {
                 if path == &autosave_path {
                     tracing::warn!("recovered unsaved work from {}", path.display());
                 }
-                parse_project(&bytes, &path.display().to_string())?
+                Some(parse_project(&bytes, &path.display().to_string())?)
             }
-            None => empty_project(),
+            None => None,
         };
+        // A sketched GLB faceanim wrote opens as its strokes, ready to edit, where no project
+        // of the user's is kept.
+        let from_file = if project.is_none() {
+            file_sketch(&character)
+        } else {
+            None
+        };
+        let sketch_from_file = from_file.as_ref().and_then(|_| {
+            let source = character.source()?;
+            Some(source.opened_animation()?.name.clone())
+        });
+        let project = project.or(from_file).unwrap_or_else(empty_project);
         Ok(Studio {
             character: Arc::new(character),
             project,
@@ -96,7 +126,21 @@ impl Studio {
             gesture: None,
             project_path,
             autosave_path,
+            sketch_from_file,
         })
+    }
+
+    /// Whether the sketch came from the character's own file (a sketched GLB's strokes): its
+    /// animation is then not also opened as a take.
+    #[must_use]
+    pub fn sketch_from_file(&self) -> bool {
+        self.sketch_from_file.is_some()
+    }
+
+    /// The name of the file's animation the sketch came from (exports write it back under it).
+    #[must_use]
+    pub fn file_sketch_name(&self) -> Option<&str> {
+        self.sketch_from_file.as_deref()
     }
 
     /// The project as it would be saved.
@@ -201,6 +245,7 @@ impl Studio {
         };
         self.undo.clear();
         self.redo.clear();
+        self.sketch_from_file = None;
         self.autosave();
     }
 

@@ -84,12 +84,22 @@ pub(super) fn read(
             .extras()
             .as_ref()
             .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
-            .is_some_and(|extras| extras.get(crate::file_animation::EXTRAS_KEY).is_some());
+            .and_then(|mut extras| {
+                extras
+                    .get_mut(crate::file_animation::EXTRAS_KEY)
+                    .map(serde_json::Value::take)
+            });
+        let strokes = ours
+            .as_ref()
+            .and_then(|o| o.get(crate::file_animation::STROKES_KEY))
+            .filter(|s| s.is_object())
+            .cloned();
         out.push(FileAnimation {
             name,
             tracks,
-            ours,
+            ours: ours.is_some(),
             turns,
+            strokes,
         });
     }
     out

@@ -62,6 +62,9 @@ pub struct CaptureDesk {
     take_path: PathBuf,
     /// VMC in and out.
     vmc: Vmc,
+    /// Whether the studio's sketch is the one the character's file kept (its animation is then
+    /// not opened as a take too).
+    sketch_from_file: bool,
     /// The face's bones as the page's view of the character turns them (for a character whose
     /// file has a head bone).
     skeleton: Option<Arc<faceanim_export::bones::ViewRig>>,
@@ -143,7 +146,12 @@ impl CaptureDesk {
     /// A desk for `character`, loading its adapter from `adapter_path` when there is one and
     /// the take autosaved at `take_path` when it belongs to this character.
     #[must_use]
-    pub fn new(character: &Character, adapter_path: PathBuf, take_path: PathBuf) -> CaptureDesk {
+    pub fn new(
+        character: &Character,
+        adapter_path: PathBuf,
+        take_path: PathBuf,
+        sketch_from_file: bool,
+    ) -> CaptureDesk {
         let mut desk = CaptureDesk {
             take_path,
             map_path: map_path(&adapter_path, character),
@@ -168,6 +176,7 @@ impl CaptureDesk {
             notice: None,
             vmc: Vmc::default(),
             skeleton: faceanim_export::bones::ViewRig::of(character).map(Arc::new),
+            sketch_from_file,
         };
         desk.load_adapter(character);
         desk.load_map(character);
@@ -345,6 +354,14 @@ impl CaptureDesk {
         let Some(reopened) = faceanim_export::reopen::animation_of(character) else {
             return;
         };
+        // A sketch faceanim wrote opens as its strokes (the Sketch tab), not as a take too.
+        if self.sketch_from_file {
+            self.notice = Some(format!(
+                "The file's {} is a sketch: its strokes are in the Sketch tab, ready to edit.",
+                reopened.what
+            ));
+            return;
+        }
         match self.open_clip(character, &reopened.clip, &reopened.name) {
             Ok(_) => {
                 self.notice = Some(format!("Opened the file's {} as the take.", reopened.what));
