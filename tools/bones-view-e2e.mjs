@@ -7,7 +7,7 @@
 // The sketch's own jawOpen stroke turns the jaw joint in the Sketch tab, where no take is shown.
 // Usage: node bones-view-e2e.mjs URL OUTPUT_DIR FRAME SKETCH_FRAME
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
-import { chromium } from 'playwright-core';
+import { checker, launch } from './browser.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
 
@@ -15,13 +15,9 @@ const [url, out, frameArg, sketchFrameArg] = process.argv.slice(2);
 const frame = Number(frameArg);
 const sketchFrame = Number(sketchFrameArg);
 fs.mkdirSync(out, { recursive: true });
-const check = (ok, message) => { if (!ok) throw new Error(`bones-view-e2e: ${message}`); };
+const check = checker('bones-view-e2e');
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
+const browser = await launch();
 const measured = {};
 try {
   for (const mode of ['gpu', 'fast']) {

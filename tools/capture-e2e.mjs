@@ -10,7 +10,7 @@
 // Usage: node capture-e2e.mjs URL OUTPUT_DIR VIDEO WEBCAM.y4m TRUE_JAW_JSON SPEECH MICROPHONE.wav PHOTO…
 // (the photos show the jaw opening wider from one to the next)
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
-import { chromium } from 'playwright-core';
+import { launch } from './browser.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
 
@@ -20,13 +20,7 @@ fs.mkdirSync(out, { recursive: true });
 const fail = (message) => { console.error(`capture-e2e: ${message}`); process.exit(1); };
 const check = (condition, message) => { if (!condition) fail(message); };
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-    '--use-fake-device-for-media-stream', `--use-file-for-fake-video-capture=${y4m}`,
-    `--use-file-for-fake-audio-capture=${microphone}`, '--use-fake-ui-for-media-stream'],
-});
+const browser = await launch(['--use-fake-device-for-media-stream', `--use-file-for-fake-video-capture=${y4m}`, `--use-file-for-fake-audio-capture=${microphone}`, '--use-fake-ui-for-media-stream']);
 const measurements = {};
 try {
   const context = await browser.newContext({ viewport: { width: 1400, height: 900 }, acceptDownloads: true });

@@ -6,20 +6,16 @@
 // Usage: node face-marks-e2e.mjs URL OUTPUT_DIR POINTS_JSON
 // POINTS_JSON: {"right_eye_outer": [x, y, z], …} in the character's space.
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
-import { chromium } from 'playwright-core';
+import { checker, launch } from './browser.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
 
 const [url, out, pointsJson] = process.argv.slice(2);
 const points = JSON.parse(pointsJson);
 fs.mkdirSync(out, { recursive: true });
-const check = (ok, message) => { if (!ok) throw new Error(`face-marks-e2e: ${message}`); };
+const check = checker('face-marks-e2e');
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
+const browser = await launch();
 try {
   const page = await browser.newPage({ viewport: { width: 1200, height: 800 } });
   const errors = [];

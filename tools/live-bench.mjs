@@ -7,7 +7,7 @@
 //   [--chromium-args "FLAGS"] [--in-flight N]
 // (QUERY defaults to `fast`, the page's software-GL viewport; FLAGS are added to Chromium's;
 // N frames at most are with the server at once, by default the page's own choice).
-import { chromium } from 'playwright-core';
+import { launch } from './browser.mjs';
 import fs from 'node:fs';
 
 const args = process.argv.slice(2);
@@ -68,12 +68,7 @@ function processTree(root) {
   return named;
 }
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-    '--use-fake-device-for-media-stream', `--use-file-for-fake-video-capture=${y4m}`, '--use-fake-ui-for-media-stream', ...extraArgs],
-});
+const browser = await launch(['--use-fake-device-for-media-stream', `--use-file-for-fake-video-capture=${y4m}`, '--use-fake-ui-for-media-stream', ...extraArgs]);
 try {
   const page = await (await browser.newContext({ viewport: { width: 1400, height: 900 } })).newPage();
   await page.goto(query ? `${url}?${query}` : url);

@@ -6,7 +6,7 @@
 // phone's JawOpen; Neutral is taken and marked; Stop ends the live view.
 // Usage: node phone-panel-e2e.mjs URL OUTPUT_DIR PHONE_PORT SENDER_SCRIPT
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
-import { chromium } from 'playwright-core';
+import { checker, launch } from './browser.mjs';
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -15,13 +15,9 @@ const [url, out, phonePort, sender] = process.argv.slice(2);
 fs.mkdirSync(out, { recursive: true });
 // A failure throws, so that the phone is stopped and the browser closed before node exits with
 // the message.
-const check = (ok, message) => { if (!ok) throw new Error(`phone-panel-e2e: ${message}`); };
+const check = checker('phone-panel-e2e');
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
+const browser = await launch();
 let phone = null;
 try {
   const page = await browser.newPage({ viewport: { width: 1200, height: 800 } });

@@ -3,7 +3,7 @@
 // reload and reopen, a broken upload; screenshots of each step; the viewport's frame rate.
 // Usage: node studio-e2e.mjs URL OUTPUT_DIR   (the studio must be running on ICT-FaceKit's head)
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
-import { chromium } from 'playwright-core';
+import { launch } from './browser.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
 
@@ -12,11 +12,7 @@ fs.mkdirSync(out, { recursive: true });
 const fail = (message) => { console.error(`studio-e2e: ${message}`); process.exit(1); };
 const check = (condition, message) => { if (!condition) fail(message); };
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
+const browser = await launch();
 const measurements = {};
 try {
   const page = await browser.newPage({ viewport: { width: 1280, height: 860 } });

@@ -5,7 +5,7 @@
 import { readFile } from 'node:fs/promises';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launch } from './browser.mjs';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const three = path.join(here, '../web/vendor/three');
@@ -19,11 +19,7 @@ export const IMPORT_MAP = '<script type="importmap">{ "imports": { "three": "/th
  * errors. Resolves to what `work` returns.
  */
 export async function withThreePage({ html, model, width, height }, work) {
-  const browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-      '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-  });
+  const browser = await launch();
   try {
     const page = await browser.newPage({ viewport: { width, height } });
     const errors = [];

@@ -2,7 +2,7 @@
 // frame the viewport shows goes out. Draws nothing itself: the caller posted the strokes.
 // Usage: node vmc-play-e2e.mjs URL OUTPUT_DIR
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
-import { chromium } from 'playwright-core';
+import { launch } from './browser.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
 
@@ -10,11 +10,7 @@ const [url, out] = process.argv.slice(2);
 fs.mkdirSync(out, { recursive: true });
 const fail = (message) => { console.error(`vmc-play-e2e: ${message}`); process.exit(1); };
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
+const browser = await launch();
 try {
   const page = await browser.newPage({ viewport: { width: 1200, height: 800 } });
   const errors = [];

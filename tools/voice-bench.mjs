@@ -7,7 +7,7 @@
 // the analysis window and the microphone's input latency), the mouth's delay at the voice's
 // onsets (each, and the median), where the latency goes, and the calibration.
 // Usage: node voice-bench.mjs URL MICROPHONE.wav [ONSETS]
-import { chromium } from 'playwright-core';
+import { launch } from './browser.mjs';
 
 const [url, microphone, onsetsArg] = process.argv.slice(2);
 if (!url || !microphone) {
@@ -15,12 +15,7 @@ if (!url || !microphone) {
   process.exit(2);
 }
 const wanted = Number(onsetsArg || 6);
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-    '--use-fake-device-for-media-stream', '--use-fake-ui-for-media-stream', `--use-file-for-fake-audio-capture=${microphone}`],
-});
+const browser = await launch(['--use-fake-device-for-media-stream', '--use-fake-ui-for-media-stream', `--use-file-for-fake-audio-capture=${microphone}`]);
 try {
   const page = await browser.newPage({ viewport: { width: 1200, height: 800 } });
   await page.goto(`${url}?fast#capture`);

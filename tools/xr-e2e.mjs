@@ -8,18 +8,14 @@
 import { readFile } from 'node:fs/promises';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launch } from './browser.mjs';
 
 const [url, out, namesArg] = process.argv.slice(2);
 const names = (namesArg || 'jawOpen').split(',');
 const here = path.dirname(fileURLToPath(import.meta.url));
 const iwer = await readFile(path.join(here, 'node_modules/iwer/build/iwer.js'), 'utf8');
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
-    '--disable-component-update', '--disable-sync', '--no-first-run', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-});
+const browser = await launch();
 const fail = (message) => { throw new Error(message); };
 const measured = {};
 const errors = [];
