@@ -20,6 +20,7 @@ than the ones faceanim aligns with). Languages other than English through eSpeak
 `--language`.
 
 Usage: scripts/bench-lipsync.py [--faceanim PATH] [--voices a,b] [--json OUT] [--lines N]
+       [--modes text,audio] [--recognise words|phones]
 """
 import argparse
 import ctypes
@@ -283,6 +284,7 @@ def main():
     parser.add_argument("--voices", default="flite:kal,flite:slt,flite:rms,flite:awb,festival:voice_kal_diphone,espeak:en-us+m3")
     parser.add_argument("--lines", type=int, default=len(HARVARD))
     parser.add_argument("--modes", default="text,audio")
+    parser.add_argument("--recognise", default="words", help="audio alone: words or phones")
     parser.add_argument("--json")
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="faceanim-bench-lipsync-")
@@ -318,6 +320,8 @@ def main():
                                "--clip", clip_path, "--language", language]
                     if mode == "text":
                         command += ["--text", line]
+                    else:
+                        command += ["--recognise", args.recognise]
                     began = time.monotonic()
                     run = subprocess.run(command, capture_output=True, text=True)
                     wall = time.monotonic() - began

@@ -4,11 +4,13 @@
 //!
 //! A VRM names its bones (`humanoid.humanBones`, 0.x and 1.0); other files are read by their
 //! joints' names along the skeleton: the head is the joint named like one (`Head`,
-//! `mixamorig:Head`, `J_Bip_C_Head`, `CC_Base_Head`), the neck the nearest of its ancestors
-//! named with "neck" (`CC_Base_NeckTwist02`), the upper spine the nearest above the neck named
-//! with "chest" or "spine" (`Spine2`, `J_Bip_C_UpperChest`, `CC_Base_Spine02`); the eyes and
-//! the jaw are nodes below the head named with "eye" and a side (`LeftEye`, `CC_Base_L_Eye`,
-//! `J_Adj_L_FaceEye`) and with "jaw" (`CC_Base_JawRoot`, `FACIAL_C_Jaw`).
+//! `mixamorig:Head`, `J_Bip_C_Head`, `CC_Base_Head`, or Blender Rigify's `spine.006`), the neck
+//! the nearest of its ancestors named with "neck" (`CC_Base_NeckTwist02`, or Rigify's
+//! `spine.004`), the upper spine the nearest above the neck named with "chest" or "spine"
+//! (`Spine2`, `J_Bip_C_UpperChest`, `CC_Base_Spine02`, `spine.003`); the eyes and the jaw are
+//! nodes below the head named with "eye" and a side (`LeftEye`, `CC_Base_L_Eye`,
+//! `J_Adj_L_FaceEye`, `eye.L`) and with "jaw" and no side (`CC_Base_JawRoot`, `FACIAL_C_Jaw`,
+//! Rigify's `jaw`, not its jawline's `jaw.L`).
 
 use glam::Quat;
 use serde_json::Value;
@@ -318,7 +320,7 @@ pub fn find(doc: &Value) -> FaceBones {
         ancestors(head)
             .into_iter()
             .take(3)
-            .find(|&n| name(n).contains("neck"))
+            .find(|&n| name(n).contains("neck") || name(n).ends_with(RIGIFY_NECK))
     });
     let upper_spine = vrm("upperChest").or_else(|| vrm("chest")).or_else(|| {
         ancestors(neck)
@@ -365,7 +367,10 @@ pub fn find(doc: &Value) -> FaceBones {
         upper_spine,
         vrm("leftEye").or_else(|| eye(Side::Left)),
         vrm("rightEye").or_else(|| eye(Side::Right)),
-        vrm("jaw").or_else(|| below(&|n: &str| n.contains("jaw") && !n.contains("end"))),
+        // The jaw, not a side of the jawline (Rigify's `jaw.L` beside its `jaw`).
+        vrm("jaw").or_else(|| {
+            below(&|n: &str| n.contains("jaw") && !n.contains("end") && side_of(n).is_none())
+        }),
     ])
 }
 
@@ -499,8 +504,23 @@ fn head_joint(doc: &Value, nodes: &[Value], name: &dyn Fn(usize) -> String) -> O
         .collect();
     joints.sort_unstable();
     joints.dedup();
-    joints.into_iter().find(|&j| name(j).ends_with("head"))
+    joints
+        .iter()
+        .copied()
+        .find(|&j| name(j).ends_with("head"))
+        // Blender's Rigify names its spine by number: the head is its seventh bone
+        // (`spine.006`, `DEF-spine.006` in a generated rig).
+        .or_else(|| {
+            joints
+                .iter()
+                .copied()
+                .find(|&j| name(j).ends_with(RIGIFY_HEAD))
+        })
 }
+
+/// Blender's Rigify human: the head, and the neck's base, by their place in its spine.
+const RIGIFY_HEAD: &str = "spine.006";
+const RIGIFY_NECK: &str = "spine.004";
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Side {
@@ -577,6 +597,24 @@ mod tests {
         assert_eq!(
             find(&cc),
             FaceBones([Some(4), Some(3), Some(1), Some(6), Some(5), Some(7)])
+        );
+        // Blender's Rigify human (its metarig, or `DEF-` bones of a generated rig): the spine
+        // by number, the jaw beside the jawline's sides.
+        let rigify = skeleton(&[
+            "spine",
+            "spine.001",
+            "spine.002",
+            "spine.003",
+            "DEF-spine.004",
+            "DEF-spine.005",
+            "DEF-spine.006",
+            "eye.L",
+            "jaw.L",
+            "jaw",
+        ]);
+        assert_eq!(
+            find(&rigify),
+            FaceBones([Some(6), Some(4), Some(3), Some(7), None, Some(9)])
         );
         // No skeleton: nothing.
         assert_eq!(
