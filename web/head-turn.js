@@ -9,8 +9,8 @@ import { currentFrame, jointNames, setFrame, setPose, setTurn } from './playback
 
 const checkbox = /** @type {HTMLInputElement} */ (document.getElementById('head-turn'));
 
-/** The joints a head pose turns, by the names the view's skin gives them (the Rust side's
- * `Bone::name`; the capture browser test ties them). */
+/** The joints a head pose turns, by the names the view's skin gives them (`faceanim_` and the
+ * Rust side's `Bone::name`; tools/bones-view-e2e.mjs finds them and unchecks the box). */
 const TURNED = ['faceanim_head', 'faceanim_neck', 'faceanim_upper_spine'];
 
 /** Shows a captured head pose `[yaw, pitch, roll]` in degrees and the view's joints' rotations
