@@ -62,6 +62,15 @@ fn assert_same(state: &serde_json::Value, columns: &[&str], what: &str) {
     }
 }
 
+/// Asserts the capture state's `notice` says `words`, failing with `what` and the notice.
+fn assert_notice(state: &serde_json::Value, words: &str, what: &str) {
+    assert!(
+        state["notice"].as_str().is_some_and(|n| n.contains(words)),
+        "{what}: {}",
+        state["notice"]
+    );
+}
+
 #[test]
 fn a_take_exported_into_the_users_avatar_opens_again_plays_and_exports_the_same() {
     let dir = tempfile::tempdir().unwrap();
@@ -97,12 +106,10 @@ fn a_take_exported_into_the_users_avatar_opens_again_plays_and_exports_the_same(
     assert_eq!(status, 200, "{body}");
     let state: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert_same(&state, &COLUMNS, "the studio on take.glb");
-    assert!(
-        state["notice"]
-            .as_str()
-            .is_some_and(|n| n.contains("animation")),
-        "the page is not told where the take came from: {}",
-        state["notice"]
+    assert_notice(
+        &state,
+        "animation",
+        "the page is not told where the take came from",
     );
 
     // A correction (the mouth shut at frame 10), then its GLB download: it holds the take once
@@ -308,12 +315,10 @@ fn a_sketched_glb_opens_again_as_its_strokes_and_exports_the_same() {
     let (_, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
     let capture: serde_json::Value = serde_json::from_str(&body).unwrap();
     assert!(capture["take"].is_null(), "{}", capture["take"]);
-    assert!(
-        capture["notice"]
-            .as_str()
-            .is_some_and(|n| n.contains("Sketch tab")),
-        "{}",
-        capture["notice"]
+    assert_notice(
+        &capture,
+        "Sketch tab",
+        "the page is not told where the sketch went",
     );
     let (status, rebaked) = request_bytes(studio.port, "GET", "/api/export.json", &[], b"");
     assert_eq!(status, 200);

@@ -31,6 +31,13 @@ pub struct BoneKeys {
 }
 
 impl BoneKeys {
+    /// The keys of a take: from the capture's own ARKit values (`arkit`) when there are any,
+    /// else from its frames (`clip`) by their names' ARKit meaning.
+    #[must_use]
+    pub fn of_take(clip: &Clip, arkit: Option<&Clip>) -> BoneKeys {
+        BoneKeys::from_clip(arkit.unwrap_or(clip))
+    }
+
     /// The keys of `clip`, whose columns are read by their ARKit meaning in any spelling.
     #[must_use]
     pub fn from_clip(clip: &Clip) -> BoneKeys {

@@ -331,8 +331,7 @@ pub fn export_with(
         Format::Glb => {
             // Gaze and jaw for the bones, from the capture's own ARKit values when there are
             // any, else from the frames by their names' ARKit meaning.
-            let keys =
-                bones::BoneKeys::from_clip(animation.arkit.as_ref().unwrap_or(&animation.clip));
+            let keys = bones::BoneKeys::of_take(&animation.clip, animation.arkit.as_ref());
             let character = animation.character.ok_or(ExportError::NeedsCharacter)?;
             let bytes = match character.source() {
                 Some(source) => {

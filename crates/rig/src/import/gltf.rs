@@ -285,13 +285,18 @@ impl Instance {
                 shares.push(by.map(|(n, w)| (n, w / total)));
             } else {
                 per_vertex.push(node);
-                let mut whole = [(node_index, 0.0); 4];
-                whole[0].1 = 1.0;
-                shares.push(whole);
+                shares.push(wholly(node_index));
             }
         }
         Ok(Placement::Skinned(per_vertex, shares))
     }
+}
+
+/// A vertex placed by `node` alone (its share 1, the other entries unused).
+fn wholly(node: u32) -> [(u32, f32); 4] {
+    let mut shares = [(node, 0.0); 4];
+    shares[0].1 = 1.0;
+    shares
 }
 
 /// Per-vertex transform of one primitive: one matrix (and the node that places it), or
@@ -319,11 +324,7 @@ impl Placement {
     /// The nodes that place `vertex` and their shares (none for meshes no node places).
     fn placed_by(&self, vertex: usize) -> [(u32, f32); 4] {
         match self {
-            Placement::Rigid(_, node) => {
-                let mut whole = [(node.unwrap_or(u32::MAX), 0.0); 4];
-                whole[0].1 = if node.is_some() { 1.0 } else { 0.0 };
-                whole
-            }
+            Placement::Rigid(_, node) => node.map_or([(u32::MAX, 0.0); 4], wholly),
             Placement::Skinned(_, shares) => {
                 shares.get(vertex).copied().unwrap_or([(u32::MAX, 0.0); 4])
             }

@@ -121,8 +121,7 @@ fn map_path(adapter_path: &std::path::Path, character: &Character) -> PathBuf {
 /// frames by their names' ARKit meaning).
 fn take_bones(skeleton: &faceanim_export::bones::ViewRig, session: &Session) -> Vec<Vec<[f32; 4]>> {
     let clip = session.clip();
-    let keys =
-        faceanim_export::bones::BoneKeys::from_clip(session.arkit_clip().as_ref().unwrap_or(&clip));
+    let keys = faceanim_export::bones::BoneKeys::of_take(&clip, session.arkit_clip().as_ref());
     let head: Vec<Option<[f32; 3]>> = match &clip.head {
         Some(head) => head.iter().copied().map(Some).collect(),
         None => vec![None; clip.frames.len()],
