@@ -139,32 +139,35 @@ async fn open_path(State(both): State<Both>, body: Bytes) -> Answer<CaptureView>
     let shown = path.display().to_string();
     if is_take(&shown) {
         let bytes = faceanim_files::read_bytes(&path)?;
-        open_take(&both, character, bytes.into(), shown).await?;
-    } else {
-        capture::start_capture(&both.desk, character, path, shown)?;
+        return open_take(&both, character, bytes.into(), shown).await;
     }
+    capture::start_capture(&both.desk, character, path, shown)?;
     Ok(state_of(&both))
 }
 
 /// Opens `bytes` (the file `shown`) as the take: a session or clip JSON at once, a GLB, VRM
-/// or Live Link CSV read off the async threads (a full-body avatar takes a moment).
+/// or Live Link CSV read off the async threads (a full-body avatar takes a moment). The answer
+/// is read under the lock that opened the take, so a file opened at the same moment never
+/// answers for this one.
 async fn open_take(
     both: &Both,
     character: Arc<faceanim_rig::Character>,
     bytes: Bytes,
     shown: String,
-) -> Result<(), ApiError> {
+) -> Answer<CaptureView> {
     if !faceanim_export::reopen::reads(&shown) {
-        both.desk().open_session(&character, &bytes, &shown)?;
-        return Ok(());
+        let mut desk = both.desk();
+        desk.open_session(&character, &bytes, &shown)?;
+        return Ok(axum::Json(desk.view(&character)));
     }
     let name = shown.clone();
     let reopened =
         tokio::task::spawn_blocking(move || faceanim_export::reopen::clip_of_file(&name, &bytes))
             .await
             .map_err(|e| ApiError::Internal(e.to_string()))??;
-    both.desk().open_reopened(&character, &reopened, &shown)?;
-    Ok(())
+    let mut desk = both.desk();
+    desk.open_reopened(&character, &reopened, &shown)?;
+    Ok(axum::Json(desk.view(&character)))
 }
 
 /// Whether a file named `name` opens as a take (a session or clip JSON, an animated GLB or VRM,
@@ -205,8 +208,7 @@ async fn upload(
             )));
         }
         let character = both.studio().character.clone();
-        open_take(&both, character, body, name).await?;
-        return Ok(state_of(&both));
+        return open_take(&both, character, body, name).await;
     }
     if let Some(mime) = capture::audio_mime(&name) {
         if batch.batch.is_some() {
@@ -260,10 +262,12 @@ async fn upload(
             }
             e => bad(format!("{name}: {e}")),
         })?;
+        // The answer is this line's take, read under the lock that opened it: a line
+        // uploaded at the same moment may open next, but never answers for this one.
         let character = both.studio().character.clone();
-        both.desk()
-            .open_speech(&character, &lip_sync, capture::Sound { path, mime }, &name)?;
-        return Ok(state_of(&both));
+        let mut desk = both.desk();
+        desk.open_speech(&character, &lip_sync, capture::Sound { path, mime }, &name)?;
+        return Ok(axum::Json(desk.view(&character)));
     }
     if batch.batch.is_some() && batch.index >= batch.count {
         return Err(bad(format!(
