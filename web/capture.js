@@ -123,7 +123,7 @@ onView((v, previous) => {
   const a = v.adapter;
   input('train-samples').placeholder = String(a.default_samples);
   $('adapter-info').textContent = a.loaded
-    ? `Adapter: ${a.path}${a.report ? ` (test MAE ${a.report.mae_test.toFixed(4)}, ${a.report.samples} renders)` : ''}.${a.note ? ` ${a.note}` : ''}${a.unseen.length ? ` Capture cannot drive ${a.unseen.length} of ${a.report ? a.report.shapes.length : '?'} shapes, each shown alone: ${a.unseen.join(', ')}. Sketch them or correct frames.` : ''}`
+    ? `Adapter: ${a.path}${a.report ? ` (test MAE ${a.report.mae_test.toFixed(4)}, ${a.report.samples} renders${a.on_map ? ', on top of the retarget map' : ''})` : ''}.${a.note ? ` ${a.note}` : ''}${a.unseen.length ? ` Capture cannot drive ${a.unseen.length} of ${a.report ? a.report.shapes.length : '?'} shapes, each shown alone: ${a.unseen.join(', ')}. Sketch them or correct frames.` : ''}`
     : `No adapter: ${v.retarget.in_use ? 'capture is read through the retarget map' : 'estimating by ARKit name'}.${a.note ? ` ${a.note}` : ''} Train one to refine it on this character's renders.`;
   /** @type {HTMLButtonElement} */ ($('finetune')).disabled = running || !a.loaded || !take || !take.corrected.length;
   showMap(v.retarget, apply, running);

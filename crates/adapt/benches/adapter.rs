@@ -91,7 +91,7 @@ fn benches(c: &mut Criterion) {
     let mut out = vec![0.0; adapter.blendshapes.len()];
     let input = adapter.input(&dataset.expressions[0], Some(dataset.neutral(0)));
     group.bench_function("adapter inference per frame", |b| {
-        b.iter(|| adapter.predict_into(black_box(&input), &mut out));
+        b.iter(|| adapter.predict_into(black_box(&input), None, &mut out));
     });
     group.finish();
 }

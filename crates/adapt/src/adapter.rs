@@ -174,6 +174,42 @@ pub struct Adapter {
     /// outputs × hidden, row-major.
     pub(crate) output_weight: Vec<f32>,
     pub(crate) output_bias: Vec<f32>,
+    /// What the network refines, when it was trained on top of the character's retarget map:
+    /// its outputs are added to the map's estimate before the clamp.
+    pub(crate) base: Option<Base>,
+}
+
+/// The estimate an adapter refines: the character's retarget map (geometry and calibration,
+/// no training). Trained on top of it, the network learns only what the map misses — on the
+/// seed's dense draws, antagonist shapes that cancel on the face — and starts from a bridge
+/// that already follows people.
+#[derive(Debug, Clone)]
+pub struct Base(faceanim_take::Retargeted);
+
+impl Base {
+    /// A base of `map`.
+    #[must_use]
+    pub fn new(map: faceanim_retarget::RetargetMap) -> Base {
+        Base(faceanim_take::Retargeted::new(std::sync::Arc::new(map)))
+    }
+
+    /// The map.
+    #[must_use]
+    pub fn map(&self) -> &faceanim_retarget::RetargetMap {
+        self.0.map()
+    }
+
+    /// The map's weights for `expression` read against `neutral`.
+    #[must_use]
+    pub fn estimate(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
+        faceanim_take::Estimator::estimate(&self.0, expression, neutral)
+    }
+}
+
+impl PartialEq for Base {
+    fn eq(&self, other: &Base) -> bool {
+        self.map() == other.map()
+    }
 }
 
 const ADAPTER_FORMAT: &str = "faceanim-adapter-1";
@@ -204,9 +240,17 @@ impl Adapter {
         self.input_mean.len()
     }
 
+    /// The map this adapter refines, when it was trained on top of one.
+    #[must_use]
+    pub fn base(&self) -> Option<&Base> {
+        self.base.as_ref()
+    }
+
     /// The character's weights for one input vector (`self.inputs()` long), written to `out`
-    /// (one per blendshape). Allocation-free apart from the hidden layer's buffer.
-    pub fn predict_into(&self, input: &[f32], out: &mut [f32]) {
+    /// (one per blendshape). Allocation-free apart from the hidden layer's buffer. For an
+    /// adapter on a [`Base`], `base` is the base's estimate for the same face: the network's
+    /// outputs are added to it before the clamp.
+    pub fn predict_into(&self, input: &[f32], base: Option<&[f32]>, out: &mut [f32]) {
         let hidden = self.architecture.hidden;
         let slope = self.architecture.activation.negative_slope();
         let x: Vec<f32> = input
@@ -223,7 +267,8 @@ impl Adapter {
         }
         for (o, slot) in out.iter_mut().enumerate().take(self.blendshapes.len()) {
             let row = &self.output_weight[o * hidden..(o + 1) * hidden];
-            let y = dot(row, &h) + self.output_bias[o];
+            let under = base.and_then(|b| b.get(o)).copied().unwrap_or(0.0);
+            let y = under + dot(row, &h) + self.output_bias[o];
             *slot = if self.architecture.clamp {
                 y.clamp(0.0, 1.0)
             } else {
@@ -250,8 +295,9 @@ impl Adapter {
     /// The character's weights for `expression` (see [`Adapter::input`] for `neutral`).
     #[must_use]
     pub fn predict(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
+        let base = self.base.as_ref().map(|b| b.estimate(expression, neutral));
         let mut out = vec![0.0; self.blendshapes.len()];
-        self.predict_into(&self.input(expression, neutral), &mut out);
+        self.predict_into(&self.input(expression, neutral), base.as_deref(), &mut out);
         out
     }
 
@@ -389,6 +435,9 @@ impl Adapter {
         metadata.insert("fingerprint".to_owned(), json(&self.fingerprint)?);
         metadata.insert("architecture".to_owned(), json(&self.architecture)?);
         metadata.insert("report".to_owned(), json(&self.report)?);
+        if let Some(base) = &self.base {
+            metadata.insert("base".to_owned(), base.map().to_json());
+        }
         let (inputs, hidden, outputs) = (
             self.inputs(),
             self.architecture.hidden,
@@ -449,6 +498,14 @@ impl Adapter {
                 blendshapes.len()
             )));
         }
+        // Adapters from before, or trained alone, have no base.
+        let base = match file.metadata_text("base") {
+            Some(text) => Some(Base::new(
+                faceanim_retarget::RetargetMap::from_json(text.as_bytes(), &blendshapes)
+                    .map_err(|e| AdaptError::Format(format!("metadata 'base': {e}")))?,
+            )),
+            None => None,
+        };
         Ok(Adapter {
             blendshapes,
             fingerprint: file.metadata_json("fingerprint")?,
@@ -461,6 +518,7 @@ impl Adapter {
             hidden_bias,
             output_weight,
             output_bias,
+            base,
         })
     }
 }

@@ -41,7 +41,7 @@ pub mod sampling;
 mod tensors;
 pub mod train;
 
-pub use adapter::{Activation, Adapter, Architecture, Fit, TrainingReport, WIDTH_PER_SHAPE};
+pub use adapter::{Activation, Adapter, Architecture, Base, Fit, TrainingReport, WIDTH_PER_SHAPE};
 pub use augment::Augmentation;
 pub use dataset::{Control, Dataset, DatasetOptions, FaceCamera, Framing, Split};
 pub use faceanim_take::{Correction, Fingerprint};
@@ -49,7 +49,8 @@ pub use features::{Calibration, Expression, FeatureSet, LandmarkFrame};
 pub use locality::Locality;
 pub use readings::{Reading, ShapeReading};
 pub use train::{
-    DEFAULT_MEMBERS, DEFAULT_SAMPLES, FinetuneReport, Loss, TrainOptions, finetune, train,
+    DEFAULT_MEMBERS, DEFAULT_SAMPLES, DEFAULT_STAY, FinetuneReport, Loss, TrainOptions, finetune,
+    train, train_on,
 };
 
 use std::path::{Path, PathBuf};

@@ -69,6 +69,11 @@ impl<'a> Read<'a> {
         serde_json::from_str(text).map_err(|e| bad(format!("metadata '{key}': {e}")))
     }
 
+    /// A metadata value as it is, when present.
+    pub(crate) fn metadata_text(&self, key: &str) -> Option<&str> {
+        self.metadata.get(key).map(String::as_str)
+    }
+
     fn tensor(&self, name: &str) -> Result<(Vec<f32>, Vec<usize>), AdaptError> {
         let view = self
             .tensors

@@ -9,9 +9,9 @@ use anyhow::Context as _;
 use faceanim_adapt::heldout::{Evaluation, HeldOut};
 use faceanim_adapt::sampling::{ExclusionReason, exclusive_pairs};
 use faceanim_adapt::{
-    Activation, Adapter, Architecture, Augmentation, Calibration, Control, Dataset, DatasetOptions,
-    FaceCamera, FeatureSet, LandmarkFrame, Locality, Loss, ShapeReading, TrainOptions,
-    WIDTH_PER_SHAPE,
+    Activation, Adapter, Architecture, Augmentation, Base, Calibration, Control, Dataset,
+    DatasetOptions, FaceCamera, FeatureSet, LandmarkFrame, Locality, Loss, ShapeReading,
+    TrainOptions, WIDTH_PER_SHAPE,
 };
 use faceanim_rig::Character;
 use faceanim_take::Session;
@@ -102,6 +102,21 @@ pub struct AdaptArgs {
     /// example another identity of the rig it was trained on); prints {"mae", "samples"}.
     #[arg(long, conflicts_with_all = ["finetune", "ablation"])]
     pub evaluate: Option<PathBuf>,
+    /// Train the network alone. By default a character whose names leave channels to
+    /// geometry gets its adapter on top of its retarget map (the map beside it, as `faceanim
+    /// retarget` makes it, or --retarget): the network learns what the map misses, and the
+    /// adapter keeps the map.
+    #[arg(long)]
+    pub alone: bool,
+    /// The retarget map to train on (default: NAME.retarget.json beside the character, made
+    /// when there is none).
+    #[arg(long, conflicts_with = "alone")]
+    pub retarget: Option<PathBuf>,
+    /// On the map: how strongly the network is held to the map (the weight of its own
+    /// outputs' mean absolute value in the loss): 0 reads the renders best and people worst,
+    /// 1 or more is the map itself.
+    #[arg(long, default_value_t = faceanim_adapt::DEFAULT_STAY, conflicts_with = "alone")]
+    pub stay: f64,
 }
 
 /// What an adapter reads (the command line's names for [`FeatureSet`]; clap stays out of the
@@ -389,10 +404,36 @@ fn dataset(
     Ok((dataset, false))
 }
 
-fn train_with_bar(dataset: &Dataset, options: &TrainOptions) -> anyhow::Result<Adapter> {
+fn train_with_bar(
+    dataset: &Dataset,
+    options: &TrainOptions,
+    base: Option<&Base>,
+) -> anyhow::Result<Adapter> {
     with_bar(options.epochs_at_most(), "training epoch", |control| {
-        faceanim_adapt::train(dataset, options, control)
+        faceanim_adapt::train_on(dataset, options, base.cloned(), control)
     })
+}
+
+/// The map the adapter is trained on top of: none with --alone, else --retarget's, else the
+/// one a capture of `character` would use (`None` for a rig its names drive whole).
+fn base(args: &AdaptArgs, character: &Character) -> anyhow::Result<Option<Base>> {
+    if args.alone {
+        return Ok(None);
+    }
+    let map = crate::retarget::for_capture(
+        character,
+        args.character.as_deref(),
+        args.retarget.as_deref(),
+        face_models()?,
+    )?;
+    if let Some(map) = &map {
+        eprintln!(
+            "training on top of the retarget map of {} ({} of 52 channels): --alone trains the network alone",
+            map.character,
+            map.answered()
+        );
+    }
+    Ok(map.map(Base::new))
 }
 
 pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
@@ -467,6 +508,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         loss: args.loss.into(),
         seed: args.seed,
         members: args.members,
+        stay: args.stay,
         ..TrainOptions::default()
     };
     if args.ablation {
@@ -480,7 +522,8 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
             args.json,
         );
     }
-    let mut adapter = train_with_bar(&dataset, &train_options)?;
+    let base = base(&args, &character)?;
+    let mut adapter = train_with_bar(&dataset, &train_options, base.as_ref())?;
     adapter.report.shapes = readings(&character, &adapter)?;
     faceanim_files::write_output(&output, &adapter.to_bytes()?)?;
     let seconds = started.elapsed().as_secs_f64();
@@ -628,7 +671,7 @@ fn ablation(
         let Some((_, data)) = datasets.iter().find(|(a, _)| *a == augmentation) else {
             continue;
         };
-        let adapter = train_with_bar(data, &experiment.options)?;
+        let adapter = train_with_bar(data, &experiment.options, None)?;
         let heldout = evaluate_held_out(&adapter, folders)?;
         // As trained: a per-shape network's width is known once the shapes are.
         let architecture = adapter.architecture;

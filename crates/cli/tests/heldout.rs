@@ -183,9 +183,24 @@ fn groups(e: &Value) -> String {
 
 /// The bridge a run measures: the retarget map (always), and the adapter beside it when
 /// `FACEANIM_HELDOUT_ADAPTER` is set (`scripts/bench-heldout.sh`: its training at the
-/// product's defaults costs about 25 minutes on two cores, too long for every test run).
+/// product's defaults costs about 25 minutes on two cores, too long for every test run) —
+/// trained on top of the map (the product's default) and alone.
 fn with_adapter() -> bool {
     std::env::var_os("FACEANIM_HELDOUT_ADAPTER").is_some_and(|v| v != "0")
+}
+
+/// Renders the adapters train on: `FACEANIM_HELDOUT_ADAPTER_SAMPLES`, else the product's
+/// default.
+fn adapter_samples() -> Option<String> {
+    std::env::var("FACEANIM_HELDOUT_ADAPTER_SAMPLES").ok()
+}
+
+/// More `faceanim adapt` arguments for both adapters (`FACEANIM_HELDOUT_ADAPTER_ARGS`, split
+/// at spaces): a variant measured against the product's defaults.
+fn adapter_args() -> Vec<String> {
+    std::env::var("FACEANIM_HELDOUT_ADAPTER_ARGS")
+        .map(|a| a.split_whitespace().map(str::to_owned).collect())
+        .unwrap_or_default()
 }
 
 #[test]
@@ -257,15 +272,11 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
         .collect();
 
     at("footage");
-    // The adapter-only path beside it (the benchmark's run).
-    let adapter_report = with_adapter().then(|| {
-        adapter_path(
-            &out,
-            &models[0],
-            &rises,
-            &[&own, &person_b, &held_out, &held_out_auto],
-        )
-    });
+    // The adapter beside it (the benchmark's run): on top of the map, and alone.
+    let dirs = [own.as_path(), &person_b, &held_out, &held_out_auto];
+    let adapter_report =
+        with_adapter().then(|| adapter_path(&out, &models[0], &rises, &dirs, false));
+    let alone_report = with_adapter().then(|| adapter_path(&out, &models[0], &rises, &dirs, true));
 
     let what = [
         "three.js, the head",
@@ -283,6 +294,7 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
                 .collect::<serde_json::Map<_, _>>(),
         },
         "adapter": adapter_report,
+        "adapter_alone": alone_report,
     });
     std::fs::write(out.join("summary.json"), format!("{report:#}")).unwrap();
     for (e, what) in map_heldout.iter().zip(what) {
@@ -358,8 +370,8 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
             "{what}: a channel goes its own way: {footage}"
         );
     }
-    if let Some(adapter) = &report["adapter"].as_object() {
-        adapter_bars(adapter);
+    if with_adapter() {
+        adapter_bars(&report["adapter"], &report["adapter_alone"], &map_heldout);
     }
 }
 
@@ -409,19 +421,34 @@ fn measured(args: &[&str], dirs: &[&Path]) -> Value {
     serde_json::from_str(faceanim_ok(&args).trim()).unwrap()
 }
 
-/// The adapter trained with `faceanim adapt` at the product's defaults on the head, measured
-/// on every folder of stills and on the footage.
-fn adapter_path(out: &Path, head: &Path, rises: &[f32], dirs: &[&Path]) -> Value {
-    let adapter = out.join("head.adapter.safetensors");
-    let summary = measured(
-        &[
-            "adapt",
-            head.to_str().unwrap(),
-            "-o",
-            adapter.to_str().unwrap(),
-        ],
-        dirs,
-    );
+/// The adapter trained with `faceanim adapt` at the product's defaults on the head (on top of
+/// its retarget map, or `alone`), measured on every folder of stills and on the footage.
+fn adapter_path(out: &Path, head: &Path, rises: &[f32], dirs: &[&Path], alone: bool) -> Value {
+    let adapter = out.join(if alone {
+        "head.alone.adapter.safetensors"
+    } else {
+        "head.adapter.safetensors"
+    });
+    // Both train on the same renders.
+    let dataset = out.join("head.dataset.safetensors");
+    let mut args = vec![
+        "adapt",
+        head.to_str().unwrap(),
+        "-o",
+        adapter.to_str().unwrap(),
+        "--dataset",
+        dataset.to_str().unwrap(),
+    ];
+    let samples = adapter_samples();
+    if let Some(samples) = &samples {
+        args.extend(["--samples", samples]);
+    }
+    if alone {
+        args.push("--alone");
+    }
+    let more = adapter_args();
+    args.extend(more.iter().map(String::as_str));
+    let summary = measured(&args, dirs);
     let footage: serde_json::Map<String, Value> = FOOTAGE
         .iter()
         .map(|bar| {
@@ -436,19 +463,31 @@ fn adapter_path(out: &Path, head: &Path, rises: &[f32], dirs: &[&Path]) -> Value
     })
 }
 
-/// What the adapter at the product's defaults held when it was the only bridge.
-fn adapter_bars(report: &serde_json::Map<String, Value>) {
-    let heldout = report["heldout"].as_array().unwrap();
-    for e in heldout {
-        eprintln!(
-            "adapter: MAE {:.4} (mean {:.4}); {}",
-            e["mae"].as_f64().unwrap(),
-            e["mae_mean_baseline"].as_f64().unwrap(),
-            groups(e)
-        );
+/// What the adapters at the product's defaults hold: on top of the map (`report`), under the
+/// map's own MAE on every folder of stills (`map`) while real people still follow; alone
+/// (`alone`), what it held when it was the only bridge.
+fn adapter_bars(report: &Value, alone: &Value, map: &[Value]) {
+    for (what, report) in [("adapter on the map", report), ("adapter alone", alone)] {
+        for e in report["heldout"].as_array().unwrap() {
+            eprintln!(
+                "{what}: MAE {:.4} (mean {:.4}); {}",
+                e["mae"].as_f64().unwrap(),
+                e["mae_mean_baseline"].as_f64().unwrap(),
+                groups(e)
+            );
+        }
+        for bar in &FOOTAGE {
+            let footage = &report["footage"][bar.video.stem()];
+            eprintln!(
+                "{what}, {}: mean correlation {:.3}",
+                bar.video.file,
+                footage["mean"].as_f64().unwrap()
+            );
+        }
     }
-    // The held-out renderer and person with the neutral given: 0.0782 (two per-shape
+    // Alone, the held-out renderer and person with the neutral given: 0.0782 (two per-shape
     // networks on 10,000 renders each, averaged), under half of always answering the mean.
+    let heldout = alone["heldout"].as_array().unwrap();
     let (mae, baseline) = (
         heldout[2]["mae"].as_f64().unwrap(),
         heldout[2]["mae_mean_baseline"].as_f64().unwrap(),
@@ -460,6 +499,17 @@ fn adapter_bars(report: &serde_json::Map<String, Value>) {
     );
     let auto = heldout[3]["mae"].as_f64().unwrap();
     assert!(auto <= 0.0875, "held-out MAE without neutral {auto}");
+    // On the map, lower than the map on every folder.
+    for (on_map, alone) in report["heldout"].as_array().unwrap().iter().zip(map) {
+        let (on_map, alone) = (
+            on_map["mae"].as_f64().unwrap(),
+            alone["mae"].as_f64().unwrap(),
+        );
+        assert!(
+            on_map < alone,
+            "the adapter on the map {on_map}, the map alone {alone}"
+        );
+    }
     for (footage, bar) in FOOTAGE
         .iter()
         .map(|bar| (&report["footage"][bar.video.stem()], bar))

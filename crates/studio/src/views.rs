@@ -515,6 +515,9 @@ pub struct AdapterView {
     /// Whether it reads faces relative to a neutral one (then the take's neutral frame and
     /// live calibration matter).
     pub calibrated: bool,
+    /// Whether it was trained on top of the character's retarget map (it refines the map's
+    /// estimate), rather than alone.
+    pub on_map: bool,
     /// The character's shapes capture cannot drive (each shown alone, not read by the
     /// adapter): the animator sketches them or corrects frames.
     pub unseen: Vec<String>,

@@ -128,7 +128,8 @@ fn rename(message: &str, path: &Path, shown: &str) -> String {
 }
 
 /// Starts rendering a training set of `samples` expressions (or reusing the cached one) and
-/// training the character's adapter on it in the background; saves it and re-estimates the
+/// training the character's adapter on it in the background, on top of the character's
+/// retarget map when it has one (as `faceanim adapt` does); saves it and re-estimates the
 /// take.
 ///
 /// # Errors
@@ -154,11 +155,11 @@ pub fn start_training(
         augmentation: faceanim_adapt::Augmentation::default(),
     };
     let job = Job::new(JobKind::TrainingAdapter);
-    let adapter_path = {
+    let (adapter_path, map) = {
         let mut guard = lock(desk);
         guard.busy()?;
         guard.job = Some(job.clone());
-        guard.adapter_path.clone()
+        (guard.adapter_path.clone(), guard.map.clone())
     };
     let desk = desk.clone();
     spawn_job(job, move |job| {
@@ -169,8 +170,9 @@ pub fn start_training(
             ..TrainOptions::default()
         };
         job.stage("training", train_options.epochs_at_most());
+        let base = map.map(|m| faceanim_adapt::Base::new((*m).clone()));
         let mut adapter = with_control(job, |control| {
-            faceanim_adapt::train(&dataset, &train_options, control)
+            faceanim_adapt::train_on(&dataset, &train_options, base, control)
         })?;
         adapter.report.shapes = readings(job, &character, &adapter)?;
         faceanim_files::write_atomic(&adapter_path, &adapter.to_bytes()?)?;

@@ -799,6 +799,7 @@ impl CaptureDesk {
                     .adapter
                     .as_ref()
                     .is_some_and(faceanim_take::Estimator::calibrated),
+                on_map: self.adapter.as_ref().is_some_and(|a| a.base().is_some()),
                 unseen: self.adapter.as_ref().map_or_else(Vec::new, |a| {
                     faceanim_adapt::readings::unseen(&a.report.shapes)
                         .into_iter()
