@@ -1166,13 +1166,26 @@ mod tests {
             stay: 0.0,
             ..TrainOptions::default()
         };
-        let adapter = train_on(
-            &data,
-            &options,
-            Some(Base::new(map.clone())),
-            Control::silent(),
-        )
-        .unwrap();
+        let on_map = |options: &TrainOptions| {
+            train_on(
+                &data,
+                options,
+                Some(Base::new(map.clone())),
+                Control::silent(),
+            )
+            .unwrap()
+        };
+        // Each of the first faces: what `adapter` answers and what the map does.
+        let against_map = |adapter: &Adapter| -> Vec<(usize, Vec<f32>, Vec<f32>)> {
+            (0..20)
+                .map(|k| {
+                    let (e, neutral) = (&data.expressions[k], Some(data.neutral(k)));
+                    let under = Base::new(map.clone()).estimate(e, neutral);
+                    (k, adapter.predict(e, neutral), under)
+                })
+                .collect()
+        };
+        let adapter = on_map(&options);
         assert_eq!(adapter.base().map(Base::map), Some(&map));
         assert!(adapter.report.mae_test < 0.05, "{:?}", adapter.report);
         // Its output is the map's estimate plus the network's, clamped.
@@ -1184,11 +1197,8 @@ mod tests {
             },
             ..adapter.clone()
         };
-        for (k, e) in data.expressions.iter().take(20).enumerate() {
-            let neutral = Some(data.neutral(k));
-            let under = Base::new(map.clone()).estimate(e, neutral);
-            let own = network.predict(e, neutral);
-            let got = adapter.predict(e, neutral);
+        for (k, got, under) in against_map(&adapter) {
+            let own = network.predict(&data.expressions[k], Some(data.neutral(k)));
             for ((g, u), o) in got.iter().zip(&under).zip(&own) {
                 assert!((g - (u + o).clamp(0.0, 1.0)).abs() < 1e-5, "{g} {u} {o}");
             }
@@ -1202,21 +1212,12 @@ mod tests {
             adapter.predict(e, Some(data.neutral(0)))
         );
         // Held hard to the map, it is the map.
-        let held = TrainOptions {
+        let held = on_map(&TrainOptions {
             stay: 4.0,
             ..options
-        };
-        let held = train_on(
-            &data,
-            &held,
-            Some(Base::new(map.clone())),
-            Control::silent(),
-        )
-        .unwrap();
-        for (k, e) in data.expressions.iter().take(20).enumerate() {
-            let neutral = Some(data.neutral(k));
-            let under = Base::new(map.clone()).estimate(e, neutral);
-            for (g, u) in held.predict(e, neutral).iter().zip(&under) {
+        });
+        for (_, got, under) in against_map(&held) {
+            for (g, u) in got.iter().zip(&under) {
                 assert!((g - u).abs() < 0.02, "{g} against the map's {u}");
             }
         }
