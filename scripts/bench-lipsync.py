@@ -20,7 +20,7 @@ than the ones faceanim aligns with). Languages other than English through eSpeak
 `--language`.
 
 Usage: scripts/bench-lipsync.py [--faceanim PATH] [--voices a,b] [--json OUT] [--lines N]
-       [--modes text,audio] [--recognise words|phones]
+       [--modes text,audio] [--recognise words|phones] [--ffmpeg-first]
 """
 import argparse
 import ctypes
@@ -285,6 +285,9 @@ def main():
     parser.add_argument("--lines", type=int, default=len(HARVARD))
     parser.add_argument("--modes", default="text,audio")
     parser.add_argument("--recognise", default="words", help="audio alone: words or phones")
+    parser.add_argument("--ffmpeg-first", action="store_true",
+                        help="convert each line to 16 kHz with ffmpeg before faceanim reads it "
+                             "(to compare faceanim's own resampling with ffmpeg's)")
     parser.add_argument("--json")
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="faceanim-bench-lipsync-")
@@ -314,6 +317,11 @@ def main():
                     espeak = espeak or Espeak()
                     phones = espeak.speak(voice, line, wav, 150)
                 seconds = read_wav(wav)
+                if args.ffmpeg_first:
+                    converted = wav[:-4] + "-16k.wav"
+                    subprocess.run(["ffmpeg", "-v", "error", "-y", "-i", wav, "-ar", "16000",
+                                    "-ac", "1", "-acodec", "pcm_s16le", converted], check=True)
+                    wav = converted
                 for mode in args.modes.split(","):
                     clip_path = os.path.join(work, "clip.json")
                     command = [args.faceanim, "lipsync", wav, "--character", rig, "--fps", "100",

@@ -8,7 +8,9 @@
 //! - silence and noise give a closed mouth; empty, cut, non-audio and over-long files give
 //!   errors that name them;
 //! - a Spanish line spoken by the `espeak-ng` program, lip-synced from its transcript by
-//!   synthesis, with the face around the mouth (blinks, brows) on the built-in head.
+//!   synthesis, with the face around the mouth (blinks, brows) on the built-in head;
+//! - a 44.1 kHz stereo 24-bit WAV (as ffmpeg writes one) lip-syncs where no ffmpeg is
+//!   installed, as it does through ffmpeg.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -438,6 +440,72 @@ fn ffmpeg(args: &[&str]) {
         .output()
         .expect("ffmpeg");
     assert!(out.status.success(), "{out:?}");
+}
+
+#[test]
+fn a_studio_wav_lip_syncs_without_ffmpeg_as_it_does_with_it() {
+    let out = output_dir("lipsync-no-ffmpeg");
+    let line = out.join("line.wav");
+    flite(
+        "slt",
+        "Bob brought a big purple map to the bumpy boat.",
+        &line,
+    );
+    // A DAW's export: 44.1 kHz, stereo, 24-bit.
+    let studio = out.join("studio.wav");
+    ffmpeg(&[
+        "-i",
+        line.to_str().unwrap(),
+        "-ar",
+        "44100",
+        "-ac",
+        "2",
+        "-acodec",
+        "pcm_s24le",
+        studio.to_str().unwrap(),
+    ]);
+    let text = "Bob brought a big purple map to the bumpy boat.";
+    let with = out.join("with.json");
+    faceanim_ok(&[
+        "lipsync",
+        studio.to_str().unwrap(),
+        "--text",
+        text,
+        "-o",
+        with.to_str().unwrap(),
+    ]);
+    // The same command where no program named ffmpeg can be found.
+    let nowhere = tempfile::tempdir().unwrap();
+    let without = out.join("without.json");
+    let ran = Command::new(env!("CARGO_BIN_EXE_faceanim"))
+        .args(["lipsync", studio.to_str().unwrap(), "--text", text, "-o"])
+        .arg(&without)
+        .env("PATH", nowhere.path())
+        .output()
+        .unwrap();
+    assert!(ran.status.success(), "{ran:?}");
+    let [with, without] = [&with, &without]
+        .map(|p| serde_json::from_slice::<Value>(&std::fs::read(p).unwrap()).unwrap());
+    let rows = |clip: &Value| -> Vec<f64> {
+        clip["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r.as_array().unwrap().iter().map(|w| w.as_f64().unwrap()))
+            .collect()
+    };
+    let (a, b) = (rows(&with), rows(&without));
+    assert_eq!(a.len(), b.len(), "as many frames");
+    // The mouth moves the same: each frame's weights within a few hundredths.
+    let mean = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).sum::<f64>() / a.len() as f64;
+    let fps = with["fps"].as_f64().unwrap();
+    let tens = (with["frames"].as_array().unwrap().len() as f64 / fps * 100.0) as usize;
+    let r = support::correlation(&mouth(&with, tens), &mouth(&without, tens));
+    assert!(
+        mean < 0.01 && r > 0.95,
+        "without ffmpeg: weights {mean} apart on average, mouth at r {r}"
+    );
+    eprintln!("without ffmpeg: weights {mean:.4} apart on average, mouth at r {r:.3}");
 }
 
 #[test]

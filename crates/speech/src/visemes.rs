@@ -176,6 +176,33 @@ pub struct Track {
     pub seconds: f32,
 }
 
+/// The shortest voice heard inside a silence the recogniser found that opens the mouth,
+/// seconds: longer than a click or a breath's edge, shorter than a syllable.
+pub const UNMADE_OUT: f32 = 0.12;
+
+/// Where `p` is heard (per `voiced`, one flag per 10 ms) for at least `shortest` seconds in a
+/// row: (start, end) in seconds.
+fn heard_stretches(p: &Phone, voiced: &[bool], shortest: f32) -> Vec<(f32, f32)> {
+    let first = (p.start.max(0.0) * 100.0) as usize;
+    let mut stretches = Vec::new();
+    let mut start = None;
+    let frames = p.frames(voiced);
+    for (k, v) in frames.iter().chain(std::iter::once(&false)).enumerate() {
+        match (v, start) {
+            (true, None) => start = Some(k),
+            (false, Some(s)) => {
+                if (k - s) as f32 / 100.0 >= shortest {
+                    let time = |f: usize| ((first + f) as f32 / 100.0).clamp(p.start, p.end);
+                    stretches.push((time(s), time(k)));
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    stretches
+}
+
 /// The visemes of `phones`, heard where `voiced` (one flag per 10 ms) says, in a sound of
 /// `seconds`.
 #[must_use]
@@ -203,7 +230,28 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
                     .is_some_and(|n| heard(n) && viseme_of(&n.label) != Viseme::Sil)))
     };
     let mut runs: Vec<(Viseme, f32, f32)> = Vec::new();
+    let mut extend = |viseme: Viseme, start: f32, end: f32| {
+        let empty = runs.is_empty();
+        match runs.last_mut() {
+            Some(last) if last.0 == viseme => last.2 = end,
+            _ if end > start || empty => runs.push((viseme, start, end)),
+            _ => {}
+        }
+    };
     for (k, p) in phones.iter().enumerate() {
+        if viseme_of(&p.label) == Viseme::Sil && !is_breath(&p.label) {
+            // A voice heard where the recogniser found silence (a word it did not make out: a
+            // formant synthesiser, a whisper, a name out of its vocabulary) still moves the
+            // mouth: each stretch heard for long enough opens it; the rest stays at rest.
+            let mut at = p.start;
+            for (a, b) in heard_stretches(p, voiced, UNMADE_OUT) {
+                extend(Viseme::Sil, at, a);
+                extend(Viseme::Aa, a, b);
+                at = b;
+            }
+            extend(Viseme::Sil, at, p.end);
+            continue;
+        }
         let mut viseme = if said(k) {
             viseme_of(&p.label)
         } else {
@@ -217,10 +265,7 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
                 viseme = Viseme::Aa;
             }
         }
-        match runs.last_mut() {
-            Some(last) if last.0 == viseme => last.2 = p.end,
-            _ => runs.push((viseme, p.start, p.end)),
-        }
+        extend(viseme, p.start, p.end);
     }
     // Minimum hold: short shapes merge into the longer neighbour; closures stay, lengthened.
     let mut held: Vec<(Viseme, f32, f32)> = Vec::new();
@@ -374,7 +419,11 @@ mod tests {
         let phones = phones(
             "SIL 0 0.3, M 0.3 0.38, AA 0.38 0.6, SIL 0.6 0.72, P 0.72 0.8, AA 0.8 1, SIL 1 2",
         );
-        let track = track(&phones, &[true; 200], 2.0);
+        // Heard while speaking, quiet in the pauses.
+        let voiced: Vec<bool> = (0..200)
+            .map(|f| (30..60).contains(&f) || (72..100).contains(&f))
+            .collect();
+        let track = track(&phones, &voiced, 2.0);
         let pp = index(Viseme::PP);
         let aa = index(Viseme::Aa);
         // Closed before the M is heard, and fully closed during it.
@@ -392,6 +441,29 @@ mod tests {
         // The long pause closes.
         assert!(track.weights_at(1.5).iter().all(|w| *w < 1e-6));
         assert_eq!(track.sample(30.0).len(), 61);
+    }
+
+    #[test]
+    fn a_voice_heard_where_the_recogniser_found_silence_still_moves_the_mouth() {
+        // "…" the recogniser did not make out (0.5–1.0 s, heard), a click (1.3–1.35 s, heard
+        // for 50 ms) and a real pause (1.5–2 s, quiet), all within its silences.
+        let phones = phones("M 0 0.2, AA 0.2 0.5, SIL 0.5 2");
+        let voiced: Vec<bool> = (0..200)
+            .map(|f| f < 100 || (130..135).contains(&f))
+            .collect();
+        let track = track(&phones, &voiced, 2.0);
+        let aa = index(Viseme::Aa);
+        assert!(track.weights_at(0.75)[aa] > 0.9, "{:?}", track.keys);
+        assert!(
+            track.weights_at(1.32).iter().all(|w| *w < 0.2),
+            "{:?}",
+            track.keys
+        );
+        assert!(
+            track.weights_at(1.8).iter().all(|w| *w < 1e-6),
+            "{:?}",
+            track.keys
+        );
     }
 
     #[test]
