@@ -131,6 +131,10 @@ pub struct TrainingReport {
     /// before.
     #[serde(default)]
     pub mae_test_groups: Vec<crate::sampling::GroupError>,
+    /// For an adapter on a [`Base`]: how strongly it was held to the map
+    /// ([`crate::TrainOptions::stay`]); `None` for one trained alone.
+    #[serde(default)]
+    pub stay: Option<f64>,
     /// How it reads each shape shown alone ([`FaceCamera::readings`](crate::FaceCamera::readings)),
     /// filled where the character is at hand; empty in adapters from before.
     #[serde(default)]

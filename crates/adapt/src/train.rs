@@ -652,6 +652,7 @@ pub fn train_on(
         corrections: 0,
         mae_test_front: None,
         mae_test_groups: Vec::new(),
+        stay: adapter.base.is_some().then_some(options.stay),
         shapes: Vec::new(),
     };
     adapter.report.mae_test_front = adapter.front_test_error(dataset);
@@ -1187,6 +1188,7 @@ mod tests {
         };
         let adapter = on_map(&options);
         assert_eq!(adapter.base().map(Base::map), Some(&map));
+        assert_eq!(adapter.report.stay, Some(0.0));
         assert!(adapter.report.mae_test < 0.05, "{:?}", adapter.report);
         // Its output is the map's estimate plus the network's, clamped.
         let network = Adapter {
