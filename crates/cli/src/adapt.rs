@@ -451,6 +451,11 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         args.samples,
         args.members
     );
+    anyhow::ensure!(
+        args.stay.is_finite() && args.stay >= 0.0,
+        "--stay must be 0 or more, got {}",
+        args.stay
+    );
     if let Some(hidden) = args.hidden {
         anyhow::ensure!(
             (1..=4096).contains(&hidden),

@@ -306,6 +306,11 @@ fn adapt_then_track_correct_and_fine_tune() {
             "{message}"
         );
     }
+    // A hold on the map below 0 is refused, naming the option.
+    let refused = faceanim(&["adapt", &ict(), "--stay=-1"]);
+    assert!(!refused.status.success());
+    let message = String::from_utf8_lossy(&refused.stderr);
+    assert!(message.contains("--stay must be 0 or more"), "{message}");
     let garbage = dir.path().join("garbage.safetensors");
     std::fs::write(&garbage, b"not an adapter").unwrap();
     let refused = faceanim(&[
