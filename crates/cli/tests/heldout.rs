@@ -431,14 +431,9 @@ fn adapter_path(out: &Path, head: &Path, rises: &[f32], dirs: &[&Path], alone: b
     });
     // Both train on the same renders.
     let dataset = out.join("head.dataset.safetensors");
-    let mut args = vec![
-        "adapt",
-        head.to_str().unwrap(),
-        "-o",
-        adapter.to_str().unwrap(),
-        "--dataset",
-        dataset.to_str().unwrap(),
-    ];
+    let [head_arg, adapter_arg, dataset] =
+        [head, adapter.as_path(), &dataset].map(|p| p.to_str().unwrap());
+    let mut args = vec!["adapt", head_arg, "-o", adapter_arg, "--dataset", dataset];
     let samples = adapter_samples();
     if let Some(samples) = &samples {
         args.extend(["--samples", samples]);

@@ -445,12 +445,11 @@ fn ffmpeg(args: &[&str]) {
 #[test]
 fn a_studio_wav_lip_syncs_without_ffmpeg_as_it_does_with_it() {
     let out = output_dir("lipsync-no-ffmpeg");
-    let line = out.join("line.wav");
-    flite(
-        "slt",
+    let (line, text) = (
+        out.join("line.wav"),
         "Bob brought a big purple map to the bumpy boat.",
-        &line,
     );
+    flite("slt", text, &line);
     // A DAW's export: 44.1 kHz, stereo, 24-bit.
     let studio = out.join("studio.wav");
     ffmpeg(&[
@@ -464,7 +463,6 @@ fn a_studio_wav_lip_syncs_without_ffmpeg_as_it_does_with_it() {
         "pcm_s24le",
         studio.to_str().unwrap(),
     ]);
-    let text = "Bob brought a big purple map to the bumpy boat.";
     let with = out.join("with.json");
     faceanim_ok(&[
         "lipsync",
