@@ -208,6 +208,16 @@ impl Base {
     pub fn estimate(&self, expression: &Expression, neutral: Option<&Expression>) -> Vec<f32> {
         faceanim_take::Estimator::estimate(&self.0, expression, neutral)
     }
+
+    /// The map's weights for each of `dataset`'s renders, read against its own neutral.
+    pub(crate) fn estimates(&self, dataset: &crate::Dataset) -> Vec<Vec<f32>> {
+        dataset
+            .expressions
+            .iter()
+            .enumerate()
+            .map(|(k, e)| self.estimate(e, Some(dataset.neutral(k))))
+            .collect()
+    }
 }
 
 impl PartialEq for Base {

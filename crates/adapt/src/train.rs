@@ -256,19 +256,25 @@ impl Net {
         ]
     }
 
-    /// Standardised inputs (rows) to outputs (rows), on top of `base` (the base's estimate
-    /// per row, for an adapter on a [`Base`]).
-    fn forward(&self, x: &Tensor, base: Option<&Tensor>) -> Result<Tensor, AdaptError> {
-        let y = self.raw(x, base)?;
+    /// Outputs before the clamp as the network's own are brought to the weights: clamped to
+    /// [0, 1] when the architecture says so.
+    fn clamped(&self, raw: Tensor) -> Result<Tensor, AdaptError> {
         Ok(if self.architecture.clamp {
-            y.clamp(0f32, 1f32)?
+            raw.clamp(0f32, 1f32)?
         } else {
-            y
+            raw
         })
     }
 
-    /// The outputs before the clamp, on top of `base`.
+    /// The outputs before the clamp, on top of `base` (the base's estimate per row, for an
+    /// adapter on a [`Base`]).
     fn raw(&self, x: &Tensor, base: Option<&Tensor>) -> Result<Tensor, AdaptError> {
+        on(&self.own(x)?, base)
+    }
+
+    /// The network's own outputs for standardised inputs (rows), before any base and the
+    /// clamp.
+    fn own(&self, x: &Tensor) -> Result<Tensor, AdaptError> {
         let (hidden_weight, output_weight) = self.weights()?;
         let h = x
             .matmul(&hidden_weight.t()?)?
@@ -280,13 +286,8 @@ impl Net {
                 f64::from(self.architecture.activation.negative_slope()),
             )?,
         };
-        let y = h
-            .matmul(&output_weight.t()?)?
-            .broadcast_add(self.output_bias.as_tensor())?;
-        Ok(match base {
-            Some(base) => (y + base)?,
-            None => y,
-        })
+        Ok(h.matmul(&output_weight.t()?)?
+            .broadcast_add(self.output_bias.as_tensor())?)
     }
 
     /// The two weight matrices, masked.
@@ -311,50 +312,44 @@ impl Net {
         stay: f64,
     ) -> Result<Tensor, AdaptError> {
         let rows = examples.select(index)?;
+        // One pass of the network serves the error and, on a base, its departure from it.
+        let own = self.own(&rows.x)?;
+        let raw = on(&own, rows.base.as_ref())?;
         let fit = match loss {
-            Loss::SquaredClamped => {
-                candle_nn::loss::mse(&self.forward(&rows.x, rows.base.as_ref())?, &rows.y)?
-            }
-            Loss::CensoredAbsolute => self.censored(&rows)?,
+            Loss::SquaredClamped => candle_nn::loss::mse(&self.clamped(raw)?, &rows.y)?,
+            Loss::CensoredAbsolute => censored(&raw, &rows)?,
         };
         if rows.base.is_none() || stay <= 0.0 {
             return Ok(fit);
         }
-        let own = self.raw(&rows.x, None)?.abs()?.mean_all()?;
-        Ok((fit + (own * stay)?)?)
+        Ok((fit + (own.abs()?.mean_all()? * stay)?)?)
     }
 
-    /// The censored absolute error of the outputs for `examples` against the bounds of their
-    /// targets ([`Loss::CensoredAbsolute`]).
-    fn censored(&self, examples: &Examples) -> Result<Tensor, AdaptError> {
-        let raw = self.raw(&examples.x, examples.base.as_ref())?;
-        let below = (&examples.lower - &raw)?.relu()?;
-        let above = (raw - &examples.upper)?.relu()?;
-        Ok((below + above)?.mean_all()?)
-    }
-
-    /// `stay` times the mean absolute value of the network's own outputs on `examples` over a
-    /// base (0 without one).
-    fn departure(&self, examples: &Examples, stay: f64) -> Result<f32, AdaptError> {
-        if examples.base.is_none() || stay <= 0.0 || examples.len() == 0 {
-            return Ok(0.0);
+    /// The mean absolute error on `examples` and, over a base, `stay` times the mean absolute
+    /// value of the network's own outputs (0 without one): both from one pass.
+    fn scores(&self, examples: &Examples, stay: f64) -> Result<(f32, f32), AdaptError> {
+        if examples.len() == 0 {
+            return Ok((0.0, 0.0));
         }
-        let own = self.raw(&examples.x, None)?.abs()?.mean_all()?;
-        Ok((f64::from(own.to_scalar::<f32>()?) * stay) as f32)
+        let own = self.own(&examples.x)?;
+        // Whatever the network says, the weights a character gets are in [0, 1].
+        let prediction = self
+            .clamped(on(&own, examples.base.as_ref())?)?
+            .clamp(0f32, 1f32)?;
+        let mae = (prediction - &examples.y)?
+            .abs()?
+            .mean_all()?
+            .to_scalar::<f32>()?;
+        let departure = if examples.base.is_some() && stay > 0.0 {
+            (f64::from(own.abs()?.mean_all()?.to_scalar::<f32>()?) * stay) as f32
+        } else {
+            0.0
+        };
+        Ok((mae, departure))
     }
 
     fn mae(&self, examples: &Examples) -> Result<f32, AdaptError> {
-        if examples.len() == 0 {
-            return Ok(0.0);
-        }
-        // Whatever the network says, the weights a character gets are in [0, 1].
-        let prediction = self
-            .forward(&examples.x, examples.base.as_ref())?
-            .clamp(0f32, 1f32)?;
-        Ok((prediction - &examples.y)?
-            .abs()?
-            .mean_all()?
-            .to_scalar::<f32>()?)
+        Ok(self.scores(examples, 0.0)?.0)
     }
 
     fn snapshot(&self) -> Result<[Vec<f32>; 4], AdaptError> {
@@ -368,6 +363,22 @@ impl Net {
             flat(self.output_bias.as_tensor())?,
         ])
     }
+}
+
+/// A network's own outputs `own` on top of `base` (the base's estimate per row), when given.
+fn on(own: &Tensor, base: Option<&Tensor>) -> Result<Tensor, AdaptError> {
+    Ok(match base {
+        Some(base) => (own + base)?,
+        None => own.clone(),
+    })
+}
+
+/// The censored absolute error of the outputs `raw` (before the clamp) against the bounds of
+/// `examples`' targets ([`Loss::CensoredAbsolute`]).
+fn censored(raw: &Tensor, examples: &Examples) -> Result<Tensor, AdaptError> {
+    let below = (&examples.lower - raw)?.relu()?;
+    let above = (raw - &examples.upper)?.relu()?;
+    Ok((below + above)?.mean_all()?)
 }
 
 /// Rows of standardised inputs and of targets, as tensors.
@@ -490,7 +501,9 @@ fn epoch(
             let fit = match options.loss {
                 // The censored error already pulls a shape read below 0 up to the user's value
                 // and leaves the shapes at rest below 0 alone.
-                Loss::CensoredAbsolute => net.censored(corrected)?,
+                Loss::CensoredAbsolute => {
+                    censored(&net.raw(&corrected.x, corrected.base.as_ref())?, corrected)?
+                }
                 // Through a leaky clamp: a shape the adapter reads far below 0 (clamped to 0,
                 // so no gradient there) must still be pulled up to the user's value, while the
                 // shapes at rest, also far below 0, are only nudged.
@@ -558,17 +571,10 @@ pub fn train_on(
             reason: "its retarget map is another set of blendshapes than the training set's".into(),
         });
     }
-    let estimates: Option<Vec<Vec<f32>>> = base.as_ref().map(|base| {
-        dataset
-            .expressions
-            .iter()
-            .enumerate()
-            .map(|(k, e)| base.estimate(e, Some(dataset.neutral(k))))
-            .collect()
-    });
     if dataset.len() < crate::MIN_SAMPLES {
         return Err(AdaptError::NotEnoughData(dataset.len()));
     }
+    let estimates = base.as_ref().map(|base| base.estimates(dataset));
     let Architecture {
         features, frame, ..
     } = options.architecture;
@@ -752,11 +758,11 @@ impl Member<'_> {
             }
             epoch(&net, &mut optimizer, train, None, options, &mut rng)?;
             epochs = e;
-            let mae = net.mae(validation)?;
+            let (mae, departure) = net.scores(validation, options.stay)?;
             tracing::debug!(member = self.index, epoch = e, mae_val = mae, "trained");
             // On a base, the epoch kept is the one best by the objective trained for, not the
             // one that departs from the map most.
-            let objective = mae + net.departure(validation, options.stay)?;
+            let objective = mae + departure;
             if objective < best.0 {
                 best = (objective, e, net.snapshot()?);
             } else if e - best.1 >= options.patience {
@@ -897,15 +903,7 @@ pub fn finetune(
         .enumerate()
         .map(|(k, e)| adapter.input(e, Some(dataset.neutral(k))))
         .collect();
-    let base = |expression: &faceanim_take::Expression, neutral| {
-        adapter.base().map(|b| b.estimate(expression, neutral))
-    };
-    let estimates: Option<Vec<Vec<f32>>> = dataset
-        .expressions
-        .iter()
-        .enumerate()
-        .map(|(k, e)| base(e, Some(dataset.neutral(k))))
-        .collect();
+    let estimates = adapter.base().map(|base| base.estimates(dataset));
     let part = |range: std::ops::Range<usize>| {
         Examples::new(
             &inputs[range.clone()],
@@ -921,10 +919,12 @@ pub fn finetune(
         .map(|c| adapter.input(&c.expression, c.neutral.as_ref()))
         .collect();
     let corrected_targets: Vec<Vec<f32>> = corrections.iter().map(|c| c.target.clone()).collect();
-    let corrected_base: Option<Vec<Vec<f32>>> = corrections
-        .iter()
-        .map(|c| base(&c.expression, c.neutral.as_ref()))
-        .collect();
+    let corrected_base: Option<Vec<Vec<f32>>> = adapter.base().map(|base| {
+        corrections
+            .iter()
+            .map(|c| base.estimate(&c.expression, c.neutral.as_ref()))
+            .collect()
+    });
     let corrected = Examples::new(
         &corrected_inputs,
         &corrected_targets,
