@@ -8,8 +8,10 @@
 //! no other program on any platform. ffmpeg comes first where it is installed because the
 //! recogniser's accuracy was measured on its conversion: on 8 lines of a held-out 8 kHz voice,
 //! [`resample`] read 0.786–0.800 of the viseme classes where ffmpeg's conversion read 0.814
-//! (a decision or two of a recogniser that is sensitive to the least change). Errors name the file and what is
-//! wrong with it: not audio, no sound in it, longer than [`MAX_SECONDS`].
+//! (a decision or two of a recogniser that is sensitive to the least change).
+//!
+//! Errors name the file and what is wrong with it: not audio, no sound in it, longer than
+//! [`MAX_SECONDS`].
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -173,6 +175,27 @@ impl Sound {
             None => vec![false; levels.len()],
         }
     }
+}
+
+/// The runs of `value` in `flags` (one per 10 ms frame, as [`Sound::voice_activity`] gives
+/// them) at least `shortest` frames long, as frame ranges in order.
+pub(crate) fn runs(flags: &[bool], value: bool, shortest: usize) -> Vec<std::ops::Range<usize>> {
+    let mut found = Vec::new();
+    let mut k = 0;
+    while k < flags.len() {
+        if flags[k] != value {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < flags.len() && flags[k] == value {
+            k += 1;
+        }
+        if k - start >= shortest {
+            found.push(start..k);
+        }
+    }
+    found
 }
 
 /// The level (dBFS) above which a voice is heard, between a quiet `floor` and a loud `peak`:
@@ -339,8 +362,8 @@ enum Encoding {
 }
 
 impl Encoding {
-    /// The encoding of WAV format `tag` with `bits` per sample; `None` for what ffmpeg reads
-    /// instead (compressed, extensible, 64-bit).
+    /// The encoding of WAV format `tag` (an extensible WAV's sub-format) with `bits` per
+    /// sample; `None` for what only ffmpeg reads (compressed, 64-bit).
     fn of(tag: u16, bits: u16) -> Option<Encoding> {
         match (tag, bits) {
             (1, 8) => Some(Encoding::U8),
@@ -529,23 +552,31 @@ fn convert(path: &Path) -> Result<Sound, AudioError> {
 /// in it).
 #[must_use]
 pub fn wav_bytes(samples: &[i16], rate: u32, channels: u16) -> Vec<u8> {
-    let data = (samples.len() * 2) as u32;
-    let mut out = Vec::with_capacity(44 + samples.len() * 2);
+    let mut out = wav_header(1, channels, rate, 16, samples.len() * 2);
+    for s in samples {
+        out.extend_from_slice(&s.to_le_bytes());
+    }
+    out
+}
+
+/// The 44 bytes before a WAV's samples: format `tag` (1 PCM, 3 float), `channels`, `rate`,
+/// `bits` per sample and `data` bytes of samples to follow.
+fn wav_header(tag: u16, channels: u16, rate: u32, bits: u16, data: usize) -> Vec<u8> {
+    let data = data as u32;
+    let align = channels * bits.div_ceil(8);
+    let mut out = Vec::with_capacity(44 + data as usize);
     out.extend_from_slice(b"RIFF");
     out.extend_from_slice(&(36 + data).to_le_bytes());
     out.extend_from_slice(b"WAVEfmt ");
     out.extend_from_slice(&16u32.to_le_bytes());
-    out.extend_from_slice(&1u16.to_le_bytes());
+    out.extend_from_slice(&tag.to_le_bytes());
     out.extend_from_slice(&channels.to_le_bytes());
     out.extend_from_slice(&rate.to_le_bytes());
-    out.extend_from_slice(&(rate * 2 * u32::from(channels)).to_le_bytes());
-    out.extend_from_slice(&(2 * channels).to_le_bytes());
-    out.extend_from_slice(&16u16.to_le_bytes());
+    out.extend_from_slice(&(rate * u32::from(align)).to_le_bytes());
+    out.extend_from_slice(&align.to_le_bytes());
+    out.extend_from_slice(&bits.to_le_bytes());
     out.extend_from_slice(b"data");
     out.extend_from_slice(&data.to_le_bytes());
-    for s in samples {
-        out.extend_from_slice(&s.to_le_bytes());
-    }
     out
 }
 
@@ -605,19 +636,7 @@ mod tests {
                 }
             }
         }
-        let align = channels * bits / 8;
-        let mut out = b"RIFF".to_vec();
-        out.extend_from_slice(&(36 + data.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"WAVEfmt ");
-        out.extend_from_slice(&16u32.to_le_bytes());
-        out.extend_from_slice(&tag.to_le_bytes());
-        out.extend_from_slice(&channels.to_le_bytes());
-        out.extend_from_slice(&rate.to_le_bytes());
-        out.extend_from_slice(&(rate * u32::from(align)).to_le_bytes());
-        out.extend_from_slice(&align.to_le_bytes());
-        out.extend_from_slice(&bits.to_le_bytes());
-        out.extend_from_slice(b"data");
-        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        let mut out = wav_header(tag, channels, rate, bits, data.len());
         out.extend_from_slice(&data);
         out
     }

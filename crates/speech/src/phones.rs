@@ -25,11 +25,18 @@ pub struct Phone {
 }
 
 impl Phone {
+    /// The first 10 ms frame of this phone in a list of `frames` (cut at its end): where
+    /// [`Phone::frames`] starts.
+    #[must_use]
+    pub fn first_frame(&self, frames: usize) -> usize {
+        ((self.start.max(0.0) * 100.0) as usize).min(frames)
+    }
+
     /// This phone's part of `per_frame`, one value per 10 ms of the sound (a voice-activity
     /// flag, a loudness): the frames from its start to its end, cut at the list's end.
     #[must_use]
     pub fn frames<'a, T>(&self, per_frame: &'a [T]) -> &'a [T] {
-        let a = ((self.start.max(0.0) * 100.0) as usize).min(per_frame.len());
+        let a = self.first_frame(per_frame.len());
         let b = ((self.end.max(0.0) * 100.0).ceil() as usize).clamp(a, per_frame.len());
         &per_frame[a..b]
     }

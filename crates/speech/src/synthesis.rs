@@ -138,25 +138,16 @@ fn timed(spoken: &Spoken, seconds: f32, on_recording: impl Fn(u32) -> f32) -> Ve
 /// or one the voice made longer than the synthesiser did).
 fn carve_pauses(phones: Vec<Phone>, voiced: &[bool]) -> Vec<Phone> {
     let shortest = (PAUSE_SECONDS * 100.0).round() as usize;
-    let mut pauses = Vec::new();
-    let mut k = 0;
-    while k < voiced.len() {
-        if voiced[k] {
-            k += 1;
-            continue;
-        }
-        let start = k;
-        while k < voiced.len() && !voiced[k] {
-            k += 1;
-        }
-        if k - start >= shortest {
-            // A few frames in from each edge: the ends of the words either side stay theirs.
-            pauses.push((
-                (start + 3) as f32 / 100.0,
-                (k.saturating_sub(3)) as f32 / 100.0,
-            ));
-        }
-    }
+    // A few frames in from each edge: the ends of the words either side stay theirs.
+    let pauses: Vec<(f32, f32)> = crate::audio::runs(voiced, false, shortest)
+        .into_iter()
+        .map(|r| {
+            (
+                (r.start + 3) as f32 / 100.0,
+                r.end.saturating_sub(3) as f32 / 100.0,
+            )
+        })
+        .collect();
     let mut out = Vec::with_capacity(phones.len() + 2 * pauses.len());
     for phone in phones {
         let mut rest = Some(phone);

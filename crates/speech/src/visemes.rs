@@ -183,24 +183,13 @@ pub const UNMADE_OUT: f32 = 0.12;
 /// Where `p` is heard (per `voiced`, one flag per 10 ms) for at least `shortest` seconds in a
 /// row: (start, end) in seconds.
 fn heard_stretches(p: &Phone, voiced: &[bool], shortest: f32) -> Vec<(f32, f32)> {
-    let first = (p.start.max(0.0) * 100.0) as usize;
-    let mut stretches = Vec::new();
-    let mut start = None;
-    let frames = p.frames(voiced);
-    for (k, v) in frames.iter().chain(std::iter::once(&false)).enumerate() {
-        match (v, start) {
-            (true, None) => start = Some(k),
-            (false, Some(s)) => {
-                if (k - s) as f32 / 100.0 >= shortest {
-                    let time = |f: usize| ((first + f) as f32 / 100.0).clamp(p.start, p.end);
-                    stretches.push((time(s), time(k)));
-                }
-                start = None;
-            }
-            _ => {}
-        }
-    }
-    stretches
+    let first = p.first_frame(voiced.len());
+    let time = |f: usize| ((first + f) as f32 / 100.0).clamp(p.start, p.end);
+    let frames = (shortest * 100.0).round() as usize;
+    crate::audio::runs(p.frames(voiced), true, frames)
+        .into_iter()
+        .map(|r| (time(r.start), time(r.end)))
+        .collect()
 }
 
 /// The visemes of `phones`, heard where `voiced` (one flag per 10 ms) says, in a sound of
