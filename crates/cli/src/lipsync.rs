@@ -224,19 +224,26 @@ fn read_speech(
     args: &LipsyncArgs,
     transcript: Option<&(String, String)>,
 ) -> anyhow::Result<(Sound, faceanim_speech::Reading)> {
+    let blind = match args.recognise {
+        Blind::Words => faceanim_speech::Recognition::Words,
+        Blind::Phones => faceanim_speech::Recognition::PhoneLoop,
+    };
+    // Without a transcript the recogniser's models (most of a short line's time) load while
+    // the sound is read and converted.
+    let loading = transcript
+        .is_none()
+        .then(|| faceanim_speech::recognition::Loading::start(Some(&args.language), blind));
     let sound = Sound::read(&args.speech)?;
     if let Some((text, from)) = transcript {
         faceanim_speech::phones::transcript_words(text, sound.seconds())
             .map_err(|e| anyhow::anyhow!("--text {from}: {e}"))?;
     }
-    let heard = faceanim_speech::read(
+    let heard = faceanim_speech::read_loaded(
         &sound,
         transcript.map(|(text, _)| text.as_str()),
         Some(&args.language),
-        match args.recognise {
-            Blind::Words => faceanim_speech::Recognition::Words,
-            Blind::Phones => faceanim_speech::Recognition::PhoneLoop,
-        },
+        blind,
+        loading,
     )?;
     Ok((sound, heard))
 }

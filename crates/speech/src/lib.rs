@@ -146,7 +146,23 @@ pub fn read(
     language: Option<&str>,
     blind: Recognition,
 ) -> Result<Reading, SpeechError> {
-    let (phones, recognition, notes) = recognition::recognise(sound, transcript, language, blind)?;
+    read_loaded(sound, transcript, language, blind, None)
+}
+
+/// [`read`], with the recogniser a line without a transcript needs already `loading` (started
+/// before the sound was read: [`recognition::Loading`]).
+///
+/// # Errors
+/// As [`read`].
+pub fn read_loaded(
+    sound: &Sound,
+    transcript: Option<&str>,
+    language: Option<&str>,
+    blind: Recognition,
+    loading: Option<recognition::Loading>,
+) -> Result<Reading, SpeechError> {
+    let (phones, recognition, notes) =
+        recognition::recognise_loaded(sound, transcript, language, blind, loading)?;
     let track = visemes::track(&phones, &sound.voice_activity(), sound.seconds());
     Ok(Reading {
         track,

@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use faceanim_sphinx_sys::{EN_US, FRAME_RATE, SphinxError};
+use faceanim_sphinx_sys::{EN_US, FRAME_RATE, Recogniser, SphinxError};
 
 use crate::audio::Sound;
 
@@ -138,8 +138,15 @@ pub fn transcript_words(text: &str, seconds: f32) -> Result<Vec<String>, PhoneEr
 ///
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
-pub(crate) fn recognise_words(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
-    let segments = faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples)?;
+pub(crate) fn recognise_words(
+    sound: &Sound,
+    recogniser: Option<Recogniser>,
+) -> Result<Vec<Phone>, PhoneError> {
+    let segments = match recogniser {
+        // Dropped once it has decoded, before the alignment below waits for a turn.
+        Some(mut recogniser) => recogniser.decode(&sound.samples)?,
+        None => faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples)?,
+    };
     // Only the words heard are looked up: reading the whole dictionary would cost more than
     // recognising a line.
     let heard: Vec<String> = segments
@@ -162,8 +169,14 @@ pub(crate) fn recognise_words(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
 ///
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
-pub(crate) fn phone_loop(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
-    let segments = faceanim_sphinx_sys::decode(&EN_US.phone_loop(), &sound.samples)?;
+pub(crate) fn phone_loop(
+    sound: &Sound,
+    recogniser: Option<Recogniser>,
+) -> Result<Vec<Phone>, PhoneError> {
+    let segments = match recogniser {
+        Some(mut recogniser) => recogniser.decode(&sound.samples)?,
+        None => faceanim_sphinx_sys::decode(&EN_US.phone_loop(), &sound.samples)?,
+    };
     Ok(segments
         .into_iter()
         .map(|s| Phone {

@@ -2,6 +2,8 @@
 //! synthesis (any language), else the sound recognised without it — and the notes that say
 //! what was done instead of what was asked.
 
+use faceanim_sphinx_sys::{EN_US, Recogniser, SphinxError};
+
 use crate::audio::Sound;
 use crate::phones::{self, Phone, PhoneError, Recognition};
 
@@ -35,18 +37,79 @@ pub fn recognise(
     language: Option<&str>,
     blind: Recognition,
 ) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
-    let language = language.unwrap_or(ENGLISH);
-    let mut notes = Vec::new();
-    let blind = if is_english(language) || blind != Recognition::Words {
+    recognise_loaded(sound, transcript, language, blind, None)
+}
+
+/// The route [`recognise`] takes without a transcript in `language`: `blind`, except that
+/// words are recognised in English only (other languages by their phones).
+fn blind_route(language: &str, blind: Recognition) -> Recognition {
+    if is_english(language) || blind != Recognition::Words {
         blind
     } else {
-        if transcript.is_none() {
-            notes.push(format!(
-                "words are recognised in English only: the phones of this {language} line were recognised instead"
-            ));
-        }
         Recognition::PhoneLoop
-    };
+    }
+}
+
+/// The recogniser a line without a transcript needs, loading on a thread of its own from
+/// the moment it is made: its models need no sound, so they load while the sound is read or
+/// converted (most of a short line's time otherwise). Give it to [`recognise_loaded`].
+#[derive(Debug)]
+pub struct Loading {
+    route: Recognition,
+    thread: std::thread::JoinHandle<Result<Recogniser, SphinxError>>,
+}
+
+impl Loading {
+    /// Starts loading the recogniser for a line in `language` (English when `None`)
+    /// recognised by `blind`.
+    #[must_use]
+    pub fn start(language: Option<&str>, blind: Recognition) -> Loading {
+        let route = blind_route(language.unwrap_or(ENGLISH), blind);
+        let search = match route {
+            Recognition::Words => EN_US.words(),
+            _ => EN_US.phone_loop(),
+        };
+        Loading {
+            route,
+            thread: std::thread::spawn(move || Recogniser::load(&search)),
+        }
+    }
+
+    /// The loaded recogniser, when it is the one `route` needs.
+    fn finish(self, route: Recognition) -> Result<Option<Recogniser>, PhoneError> {
+        if self.route != route {
+            return Ok(None);
+        }
+        match self.thread.join() {
+            Ok(loaded) => Ok(Some(loaded?)),
+            Err(_) => Err(PhoneError::Sphinx(SphinxError::Decoder(
+                "loading the recogniser stopped".into(),
+            ))),
+        }
+    }
+}
+
+/// [`recognise`], with the recogniser for a line without a transcript already `loading`
+/// (used only when that route is taken; otherwise it is left to finish and be dropped).
+///
+/// # Errors
+/// As [`recognise`].
+pub fn recognise_loaded(
+    sound: &Sound,
+    transcript: Option<&str>,
+    language: Option<&str>,
+    blind: Recognition,
+    loading: Option<Loading>,
+) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
+    let language = language.unwrap_or(ENGLISH);
+    let mut notes = Vec::new();
+    let asked = blind;
+    let blind = blind_route(language, blind);
+    if blind != asked && transcript.is_none() {
+        notes.push(format!(
+            "words are recognised in English only: the phones of this {language} line were recognised instead"
+        ));
+    }
     if let Some(text) = transcript {
         let words = phones::transcript_words(text, sound.seconds())?;
         // Why the recogniser could not align it, when it tried.
@@ -72,10 +135,11 @@ pub fn recognise(
             None => format!("{failed}: the speech was recognised without it"),
         });
     }
+    let loaded = loading.map(|l| l.finish(blind)).transpose()?.flatten();
     let phones = if blind == Recognition::Words {
-        phones::recognise_words(sound)?
+        phones::recognise_words(sound, loaded)?
     } else {
-        phones::phone_loop(sound)?
+        phones::phone_loop(sound, loaded)?
     };
     Ok((phones, blind, notes))
 }

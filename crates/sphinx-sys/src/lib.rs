@@ -24,6 +24,9 @@
 
 use std::path::{Path, PathBuf};
 
+#[cfg(pocketsphinx)]
+mod known;
+
 /// Samples per second the models expect.
 pub const SAMPLE_RATE: u32 = 16_000;
 /// Decoder frames per second (one every 10 ms).
@@ -159,37 +162,74 @@ fn check(path: &Path) -> Result<(), SphinxError> {
     }
 }
 
-/// Decodes `samples` (16 kHz, mono) as one utterance with `search`.
+/// Decodes `samples` (16 kHz, mono) as one utterance with `search`: [`Recogniser::load`]
+/// then [`Recogniser::decode`].
 ///
 /// # Errors
 /// [`SphinxError::NotInstalled`] without the library, [`SphinxError::MissingModel`] naming a
 /// missing model file, [`SphinxError::Decoder`] when the recogniser fails.
 pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxError> {
-    check(&search.acoustic)?;
-    match &search.mode {
-        Mode::PhoneLoop(lm) => check(lm)?,
-        Mode::Grammar { dictionary, .. } => check(dictionary)?,
-        Mode::Phones(sequence) => {
-            if sequence.is_empty()
-                || sequence
-                    .iter()
-                    .any(|p| p.is_empty() || !p.bytes().all(|b| b.is_ascii_uppercase()))
-            {
-                return Err(SphinxError::Decoder(format!(
-                    "a phone sequence to align must be ARPAbet phones: {sequence:?}"
-                )));
+    Recogniser::load(search)?.decode(samples)
+}
+
+/// A decoder with its models loaded, ready for speech. Loading is most of a short line's
+/// cost (the word search reads a 27 MB language model and a 134,000-word dictionary), and
+/// needs no speech: a caller can load on one thread while it reads the sound on another.
+/// It holds a turn of the cores (see [`decode`]) until dropped.
+pub struct Recogniser {
+    decoder: imp::Decoder,
+    _turn: Turn,
+}
+
+impl std::fmt::Debug for Recogniser {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Recogniser").finish_non_exhaustive()
+    }
+}
+
+impl Recogniser {
+    /// Loads `search`'s models, waiting for a turn of the cores first.
+    ///
+    /// # Errors
+    /// As [`decode`].
+    pub fn load(search: &Search) -> Result<Recogniser, SphinxError> {
+        check(&search.acoustic)?;
+        match &search.mode {
+            Mode::PhoneLoop(lm) => check(lm)?,
+            Mode::Grammar { dictionary, .. } => check(dictionary)?,
+            Mode::Phones(sequence) => {
+                if sequence.is_empty()
+                    || sequence
+                        .iter()
+                        .any(|p| p.is_empty() || !p.bytes().all(|b| b.is_ascii_uppercase()))
+                {
+                    return Err(SphinxError::Decoder(format!(
+                        "a phone sequence to align must be ARPAbet phones: {sequence:?}"
+                    )));
+                }
+            }
+            Mode::Words {
+                language_model,
+                dictionary,
+            } => {
+                check(language_model)?;
+                check(dictionary)?;
             }
         }
-        Mode::Words {
-            language_model,
-            dictionary,
-        } => {
-            check(language_model)?;
-            check(dictionary)?;
-        }
+        let turn = Turn::wait();
+        Ok(Recogniser {
+            decoder: imp::Decoder::load(search)?,
+            _turn: turn,
+        })
     }
-    let _turn = Turn::wait();
-    imp::decode(search, samples)
+
+    /// Decodes `samples` (16 kHz, mono) as one utterance.
+    ///
+    /// # Errors
+    /// [`SphinxError::Decoder`] when the recogniser fails.
+    pub fn decode(&mut self, samples: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+        self.decoder.decode(samples)
+    }
 }
 
 /// A turn to decode: at most one decoder per core runs at once (each holds its models, some
@@ -237,8 +277,17 @@ pub fn available() -> bool {
 mod imp {
     use super::{Search, Segment, SphinxError};
 
-    pub fn decode(_: &Search, _: &[i16]) -> Result<Vec<Segment>, SphinxError> {
-        Err(SphinxError::NotInstalled)
+    /// Never made: without the library, loading fails.
+    pub enum Decoder {}
+
+    impl Decoder {
+        pub fn load(_: &Search) -> Result<Decoder, SphinxError> {
+            Err(SphinxError::NotInstalled)
+        }
+
+        pub fn decode(&mut self, _: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+            match *self {}
+        }
     }
 }
 
@@ -286,6 +335,7 @@ pub mod ffi {
         pub fn ps_seg_word(seg: *mut ps_seg_t) -> *const c_char;
         pub fn ps_seg_frames(seg: *mut ps_seg_t, out_sf: *mut c_int, out_ef: *mut c_int);
         pub fn ps_seg_free(seg: *mut ps_seg_t);
+        pub fn err_set_logfp(stream: *mut std::ffi::c_void);
     }
 }
 
@@ -296,11 +346,34 @@ mod imp {
 
     use super::{Mode, Search, Segment, SphinxError, ffi};
 
-    /// The configuration and the decoder made from it, freed together.
-    struct Decoder {
+    /// The configuration and the decoder made from it, freed together, and the scratch files
+    /// its search reads.
+    pub struct Decoder {
         config: *mut ffi::cmd_ln_t,
         ps: *mut ffi::ps_decoder_t,
+        _scratch: Vec<Scratch>,
     }
+
+    /// `args` as C strings.
+    fn c_strings(args: &[String]) -> Result<Vec<CString>, SphinxError> {
+        args.iter()
+            .map(|a| CString::new(a.as_str()))
+            .collect::<Result<_, _>>()
+            .map_err(|_| SphinxError::Decoder("a path holds a NUL byte".into()))
+    }
+
+    /// Sphinx's log, off for the whole process once: set per decoder (`-logfn`), each decoder
+    /// would reopen the one global log file under any other decoder loading at the time.
+    fn quiet() {
+        static QUIET: std::sync::Once = std::sync::Once::new();
+        // SAFETY: NULL is the documented way to turn the log off; called before any decoder.
+        QUIET.call_once(|| unsafe { ffi::err_set_logfp(std::ptr::null_mut()) });
+    }
+
+    // SAFETY: a PocketSphinx decoder and its configuration are plain heap structures with no
+    // tie to the thread that made them (no thread-local state); `Decoder` is used through
+    // `&mut` only, so one thread at a time.
+    unsafe impl Send for Decoder {}
 
     impl Drop for Decoder {
         fn drop(&mut self) {
@@ -358,147 +431,148 @@ mod imp {
         path.to_string_lossy().into_owned()
     }
 
-    pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxError> {
-        let mut args: Vec<String> = vec![
-            "-hmm".into(),
-            text(&search.acoustic),
-            "-logfn".into(),
-            "/dev/null".into(),
-        ];
-        let _scratch = match &search.mode {
-            Mode::PhoneLoop(lm) => {
-                // The settings CMU recommends for phone recognition.
-                args.extend(
-                    [
-                        "-allphone",
-                        &text(lm),
-                        "-backtrace",
-                        "no",
-                        "-lw",
-                        "2.0",
-                        "-beam",
-                        "1e-20",
-                        "-pbeam",
-                        "1e-20",
-                    ]
-                    .map(str::to_owned),
-                );
-                Vec::new()
+    impl Decoder {
+        pub fn load(search: &Search) -> Result<Decoder, SphinxError> {
+            quiet();
+            let mut args: Vec<String> = vec!["-hmm".into(), text(&search.acoustic)];
+            let scratch = match &search.mode {
+                Mode::PhoneLoop(lm) => {
+                    // The settings CMU recommends for phone recognition.
+                    args.extend(
+                        [
+                            "-allphone",
+                            &text(lm),
+                            "-backtrace",
+                            "no",
+                            "-lw",
+                            "2.0",
+                            "-beam",
+                            "1e-20",
+                            "-pbeam",
+                            "1e-20",
+                        ]
+                        .map(str::to_owned),
+                    );
+                    Vec::new()
+                }
+                Mode::Words {
+                    language_model,
+                    dictionary,
+                } => {
+                    let dictionary = super::known::dictionary_for(language_model, dictionary);
+                    args.extend(
+                        [
+                            "-lm",
+                            &text(language_model),
+                            "-dict",
+                            &text(&dictionary),
+                            "-fwdflat",
+                            "no",
+                            "-bestpath",
+                            "no",
+                        ]
+                        .map(str::to_owned),
+                    );
+                    Vec::new()
+                }
+                Mode::Grammar { jsgf, dictionary } => {
+                    let grammar = Scratch::write("jsgf", jsgf)?;
+                    args.extend(grammar_args(&text(dictionary), &grammar));
+                    vec![grammar]
+                }
+                Mode::Phones(sequence) => {
+                    let mut distinct: Vec<&String> = sequence.iter().collect();
+                    distinct.sort();
+                    distinct.dedup();
+                    let entries: String = distinct
+                        .iter()
+                        .map(|p| format!("ph_{} {p}\n", p.to_ascii_lowercase()))
+                        .collect();
+                    let words: Vec<String> = sequence
+                        .iter()
+                        .map(|p| format!("ph_{}", p.to_ascii_lowercase()))
+                        .collect();
+                    let jsgf = format!(
+                        "#JSGF V1.0;\ngrammar phones;\npublic <s> = {};\n",
+                        words.join(" ")
+                    );
+                    let dictionary = Scratch::write("dict", &entries)?;
+                    let grammar = Scratch::write("jsgf", &jsgf)?;
+                    args.extend(grammar_args(&text(&dictionary.0), &grammar));
+                    vec![dictionary, grammar]
+                }
+            };
+            let owned = c_strings(&args)?;
+            let mut argv: Vec<*mut std::os::raw::c_char> =
+                owned.iter().map(|a| a.as_ptr().cast_mut()).collect();
+            let argc = i32::try_from(argv.len()).unwrap_or(i32::MAX);
+            let mut decoder = Decoder {
+                config: std::ptr::null_mut(),
+                ps: std::ptr::null_mut(),
+                _scratch: scratch,
+            };
+            // SAFETY: argv points at `argc` NUL-terminated strings that outlive the call (the
+            // parser copies what it keeps); ps_args() is the library's static definition table.
+            decoder.config = unsafe {
+                ffi::cmd_ln_parse_r(
+                    std::ptr::null_mut(),
+                    ffi::ps_args(),
+                    argc,
+                    argv.as_mut_ptr(),
+                    1,
+                )
+            };
+            if decoder.config.is_null() {
+                return Err(SphinxError::Decoder(format!(
+                    "the settings were refused: {}",
+                    args.join(" ")
+                )));
             }
-            Mode::Words {
-                language_model,
-                dictionary,
-            } => {
-                args.extend(
-                    [
-                        "-lm",
-                        &text(language_model),
-                        "-dict",
-                        &text(dictionary),
-                        "-fwdflat",
-                        "no",
-                        "-bestpath",
-                        "no",
-                    ]
-                    .map(str::to_owned),
-                );
-                Vec::new()
-            }
-            Mode::Grammar { jsgf, dictionary } => {
-                let grammar = Scratch::write("jsgf", jsgf)?;
-                args.extend(grammar_args(&text(dictionary), &grammar));
-                vec![grammar]
-            }
-            Mode::Phones(sequence) => {
-                let mut distinct: Vec<&String> = sequence.iter().collect();
-                distinct.sort();
-                distinct.dedup();
-                let entries: String = distinct
-                    .iter()
-                    .map(|p| format!("ph_{} {p}\n", p.to_ascii_lowercase()))
-                    .collect();
-                let words: Vec<String> = sequence
-                    .iter()
-                    .map(|p| format!("ph_{}", p.to_ascii_lowercase()))
-                    .collect();
-                let jsgf = format!(
-                    "#JSGF V1.0;\ngrammar phones;\npublic <s> = {};\n",
-                    words.join(" ")
-                );
-                let dictionary = Scratch::write("dict", &entries)?;
-                let grammar = Scratch::write("jsgf", &jsgf)?;
-                args.extend(grammar_args(&text(&dictionary.0), &grammar));
-                vec![dictionary, grammar]
-            }
-        };
-        let owned: Vec<CString> = args
-            .iter()
-            .map(|a| CString::new(a.as_str()))
-            .collect::<Result<_, _>>()
-            .map_err(|_| SphinxError::Decoder("a path holds a NUL byte".into()))?;
-        let mut argv: Vec<*mut std::os::raw::c_char> =
-            owned.iter().map(|a| a.as_ptr().cast_mut()).collect();
-        let argc = i32::try_from(argv.len()).unwrap_or(i32::MAX);
-        let mut decoder = Decoder {
-            config: std::ptr::null_mut(),
-            ps: std::ptr::null_mut(),
-        };
-        // SAFETY: argv points at `argc` NUL-terminated strings that outlive the call (the
-        // parser copies what it keeps); ps_args() is the library's static definition table.
-        decoder.config = unsafe {
-            ffi::cmd_ln_parse_r(
-                std::ptr::null_mut(),
-                ffi::ps_args(),
-                argc,
-                argv.as_mut_ptr(),
-                1,
-            )
-        };
-        if decoder.config.is_null() {
-            return Err(SphinxError::Decoder(format!(
-                "the settings were refused: {}",
-                args.join(" ")
-            )));
-        }
-        // SAFETY: a valid configuration; the decoder keeps its own reference to it.
-        decoder.ps = unsafe { ffi::ps_init(decoder.config) };
-        if decoder.ps.is_null() {
-            return Err(SphinxError::Decoder(
+            // SAFETY: a valid configuration; the decoder keeps its own reference to it.
+            decoder.ps = unsafe { ffi::ps_init(decoder.config) };
+            if decoder.ps.is_null() {
+                return Err(SphinxError::Decoder(
                 "the models could not be loaded (a damaged model or grammar, or a word not in the dictionary)".into(),
             ));
-        }
-        // SAFETY: a live decoder; `samples` is valid for its length during the call.
-        let processed = unsafe {
-            if ffi::ps_start_utt(decoder.ps) < 0 {
-                return Err(SphinxError::Decoder("could not start the utterance".into()));
             }
-            let n = ffi::ps_process_raw(decoder.ps, samples.as_ptr(), samples.len(), 0, 1);
-            let end = ffi::ps_end_utt(decoder.ps);
-            n.min(end)
-        };
-        if processed < 0 {
-            return Err(SphinxError::Decoder("decoding failed".into()));
+            Ok(decoder)
         }
-        let mut segments = Vec::new();
-        // SAFETY: the iterator belongs to the live decoder; ps_seg_next frees it when it
-        // returns null, and each word pointer is read before the iterator moves on.
-        unsafe {
-            let mut seg = ffi::ps_seg_iter(decoder.ps);
-            while !seg.is_null() {
-                let word = ffi::ps_seg_word(seg);
-                let (mut start, mut end) = (0, 0);
-                ffi::ps_seg_frames(seg, &raw mut start, &raw mut end);
-                if !word.is_null() && end >= start && start >= 0 {
-                    segments.push(Segment {
-                        label: CStr::from_ptr(word).to_string_lossy().into_owned(),
-                        start: start.unsigned_abs(),
-                        end: end.unsigned_abs(),
-                    });
+
+        pub fn decode(&mut self, samples: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+            let decoder = self;
+            // SAFETY: a live decoder; `samples` is valid for its length during the call.
+            let processed = unsafe {
+                if ffi::ps_start_utt(decoder.ps) < 0 {
+                    return Err(SphinxError::Decoder("could not start the utterance".into()));
                 }
-                seg = ffi::ps_seg_next(seg);
+                let n = ffi::ps_process_raw(decoder.ps, samples.as_ptr(), samples.len(), 0, 1);
+                let end = ffi::ps_end_utt(decoder.ps);
+                n.min(end)
+            };
+            if processed < 0 {
+                return Err(SphinxError::Decoder("decoding failed".into()));
             }
+            let mut segments = Vec::new();
+            // SAFETY: the iterator belongs to the live decoder; ps_seg_next frees it when it
+            // returns null, and each word pointer is read before the iterator moves on.
+            unsafe {
+                let mut seg = ffi::ps_seg_iter(decoder.ps);
+                while !seg.is_null() {
+                    let word = ffi::ps_seg_word(seg);
+                    let (mut start, mut end) = (0, 0);
+                    ffi::ps_seg_frames(seg, &raw mut start, &raw mut end);
+                    if !word.is_null() && end >= start && start >= 0 {
+                        segments.push(Segment {
+                            label: CStr::from_ptr(word).to_string_lossy().into_owned(),
+                            start: start.unsigned_abs(),
+                            end: end.unsigned_abs(),
+                        });
+                    }
+                    seg = ffi::ps_seg_next(seg);
+                }
+            }
+            Ok(segments)
         }
-        Ok(segments)
     }
 }
 
