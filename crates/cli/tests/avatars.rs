@@ -17,9 +17,9 @@ mod support;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use faceanim_testdata::avatar::{ICT_EXPRESSIONS, VrmKind, full_body_glb};
+use faceanim_testdata::avatar::{ICT_EXPRESSIONS, VrmKind, full_body_glb, full_body_glb_textured};
 use faceanim_testdata::glb::assert_kept;
-use faceanim_testdata::{gltf_transform, gltfpack, ict};
+use faceanim_testdata::{gltf_transform, gltfpack, ict, ktx2};
 use serde_json::Value;
 use support::{
     assert_avatar_drawn, assert_valid_gltf, blender_report, export_with_clip, faceanim_ok,
@@ -301,6 +301,127 @@ fn a_webp_meshopt_quantized_avatar_like_vroids() {
         uncompressed.source().unwrap().take().unwrap(),
     );
     assert_eq!(a, b, "the animation reads back differently");
+}
+
+/// An avatar whose texture ships as KTX2 (`KHR_texture_basisu`, required), as asset pipelines
+/// compress them, in both of Basis Universal's codecs, made by Binomial's own encoder: ETC1S
+/// with BasisLZ and UASTC with Zstandard. The texture is read and decodes to the picture that
+/// was encoded (within the codec's loss: a 256-pixel grainy checker), the renderer (the face's
+/// renders for the retarget map and the adapter) draws it, the studio's view carries it as PNG
+/// so that browsers show it without a transcoder, and the export keeps the user's KTX2.
+#[test]
+fn ktx2_textures_are_decoded_drawn_shown_and_kept() {
+    let dir = output_dir("avatars-ktx2");
+    let plain = full_body_glb_textured(ict(), VrmKind::None, &[], 256);
+    let texture_of = |c: &faceanim_rig::Character| {
+        c.materials()
+            .iter()
+            .find_map(|m| m.base_color_texture.clone())
+            .expect("the outfit's texture")
+    };
+    let encoded = texture_of(&glb_character(&plain, "plain.glb"));
+    let picture = faceanim_media::decode_image(Path::new("outfit.png"), &encoded.bytes).unwrap();
+    let clip = clip(&dir);
+    // Mean absolute error per channel (0..255) each codec is allowed on the picture's pixels
+    // (ETC1S drops the grain, as it is made to) and on its 8×8 blocks' means (what a codec
+    // keeps; a decoder that misread blocks, endpoints or colours would be far off).
+    for (uastc, codec, loss, block_loss) in [(false, "etc1s", 20.0, 4.0), (true, "uastc", 3.0, 1.0)]
+    {
+        let packed = ktx2(&plain, uastc);
+        let file = dir.join(format!("avatar-{codec}.glb"));
+        std::fs::write(&file, &packed).unwrap();
+        let required = json_chunk(&file)["extensionsRequired"].to_string();
+        assert!(
+            required.contains("KHR_texture_basisu"),
+            "{codec}: {required}"
+        );
+        let character = glb_character(&packed, "avatar-ktx2.glb");
+        let texture = texture_of(&character);
+        assert_eq!(texture.mime_type, "image/ktx2", "{codec}");
+        let decoded = faceanim_media::decode_image(&file, &texture.bytes).unwrap();
+        assert_eq!(
+            (decoded.width, decoded.height),
+            (picture.width, picture.height),
+            "{codec}"
+        );
+        let error = decoded
+            .rgb
+            .iter()
+            .zip(&picture.rgb)
+            .map(|(&a, &b)| f64::from(a.abs_diff(b)))
+            .sum::<f64>()
+            / picture.rgb.len() as f64;
+        let blocks = block_means(&decoded);
+        let block_error = blocks
+            .iter()
+            .zip(block_means(&picture))
+            .map(|(a, b)| (a - b).abs())
+            .sum::<f64>()
+            / blocks.len() as f64;
+        eprintln!(
+            "{codec}: mean error {error:.2} of 255 per channel, {block_error:.2} on 8×8 blocks"
+        );
+        assert!(
+            error < loss,
+            "{codec}: the KTX2 decodes {error:.2} away from the picture"
+        );
+        assert!(
+            block_error < block_loss,
+            "{codec}: the KTX2's 8×8 blocks decode {block_error:.2} away from the picture's"
+        );
+        let appearance = faceanim_render::Appearance::of(&character);
+        assert!(
+            appearance.warnings().is_empty(),
+            "{codec}: {:?}",
+            appearance.warnings()
+        );
+        let view = dir.join(format!("view-{codec}.glb"));
+        std::fs::write(&view, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
+        assert_valid_gltf(&view);
+        let shown = json_chunk(&view);
+        assert!(
+            shown["images"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|i| i["mimeType"] == "image/png"),
+            "{codec}: {}",
+            shown["images"]
+        );
+        let out = dir.join(format!("animated-{codec}.glb"));
+        export_with_clip(&file, &out, &clip);
+        assert_valid_gltf(&out);
+        let kept = json_chunk(&out);
+        assert!(
+            kept["extensionsRequired"]
+                .to_string()
+                .contains("KHR_texture_basisu"),
+            "{codec}: {}",
+            kept["extensionsRequired"]
+        );
+        assert_eq!(
+            texture_of(&glb_character(&std::fs::read(&out).unwrap(), "out.glb")).bytes,
+            texture.bytes,
+            "{codec}: the export re-encoded the user's texture"
+        );
+    }
+}
+
+/// The mean of each channel over each 8×8 block of `image` (its sides a multiple of 8).
+fn block_means(image: &faceanim_media::Image) -> Vec<f64> {
+    let mut means = Vec::new();
+    for by in (0..image.height).step_by(8) {
+        for bx in (0..image.width).step_by(8) {
+            for c in 0..3 {
+                let sum: u32 = (by..by + 8)
+                    .flat_map(|y| (bx..bx + 8).map(move |x| (y, x)))
+                    .map(|(y, x)| u32::from(image.rgb[(y * image.width + x) * 3 + c]))
+                    .sum();
+                means.push(f64::from(sum) / 64.0);
+            }
+        }
+    }
+    means
 }
 
 /// The character in a GLB's bytes, named `name`.

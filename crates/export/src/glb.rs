@@ -433,10 +433,23 @@ fn materials_json(character: &Character, bin: &mut Bin) -> (Vec<Value>, Vec<Valu
                 "metallicFactor": f64::from(m.metallic.clamp(0.0, 1.0)),
                 "roughnessFactor": f64::from(m.roughness.clamp(0.0, 1.0)),
             });
-            if let Some(texture) = &m.base_color_texture {
-                let view = bin.view(&texture.bytes, None);
-                images.push(json!({ "bufferView": view, "mimeType": texture.mime_type }));
-                textures.push(if texture.mime_type == "image/webp" {
+            // A browser shows KTX2 only through a transcoder the page does not carry: it goes
+            // as PNG. One that does not decode is left out (the render says so; an export
+            // into the user's own file keeps it as it was).
+            let shown = m.base_color_texture.as_ref().and_then(|texture| {
+                let bytes =
+                    faceanim_media::browser_image(std::path::Path::new(&m.name), &texture.bytes)
+                        .ok()?;
+                let mime_type = match bytes {
+                    std::borrow::Cow::Owned(_) => "image/png",
+                    std::borrow::Cow::Borrowed(_) => texture.mime_type.as_str(),
+                };
+                Some((bytes, mime_type))
+            });
+            if let Some((bytes, mime_type)) = shown {
+                let view = bin.view(&bytes, None);
+                images.push(json!({ "bufferView": view, "mimeType": mime_type }));
+                textures.push(if mime_type == "image/webp" {
                     json!({ "sampler": 0, "extensions": { "EXT_texture_webp": { "source": images.len() - 1 } } })
                 } else {
                     json!({ "source": images.len() - 1, "sampler": 0 })

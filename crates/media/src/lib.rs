@@ -177,22 +177,31 @@ fn image_kind(head: &[u8]) -> Option<&'static str> {
         Some("jpeg")
     } else if head.len() >= 12 && head.starts_with(b"RIFF") && &head[8..12] == b"WEBP" {
         Some("webp")
+    } else if head.starts_with(&KTX2_MAGIC) {
+        Some("ktx2")
     } else {
         None
     }
 }
 
-/// Decodes a PNG, JPEG or WebP (lossy or lossless, the first frame of an animation; alpha
-/// dropped) held in memory — the textures avatars ship; `path` is only for messages.
+/// The first bytes of every KTX2 file: «KTX 20», CR LF, EOF, LF.
+const KTX2_MAGIC: [u8; 12] = [
+    0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
+];
+
+/// Decodes a PNG, JPEG, WebP (lossy or lossless, the first frame of an animation) or KTX2
+/// (Basis Universal, ETC1S or UASTC, its largest level: `KHR_texture_basisu`) held in memory —
+/// the textures avatars ship — alpha dropped; `path` is only for messages.
 ///
 /// # Errors
-/// [`MediaError::BadImage`] for anything that is not a complete PNG, JPEG or WebP.
+/// [`MediaError::BadImage`] for anything that is not a complete PNG, JPEG, WebP or Basis
+/// Universal KTX2.
 pub fn decode_image(path: &Path, bytes: &[u8]) -> Result<Image, MediaError> {
     decode_image_alpha(path, bytes).map(|(image, _)| image)
 }
 
-/// [`decode_image`], with the image's alpha (one byte a pixel) when it has one: a PNG or WebP
-/// texture that cuts lashes, brows or hair out.
+/// [`decode_image`], with the image's alpha (one byte a pixel) when it has one: a PNG, WebP or
+/// KTX2 texture that cuts lashes, brows or hair out.
 ///
 /// # Errors
 /// As [`decode_image`].
@@ -207,9 +216,87 @@ pub fn decode_image_alpha(
     match image_kind(bytes) {
         Some("png") => decode_png(bytes).map_err(bad),
         Some("webp") => decode_webp(bytes).map_err(bad),
+        Some("ktx2") => decode_ktx2(bytes).map_err(bad),
         Some(_) => decode_jpeg(bytes).map(|image| (image, None)).map_err(bad),
-        None => Err(bad("neither PNG, JPEG nor WebP".into())),
+        None => Err(bad("neither PNG, JPEG, WebP nor KTX2".into())),
     }
+}
+
+/// A texture as a browser shows it without a transcoder: a KTX2 image (see [`decode_image`])
+/// as PNG (with its alpha when it has one), any other image as it is.
+///
+/// # Errors
+/// [`MediaError::BadImage`] for a KTX2 image that does not decode.
+pub fn browser_image<'a>(
+    path: &Path,
+    bytes: &'a [u8],
+) -> Result<std::borrow::Cow<'a, [u8]>, MediaError> {
+    if image_kind(bytes) != Some("ktx2") {
+        return Ok(std::borrow::Cow::Borrowed(bytes));
+    }
+    let (image, alpha) = decode_image_alpha(path, bytes)?;
+    let png = match alpha {
+        None => image.to_png(),
+        Some(alpha) => rgba_png(&image, &alpha),
+    };
+    png.map(std::borrow::Cow::Owned)
+        .map_err(|message| MediaError::BadImage {
+            path: path.to_owned(),
+            message,
+        })
+}
+
+/// `image` with `alpha` as an RGBA PNG (fast compression).
+fn rgba_png(image: &Image, alpha: &[u8]) -> Result<Vec<u8>, String> {
+    let rgba: Vec<u8> = image
+        .rgb
+        .chunks_exact(3)
+        .zip(alpha)
+        .flat_map(|(p, &a)| [p[0], p[1], p[2], a])
+        .collect();
+    let mut out = Vec::new();
+    let width = u32::try_from(image.width).map_err(|e| e.to_string())?;
+    let height = u32::try_from(image.height).map_err(|e| e.to_string())?;
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(&rgba).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    Ok(out)
+}
+
+/// A Basis Universal KTX2 (ETC1S or UASTC LDR, the supercompressions `KHR_texture_basisu`
+/// allows), its largest level transcoded to RGBA by the `basisu` crate (a port of Binomial's
+/// reference transcoder, byte for byte). The transcoder is young: a panic inside it becomes
+/// this image's error, never the program's end.
+fn decode_ktx2(bytes: &[u8]) -> Result<(Image, Option<Vec<u8>>), String> {
+    use basisu::{DecodeFlags, TargetFormat, Transcoder};
+    let decoded = std::panic::catch_unwind(|| {
+        let texture = Transcoder::new(bytes).map_err(|e| format!("KTX2: {e:?}"))?;
+        let (width, height) = texture.base_dimensions();
+        let (width, height) = (width as usize, height as usize);
+        check_size(width, height)?;
+        let rgba = texture
+            .transcode(0, TargetFormat::Rgba32, DecodeFlags::NONE)
+            .map_err(|e| format!("KTX2 ({:?}): {e:?}", texture.source_format()))?;
+        if rgba.len() != width * height * 4 {
+            return Err(format!(
+                "KTX2: {} bytes for {width}×{height} RGBA",
+                rgba.len()
+            ));
+        }
+        Ok((width, height, rgba, texture.has_alpha()))
+    })
+    .map_err(|_| "KTX2: the Basis Universal transcoder failed on this file".to_owned())?;
+    let (width, height, rgba, has_alpha) = decoded?;
+    let rgb = rgba
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let alpha = has_alpha.then(|| rgba.chunks_exact(4).map(|p| p[3]).collect());
+    Ok((Image { width, height, rgb }, alpha))
 }
 
 /// Images larger than this (in pixels) are refused rather than allocated.

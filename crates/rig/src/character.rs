@@ -21,10 +21,10 @@ use crate::symmetry::Symmetry;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct MaterialId(pub u32);
 
-/// Encoded image bytes (PNG, JPEG or WebP) kept as they came, for rendering and re-export.
+/// Encoded image bytes (PNG, JPEG, WebP or KTX2) kept as they came, for rendering and re-export.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Texture {
-    /// `image/png` or `image/jpeg`.
+    /// `image/png`, `image/jpeg`, `image/webp` or `image/ktx2`.
     pub mime_type: String,
     /// The encoded file.
     pub bytes: Arc<[u8]>,

@@ -215,12 +215,17 @@ pub fn renamed_and_shuffled(character: &Character, seed: u64) -> (Character, Vec
 /// When node or gltfpack is missing or gltfpack fails, with its output.
 #[must_use]
 pub fn gltfpack(input: &[u8], args: &[&str]) -> Vec<u8> {
-    node_tool("gltfpack/cli.js", "gltfpack", input, |src, out| {
-        let mut all: Vec<std::ffi::OsString> =
-            vec!["-i".into(), src.into(), "-o".into(), out.into()];
-        all.extend(args.iter().map(Into::into));
-        all
-    })
+    node_tool(
+        "node_modules/gltfpack/cli.js",
+        "gltfpack",
+        input,
+        |src, out| {
+            let mut all: Vec<std::ffi::OsString> =
+                vec!["-i".into(), src.into(), "-o".into(), out.into()];
+            all.extend(args.iter().map(Into::into));
+            all
+        },
+    )
 }
 
 /// Runs npm `@gltf-transform/cli` (installed in `tools/` by `scripts/setup.sh`) as
@@ -233,14 +238,30 @@ pub fn gltfpack(input: &[u8], args: &[&str]) -> Vec<u8> {
 #[must_use]
 pub fn gltf_transform(input: &[u8], command: &str) -> Vec<u8> {
     node_tool(
-        "@gltf-transform/cli/bin/cli.js",
+        "node_modules/@gltf-transform/cli/bin/cli.js",
         "gltf-transform",
         input,
         |src, out| vec![command.into(), src.into(), out.into()],
     )
 }
 
-/// Runs the npm tool at `tools/node_modules/SCRIPT` with node on `input`, written to a
+/// `input` with every texture re-encoded as KTX2 (`KHR_texture_basisu`, required) by
+/// Binomial's Basis Universal encoder (npm `ktx2-encoder`, its WebAssembly build, through
+/// glTF Transform: `tools/ktx2.mjs`): `uastc` false for ETC1S with BasisLZ (gltfpack's and
+/// toktx's default), true for UASTC with Zstandard (glTF Transform's `uastc`).
+///
+/// # Panics
+/// When node or the tool is missing or it fails, with its output.
+#[must_use]
+pub fn ktx2(input: &[u8], uastc: bool) -> Vec<u8> {
+    node_tool("ktx2.mjs", "ktx2", input, |src, out| {
+        let mode = if uastc { "uastc" } else { "etc1s" };
+        vec![src.into(), out.into(), mode.into()]
+    })
+}
+
+/// Runs the node script at `tools/SCRIPT` (a tool's, under `node_modules`, or one of ours)
+/// with node on `input`, written to a
 /// temporary `in.glb`, with the arguments `args(in, out)`; returns what it wrote to `out.glb`.
 #[expect(
     clippy::panic,
@@ -253,7 +274,7 @@ fn node_tool(
     args: impl FnOnce(&std::path::Path, &std::path::Path) -> Vec<std::ffi::OsString>,
 ) -> Vec<u8> {
     let cli = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tools/node_modules")
+        .join("../../tools")
         .join(script);
     if !cli.exists() {
         panic!(

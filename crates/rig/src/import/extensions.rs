@@ -110,7 +110,7 @@ pub(crate) fn prepare<'a>(
     decode_meshopt(&mut value, &mut buffers)?;
     super::draco::decode(&mut value, &mut buffers)?;
     let kept = keep(&value, &buffers, resources, &mut warnings);
-    resolve_texture_sources(&mut value, &mut warnings);
+    resolve_texture_sources(&mut value);
     let uv_transforms = uv_transforms(&value);
     let vrm = super::vrm::read(&value, &mut warnings);
     // What is handled here must not reach the `gltf` crate's extension check.
@@ -523,13 +523,13 @@ fn apply_filter(bytes: &mut [u8], stride: usize, filter: &str) -> Result<(), Str
 }
 
 /// Gives textures that carry their image only in `EXT_texture_webp` or `KHR_texture_basisu`
-/// that image as `source` (WebP first: browsers show it; a KTX2 image is kept for export but
-/// not shown).
-fn resolve_texture_sources(value: &mut Value, warnings: &mut Vec<String>) {
+/// that image as `source` (WebP first, over a PNG/JPEG fallback; a KTX2 image only where there
+/// is no fallback: the fallback is what the author meant for viewers without a transcoder).
+fn resolve_texture_sources(value: &mut Value) {
     let Some(Value::Array(textures)) = value.get_mut("textures") else {
         return;
     };
-    for (t, texture) in textures.iter_mut().enumerate() {
+    for texture in textures.iter_mut() {
         let from_extension = ["EXT_texture_webp", "KHR_texture_basisu"]
             .iter()
             .find_map(|ext| {
@@ -544,11 +544,8 @@ fn resolve_texture_sources(value: &mut Value, warnings: &mut Vec<String>) {
                 // The WebP image is what the author meant; a PNG/JPEG `source` is a fallback.
                 texture["source"] = Value::from(source);
             }
-            Some((ext, source)) if !has_source => {
+            Some((_, source)) if !has_source => {
                 texture["source"] = Value::from(source);
-                warnings.push(format!(
-                    "texture {t}: its only image is {ext} (KTX2), which the studio cannot show; the surface colour is used"
-                ));
             }
             _ => {}
         }

@@ -1180,9 +1180,9 @@ fn load_image(
     let sniffed = super::uri::sniff_image(&bytes);
     let mime_type = sniffed.map(str::to_owned).ok_or_else(|| match declared {
         Some(declared) => {
-            format!("its {declared} image is not one faceanim shows (PNG, JPEG or WebP)")
+            format!("its {declared} image is not one faceanim shows (PNG, JPEG, WebP or KTX2)")
         }
-        None => "not a PNG, JPEG or WebP image".to_owned(),
+        None => "not a PNG, JPEG, WebP or KTX2 image".to_owned(),
     })?;
     Ok(Texture {
         mime_type,

@@ -41,7 +41,7 @@ fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
-/// The media type of PNG, JPEG and WebP images, from their first bytes.
+/// The media type of PNG, JPEG, WebP and KTX2 images, from their first bytes.
 pub(super) fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
     if bytes.starts_with(b"\x89PNG") {
         Some("image/png")
@@ -49,6 +49,8 @@ pub(super) fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
         Some("image/jpeg")
     } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
         Some("image/webp")
+    } else if bytes.starts_with(b"\xABKTX 20\xBB\r\n\x1A\n") {
+        Some("image/ktx2")
     } else {
         None
     }
