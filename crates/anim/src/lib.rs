@@ -105,6 +105,12 @@ pub struct Retarget {
 }
 
 impl Clip {
+    /// The column of the blendshape named exactly `name`, if the clip has one.
+    #[must_use]
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.blendshapes.iter().position(|n| n == name)
+    }
+
     /// Parses and validates clip JSON.
     ///
     /// # Errors

@@ -62,11 +62,7 @@ fn a_video_keeps_its_frames_timing_and_marks_the_faceless_ones() {
     let clip = result.clip(Filtering::default()).unwrap();
     assert_eq!(clip.frames.len(), STORY.len());
     assert_eq!(clip.fps, FPS as f32);
-    let jaw = clip
-        .blendshapes
-        .iter()
-        .position(|n| n == "jawOpen")
-        .unwrap();
+    let jaw = clip.column("jawOpen").unwrap();
     let presence = clip.presence.as_ref().unwrap();
     for (i, c) in STORY.chars().enumerate() {
         let record = &result.frames[i];
@@ -123,7 +119,7 @@ fn keyframes_every_five_are_interpolated_and_smoothing_is_separate() {
             one_euro: None,
         })
         .unwrap();
-    let jaw = raw.blendshapes.iter().position(|n| n == "jawOpen").unwrap();
+    let jaw = raw.column("jawOpen").unwrap();
     for k in [0, 5, 10, 15] {
         assert_eq!(keyed.frames[k][jaw], raw.frames[k][jaw], "key {k}");
     }

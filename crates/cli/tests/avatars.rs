@@ -229,15 +229,7 @@ fn a_webp_meshopt_quantized_avatar_like_vroids() {
     );
     // The software renderer (the face's renders for generate-shapes, the retarget map and the
     // adapter) draws it: gltf-transform's WebP (libwebp through sharp) decodes.
-    let appearance = faceanim_render::Appearance::of(&character);
-    assert!(
-        appearance.warnings().is_empty(),
-        "{:?}",
-        appearance.warnings()
-    );
-    let view = dir.join("view.glb");
-    std::fs::write(&view, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
-    let report = assert_valid_gltf(&view);
+    let report = drawn_and_viewed(&character, &dir.join("view.glb"));
     assert!(
         report["info"]["extensionsRequired"]
             .to_string()
@@ -369,15 +361,8 @@ fn ktx2_textures_are_decoded_drawn_shown_and_kept() {
             block_error < block_loss,
             "{codec}: the KTX2's 8×8 blocks decode {block_error:.2} away from the picture's"
         );
-        let appearance = faceanim_render::Appearance::of(&character);
-        assert!(
-            appearance.warnings().is_empty(),
-            "{codec}: {:?}",
-            appearance.warnings()
-        );
         let view = dir.join(format!("view-{codec}.glb"));
-        std::fs::write(&view, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
-        assert_valid_gltf(&view);
+        drawn_and_viewed(&character, &view);
         let shown = json_chunk(&view);
         assert!(
             shown["images"]
@@ -405,6 +390,20 @@ fn ktx2_textures_are_decoded_drawn_shown_and_kept() {
             "{codec}: the export re-encoded the user's texture"
         );
     }
+}
+
+/// Asserts that faceanim's software renderer draws `character`'s textures without a warning,
+/// and writes the studio's view of it to `view`: the validator's report, which has no errors.
+fn drawn_and_viewed(character: &faceanim_rig::Character, view: &Path) -> Value {
+    let appearance = faceanim_render::Appearance::of(character);
+    assert!(
+        appearance.warnings().is_empty(),
+        "{}: {:?}",
+        view.display(),
+        appearance.warnings()
+    );
+    std::fs::write(view, faceanim_export::view_glb(character, None).unwrap()).unwrap();
+    assert_valid_gltf(view)
 }
 
 /// The mean of each channel over each 8×8 block of `image` (its sides a multiple of 8).

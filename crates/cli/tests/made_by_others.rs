@@ -429,9 +429,7 @@ fn assert_reopened(name: &str, file: &[u8], head: [f32; 3], values: &[(&str, f32
     for &(shape, written) in values {
         let c = back
             .clip
-            .blendshapes
-            .iter()
-            .position(|n| n == shape)
+            .column(shape)
             .unwrap_or_else(|| panic!("{name}: no {shape}"));
         for row in &back.clip.frames {
             assert!(

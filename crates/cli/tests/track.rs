@@ -77,11 +77,7 @@ fn a_video_animates_an_arkit_named_character_in_three_formats() {
     assert_eq!(clip.fps, 24.0);
     assert_eq!(clip.frames.len(), 10);
     assert_eq!(clip.blendshapes.len(), 53);
-    let jaw = clip
-        .blendshapes
-        .iter()
-        .position(|n| n == "jawOpen")
-        .unwrap();
+    let jaw = clip.column("jawOpen").unwrap();
     for (i, row) in clip.frames.iter().enumerate() {
         if (3..7).contains(&i) {
             assert!(row[jaw] > 0.5, "frame {i}: {}", row[jaw]);

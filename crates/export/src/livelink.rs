@@ -320,16 +320,8 @@ mod tests {
         assert_eq!(back.fps, 30.0);
         assert_eq!(back.frames.len(), 75);
         assert_eq!(back.blendshapes.len(), 52);
-        let jaw = back
-            .blendshapes
-            .iter()
-            .position(|n| n == "jawOpen")
-            .unwrap();
-        let blink = back
-            .blendshapes
-            .iter()
-            .position(|n| n == "eyeBlinkLeft")
-            .unwrap();
+        let jaw = back.column("jawOpen").unwrap();
+        let blink = back.column("eyeBlinkLeft").unwrap();
         for (f, row) in frames.iter().enumerate() {
             assert!((back.frames[f][jaw] - row[0]).abs() < 1e-5);
             assert!((back.frames[f][blink] - row[1]).abs() < 1e-5);

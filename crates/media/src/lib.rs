@@ -74,20 +74,28 @@ impl Image {
     /// # Errors
     /// The encoder's message when the buffer does not match the size.
     pub fn to_png(&self) -> Result<Vec<u8>, String> {
-        let mut out = Vec::new();
-        let width = u32::try_from(self.width).map_err(|e| e.to_string())?;
-        let height = u32::try_from(self.height).map_err(|e| e.to_string())?;
-        let mut encoder = png::Encoder::new(&mut out, width, height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_compression(png::Compression::Fast);
-        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-        writer
-            .write_image_data(&self.rgb)
-            .map_err(|e| e.to_string())?;
-        writer.finish().map_err(|e| e.to_string())?;
-        Ok(out)
+        png_bytes(self.width, self.height, png::ColorType::Rgb, &self.rgb)
     }
+}
+
+/// `pixels` (`width`×`height` of `color`, 8 bits a channel) as PNG bytes, fast compression.
+fn png_bytes(
+    width: usize,
+    height: usize,
+    color: png::ColorType,
+    pixels: &[u8],
+) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    let width = u32::try_from(width).map_err(|e| e.to_string())?;
+    let height = u32::try_from(height).map_err(|e| e.to_string())?;
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(color);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(pixels).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    Ok(out)
 }
 
 /// Why an input cannot be read. Every variant names the file.
@@ -254,17 +262,7 @@ fn rgba_png(image: &Image, alpha: &[u8]) -> Result<Vec<u8>, String> {
         .zip(alpha)
         .flat_map(|(p, &a)| [p[0], p[1], p[2], a])
         .collect();
-    let mut out = Vec::new();
-    let width = u32::try_from(image.width).map_err(|e| e.to_string())?;
-    let height = u32::try_from(image.height).map_err(|e| e.to_string())?;
-    let mut encoder = png::Encoder::new(&mut out, width, height);
-    encoder.set_color(png::ColorType::Rgba);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_compression(png::Compression::Fast);
-    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(&rgba).map_err(|e| e.to_string())?;
-    writer.finish().map_err(|e| e.to_string())?;
-    Ok(out)
+    png_bytes(image.width, image.height, png::ColorType::Rgba, &rgba)
 }
 
 /// A Basis Universal KTX2 (ETC1S or UASTC LDR, the supercompressions `KHR_texture_basisu`

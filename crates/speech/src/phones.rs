@@ -142,11 +142,9 @@ pub(crate) fn recognise_words(
     sound: &Sound,
     recogniser: Option<Recogniser>,
 ) -> Result<Vec<Phone>, PhoneError> {
-    let segments = match recogniser {
-        // Dropped once it has decoded, before the alignment below waits for a turn.
-        Some(mut recogniser) => recogniser.decode(&sound.samples)?,
-        None => faceanim_sphinx_sys::decode(&EN_US.words(), &sound.samples)?,
-    };
+    // The recogniser is dropped once it has decoded, before the alignment below waits for a
+    // turn of the cores.
+    let segments = decode_with(recogniser, &EN_US.words(), sound)?;
     // Only the words heard are looked up: reading the whole dictionary would cost more than
     // recognising a line.
     let heard: Vec<String> = segments
@@ -165,6 +163,18 @@ pub(crate) fn recognise_words(
     Ok(phones.unwrap_or_else(|| phones_of_words(segments, &dictionary).0))
 }
 
+/// `sound` decoded by `loaded` (a recogniser loaded for `search`), or by one loaded now.
+fn decode_with(
+    loaded: Option<Recogniser>,
+    search: &faceanim_sphinx_sys::Search,
+    sound: &Sound,
+) -> Result<Vec<faceanim_sphinx_sys::Segment>, SphinxError> {
+    match loaded {
+        Some(mut recogniser) => recogniser.decode(&sound.samples),
+        None => faceanim_sphinx_sys::decode(search, &sound.samples),
+    }
+}
+
 /// Any phone after any other (no words assumed: other languages, gibberish, singing).
 ///
 /// # Errors
@@ -173,10 +183,7 @@ pub(crate) fn phone_loop(
     sound: &Sound,
     recogniser: Option<Recogniser>,
 ) -> Result<Vec<Phone>, PhoneError> {
-    let segments = match recogniser {
-        Some(mut recogniser) => recogniser.decode(&sound.samples)?,
-        None => faceanim_sphinx_sys::decode(&EN_US.phone_loop(), &sound.samples)?,
-    };
+    let segments = decode_with(recogniser, &EN_US.phone_loop(), sound)?;
     Ok(segments
         .into_iter()
         .map(|s| Phone {
