@@ -151,6 +151,7 @@ pub(crate) fn recognise_words(
         .iter()
         .map(|s| s.label.split('(').next().unwrap_or("").to_lowercase())
         .collect();
+    tracing::debug!(words = ?heard, "recognised");
     let dictionary = Dictionary::english_words(&heard)?;
     let words: Vec<String> = heard
         .into_iter()
