@@ -184,7 +184,23 @@ pub(crate) fn phone_loop(
     sound: &Sound,
     recogniser: Option<Recogniser>,
 ) -> Result<Vec<Phone>, PhoneError> {
-    let segments = decode_with(recogniser, &EN_US.phone_loop(), sound)?;
+    phones_of(decode_with(recogniser, &EN_US.phone_loop(), sound)?)
+}
+
+/// [`phone_loop`] over context-independent phones: some twenty times faster, a little less
+/// exact; for a second opinion where the words recognised leave much of the voice unsaid.
+///
+/// # Errors
+/// [`PhoneError`] when the recogniser or its models are missing or fail.
+pub(crate) fn quick_phone_loop(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
+    phones_of(faceanim_sphinx_sys::decode(
+        &EN_US.quick_phone_loop(),
+        &sound.samples,
+    )?)
+}
+
+/// A phone loop's segments as phones.
+fn phones_of(segments: Vec<faceanim_sphinx_sys::Segment>) -> Result<Vec<Phone>, PhoneError> {
     Ok(segments
         .into_iter()
         .map(|s| Phone {

@@ -60,7 +60,24 @@ impl Models<'_> {
     pub fn phone_loop(&self) -> Search {
         Search {
             acoustic: PathBuf::from(self.acoustic),
-            mode: Mode::PhoneLoop(PathBuf::from(self.phone_lm)),
+            mode: Mode::PhoneLoop {
+                lm: PathBuf::from(self.phone_lm),
+                in_context: true,
+            },
+        }
+    }
+
+    /// [`Models::phone_loop`] over the acoustic model's context-independent phones only:
+    /// some twenty times faster, a little less exact (on flite's `slt`, viseme agreement 0.79
+    /// against 0.83).
+    #[must_use]
+    pub fn quick_phone_loop(&self) -> Search {
+        Search {
+            acoustic: PathBuf::from(self.acoustic),
+            mode: Mode::PhoneLoop {
+                lm: PathBuf::from(self.phone_lm),
+                in_context: false,
+            },
         }
     }
 
@@ -114,7 +131,11 @@ pub struct Search {
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum Mode {
-    PhoneLoop(PathBuf),
+    PhoneLoop {
+        lm: PathBuf,
+        /// Triphones (the phones in their context), or the context-independent phones.
+        in_context: bool,
+    },
     Words {
         language_model: PathBuf,
         dictionary: PathBuf,
@@ -195,7 +216,7 @@ impl Recogniser {
     pub fn load(search: &Search) -> Result<Recogniser, SphinxError> {
         check(&search.acoustic)?;
         match &search.mode {
-            Mode::PhoneLoop(lm) => check(lm)?,
+            Mode::PhoneLoop { lm, .. } => check(lm)?,
             Mode::Grammar { dictionary, .. } => check(dictionary)?,
             Mode::Phones(sequence) => {
                 if sequence.is_empty()
@@ -436,7 +457,7 @@ mod imp {
             quiet();
             let mut args: Vec<String> = vec!["-hmm".into(), text(&search.acoustic)];
             let scratch = match &search.mode {
-                Mode::PhoneLoop(lm) => {
+                Mode::PhoneLoop { lm, in_context } => {
                     // The settings CMU recommends for phone recognition.
                     args.extend(
                         [
@@ -450,6 +471,8 @@ mod imp {
                             "1e-20",
                             "-pbeam",
                             "1e-20",
+                            "-allphone_ci",
+                            if *in_context { "no" } else { "yes" },
                         ]
                         .map(str::to_owned),
                     );
