@@ -5,8 +5,11 @@
 //! phone language model and pronouncing dictionary come from a package registry. The old
 //! `pocketsphinx-sys` crates target other versions and are unmaintained; these bindings declare
 //! only the dozen functions faceanim calls ([`ffi`]) and wrap them in one safe call,
-//! [`decode`]: 16 kHz mono speech in, time-aligned labels out (phones from a phone loop, or
-//! words from a grammar for forced alignment), one frame every 10 ms.
+//! [`decode`]: 16 kHz mono speech in, time-aligned labels out (phones from a phone loop, words
+//! recognised, or words from a grammar for forced alignment), one frame every 10 ms; or in two
+//! steps, a [`Recogniser`] loaded before the speech is at hand, then decoding it. A word search
+//! reads the pronouncing dictionary cut to its language model's words, kept in the user's
+//! cache folder.
 //!
 //! Built where the library is missing, the crate still compiles and [`decode`] returns
 //! [`SphinxError::NotInstalled`], so the rest of faceanim builds and runs on any machine.
@@ -194,7 +197,7 @@ pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxEr
 }
 
 /// A decoder with its models loaded, ready for speech. Loading is most of a short line's
-/// cost (the word search reads a 27 MB language model and a 134,000-word dictionary), and
+/// cost (the word search reads a 27 MB language model and 79,000 pronunciations), and
 /// needs no speech: a caller can load on one thread while it reads the sound on another.
 /// It holds a turn of the cores (see [`decode`]) until dropped.
 pub struct Recogniser {
