@@ -942,6 +942,28 @@ mod tests {
 ";
 
     #[test]
+    fn a_broken_ktx2_is_an_error_naming_the_file() {
+        let path = Path::new("face.ktx2");
+        // A KTX2 header and nothing, then a header with bytes no encoder wrote (a 64×64
+        // image claimed, its index and data pointing anywhere).
+        let mut noise = KTX2_MAGIC.to_vec();
+        noise.extend((0u32..400).map(|k| (k.wrapping_mul(2_654_435_761) >> 13) as u8));
+        for bytes in [KTX2_MAGIC.to_vec(), noise] {
+            let error = decode_image(path, &bytes).unwrap_err().to_string();
+            assert!(
+                error.contains("face.ktx2") && error.contains("KTX2"),
+                "{error}"
+            );
+            assert!(browser_image(path, &bytes).is_err());
+        }
+        // Other images go to the page as they are.
+        assert!(matches!(
+            browser_image(path, b"\x89PNG\r\n\x1a\n"),
+            Ok(std::borrow::Cow::Borrowed(_))
+        ));
+    }
+
+    #[test]
     fn the_header_is_the_output_streams_not_the_inputs() {
         let header = read_header(&mut LOG.as_bytes()).unwrap();
         assert_eq!(
