@@ -53,14 +53,16 @@ fn cut(folder: &Path, language_model: &Path, dictionary: &Path) -> Option<PathBu
         return None;
     }
     std::fs::create_dir_all(folder).ok()?;
-    // Written whole under a name of its own, then renamed: a reader never sees half a file.
+    // Written whole under a name of its own (this process's, this call's), then renamed: a
+    // reader never sees half a file.
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let partial = folder.join(format!(
-        ".{}.{}.partial",
+        ".{}.{}-{}.partial",
         path.file_name()?.to_string_lossy(),
-        std::process::id()
+        std::process::id(),
+        CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
-    std::fs::write(&partial, &kept).ok()?;
-    match std::fs::rename(&partial, &path) {
+    match std::fs::write(&partial, &kept).and_then(|()| std::fs::rename(&partial, &path)) {
         Ok(()) => Some(path),
         Err(_) => {
             let _ = std::fs::remove_file(&partial);
