@@ -437,14 +437,15 @@ fn materials_json(character: &Character, bin: &mut Bin) -> (Vec<Value>, Vec<Valu
             // as PNG. One that does not decode is left out (the render says so; an export
             // into the user's own file keeps it as it was).
             let shown = m.base_color_texture.as_ref().and_then(|texture| {
-                let bytes =
-                    faceanim_media::browser_image(std::path::Path::new(&m.name), &texture.bytes)
-                        .ok()?;
-                let mime_type = match bytes {
-                    std::borrow::Cow::Owned(_) => "image/png",
-                    std::borrow::Cow::Borrowed(_) => texture.mime_type.as_str(),
-                };
-                Some((bytes, mime_type))
+                match faceanim_media::browser_image(std::path::Path::new(&m.name), &texture.bytes)
+                {
+                    Ok(Some(png)) => Some((std::borrow::Cow::Owned(png), "image/png")),
+                    Ok(None) => Some((
+                        std::borrow::Cow::Borrowed(&*texture.bytes),
+                        texture.mime_type.as_str(),
+                    )),
+                    Err(_) => None,
+                }
             });
             if let Some((bytes, mime_type)) = shown {
                 let view = bin.view(&bytes, None);

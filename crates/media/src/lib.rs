@@ -231,27 +231,24 @@ pub fn decode_image_alpha(
 }
 
 /// A texture as a browser shows it without a transcoder: a KTX2 image (see [`decode_image`])
-/// as PNG (with its alpha when it has one), any other image as it is.
+/// as PNG (with its alpha when it has one); `None` for any other image, which browsers show
+/// as it is.
 ///
 /// # Errors
 /// [`MediaError::BadImage`] for a KTX2 image that does not decode.
-pub fn browser_image<'a>(
-    path: &Path,
-    bytes: &'a [u8],
-) -> Result<std::borrow::Cow<'a, [u8]>, MediaError> {
+pub fn browser_image(path: &Path, bytes: &[u8]) -> Result<Option<Vec<u8>>, MediaError> {
     if image_kind(bytes) != Some("ktx2") {
-        return Ok(std::borrow::Cow::Borrowed(bytes));
+        return Ok(None);
     }
     let (image, alpha) = decode_image_alpha(path, bytes)?;
     let png = match alpha {
         None => image.to_png(),
         Some(alpha) => rgba_png(&image, &alpha),
     };
-    png.map(std::borrow::Cow::Owned)
-        .map_err(|message| MediaError::BadImage {
-            path: path.to_owned(),
-            message,
-        })
+    png.map(Some).map_err(|message| MediaError::BadImage {
+        path: path.to_owned(),
+        message,
+    })
 }
 
 /// `image` with `alpha` as an RGBA PNG (fast compression).
@@ -959,7 +956,7 @@ mod tests {
         // Other images go to the page as they are.
         assert!(matches!(
             browser_image(path, b"\x89PNG\r\n\x1a\n"),
-            Ok(std::borrow::Cow::Borrowed(_))
+            Ok(None)
         ));
     }
 

@@ -144,7 +144,7 @@ pub(crate) fn recognise_words(
 ) -> Result<Vec<Phone>, PhoneError> {
     // The recogniser is dropped once it has decoded, before the alignment below waits for a
     // turn of the cores.
-    let segments = decode_with(recogniser, &EN_US.words(), sound)?;
+    let segments = decode_with(recogniser, Recognition::Words, sound)?;
     // Only the words heard are looked up: reading the whole dictionary would cost more than
     // recognising a line.
     let heard: Vec<String> = segments
@@ -164,15 +164,26 @@ pub(crate) fn recognise_words(
     Ok(phones.unwrap_or_else(|| phones_of_words(segments, &dictionary).0))
 }
 
-/// `sound` decoded by `loaded` (a recogniser loaded for `search`), or by one loaded now.
+/// What the recogniser searches for on a line recognised by `route` without a transcript:
+/// English words, or any phone after any other. One place, for the recogniser loaded ahead
+/// ([`crate::recognition::Loading`]) and the one loaded when the sound is at hand.
+pub(crate) fn blind_search(route: Recognition) -> faceanim_sphinx_sys::Search {
+    match route {
+        Recognition::Words => EN_US.words(),
+        _ => EN_US.phone_loop(),
+    }
+}
+
+/// `sound` decoded by `loaded` (a recogniser loaded for `route`'s search), or by one loaded
+/// now.
 fn decode_with(
     loaded: Option<Recogniser>,
-    search: &faceanim_sphinx_sys::Search,
+    route: Recognition,
     sound: &Sound,
 ) -> Result<Vec<faceanim_sphinx_sys::Segment>, SphinxError> {
     match loaded {
         Some(mut recogniser) => recogniser.decode(&sound.samples),
-        None => faceanim_sphinx_sys::decode(search, &sound.samples),
+        None => faceanim_sphinx_sys::decode(&blind_search(route), &sound.samples),
     }
 }
 
@@ -184,7 +195,7 @@ pub(crate) fn phone_loop(
     sound: &Sound,
     recogniser: Option<Recogniser>,
 ) -> Result<Vec<Phone>, PhoneError> {
-    phones_of(decode_with(recogniser, &EN_US.phone_loop(), sound)?)
+    phones_of(decode_with(recogniser, Recognition::PhoneLoop, sound)?)
 }
 
 /// [`phone_loop`] over context-independent phones: some twenty times faster, a little less

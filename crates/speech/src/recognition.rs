@@ -2,7 +2,7 @@
 //! synthesis (any language), else the sound recognised without it — and the notes that say
 //! what was done instead of what was asked.
 
-use faceanim_sphinx_sys::{EN_US, Recogniser, SphinxError};
+use faceanim_sphinx_sys::{Recogniser, SphinxError};
 
 use crate::audio::Sound;
 use crate::phones::{self, Phone, PhoneError, Recognition};
@@ -65,10 +65,7 @@ impl Loading {
     #[must_use]
     pub fn start(language: Option<&str>, blind: Recognition) -> Loading {
         let route = blind_route(language.unwrap_or(ENGLISH), blind);
-        let search = match route {
-            Recognition::Words => EN_US.words(),
-            _ => EN_US.phone_loop(),
-        };
+        let search = phones::blind_search(route);
         Loading {
             route,
             thread: std::thread::spawn(move || Recogniser::load(&search)),

@@ -87,7 +87,7 @@ fn cache_folder() -> Option<PathBuf> {
 
 /// The words of a binary trie language model: its unigram count from the header, and the
 /// words themselves, NUL-terminated at the end of the file after their total length.
-pub(crate) fn vocabulary(language_model: &Path) -> Option<HashSet<Vec<u8>>> {
+fn vocabulary(language_model: &Path) -> Option<HashSet<Vec<u8>>> {
     let mut file = std::fs::File::open(language_model).ok()?;
     let mut head = [0u8; TRIE_HEADER.len() + 1 + 4];
     file.read_exact(&mut head).ok()?;

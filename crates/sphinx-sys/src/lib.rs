@@ -378,14 +378,6 @@ mod imp {
         _scratch: Vec<Scratch>,
     }
 
-    /// `args` as C strings.
-    fn c_strings(args: &[String]) -> Result<Vec<CString>, SphinxError> {
-        args.iter()
-            .map(|a| CString::new(a.as_str()))
-            .collect::<Result<_, _>>()
-            .map_err(|_| SphinxError::Decoder("a path holds a NUL byte".into()))
-    }
-
     /// Sphinx's log, off for the whole process once: set per decoder (`-logfn`), each decoder
     /// would reopen the one global log file under any other decoder loading at the time.
     fn quiet() {
@@ -528,7 +520,11 @@ mod imp {
                     vec![dictionary, grammar]
                 }
             };
-            let owned = c_strings(&args)?;
+            let owned: Vec<CString> = args
+                .iter()
+                .map(|a| CString::new(a.as_str()))
+                .collect::<Result<_, _>>()
+                .map_err(|_| SphinxError::Decoder("a path holds a NUL byte".into()))?;
             let mut argv: Vec<*mut std::os::raw::c_char> =
                 owned.iter().map(|a| a.as_ptr().cast_mut()).collect();
             let argc = i32::try_from(argv.len()).unwrap_or(i32::MAX);
