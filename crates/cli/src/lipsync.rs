@@ -46,8 +46,8 @@ pub struct LipsyncArgs {
     /// nothing of a mouth (neither visemes nor ARKit names).
     #[arg(long, value_name = "ADAPTER")]
     pub adapter: Option<PathBuf>,
-    /// Without --text: recognise words (English; about a third of real time) or phones (any
-    /// language, slower).
+    /// Without --text: recognise words (English; about a sixth of real time) or phones (any
+    /// language; faster, a little less exact in English).
     #[arg(long, value_enum, default_value_t = Blind::Words)]
     pub recognise: Blind,
     /// The face around the mouth too: blinks at phrase boundaries and natural rates, brows

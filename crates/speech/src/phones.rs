@@ -47,10 +47,10 @@ impl Phone {
 #[serde(rename_all = "snake_case")]
 pub enum Recognition {
     /// Words recognised with the English language model, spoken as the dictionary says (the
-    /// default without a transcript: about a third of real time; Rhubarb Lip Sync works so).
+    /// default without a transcript: about a sixth of real time; Rhubarb Lip Sync works so).
     Words,
     /// Any phone after any other (no words assumed: other languages, gibberish, singing), at
-    /// about 1.7× real time with CMU's recommended beams.
+    /// about a tenth of real time.
     PhoneLoop,
     /// The transcript's words aligned to the sound by the recogniser (English).
     Transcript,
@@ -196,18 +196,6 @@ pub(crate) fn phone_loop(
     recogniser: Option<Recogniser>,
 ) -> Result<Vec<Phone>, PhoneError> {
     phones_of(decode_with(recogniser, Recognition::PhoneLoop, sound)?)
-}
-
-/// [`phone_loop`] over context-independent phones: some twenty times faster, a little less
-/// exact; for a second opinion where the words recognised leave much of the voice unsaid.
-///
-/// # Errors
-/// [`PhoneError`] when the recogniser or its models are missing or fail.
-pub(crate) fn quick_phone_loop(sound: &Sound) -> Result<Vec<Phone>, PhoneError> {
-    phones_of(faceanim_sphinx_sys::decode(
-        &EN_US.quick_phone_loop(),
-        &sound.samples,
-    )?)
 }
 
 /// A phone loop's segments as phones.

@@ -143,7 +143,7 @@ pub fn recognise_loaded(
     let said = said_share(&words, &voiced);
     tracing::debug!(said, "the words recognised cover this share of the voice");
     if said < WORDS_SAY_ENOUGH {
-        let heard = phones::quick_phone_loop(sound)?;
+        let heard = phones::phone_loop(sound, None)?;
         if said_share(&heard, &voiced) > said {
             notes.push(format!(
                 "the words recognised cover {:.0} % of the voice: its phones were recognised instead",

@@ -57,29 +57,22 @@ pub struct Models<'a> {
 }
 
 impl Models<'_> {
-    /// Any phone after any other, weighted by the phone language model: recognition without a
-    /// transcript.
+    /// Any phone after any other, lightly weighted by the phone language model: recognition
+    /// without a transcript, in any language the acoustic model's phones can tell apart.
+    ///
+    /// Over the context-independent phones with a language weight of 0.5. Chosen on eSpeak NG
+    /// lines in Spanish, German and French and on flite's slt, rms, awb and eSpeak NG's en-us
+    /// (viseme agreement, audio alone): over triphones with CMU's recommended settings (weight
+    /// 2) it was 0.62 and 0.82 there at about 1.5× real time; tightening the triphones' beams
+    /// (0.3×) or lowering their weight gained less than this does at 0.05–0.1× real time (0.65
+    /// and 0.79). English phonotactics weigh less at a lower weight, which is what another
+    /// language needs.
     #[must_use]
     pub fn phone_loop(&self) -> Search {
         Search {
             acoustic: PathBuf::from(self.acoustic),
             mode: Mode::PhoneLoop {
                 lm: PathBuf::from(self.phone_lm),
-                in_context: true,
-            },
-        }
-    }
-
-    /// [`Models::phone_loop`] over the acoustic model's context-independent phones only:
-    /// some twenty times faster, a little less exact (on flite's `slt`, viseme agreement 0.79
-    /// against 0.83).
-    #[must_use]
-    pub fn quick_phone_loop(&self) -> Search {
-        Search {
-            acoustic: PathBuf::from(self.acoustic),
-            mode: Mode::PhoneLoop {
-                lm: PathBuf::from(self.phone_lm),
-                in_context: false,
             },
         }
     }
@@ -136,8 +129,6 @@ pub struct Search {
 enum Mode {
     PhoneLoop {
         lm: PathBuf,
-        /// Triphones (the phones in their context), or the context-independent phones.
-        in_context: bool,
     },
     Words {
         language_model: PathBuf,
@@ -452,22 +443,21 @@ mod imp {
             quiet();
             let mut args: Vec<String> = vec!["-hmm".into(), text(&search.acoustic)];
             let scratch = match &search.mode {
-                Mode::PhoneLoop { lm, in_context } => {
-                    // The settings CMU recommends for phone recognition.
+                Mode::PhoneLoop { lm } => {
                     args.extend(
                         [
                             "-allphone",
                             &text(lm),
+                            "-allphone_ci",
+                            "yes",
                             "-backtrace",
                             "no",
                             "-lw",
-                            "2.0",
+                            "0.5",
                             "-beam",
                             "1e-20",
                             "-pbeam",
                             "1e-20",
-                            "-allphone_ci",
-                            if *in_context { "no" } else { "yes" },
                         ]
                         .map(str::to_owned),
                     );
