@@ -236,6 +236,22 @@ def viseme_rig(faceanim, work):
     return rig
 
 
+# Voice types no synthesiser here speaks, made from one that does without moving its phones in
+# time (ffmpeg filters on a line at `r` Hz): what each stands for, and the filter graph.
+EFFECTS = {
+    "child": ("pitch and formants up 40 %, as a child's shorter vocal tract gives",
+              lambda r: f"[0:a]asetrate={round(r * 1.4)},aresample={r},atempo={1 / 1.4:.6f}"),
+    "deep": ("pitch and formants down 20 %",
+             lambda r: f"[0:a]asetrate={round(r * 0.8)},aresample={r},atempo=1.25"),
+    "shout": ("24 dB louder, clipped flat where it overflows",
+              lambda r: "[0:a]volume=24dB,alimiter=limit=1:level=false"),
+    "phone": ("a telephone line: 300-3400 Hz at 8 kHz",
+              lambda r: "[0:a]highpass=f=300,lowpass=f=3400,aresample=8000"),
+    "noisy": ("pink noise (a fan, a room) about 15 dB under the voice",
+              lambda r: f"anoisesrc=c=pink:a=0.02:r={r}[n];[0:a][n]amix=inputs=2:duration=first:normalize=0"),
+}
+
+
 def score(phones, clip, seconds):
     names = clip["blendshapes"]
     columns = {v: names.index(f"viseme_{v}") for v in VISEMES}
@@ -288,6 +304,9 @@ def main():
     parser.add_argument("--ffmpeg-first", action="store_true",
                         help="convert each line to 16 kHz with ffmpeg before faceanim reads it "
                              "(to compare faceanim's own resampling with ffmpeg's)")
+    parser.add_argument("--effect", choices=sorted(EFFECTS),
+                        help="change each line before faceanim hears it, keeping its timing: "
+                             + "; ".join(f"{k}: {v[0]}" for k, v in sorted(EFFECTS.items())))
     parser.add_argument("--json")
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="faceanim-bench-lipsync-")
@@ -317,6 +336,12 @@ def main():
                     espeak = espeak or Espeak()
                     phones = espeak.speak(voice, line, wav, 150)
                 seconds = read_wav(wav)
+                if args.effect:
+                    changed = wav[:-4] + f"-{args.effect}.wav"
+                    rate = struct.unpack_from("<I", open(wav, "rb").read(28), 24)[0]
+                    subprocess.run(["ffmpeg", "-v", "error", "-y", "-i", wav, "-filter_complex",
+                                    EFFECTS[args.effect][1](rate), changed], check=True)
+                    wav = changed
                 if args.ffmpeg_first:
                     converted = wav[:-4] + "-16k.wav"
                     subprocess.run(["ffmpeg", "-v", "error", "-y", "-i", wav, "-ar", "16000",

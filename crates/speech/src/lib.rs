@@ -37,6 +37,7 @@ pub mod phones;
 pub mod recognition;
 pub mod synthesis;
 pub mod visemes;
+mod warp;
 
 use faceanim_rig::Character;
 

@@ -11,6 +11,7 @@ use std::path::Path;
 use faceanim_sphinx_sys::{EN_US, FRAME_RATE, Recogniser, SphinxError};
 
 use crate::audio::Sound;
+use crate::warp::Heard;
 
 /// A phone (ARPAbet, as the CMU dictionary spells them, stress removed; `SIL` for silence
 /// and noise) from `start` to `end` seconds.
@@ -139,26 +140,26 @@ pub fn transcript_words(text: &str, seconds: f32) -> Result<Vec<String>, PhoneEr
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
 pub(crate) fn recognise_words(
-    sound: &Sound,
+    heard: &Heard<'_>,
     recogniser: Option<Recogniser>,
 ) -> Result<Vec<Phone>, PhoneError> {
     // The recogniser is dropped once it has decoded, before the alignment below waits for a
     // turn of the cores.
-    let segments = decode_with(recogniser, Recognition::Words, sound)?;
+    let segments = heard.decode(blind_search(Recognition::Words), recogniser)?;
     // Only the words heard are looked up: reading the whole dictionary would cost more than
     // recognising a line.
-    let heard: Vec<String> = segments
+    let recognised: Vec<String> = segments
         .iter()
         .map(|s| s.label.split('(').next().unwrap_or("").to_lowercase())
         .collect();
-    tracing::debug!(words = ?heard, "recognised");
-    let dictionary = Dictionary::english_words(&heard)?;
-    let words: Vec<String> = heard
+    tracing::debug!(words = ?recognised, "recognised");
+    let dictionary = Dictionary::english_words(&recognised)?;
+    let words: Vec<String> = recognised
         .into_iter()
         .filter(|w| dictionary.phones(w).is_some_and(|p| !p.is_empty()))
         .collect();
     let phones = match words.is_empty() {
-        false => align_phones(sound, &words, &dictionary)?,
+        false => align_phones(heard, &words, &dictionary)?,
         true => None,
     };
     Ok(phones.unwrap_or_else(|| phones_of_words(segments, &dictionary).0))
@@ -174,28 +175,15 @@ pub(crate) fn blind_search(route: Recognition) -> faceanim_sphinx_sys::Search {
     }
 }
 
-/// `sound` decoded by `loaded` (a recogniser loaded for `route`'s search), or by one loaded
-/// now.
-fn decode_with(
-    loaded: Option<Recogniser>,
-    route: Recognition,
-    sound: &Sound,
-) -> Result<Vec<faceanim_sphinx_sys::Segment>, SphinxError> {
-    match loaded {
-        Some(mut recogniser) => recogniser.decode(&sound.samples),
-        None => faceanim_sphinx_sys::decode(&blind_search(route), &sound.samples),
-    }
-}
-
 /// Any phone after any other (no words assumed: other languages, gibberish, singing).
 ///
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
 pub(crate) fn phone_loop(
-    sound: &Sound,
+    heard: &Heard<'_>,
     recogniser: Option<Recogniser>,
 ) -> Result<Vec<Phone>, PhoneError> {
-    phones_of(decode_with(recogniser, Recognition::PhoneLoop, sound)?)
+    phones_of(heard.decode(blind_search(Recognition::PhoneLoop), recogniser)?)
 }
 
 /// A phone loop's segments as phones.
@@ -212,7 +200,7 @@ fn phones_of(segments: Vec<faceanim_sphinx_sys::Segment>) -> Result<Vec<Phone>, 
 
 /// An English transcript's `words` aligned by the recogniser, or why they could not be (a
 /// word the dictionary lacks, an alignment that failed).
-pub(crate) fn align_english(sound: &Sound, words: &[String]) -> Result<Vec<Phone>, String> {
+pub(crate) fn align_english(heard: &Heard<'_>, words: &[String]) -> Result<Vec<Phone>, String> {
     let dictionary = Dictionary::english_words(words).map_err(|e| e.to_string())?;
     let unknown: Vec<&str> = words
         .iter()
@@ -234,7 +222,7 @@ pub(crate) fn align_english(sound: &Sound, words: &[String]) -> Result<Vec<Phone
             shown.join(", ")
         ));
     }
-    match align(sound, words, &dictionary) {
+    match align(heard, words, &dictionary) {
         Ok(phones) if !phones.is_empty() => Ok(phones),
         Ok(_) => Err("the recogniser could not align the transcript to the sound".into()),
         Err(e) => Err(format!(
@@ -339,20 +327,20 @@ fn typical_length(phone: &str) -> f32 {
 /// optional silences and fillers between them; the words alone (their time shared between
 /// their phones by typical lengths) when the phones cannot be aligned.
 fn align(
-    sound: &Sound,
+    heard: &Heard<'_>,
     words: &[String],
     dictionary: &Dictionary,
 ) -> Result<Vec<Phone>, PhoneError> {
-    match align_phones(sound, words, dictionary)? {
+    match align_phones(heard, words, dictionary)? {
         Some(phones) => Ok(phones),
-        None => align_words(sound, words, dictionary),
+        None => align_words(heard, words, dictionary),
     }
 }
 
 /// The words' phones in order, each timed by the acoustic model; `None` when the recogniser
 /// could not fit them all to the sound.
 fn align_phones(
-    sound: &Sound,
+    heard: &Heard<'_>,
     words: &[String],
     dictionary: &Dictionary,
 ) -> Result<Option<Vec<Phone>>, PhoneError> {
@@ -362,7 +350,7 @@ fn align_phones(
         .flatten()
         .cloned()
         .collect();
-    let segments = faceanim_sphinx_sys::decode(&EN_US.phones(sequence.clone()), &sound.samples)?;
+    let segments = heard.decode(EN_US.phones(sequence.clone()), None)?;
     let phones: Vec<Phone> = segments
         .iter()
         .map(|s| Phone {
@@ -416,7 +404,7 @@ fn closures(phones: Vec<Phone>) -> Vec<Phone> {
 
 /// Forced alignment of the words in order, with optional silences and fillers between them.
 fn align_words(
-    sound: &Sound,
+    heard: &Heard<'_>,
     words: &[String],
     dictionary: &Dictionary,
 ) -> Result<Vec<Phone>, PhoneError> {
@@ -424,7 +412,7 @@ fn align_words(
         "#JSGF V1.0;\ngrammar transcript;\npublic <s> = {};\n",
         words.join(" ")
     );
-    let segments = faceanim_sphinx_sys::decode(&EN_US.grammar(grammar), &sound.samples)?;
+    let segments = heard.decode(EN_US.grammar(grammar), None)?;
     let (phones, said) = phones_of_words(segments, dictionary);
     Ok(if said == words.len() {
         phones

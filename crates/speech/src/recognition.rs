@@ -6,6 +6,7 @@ use faceanim_sphinx_sys::{Recogniser, SphinxError};
 
 use crate::audio::Sound;
 use crate::phones::{self, Phone, PhoneError, Recognition};
+use crate::warp::Heard;
 
 /// The language of lines without one: US English.
 pub const ENGLISH: &str = "en-us";
@@ -107,12 +108,14 @@ pub fn recognise_loaded(
             "words are recognised in English only: the phones of this {language} line were recognised instead"
         ));
     }
+    // The voice as the acoustic model hears it best (a woman's, a child's slowed).
+    let heard = Heard::voice(sound);
     if let Some(text) = transcript {
         let words = phones::transcript_words(text, sound.seconds())?;
         // Why the recogniser could not align it, when it tried.
         let mut why = None;
         if is_english(language) {
-            match phones::align_english(sound, &words) {
+            match phones::align_english(&heard, &words) {
                 Ok(phones) => return Ok((phones, Recognition::Transcript, notes)),
                 Err(reason) => why = Some(reason),
             }
@@ -134,22 +137,22 @@ pub fn recognise_loaded(
     }
     let loaded = loading.map(|l| l.finish(blind)).transpose()?.flatten();
     if blind != Recognition::Words {
-        return Ok((phones::phone_loop(sound, loaded)?, blind, notes));
+        return Ok((phones::phone_loop(&heard, loaded)?, blind, notes));
     }
-    let words = phones::recognise_words(sound, loaded)?;
+    let words = phones::recognise_words(&heard, loaded)?;
     // Words the recogniser could not make out leave the voice unsaid (a formant synthesiser,
     // a whisper): the phones heard there, where they say more.
     let voiced = sound.voice_activity();
     let said = said_share(&words, &voiced);
     tracing::debug!(said, "the words recognised cover this share of the voice");
     if said < WORDS_SAY_ENOUGH {
-        let heard = phones::phone_loop(sound, None)?;
-        if said_share(&heard, &voiced) > said {
+        let phones = phones::phone_loop(&heard, None)?;
+        if said_share(&phones, &voiced) > said {
             notes.push(format!(
                 "the words recognised cover {:.0} % of the voice: its phones were recognised instead",
                 said * 100.0
             ));
-            return Ok((heard, Recognition::PhoneLoop, notes));
+            return Ok((phones, Recognition::PhoneLoop, notes));
         }
     }
     Ok((words, blind, notes))

@@ -7,6 +7,9 @@
 //! English line in a voice whose words the recogniser cannot make out still moves the mouth.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
+mod common;
+
+use common::class;
 use faceanim_rig::names::Viseme;
 use faceanim_speech::Sound;
 use faceanim_speech::visemes::{index, viseme_of_ipa};
@@ -51,15 +54,6 @@ const LINES: [Line; 6] = [
         text: "Mamma mia, il mare è bellissimo.",
     },
 ];
-
-/// What the lips do for a viseme: the classes an animator checks (the tongue's shapes are one).
-fn class(v: Viseme) -> &'static str {
-    let lips = "closed:PP lip-teeth:FF open:aa spread:E spread:ih round:oh round:ou rest:sil";
-    lips.split(' ')
-        .filter_map(|pair| pair.split_once(':'))
-        .find(|(_, name)| *name == v.name())
-        .map_or("tongue", |(class, _)| class)
-}
 
 /// `line` spoken by the eSpeak NG `voice` at 140 words a minute, and as a sound at 16 kHz with
 /// half a second of silence either side.

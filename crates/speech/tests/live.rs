@@ -7,31 +7,14 @@
 //! Silence, steady noise and hum keep the mouth shut; calibrating on silence is refused.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
+use std::path::Path;
+
+use common::flite;
 use faceanim_rig::names::Viseme;
 use faceanim_speech::Sound;
 use faceanim_speech::listen::{self, CALIBRATION_SECONDS, Heard, Listener, PASSAGE};
-use faceanim_speech::visemes::viseme_of;
-
-/// Speaks `text` in `voice` into `wav`; the visemes spoken with their end times.
-fn flite(voice: &str, text: &str, wav: &Path) -> Vec<(Viseme, f32)> {
-    let made = Command::new("flite")
-        .args(["-voice", voice, "-t", text, "-o"])
-        .arg(wav)
-        .arg("-psdur")
-        .output()
-        .expect("flite is needed: run scripts/setup.sh");
-    assert!(made.status.success(), "{made:?}");
-    String::from_utf8_lossy(&made.stdout)
-        .split_whitespace()
-        .filter_map(|p| {
-            let (phone, end) = p.split_once(':')?;
-            Some((viseme_of(&phone.to_ascii_uppercase()), end.parse().ok()?))
-        })
-        .collect()
-}
 
 fn spoken_at(phones: &[(Viseme, f32)], t: f32) -> Viseme {
     phones

@@ -70,6 +70,7 @@ impl Models<'_> {
     #[must_use]
     pub fn phone_loop(&self) -> Search {
         Search {
+            frame_rate: FRAME_RATE,
             acoustic: PathBuf::from(self.acoustic),
             mode: Mode::PhoneLoop {
                 lm: PathBuf::from(self.phone_lm),
@@ -82,6 +83,7 @@ impl Models<'_> {
     #[must_use]
     pub fn words(&self) -> Search {
         Search {
+            frame_rate: FRAME_RATE,
             acoustic: PathBuf::from(self.acoustic),
             mode: Mode::Words {
                 language_model: PathBuf::from(self.language_model),
@@ -95,6 +97,7 @@ impl Models<'_> {
     #[must_use]
     pub fn grammar(&self, jsgf: String) -> Search {
         Search {
+            frame_rate: FRAME_RATE,
             acoustic: PathBuf::from(self.acoustic),
             mode: Mode::Grammar {
                 jsgf,
@@ -112,6 +115,7 @@ impl Models<'_> {
     #[must_use]
     pub fn phones(&self, sequence: Vec<String>) -> Search {
         Search {
+            frame_rate: FRAME_RATE,
             acoustic: PathBuf::from(self.acoustic),
             mode: Mode::Phones(sequence),
         }
@@ -123,6 +127,26 @@ impl Models<'_> {
 pub struct Search {
     acoustic: PathBuf,
     mode: Mode,
+    /// Frames a second of the sound decoded: 100, or fewer or more for a sound slowed or
+    /// hurried (see [`Search::warped`]).
+    frame_rate: u32,
+}
+
+impl Search {
+    /// This search over a sound slowed to `100 / frame_rate` of its speed (every frequency
+    /// divided as much, as a longer vocal tract would say it), read `frame_rate` frames a
+    /// second with each window as much longer: each frame then covers the same 10 ms of the
+    /// speech as at 100, so the frames and their times are the unslowed sound's. A rate
+    /// outside 40–250 is taken as 100.
+    #[must_use]
+    pub fn warped(mut self, frame_rate: u32) -> Search {
+        self.frame_rate = if (40..=250).contains(&frame_rate) {
+            frame_rate
+        } else {
+            FRAME_RATE
+        };
+        self
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -442,6 +466,20 @@ mod imp {
         pub fn load(search: &Search) -> Result<Decoder, SphinxError> {
             quiet();
             let mut args: Vec<String> = vec!["-hmm".into(), text(&search.acoustic)];
+            if search.frame_rate != super::FRAME_RATE {
+                // The model's 25.625 ms windows, lengthened with the sound; the transform
+                // long enough to hold them.
+                let window = 0.025_625 * 100.0 / f64::from(search.frame_rate);
+                let samples = window * f64::from(super::SAMPLE_RATE);
+                args.extend([
+                    "-frate".into(),
+                    search.frame_rate.to_string(),
+                    "-wlen".into(),
+                    format!("{window:.6}"),
+                    "-nfft".into(),
+                    (if samples <= 512.0 { "512" } else { "1024" }).into(),
+                ]);
+            }
             let scratch = match &search.mode {
                 Mode::PhoneLoop { lm } => {
                     args.extend(
@@ -636,5 +674,48 @@ mod tests {
             .filter(|w| !w.starts_with('<') && !w.starts_with('['))
             .collect();
         assert_eq!(words, ["go", "forward", "ten", "meters"]);
+    }
+
+    #[test]
+    #[cfg(pocketsphinx)]
+    fn a_slowed_sound_read_at_fewer_frames_keeps_its_own_frames() {
+        let path = "/usr/share/pocketsphinx/test/data/goforward.raw";
+        let Ok(bytes) = std::fs::read(path) else {
+            eprintln!("{path} is missing: apt-get install pocketsphinx-testdata");
+            return;
+        };
+        let samples: Vec<i16> = bytes
+            .chunks_exact(2)
+            .map(|b| i16::from_le_bytes([b[0], b[1]]))
+            .collect();
+        // Slowed to 80 % (every frequency 0.8 times), by linear interpolation.
+        let slowed: Vec<i16> = (0..samples.len() * 5 / 4)
+            .map(|n| {
+                let x = n as f32 * 0.8;
+                let (k, f) = (x as usize, x.fract());
+                let a = f32::from(samples[k.min(samples.len() - 1)]);
+                let b = f32::from(samples[(k + 1).min(samples.len() - 1)]);
+                (a + (b - a) * f) as i16
+            })
+            .collect();
+        let grammar = "#JSGF V1.0;\ngrammar t;\npublic <s> = go forward ten meters;\n";
+        let words = |search: Search, samples: &[i16]| -> Vec<(String, u32, u32)> {
+            decode(&search, samples)
+                .unwrap()
+                .into_iter()
+                .filter(|w| !w.label.starts_with('<') && !w.label.starts_with('['))
+                .map(|w| (w.label, w.start, w.end))
+                .collect()
+        };
+        let plain = words(EN_US.grammar(grammar.into()), &samples);
+        let heard = words(EN_US.grammar(grammar.into()).warped(80), &slowed);
+        assert_eq!(plain.len(), 4, "{plain:?}");
+        assert_eq!(heard.len(), 4, "{heard:?}");
+        for (a, b) in plain.iter().zip(&heard) {
+            assert_eq!(a.0, b.0);
+            assert!(a.1.abs_diff(b.1) <= 3 && a.2.abs_diff(b.2) <= 3, "{plain:?} {heard:?}");
+        }
+        // Out of range: read as it is.
+        assert_eq!(EN_US.phone_loop().warped(7), EN_US.phone_loop());
     }
 }

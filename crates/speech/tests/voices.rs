@@ -1,0 +1,93 @@
+//! A woman's voice and a child's lip-synced from the audio alone. The US English acoustic
+//! model hears an adult man's voice best; a higher voice is heard through a longer vocal tract
+//! (its frequencies lowered by a warp its pitch chooses). flite's `slt` (built from a woman's
+//! recordings) reads Harvard sentences; raised 40 % — pitch and every resonance, 1.4 times as
+//! fast, as if recorded at 22.4 kHz — it stands for a child. The visemes faceanim puts on the
+//! mouth are compared, 10 ms at a time (±40 ms), with the phones flite said then.
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+mod common;
+
+use common::{class, flite};
+use faceanim_rig::names::Viseme;
+use faceanim_speech::visemes::index;
+use faceanim_speech::{Recognition, Sound};
+
+const LINES: [&str; 4] = [
+    "The birch canoe slid on the smooth planks.",
+    "Glue the sheet to the dark blue background.",
+    "Mama made my bed before breakfast.",
+    "Bob brought a big purple map to the bumpy boat.",
+];
+
+/// The share of spoken 10 ms frames whose lip class the mouth shows within 40 ms, over
+/// [`LINES`] read by `voice` and raised by `raise` (1: as spoken), recognised without a
+/// transcript.
+fn agreement(voice: &str, raise: f32) -> f32 {
+    let (mut hits, mut total) = (0usize, 0usize);
+    for (k, line) in LINES.iter().enumerate() {
+        let wav = std::env::temp_dir().join(format!(
+            "faceanim-voices-{}-{voice}-{k}.wav",
+            std::process::id()
+        ));
+        let spoken = flite(voice, line, &wav);
+        let sound = Sound::read(&wav).unwrap();
+        let _ = std::fs::remove_file(&wav);
+        let sound = if raise == 1.0 {
+            sound
+        } else {
+            let samples: Vec<f32> = sound
+                .samples
+                .iter()
+                .map(|&s| f32::from(s) / 32768.0)
+                .collect();
+            Sound {
+                samples: faceanim_speech::audio::resample(&samples, (16_000.0 * raise) as u32),
+            }
+        };
+        let reading = faceanim_speech::read(&sound, None, None, Recognition::Words).unwrap();
+        let frames = reading.track.sample(100.0);
+        let shown = |k: i64| -> &'static str {
+            let Some(row) = usize::try_from(k).ok().and_then(|k| frames.get(k)) else {
+                return "rest";
+            };
+            let (best, weight) = row
+                .iter()
+                .enumerate()
+                .fold((0, 0.0f32), |b, (i, &w)| if w > b.1 { (i, w) } else { b });
+            if weight < 0.2 {
+                "rest"
+            } else {
+                class(Viseme::ALL[best])
+            }
+        };
+        let mut start = 0.0f32;
+        for &(viseme, end) in &spoken {
+            let end = end / raise;
+            if viseme != Viseme::Sil {
+                let mut t = start + 0.005;
+                while t < end {
+                    let frame = (t * 100.0).round() as i64;
+                    total += 1;
+                    if (-4..=4).any(|d| shown(frame + d) == class(viseme)) {
+                        hits += 1;
+                    }
+                    t += 0.01;
+                }
+            }
+            start = end;
+        }
+        assert!(frames.iter().all(|row| row.len() > index(Viseme::Sil)));
+    }
+    hits as f32 / total.max(1) as f32
+}
+
+#[test]
+fn a_womans_voice_and_a_childs_are_lip_synced_from_the_audio_alone() {
+    let woman = agreement("slt", 1.0);
+    let child = agreement("slt", 1.4);
+    eprintln!("slt {woman:.3}, raised 40 % {child:.3}");
+    // Heard as they are, without the warp: 0.868 and 0.517.
+    assert!(woman >= 0.93, "a woman's voice: {woman:.3}");
+    assert!(child >= 0.62, "a child's voice: {child:.3}");
+}
