@@ -1,5 +1,5 @@
 //! The validated blendshape character: neutral mesh, sparse blendshapes, materials, and the
-//! structures derived from them once (bounds, edge graph, symmetry).
+//! structures derived from them once (bounds, edge graph; the symmetry when first asked for).
 //!
 //! A [`Character`] only exists validated: [`Character::new`] checks every index, count and value
 //! and derives the rest, so the sketch engine, the capture adapter and the exporters never
@@ -233,13 +233,16 @@ pub struct Character {
     head: Aabb,
     source: Option<crate::source::SharedSource>,
     graph: EdgeGraph,
-    symmetry: Symmetry,
+    /// Found when first asked for (sketching and mirroring need it; lip sync, capture and
+    /// export do not).
+    symmetry: std::sync::OnceLock<Symmetry>,
     runs: EvaluationRuns,
 }
 
 impl Character {
-    /// Validates `parts` and derives normals (when missing), normal deltas, bounds, the edge
-    /// graph and the symmetry (plane, mirrored vertices, left/right blendshape pairs).
+    /// Validates `parts` and derives normals (when missing), normal deltas, bounds and the edge
+    /// graph; the symmetry (plane, mirrored vertices, left/right blendshape pairs) is found
+    /// when first asked for.
     ///
     /// # Errors
     /// Any inconsistency, as a [`ModelError`] naming the attribute, index or blendshape.
@@ -359,7 +362,6 @@ impl Character {
             _ => normals::blendshape_normal_deltas(&positions, &triangles, &graph, &blendshapes),
         };
         let (face, head) = face_and_head(&positions, &blendshapes, &bounds);
-        let symmetry = Symmetry::detect(&positions, &head, &blendshapes);
         let runs = EvaluationRuns {
             positions: blendshapes
                 .iter()
@@ -387,7 +389,7 @@ impl Character {
             head,
             source: None,
             graph,
-            symmetry,
+            symmetry: std::sync::OnceLock::new(),
             runs,
         })
     }
@@ -584,7 +586,8 @@ impl Character {
     /// Symmetry plane, mirrored vertices and left/right blendshape pairs.
     #[must_use]
     pub fn symmetry(&self) -> &Symmetry {
-        &self.symmetry
+        self.symmetry
+            .get_or_init(|| Symmetry::detect(&self.positions, &self.head, &self.blendshapes))
     }
 
     /// For each blendshape that is a VRM expression, the blendshapes whose morph targets it
@@ -649,6 +652,8 @@ impl Character {
         for shape in &extra {
             check_blendshape(shape, self.vertex_count())?;
         }
+        // The pairs are this character's: found now, before the extra shapes join.
+        let _ = self.symmetry();
         let mut out = self.clone();
         let normal_deltas = normals::blendshape_normal_deltas(
             &self.positions,

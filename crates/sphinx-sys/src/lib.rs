@@ -713,7 +713,10 @@ mod tests {
         assert_eq!(heard.len(), 4, "{heard:?}");
         for (a, b) in plain.iter().zip(&heard) {
             assert_eq!(a.0, b.0);
-            assert!(a.1.abs_diff(b.1) <= 3 && a.2.abs_diff(b.2) <= 3, "{plain:?} {heard:?}");
+            assert!(
+                a.1.abs_diff(b.1) <= 3 && a.2.abs_diff(b.2) <= 3,
+                "{plain:?} {heard:?}"
+            );
         }
         // Out of range: read as it is.
         assert_eq!(EN_US.phone_loop().warped(7), EN_US.phone_loop());
