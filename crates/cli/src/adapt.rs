@@ -567,8 +567,10 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
             augmentation: args.augmentation.into(),
             calibration: adapter.architecture.calibration,
             loss: train_options.loss,
-            shapes: &report.shapes,
-            heldout: &heldout,
+            readings: Readings {
+                shapes: &report.shapes,
+                heldout: &heldout,
+            },
         };
         outln!("{}", serde_json::to_string(&summary)?);
     }
@@ -599,7 +601,14 @@ struct TrainingSummary<'a> {
     augmentation: Augmentation,
     calibration: Calibration,
     loss: Loss,
-    /// Each shape shown alone and read back.
+    #[serde(flatten)]
+    readings: Readings<'a>,
+}
+
+/// What both summaries end with: each shape shown alone and read back, and the adapter on the
+/// held-out renders.
+#[derive(serde::Serialize)]
+struct Readings<'a> {
     shapes: &'a [ShapeReading],
     heldout: &'a [Evaluation],
 }
@@ -865,8 +874,10 @@ fn finetune(
             mae_corrected_before: outcome.corrected_before,
             mae_corrected_after: outcome.corrected_after,
             mae_test_before: outcome.test_before,
-            shapes: &tuned.report.shapes,
-            heldout: &heldout,
+            readings: Readings {
+                shapes: &tuned.report.shapes,
+                heldout: &heldout,
+            },
         };
         outln!("{}", serde_json::to_string(&summary)?);
     }
@@ -885,8 +896,8 @@ struct FinetuneSummary<'a> {
     mae_corrected_before: f32,
     mae_corrected_after: f32,
     mae_test_before: f32,
-    shapes: &'a [ShapeReading],
-    heldout: &'a [Evaluation],
+    #[serde(flatten)]
+    readings: Readings<'a>,
 }
 
 /// MAE of an existing adapter on renders of `character` (another identity of its rig, say).

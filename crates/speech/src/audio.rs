@@ -128,6 +128,24 @@ impl Sound {
         Ok(self)
     }
 
+    /// This sound played as if recorded at `rate` samples a second, at 16 kHz again: faster
+    /// and higher above 16,000 (every frequency times `rate` / 16,000), slower and lower under
+    /// it.
+    #[must_use]
+    pub fn played_at(&self, rate: u32) -> Sound {
+        if rate == SAMPLE_RATE {
+            return self.clone();
+        }
+        let samples: Vec<f32> = self
+            .samples
+            .iter()
+            .map(|&s| f32::from(s) / 32768.0)
+            .collect();
+        Sound {
+            samples: resample(&samples, rate),
+        }
+    }
+
     /// Its length in seconds.
     #[must_use]
     pub fn seconds(&self) -> f32 {

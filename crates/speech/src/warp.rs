@@ -22,7 +22,7 @@ use std::borrow::Cow;
 
 use faceanim_sphinx_sys::{FRAME_RATE, Recogniser, Search, Segment, SphinxError};
 
-use crate::audio::{SAMPLE_RATE, Sound, resample};
+use crate::audio::{SAMPLE_RATE, Sound};
 
 /// The warp of a voice of each median pitch (Hz), linear between them: a man's, a woman's, a
 /// child's.
@@ -66,13 +66,12 @@ impl<'a> Heard<'a> {
         if frame_rate == FRAME_RATE {
             return Heard::plain(sound);
         }
-        let samples: Vec<f32> = sound
-            .samples
-            .iter()
-            .map(|&s| f32::from(s) / 32768.0)
-            .collect();
         Heard {
-            samples: Cow::Owned(resample(&samples, SAMPLE_RATE / FRAME_RATE * frame_rate)),
+            samples: Cow::Owned(
+                sound
+                    .played_at(SAMPLE_RATE / FRAME_RATE * frame_rate)
+                    .samples,
+            ),
             frame_rate,
         }
     }
@@ -145,14 +144,14 @@ pub(crate) fn median_pitch(sound: &Sound) -> Option<f32> {
     while at + window + longest <= samples.len() {
         // The 10 ms frame at the window's centre.
         let frame = (at + window / 2) * 100 / RATE;
-        if voiced.get(frame).copied().unwrap_or(false) {
-            if let Some(period) = period(
+        if voiced.get(frame).copied().unwrap_or(false)
+            && let Some(period) = period(
                 &samples[at..at + window + longest],
                 window,
                 shortest..=longest,
-            ) {
-                pitches.push(RATE as f32 / period);
-            }
+            )
+        {
+            pitches.push(RATE as f32 / period);
         }
         at += hop;
     }
@@ -263,6 +262,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::float_cmp, reason = "the table's own values, exactly")]
     fn men_are_not_warped_women_and_children_more() {
         assert_eq!(warp(100.0), 1.0);
         assert_eq!(warp(150.0), 1.0);

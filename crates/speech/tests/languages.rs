@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::class;
+use common::{agreeing, shown};
 use faceanim_rig::names::Viseme;
 use faceanim_speech::Sound;
 use faceanim_speech::visemes::{index, viseme_of_ipa};
@@ -142,20 +142,7 @@ fn transcripts_in_six_languages_lip_sync_on_time() {
             reading.notes
         );
         let frames = reading.track.sample(100.0);
-        let dominant = |k: i64| -> &'static str {
-            let Some(row) = usize::try_from(k).ok().and_then(|k| frames.get(k)) else {
-                return "rest";
-            };
-            let (best, weight) = row
-                .iter()
-                .enumerate()
-                .fold((0, 0.0f32), |b, (i, w)| if *w > b.1 { (i, *w) } else { b });
-            if weight < 0.2 {
-                "rest"
-            } else {
-                class(Viseme::ALL[best])
-            }
-        };
+        let dominant = |k: i64| shown(&frames, k);
         // The variant's phones, on the padded recording.
         let end = spoken.samples.len() as f32 / spoken.sample_rate as f32;
         let truth: Vec<(Viseme, f32, f32)> = spoken
@@ -179,15 +166,8 @@ fn transcripts_in_six_languages_lip_sync_on_time() {
             if viseme == Viseme::Sil {
                 continue;
             }
-            let mut t = start + 0.005;
-            while t < stop {
-                let k = (t * 100.0).round() as i64;
-                total += 1;
-                if (-4..=4).any(|d| dominant(k + d) == class(viseme)) {
-                    hits += 1;
-                }
-                t += 0.01;
-            }
+            let (agree, spoken) = agreeing(dominant, viseme, start, stop);
+            (hits, total) = (hits + agree, total + spoken);
             if viseme == Viseme::PP {
                 bilabials += 1;
                 let (a, b) = (
@@ -199,7 +179,7 @@ fn transcripts_in_six_languages_lip_sync_on_time() {
                 }
             }
         }
-        let agreement = f64::from(hits) / f64::from(total.max(1));
+        let agreement = hits as f64 / total.max(1) as f64;
         report.push(format!(
             "{language} ({voice}): agreement {agreement:.3} of {total} frames, P/B/M closed {closed}/{bilabials}"
         ));

@@ -8,9 +8,8 @@
 
 mod common;
 
-use common::{class, flite};
+use common::{agreeing, flite, shown};
 use faceanim_rig::names::Viseme;
-use faceanim_speech::visemes::index;
 use faceanim_speech::{Recognition, Sound};
 
 const LINES: [&str; 4] = [
@@ -33,51 +32,19 @@ fn agreement(voice: &str, raise: f32) -> f32 {
         let spoken = flite(voice, line, &wav);
         let sound = Sound::read(&wav).unwrap();
         let _ = std::fs::remove_file(&wav);
-        let sound = if raise == 1.0 {
-            sound
-        } else {
-            let samples: Vec<f32> = sound
-                .samples
-                .iter()
-                .map(|&s| f32::from(s) / 32768.0)
-                .collect();
-            Sound {
-                samples: faceanim_speech::audio::resample(&samples, (16_000.0 * raise) as u32),
-            }
-        };
+        let sound = sound.played_at((16_000.0 * raise) as u32);
         let reading = faceanim_speech::read(&sound, None, None, Recognition::Words).unwrap();
         let frames = reading.track.sample(100.0);
-        let shown = |k: i64| -> &'static str {
-            let Some(row) = usize::try_from(k).ok().and_then(|k| frames.get(k)) else {
-                return "rest";
-            };
-            let (best, weight) = row
-                .iter()
-                .enumerate()
-                .fold((0, 0.0f32), |b, (i, &w)| if w > b.1 { (i, w) } else { b });
-            if weight < 0.2 {
-                "rest"
-            } else {
-                class(Viseme::ALL[best])
-            }
-        };
+        let shown = |k: i64| shown(&frames, k);
         let mut start = 0.0f32;
         for &(viseme, end) in &spoken {
             let end = end / raise;
             if viseme != Viseme::Sil {
-                let mut t = start + 0.005;
-                while t < end {
-                    let frame = (t * 100.0).round() as i64;
-                    total += 1;
-                    if (-4..=4).any(|d| shown(frame + d) == class(viseme)) {
-                        hits += 1;
-                    }
-                    t += 0.01;
-                }
+                let (agree, frames) = agreeing(shown, viseme, start, end);
+                (hits, total) = (hits + agree, total + frames);
             }
             start = end;
         }
-        assert!(frames.iter().all(|row| row.len() > index(Viseme::Sil)));
     }
     hits as f32 / total.max(1) as f32
 }

@@ -642,19 +642,28 @@ mod tests {
         assert!(error.contains("/no/such/model"), "{error}");
     }
 
-    #[test]
+    /// "go forward ten meters", 16 kHz raw, from Debian's pocketsphinx-testdata.
     #[cfg(pocketsphinx)]
-    fn real_speech_decodes_into_phones() {
-        // "go forward ten meters", 16 kHz raw, from Debian's pocketsphinx-testdata.
+    fn go_forward() -> Option<Vec<i16>> {
         let path = "/usr/share/pocketsphinx/test/data/goforward.raw";
         let Ok(bytes) = std::fs::read(path) else {
             eprintln!("{path} is missing: apt-get install pocketsphinx-testdata");
+            return None;
+        };
+        Some(
+            bytes
+                .chunks_exact(2)
+                .map(|b| i16::from_le_bytes([b[0], b[1]]))
+                .collect(),
+        )
+    }
+
+    #[test]
+    #[cfg(pocketsphinx)]
+    fn real_speech_decodes_into_phones() {
+        let Some(samples) = go_forward() else {
             return;
         };
-        let samples: Vec<i16> = bytes
-            .chunks_exact(2)
-            .map(|b| i16::from_le_bytes([b[0], b[1]]))
-            .collect();
         let phones = decode(&EN_US.phone_loop(), &samples).unwrap();
         let labels: Vec<&str> = phones.iter().map(|p| p.label.as_str()).collect();
         assert!(phones.len() > 10, "{labels:?}");
@@ -679,15 +688,9 @@ mod tests {
     #[test]
     #[cfg(pocketsphinx)]
     fn a_slowed_sound_read_at_fewer_frames_keeps_its_own_frames() {
-        let path = "/usr/share/pocketsphinx/test/data/goforward.raw";
-        let Ok(bytes) = std::fs::read(path) else {
-            eprintln!("{path} is missing: apt-get install pocketsphinx-testdata");
+        let Some(samples) = go_forward() else {
             return;
         };
-        let samples: Vec<i16> = bytes
-            .chunks_exact(2)
-            .map(|b| i16::from_le_bytes([b[0], b[1]]))
-            .collect();
         // Slowed to 80 % (every frequency 0.8 times), by linear interpolation.
         let slowed: Vec<i16> = (0..samples.len() * 5 / 4)
             .map(|n| {
