@@ -121,11 +121,14 @@ const PITCHES: std::ops::RangeInclusive<f32> = 60.0..=500.0;
 const PERIODIC: f32 = 0.6;
 /// Voiced windows needed for a median.
 const FEWEST: usize = 10;
+/// Voiced windows enough for a median (20 s of voice): a long recording is not read to its end.
+const ENOUGH: usize = 1000;
 
 /// The median pitch (Hz) of `sound`'s voiced 40 ms windows, every 20 ms where a voice is
 /// heard ([`Sound::voice_activity`]): each window's period is the shortest lag whose normalised
 /// correlation comes within 10 % of its best (so the period, not a multiple of it), read at
-/// 8 kHz. `None` without [`FEWEST`] voiced windows (a whisper, noise, silence).
+/// 8 kHz; at most the first [`ENOUGH`] voiced windows. `None` without [`FEWEST`] voiced
+/// windows (a whisper, noise, silence).
 pub(crate) fn median_pitch(sound: &Sound) -> Option<f32> {
     const RATE: usize = 8000;
     // Pairs averaged: 8 kHz, enough for any voice's period.
@@ -141,7 +144,7 @@ pub(crate) fn median_pitch(sound: &Sound) -> Option<f32> {
     let longest = (RATE as f32 / PITCHES.start()).ceil() as usize;
     let mut pitches = Vec::new();
     let mut at = 0;
-    while at + window + longest <= samples.len() {
+    while at + window + longest <= samples.len() && pitches.len() < ENOUGH {
         // The 10 ms frame at the window's centre.
         let frame = (at + window / 2) * 100 / RATE;
         if voiced.get(frame).copied().unwrap_or(false)
