@@ -26,8 +26,9 @@ pub fn is_english(language: &str) -> bool {
 /// in another language, is aligned by synthesis ([`crate::synthesis`]); only when neither
 /// works is the sound recognised without it, with a note saying why. Without a transcript the
 /// sound is recognised by `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words
-/// only in English, phones in any other language). The notes say what was done instead of
-/// what was asked.
+/// only in English, phones in any other language). Every route of the recogniser hears a
+/// woman's or child's voice through a longer vocal tract, as its pitch says.
+/// The notes say what was done instead of what was asked.
 ///
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail, or the transcript is

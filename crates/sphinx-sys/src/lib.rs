@@ -212,7 +212,7 @@ pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxEr
 }
 
 /// A decoder with its models loaded, ready for speech. Loading is most of a short line's
-/// cost (the word search reads a 27 MB language model and 79,000 pronunciations), and
+/// cost (the word search reads a 27 MB language model and 23,000 pronunciations), and
 /// needs no speech: a caller can load on one thread while it reads the sound on another.
 /// It holds a turn of the cores (see [`decode`]) until dropped.
 pub struct Recogniser {
