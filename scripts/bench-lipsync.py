@@ -301,6 +301,7 @@ def main():
     parser.add_argument("--lines", type=int, default=len(HARVARD))
     parser.add_argument("--modes", default="text,audio")
     parser.add_argument("--recognise", default="words", help="audio alone: words or phones")
+    parser.add_argument("--voice", help="faceanim's --voice (auto, man, woman, child or a warp)")
     parser.add_argument("--ffmpeg-first", action="store_true",
                         help="convert each line to 16 kHz with ffmpeg before faceanim reads it "
                              "(to compare faceanim's own resampling with ffmpeg's)")
@@ -351,6 +352,8 @@ def main():
                     clip_path = os.path.join(work, "clip.json")
                     command = [args.faceanim, "lipsync", wav, "--character", rig, "--fps", "100",
                                "--clip", clip_path, "--language", language]
+                    if args.voice:
+                        command += ["--voice", args.voice]
                     if mode == "text":
                         command += ["--text", line]
                     else:

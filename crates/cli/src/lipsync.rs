@@ -50,6 +50,12 @@ pub struct LipsyncArgs {
     /// language; faster, a little less exact in English).
     #[arg(long, value_enum, default_value_t = Blind::Words)]
     pub recognise: Blind,
+    /// Whose vocal tract the recogniser hears the voice through (its models were trained on
+    /// adults and hear a man best): `auto` (by the voice's pitch), `man` (as it is), `woman`,
+    /// `child`, or a warp from 0.6 to 1.8 that every frequency is divided by (under 1 for a
+    /// voice deeper than a man's: an effect, a monster's).
+    #[arg(long, default_value = "auto", value_name = "auto|man|woman|child|WARP")]
+    pub voice: faceanim_speech::Voice,
     /// The face around the mouth too: blinks at phrase boundaries and natural rates, brows
     /// raised on accented syllables (ARKit blink and brow channels, on any rig through its
     /// name table), and the head: a nod on each accent and a slight turn per phrase (on the
@@ -244,6 +250,7 @@ fn read_speech(
         Some(&args.language),
         blind,
         loading,
+        args.voice,
     )?;
     Ok((sound, heard))
 }

@@ -45,6 +45,7 @@ pub use audio::{AudioError, Sound};
 pub use mouth::{Mouth, MouthError, MouthTable, Route};
 pub use phones::{Phone, PhoneError, Recognition};
 pub use visemes::Track;
+pub use warp::Voice;
 
 /// Why lip sync failed.
 #[derive(Debug, thiserror::Error)]
@@ -147,11 +148,12 @@ pub fn read(
     language: Option<&str>,
     blind: Recognition,
 ) -> Result<Reading, SpeechError> {
-    read_loaded(sound, transcript, language, blind, None)
+    read_loaded(sound, transcript, language, blind, None, Voice::Auto)
 }
 
 /// [`read`], with the recogniser a line without a transcript needs already `loading` (started
-/// before the sound was read: [`recognition::Loading`]).
+/// before the sound was read: [`recognition::Loading`]), and the voice heard through the vocal
+/// tract `voice` says ([`Voice::Auto`]: as its pitch says).
 ///
 /// # Errors
 /// As [`read`].
@@ -161,9 +163,10 @@ pub fn read_loaded(
     language: Option<&str>,
     blind: Recognition,
     loading: Option<recognition::Loading>,
+    voice: Voice,
 ) -> Result<Reading, SpeechError> {
     let (phones, recognition, notes) =
-        recognition::recognise_loaded(sound, transcript, language, blind, loading)?;
+        recognition::recognise_loaded(sound, transcript, language, blind, loading, voice)?;
     let track = visemes::track(&phones, &sound.voice_activity(), sound.seconds());
     Ok(Reading {
         track,

@@ -6,7 +6,7 @@ use faceanim_sphinx_sys::{Recogniser, SphinxError};
 
 use crate::audio::Sound;
 use crate::phones::{self, Phone, PhoneError, Recognition};
-use crate::warp::Heard;
+use crate::warp::{Heard, Voice};
 
 /// The language of lines without one: US English.
 pub const ENGLISH: &str = "en-us";
@@ -27,7 +27,7 @@ pub fn is_english(language: &str) -> bool {
 /// works is the sound recognised without it, with a note saying why. Without a transcript the
 /// sound is recognised by `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words
 /// only in English, phones in any other language). Every route of the recogniser hears a
-/// woman's or child's voice through a longer vocal tract, as its pitch says.
+/// woman's or child's voice through a longer vocal tract, as its pitch says ([`Voice::Auto`]).
 /// The notes say what was done instead of what was asked.
 ///
 /// # Errors
@@ -39,7 +39,7 @@ pub fn recognise(
     language: Option<&str>,
     blind: Recognition,
 ) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
-    recognise_loaded(sound, transcript, language, blind, None)
+    recognise_loaded(sound, transcript, language, blind, None, Voice::Auto)
 }
 
 /// The route [`recognise`] takes without a transcript in `language`: `blind`, except that
@@ -89,7 +89,8 @@ impl Loading {
 }
 
 /// [`recognise`], with the recogniser for a line without a transcript already `loading`
-/// (used only when that route is taken; otherwise it is left to finish and be dropped).
+/// (used only when that route is taken; otherwise it is left to finish and be dropped), and
+/// the voice heard through the vocal tract `voice` says.
 ///
 /// # Errors
 /// As [`recognise`].
@@ -99,6 +100,7 @@ pub fn recognise_loaded(
     language: Option<&str>,
     blind: Recognition,
     loading: Option<Loading>,
+    voice: Voice,
 ) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
     let language = language.unwrap_or(ENGLISH);
     let mut notes = Vec::new();
@@ -110,7 +112,7 @@ pub fn recognise_loaded(
         ));
     }
     // The voice as the acoustic model hears it best (a woman's, a child's slowed).
-    let heard = Heard::voice(sound);
+    let heard = Heard::voice(sound, voice);
     if let Some(text) = transcript {
         let words = phones::transcript_words(text, sound.seconds())?;
         // Why the recogniser could not align it, when it tried.

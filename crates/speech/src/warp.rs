@@ -28,6 +28,47 @@ use crate::audio::{SAMPLE_RATE, Sound};
 /// child's.
 const WARPS: [(f32, f32); 4] = [(150.0, 1.0), (170.0, 1.2), (250.0, 1.2), (290.0, 1.45)];
 
+/// Whose vocal tract the recogniser hears a voice through.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Voice {
+    /// As its pitch says: a man's, a woman's or a child's.
+    #[default]
+    Auto,
+    /// This warp: every frequency divided by it (1: as it is; a woman's 1.2, a child's 1.45;
+    /// under 1 for a voice deeper than a man's, lowered by an effect, say).
+    Warp(f32),
+}
+
+impl Voice {
+    /// The lowest and highest warp given by hand.
+    pub const WARPS: std::ops::RangeInclusive<f32> = 0.6..=1.8;
+}
+
+impl std::str::FromStr for Voice {
+    type Err = String;
+
+    /// `auto`, `man` (1), `woman` (1.2), `child` (1.45) or a warp from 0.6 to 1.8.
+    fn from_str(text: &str) -> Result<Voice, String> {
+        let warp = match text.trim().to_ascii_lowercase().as_str() {
+            "auto" => return Ok(Voice::Auto),
+            "man" => 1.0,
+            "woman" => 1.2,
+            "child" => 1.45,
+            other => other.parse::<f32>().map_err(|_| {
+                format!("'{text}' is not a voice: auto, man, woman, child, or a warp such as 0.8")
+            })?,
+        };
+        if !Voice::WARPS.contains(&warp) {
+            return Err(format!(
+                "a warp of {warp} is outside {}–{}",
+                Voice::WARPS.start(),
+                Voice::WARPS.end()
+            ));
+        }
+        Ok(Voice::Warp(warp))
+    }
+}
+
 /// A sound as the recogniser hears it: slowed by the speaker's warp, and the frame rate that
 /// reads it at the sound's own 10 ms frames.
 #[derive(Debug)]
@@ -45,10 +86,15 @@ impl<'a> Heard<'a> {
         }
     }
 
-    /// `sound` warped as its voice's pitch says ([`warp`]).
-    pub(crate) fn voice(sound: &'a Sound) -> Heard<'a> {
-        let pitch = median_pitch(sound);
-        let warp = pitch.map_or(1.0, warp);
+    /// `sound` warped as `voice` says: by hand, or as its pitch says ([`warp`]).
+    pub(crate) fn voice(sound: &'a Sound, voice: Voice) -> Heard<'a> {
+        let (pitch, warp) = match voice {
+            Voice::Warp(warp) => (None, warp.clamp(*Voice::WARPS.start(), *Voice::WARPS.end())),
+            Voice::Auto => {
+                let pitch = median_pitch(sound);
+                (pitch, pitch.map_or(1.0, warp))
+            }
+        };
         // A whole number of frames a second, so the frames stay exactly 10 ms of the sound.
         let frame_rate = (FRAME_RATE as f32 / warp).round() as u32;
         tracing::debug!(
@@ -282,6 +328,22 @@ mod tests {
     }
 
     #[test]
+    fn voices_are_named_or_given_by_their_warp() {
+        assert_eq!("auto".parse(), Ok(Voice::Auto));
+        assert_eq!("Woman".parse(), Ok(Voice::Warp(1.2)));
+        assert_eq!(" child ".parse(), Ok(Voice::Warp(1.45)));
+        assert_eq!("0.8".parse(), Ok(Voice::Warp(0.8)));
+        let outside = "3".parse::<Voice>().unwrap_err();
+        assert!(outside.contains("outside"), "{outside}");
+        let unknown = "robot".parse::<Voice>().unwrap_err();
+        assert!(
+            unknown.contains("'robot'") && unknown.contains("woman"),
+            "{unknown}"
+        );
+        assert!("NaN".parse::<Voice>().is_err());
+    }
+
+    #[test]
     fn a_warped_sound_is_slowed_as_its_frame_rate_says() {
         let sound = buzz(200.0, 1.0);
         let heard = Heard::warped(&sound, 80);
@@ -296,8 +358,10 @@ mod tests {
         assert!((pitch - 160.0).abs() < 5.0, "{pitch}");
         assert!(Heard::warped(&sound, 100).is_plain());
         assert!(
-            Heard::voice(&buzz(110.0, 1.0)).is_plain(),
+            Heard::voice(&buzz(110.0, 1.0), Voice::Auto).is_plain(),
             "a man's voice as it is"
         );
+        assert!(!Heard::voice(&buzz(230.0, 1.0), Voice::Auto).is_plain());
+        assert!(Heard::voice(&buzz(230.0, 1.0), Voice::Warp(1.0)).is_plain());
     }
 }

@@ -10,7 +10,7 @@ mod common;
 
 use common::{agreeing, flite, shown};
 use faceanim_rig::names::Viseme;
-use faceanim_speech::{Recognition, Sound};
+use faceanim_speech::{Recognition, Sound, Voice};
 
 const LINES: [&str; 4] = [
     "The birch canoe slid on the smooth planks.",
@@ -20,9 +20,9 @@ const LINES: [&str; 4] = [
 ];
 
 /// The share of spoken 10 ms frames whose lip class the mouth shows within 40 ms, over
-/// [`LINES`] read by `voice` and raised by `raise` (1: as spoken), recognised without a
-/// transcript.
-fn agreement(voice: &str, raise: f32) -> f32 {
+/// [`LINES`] read by `voice` and raised by `raise` (1: as spoken; under 1 lowered), recognised
+/// without a transcript and heard as `heard_as` says.
+fn agreement(voice: &str, raise: f32, heard_as: Voice) -> f32 {
     let (mut hits, mut total) = (0usize, 0usize);
     for (k, line) in LINES.iter().enumerate() {
         let wav = std::env::temp_dir().join(format!(
@@ -33,7 +33,9 @@ fn agreement(voice: &str, raise: f32) -> f32 {
         let sound = Sound::read(&wav).unwrap();
         let _ = std::fs::remove_file(&wav);
         let sound = sound.played_at((16_000.0 * raise) as u32);
-        let reading = faceanim_speech::read(&sound, None, None, Recognition::Words).unwrap();
+        let reading =
+            faceanim_speech::read_loaded(&sound, None, None, Recognition::Words, None, heard_as)
+                .unwrap();
         let frames = reading.track.sample(100.0);
         let shown = |k: i64| shown(&frames, k);
         let mut start = 0.0f32;
@@ -51,10 +53,20 @@ fn agreement(voice: &str, raise: f32) -> f32 {
 
 #[test]
 fn a_womans_voice_and_a_childs_are_lip_synced_from_the_audio_alone() {
-    let woman = agreement("slt", 1.0);
-    let child = agreement("slt", 1.4);
+    let woman = agreement("slt", 1.0, Voice::Auto);
+    let child = agreement("slt", 1.4, Voice::Auto);
     eprintln!("slt {woman:.3}, raised 40 % {child:.3}");
     // Heard as they are, without the warp: 0.868 and 0.517.
     assert!(woman >= 0.93, "a woman's voice: {woman:.3}");
     assert!(child >= 0.62, "a child's voice: {child:.3}");
+}
+
+/// A voice lowered below a man's (an effect, a monster's) has a pitch men's voices have too, so
+/// it is not warped by itself; the user says how deep it is.
+#[test]
+fn a_voice_deeper_than_a_mans_is_heard_as_the_user_says() {
+    let as_it_is = agreement("rms", 0.8, Voice::Auto);
+    let told = agreement("rms", 0.8, "0.8".parse().unwrap());
+    eprintln!("rms lowered 20 %: {as_it_is:.3} as it is, {told:.3} heard at 0.8");
+    assert!(told >= as_it_is + 0.1, "{as_it_is:.3} → {told:.3}");
 }
