@@ -89,7 +89,10 @@ impl<'a> Heard<'a> {
     /// `sound` warped as `voice` says: by hand, or as its pitch says ([`warp`]).
     pub(crate) fn voice(sound: &'a Sound, voice: Voice) -> Heard<'a> {
         let (pitch, warp) = match voice {
-            Voice::Warp(warp) => (None, warp.clamp(*Voice::WARPS.start(), *Voice::WARPS.end())),
+            Voice::Warp(warp) if warp.is_finite() => {
+                (None, warp.clamp(*Voice::WARPS.start(), *Voice::WARPS.end()))
+            }
+            Voice::Warp(_) => (None, 1.0),
             Voice::Auto => {
                 let pitch = median_pitch(sound);
                 (pitch, pitch.map_or(1.0, warp))
@@ -363,5 +366,6 @@ mod tests {
         );
         assert!(!Heard::voice(&buzz(230.0, 1.0), Voice::Auto).is_plain());
         assert!(Heard::voice(&buzz(230.0, 1.0), Voice::Warp(1.0)).is_plain());
+        assert!(Heard::voice(&buzz(230.0, 1.0), Voice::Warp(f32::NAN)).is_plain());
     }
 }
