@@ -294,7 +294,19 @@ def score(phones, clip, seconds):
     return hits, total, closed, bilabials, silence
 
 
+def espeak_line(voice, line, wav):
+    """eSpeak NG's `voice` saying `line` into `wav`, in an engine of its own (a process): eSpeak
+    NG keeps some of one voice's settings into the next, so that in one engine a voice's sound
+    depends on the voices spoken before it."""
+    run = subprocess.run([sys.executable, os.path.abspath(__file__), "--espeak-line", voice, line, wav],
+                         capture_output=True, text=True, check=True)
+    return [tuple(p) for p in json.loads(run.stdout)]
+
+
 def main():
+    if len(sys.argv) == 5 and sys.argv[1] == "--espeak-line":
+        print(json.dumps(Espeak().speak(sys.argv[2], sys.argv[3], sys.argv[4], 150)))
+        return
     parser = argparse.ArgumentParser()
     parser.add_argument("--faceanim", default="target/release/faceanim")
     parser.add_argument("--voices", default="flite:kal,flite:slt,flite:rms,flite:awb,festival:voice_kal_diphone,espeak:en-us+m3")
@@ -311,7 +323,6 @@ def main():
     parser.add_argument("--json")
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="faceanim-bench-lipsync-")
-    espeak = None
     results = []
     try:
         rig = viseme_rig(args.faceanim, work)
@@ -334,8 +345,7 @@ def main():
                 elif engine == "festival-it":
                     phones = festival(voice, line, wav, work, sampa_viseme)
                 else:
-                    espeak = espeak or Espeak()
-                    phones = espeak.speak(voice, line, wav, 150)
+                    phones = espeak_line(voice, line, wav)
                 seconds = read_wav(wav)
                 if args.effect:
                     changed = wav[:-4] + f"-{args.effect}.wav"

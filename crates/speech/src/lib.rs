@@ -31,6 +31,7 @@
 pub mod audio;
 pub mod face;
 pub mod features;
+mod holds;
 pub mod listen;
 pub mod mouth;
 pub mod phones;
@@ -167,6 +168,15 @@ pub fn read_loaded(
 ) -> Result<Reading, SpeechError> {
     let (phones, recognition, notes) =
         recognition::recognise_loaded(sound, transcript, language, blind, loading, voice)?;
+    tracing::debug!(
+        ?recognition,
+        phones = %phones
+            .iter()
+            .map(|p| format!("{} {:.2}-{:.2}", p.label, p.start, p.end))
+            .collect::<Vec<_>>()
+            .join(", "),
+        "the line's phones"
+    );
     let track = visemes::track(&phones, &sound.voice_activity(), sound.seconds());
     Ok(Reading {
         track,

@@ -119,7 +119,10 @@ pub fn recognise_loaded(
         let mut why = None;
         if is_english(language) {
             match phones::align_english(&heard, &words) {
-                Ok(phones) => return Ok((phones, Recognition::Transcript, notes)),
+                Ok(phones) => {
+                    let phones = phones::voiced_pauses(phones, &sound.voice_activity());
+                    return Ok((phones, Recognition::Transcript, notes));
+                }
                 Err(reason) => why = Some(reason),
             }
         }
@@ -140,7 +143,11 @@ pub fn recognise_loaded(
     }
     let loaded = loading.map(|l| l.finish(blind)).transpose()?.flatten();
     if blind != Recognition::Words {
-        return Ok((phones::phone_loop(&heard, loaded)?, blind, notes));
+        return Ok((
+            crate::holds::lips_held(sound, phones::phone_loop(&heard, loaded)?, heard.warp()),
+            blind,
+            notes,
+        ));
     }
     let words = phones::recognise_words(&heard, loaded)?;
     // Words the recogniser could not make out leave the voice unsaid (a formant synthesiser,
@@ -155,10 +162,18 @@ pub fn recognise_loaded(
                 "the words recognised cover {:.0} % of the voice: its phones were recognised instead",
                 said * 100.0
             ));
-            return Ok((phones, Recognition::PhoneLoop, notes));
+            return Ok((
+                crate::holds::lips_held(sound, phones, heard.warp()),
+                Recognition::PhoneLoop,
+                notes,
+            ));
         }
     }
-    Ok((words, blind, notes))
+    Ok((
+        crate::holds::lips_held(sound, words, heard.warp()),
+        blind,
+        notes,
+    ))
 }
 
 /// The share of a line's voice its words recognised must cover (`said_share`), below which its

@@ -388,19 +388,7 @@ impl Track {
 mod tests {
     use super::*;
 
-    /// Phones from "LABEL START END, …".
-    fn phones(text: &str) -> Vec<Phone> {
-        text.split(',')
-            .map(|p| {
-                let parts: Vec<&str> = p.split_whitespace().collect();
-                Phone {
-                    label: parts[0].into(),
-                    start: parts[1].parse().unwrap(),
-                    end: parts[2].parse().unwrap(),
-                }
-            })
-            .collect()
-    }
+    use crate::phones::tests::phones;
 
     #[test]
     fn lips_close_early_and_pauses_relax_or_close() {

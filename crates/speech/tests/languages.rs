@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{agreeing, shown};
+use common::{espeak, judged, shown};
 use faceanim_rig::names::Viseme;
 use faceanim_speech::Sound;
 use faceanim_speech::visemes::{index, viseme_of_ipa};
@@ -54,18 +54,6 @@ const LINES: [Line; 6] = [
         text: "Mamma mia, il mare è bellissimo.",
     },
 ];
-
-/// `line` spoken by the eSpeak NG `voice` at 140 words a minute, and as a sound at 16 kHz with
-/// half a second of silence either side.
-fn spoken(line: &str, voice: &str) -> (faceanim_espeak_sys::Spoken, Sound) {
-    let spoken = faceanim_espeak_sys::speak(line, voice, Some(140)).unwrap();
-    let step = spoken.sample_rate as f32 / 16_000.0;
-    let mut samples = vec![0i16; 8_000];
-    let count = (spoken.samples.len() as f32 / step) as usize;
-    samples.extend((0..count).map(|n| spoken.samples[(n as f32 * step) as usize]));
-    samples.extend(vec![0i16; 8_000]);
-    (spoken, Sound { samples })
-}
 
 /// A voice whose words the recogniser does not make out (eSpeak NG's formant synthesis in
 /// English, without a transcript: it hears "that … for … those" in a line of six words) is
@@ -117,9 +105,6 @@ fn a_voice_whose_words_are_not_made_out_still_moves_the_mouth() {
 
 #[test]
 fn transcripts_in_six_languages_lip_sync_on_time() {
-    if !faceanim_espeak_sys::available() {
-        panic!("eSpeak NG is needed: run scripts/setup.sh (libespeak-ng-dev) and build again");
-    }
     let mut report = Vec::new();
     for Line {
         language,
@@ -127,7 +112,7 @@ fn transcripts_in_six_languages_lip_sync_on_time() {
         text: line,
     } in LINES
     {
-        let (spoken, sound) = spoken(line, voice);
+        let (said, sound) = espeak(line, voice, Some(140));
         let reading = faceanim_speech::read(
             &sound,
             Some(line),
@@ -143,42 +128,7 @@ fn transcripts_in_six_languages_lip_sync_on_time() {
         );
         let frames = reading.track.sample(100.0);
         let dominant = |k: i64| shown(&frames, k);
-        // The variant's phones, on the padded recording.
-        let end = spoken.samples.len() as f32 / spoken.sample_rate as f32;
-        let truth: Vec<(Viseme, f32, f32)> = spoken
-            .phones
-            .iter()
-            .enumerate()
-            .map(|(k, p)| {
-                let next = spoken
-                    .phones
-                    .get(k + 1)
-                    .map_or(end, |n| n.start_ms as f32 / 1000.0);
-                (
-                    viseme_of_ipa(&p.ipa),
-                    0.5 + p.start_ms as f32 / 1000.0,
-                    0.5 + next,
-                )
-            })
-            .collect();
-        let (mut hits, mut total, mut closed, mut bilabials) = (0, 0, 0, 0);
-        for &(viseme, start, stop) in &truth {
-            if viseme == Viseme::Sil {
-                continue;
-            }
-            let (agree, spoken) = agreeing(dominant, viseme, start, stop);
-            (hits, total) = (hits + agree, total + spoken);
-            if viseme == Viseme::PP {
-                bilabials += 1;
-                let (a, b) = (
-                    ((start - 0.04) * 100.0) as usize,
-                    ((stop + 0.04) * 100.0) as usize,
-                );
-                if (a..=b.min(frames.len() - 1)).any(|k| frames[k][index(Viseme::PP)] >= 0.5) {
-                    closed += 1;
-                }
-            }
-        }
+        let [hits, total, closed, bilabials] = judged(&frames, &said);
         let agreement = hits as f64 / total.max(1) as f64;
         report.push(format!(
             "{language} ({voice}): agreement {agreement:.3} of {total} frames, P/B/M closed {closed}/{bilabials}"

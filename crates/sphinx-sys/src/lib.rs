@@ -545,6 +545,11 @@ mod imp {
                     let dictionary = Scratch::write("dict", &entries)?;
                     let grammar = Scratch::write("jsgf", &jsgf)?;
                     args.extend(grammar_args(&text(&dictionary.0), &grammar));
+                    // Silence between phones a fifth as likely as CMU's default (0.005): the
+                    // phones are known, and a whisper's quiet vowels otherwise fit the
+                    // silence model better than their own (chosen on flite's and eSpeak NG's
+                    // voices, a whisper among them).
+                    args.extend(["-silprob".into(), "0.001".into()]);
                     vec![dictionary, grammar]
                 }
             };

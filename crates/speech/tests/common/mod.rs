@@ -6,7 +6,8 @@ use std::path::Path;
 use std::process::Command;
 
 use faceanim_rig::names::Viseme;
-use faceanim_speech::visemes::viseme_of;
+use faceanim_speech::Sound;
+use faceanim_speech::visemes::{index, viseme_of, viseme_of_ipa};
 
 /// Speaks `text` in `voice` into `wav`; the visemes spoken with their end times.
 pub fn flite(voice: &str, text: &str, wav: &Path) -> Vec<(Viseme, f32)> {
@@ -72,4 +73,78 @@ pub fn agreeing(
         t += 0.01;
     }
     (hits, total)
+}
+
+/// What an eSpeak NG voice said: each phone's viseme, start and end (seconds, on the sound).
+pub type Said = Vec<(Viseme, f32, f32)>;
+
+/// `line` spoken by the eSpeak NG `voice` at `rate` words a minute (its default when `None`),
+/// with half a second of silence either side, written as a WAV and read as any is, and the
+/// phones it said.
+pub fn espeak(line: &str, voice: &str, rate: Option<u32>) -> (Said, Sound) {
+    assert!(
+        faceanim_espeak_sys::available(),
+        "eSpeak NG is needed: run scripts/setup.sh (libespeak-ng-dev) and build again"
+    );
+    let spoken = faceanim_espeak_sys::speak(line, voice, rate).unwrap();
+    // As a user has it: the synthesiser's WAV (22,050 Hz), read as any WAV is.
+    let pad = vec![0i16; spoken.sample_rate as usize / 2];
+    let samples: Vec<i16> = [&pad[..], &spoken.samples, &pad].concat();
+    let wav = std::env::temp_dir().join(format!(
+        "faceanim-espeak-{}-{:?}.wav",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    std::fs::write(
+        &wav,
+        faceanim_speech::audio::wav_bytes(&samples, spoken.sample_rate, 1),
+    )
+    .unwrap();
+    let sound = Sound::read(&wav).unwrap();
+    let _ = std::fs::remove_file(&wav);
+    let end = spoken.samples.len() as f32 / spoken.sample_rate as f32;
+    let said = spoken
+        .phones
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let next = spoken
+                .phones
+                .get(k + 1)
+                .map_or(end, |n| n.start_ms as f32 / 1000.0);
+            (
+                viseme_of_ipa(&p.ipa),
+                0.5 + p.start_ms as f32 / 1000.0,
+                0.5 + next,
+            )
+        })
+        .collect();
+    (said, sound)
+}
+
+/// How a track (`frames`, 10 ms each) shows what was `said`: the spoken frames whose lip class
+/// it shows within 40 ms and all spoken frames; the bilabials whose lips it closes (viseme PP
+/// at 0.5 or more, within 40 ms) and all bilabials.
+pub fn judged(frames: &[[f32; 15]], said: &Said) -> [usize; 4] {
+    let [mut hits, mut total, mut closed, mut bilabials] = [0; 4];
+    for &(viseme, start, stop) in said {
+        if viseme == Viseme::Sil {
+            continue;
+        }
+        let (agree, spoken) = agreeing(|k| shown(frames, k), viseme, start, stop);
+        (hits, total) = (hits + agree, total + spoken);
+        if viseme == Viseme::PP {
+            bilabials += 1;
+            let (a, b) = (
+                ((start - 0.04) * 100.0) as usize,
+                ((stop + 0.04) * 100.0) as usize,
+            );
+            if (a..=b.min(frames.len().saturating_sub(1)))
+                .any(|k| frames.get(k).is_some_and(|f| f[index(Viseme::PP)] >= 0.5))
+            {
+                closed += 1;
+            }
+        }
+    }
+    [hits, total, closed, bilabials]
 }
