@@ -1,11 +1,4 @@
 //! The built-in default head from the command line: export, info, contact sheet.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    reason = "tests"
-)]
-
 mod support;
 
 use serde_json::Value;

@@ -4,13 +4,6 @@
 //! pipeline (which reads the same pixels as MediaPipe's own). Measured 21 here; in three.js,
 //! front on, 21 too (`faceanim`'s `default_head` test). On the realistic ICT head 17 of 49 pass;
 //! the model is blind to some shapes (cheek puff and squint, nose sneer, dimples).
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    reason = "tests"
-)]
-
 use faceanim_render::{Appearance, Camera, render};
 use faceanim_track::{BLENDSHAPE_NAMES, FaceModels, Frame};
 use glam::{Mat4, Vec3};

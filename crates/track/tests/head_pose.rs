@@ -1,13 +1,6 @@
 //! Head pose directions on renders of the ICT head turned by known angles: the signs a user
 //! relies on when the pose drives a character's root (yaw towards the subject's own left,
 //! pitch chin up, roll anticlockwise as seen by the camera, all positive).
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    reason = "tests"
-)]
-
 use faceanim_render::{Appearance, Camera, render};
 use faceanim_track::{FaceModels, Frame};
 use glam::Quat;

@@ -5,13 +5,6 @@
 //! and every score within 0.01 (the issue asks for 0.05; the port measures 0.006 px and
 //! 0.0008). The stills include a rolled head, a crop that runs off the frame's edge and a
 //! small face.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    reason = "tests"
-)]
-
 use std::path::{Path, PathBuf};
 
 use faceanim_track::{FaceModels, Frame};
