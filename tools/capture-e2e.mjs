@@ -266,7 +266,9 @@ try {
   // Calibrate: the next face is the performer's neutral, and the page says so.
   await page.click('#calibrate');
   await page.waitForFunction(() => window.studio.capture.live.neutral === 'user', null, { timeout: 30000 });
-  check((await page.textContent('#live-neutral')).includes('calibrated'), 'the page does not say the neutral is calibrated');
+  // The label follows the state on the page's next redraw: wait for it rather than race it.
+  const said = await page.waitForFunction(() => document.getElementById('live-neutral').textContent.includes('calibrated'), null, { timeout: 10000 }).then(() => true, () => false);
+  check(said, 'the page does not say the neutral is calibrated');
   await shot('08-live');
 
   // 10. Record a take from the webcam into the timeline.
@@ -336,7 +338,11 @@ try {
 
   // 13. Speech: a recording opened as the take is lip-synced, and plays with its sound; the
   //     stroke stays on top; scrubbing sounds a slice at the frame.
+  //     Whose voice it is goes with it when chosen (a man's: as the pitch would say).
+  await page.selectOption('#speech-voice', 'man');
+  const sent = page.waitForRequest((r) => r.url().includes('api/capture/upload'));
   await page.setInputFiles('#capture-file', speech);
+  check(new URL((await sent).url()).searchParams.get('voice') === 'man', 'the chosen voice was not sent');
   await page.waitForFunction(() => { const t = window.studio.capture.view && window.studio.capture.view.take; return t && t.sound && window.studio.sound.source === t.sound; }, null, { timeout: 120000 });
   const spoken = (await captureState()).take;
   const jawColumn = (await captureState()).blendshapes.indexOf('jawOpen');

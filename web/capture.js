@@ -185,12 +185,15 @@ export async function openInput(files) {
       let url = 'api/capture/upload';
       if (AUDIO.test(files[0].name)) {
         $('take-info').textContent = `Lip sync of ${files[0].name}…`;
-        // What was said, and in which language, when the user typed them.
+        // What was said, and in which language, when the user typed them; whose voice, when
+        // the user chose.
         const query = new URLSearchParams();
         const text = input('speech-text').value.trim();
         const language = input('speech-language').value.trim();
+        const voice = input('speech-voice').value;
         if (text) query.set('text', text);
         if (language) query.set('language', language);
+        if (voice && voice !== 'auto') query.set('voice', voice);
         if ([...query].length) url += `?${query}`;
       }
       apply(await api('POST', url, await files[0].arrayBuffer(), header(files[0])));

@@ -387,7 +387,7 @@ fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
 }
 
 #[test]
-fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language() {
+fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language_and_voice() {
     let out = output_dir("lipsync-studio-languages");
     let wav = out.join("pablo.wav");
     espeak_ng("es+m3", "150", "El perro de Pablo bebe mucho.", &wav);
@@ -420,6 +420,39 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language() {
     let (status, body) = upload("language=es%3Brm");
     assert_eq!(status, 400, "{body}");
     assert!(body.contains("language"), "{body}");
+    // Whose voice it is: every choice the page offers is one the studio takes, and reaches the
+    // recogniser (heard through another vocal tract, the phones recognised differ).
+    let page = std::fs::read_to_string(support::repo().join("web/index.html")).unwrap();
+    let select = page
+        .split_once("id=\"speech-voice\"")
+        .and_then(|(_, rest)| rest.split_once("</select>"))
+        .expect("the page's voice choice")
+        .0;
+    let choices: Vec<&str> = select
+        .split("value=\"")
+        .skip(1)
+        .filter_map(|v| v.split_once('"').map(|(value, _)| value))
+        .collect();
+    assert!(choices.len() >= 4, "{choices:?}");
+    let mut takes = Vec::new();
+    for voice in &choices {
+        let (status, state) = upload(&format!("language=es&voice={voice}"));
+        assert_eq!(status, 200, "voice {voice}: {state}");
+        let state: Value = serde_json::from_str(&state).unwrap();
+        takes.push(state["take"]["weights"].clone());
+    }
+    let deeper = choices
+        .iter()
+        .position(|v| *v == "0.8")
+        .expect("deeper than a man's");
+    assert_ne!(
+        takes[0], takes[deeper],
+        "heard as {} and as 0.8",
+        choices[0]
+    );
+    let (status, body) = upload("voice=robot");
+    assert_eq!(status, 400, "{body}");
+    assert!(body.contains("voice"), "{body}");
 }
 
 /// `text` spoken into `wav` by the `espeak-ng` program with `voice` at `rate` words a minute.

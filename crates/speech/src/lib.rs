@@ -104,12 +104,14 @@ pub fn lip_sync(
         &Mouth::of(character, table)?,
         fps,
         blind,
+        Voice::Auto,
     )
 }
 
 /// Lip sync of `sound` in `language` (an eSpeak NG voice name; English when `None`: see
 /// [`recognition::recognise`]) through `mouth` (one read through the character's adapter:
-/// [`Mouth::from_readings`]), as [`lip_sync`] does.
+/// [`Mouth::from_readings`]), heard through the vocal tract `voice` says, as [`lip_sync`]
+/// does.
 ///
 /// # Errors
 /// [`SpeechError`] when the recogniser fails.
@@ -120,8 +122,9 @@ pub fn lip_sync_with(
     mouth: &Mouth,
     fps: f32,
     blind: Recognition,
+    voice: Voice,
 ) -> Result<LipSync, SpeechError> {
-    Ok(read(sound, transcript, language, blind)?.on(mouth, fps))
+    Ok(read_loaded(sound, transcript, language, blind, None, voice)?.on(mouth, fps))
 }
 
 /// A sound's visemes, before they are put on a character: what [`read`] finds.

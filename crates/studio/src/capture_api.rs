@@ -180,8 +180,9 @@ fn is_take(name: &str) -> bool {
 }
 
 /// Several photos sent as one sequence: each names the batch, its place and the count; the
-/// last one starts reading the folder. Speech may come with its transcript and its language
-/// (an eSpeak NG voice name), as `faceanim lipsync --text --language` takes them.
+/// last one starts reading the folder. Speech may come with its transcript, its language (an
+/// eSpeak NG voice name) and whose voice it is, as `faceanim lipsync --text --language
+/// --voice` takes them.
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct Batch {
@@ -192,6 +193,7 @@ struct Batch {
     count: usize,
     text: Option<String>,
     language: Option<String>,
+    voice: Option<String>,
 }
 
 async fn upload(
@@ -229,6 +231,10 @@ async fn upload(
                 faceanim_rig::excerpt(language)
             )));
         }
+        let voice: faceanim_speech::Voice = match batch.voice.as_deref().map(str::trim) {
+            None | Some("") => faceanim_speech::Voice::Auto,
+            Some(voice) => voice.parse().map_err(|e| bad(format!("voice: {e}")))?,
+        };
         let path = both.desk().store_upload(&name, &body, None)?;
         let character = both.studio().character.clone();
         let (shown, stored, desk) = (name.clone(), path.clone(), both.desk.clone());
@@ -251,6 +257,7 @@ async fn upload(
                 &mouth,
                 30.0,
                 faceanim_speech::Recognition::Words,
+                voice,
             )
             .map_err(|e| ApiError::Invalid(e.to_string()))
         })
