@@ -247,6 +247,10 @@ EFFECTS = {
               lambda r: "[0:a]volume=24dB,alimiter=limit=1:level=false"),
     "phone": ("a telephone line: 300-3400 Hz at 8 kHz",
               lambda r: "[0:a]highpass=f=300,lowpass=f=3400,aresample=8000"),
+    "quiet": ("30 dB quieter (a distant or badly set microphone)",
+              lambda r: "[0:a]volume=-30dB"),
+    "dc": ("a DC offset of a tenth of full scale (a cheap sound card)",
+           lambda r: "[0:a]dcshift=0.1"),
     "noisy": ("pink noise (a fan, a room) about 15 dB under the voice",
               lambda r: f"anoisesrc=c=pink:a=0.02:r={r}[n];[0:a][n]amix=inputs=2:duration=first:normalize=0"),
 }

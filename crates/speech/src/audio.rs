@@ -70,6 +70,10 @@ fn long(seconds: f32) -> String {
     }
 }
 
+/// The offset (in samples' units, of 32,768) up to which a sound is kept as it is: 0.3 % of
+/// full scale (−50 dBFS), as flite's own voices carry (awb's lines: 76 to 158).
+const OFFSET: i32 = 100;
+
 impl Sound {
     /// Reads `path`.
     ///
@@ -111,7 +115,50 @@ impl Sound {
             }
             Wav::Elsewhere => convert(path)?,
         };
-        sound.checked(path)
+        sound.checked(path).map(Sound::without_offset)
+    }
+
+    /// This sound without a DC offset (a cheap sound card's, or one drifting slowly), where it
+    /// has one — the median 10 ms frame's mean over [`OFFSET`] — through a one-pole high-pass
+    /// at about 13 Hz, under any voice; a sound without one is kept as it is. An offset of a
+    /// tenth of full scale otherwise made every frame as loud as the voice, so that none was
+    /// heard as one and the mouth stayed shut.
+    #[must_use]
+    pub fn without_offset(self) -> Sound {
+        let mut offsets: Vec<i32> = self
+            .samples
+            .chunks(FRAME_SAMPLES)
+            .map(|frame| {
+                let sum: i64 = frame.iter().map(|&s| i64::from(s)).sum();
+                (sum / frame.len() as i64)
+                    .unsigned_abs()
+                    .min(i32::MAX as u64) as i32
+            })
+            .collect();
+        offsets.sort_unstable();
+        if offsets
+            .get(offsets.len() / 2)
+            .is_none_or(|&median| median <= OFFSET)
+        {
+            return self;
+        }
+        // y[n] = x[n] - x[n-1] + R y[n-1]: the pole's radius sets the cut-off (16 kHz).
+        const R: f32 = 0.995;
+        // Started as if the first sample had always been: an offset there from the start
+        // leaves no click.
+        let first = self.samples.first().map_or(0.0, |&s| f32::from(s));
+        let (mut before, mut out) = (first, 0.0f32);
+        let samples = self
+            .samples
+            .iter()
+            .map(|&s| {
+                let x = f32::from(s);
+                out = x - before + R * out;
+                before = x;
+                out.round().clamp(-32768.0, 32767.0) as i16
+            })
+            .collect();
+        Sound { samples }
     }
 
     fn checked(self, path: &Path) -> Result<Sound, AudioError> {
@@ -176,8 +223,11 @@ impl Sound {
     }
 
     /// Per 10 ms frame, whether a voice may be heard: louder than the recording's own noise
-    /// floor by a share of its range (and than −55 dBFS). A recording without a clear
-    /// difference between its quiet and loud parts (silence, steady noise, hum) has none.
+    /// floor by a share of its range, and than 35 dB under its peak or −55 dBFS, whichever is
+    /// lower. A recording without a clear difference between its quiet and loud parts
+    /// (silence, steady noise, hum), or whose loudest is under −70 dBFS, has none. A quiet
+    /// recording (a distant microphone, a badly set gain: a voice peaking at −50 dBFS) is heard
+    /// as a loud one is; before, nothing under −55 dBFS was a voice.
     #[must_use]
     pub fn voice_activity(&self) -> Vec<bool> {
         let levels = self.frame_levels();
@@ -188,7 +238,7 @@ impl Sound {
         sorted.sort_by(f32::total_cmp);
         let floor = sorted[sorted.len() / 10];
         let peak = sorted[(sorted.len() * 98 / 100).min(sorted.len() - 1)];
-        match voice_threshold(floor, peak, -55.0) {
+        match voice_threshold(floor, peak, (peak - 35.0).min(-55.0), -70.0) {
             Some(threshold) => levels.iter().map(|&l| l > threshold).collect(),
             None => vec![false; levels.len()],
         }
@@ -218,11 +268,12 @@ pub(crate) fn runs(flags: &[bool], value: bool, shortest: usize) -> Vec<std::ops
 
 /// The level (dBFS) above which a voice is heard, between a quiet `floor` and a loud `peak`:
 /// a share of their range above the floor, and never under `quietest`. `None` when quiet and
-/// loud differ too little (silence, steady noise, hum) or nothing is loud. The rule of both
-/// [`Sound::voice_activity`] and the live listener's gate.
-pub(crate) fn voice_threshold(floor: f32, peak: f32, quietest: f32) -> Option<f32> {
+/// loud differ too little (silence, steady noise, hum) or nothing reaches `faintest` (the
+/// quietest peak a voice has). The rule of both [`Sound::voice_activity`] and the live
+/// listener's gate.
+pub(crate) fn voice_threshold(floor: f32, peak: f32, quietest: f32, faintest: f32) -> Option<f32> {
     let range = peak - floor;
-    if range < 12.0 || peak < -45.0 {
+    if range < 12.0 || peak < faintest {
         return None;
     }
     Some((floor + (0.3 * range).max(8.0)).max(quietest))
@@ -633,6 +684,49 @@ mod tests {
         let cut = Sound::read(&dir.join("cut.wav")).unwrap_err().to_string();
         assert!(cut.contains("cut.wav"), "{cut}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A second of silence, a second of a 200 Hz tone peaking at `peak` (of 32,768), a second
+    /// of silence, all raised by `offset`.
+    fn line(peak: f32, offset: i16) -> Sound {
+        let samples = (0..48_000)
+            .map(|k| {
+                let tone = match (16_000..32_000).contains(&k) {
+                    true => peak * (std::f32::consts::TAU * 200.0 * k as f32 / 16_000.0).sin(),
+                    false => 0.0,
+                };
+                (tone as i16).saturating_add(offset)
+            })
+            .collect();
+        Sound { samples }
+    }
+
+    #[test]
+    fn a_quiet_recording_is_heard_and_an_offset_is_removed() {
+        let heard = |sound: &Sound| {
+            let voiced = sound.voice_activity();
+            (
+                voiced[110..190].iter().all(|v| *v),
+                voiced[..90].iter().chain(&voiced[210..]).all(|v| !v),
+            )
+        };
+        // A voice 50 dB under full scale (a distant microphone) is heard where it is; one
+        // under −70 dBFS is none.
+        assert_eq!(heard(&line(100.0, 0)), (true, true));
+        assert_eq!(heard(&line(8.0, 0)).0, false);
+        // An offset of a tenth of full scale hides the voice until it is removed — with no
+        // click where the sound starts, and the tone kept.
+        let offset = line(8000.0, 3277);
+        assert_eq!(heard(&offset).0, false);
+        let removed = offset.clone().without_offset();
+        assert_eq!(heard(&removed), (true, true));
+        assert!(removed.samples[..16_000].iter().all(|s| s.abs() <= 1));
+        let kept =
+            rms(&removed.samples[16_500..31_500]) / rms(&line(8000.0, 0).samples[16_500..31_500]);
+        assert!((kept - 1.0).abs() < 0.02, "{kept}");
+        // A sound without an offset is kept as it is.
+        let clean = line(8000.0, 40);
+        assert_eq!(clean.clone().without_offset().samples, clean.samples);
     }
 
     /// A WAV of `frames` at `rate` Hz in `encoding`, each frame's channels given.

@@ -54,6 +54,8 @@ impl Gate {
     /// Nothing quieter is a voice, dBFS (a live microphone without gain control can be
     /// quieter than a recording, so lower than [`Sound::voice_activity`]'s −55).
     const QUIETEST: f32 = -65.0;
+    /// The quietest peak a voice reaches at the microphone, dBFS.
+    const FAINTEST: f32 = -45.0;
 
     /// (voiced, open) of a frame at `level` dB.
     fn observe(&mut self, level: f32) -> (bool, f32) {
@@ -70,7 +72,9 @@ impl Gate {
         } else {
             (self.peak - Self::FADE).max(self.floor)
         };
-        let Some(threshold) = voice_threshold(self.floor, self.peak, Self::QUIETEST) else {
+        let Some(threshold) =
+            voice_threshold(self.floor, self.peak, Self::QUIETEST, Self::FAINTEST)
+        else {
             return (false, 0.0);
         };
         if level <= threshold {

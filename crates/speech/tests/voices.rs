@@ -113,3 +113,48 @@ fn a_formant_voice_closes_its_lips_on_holds_released_by_the_lips() {
     eprintln!("eSpeak NG m3, audio alone: {agreement:.3}, P/B/M {closed:.2}");
     assert!(closed >= 0.4, "{closed:.2}");
 }
+
+/// A recording 30 dB quieter than flite makes it (a distant microphone, a badly set gain), and
+/// one with a DC offset of a tenth of full scale (a cheap sound card), lip-sync as the clean
+/// one does. Before, nothing under −55 dBFS was a voice (0.46 agreement quiet), and an offset
+/// made every frame as loud as the voice (0.00).
+#[test]
+fn a_quiet_recording_and_one_with_an_offset_lip_sync_as_the_clean_one() {
+    let mut report = Vec::new();
+    for (name, change) in [
+        ("clean", (|s: i16| s) as fn(i16) -> i16),
+        ("30 dB quieter", |s: i16| s / 32),
+        ("offset", |s: i16| s.saturating_add(3277)),
+    ] {
+        let (mut hits, mut total) = (0, 0);
+        for (k, line) in LINES.iter().enumerate().take(2) {
+            let wav = std::env::temp_dir().join(format!(
+                "faceanim-level-{}-{k}-{}.wav",
+                std::process::id(),
+                name.len()
+            ));
+            let spoken = flite("rms", line, &wav);
+            let sound = Sound::read(&wav).unwrap();
+            let changed: Vec<i16> = sound.samples.iter().map(|&s| change(s)).collect();
+            std::fs::write(&wav, faceanim_speech::audio::wav_bytes(&changed, 16_000, 1)).unwrap();
+            let sound = Sound::read(&wav).unwrap();
+            let _ = std::fs::remove_file(&wav);
+            let reading =
+                faceanim_speech::read(&sound, Some(line), None, Recognition::Words).unwrap();
+            let frames = reading.track.sample(100.0);
+            let mut start = 0.0f32;
+            for &(viseme, end) in &spoken {
+                if viseme != Viseme::Sil {
+                    let (agree, frames) = agreeing(|k| shown(&frames, k), viseme, start, end);
+                    (hits, total) = (hits + agree, total + frames);
+                }
+                start = end;
+            }
+        }
+        report.push((name, hits as f32 / total.max(1) as f32));
+    }
+    eprintln!("{report:?}");
+    for (name, agreement) in &report {
+        assert!(*agreement >= report[0].1 - 0.03, "{report:?}: {name}");
+    }
+}
