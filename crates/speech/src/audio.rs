@@ -713,11 +713,11 @@ mod tests {
         // A voice 50 dB under full scale (a distant microphone) is heard where it is; one
         // under −70 dBFS is none.
         assert_eq!(heard(&line(100.0, 0)), (true, true));
-        assert_eq!(heard(&line(8.0, 0)).0, false);
+        assert!(!heard(&line(8.0, 0)).0);
         // An offset of a tenth of full scale hides the voice until it is removed — with no
         // click where the sound starts, and the tone kept.
         let offset = line(8000.0, 3277);
-        assert_eq!(heard(&offset).0, false);
+        assert!(!heard(&offset).0);
         let removed = offset.clone().without_offset();
         assert_eq!(heard(&removed), (true, true));
         assert!(removed.samples[..16_000].iter().all(|s| s.abs() <= 1));
