@@ -75,7 +75,13 @@ impl std::str::FromStr for Voice {
 pub(crate) struct Heard<'a> {
     samples: Cow<'a, [i16]>,
     frame_rate: u32,
+    /// Whether the voice is heard for at least [`WHISPER`] without a pitch: a whisper.
+    whispered: bool,
 }
+
+/// The least voice (10 ms frames) without a pitch that is a whisper, not a word too short to
+/// find a pitch in.
+const WHISPER: usize = 50;
 
 impl<'a> Heard<'a> {
     /// `sound` as it is.
@@ -83,11 +89,13 @@ impl<'a> Heard<'a> {
         Heard {
             samples: audible(Cow::Borrowed(&sound.samples)),
             frame_rate: FRAME_RATE,
+            whispered: false,
         }
     }
 
     /// `sound` warped as `voice` says: by hand, or as its pitch says ([`warp`]).
     pub(crate) fn voice(sound: &'a Sound, voice: Voice) -> Heard<'a> {
+        let mut whispered = false;
         let (pitch, warp) = match voice {
             Voice::Warp(warp) if warp.is_finite() => {
                 (None, warp.clamp(*Voice::WARPS.start(), *Voice::WARPS.end()))
@@ -95,6 +103,8 @@ impl<'a> Heard<'a> {
             Voice::Warp(_) => (None, 1.0),
             Voice::Auto => {
                 let pitch = median_pitch(sound);
+                whispered = pitch.is_none()
+                    && sound.voice_activity().iter().filter(|&&v| v).count() >= WHISPER;
                 (pitch, pitch.map_or(1.0, warp))
             }
         };
@@ -104,9 +114,13 @@ impl<'a> Heard<'a> {
             ?pitch,
             warp,
             frame_rate,
+            whispered,
             "the voice as the recogniser hears it"
         );
-        Heard::warped(sound, frame_rate)
+        Heard {
+            whispered,
+            ..Heard::warped(sound, frame_rate)
+        }
     }
 
     /// `sound` slowed to `100 / frame_rate` of its speed, every frequency divided as much:
@@ -122,7 +136,14 @@ impl<'a> Heard<'a> {
                     .samples,
             )),
             frame_rate,
+            whispered: false,
         }
+    }
+
+    /// Whether the voice was heard without a pitch, long enough to be a whisper (only when
+    /// its vocal tract was left to the pitch: [`Voice::Auto`]).
+    pub(crate) fn is_whispered(&self) -> bool {
+        self.whispered
     }
 
     /// How much longer a vocal tract than the acoustic model's the sound is heard through: 1
@@ -158,8 +179,9 @@ const DIGITAL_SILENCE: usize = (SAMPLE_RATE / 10) as usize;
 /// `samples` with every run of digital silence of [`DIGITAL_SILENCE`] or longer filled with
 /// noise of one least significant bit, from a fixed seed (the same sound is always heard
 /// alike). The recogniser's features of exact zeros have no energy to take a logarithm of,
-/// and throw the running mean it normalises by far off: an eSpeak NG whisper padded with half
-/// a second of zeros was aligned to its transcript 0.4 s early.
+/// and throw the running mean it normalises by far off: four lines of an eSpeak NG whisper,
+/// each padded with half a second of zeros, were aligned to their transcripts at 0.81
+/// agreement unfilled, 0.96 filled.
 fn audible(samples: Cow<'_, [i16]>) -> Cow<'_, [i16]> {
     let runs: Vec<(usize, usize)> = {
         let mut runs = Vec::new();
