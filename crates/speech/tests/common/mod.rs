@@ -148,3 +148,22 @@ pub fn judged(frames: &[[f32; 15]], said: &Said) -> [usize; 4] {
     }
     [hits, total, closed, bilabials]
 }
+
+/// `sound` read without a transcript, asserting that its phones were recognised (not its
+/// words) and that a note saying `why` told the user so.
+pub fn read_by_its_phones(sound: &Sound, why: &str) -> faceanim_speech::Reading {
+    let reading =
+        faceanim_speech::read(sound, None, None, faceanim_speech::Recognition::Words).unwrap();
+    assert_eq!(
+        reading.recognition,
+        faceanim_speech::Recognition::PhoneLoop,
+        "{:?}",
+        reading.notes
+    );
+    assert!(
+        reading.notes.iter().any(|n| n.contains(why)),
+        "{:?}",
+        reading.notes
+    );
+    reading
+}
