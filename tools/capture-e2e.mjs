@@ -267,8 +267,8 @@ try {
   await page.click('#calibrate');
   await page.waitForFunction(() => window.studio.capture.live.neutral === 'user', null, { timeout: 30000 });
   // The label follows the state on the page's next redraw: wait for it rather than race it.
-  const said = await page.waitForFunction(() => document.getElementById('live-neutral').textContent.includes('calibrated'), null, { timeout: 10000 }).then(() => true, () => false);
-  check(said, 'the page does not say the neutral is calibrated');
+  const calibratedShown = await page.waitForFunction(() => document.getElementById('live-neutral').textContent.includes('calibrated'), null, { timeout: 10000 }).then(() => true, () => false);
+  check(calibratedShown, 'the page does not say the neutral is calibrated');
   await shot('08-live');
 
   // 10. Record a take from the webcam into the timeline.
