@@ -102,9 +102,9 @@ impl<'a> Heard<'a> {
             }
             Voice::Warp(_) => (None, 1.0),
             Voice::Auto => {
-                let pitch = median_pitch(sound);
-                whispered = pitch.is_none()
-                    && sound.voice_activity().iter().filter(|&&v| v).count() >= WHISPER;
+                let voiced = sound.voice_activity();
+                let pitch = median_pitch(sound, &voiced);
+                whispered = pitch.is_none() && voiced.iter().filter(|&&v| v).count() >= WHISPER;
                 (pitch, pitch.map_or(1.0, warp))
             }
         };
@@ -251,7 +251,7 @@ const ENOUGH: usize = 1000;
 /// correlation comes within 10 % of its best (so the period, not a multiple of it), read at
 /// 8 kHz; at most the first [`ENOUGH`] voiced windows. `None` without [`FEWEST`] voiced
 /// windows (a whisper, noise, silence).
-pub(crate) fn median_pitch(sound: &Sound) -> Option<f32> {
+pub(crate) fn median_pitch(sound: &Sound, voiced: &[bool]) -> Option<f32> {
     const RATE: usize = 8000;
     // Pairs averaged: 8 kHz, enough for any voice's period.
     let samples: Vec<f32> = sound
@@ -259,7 +259,6 @@ pub(crate) fn median_pitch(sound: &Sound) -> Option<f32> {
         .chunks_exact(2)
         .map(|pair| (f32::from(pair[0]) + f32::from(pair[1])) / 2.0)
         .collect();
-    let voiced = sound.voice_activity();
     let window = RATE / 25;
     let hop = RATE / 50;
     let shortest = (RATE as f32 / PITCHES.end()).floor() as usize;
@@ -332,6 +331,11 @@ fn period(x: &[f32], window: usize, lags: std::ops::RangeInclusive<usize>) -> Op
 mod tests {
     use super::*;
 
+    /// `sound`'s median pitch, where its own voice activity says a voice is heard.
+    fn pitch_of(sound: &Sound) -> Option<f32> {
+        median_pitch(sound, &sound.voice_activity())
+    }
+
     /// A voice-like buzz: harmonics of `pitch` Hz falling 6 dB an octave, `seconds` long,
     /// between two stretches of silence.
     fn buzz(pitch: f32, seconds: f32) -> Sound {
@@ -385,7 +389,7 @@ mod tests {
     #[test]
     fn a_voices_pitch_is_found_not_its_octave() {
         for pitch in [85.0, 120.0, 170.0, 230.0, 320.0] {
-            let found = median_pitch(&buzz(pitch, 1.0)).unwrap();
+            let found = pitch_of(&buzz(pitch, 1.0)).unwrap();
             assert!(
                 (found / pitch - 1.0).abs() < 0.03,
                 "{pitch} Hz found as {found}"
@@ -393,7 +397,7 @@ mod tests {
         }
         // Silence and noise have none.
         assert_eq!(
-            median_pitch(&Sound {
+            pitch_of(&Sound {
                 samples: vec![0; 16000]
             }),
             None
@@ -410,7 +414,7 @@ mod tests {
                 ((seed >> 16) as i32 % loud) as i16
             })
             .collect();
-        assert_eq!(median_pitch(&Sound { samples: noise }), None, "a whisper");
+        assert_eq!(pitch_of(&Sound { samples: noise }), None, "a whisper");
     }
 
     #[test]
@@ -457,7 +461,7 @@ mod tests {
         let slowed = Sound {
             samples: heard.samples.into_owned(),
         };
-        let pitch = median_pitch(&slowed).unwrap();
+        let pitch = pitch_of(&slowed).unwrap();
         assert!((pitch - 160.0).abs() < 5.0, "{pitch}");
         assert!(Heard::warped(&sound, 100).is_plain());
         assert!(
