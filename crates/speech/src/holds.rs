@@ -30,6 +30,9 @@ const RELEASE: (f32, f32) = (-0.005, 0.015);
 /// tract `warp` times the acoustic model's.
 pub(crate) fn lips_held(sound: &Sound, mut phones: Vec<Phone>, warp: f32) -> Vec<Phone> {
     let grave = GRAVE * warp.clamp(0.5, 2.0);
+    // One planner for the line: every release window is the same length, so its transform is
+    // planned once.
+    let mut planner = FftPlanner::new();
     for k in 1..phones.len().saturating_sub(1) {
         let (before, hold, after) = (&phones[k - 1], &phones[k], &phones[k + 1]);
         if hold.label != "SIL"
@@ -39,7 +42,12 @@ pub(crate) fn lips_held(sound: &Sound, mut phones: Vec<Phone>, warp: f32) -> Vec
         {
             continue;
         }
-        let centroid = centroid(sound, hold.end + RELEASE.0, hold.end + RELEASE.1);
+        let centroid = centroid(
+            sound,
+            &mut planner,
+            hold.end + RELEASE.0,
+            hold.end + RELEASE.1,
+        );
         tracing::trace!(start = hold.start, end = hold.end, ?centroid, "a hold");
         if centroid.is_some_and(|c| c < grave) {
             phones[k].label = "P".into();
@@ -49,8 +57,9 @@ pub(crate) fn lips_held(sound: &Sound, mut phones: Vec<Phone>, warp: f32) -> Vec
 }
 
 /// The spectral centroid (Hz) between 300 Hz and 7 kHz of `sound` from `start` to `end`
-/// (seconds) under a Hann window; `None` where the stretch is cut short or silent.
-fn centroid(sound: &Sound, start: f32, end: f32) -> Option<f32> {
+/// (seconds) under a Hann window, transformed by a plan from `planner`; `None` where the
+/// stretch is cut short or silent.
+fn centroid(sound: &Sound, planner: &mut FftPlanner<f32>, start: f32, end: f32) -> Option<f32> {
     let rate = SAMPLE_RATE as f32;
     let a = (start * rate).round().max(0.0) as usize;
     let b = ((end * rate).round().max(0.0) as usize).min(sound.samples.len());
@@ -69,9 +78,7 @@ fn centroid(sound: &Sound, start: f32, end: f32) -> Option<f32> {
         .chain(std::iter::repeat(Complex32::new(0.0, 0.0)))
         .take(size)
         .collect();
-    FftPlanner::new()
-        .plan_fft_forward(size)
-        .process(&mut buffer);
+    planner.plan_fft_forward(size).process(&mut buffer);
     let bin = rate / size as f32;
     let (mut weighted, mut total) = (0.0f64, 0.0f64);
     for (i, c) in buffer.iter().enumerate().take(size / 2 + 1) {
@@ -119,10 +126,18 @@ mod tests {
     fn a_release_is_as_high_as_its_sound() {
         let sound = stop(0.1, 1000.0);
         // The burst: 0.4 to 0.42 s.
-        let found = centroid(&sound, 0.402, 0.418).unwrap();
+        let mut planner = FftPlanner::new();
+        let found = centroid(&sound, &mut planner, 0.402, 0.418).unwrap();
         assert!((found - 1000.0).abs() < 100.0, "{found}");
-        assert_eq!(centroid(&sound, 0.31, 0.39), None, "silence");
-        assert_eq!(centroid(&sound, 0.9, 1.1), None, "past the end");
+        assert_eq!(centroid(&sound, &mut planner, 0.31, 0.39), None, "silence");
+        assert_eq!(
+            centroid(&sound, &mut planner, 0.9, 1.1),
+            None,
+            "past the end"
+        );
+        // A window of another length, planned by the same planner.
+        let found = centroid(&sound, &mut planner, 0.4, 0.42).unwrap();
+        assert!((found - 1000.0).abs() < 100.0, "{found}");
     }
 
     #[test]
