@@ -82,8 +82,8 @@ impl Models<'_> {
     /// dictionary turns into phones), several times faster than a phone loop.
     ///
     /// With the library's own beams. Narrower ones (`-beam 1e-40 -wbeam 1e-24`, or
-    /// `-maxhmmpf 3000 -maxwpf 20`) decoded 25–30 % faster and left clean voices' viseme
-    /// agreement within 0.01 (flite slt, rms, awb; eSpeak NG m3, f2), but under pink room
+    /// `-maxhmmpf 3000 -maxwpf 20`) decoded 15–30 % faster and cost clean voices at most
+    /// 0.011 viseme agreement (flite slt, rms, awb; eSpeak NG m3, f2), but under pink room
     /// noise 15 dB below the voice they cost flite's slt and rms up to 0.05 agreement and up
     /// to a quarter of their P/B/M closures (slt 0.83 → 0.62 with the narrower beams): real
     /// recordings need the width.
