@@ -1,27 +1,39 @@
 //! Links Debian's libespeak-ng (`apt-get install libespeak-ng-dev`) when it is installed;
 //! otherwise the crate builds without it and every call reports that the synthesiser is
 //! missing, so the rest of faceanim builds and runs on any machine.
+//!
+//! What Cargo watches: the library found, so that an upgrade or removal builds the crate again
+//! and nothing else does; when none is found, the places it would be installed (a path that
+//! does not exist is always stale to Cargo), so that the next build after installing it links
+//! it.
 use std::path::Path;
+
+const DIRS: [&str; 5] = [
+    "/usr/lib/x86_64-linux-gnu",
+    "/usr/lib/aarch64-linux-gnu",
+    "/usr/lib",
+    "/usr/local/lib",
+    "/opt/homebrew/lib",
+];
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(espeak)");
     println!("cargo::rerun-if-env-changed=FACEANIM_NO_ESPEAK");
-    let dirs = [
-        "/usr/lib/x86_64-linux-gnu",
-        "/usr/lib/aarch64-linux-gnu",
-        "/usr/lib",
-        "/usr/local/lib",
-        "/opt/homebrew/lib",
-    ];
-    for dir in dirs {
-        println!("cargo::rerun-if-changed={dir}/libespeak-ng.so");
+    let found = DIRS.iter().find_map(|d| {
+        ["libespeak-ng.so", "libespeak-ng.dylib"]
+            .map(|l| Path::new(d).join(l))
+            .into_iter()
+            .find(|l| l.exists())
+    });
+    match &found {
+        Some(library) => println!("cargo::rerun-if-changed={}", library.display()),
+        None => {
+            for dir in DIRS {
+                println!("cargo::rerun-if-changed={dir}/libespeak-ng.so");
+            }
+        }
     }
-    let found = std::env::var_os("FACEANIM_NO_ESPEAK").is_none()
-        && dirs.iter().any(|d| {
-            Path::new(d).join("libespeak-ng.so").exists()
-                || Path::new(d).join("libespeak-ng.dylib").exists()
-        });
-    if found {
+    if found.is_some() && std::env::var_os("FACEANIM_NO_ESPEAK").is_none() {
         println!("cargo::rustc-cfg=espeak");
         println!("cargo::rustc-link-lib=dylib=espeak-ng");
     } else {
