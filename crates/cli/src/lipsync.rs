@@ -234,16 +234,22 @@ fn read_speech(
         Blind::Words => faceanim_speech::Recognition::Words,
         Blind::Phones => faceanim_speech::Recognition::PhoneLoop,
     };
-    // Without a transcript the recogniser's models (most of a short line's time) load while
-    // the sound is read and converted.
-    let loading = transcript
-        .is_none()
-        .then(|| faceanim_speech::recognition::Loading::start(Some(&args.language), blind));
     let sound = Sound::read(&args.speech)?;
     if let Some((text, from)) = transcript {
         faceanim_speech::phones::transcript_words(text, sound.seconds())
             .map_err(|e| anyhow::anyhow!("--text {from}: {e}"))?;
     }
+    // Without a transcript the recogniser's models (most of a short line's time) load while
+    // the character loads: the ones this voice is heard with (a woman's, a child's, a
+    // whisper's), decided from the sound first.
+    let loading = transcript.is_none().then(|| {
+        faceanim_speech::recognition::Loading::start_for(
+            &sound,
+            Some(&args.language),
+            blind,
+            args.voice,
+        )
+    });
     let heard = faceanim_speech::read_loaded(
         &sound,
         transcript.map(|(text, _)| text.as_str()),

@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use faceanim_sphinx_sys::{EN_US, FRAME_RATE, Recogniser, SphinxError};
+use faceanim_sphinx_sys::{EN_US, FRAME_RATE, SphinxError};
 
 use crate::audio::Sound;
 use crate::warp::Heard;
@@ -141,7 +141,7 @@ pub fn transcript_words(text: &str, seconds: f32) -> Result<Vec<String>, PhoneEr
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
 pub(crate) fn recognise_words(
     heard: &Heard<'_>,
-    recogniser: Option<Recogniser>,
+    recogniser: Option<crate::warp::Loaded>,
 ) -> Result<Vec<Phone>, PhoneError> {
     // The recogniser is dropped once it has decoded, before the alignment below waits for a
     // turn of the cores.
@@ -181,7 +181,7 @@ pub(crate) fn blind_search(route: Recognition) -> faceanim_sphinx_sys::Search {
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
 pub(crate) fn phone_loop(
     heard: &Heard<'_>,
-    recogniser: Option<Recogniser>,
+    recogniser: Option<crate::warp::Loaded>,
 ) -> Result<Vec<Phone>, PhoneError> {
     phones_of(heard.decode(blind_search(Recognition::PhoneLoop), recogniser)?)
 }

@@ -6,7 +6,7 @@ use faceanim_sphinx_sys::{Recogniser, SphinxError};
 
 use crate::audio::Sound;
 use crate::phones::{self, Phone, PhoneError, Recognition};
-use crate::warp::{Heard, Voice};
+use crate::warp::{Heard, Hearing, Loaded, Voice};
 
 /// The language of lines without one: US English.
 pub const ENGLISH: &str = "en-us";
@@ -54,37 +54,114 @@ fn blind_route(language: &str, blind: Recognition) -> Recognition {
 
 /// The recogniser a line without a transcript needs, loading on a thread of its own from
 /// the moment it is made: its models need no sound, so they load while the sound is read or
-/// converted (most of a short line's time otherwise). Give it to [`recognise_loaded`].
+/// converted, or the character loads (most of a short line's time otherwise). Give it to
+/// [`recognise_loaded`].
 #[derive(Debug)]
 pub struct Loading {
     route: Recognition,
+    /// The frame rate it reads at.
+    frame_rate: u32,
+    /// What it was decided for, when the sound was at hand ([`Loading::start_for`]).
+    decided: Option<Decided>,
     thread: std::thread::JoinHandle<Result<Recogniser, SphinxError>>,
+}
+
+/// How a sound is heard, decided before its recogniser loads.
+#[derive(Debug)]
+struct Decided {
+    /// The sound's length and a hash of its samples: the decision is for that sound only.
+    sound: (usize, u64),
+    voice: Voice,
+    hearing: Hearing,
 }
 
 impl Loading {
     /// Starts loading the recogniser for a line in `language` (English when `None`)
-    /// recognised by `blind`.
+    /// recognised by `blind`, before its sound is at hand: for a voice heard as it is (a
+    /// man's). A woman's, a child's or a whisper needs another, loaded when the sound is
+    /// decoded; [`Loading::start_for`] loads the right one once the sound is at hand.
     #[must_use]
     pub fn start(language: Option<&str>, blind: Recognition) -> Loading {
-        let route = blind_route(language.unwrap_or(ENGLISH), blind);
-        let search = phones::blind_search(route);
+        Loading::load(language, blind, Hearing::plain(), None)
+    }
+
+    /// Starts loading the recogniser for `sound` in `language` recognised by `blind`, heard
+    /// through the vocal tract `voice` says: decides how it is heard first (its pitch: a few
+    /// milliseconds), so that a woman's or child's voice, warped, and a whisper, recognised by
+    /// its phones, find theirs loaded too.
+    #[must_use]
+    pub fn start_for(
+        sound: &Sound,
+        language: Option<&str>,
+        blind: Recognition,
+        voice: Voice,
+    ) -> Loading {
+        let hearing = Hearing::of(sound, voice);
+        let decided = Decided {
+            sound: identity(sound),
+            voice,
+            hearing,
+        };
+        Loading::load(language, blind, hearing, Some(decided))
+    }
+
+    fn load(
+        language: Option<&str>,
+        blind: Recognition,
+        hearing: Hearing,
+        decided: Option<Decided>,
+    ) -> Loading {
+        let route = heard_route(blind_route(language.unwrap_or(ENGLISH), blind), hearing);
+        let search = phones::blind_search(route).warped(hearing.frame_rate);
         Loading {
             route,
+            frame_rate: hearing.frame_rate,
+            decided,
             thread: std::thread::spawn(move || Recogniser::load(&search)),
         }
     }
 
-    /// The loaded recogniser, when it is the one `route` needs.
-    fn finish(self, route: Recognition) -> Result<Option<Recogniser>, PhoneError> {
-        if self.route != route {
+    /// How `sound` is heard through `voice`, when this recogniser was loaded for them.
+    fn hearing_of(&self, sound: &Sound, voice: Voice) -> Option<Hearing> {
+        self.decided
+            .as_ref()
+            .filter(|d| d.voice == voice && d.sound == identity(sound))
+            .map(|d| d.hearing)
+    }
+
+    /// The loaded recogniser, when it is the one `route` needs at `frame_rate`.
+    fn finish(self, route: Recognition, frame_rate: u32) -> Result<Option<Loaded>, PhoneError> {
+        if self.route != route || self.frame_rate != frame_rate {
             return Ok(None);
         }
         match self.thread.join() {
-            Ok(loaded) => Ok(Some(loaded?)),
+            Ok(loaded) => Ok(Some(Loaded {
+                recogniser: loaded?,
+                frame_rate,
+            })),
             Err(_) => Err(PhoneError::Sphinx(SphinxError::Decoder(
                 "loading the recogniser stopped".into(),
             ))),
         }
+    }
+}
+
+/// A sound's length and a hash of its samples.
+fn identity(sound: &Sound) -> (usize, u64) {
+    use std::hash::{Hash, Hasher};
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    sound.samples.hash(&mut hasher);
+    (sound.samples.len(), hasher.finish())
+}
+
+/// The route a line recognised by `blind` takes when heard as `hearing` says: a whisper's
+/// words are seldom made out, and slowly (the acoustic scores are flat): its phones say more,
+/// at a quarter of the time (eSpeak NG's whisperf: 0.65 agreement against 0.58).
+fn heard_route(blind: Recognition, hearing: Hearing) -> Recognition {
+    if blind == Recognition::Words && hearing.whispered {
+        Recognition::PhoneLoop
+    } else {
+        blind
     }
 }
 
@@ -111,8 +188,13 @@ pub fn recognise_loaded(
             "words are recognised in English only: the phones of this {language} line were recognised instead"
         ));
     }
-    // The voice as the acoustic model hears it best (a woman's, a child's slowed).
-    let heard = Heard::voice(sound, voice);
+    // The voice as the acoustic model hears it best (a woman's, a child's slowed), as decided
+    // when its recogniser started loading if it was.
+    let hearing = loading
+        .as_ref()
+        .and_then(|l| l.hearing_of(sound, voice))
+        .unwrap_or_else(|| Hearing::of(sound, voice));
+    let heard = Heard::as_decided(sound, hearing);
     if let Some(text) = transcript {
         let words = phones::transcript_words(text, sound.seconds())?;
         // Why the recogniser could not align it, when it tried.
@@ -141,16 +223,15 @@ pub fn recognise_loaded(
             None => format!("{failed}: the speech was recognised without it"),
         });
     }
-    // A whisper's words are seldom made out, and slowly (the acoustic scores are flat): its
-    // phones say more, at a quarter of the time (eSpeak NG's whisperf: 0.65 agreement
-    // against 0.58).
-    let blind = if blind == Recognition::Words && heard.is_whispered() {
+    let route = heard_route(blind, hearing);
+    if route != blind {
         notes.push("the voice has no pitch (a whisper): its phones were recognised".to_owned());
-        Recognition::PhoneLoop
-    } else {
-        blind
-    };
-    let loaded = loading.map(|l| l.finish(blind)).transpose()?.flatten();
+    }
+    let blind = route;
+    let loaded = loading
+        .map(|l| l.finish(blind, hearing.frame_rate))
+        .transpose()?
+        .flatten();
     if blind != Recognition::Words {
         return Ok((
             crate::holds::lips_held(sound, phones::phone_loop(&heard, loaded)?, heard.warp()),
@@ -206,4 +287,38 @@ fn said_share(phones: &[Phone], voiced: &[bool]) -> f32 {
     }
     let covered = voiced.iter().zip(&said).filter(|(v, s)| **v && **s).count();
     covered as f32 / total as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::warp::tests::buzz;
+
+    /// A recogniser loaded once the sound is at hand is the one its voice is heard with, and
+    /// its decision is used for that sound and voice only.
+    #[test]
+    fn a_recogniser_loaded_for_a_sound_is_the_one_its_voice_needs() {
+        let woman = buzz(230.0, 1.0);
+        let loading = Loading::start_for(&woman, None, Recognition::Words, Voice::Auto);
+        assert_eq!(loading.route, Recognition::Words);
+        assert_eq!(loading.frame_rate, 83, "a woman's voice is warped by 1.2");
+        assert_eq!(
+            loading.hearing_of(&woman, Voice::Auto),
+            Some(Hearing::of(&woman, Voice::Auto))
+        );
+        assert_eq!(loading.hearing_of(&woman, Voice::Warp(1.0)), None);
+        assert_eq!(loading.hearing_of(&buzz(110.0, 1.0), Voice::Auto), None);
+        // Another voice's frame rate, or another route, is not served by it.
+        let by_hand = Loading::start_for(&woman, None, Recognition::Words, Voice::Warp(1.0));
+        assert_eq!(by_hand.frame_rate, faceanim_sphinx_sys::FRAME_RATE);
+        assert!(matches!(
+            loading.finish(Recognition::PhoneLoop, 83),
+            Ok(None)
+        ));
+        assert!(matches!(by_hand.finish(Recognition::Words, 83), Ok(None)));
+        // Before the sound is at hand: a man's voice, and no decision to reuse.
+        let ahead = Loading::start(None, Recognition::Words);
+        assert_eq!(ahead.frame_rate, faceanim_sphinx_sys::FRAME_RATE);
+        assert_eq!(ahead.hearing_of(&woman, Voice::Auto), None);
+    }
 }

@@ -75,8 +75,6 @@ impl std::str::FromStr for Voice {
 pub(crate) struct Heard<'a> {
     samples: Cow<'a, [i16]>,
     frame_rate: u32,
-    /// Whether the voice is heard for at least [`WHISPER`] without a pitch: a whisper.
-    whispered: bool,
 }
 
 /// The least voice (10 ms frames) without a pitch that is a whisper, not a word too short to
@@ -89,12 +87,68 @@ impl<'a> Heard<'a> {
         Heard {
             samples: audible(Cow::Borrowed(&sound.samples)),
             frame_rate: FRAME_RATE,
-            whispered: false,
         }
     }
 
-    /// `sound` warped as `voice` says: by hand, or as its pitch says ([`warp`]).
-    pub(crate) fn voice(sound: &'a Sound, voice: Voice) -> Heard<'a> {
+    /// `sound` heard as `hearing` decided (for this sound: [`Hearing::of`]).
+    pub(crate) fn as_decided(sound: &'a Sound, hearing: Hearing) -> Heard<'a> {
+        Heard::warped(sound, hearing.frame_rate)
+    }
+
+    /// `sound` slowed to `100 / frame_rate` of its speed, every frequency divided as much:
+    /// played as if recorded at 160 × `frame_rate` samples a second.
+    pub(crate) fn warped(sound: &'a Sound, frame_rate: u32) -> Heard<'a> {
+        if frame_rate == FRAME_RATE {
+            return Heard::plain(sound);
+        }
+        Heard {
+            samples: audible(Cow::Owned(
+                sound
+                    .played_at(SAMPLE_RATE / FRAME_RATE * frame_rate)
+                    .samples,
+            )),
+            frame_rate,
+        }
+    }
+
+    /// How much longer a vocal tract than the acoustic model's the sound is heard through: 1
+    /// for a sound heard as it is, 1.2 for a woman's voice.
+    pub(crate) fn warp(&self) -> f32 {
+        FRAME_RATE as f32 / self.frame_rate as f32
+    }
+
+    /// The sound decoded with `search` (read at this sound's frame rate), by `loaded` where
+    /// it was loaded for this search at this sound's frame rate, else by a recogniser loaded
+    /// now. Segments' frames are the sound's 10 ms frames.
+    pub(crate) fn decode(
+        &self,
+        search: Search,
+        loaded: Option<Loaded>,
+    ) -> Result<Vec<Segment>, SphinxError> {
+        match loaded {
+            Some(Loaded {
+                mut recogniser,
+                frame_rate,
+            }) if frame_rate == self.frame_rate => recogniser.decode(&self.samples),
+            _ => faceanim_sphinx_sys::decode(&search.warped(self.frame_rate), &self.samples),
+        }
+    }
+}
+
+/// How the recogniser hears a voice, decided once per sound: the frame rate its warp reads
+/// it at, and whether it is a whisper.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Hearing {
+    /// Frames a second: [`FRAME_RATE`] for a voice heard as it is, fewer for a longer tract.
+    pub(crate) frame_rate: u32,
+    /// Whether the voice is heard for at least [`WHISPER`] without a pitch (only decided
+    /// for [`Voice::Auto`]).
+    pub(crate) whispered: bool,
+}
+
+impl Hearing {
+    /// How `voice` says `sound` is heard: by hand, or as its pitch says ([`warp`]).
+    pub(crate) fn of(sound: &Sound, voice: Voice) -> Hearing {
         let mut whispered = false;
         let (pitch, warp) = match voice {
             Voice::Warp(warp) if warp.is_finite() => {
@@ -117,59 +171,28 @@ impl<'a> Heard<'a> {
             whispered,
             "the voice as the recogniser hears it"
         );
-        Heard {
+        Hearing {
+            frame_rate,
             whispered,
-            ..Heard::warped(sound, frame_rate)
         }
     }
 
-    /// `sound` slowed to `100 / frame_rate` of its speed, every frequency divided as much:
-    /// played as if recorded at 160 × `frame_rate` samples a second.
-    pub(crate) fn warped(sound: &'a Sound, frame_rate: u32) -> Heard<'a> {
-        if frame_rate == FRAME_RATE {
-            return Heard::plain(sound);
-        }
-        Heard {
-            samples: audible(Cow::Owned(
-                sound
-                    .played_at(SAMPLE_RATE / FRAME_RATE * frame_rate)
-                    .samples,
-            )),
-            frame_rate,
+    /// A voice heard as it is, not a whisper: what a recogniser loaded before the sound is at
+    /// hand assumes.
+    pub(crate) fn plain() -> Hearing {
+        Hearing {
+            frame_rate: FRAME_RATE,
             whispered: false,
         }
     }
+}
 
-    /// Whether the voice was heard without a pitch, long enough to be a whisper (only when
-    /// its vocal tract was left to the pitch: [`Voice::Auto`]).
-    pub(crate) fn is_whispered(&self) -> bool {
-        self.whispered
-    }
-
-    /// How much longer a vocal tract than the acoustic model's the sound is heard through: 1
-    /// for a sound heard as it is, 1.2 for a woman's voice.
-    pub(crate) fn warp(&self) -> f32 {
-        FRAME_RATE as f32 / self.frame_rate as f32
-    }
-
-    /// Whether the sound is heard as it is.
-    pub(crate) fn is_plain(&self) -> bool {
-        self.frame_rate == FRAME_RATE
-    }
-
-    /// The sound decoded with `search` (read at this sound's frame rate), by `loaded` where
-    /// it was loaded for this search at 100 frames a second and the sound is heard as it is,
-    /// else by a recogniser loaded now. Segments' frames are the sound's 10 ms frames.
-    pub(crate) fn decode(
-        &self,
-        search: Search,
-        loaded: Option<Recogniser>,
-    ) -> Result<Vec<Segment>, SphinxError> {
-        match loaded {
-            Some(mut recogniser) if self.is_plain() => recogniser.decode(&self.samples),
-            _ => faceanim_sphinx_sys::decode(&search.warped(self.frame_rate), &self.samples),
-        }
-    }
+/// A recogniser loaded ahead, and the frame rate it reads at: only a sound heard at that
+/// rate is decoded by it ([`Heard::decode`]).
+#[derive(Debug)]
+pub(crate) struct Loaded {
+    pub(crate) recogniser: Recogniser,
+    pub(crate) frame_rate: u32,
 }
 
 /// The shortest run of digital silence (exact zeros) [`audible`] fills, samples: 100 ms.
@@ -328,7 +351,7 @@ fn period(x: &[f32], window: usize, lags: std::ops::RangeInclusive<usize>) -> Op
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// `sound`'s median pitch, where its own voice activity says a voice is heard.
@@ -338,7 +361,7 @@ mod tests {
 
     /// A voice-like buzz: harmonics of `pitch` Hz falling 6 dB an octave, `seconds` long,
     /// between two stretches of silence.
-    fn buzz(pitch: f32, seconds: f32) -> Sound {
+    pub(crate) fn buzz(pitch: f32, seconds: f32) -> Sound {
         let rate = SAMPLE_RATE as f32;
         let quiet = vec![0i16; 4000];
         let voiced = (0..(seconds * rate) as usize).map(|n| {
@@ -454,7 +477,7 @@ mod tests {
     fn a_warped_sound_is_slowed_as_its_frame_rate_says() {
         let sound = buzz(200.0, 1.0);
         let heard = Heard::warped(&sound, 80);
-        assert!(!heard.is_plain());
+        assert_ne!(heard.frame_rate, FRAME_RATE);
         let ratio = heard.samples.len() as f32 / sound.samples.len() as f32;
         assert!((ratio - 1.25).abs() < 0.01, "{ratio}");
         // Its pitch is lowered as much.
@@ -463,13 +486,19 @@ mod tests {
         };
         let pitch = pitch_of(&slowed).unwrap();
         assert!((pitch - 160.0).abs() < 5.0, "{pitch}");
-        assert!(Heard::warped(&sound, 100).is_plain());
-        assert!(
-            Heard::voice(&buzz(110.0, 1.0), Voice::Auto).is_plain(),
+        assert_eq!(Heard::warped(&sound, 100).frame_rate, FRAME_RATE);
+        let rate = |pitch: f32, voice: Voice| Hearing::of(&buzz(pitch, 1.0), voice).frame_rate;
+        assert_eq!(
+            rate(110.0, Voice::Auto),
+            FRAME_RATE,
             "a man's voice as it is"
         );
-        assert!(!Heard::voice(&buzz(230.0, 1.0), Voice::Auto).is_plain());
-        assert!(Heard::voice(&buzz(230.0, 1.0), Voice::Warp(1.0)).is_plain());
-        assert!(Heard::voice(&buzz(230.0, 1.0), Voice::Warp(f32::NAN)).is_plain());
+        assert_eq!(
+            rate(230.0, Voice::Auto),
+            83,
+            "a woman's voice warped by 1.2"
+        );
+        assert_eq!(rate(230.0, Voice::Warp(1.0)), FRAME_RATE);
+        assert_eq!(rate(230.0, Voice::Warp(f32::NAN)), FRAME_RATE);
     }
 }
