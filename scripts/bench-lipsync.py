@@ -323,7 +323,8 @@ def main():
                              "(to compare faceanim's own resampling with ffmpeg's)")
     parser.add_argument("--effect", choices=sorted(EFFECTS),
                         help="change each line before faceanim hears it, keeping its timing: "
-                             + "; ".join(f"{k}: {v[0]}" for k, v in sorted(EFFECTS.items())))
+                             # argparse formats help with %: a literal one is doubled.
+                             + "; ".join(f"{k}: {v[0]}" for k, v in sorted(EFFECTS.items())).replace("%", "%%"))
     parser.add_argument("--json")
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="faceanim-bench-lipsync-")
