@@ -243,7 +243,7 @@ fn read_speech(
     // the character loads: the ones this voice is heard with (a woman's, a child's, a
     // whisper's), decided from the sound first.
     let loading = transcript.is_none().then(|| {
-        faceanim_speech::recognition::Loading::start_for(
+        faceanim_speech::recognition::Loading::start(
             &sound,
             Some(&args.language),
             blind,

@@ -53,85 +53,53 @@ fn blind_route(language: &str, blind: Recognition) -> Recognition {
 }
 
 /// The recogniser a line without a transcript needs, loading on a thread of its own from
-/// the moment it is made: its models need no sound, so they load while the sound is read or
-/// converted, or the character loads (most of a short line's time otherwise). Give it to
+/// the moment it is made: its models need no more of the sound than how it is heard, so they
+/// load while the character loads (most of a short line's time otherwise). Give it to
 /// [`recognise_loaded`].
 #[derive(Debug)]
 pub struct Loading {
     route: Recognition,
-    /// The frame rate it reads at.
-    frame_rate: u32,
-    /// What it was decided for, when the sound was at hand ([`Loading::start_for`]).
-    decided: Option<Decided>,
-    thread: std::thread::JoinHandle<Result<Recogniser, SphinxError>>,
-}
-
-/// How a sound is heard, decided before its recogniser loads.
-#[derive(Debug)]
-struct Decided {
     /// The sound's length and a hash of its samples: the decision is for that sound only.
     sound: (usize, u64),
     voice: Voice,
+    /// How the sound is heard, decided before the recogniser started loading: its frame
+    /// rate is the one the recogniser reads at.
     hearing: Hearing,
+    thread: std::thread::JoinHandle<Result<Recogniser, SphinxError>>,
 }
 
 impl Loading {
-    /// Starts loading the recogniser for a line in `language` (English when `None`)
-    /// recognised by `blind`, before its sound is at hand: for a voice heard as it is (a
-    /// man's). A woman's, a child's or a whisper needs another, loaded when the sound is
-    /// decoded; [`Loading::start_for`] loads the right one once the sound is at hand.
+    /// Starts loading the recogniser for `sound` in `language` (English when `None`)
+    /// recognised by `blind`, heard through the vocal tract `voice` says: decides how it is
+    /// heard first (its pitch: a few milliseconds), so that a woman's or child's voice,
+    /// warped, and a whisper, recognised by its phones, find theirs loaded too.
     #[must_use]
-    pub fn start(language: Option<&str>, blind: Recognition) -> Loading {
-        Loading::load(language, blind, Hearing::plain(), None)
-    }
-
-    /// Starts loading the recogniser for `sound` in `language` recognised by `blind`, heard
-    /// through the vocal tract `voice` says: decides how it is heard first (its pitch: a few
-    /// milliseconds), so that a woman's or child's voice, warped, and a whisper, recognised by
-    /// its phones, find theirs loaded too.
-    #[must_use]
-    pub fn start_for(
+    pub fn start(
         sound: &Sound,
         language: Option<&str>,
         blind: Recognition,
         voice: Voice,
     ) -> Loading {
         let hearing = Hearing::of(sound, voice);
-        let decided = Decided {
-            sound: identity(sound),
-            voice,
-            hearing,
-        };
-        Loading::load(language, blind, hearing, Some(decided))
-    }
-
-    fn load(
-        language: Option<&str>,
-        blind: Recognition,
-        hearing: Hearing,
-        decided: Option<Decided>,
-    ) -> Loading {
         let route = heard_route(blind_route(language.unwrap_or(ENGLISH), blind), hearing);
         let search = phones::blind_search(route).warped(hearing.frame_rate);
         Loading {
             route,
-            frame_rate: hearing.frame_rate,
-            decided,
+            sound: identity(sound),
+            voice,
+            hearing,
             thread: std::thread::spawn(move || Recogniser::load(&search)),
         }
     }
 
     /// How `sound` is heard through `voice`, when this recogniser was loaded for them.
     fn hearing_of(&self, sound: &Sound, voice: Voice) -> Option<Hearing> {
-        self.decided
-            .as_ref()
-            .filter(|d| d.voice == voice && d.sound == identity(sound))
-            .map(|d| d.hearing)
+        (self.voice == voice && self.sound == identity(sound)).then_some(self.hearing)
     }
 
     /// The loaded recogniser, when it is the one `route` needs at `frame_rate`.
     fn finish(self, route: Recognition, frame_rate: u32) -> Result<Option<Loaded>, PhoneError> {
-        if self.route != route || self.frame_rate != frame_rate {
+        if self.route != route || self.hearing.frame_rate != frame_rate {
             return Ok(None);
         }
         match self.thread.join() {
@@ -299,9 +267,12 @@ mod tests {
     #[test]
     fn a_recogniser_loaded_for_a_sound_is_the_one_its_voice_needs() {
         let woman = buzz(230.0, 1.0);
-        let loading = Loading::start_for(&woman, None, Recognition::Words, Voice::Auto);
+        let loading = Loading::start(&woman, None, Recognition::Words, Voice::Auto);
         assert_eq!(loading.route, Recognition::Words);
-        assert_eq!(loading.frame_rate, 83, "a woman's voice is warped by 1.2");
+        assert_eq!(
+            loading.hearing.frame_rate, 83,
+            "a woman's voice is warped by 1.2"
+        );
         assert_eq!(
             loading.hearing_of(&woman, Voice::Auto),
             Some(Hearing::of(&woman, Voice::Auto))
@@ -309,16 +280,12 @@ mod tests {
         assert_eq!(loading.hearing_of(&woman, Voice::Warp(1.0)), None);
         assert_eq!(loading.hearing_of(&buzz(110.0, 1.0), Voice::Auto), None);
         // Another voice's frame rate, or another route, is not served by it.
-        let by_hand = Loading::start_for(&woman, None, Recognition::Words, Voice::Warp(1.0));
-        assert_eq!(by_hand.frame_rate, faceanim_sphinx_sys::FRAME_RATE);
+        let by_hand = Loading::start(&woman, None, Recognition::Words, Voice::Warp(1.0));
+        assert_eq!(by_hand.hearing.frame_rate, faceanim_sphinx_sys::FRAME_RATE);
         assert!(matches!(
             loading.finish(Recognition::PhoneLoop, 83),
             Ok(None)
         ));
         assert!(matches!(by_hand.finish(Recognition::Words, 83), Ok(None)));
-        // Before the sound is at hand: a man's voice, and no decision to reuse.
-        let ahead = Loading::start(None, Recognition::Words);
-        assert_eq!(ahead.frame_rate, faceanim_sphinx_sys::FRAME_RATE);
-        assert_eq!(ahead.hearing_of(&woman, Voice::Auto), None);
     }
 }

@@ -176,15 +176,6 @@ impl Hearing {
             whispered,
         }
     }
-
-    /// A voice heard as it is, not a whisper: what a recogniser loaded before the sound is at
-    /// hand assumes.
-    pub(crate) fn plain() -> Hearing {
-        Hearing {
-            frame_rate: FRAME_RATE,
-            whispered: false,
-        }
-    }
 }
 
 /// A recogniser loaded ahead, and the frame rate it reads at: only a sound heard at that
