@@ -34,6 +34,9 @@ try {
   desk.on('console', (m) => { if (m.type() === 'error') errors.push(`desktop: ${m.text()}`); });
   await desk.goto(url);
   await desk.waitForFunction(() => window.studio && window.studio.bakedReady && window.studio.state, null, { timeout: 120000 });
+  // The headset's page in front, as the one a user wears is: Chromium runs a page behind
+  // another at one frame a second (the desktop page behind it still hears the studio's events).
+  await vr.bringToFront();
 
   const enter = vr.getByRole('button', { name: 'Enter VR' });
   await enter.waitFor({ state: 'visible', timeout: 30000 });
@@ -101,7 +104,7 @@ try {
 
   // 2. The desktop page sees the VR strokes.
   const count = (await state()).actions.length;
-  await desk.waitForFunction((n) => window.studio.state.actions.length === n, count, { timeout: 15000 });
+  await desk.waitForFunction((n) => window.studio.state.actions.length === n, count, { timeout: 15000, polling: 250 });
   measured.desktopSees = count;
 
   // 3. The four flicks of the left thumbstick: left takes the stroke just drawn away (undo),
