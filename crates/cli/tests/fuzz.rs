@@ -588,15 +588,31 @@ fn the_studio_answers_every_upload_and_survives_a_bad_take() {
             upload("take.session.json", &case),
         );
     }
-    // Uploads of other kinds: noise named as video and images, cut PNGs.
+    // Uploads of other kinds: noise named as video and images, cut PNGs. An accepted one is
+    // read in the background; each is seen to its end (a short error naming the file, the
+    // studio still answering) before the next, as a user who waits for it would.
     let png = std::fs::read(faceanim_testdata::shared("images/ict-face-neutral.png")).unwrap();
+    let read_to_its_end = |what: &str, name: &str, answer: (u16, String)| {
+        if answer.0 != 200 {
+            return;
+        }
+        let state = support::settled(port, 120);
+        let job = &state["job"];
+        if let Some(error) = job["error"].as_str() {
+            assert!(
+                error.len() < 2_000 && error.contains(name) && !error.contains("/tmp"),
+                "{what}: {error}"
+            );
+        } else {
+            assert!(job["result"].is_string(), "{what}: {state}");
+        }
+    };
     for (k, name) in ["a.mp4", "b.png", "c.jpg", "d", "e.mov"].iter().enumerate() {
         let noise = mutator.bytes(&png[..png.len().min(4096)]);
-        answered(name, upload(name, &noise));
-        answered(
-            &format!("cut png {k}"),
-            upload("cut.png", &png[..png.len() / (k + 2)]),
-        );
+        read_to_its_end(name, name, answered(name, upload(name, &noise)));
+        let what = format!("cut png {k}");
+        let cut = &png[..png.len() / (k + 2)];
+        read_to_its_end(&what, "cut.png", answered(&what, upload("cut.png", cut)));
     }
     // Odd names: 10 KB, not ASCII, a path, none; every answer is JSON and short.
     let long = format!("{}.wav", "n".repeat(10_000));
