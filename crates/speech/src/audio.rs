@@ -119,7 +119,7 @@ impl Sound {
     }
 
     /// This sound without a DC offset (a cheap sound card's, or one drifting slowly), where it
-    /// has one — the median 10 ms frame's mean over [`OFFSET`] — through a one-pole high-pass
+    /// has one — the median 10 ms frame's mean over `OFFSET` — through a one-pole high-pass
     /// at about 13 Hz, under any voice; a sound without one is kept as it is. An offset of a
     /// tenth of full scale otherwise made every frame as loud as the voice, so that none was
     /// heard as one and the mouth stayed shut.

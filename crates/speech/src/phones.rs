@@ -187,7 +187,9 @@ pub(crate) fn phone_loop(
 }
 
 /// A phone loop's segments as phones.
-fn phones_of(segments: Vec<faceanim_sphinx_sys::Segment>) -> Result<Vec<Phone>, PhoneError> {
+pub(crate) fn phones_of(
+    segments: Vec<faceanim_sphinx_sys::Segment>,
+) -> Result<Vec<Phone>, PhoneError> {
     Ok(segments
         .into_iter()
         .map(|s| Phone {

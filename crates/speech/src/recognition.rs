@@ -2,7 +2,7 @@
 //! synthesis (any language), else the sound recognised without it — and the notes that say
 //! what was done instead of what was asked.
 
-use faceanim_sphinx_sys::{Recogniser, SphinxError};
+use faceanim_sphinx_sys::{Decoded, Recogniser, SphinxError, Turn};
 
 use crate::audio::Sound;
 use crate::phones::{self, Phone, PhoneError, Recognition};
@@ -54,7 +54,8 @@ fn blind_route(language: &str, blind: Recognition) -> Recognition {
 
 /// The recogniser a line without a transcript needs, loading on a thread of its own from
 /// the moment it is made: its models need no more of the sound than how it is heard, so they
-/// load while the character loads (most of a short line's time otherwise). Give it to
+/// load while the character loads (most of a short line's time otherwise); a line recognised
+/// by its words has its phones decoded meanwhile. Give it to
 /// [`recognise_loaded`].
 #[derive(Debug)]
 pub struct Loading {
@@ -65,7 +66,48 @@ pub struct Loading {
     /// How the sound is heard, decided before the recogniser started loading: its frame
     /// rate is the one the recogniser reads at.
     hearing: Hearing,
-    thread: std::thread::JoinHandle<Result<Recogniser, SphinxError>>,
+    thread: std::thread::JoinHandle<Ready>,
+}
+
+/// A line's recogniser, loaded; for a line recognised by its words, with the line's phones
+/// decoded beside it ([`prepare`]).
+#[derive(Debug)]
+struct Ready {
+    recogniser: Result<Recogniser, SphinxError>,
+    phones: Option<Result<Decoded, SphinxError>>,
+}
+
+/// Loads the recogniser `route` needs for `heard` (read at its frame rate). A line recognised
+/// by its words has its phones decoded by a phone loop meanwhile, on another thread and the
+/// same [`Turn`] (a phone loop is small, and as long to decode as the word search is to
+/// load): how well the acoustic model hears them says whether its words are worth
+/// searching for ([`HEARD_POORLY`]), and they are the phones a line whose words say too
+/// little falls back on.
+fn prepare(route: Recognition, heard: &Heard<'_>) -> Ready {
+    let turn = Turn::wait();
+    let search = phones::blind_search(route).warped(heard.frame_rate());
+    if route != Recognition::Words {
+        return Ready {
+            recogniser: Recogniser::load_on(&search, Some(&turn)),
+            phones: None,
+        };
+    }
+    let loop_search = phones::blind_search(Recognition::PhoneLoop).warped(heard.frame_rate());
+    std::thread::scope(|scope| {
+        let phones = scope.spawn(|| {
+            Recogniser::load_on(&loop_search, Some(&turn))?.decode_scored(heard.samples())
+        });
+        let recogniser = Recogniser::load_on(&search, Some(&turn));
+        let phones = phones.join().unwrap_or_else(|_| {
+            Err(SphinxError::Decoder(
+                "decoding the phone loop stopped".into(),
+            ))
+        });
+        Ready {
+            recogniser,
+            phones: Some(phones),
+        }
+    })
 }
 
 impl Loading {
@@ -82,13 +124,13 @@ impl Loading {
     ) -> Loading {
         let hearing = Hearing::of(sound, voice);
         let route = heard_route(blind_route(language.unwrap_or(ENGLISH), blind), hearing);
-        let search = phones::blind_search(route).warped(hearing.frame_rate);
+        let owned = sound.clone();
         Loading {
             route,
             sound: identity(sound),
             voice,
             hearing,
-            thread: std::thread::spawn(move || Recogniser::load(&search)),
+            thread: std::thread::spawn(move || prepare(route, &Heard::as_decided(&owned, hearing))),
         }
     }
 
@@ -98,15 +140,12 @@ impl Loading {
     }
 
     /// The loaded recogniser, when it is the one `route` needs at `frame_rate`.
-    fn finish(self, route: Recognition, frame_rate: u32) -> Result<Option<Loaded>, PhoneError> {
+    fn finish(self, route: Recognition, frame_rate: u32) -> Result<Option<Ready>, PhoneError> {
         if self.route != route || self.hearing.frame_rate != frame_rate {
             return Ok(None);
         }
         match self.thread.join() {
-            Ok(loaded) => Ok(Some(Loaded {
-                recogniser: loaded?,
-                frame_rate,
-            })),
+            Ok(ready) => Ok(Some(ready)),
             Err(_) => Err(PhoneError::Sphinx(SphinxError::Decoder(
                 "loading the recogniser stopped".into(),
             ))),
@@ -196,25 +235,57 @@ pub fn recognise_loaded(
         notes.push("the voice has no pitch (a whisper): its phones were recognised".to_owned());
     }
     let blind = route;
-    let loaded = loading
+    let ready = match loading
         .map(|l| l.finish(blind, hearing.frame_rate))
         .transpose()?
-        .flatten();
-    if blind != Recognition::Words {
+        .flatten()
+    {
+        Some(ready) => ready,
+        None => prepare(blind, &heard),
+    };
+    let loaded = Loaded {
+        recogniser: ready.recogniser?,
+        frame_rate: heard.frame_rate(),
+    };
+    let Some(phones) = ready.phones else {
         return Ok((
-            crate::holds::lips_held(sound, phones::phone_loop(&heard, loaded)?, heard.warp()),
+            crate::holds::lips_held(
+                sound,
+                phones::phone_loop(&heard, Some(loaded))?,
+                heard.warp(),
+            ),
             blind,
             notes,
         ));
+    };
+    let phones = phones?;
+    tracing::debug!(
+        score_per_frame = phones.score_per_frame,
+        "the phone loop's acoustic score a frame of speech"
+    );
+    let phones_heard = phones::phones_of(phones.segments)?;
+    // A voice the acoustic model hears poorly (a formant synthesiser's buzz) is recognised
+    // by its phones: its words are mostly wrong, and slow to search for.
+    if phones.score_per_frame.is_some_and(|s| s < HEARD_POORLY) {
+        drop(loaded);
+        notes.push(
+            "the recogniser hears this voice poorly (as a formant synthesiser's): its phones were recognised, not its words"
+                .to_owned(),
+        );
+        return Ok((
+            crate::holds::lips_held(sound, phones_heard, heard.warp()),
+            Recognition::PhoneLoop,
+            notes,
+        ));
     }
-    let words = phones::recognise_words(&heard, loaded)?;
+    let words = phones::recognise_words(&heard, Some(loaded))?;
     // Words the recogniser could not make out leave the voice unsaid (a formant synthesiser,
     // a whisper): the phones heard there, where they say more.
     let voiced = sound.voice_activity();
     let said = said_share(&words, &voiced);
     tracing::debug!(said, "the words recognised cover this share of the voice");
     if said < WORDS_SAY_ENOUGH {
-        let phones = phones::phone_loop(&heard, None)?;
+        let phones = phones_heard;
         if said_share(&phones, &voiced) > said {
             notes.push(format!(
                 "the words recognised cover {:.0} % of the voice: its phones were recognised instead",
@@ -233,6 +304,20 @@ pub fn recognise_loaded(
         notes,
     ))
 }
+
+/// The phone loop's acoustic score per frame of speech ([`Decoded::score_per_frame`]) below
+/// which a voice is heard too poorly for its words to be searched for. Chosen on the tuning
+/// voices' Harvard lines (`scripts/bench-lipsync.py`, and the same lines from the
+/// synthesisers' command lines): flite's slt, rms and awb score −7.8 to −13.1, to −13.8 with
+/// pink room noise, to −14.2 raised as a child's, to −16.0 lowered by a fifth (a deep voice,
+/// whose words still do better than its phones); eSpeak NG's m3 −15.6 to −20.4, its f2 −13.0
+/// to −18.6. The lines of m3 below this (seven of eight) are lip-synced as well or better by
+/// their phones (0.637 agreement and P/B/M 0.69 over all eight, against 0.608 and 0.66 by its
+/// words), in a third of the time; f2's words mostly do better, and its lines below this
+/// (three) did as well either way (0.718 and 0.59 over all eight, against 0.712 and 0.59).
+/// Real readings score −8.5 to −14.0 (LibriVox, and the recordings of Debian's
+/// pocketsphinx-testdata).
+const HEARD_POORLY: f32 = -17.0;
 
 /// The share of a line's voice its words recognised must cover (`said_share`), below which its
 /// phones are recognised too. Every line of the flite voices and of LibriVox readings is

@@ -111,6 +111,16 @@ impl<'a> Heard<'a> {
         }
     }
 
+    /// The samples the recogniser reads.
+    pub(crate) fn samples(&self) -> &[i16] {
+        &self.samples
+    }
+
+    /// The frames a second the recogniser reads [`Heard::samples`] at.
+    pub(crate) fn frame_rate(&self) -> u32 {
+        self.frame_rate
+    }
+
     /// How much longer a vocal tract than the acoustic model's the sound is heard through: 1
     /// for a sound heard as it is, 1.2 for a woman's voice.
     pub(crate) fn warp(&self) -> f32 {

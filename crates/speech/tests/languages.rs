@@ -56,9 +56,10 @@ const LINES: [Line; 6] = [
 ];
 
 /// A voice whose words the recogniser does not make out (eSpeak NG's formant synthesis in
-/// English, without a transcript: it hears "that … for … those" in a line of six words) is
-/// still lip-synced wherever it is heard: its phones are recognised instead, and the user is
-/// told so. No line of the flite voices or of LibriVox readings takes this route.
+/// English, without a transcript: it heard "that … for … those" in a line of six words) is
+/// still lip-synced wherever it is heard: the acoustic model hears it poorly, or the words it
+/// makes out cover too little of the voice, so its phones are recognised instead, and the
+/// user is told so. No line of the flite voices or of LibriVox readings takes this route.
 #[test]
 fn a_voice_whose_words_are_not_made_out_still_moves_the_mouth() {
     // As a user has it: the synthesiser's own WAV (22,050 Hz), read as any WAV is.
@@ -72,7 +73,7 @@ fn a_voice_whose_words_are_not_made_out_still_moves_the_mouth() {
     .unwrap();
     let sound = Sound::read(&wav).unwrap();
     let _ = std::fs::remove_file(&wav);
-    let reading = read_by_its_phones(&sound, "of the voice");
+    let reading = read_by_its_phones(&sound, "phones were recognised");
     // The mouth moves (a viseme other than rest above 0.2) through most of the voice.
     let voiced = sound.voice_activity();
     let frames = reading.track.sample(100.0);

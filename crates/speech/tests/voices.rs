@@ -118,6 +118,58 @@ fn a_formant_voice_closes_its_lips_on_holds_released_by_the_lips() {
     assert!(closed >= 0.4, "{closed:.2}");
 }
 
+/// A voice the acoustic model hears poorly (a formant synthesiser's buzz: its phone loop's path
+/// scores far below any recorded or diphone voice's) is read by its phones, and the user is
+/// told so; a diphone voice, clean or in a noisy room, by its words.
+#[test]
+fn a_voice_heard_poorly_is_read_by_its_phones_and_a_clear_one_by_its_words() {
+    let poorly = "hears this voice poorly";
+    let mut by_phones = 0;
+    for line in LINES {
+        let (_, sound) = espeak(line, "en-us+m3", None);
+        let reading = faceanim_speech::read(&sound, None, None, Recognition::Words).unwrap();
+        if reading.notes.iter().any(|n| n.contains(poorly)) {
+            assert_eq!(reading.recognition, Recognition::PhoneLoop);
+            by_phones += 1;
+        }
+    }
+    assert!(by_phones >= 3, "{by_phones} of {} m3 lines", LINES.len());
+    // The sound of a diphone voice, and the same in a room: its words.
+    for (k, line) in LINES.iter().enumerate() {
+        let wav =
+            std::env::temp_dir().join(format!("faceanim-heard-{}-{k}.wav", std::process::id()));
+        flite("rms", line, &wav);
+        let clean = Sound::read(&wav).unwrap();
+        std::fs::remove_file(&wav).unwrap();
+        // Pink-ish room noise at about −34 dBFS (a seeded sum of white noise, low-passed).
+        let mut seed = 0x9e37_79b9_u32 + k as u32;
+        let mut low = 0.0f32;
+        let noisy = Sound {
+            samples: clean
+                .samples
+                .iter()
+                .map(|&s| {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 17;
+                    seed ^= seed << 5;
+                    let white = (seed as f32 / u32::MAX as f32 - 0.5) * 1200.0;
+                    low = 0.9 * low + 0.1 * white;
+                    (f32::from(s) + low * 3.0).clamp(-32768.0, 32767.0) as i16
+                })
+                .collect(),
+        };
+        for (what, sound) in [("clean", clean), ("noisy", noisy)] {
+            let reading = faceanim_speech::read(&sound, None, None, Recognition::Words).unwrap();
+            assert_eq!(
+                reading.recognition,
+                Recognition::Words,
+                "rms {what} line {k}: {:?}",
+                reading.notes
+            );
+        }
+    }
+}
+
 /// A recording 30 dB quieter than flite makes it (a distant microphone, a badly set gain), and
 /// one with a DC offset of a tenth of full scale (a cheap sound card), lip-sync as the clean
 /// one does. Before, nothing under −55 dBFS was a voice (0.46 agreement quiet), and an offset

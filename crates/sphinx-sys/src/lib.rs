@@ -183,6 +183,18 @@ pub struct Segment {
     pub end: u32,
 }
 
+/// An utterance decoded: its labels, and how well the acoustic model heard it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decoded {
+    /// The labels, in order.
+    pub segments: Vec<Segment>,
+    /// The acoustic score of the labels that are not silence or fillers, per frame they
+    /// cover: the acoustic model's log likelihood of the speech along them, in the decoder's
+    /// units. Higher for speech the model hears as its own; lower for sound it hears poorly
+    /// (a formant synthesiser's buzz). `None` when nothing but silence was decoded.
+    pub score_per_frame: Option<f32>,
+}
+
 /// Why decoding failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -221,7 +233,7 @@ pub fn decode(search: &Search, samples: &[i16]) -> Result<Vec<Segment>, SphinxEr
 /// A decoder with its models loaded, ready for speech. Loading is most of a short line's
 /// cost (the word search reads a 27 MB language model and 23,000 pronunciations), and
 /// needs no speech: a caller can load on one thread while it reads the sound on another.
-/// It holds a turn of the cores (see [`decode`]) until dropped.
+/// It holds a [`Turn`] of the cores until dropped.
 pub struct Recogniser {
     decoder: imp::Decoder,
     _turn: Turn,
@@ -234,11 +246,21 @@ impl std::fmt::Debug for Recogniser {
 }
 
 impl Recogniser {
-    /// Loads `search`'s models, waiting for a turn of the cores first.
+    /// Loads `search`'s models, waiting for a [`Turn`] of the cores first.
     ///
     /// # Errors
     /// As [`decode`].
     pub fn load(search: &Search) -> Result<Recogniser, SphinxError> {
+        Recogniser::load_on(search, None)
+    }
+
+    /// Loads `search`'s models on `turn` (shared with the other decoders of the same line:
+    /// a small phone loop decoded while its word search loads), or on a turn waited for now
+    /// when `None`. The models are checked before any wait.
+    ///
+    /// # Errors
+    /// As [`decode`].
+    pub fn load_on(search: &Search, turn: Option<&Turn>) -> Result<Recogniser, SphinxError> {
         check(&search.acoustic)?;
         match &search.mode {
             Mode::PhoneLoop { lm, .. } => check(lm)?,
@@ -262,7 +284,7 @@ impl Recogniser {
                 check(dictionary)?;
             }
         }
-        let turn = Turn::wait();
+        let turn = turn.map_or_else(Turn::wait, Turn::clone);
         Ok(Recogniser {
             decoder: imp::Decoder::load(search)?,
             _turn: turn,
@@ -274,21 +296,40 @@ impl Recogniser {
     /// # Errors
     /// [`SphinxError::Decoder`] when the recogniser fails.
     pub fn decode(&mut self, samples: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+        Ok(self.decoder.decode(samples)?.segments)
+    }
+
+    /// [`Recogniser::decode`], with how well the acoustic model heard the sound.
+    ///
+    /// # Errors
+    /// As [`Recogniser::decode`].
+    pub fn decode_scored(&mut self, samples: &[i16]) -> Result<Decoded, SphinxError> {
         self.decoder.decode(samples)
     }
 }
 
-/// A turn to decode: at most one decoder per core runs at once (each holds its models, some
-/// 250 MB with the language model), so that a burst of requests — a studio's uploads, a
-/// batch — queues for the cores instead of multiplying memory.
-struct Turn;
+/// A turn of the cores: at most one line is recognised per core at once (its decoders hold
+/// their models, some 250 MB with the language model), so that a burst of requests — a
+/// studio's uploads, a batch — queues for the cores instead of multiplying memory. One line's
+/// decoders may share a turn ([`Recogniser::load_on`]); it ends when the last of its clones
+/// is dropped.
+#[derive(Debug, Clone)]
+pub struct Turn {
+    _held: std::sync::Arc<Held>,
+}
+
+/// What a turn's clones share: the count goes down once, when the last is dropped.
+#[derive(Debug)]
+struct Held;
 
 /// Decoders running now, and the signal that one ended.
 static RUNNING: std::sync::Mutex<usize> = std::sync::Mutex::new(0);
 static ENDED: std::sync::Condvar = std::sync::Condvar::new();
 
 impl Turn {
-    fn wait() -> Turn {
+    /// Waits until fewer lines are recognised than there are cores, and takes a turn.
+    #[must_use]
+    pub fn wait() -> Turn {
         let most = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
         let mut running = RUNNING
             .lock()
@@ -299,11 +340,13 @@ impl Turn {
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
         }
         *running += 1;
-        Turn
+        Turn {
+            _held: std::sync::Arc::new(Held),
+        }
     }
 }
 
-impl Drop for Turn {
+impl Drop for Held {
     fn drop(&mut self) {
         let mut running = RUNNING
             .lock()
@@ -321,7 +364,7 @@ pub fn available() -> bool {
 
 #[cfg(not(pocketsphinx))]
 mod imp {
-    use super::{Search, Segment, SphinxError};
+    use super::{Decoded, Search, SphinxError};
 
     /// Never made: without the library, loading fails.
     pub enum Decoder {}
@@ -331,7 +374,7 @@ mod imp {
             Err(SphinxError::NotInstalled)
         }
 
-        pub fn decode(&mut self, _: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+        pub fn decode(&mut self, _: &[i16]) -> Result<Decoded, SphinxError> {
             match *self {}
         }
     }
@@ -376,6 +419,12 @@ pub mod ffi {
             full_utt: c_int,
         ) -> c_int;
         pub fn ps_end_utt(ps: *mut ps_decoder_t) -> c_int;
+        pub fn ps_seg_prob(
+            seg: *mut ps_seg_t,
+            out_ascr: *mut i32,
+            out_lscr: *mut i32,
+            out_lback: *mut i32,
+        ) -> i32;
         pub fn ps_seg_iter(ps: *mut ps_decoder_t) -> *mut ps_seg_t;
         pub fn ps_seg_next(seg: *mut ps_seg_t) -> *mut ps_seg_t;
         pub fn ps_seg_word(seg: *mut ps_seg_t) -> *const c_char;
@@ -390,7 +439,7 @@ mod imp {
     use std::ffi::{CStr, CString};
     use std::sync::atomic::{AtomicU64, Ordering};
 
-    use super::{Mode, Search, Segment, SphinxError, ffi};
+    use super::{Decoded, Mode, Search, Segment, SphinxError, ffi};
 
     /// The configuration and the decoder made from it, freed together, and the scratch files
     /// its search reads.
@@ -606,7 +655,7 @@ mod imp {
             Ok(decoder)
         }
 
-        pub fn decode(&mut self, samples: &[i16]) -> Result<Vec<Segment>, SphinxError> {
+        pub fn decode(&mut self, samples: &[i16]) -> Result<Decoded, SphinxError> {
             let decoder = self;
             // SAFETY: a live decoder; `samples` is valid for its length during the call.
             let processed = unsafe {
@@ -621,6 +670,8 @@ mod imp {
                 return Err(SphinxError::Decoder("decoding failed".into()));
             }
             let mut segments = Vec::new();
+            // The acoustic score of the frames of speech (silence and fillers left out).
+            let (mut score, mut frames) = (0i64, 0u64);
             // SAFETY: the iterator belongs to the live decoder; ps_seg_next frees it when it
             // returns null, and each word pointer is read before the iterator moves on.
             unsafe {
@@ -630,8 +681,20 @@ mod imp {
                     let (mut start, mut end) = (0, 0);
                     ffi::ps_seg_frames(seg, &raw mut start, &raw mut end);
                     if !word.is_null() && end >= start && start >= 0 {
+                        let label = CStr::from_ptr(word).to_string_lossy().into_owned();
+                        if !is_silence(&label) {
+                            let (mut acoustic, mut language, mut backoff) = (0, 0, 0);
+                            ffi::ps_seg_prob(
+                                seg,
+                                &raw mut acoustic,
+                                &raw mut language,
+                                &raw mut backoff,
+                            );
+                            score += i64::from(acoustic);
+                            frames += u64::from((end - start + 1).unsigned_abs());
+                        }
                         segments.push(Segment {
-                            label: CStr::from_ptr(word).to_string_lossy().into_owned(),
+                            label,
                             start: start.unsigned_abs(),
                             end: end.unsigned_abs(),
                         });
@@ -639,8 +702,16 @@ mod imp {
                     seg = ffi::ps_seg_next(seg);
                 }
             }
-            Ok(segments)
+            Ok(Decoded {
+                segments,
+                score_per_frame: (frames > 0).then(|| score as f32 / frames as f32),
+            })
         }
+    }
+
+    /// Whether a label is silence or a filler (`SIL`, `<sil>`, `+NSN+`, `[NOISE]`).
+    fn is_silence(label: &str) -> bool {
+        label == "SIL" || label.starts_with(['<', '+', '['])
     }
 }
 
@@ -701,6 +772,34 @@ mod tests {
             .filter(|w| !w.starts_with('<') && !w.starts_with('['))
             .collect();
         assert_eq!(words, ["go", "forward", "ten", "meters"]);
+    }
+
+    /// Real speech scores as the acoustic model's own (a formant synthesiser's lines score
+    /// −15.6 to −20.4 a frame); a line's decoders share its turn, so that a phone loop loads
+    /// while every turn is taken by the line it belongs to.
+    #[test]
+    #[cfg(pocketsphinx)]
+    fn speech_is_scored_and_a_lines_decoders_share_its_turn() {
+        let Some(samples) = go_forward() else {
+            return;
+        };
+        let most = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+        let turns: Vec<Turn> = (0..most).map(|_| Turn::wait()).collect();
+        let (sent, received) = std::sync::mpsc::channel();
+        let turn = turns[0].clone();
+        std::thread::spawn(move || {
+            let decoded = Recogniser::load_on(&EN_US.phone_loop(), Some(&turn))
+                .and_then(|mut r| r.decode_scored(&samples));
+            let _ = sent.send(decoded);
+        });
+        let decoded = received
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .expect("a decoder given a turn already held waited for another")
+            .unwrap();
+        drop(turns);
+        let score = decoded.score_per_frame.unwrap();
+        assert!((-14.0..0.0).contains(&score), "{score}");
+        assert!(decoded.segments.iter().any(|s| s.label == "F"));
     }
 
     #[test]
