@@ -312,8 +312,8 @@ pub fn recognise_loaded(
 /// pink room noise, to −14.2 raised as a child's, to −16.0 lowered by a fifth (a deep voice,
 /// whose words still do better than its phones); eSpeak NG's m3 −15.6 to −20.4, its f2 −13.0
 /// to −18.6. The lines of m3 below this (seven of eight) are lip-synced as well or better by
-/// their phones (0.637 agreement and P/B/M 0.69 over all eight, against 0.608 and 0.66 by its
-/// words), in a third of the time; f2's words mostly do better, and its lines below this
+/// their phones (0.632 agreement and P/B/M 0.69 over all eight, against 0.608 and 0.66 by its
+/// words), in half the time; f2's words mostly do better, and its lines below this
 /// (three) did as well either way (0.718 and 0.59 over all eight, against 0.712 and 0.59).
 /// Real readings score −8.5 to −14.0 (LibriVox, and the recordings of Debian's
 /// pocketsphinx-testdata).
