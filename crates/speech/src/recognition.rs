@@ -2,9 +2,9 @@
 //! synthesis (any language), else the sound recognised without it — and the notes that say
 //! what was done instead of what was asked.
 
-use faceanim_sphinx_sys::{Decoded, Recogniser, SphinxError, Turn};
+use faceanim_sphinx_sys::{Decoded, FRAME_RATE, Recogniser, SphinxError, Turn};
 
-use crate::audio::Sound;
+use crate::audio::{SAMPLE_RATE, Sound};
 use crate::phones::{self, Phone, PhoneError, Recognition};
 use crate::warp::{Heard, Hearing, Loaded, Voice};
 
@@ -69,21 +69,34 @@ pub struct Loading {
     thread: std::thread::JoinHandle<Ready>,
 }
 
-/// A line's recogniser, loaded; for a line recognised by its words, with the line's phones
-/// decoded beside it ([`prepare`]).
+/// A line's recogniser, loaded; for a line recognised by its words, with its first
+/// [`SCORED_VOICE`] decoded beside it ([`prepare`]).
 #[derive(Debug)]
 struct Ready {
     recogniser: Result<Recogniser, SphinxError>,
-    phones: Option<Result<Decoded, SphinxError>>,
+    phones: Option<Result<Scored, SphinxError>>,
 }
 
-/// Loads the recogniser `route` needs for `heard` (read at its frame rate). A line recognised
-/// by its words has its phones decoded by a phone loop meanwhile, on another thread and the
-/// same [`Turn`] (a phone loop is small, and as long to decode as the word search is to
-/// load): how well the acoustic model hears them says whether its words are worth
-/// searching for ([`HEARD_POORLY`]), and they are the phones a line whose words say too
-/// little falls back on.
-fn prepare(route: Recognition, heard: &Heard<'_>) -> Ready {
+/// A line's phones from its start, and whether they are the whole line's.
+#[derive(Debug)]
+struct Scored {
+    decoded: Decoded,
+    whole: bool,
+}
+
+/// Frames of voice (10 ms each) a line's phones are scored on before its words are searched
+/// for: 3 s, as long as a Harvard sentence (the lines [`HEARD_POORLY`] was chosen on). A
+/// longer line is scored on its start, so that its words wait no longer than a short line's
+/// (a phone loop over a 25 s reading took 2.5 s, the word search 0.25 s to load).
+const SCORED_VOICE: usize = 300;
+
+/// Loads the recogniser `route` needs for `heard` (`sound` read at its frame rate). A line
+/// recognised by its words has its first [`SCORED_VOICE`] decoded by a phone loop meanwhile,
+/// on another thread and the same [`Turn`] (a phone loop is small, and over a short line as
+/// long to decode as the word search is to load): how well the acoustic model hears them
+/// says whether its words are worth searching for ([`HEARD_POORLY`]), and a short line whose
+/// words say too little falls back on them.
+fn prepare(route: Recognition, sound: &Sound, heard: &Heard<'_>) -> Ready {
     let turn = Turn::wait();
     let search = phones::blind_search(route).warped(heard.frame_rate());
     if route != Recognition::Words {
@@ -93,9 +106,27 @@ fn prepare(route: Recognition, heard: &Heard<'_>) -> Ready {
         };
     }
     let loop_search = phones::blind_search(Recognition::PhoneLoop).warped(heard.frame_rate());
+    // The sound up to its last frame of voice scored, in the heard sound's samples.
+    let samples = heard.samples();
+    let cut = sound
+        .voice_activity()
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v)
+        .nth(SCORED_VOICE)
+        .map_or(samples.len(), |(frame, _)| {
+            (frame * (SAMPLE_RATE / FRAME_RATE) as usize * FRAME_RATE as usize
+                / heard.frame_rate() as usize)
+                .min(samples.len())
+        });
     std::thread::scope(|scope| {
         let phones = scope.spawn(|| {
-            Recogniser::load_on(&loop_search, Some(&turn))?.decode_scored(heard.samples())
+            let decoded =
+                Recogniser::load_on(&loop_search, Some(&turn))?.decode_scored(&samples[..cut])?;
+            Ok(Scored {
+                decoded,
+                whole: cut == samples.len(),
+            })
         });
         let recogniser = Recogniser::load_on(&search, Some(&turn));
         let phones = phones.join().unwrap_or_else(|_| {
@@ -130,7 +161,9 @@ impl Loading {
             sound: identity(sound),
             voice,
             hearing,
-            thread: std::thread::spawn(move || prepare(route, &Heard::as_decided(&owned, hearing))),
+            thread: std::thread::spawn(move || {
+                prepare(route, &owned, &Heard::as_decided(&owned, hearing))
+            }),
         }
     }
 
@@ -241,7 +274,7 @@ pub fn recognise_loaded(
         .flatten()
     {
         Some(ready) => ready,
-        None => prepare(blind, &heard),
+        None => prepare(blind, sound, &heard),
     };
     let loaded = Loaded {
         recogniser: ready.recogniser?,
@@ -258,16 +291,22 @@ pub fn recognise_loaded(
             notes,
         ));
     };
-    let phones = phones?;
+    let Scored { decoded, whole } = phones?;
     tracing::debug!(
-        score_per_frame = phones.score_per_frame,
+        score_per_frame = decoded.score_per_frame,
+        whole,
         "the phone loop's acoustic score a frame of speech"
     );
-    let phones_heard = phones::phones_of(phones.segments)?;
+    // The line's phones: those decoded already when they are the whole line's.
+    let phones_heard = || match whole {
+        true => phones::phones_of(decoded.segments.clone()),
+        false => phones::phone_loop(&heard, None),
+    };
     // A voice the acoustic model hears poorly (a formant synthesiser's buzz) is recognised
     // by its phones: its words are mostly wrong, and slow to search for.
-    if phones.score_per_frame.is_some_and(|s| s < HEARD_POORLY) {
+    if decoded.score_per_frame.is_some_and(|s| s < HEARD_POORLY) {
         drop(loaded);
+        let phones_heard = phones_heard()?;
         notes.push(
             "the recogniser hears this voice poorly (as a formant synthesiser's): its phones were recognised, not its words"
                 .to_owned(),
@@ -285,7 +324,7 @@ pub fn recognise_loaded(
     let said = said_share(&words, &voiced);
     tracing::debug!(said, "the words recognised cover this share of the voice");
     if said < WORDS_SAY_ENOUGH {
-        let phones = phones_heard;
+        let phones = phones_heard()?;
         if said_share(&phones, &voiced) > said {
             notes.push(format!(
                 "the words recognised cover {:.0} % of the voice: its phones were recognised instead",
