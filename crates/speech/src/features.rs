@@ -39,7 +39,7 @@ pub struct Features {
 }
 
 /// Follows the room's noise floor and the voice's peaks, frame by frame, as
-/// [`Sound::voice_activity`] does over a whole recording.
+/// [`crate::audio::Sound::voice_activity`] does over a whole recording.
 #[derive(Debug, Clone, Copy)]
 struct Gate {
     floor: f32,
@@ -52,7 +52,7 @@ impl Gate {
     const RISE: f32 = 0.01;
     const FADE: f32 = 0.03;
     /// Nothing quieter is a voice, dBFS (a live microphone without gain control can be
-    /// quieter than a recording, so lower than [`Sound::voice_activity`]'s −55).
+    /// quieter than a recording, so lower than [`crate::audio::Sound::voice_activity`]'s −55).
     const QUIETEST: f32 = -65.0;
     /// The quietest peak a voice reaches at the microphone, dBFS.
     const FAINTEST: f32 = -45.0;

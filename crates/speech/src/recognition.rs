@@ -22,9 +22,11 @@ pub fn is_english(language: &str) -> bool {
 /// [`ENGLISH`] when `None`).
 ///
 /// With `transcript`, its words are never thrown away: an English line is aligned by the
-/// recogniser (its words in the pronouncing dictionary, in order); a line it cannot align, or
-/// in another language, is aligned by synthesis ([`crate::synthesis`]); only when neither
-/// works is the sound recognised without it, with a note saying why. Without a transcript the
+/// recogniser (its words in the pronouncing dictionary, in order) unless its voice follows the
+/// synthesiser's own rendition sharply (a synthesiser's voice of eSpeak NG's kind); that line,
+/// a line the recogniser cannot align, or one in another language, is aligned by synthesis
+/// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
+/// note saying why. Without a transcript the
 /// sound is recognised by `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words
 /// only in English, phones in any other language). Every route of the recogniser hears a
 /// woman's or child's voice through a longer vocal tract, as its pitch says ([`Voice::Auto`]).
@@ -237,26 +239,51 @@ pub fn recognise_loaded(
     let heard = Heard::as_decided(sound, hearing);
     if let Some(text) = transcript {
         let words = phones::transcript_words(text, sound.seconds())?;
+        // Timed by synthesis first (a few hundredths of the line's time): a voice the
+        // synthesiser's own rendition follows sharply is timed by it; any other English line
+        // by the recogniser, and by synthesis where the recogniser cannot align it.
+        let by_synthesis = match crate::synthesis::timed_by_synthesis(sound, text, language) {
+            Ok(timed) if !timed.phones.is_empty() => Ok(timed),
+            Ok(_) => Err("the transcript could not be aligned by synthesis".to_owned()),
+            Err(e) => Err(format!(
+                "the transcript could not be aligned by synthesis ({e})"
+            )),
+        };
         // Why the recogniser could not align it, when it tried.
         let mut why = None;
         if is_english(language) {
-            match phones::align_english(&heard, &words) {
-                Ok(phones) => {
-                    let phones = phones::voiced_pauses(phones, &sound.voice_activity());
-                    return Ok((phones, Recognition::Transcript, notes));
+            if let Ok(timed) = &by_synthesis {
+                tracing::debug!(
+                    sharpness = timed.sharpness,
+                    "how sharply the synthesiser's rendition follows the voice"
+                );
+            }
+            if by_synthesis
+                .as_ref()
+                .is_ok_and(|t| t.sharpness >= SAME_VOICE)
+            {
+                notes.push(
+                    "the voice follows the synthesiser's own rendition of the transcript closely (a synthesiser's voice): the transcript was aligned by synthesis"
+                        .to_owned(),
+                );
+            } else {
+                match phones::align_english(&heard, &words) {
+                    Ok(phones) => {
+                        let phones = phones::voiced_pauses(phones, &sound.voice_activity());
+                        return Ok((phones, Recognition::Transcript, notes));
+                    }
+                    Err(reason) => why = Some(reason),
                 }
-                Err(reason) => why = Some(reason),
             }
         }
-        let failed = match crate::synthesis::align(sound, text, language) {
-            Ok(phones) if !phones.is_empty() => {
+        let failed = match by_synthesis {
+            Ok(timed) => {
                 if let Some(why) = why {
                     notes.push(format!("{why}: the transcript was aligned by synthesis"));
                 }
-                return Ok((phones, Recognition::Synthesis, notes));
+                return Ok((timed.phones, Recognition::Synthesis, notes));
             }
-            Ok(_) => "the transcript could not be aligned by synthesis".to_owned(),
-            Err(e) => format!("the transcript could not be aligned by synthesis ({e})"),
+            Err(failed) => failed,
         };
         notes.push(match why {
             Some(why) => format!("{why}, and {failed}: the speech was recognised without it"),
@@ -357,6 +384,19 @@ pub fn recognise_loaded(
 /// Real readings score −8.5 to −14.0 (LibriVox, and the recordings of Debian's
 /// pocketsphinx-testdata).
 const HEARD_POORLY: f32 = -17.0;
+
+/// The [`crate::synthesis`] warping's sharpness (how much closer a recording follows the
+/// synthesiser's own rendition of its transcript on the warping path than a few frames beside
+/// it) from which an English line is timed by synthesis, not by the recogniser: the voice is
+/// a synthesiser's of eSpeak NG's kind, whose phones its rendition times exactly. Chosen on the
+/// tuning voices' Harvard lines (`scripts/bench-lipsync.py`, with their transcripts, clean and
+/// with the bench's effects): eSpeak NG's m3 scores 3.2–3.6 (2.8–3.1 in a noisy room) and
+/// its lines are timed better by synthesis (0.974 agreement against 0.892); flite's slt, rms
+/// and awb score 1.1–1.6, clean, noisy, raised or lowered, and are timed better by the
+/// recogniser (0.959–0.964 against 0.87–0.91); LibriVox readers 1.2–1.3. eSpeak NG's f2
+/// (1.6–1.8) and whisperf (1.4–1.6) fall among the diphone voices and keep the recogniser's
+/// alignment (0.87 and 0.89), as does m3 raised or lowered by the bench's effects (1.0–1.1).
+const SAME_VOICE: f32 = 2.0;
 
 /// The share of a line's voice its words recognised must cover (`said_share`), below which its
 /// phones are recognised too. Every line of the flite voices and of LibriVox readings is
