@@ -26,8 +26,7 @@ pub fn is_english(language: &str) -> bool {
 /// synthesiser's own rendition sharply (a synthesiser's voice of eSpeak NG's kind); that line,
 /// a line the recogniser cannot align, or one in another language, is aligned by synthesis
 /// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
-/// note saying why. Without a transcript the
-/// sound is recognised by `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words
+/// note saying why. Without a transcript the sound is recognised by `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words
 /// only in English, phones in any other language). Every route of the recogniser hears a
 /// woman's or child's voice through a longer vocal tract, as its pitch says ([`Voice::Auto`]).
 /// The notes say what was done instead of what was asked.
@@ -239,28 +238,29 @@ pub fn recognise_loaded(
     let heard = Heard::as_decided(sound, hearing);
     if let Some(text) = transcript {
         let words = phones::transcript_words(text, sound.seconds())?;
-        // Timed by synthesis first (a few hundredths of the line's time): a voice the
-        // synthesiser's own rendition follows sharply is timed by it; any other English line
-        // by the recogniser, and by synthesis where the recogniser cannot align it.
-        let by_synthesis = match crate::synthesis::timed_by_synthesis(sound, text, language) {
+        let synthesis = || match crate::synthesis::timed_by_synthesis(sound, text, language) {
             Ok(timed) if !timed.phones.is_empty() => Ok(timed),
             Ok(_) => Err("the transcript could not be aligned by synthesis".to_owned()),
             Err(e) => Err(format!(
                 "the transcript could not be aligned by synthesis ({e})"
             )),
         };
+        let english = is_english(language);
+        // Timed by synthesis first (a few hundredths of the line's time): a voice the
+        // synthesiser's own rendition follows sharply is timed by it; any other English line
+        // by the recogniser, and by synthesis where the recogniser cannot align it.
+        let by_synthesis = (!english || sound.seconds() <= SYNTHESIS_FIRST).then(synthesis);
         // Why the recogniser could not align it, when it tried.
         let mut why = None;
-        if is_english(language) {
-            if let Ok(timed) = &by_synthesis {
+        if english {
+            if let Some(Ok(timed)) = &by_synthesis {
                 tracing::debug!(
                     sharpness = timed.sharpness,
                     "how sharply the synthesiser's rendition follows the voice"
                 );
             }
-            if by_synthesis
-                .as_ref()
-                .is_ok_and(|t| t.sharpness >= SAME_VOICE)
+            if let Some(Ok(timed)) = &by_synthesis
+                && timed.sharpness >= SAME_VOICE
             {
                 notes.push(
                     "the voice follows the synthesiser's own rendition of the transcript closely (a synthesiser's voice): the transcript was aligned by synthesis"
@@ -276,7 +276,7 @@ pub fn recognise_loaded(
                 }
             }
         }
-        let failed = match by_synthesis {
+        let failed = match by_synthesis.unwrap_or_else(synthesis) {
             Ok(timed) => {
                 if let Some(why) = why {
                     notes.push(format!("{why}: the transcript was aligned by synthesis"));
@@ -388,7 +388,7 @@ const HEARD_POORLY: f32 = -17.0;
 /// The [`crate::synthesis`] warping's sharpness (how much closer a recording follows the
 /// synthesiser's own rendition of its transcript on the warping path than a few frames beside
 /// it) from which an English line is timed by synthesis, not by the recogniser: the voice is
-/// a synthesiser's of eSpeak NG's kind, whose phones its rendition times exactly. Chosen on the
+/// a synthesiser's of eSpeak NG's kind, whose phones its rendition times closely. Chosen on the
 /// tuning voices' Harvard lines (`scripts/bench-lipsync.py`, with their transcripts, clean and
 /// with the bench's effects): eSpeak NG's m3 scores 3.2–3.6 (2.8–3.1 in a noisy room) and
 /// its lines are timed better by synthesis (0.974 agreement against 0.892); flite's slt, rms
@@ -397,6 +397,13 @@ const HEARD_POORLY: f32 = -17.0;
 /// (1.6–1.8) and whisperf (1.4–1.6) fall among the diphone voices and keep the recogniser's
 /// alignment (0.87 and 0.89), as does m3 raised or lowered by the bench's effects (1.0–1.1).
 const SAME_VOICE: f32 = 2.0;
+
+/// The longest English line, seconds, timed by synthesis before the recogniser aligns it (to
+/// see whether its voice is a synthesiser's, [`SAME_VOICE`]): a line of dialogue. Warping a
+/// longer recording onto its rendition costs memory and time that grow with the square of its
+/// length (a minute: about 20 MB and half a second; three minutes, 200 MB), so a longer one is
+/// aligned by the recogniser, and by synthesis only where the recogniser cannot.
+const SYNTHESIS_FIRST: f32 = 60.0;
 
 /// The share of a line's voice its words recognised must cover (`said_share`), below which its
 /// phones are recognised too. Every line of the flite voices and of LibriVox readings is

@@ -110,11 +110,11 @@ const BESIDE: [usize; 2] = [8, 15];
 
 /// How sharply `path` matches the recording `a` to the rendition `b`: the mean cepstral
 /// distance from each of its recording's frames to the rendition's frames [`BESIDE`] the path
-/// (either side, 80 and 150 ms off), over the mean distance to the frames on it. The voices'
-/// own colours are normalised away before this ([`features`]), so it says how closely the
-/// sounds follow each other, not how alike the voices are: a recording of eSpeak NG itself
-/// (another of its voices, at another rate, in a noisy room) 2.8–3.6; flite's diphone voices,
-/// clean, noisy, raised or lowered, 1.1–1.6; LibriVox readers 1.2–1.3.
+/// (either side, 80 and 150 ms off), over the mean distance to the frames on it. Each voice's
+/// own colour is normalised away before this ([`features`]), so it says how closely the sounds
+/// follow each other more than how alike the voices sound. eSpeak NG's m3, at another rate than
+/// the rendition's (and in a noisy room): 2.8–3.6; its f2 1.6–1.8 and whisperf 1.4–1.6; flite's
+/// diphone voices, clean, noisy, raised or lowered, 1.1–1.6; LibriVox readers 1.2–1.3.
 fn sharpness(path: &[(usize, usize)], a: &[[f32; DIMS]], b: &[[f32; DIMS]]) -> f32 {
     let cepstral = |i: usize, j: usize| {
         a[i][..CEPSTRA]
