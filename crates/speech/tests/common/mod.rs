@@ -152,14 +152,21 @@ pub fn judged(frames: &[[f32; 15]], said: &Said) -> [usize; 4] {
 /// `sound` read without a transcript, asserting that its phones were recognised (not its
 /// words) and that a note saying `why` told the user so.
 pub fn read_by_its_phones(sound: &Sound, why: &str) -> faceanim_speech::Reading {
+    read_by(sound, None, faceanim_speech::Recognition::PhoneLoop, why)
+}
+
+/// `sound` read with `transcript` (or without), asserting that `route` found its phones and
+/// that a note saying `why` told the user so.
+pub fn read_by(
+    sound: &Sound,
+    transcript: Option<&str>,
+    route: faceanim_speech::Recognition,
+    why: &str,
+) -> faceanim_speech::Reading {
     let reading =
-        faceanim_speech::read(sound, None, None, faceanim_speech::Recognition::Words).unwrap();
-    assert_eq!(
-        reading.recognition,
-        faceanim_speech::Recognition::PhoneLoop,
-        "{:?}",
-        reading.notes
-    );
+        faceanim_speech::read(sound, transcript, None, faceanim_speech::Recognition::Words)
+            .unwrap();
+    assert_eq!(reading.recognition, route, "{:?}", reading.notes);
     assert!(
         reading.notes.iter().any(|n| n.contains(why)),
         "{:?}",
