@@ -2,7 +2,7 @@
 //! synthesis (any language), else the sound recognised without it — and the notes that say
 //! what was done instead of what was asked.
 
-use faceanim_sphinx_sys::{Decoded, FRAME_RATE, Recogniser, SphinxError, Turn};
+use faceanim_sphinx_sys::{Decoded, Recogniser, SphinxError, Turn};
 
 use crate::audio::{SAMPLE_RATE, Sound};
 use crate::phones::{self, Phone, PhoneError, Recognition};
@@ -26,10 +26,11 @@ pub fn is_english(language: &str) -> bool {
 /// synthesiser's own rendition sharply (a synthesiser's voice of eSpeak NG's kind); that line,
 /// a line the recogniser cannot align, or one in another language, is aligned by synthesis
 /// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
-/// note saying why. Without a transcript the sound is recognised by `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words
-/// only in English, phones in any other language). Every route of the recogniser hears a
-/// woman's or child's voice through a longer vocal tract, as its pitch says ([`Voice::Auto`]).
-/// The notes say what was done instead of what was asked.
+/// note saying why. Without a transcript the sound is recognised by `blind`
+/// ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words only in English, phones in any
+/// other language). Every route of the recogniser hears a woman's or child's voice through a
+/// longer vocal tract, as its pitch says ([`Voice::Auto`]). The notes say what was done
+/// instead of what was asked.
 ///
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail, or the transcript is
@@ -107,7 +108,8 @@ fn prepare(route: Recognition, sound: &Sound, heard: &Heard<'_>) -> Ready {
         };
     }
     let loop_search = phones::blind_search(Recognition::PhoneLoop).warped(heard.frame_rate());
-    // The sound up to its last frame of voice scored, in the heard sound's samples.
+    // The sound up to its last frame of voice scored, in the heard sound's samples (its
+    // frames are the sound's, each `SAMPLE_RATE / frame_rate` samples long).
     let samples = heard.samples();
     let cut = sound
         .voice_activity()
@@ -116,9 +118,7 @@ fn prepare(route: Recognition, sound: &Sound, heard: &Heard<'_>) -> Ready {
         .filter(|(_, v)| **v)
         .nth(SCORED_VOICE)
         .map_or(samples.len(), |(frame, _)| {
-            (frame * (SAMPLE_RATE / FRAME_RATE) as usize * FRAME_RATE as usize
-                / heard.frame_rate() as usize)
-                .min(samples.len())
+            (frame * SAMPLE_RATE as usize / heard.frame_rate() as usize).min(samples.len())
         });
     std::thread::scope(|scope| {
         let phones = scope.spawn(|| {
@@ -253,15 +253,17 @@ pub fn recognise_loaded(
         // Why the recogniser could not align it, when it tried.
         let mut why = None;
         if english {
-            if let Some(Ok(timed)) = &by_synthesis {
-                tracing::debug!(
-                    sharpness = timed.sharpness,
-                    "how sharply the synthesiser's rendition follows the voice"
-                );
-            }
-            if let Some(Ok(timed)) = &by_synthesis
-                && timed.sharpness >= SAME_VOICE
-            {
+            let sharp = match &by_synthesis {
+                Some(Ok(timed)) => {
+                    tracing::debug!(
+                        sharpness = timed.sharpness,
+                        "how sharply the synthesiser's rendition follows the voice"
+                    );
+                    timed.sharpness >= SAME_VOICE
+                }
+                _ => false,
+            };
+            if sharp {
                 notes.push(
                     "the voice follows the synthesiser's own rendition of the transcript closely (a synthesiser's voice): the transcript was aligned by synthesis"
                         .to_owned(),
@@ -325,9 +327,11 @@ pub fn recognise_loaded(
         "the phone loop's acoustic score a frame of speech"
     );
     // The line's phones: those decoded already when they are the whole line's.
-    let phones_heard = || match whole {
-        true => phones::phones_of(decoded.segments.clone()),
-        false => phones::phone_loop(&heard, None),
+    let segments = decoded.segments;
+    let heard_ref = &heard;
+    let phones_heard = move || match whole {
+        true => phones::phones_of(segments),
+        false => phones::phone_loop(heard_ref, None),
     };
     // A voice the acoustic model hears poorly (a formant synthesiser's buzz) is recognised
     // by its phones: its words are mostly wrong, and slow to search for.
