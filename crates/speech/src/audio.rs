@@ -1,14 +1,18 @@
 //! Speech as the recogniser wants it: 16 kHz, mono, 16-bit.
 //!
-//! A WAV file at 16 kHz in 16-bit PCM (what recorders and TTS voices often write) is read
-//! here; anything else — other rates, channels and sample formats, MP3, Ogg, FLAC, or the
-//! sound of a video — is converted by the `ffmpeg` program. Without ffmpeg, a WAV in 8-, 16-,
-//! 24- or 32-bit PCM or 32-bit float, of any rate and channels, is still read here: its
-//! channels mixed and resampled by band-limited interpolation ([`resample`]), so speech needs
-//! no other program on any platform. ffmpeg comes first where it is installed because the
-//! recogniser's accuracy was measured on its conversion: on 8 lines of a held-out 8 kHz voice,
-//! [`resample`] read 0.786–0.800 of the viseme classes where ffmpeg's conversion read 0.814
-//! (a decision or two of a recogniser that is sensitive to the least change).
+//! A WAV file in 8-, 16-, 24- or 32-bit PCM or 32-bit float, of any channels, recorded at
+//! 16 kHz or more (what recorders, TTS voices and editors write) is read here: its channels
+//! mixed and resampled by band-limited interpolation ([`resample`]), with no other program on
+//! any platform and no process started (about a tenth of a second of a short line's command).
+//! Anything else — MP3, Ogg, FLAC, the sound of a video, a WAV in another encoding — is
+//! converted by the `ffmpeg` program, and so is a WAV below 16 kHz (a telephone line's 8 kHz)
+//! where ffmpeg is installed, else it too is resampled here. How each was chosen, on
+//! `scripts/bench-lipsync.py`'s lines: from 22,050 Hz (eSpeak NG's m3, f2 and whisperf, clean
+//! and in a noisy room) the recogniser reads the same viseme classes from either conversion
+//! (agreement within ±0.01 with the transcript and ±0.02 without, and half the command's time
+//! with the transcript: 0.04× real time against 0.08–0.09×); from 8 kHz (flite's kal),
+//! ffmpeg's conversion read 0.80 of the classes without the transcript and [`resample`]'s
+//! 0.77–0.80 (a decision or two of a recogniser that is sensitive to the least change).
 //!
 //! Errors name the file and what is wrong with it: not audio, no sound in it, longer than
 //! [`MAX_SECONDS`].
@@ -91,7 +95,7 @@ impl Sound {
         if metadata.len() == 0 {
             return Err(AudioError::Empty(path.to_owned()));
         }
-        let sound = match read_wav(path, Resampling::Ffmpeg).map_err(bad)? {
+        let sound = match read_wav(path, Resampling::Down).map_err(bad)? {
             Wav::Plain(sound) => sound,
             Wav::Other(header) => {
                 header.check().map_err(bad)?;
@@ -101,11 +105,11 @@ impl Sound {
                         seconds: header.seconds() as f32,
                     });
                 }
-                // ffmpeg's resampler where it is installed (the recogniser was measured on it);
-                // where it is not, a PCM or float WAV is resampled here.
+                // ffmpeg where it is installed (see the module's docs); where it is not, a PCM
+                // or float WAV of a lower rate is resampled here too.
                 match convert(path) {
                     Err(AudioError::NoFfmpeg(_)) => {
-                        match read_wav(path, Resampling::Here).map_err(bad)? {
+                        match read_wav(path, Resampling::Any).map_err(bad)? {
                             Wav::Plain(sound) => sound,
                             _ => return Err(AudioError::NoFfmpeg(path.to_owned())),
                         }
@@ -329,18 +333,18 @@ impl WavHeader {
     }
 }
 
-/// Who brings a WAV of another rate or format to 16 kHz mono.
+/// Which PCM and float WAVs [`read_wav`] resamples itself (see the module's docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Resampling {
-    /// The `ffmpeg` program.
-    Ffmpeg,
-    /// [`resample`], for a PCM or float WAV.
-    Here,
+    /// Those recorded at 16 kHz or more; a lower rate is left to the `ffmpeg` program.
+    Down,
+    /// Every one.
+    Any,
 }
 
 /// Reads `path`'s WAV header: a canonical 16 kHz mono 16-bit PCM WAV is read whole here, and
-/// with [`Resampling::Here`] any PCM or float WAV (mixed to mono and resampled to 16 kHz); an
-/// error for a WAV that is cut short or lacks its format.
+/// any other PCM or float WAV that `resampling` allows is mixed to mono and resampled to
+/// 16 kHz here; an error for a WAV that is cut short or lacks its format.
 fn read_wav(path: &Path, resampling: Resampling) -> Result<Wav, String> {
     // The header first: an MP3 or a video is left to ffmpeg without being read here.
     let mut header = [0u8; 12];
@@ -403,7 +407,7 @@ fn read_wav(path: &Path, resampling: Resampling) -> Result<Wav, String> {
             let encoding = Encoding::of(tag, bits);
             match (encoding, data) {
                 (Some(encoding), Some(data))
-                    if resampling == Resampling::Here
+                    if (resampling == Resampling::Any || rate >= SAMPLE_RATE)
                         && header.check().is_ok()
                         && header.seconds() <= f64::from(MAX_SECONDS) =>
                 {
@@ -761,7 +765,7 @@ mod tests {
 
     /// `path` read as it is without ffmpeg.
     fn here(path: &Path) -> Sound {
-        match read_wav(path, Resampling::Here) {
+        match read_wav(path, Resampling::Any) {
             Ok(Wav::Plain(sound)) => sound,
             _ => panic!("{} is not read here", path.display()),
         }
@@ -770,6 +774,36 @@ mod tests {
     fn rms(samples: &[i16]) -> f64 {
         let middle = &samples[samples.len() / 10..samples.len() * 9 / 10];
         (middle.iter().map(|&s| f64::from(s).powi(2)).sum::<f64>() / middle.len() as f64).sqrt()
+    }
+
+    /// A WAV recorded at 16 kHz or more is resampled here, whether or not ffmpeg is installed;
+    /// one below 16 kHz is left to ffmpeg where it is (see the module's docs).
+    #[test]
+    fn wavs_from_16_khz_up_are_resampled_here_and_lower_ones_left_to_ffmpeg() {
+        let dir = tempfile::tempdir().unwrap();
+        for (rate, tag, bits, here) in [
+            (22_050, 1, 16, true),
+            (44_100, 1, 24, true),
+            (48_000, 3, 32, true),
+            (16_000, 1, 24, true),
+            (8_000, 1, 16, false),
+            (11_025, 1, 8, false),
+        ] {
+            let tone = tone(440.0, rate, 0.5, 0.5);
+            let frames: Vec<Vec<f32>> = tone.iter().map(|&v| vec![v, v]).collect();
+            let path = dir.path().join(format!("{rate}.wav"));
+            std::fs::write(&path, encoded(&frames, rate, tag, bits)).unwrap();
+            let read = read_wav(&path, Resampling::Down).unwrap();
+            assert_eq!(
+                matches!(read, Wav::Plain(_)),
+                here,
+                "{rate} Hz, {bits} bits"
+            );
+            assert!(matches!(
+                read_wav(&path, Resampling::Any).unwrap(),
+                Wav::Plain(_)
+            ));
+        }
     }
 
     #[test]
