@@ -512,6 +512,11 @@ fn bessel_i0(x: f64) -> f64 {
 /// its zero crossings wide; the kernel is tabulated and read with linear interpolation.
 #[must_use]
 pub fn resample(samples: &[f32], rate: u32) -> Vec<i16> {
+    resample_tabulating(samples, rate, MAX_PHASES)
+}
+
+/// [`resample`], with the kernel tabulated for up to `max_phases` phases.
+fn resample_tabulating(samples: &[f32], rate: u32, max_phases: u64) -> Vec<i16> {
     let quantise = |v: f64| (v * 32768.0).round().clamp(-32768.0, 32767.0) as i16;
     if rate == SAMPLE_RATE || samples.is_empty() || rate == 0 {
         return samples.iter().map(|&v| quantise(f64::from(v))).collect();
@@ -548,17 +553,62 @@ pub fn resample(samples: &[f32], rate: u32) -> Vec<i16> {
     };
     let outputs = (samples.len() as f64 / step).floor() as usize;
     let last = samples.len() as isize - 1;
+    // The output's position in the input, each `n`: `n × rate / 16,000` reduced, so that the
+    // kernel's weights repeat every `phases` outputs (160 from 44.1 kHz, 320 from 22.05 kHz,
+    // 1 from 48 kHz) and are computed once for each.
+    let common = gcd(rate, SAMPLE_RATE);
+    let (up, phases) = (u64::from(rate / common), u64::from(SAMPLE_RATE / common));
+    let span = |t: f64| ((t - half).ceil() as isize, (t + half).floor() as isize);
+    let weights: Vec<(isize, Vec<f64>)> = match phases <= max_phases {
+        true => (0..phases)
+            .map(|phase| {
+                let t = phase as f64 / phases as f64;
+                let (first, end) = span(t);
+                (first, (first..=end).map(|k| at(t - k as f64)).collect())
+            })
+            .collect(),
+        false => Vec::new(),
+    };
     (0..outputs)
         .map(|n| {
-            let t = n as f64 * step;
-            let first = ((t - half).ceil() as isize).max(0);
-            let end = ((t + half).floor() as isize).min(last);
-            let sum: f64 = (first..=end)
-                .map(|k| f64::from(samples[k as usize]) * at(t - k as f64))
-                .sum();
+            // The input sample at or before the output, and the phase past it.
+            let position = n as u64 * up;
+            let (whole, phase) = (position / phases, (position % phases) as usize);
+            let tabulated = weights.get(phase).and_then(|(offset, weights)| {
+                let from = usize::try_from(whole as isize + offset).ok()?;
+                Some((samples.get(from..from + weights.len())?, weights))
+            });
+            let sum: f64 = match tabulated {
+                Some((inputs, weights)) => inputs
+                    .iter()
+                    .zip(weights)
+                    .map(|(&v, w)| f64::from(v) * w)
+                    .sum(),
+                // Near either end (the kernel reaches past the sound), or a rate with too many
+                // phases: the kernel read at each input sample.
+                None => {
+                    let t = n as f64 * step;
+                    let (first, end) = span(t);
+                    (first.max(0)..=end.min(last))
+                        .map(|k| f64::from(samples[k as usize]) * at(t - k as f64))
+                        .sum()
+                }
+            };
             quantise(sum)
         })
         .collect()
+}
+
+/// The most kernel phases [`resample`] tabulates (a rate whose ratio to 16 kHz reduces to
+/// more is resampled by reading the kernel at each output sample).
+const MAX_PHASES: u64 = 2048;
+
+/// The greatest common divisor of `a` and `b`.
+fn gcd(mut a: u32, mut b: u32) -> u32 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 /// The sound of any file ffmpeg reads, converted to 16 kHz mono.
@@ -774,6 +824,29 @@ mod tests {
     fn rms(samples: &[i16]) -> f64 {
         let middle = &samples[samples.len() / 10..samples.len() * 9 / 10];
         (middle.iter().map(|&s| f64::from(s).powi(2)).sum::<f64>() / middle.len() as f64).sqrt()
+    }
+
+    /// The kernel's weights tabulated once per phase give the samples that reading it at every
+    /// output sample gives (to the last bit but for a rounding), at each rate recorders write.
+    #[test]
+    fn a_tabulated_kernel_resamples_as_the_kernel_read_at_each_sample() {
+        for rate in [8_000, 11_025, 22_050, 44_100, 48_000, 96_000] {
+            let glide: Vec<f32> = (0..rate / 2)
+                .map(|k| {
+                    let t = k as f32 / rate as f32;
+                    0.5 * (std::f32::consts::TAU * (200.0 + 6000.0 * t) * t).sin()
+                })
+                .collect();
+            let tabulated = resample(&glide, rate);
+            let read = resample_tabulating(&glide, rate, 0);
+            assert_eq!(tabulated.len(), read.len());
+            let most = tabulated
+                .iter()
+                .zip(&read)
+                .map(|(a, b)| (i32::from(*a) - i32::from(*b)).abs())
+                .max();
+            assert!(most <= Some(1), "{rate} Hz: {most:?}");
+        }
     }
 
     /// A WAV recorded at 16 kHz or more is resampled here, whether or not ffmpeg is installed;
