@@ -9,7 +9,7 @@
 //! where ffmpeg is installed, else it too is resampled here. How each was chosen, on
 //! `scripts/bench-lipsync.py`'s lines: from 22,050 Hz (eSpeak NG's m3, f2 and whisperf, clean
 //! and in a noisy room) the recogniser reads the same viseme classes from either conversion
-//! (agreement within ±0.01 with the transcript and ±0.02 without, and half the command's time
+//! (agreement within ±0.01 with the transcript and ±0.025 without, and half the command's time
 //! with the transcript: 0.04× real time against 0.08–0.09×); from 8 kHz (flite's kal),
 //! ffmpeg's conversion read 0.80 of the classes without the transcript and [`resample`]'s
 //! 0.77–0.80 (a decision or two of a recogniser that is sensitive to the least change).
@@ -509,7 +509,9 @@ fn bessel_i0(x: f64) -> f64 {
 /// `samples` (in [-1, 1]) at `rate` Hz as 16 kHz 16-bit samples: band-limited interpolation,
 /// each output sample the input under a Kaiser-windowed sinc (β 9) whose cutoff is 97 % of the
 /// lower of the two Nyquist frequencies (so nothing above 8 kHz folds back into speech), ±16 of
-/// its zero crossings wide; the kernel is tabulated and read with linear interpolation.
+/// its zero crossings wide; the kernel is tabulated and read with linear interpolation, and
+/// its weights for each phase of the output against the input (`n × rate / 16,000`, reduced)
+/// are read once, not at every output sample.
 #[must_use]
 pub fn resample(samples: &[f32], rate: u32) -> Vec<i16> {
     resample_tabulating(samples, rate, MAX_PHASES)
