@@ -54,7 +54,13 @@ FOREIGN = {
     "ko": ["안녕하세요, 만나서 반갑습니다.", "엄마는 매일 밥을 먹어요."],
     "it": ["Buongiorno, come stai?", "Mamma mia, il mare è bellissimo."],
     "pt": ["Bom dia, meu amigo.", "A minha mãe bebe muito café."],
+    # Mandarin in characters, told `zh` as users name it; spoken by eSpeak NG's pinyin voice
+    # (its `zh` voice reads characters as numbered pinyin in English).
+    "zh": ["妈妈每天买面包。", "你好，谢谢你的帮助。"],
 }
+
+# The voice that speaks a language's lines, where it is not the language's own.
+SPEAKER = {"zh": "cmn-latn-pinyin"}
 
 # More Italian for Festival's Italian voices (held out of every choice).
 ITALIAN = [
@@ -350,7 +356,8 @@ def main():
                 elif engine == "festival-it":
                     phones = festival(voice, line, wav, work, sampa_viseme)
                 else:
-                    phones = espeak_line(voice, line, wav)
+                    base, plus, variant = voice.partition("+")
+                    phones = espeak_line(SPEAKER.get(base, base) + plus + variant, line, wav)
                 seconds = read_wav(wav)
                 if args.effect:
                     changed = wav[:-4] + f"-{args.effect}.wav"

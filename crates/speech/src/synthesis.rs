@@ -57,7 +57,7 @@ pub(crate) fn timed_by_synthesis(
     text: &str,
     language: &str,
 ) -> Result<Timed, PhoneError> {
-    let spoken = faceanim_espeak_sys::speak(text, language, None)?;
+    let spoken = faceanim_espeak_sys::speak(text, &voice_for(text, language), None)?;
     if spoken.phones.iter().all(|p| p.ipa == PAUSE) {
         return Err(PhoneError::EmptyTranscript);
     }
@@ -260,6 +260,32 @@ fn carve_pauses(phones: Vec<Phone>, voiced: &[bool]) -> Vec<Phone> {
     out
 }
 
+/// The eSpeak NG voice that reads `text` in `language`. Its Mandarin voice (`cmn`, also
+/// named `zh` and `zh-cmn`) turns Chinese characters into numbered pinyin and reads that, as it
+/// reads any Latin letters, as English (eSpeak NG 1.51: "妈妈买了" spoken "ma one ma one mei
+/// three le five"), so that a line in characters would be aligned to English phones; its pinyin
+/// voice, `cmn-latn-pinyin`, reads the characters and pinyin alike as Mandarin. A line holding
+/// a Chinese character is read by that voice, with the variant asked for (`zh+f2`).
+fn voice_for<'a>(text: &str, language: &'a str) -> std::borrow::Cow<'a, str> {
+    let (base, variant) = language
+        .split_once('+')
+        .map_or((language, None), |(b, v)| (b, Some(v)));
+    let mandarin = ["cmn", "zh", "zh-cmn"]
+        .iter()
+        .any(|name| base.eq_ignore_ascii_case(name));
+    let han = |c: char| matches!(c, '\u{3400}'..='\u{4DBF}' | '\u{4E00}'..='\u{9FFF}' | '\u{F900}'..='\u{FAFF}' | '\u{20000}'..='\u{2FA1F}');
+    if mandarin && text.chars().any(han) {
+        let voice = match variant {
+            Some(variant) => format!("cmn-latn-pinyin+{variant}"),
+            None => "cmn-latn-pinyin".to_owned(),
+        };
+        tracing::debug!(%voice, "a Mandarin line in characters, spoken by eSpeak NG's pinyin voice");
+        std::borrow::Cow::Owned(voice)
+    } else {
+        std::borrow::Cow::Borrowed(language)
+    }
+}
+
 /// The first and last frames of speech in `frames`: louder than 30 dB under the loudest.
 fn speech(frames: &[([f32; CEPSTRA], f32)]) -> Option<(usize, usize)> {
     let loudest = frames.iter().map(|f| f.1).fold(f32::MIN, f32::max);
@@ -429,6 +455,18 @@ fn time_of(k: usize) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mandarin_line_in_characters_is_read_by_the_pinyin_voice() {
+        assert_eq!(voice_for("妈妈每天买面包。", "zh"), "cmn-latn-pinyin");
+        assert_eq!(
+            voice_for("妈妈每天买面包。", "CMN+f2"),
+            "cmn-latn-pinyin+f2"
+        );
+        assert_eq!(voice_for("ma1 ma1 mai3", "zh"), "zh");
+        assert_eq!(voice_for("まいにち", "ja"), "ja");
+        assert_eq!(voice_for("妈妈", "yue"), "yue");
+    }
 
     #[test]
     fn a_stretched_copy_warps_onto_its_original() {

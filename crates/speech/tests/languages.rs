@@ -22,7 +22,7 @@ struct Line {
     text: &'static str,
 }
 
-const LINES: [Line; 6] = [
+const LINES: [Line; 7] = [
     Line {
         language: "es",
         voice: "es+f3",
@@ -52,6 +52,13 @@ const LINES: [Line; 6] = [
         language: "it",
         voice: "it+m4",
         text: "Mamma mia, il mare è bellissimo.",
+    },
+    // Told `zh`, as a user would say Chinese; spoken by the voice that reads characters as
+    // Mandarin (eSpeak NG's `zh` reads them as numbered pinyin in English).
+    Line {
+        language: "zh",
+        voice: "cmn-latn-pinyin+m3",
+        text: "妈妈每天买面包。",
     },
 ];
 
@@ -93,7 +100,7 @@ fn a_voice_whose_words_are_not_made_out_still_moves_the_mouth() {
 }
 
 #[test]
-fn transcripts_in_six_languages_lip_sync_on_time() {
+fn transcripts_in_seven_languages_lip_sync_on_time() {
     let mut report = Vec::new();
     for Line {
         language,
