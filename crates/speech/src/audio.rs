@@ -187,13 +187,8 @@ impl Sound {
         if rate == SAMPLE_RATE {
             return self.clone();
         }
-        let samples: Vec<f32> = self
-            .samples
-            .iter()
-            .map(|&s| f32::from(s) / 32768.0)
-            .collect();
         Sound {
-            samples: resample(&samples, rate),
+            samples: resample_pcm(&self.samples, rate),
         }
     }
 
@@ -515,6 +510,13 @@ fn bessel_i0(x: f64) -> f64 {
 #[must_use]
 pub fn resample(samples: &[f32], rate: u32) -> Vec<i16> {
     resample_tabulating(samples, rate, MAX_PHASES)
+}
+
+/// 16-bit `samples` at `rate` Hz as 16 kHz 16-bit samples, by [`resample`].
+#[must_use]
+pub(crate) fn resample_pcm(samples: &[i16], rate: u32) -> Vec<i16> {
+    let floats: Vec<f32> = samples.iter().map(|&s| f32::from(s) / 32768.0).collect();
+    resample(&floats, rate)
 }
 
 /// [`resample`], with the kernel tabulated for up to `max_phases` phases.

@@ -63,12 +63,7 @@ pub(crate) fn timed_by_synthesis(
     }
     // eSpeak NG speaks at 22,050 Hz: brought to the recording's 16 kHz as a recording is
     // (band-limited, so nothing above 8 kHz folds into the cepstra).
-    let floats: Vec<f32> = spoken
-        .samples
-        .iter()
-        .map(|&s| f32::from(s) / 32_768.0)
-        .collect();
-    let synthetic = crate::audio::resample(&floats, spoken.sample_rate);
+    let synthetic = crate::audio::resample_pcm(&spoken.samples, spoken.sample_rate);
     let (ours, theirs) = (
         Frontend::cepstra(&synthetic),
         Frontend::cepstra(&sound.samples),
