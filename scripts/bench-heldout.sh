@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The held-out measure in full: 60 stills per renderer (a test run renders 40), the retarget
+# The held-out measure in full: 60 stills per renderer (a test run renders 24), the retarget
 # map (as every test run measures it) and, beside
 # it, the adapter trained with `faceanim adapt` at the product's defaults (about 25 minutes of
 # training on two cores, too long for every test run). The figures are printed and kept in

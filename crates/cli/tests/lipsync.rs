@@ -925,7 +925,8 @@ fn a_rig_without_mouth_names_lip_syncs_through_its_map_or_its_adapter() {
     println!("through the map, {jaw} (ICT's jawOpen) peaks at {most:.2}");
     assert!(most > 0.25, "{by_map:?}");
     assert!(by_map[0] < 0.05, "{by_map:?}");
-    // The adapter, when given, reads the mouth instead.
+    // The adapter, when given, reads the mouth instead (few renders: this checks the route;
+    // the adapter tests check its accuracy).
     let adapter = out.join("unnamed.adapter.safetensors");
     let (character_arg, adapter_arg) = (glb.to_str().unwrap(), adapter.to_str().unwrap());
     faceanim_ok(&[
@@ -934,7 +935,7 @@ fn a_rig_without_mouth_names_lip_syncs_through_its_map_or_its_adapter() {
         "-o",
         adapter_arg,
         "--samples",
-        "1000",
+        "400",
     ]);
     let summary = faceanim_ok(
         &args(&["--adapter", adapter_arg])
