@@ -59,7 +59,9 @@ const MOVES: f64 = 0.1;
 /// maps' measure on them took 104 s instead of 141 s on two cores, and gave the same figures
 /// within the draw (held out with the neutral: 0.1151 against 0.1158; one to three shapes
 /// 0.044 against 0.046; the three.js head 0.109 against 0.115, another person 0.119 against
-/// 0.123).
+/// 0.123). The draw moves the figures more than the count: on another draw of the same sampler
+/// (seed 777001), tried once and not kept, the held-out stills gave 0.134 with 40 and 0.138
+/// with 24 (one to three shapes 0.058 and 0.064), its dense group being harder (0.362).
 fn stills() -> usize {
     std::env::var("FACEANIM_HELDOUT_STILLS")
         .ok()
