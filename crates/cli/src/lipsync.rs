@@ -183,7 +183,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         crate::outputs::write(path, format, &animation, args.glb)?;
     }
     eprintln!(
-        "{:.2} s of speech in {:.2} s ({:.2}× real time): {} phones ({}), {} visemes on {} of {} shapes ({})",
+        "{:.2} s of sound in {:.2} s ({:.2}× real time): {} phones ({}), {} visemes on {} of {} shapes ({})",
         sound.seconds(),
         seconds,
         seconds / f64::from(sound.seconds()),

@@ -181,11 +181,33 @@ pub fn read_loaded(
         "the line's phones"
     );
     let track = visemes::track(&phones, &sound.voice_activity(), sound.seconds());
+    let mut notes = notes;
+    if let Some(note) = unheard(&track, transcript.is_some()) {
+        notes.push(note.to_owned());
+    }
     Ok(Reading {
         track,
         phones,
         recognition,
         notes,
+    })
+}
+
+/// What to tell the user of a sound whose `track` never moves the mouth (silence, a room's
+/// noise, music without a voice: a wrong file or a video's empty sound track), when a
+/// `transcript` was given or not; `None` when the mouth moves.
+fn unheard(track: &Track, transcript: bool) -> Option<&'static str> {
+    if track
+        .keys
+        .iter()
+        .any(|k| k.viseme != faceanim_rig::names::Viseme::Sil)
+    {
+        return None;
+    }
+    Some(if transcript {
+        "no voice was heard in it: the mouth rests throughout, and the transcript's words were placed nowhere"
+    } else {
+        "no voice was heard in it: the mouth rests throughout"
     })
 }
 

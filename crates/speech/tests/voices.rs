@@ -334,3 +334,74 @@ fn a_whisper_without_its_transcript_is_read_by_its_phones() {
         reading.notes
     );
 }
+
+/// A sound without a voice (digital silence, a room's noise, music) keeps the mouth at rest
+/// and says so, with a transcript or without: a wrong file, or a video whose sound track is
+/// empty, is not lip-synced silently to nothing. A spoken line says nothing of the kind.
+#[test]
+fn a_sound_without_a_voice_rests_the_mouth_and_says_so() {
+    let rate = 16_000.0f32;
+    let seconds = 3 * 16_000;
+    // Noise falling with frequency (white noise through a one-pole low-pass, a fan or a room)
+    // about 30 dB under full scale, from a fixed generator.
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut low = 0.0f32;
+    let room: Vec<i16> = (0..seconds)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let white = (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0;
+            low = 0.9 * low + 0.1 * white;
+            (low * 6000.0) as i16
+        })
+        .collect();
+    // A held chord (A and C sharp, with an octave above each), as loud as speech.
+    let chord: Vec<i16> = (0..seconds)
+        .map(|n| {
+            let t = n as f32 / rate;
+            let tone = |hz: f32| (std::f32::consts::TAU * hz * t).sin();
+            (3000.0 * (tone(440.0) + tone(554.37) + 0.5 * tone(880.0) + 0.5 * tone(1108.7))) as i16
+        })
+        .collect();
+    let line = "Bob brought a big purple map to the bumpy boat.";
+    for (name, samples) in [
+        ("silence", vec![0; seconds]),
+        ("room", room),
+        ("chord", chord),
+    ] {
+        let sound = Sound { samples };
+        for transcript in [None, Some(line)] {
+            let reading =
+                faceanim_speech::read(&sound, transcript, None, Recognition::Words).unwrap();
+            assert!(
+                reading.track.keys.iter().all(|k| k.viseme == Viseme::Sil),
+                "{name}, {transcript:?}: {:?}",
+                reading.track
+            );
+            assert!(
+                reading
+                    .notes
+                    .iter()
+                    .any(|n| n.starts_with("no voice was heard")),
+                "{name}, {transcript:?}: {:?}",
+                reading.notes
+            );
+        }
+    }
+    let wav = std::env::temp_dir().join(format!("faceanim-unheard-{}.wav", std::process::id()));
+    flite("rms", line, &wav);
+    let sound = Sound::read(&wav).unwrap();
+    let _ = std::fs::remove_file(&wav);
+    for transcript in [None, Some(line)] {
+        let reading = faceanim_speech::read(&sound, transcript, None, Recognition::Words).unwrap();
+        assert!(
+            !reading
+                .notes
+                .iter()
+                .any(|n| n.starts_with("no voice was heard")),
+            "{:?}",
+            reading.notes
+        );
+    }
+}
