@@ -467,6 +467,8 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| default_adapter_path(args.character.as_deref(), character.name()));
+    // Before minutes of rendering and training, not after.
+    faceanim_files::check_output(&output)?;
     let cache = args
         .dataset
         .clone()

@@ -123,6 +123,7 @@ fn check_output(input: &Path, output: &Path) -> anyhow::Result<()> {
         "{}: the output must be a .glb or .vrm file",
         output.display()
     );
+    faceanim_files::check_output(output)?;
     let same = match (input.canonicalize(), output.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => false,

@@ -28,13 +28,18 @@ impl GlbArgs {
     }
 }
 
-/// The formats `paths` ask for, by their endings; the first name that asks for none is an
-/// error.
+/// The formats `paths` ask for, by their endings, checked before any work is done for them:
+/// the first name that asks for none, or that cannot be written (a folder that is not there:
+/// [`faceanim_files::check_output`]), is an error.
 pub fn formats_of(paths: &[PathBuf]) -> anyhow::Result<Vec<Format>> {
-    Ok(paths
+    paths
         .iter()
-        .map(|p| Format::from_path(p))
-        .collect::<Result<_, _>>()?)
+        .map(|p| {
+            let format = Format::from_path(p)?;
+            faceanim_files::check_output(p)?;
+            Ok(format)
+        })
+        .collect()
 }
 
 /// Writes `animation` to `path` in `format` (a GLB as `glb` says).

@@ -50,6 +50,7 @@ pub fn run(args: RetargetArgs) -> anyhow::Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| default_path(args.character.as_deref(), &character));
+    faceanim_files::check_output(&path)?;
     let models = FaceModels::load().context("loading the face models")?;
     let names = character.blendshape_names();
     let existing = read(&path, &names)?;

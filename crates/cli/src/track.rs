@@ -120,6 +120,9 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         "give at least one -o OUTPUT (.json, .glb, .csv, .byoc.csv), --session or --raw"
     );
     let formats = crate::outputs::formats_of(&args.outputs)?;
+    for path in args.raw.iter().chain(&args.session) {
+        faceanim_files::check_output(path)?;
+    }
     anyhow::ensure!(
         args.fps.is_finite() && args.fps > 0.0,
         "--fps must be a positive number, got {}",

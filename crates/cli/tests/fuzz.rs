@@ -516,6 +516,37 @@ fn the_command_refuses_what_it_cannot_use_by_name() {
     );
     assert!(started.elapsed().as_secs() < 5, "{stderr}");
 
+    // An output in a folder that is not there (a typo) is refused before the work, by name:
+    // not after minutes of tracking or training, and not as a temporary file's name.
+    let typo = dir.path().join("typo");
+    for args in [
+        vec![os("lipsync"), speech.as_os_str(), os("-o")],
+        vec![
+            os("lipsync"),
+            speech.as_os_str(),
+            os("-o"),
+            clip.as_os_str(),
+            os("--clip"),
+        ],
+        vec![os("track"), speech.as_os_str(), os("--session")],
+        vec![os("adapt"), os("--output")],
+        vec![os("retarget"), os("-o")],
+        vec![os("generate-shapes"), speech.as_os_str(), os("-o")],
+    ] {
+        let into = typo.join("out.glb");
+        let mut args = args;
+        args.push(into.as_os_str());
+        let started = std::time::Instant::now();
+        let (code, stderr) = command(&args);
+        assert!(code != 0, "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(&format!("its folder {} does not exist", typo.display())),
+            "{args:?}: {stderr}"
+        );
+        assert!(started.elapsed().as_secs() < 5, "{args:?}: {stderr}");
+    }
+    assert!(!typo.exists());
+
     // A reader that goes away ends the command quietly.
     let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
         .args(["info", "--json"])

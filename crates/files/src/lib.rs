@@ -295,6 +295,56 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
     replace_file(&target, bytes).map_err(io)
 }
 
+/// Checks that `path` can be written as a command's output, before any work is done for it:
+/// standard output (`-`), or a file (new, or one to replace) in a folder that exists — so that
+/// a mistyped folder fails at once, not after minutes of tracking or training.
+///
+/// # Errors
+/// [`FileError::Io`] with the path: its folder does not exist (or is a file), or the path is a
+/// folder.
+pub fn check_output(path: &Path) -> Result<(), FileError> {
+    if is_stdout(path) {
+        return Ok(());
+    }
+    let io = |source| FileError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let target = link_target(path).map_err(io)?;
+    folder_exists(&target).map_err(io)?;
+    if target.is_dir() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "is a folder, not a file",
+        )));
+    }
+    Ok(())
+}
+
+/// The folder a file `path` is written in: its parent, or the working folder.
+fn folder_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Whether the folder `path` is written in exists; an error that names it when not.
+fn folder_exists(path: &Path) -> std::io::Result<()> {
+    let folder = folder_of(path);
+    if folder.is_dir() {
+        return Ok(());
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::NotFound,
+        if folder.exists() {
+            format!("{} is not a folder", folder.display())
+        } else {
+            format!("its folder {} does not exist", folder.display())
+        },
+    ))
+}
+
 /// Writes a command's output: `-` is standard output, anything else [`write_atomic`].
 ///
 /// # Errors
@@ -344,10 +394,9 @@ fn link_target(path: &Path) -> std::io::Result<PathBuf> {
 /// A regular file (or none yet) replaced by `bytes`: a temporary file beside it, synced, then
 /// renamed over it.
 fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
-        _ => PathBuf::from("."),
-    };
+    // Said plainly, not as the temporary file's path.
+    folder_exists(path)?;
+    let dir = folder_of(path);
     // Named after the file and recognisably ours, so that one left by a killed process is
     // known for what it is and removed later ([`remove_stale_partials`]).
     let name = path
@@ -412,6 +461,55 @@ mod tests {
             std::fs::read_dir(dir.path()).map(|d| d.count()).ok(),
             Some(1)
         );
+    }
+
+    #[test]
+    fn an_output_in_a_folder_that_is_not_there_is_refused_before_the_work_and_said_plainly() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let fine = dir.path().join("take.glb");
+        assert!(
+            check_output(&fine).is_ok(),
+            "a new file in a folder that exists"
+        );
+        std::fs::write(&fine, b"old").unwrap_or_else(|e| panic!("{e}"));
+        assert!(check_output(&fine).is_ok(), "a file to replace");
+        assert!(check_output(Path::new("-")).is_ok(), "standard output");
+        assert!(
+            check_output(Path::new("take.glb")).is_ok(),
+            "the working folder"
+        );
+        let missing = dir.path().join("typo").join("take.glb");
+        let said = |e: FileError| e.to_string();
+        let refused = check_output(&missing)
+            .map_err(said)
+            .err()
+            .unwrap_or_default();
+        assert!(
+            refused.contains("does not exist") && refused.contains("typo"),
+            "{refused}"
+        );
+        // The write says the same, not the name of its temporary file.
+        let written = write_atomic(&missing, b"x")
+            .map_err(said)
+            .err()
+            .unwrap_or_default();
+        assert!(
+            written.contains("its folder") && !written.contains(PARTIAL_SUFFIX),
+            "{written}"
+        );
+        assert!(!missing.exists());
+        // A file where the folder should be, and a folder where the file should be.
+        let under_a_file = fine.join("take.json");
+        let refused = check_output(&under_a_file)
+            .map_err(said)
+            .err()
+            .unwrap_or_default();
+        assert!(refused.contains("is not a folder"), "{refused}");
+        let refused = check_output(dir.path())
+            .map_err(said)
+            .err()
+            .unwrap_or_default();
+        assert!(refused.contains("is a folder"), "{refused}");
     }
 
     #[test]
