@@ -9,6 +9,10 @@ the audio alone:
   teeth, open, spread, round, tongue and teeth) the class of the rig's dominant viseme
   somewhere within ±40 ms;
 - P/B/M: for every bilabial, do the lips close (viseme_PP ≥ 0.5) within its time ±40 ms;
+- closures elsewhere: of the closures the rig makes (runs of frames with viseme_PP ≥ 0.5), how
+  many lie more than 40 ms from every bilabial (the lips shut on a D, an N, a vowel). P/B/M
+  counts closures that land; this counts those that should not have been made, which P/B/M
+  and agreement (a few 10 ms frames each) barely see;
 - silence: in every pause of at least 0.3 s (its middle, 0.1 s in from each end), the open
   shapes' largest weight (all but viseme_sil and viseme_PP);
 - the command's wall-clock time over the sound's length.
@@ -294,6 +298,20 @@ def score(phones, clip, seconds):
         a, b = max(0, round((start - 0.04) * fps)), min(len(frames), round((end + 0.04) * fps) + 1)
         if any(frames[k][columns["PP"]] >= 0.5 for k in range(a, b)):
             closed += 1
+    # Closures the rig makes, and those with no bilabial within 40 ms.
+    runs = elsewhere = 0
+    k = 0
+    while k < len(frames):
+        if frames[k][columns["PP"]] < 0.5:
+            k += 1
+            continue
+        first = k
+        while k < len(frames) and frames[k][columns["PP"]] >= 0.5:
+            k += 1
+        a, b = first / fps, (k - 1) / fps
+        runs += 1
+        if not any(v == "PP" and start - 0.04 <= b and a <= end + 0.04 for _, start, end, v in phones):
+            elsewhere += 1
     silence = 0.0
     for label, start, end, viseme in phones:
         if viseme is None and label in ("pau", "_", "h#", "sil", "#") and end - start >= 0.3:
@@ -301,7 +319,7 @@ def score(phones, clip, seconds):
             for k in range(max(a, 0), min(b, len(frames))):
                 silence = max(silence, max(frames[k][columns[v]] for v in VISEMES
                                            if v not in ("sil", "PP")))
-    return hits, total, closed, bilabials, silence
+    return hits, total, closed, bilabials, silence, elsewhere, runs
 
 
 def espeak_line(voice, line, wav):
@@ -387,17 +405,20 @@ def main():
                         print(f"{spec} line {k} {mode}: {run.stderr.strip()}", file=sys.stderr)
                         continue
                     clip = json.load(open(clip_path))
-                    hits, total, closed, bilabials, silence = score(phones, clip, seconds)
-                    t = totals.setdefault(mode, [0, 0, 0, 0, 0.0, 0.0, 0.0])
+                    hits, total, closed, bilabials, silence, elsewhere, runs = score(phones, clip, seconds)
+                    t = totals.setdefault(mode, [0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0])
                     t[0] += hits; t[1] += total; t[2] += closed; t[3] += bilabials
                     t[4] = max(t[4], silence); t[5] += wall; t[6] += seconds
+                    t[7] += elsewhere; t[8] += runs
                     results.append({"voice": spec, "line": k, "mode": mode, "agreement": hits / max(total, 1),
                                     "pbm_closed": closed / max(bilabials, 1), "bilabials": bilabials,
+                                    "closures": runs, "closures_elsewhere": elsewhere,
                                     "silence_open": silence, "real_time": wall / seconds,
                                     "notes": run.stderr.strip().splitlines()[:-1]})
             for mode, t in totals.items():
                 print(f"{spec:28s} {mode:5s} agreement {t[0] / max(t[1], 1):.3f}  P/B/M closed "
-                      f"{t[2]}/{t[3]} = {t[2] / max(t[3], 1):.2f}  silence open ≤ {t[4]:.2f}  "
+                      f"{t[2]}/{t[3]} = {t[2] / max(t[3], 1):.2f}  closures elsewhere {t[7]}/{t[8]}  "
+                      f"silence open ≤ {t[4]:.2f}  "
                       f"{t[5] / t[6]:.2f}× real time", flush=True)
     finally:
         shutil.rmtree(work, ignore_errors=True)
