@@ -473,6 +473,7 @@ pub fn run(args: AdaptArgs) -> anyhow::Result<()> {
         .dataset
         .clone()
         .unwrap_or_else(|| faceanim_adapt::dataset_cache_path(&output));
+    faceanim_files::check_output(&cache)?;
     let user_rules = parse_exclusive(&args.exclusive)?;
     let exclusive = exclusive_pairs(&character, &user_rules)?;
     let names: Vec<&str> = character.blendshapes().iter().map(|b| b.name()).collect();

@@ -530,6 +530,12 @@ fn the_command_refuses_what_it_cannot_use_by_name() {
         ],
         vec![os("track"), speech.as_os_str(), os("--session")],
         vec![os("adapt"), os("--output")],
+        vec![
+            os("adapt"),
+            os("--output"),
+            clip.as_os_str(),
+            os("--dataset"),
+        ],
         vec![os("retarget"), os("-o")],
         vec![os("generate-shapes"), speech.as_os_str(), os("-o")],
     ] {
