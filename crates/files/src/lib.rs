@@ -273,14 +273,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
         path: path.to_owned(),
         source,
     };
-    let target = link_target(path).map_err(io)?;
+    let target = writable_target(path).map_err(io)?;
     match std::fs::metadata(&target) {
-        Ok(existing) if existing.is_dir() => {
-            return Err(io(std::io::Error::new(
-                std::io::ErrorKind::IsADirectory,
-                "is a folder, not a file",
-            )));
-        }
         Ok(existing) if !existing.is_file() => {
             // A device, a pipe or a socket: written as it is, never replaced.
             let mut file = std::fs::OpenOptions::new()
@@ -306,19 +300,28 @@ pub fn check_output(path: &Path) -> Result<(), FileError> {
     if is_stdout(path) {
         return Ok(());
     }
-    let io = |source| FileError::Io {
-        path: path.to_owned(),
-        source,
-    };
-    let target = link_target(path).map_err(io)?;
-    folder_exists(&target).map_err(io)?;
+    writable_target(path)
+        .map(drop)
+        .map_err(|source| FileError::Io {
+            path: path.to_owned(),
+            source,
+        })
+}
+
+/// The file `path` finally names ([`link_target`]), when a file can be written there: its
+/// folder exists and it is not itself a folder. The one check [`check_output`] makes before a
+/// command's work and [`write_atomic`] at the write (where a folder removed meanwhile is said
+/// plainly, not as the temporary file's path).
+fn writable_target(path: &Path) -> std::io::Result<PathBuf> {
+    let target = link_target(path)?;
+    folder_exists(&target)?;
     if target.is_dir() {
-        return Err(io(std::io::Error::new(
+        return Err(std::io::Error::new(
             std::io::ErrorKind::IsADirectory,
             "is a folder, not a file",
-        )));
+        ));
     }
-    Ok(())
+    Ok(target)
 }
 
 /// The folder a file `path` is written in: its parent, or the working folder.
@@ -394,8 +397,6 @@ fn link_target(path: &Path) -> std::io::Result<PathBuf> {
 /// A regular file (or none yet) replaced by `bytes`: a temporary file beside it, synced, then
 /// renamed over it.
 fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    // Said plainly, not as the temporary file's path.
-    folder_exists(path)?;
     let dir = folder_of(path);
     // Named after the file and recognisably ours, so that one left by a killed process is
     // known for what it is and removed later ([`remove_stale_partials`]).
