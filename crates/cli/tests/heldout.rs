@@ -341,11 +341,14 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
         // 20,000 renders of it. So the bar the 0.08 becomes here is on the stills a
         // face can be read from: the one-, two- and three-shape groups, below.
         //
-        // Without their neutral picture the held-out stills gave 0.175, worse than answering
-        // nothing (0.133): read against the calmest still of each part, two channels whose
-        // score sits high on this face's rest stay raised by 0.66 through their gains. That is
-        // the finding (a take's automatic neutral has many frames to choose from; sixty random
-        // expressions have no calm one), and this bar only keeps it from getting worse.
+        // Without their neutral picture the stills are read against the automatic neutral of a
+        // folder of unrelated photos: each part at the most typical of its calmest quarter
+        // (`faceanim_take::expression::calmest_parts`). Against the least expressive still of
+        // each part instead, as a video's neutral is chosen, the held-out stills gave 0.165
+        // (one to three shapes 0.095–0.115): this face's brows read raised at rest, the
+        // still with one brow lowered read as the calmest brows, and every other still read
+        // its outer brow raised. Now 0.124 (one to three shapes 0.038–0.064), chosen on our
+        // own renderer's stills of the head (0.156 → 0.119) and measured here once.
         let (mae, mean) = (
             e["mae"].as_f64().unwrap(),
             e["mae_mean_baseline"].as_f64().unwrap(),
@@ -357,12 +360,12 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
                 mae <= 0.14 && mae < 0.7 * mean,
                 "map, {what}: MAE {mae}: {e}"
             );
-            let readable = readable_mae(e);
-            assert!(
-                readable <= 0.08,
-                "map, {what}: MAE {readable} over the one-, two- and three-shape stills: {e}"
-            );
         }
+        let readable = readable_mae(e);
+        assert!(
+            readable <= 0.08,
+            "map, {what}: MAE {readable} over the one-, two- and three-shape stills: {e}"
+        );
     }
     // Real people: every channel MediaPipe moves on each video follows its score.
     for (footage, bar) in &map_footage {

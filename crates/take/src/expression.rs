@@ -124,6 +124,19 @@ impl FacePart {
         }
     }
 
+    /// How far apart two expressions are in this part: the summed differences of its ARKit
+    /// scores (MediaPipe's `_neutral` left out).
+    #[must_use]
+    pub fn distance(self, a: &Expression, b: &Expression) -> f32 {
+        score_parts()
+            .iter()
+            .zip(a.scores.iter().zip(&b.scores))
+            .skip(1)
+            .filter(|(part, _)| **part == self)
+            .map(|(_, (x, y))| (x - y).abs())
+            .sum()
+    }
+
     /// How far this part of `expression` is from rest: the sum of its ARKit scores (MediaPipe's
     /// `_neutral` left out), as [`Expression::energy`] sums the whole face's.
     #[must_use]
@@ -204,29 +217,111 @@ impl std::fmt::Display for PartFrames {
     }
 }
 
-/// Each [`FacePart`]'s calmest frame among `expressions` (least [`FacePart::energy`]; the
-/// earliest of equals), the automatic neutral of a take; `None` when fewer than two frames
-/// have a face (a single picture is not read against itself: an adapter then uses the neutral
-/// face typical of its training).
+/// Each [`FacePart`]'s rest frame among `expressions`, the automatic neutral of a take;
+/// `None` when fewer than two frames have a face (a single picture is not read against
+/// itself: an adapter then uses the neutral face typical of its training).
+///
+/// In a video (frames that follow on from one another, [`frames_follow_on`]) a part rests at
+/// its calmest frame: the least [`FacePart::energy`], the earliest of equals. Among nine or
+/// more unrelated photos (a folder of stills) it rests at the most typical of its calmest
+/// quarter ([`CALM_SHARE`]): the frame whose scores of that part differ least from theirs.
+/// The least energy can be a face pulled the other way there: brows lowered read to MediaPipe
+/// as brows less raised, not as `browDown`, on a face whose brows read raised at rest (an ICT
+/// head in Cycles: `browInnerUp` 0.73 at rest), and that still, taken as the brows' rest, made
+/// every other read its outer brows raised (0.78 too much on average over 40 stills). On a
+/// video the same rule made real footage follow MediaPipe less (the weakest shape of two of
+/// three videos: r 0.95 → 0.86 and 0.89 → 0.84): a talking face's calmest frame is its rest.
+/// Fewer photos say too little of what is typical: their calmest frame.
 #[must_use]
 pub fn calmest_parts(expressions: &[Option<&Expression>]) -> Option<PartFrames> {
-    if expressions.iter().flatten().count() < 2 {
+    let faces: Vec<(usize, &Expression)> = expressions
+        .iter()
+        .enumerate()
+        .filter_map(|(k, e)| e.map(|e| (k, e)))
+        .collect();
+    if faces.len() < 2 {
         return None;
     }
-    let calmest = |part: FacePart| {
-        expressions
-            .iter()
+    let in_order: Vec<&Expression> = faces.iter().map(|(_, e)| *e).collect();
+    let share = if frames_follow_on(&in_order) {
+        None
+    } else {
+        Some(CALM_SHARE)
+    };
+    let rest = |part: FacePart| {
+        let mut calm: Vec<(usize, &Expression, f32)> =
+            faces.iter().map(|&(k, e)| (k, e, part.energy(e))).collect();
+        // Stable: the earliest of equal energies first.
+        calm.sort_by(|a, b| a.2.total_cmp(&b.2));
+        let keep = share.map_or(1, |share| (calm.len() as f32 * share).ceil() as usize);
+        // Fewer than three say nothing of what is typical.
+        if keep < 3 {
+            return calm[0].0;
+        }
+        calm.truncate(keep);
+        // The most typical; of equals, the calmest.
+        calm.iter()
             .enumerate()
-            .filter_map(|(k, e)| e.map(|e| (k, part.energy(e))))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map_or(0, |(k, _)| k)
+            .map(|(rank, (k, e, _))| {
+                let apart: f32 = calm.iter().map(|(_, o, _)| part.distance(e, o)).sum();
+                (apart, rank, *k)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+            .map_or(0, |(_, _, k)| k)
     };
     Some(PartFrames {
-        lids: calmest(FacePart::Lids),
-        gaze: calmest(FacePart::Gaze),
-        brows: calmest(FacePart::Brows),
-        mouth: calmest(FacePart::Mouth),
+        lids: rest(FacePart::Lids),
+        gaze: rest(FacePart::Gaze),
+        brows: rest(FacePart::Brows),
+        mouth: rest(FacePart::Mouth),
     })
+}
+
+/// The share of a set of photos, the calmest by each part, among which that part's rest is
+/// the most typical ([`calmest_parts`]). A quarter: on stills of the seed's groups (one, two or
+/// three shapes, or every shape at once, in turn) most leave any one part at rest.
+pub const CALM_SHARE: f32 = 0.25;
+
+/// Frames follow on from one another (a video, a webcam take, a photo made an animation) when
+/// consecutive faces differ by less than this share of what faces a quarter, half or three
+/// quarters of the take apart do (median distances over their scores). Consecutive frames of
+/// a video differ by a tenth to a seventh of that (three real videos: 0.08–0.15); unrelated
+/// photos by as much.
+pub const FOLLOW_ON: f32 = 0.5;
+
+/// Whether `faces` (in order, faceless frames left out) follow on from one another
+/// ([`FOLLOW_ON`]): a video's frames, not a folder of unrelated photos. Faces all alike follow
+/// on.
+#[must_use]
+pub fn frames_follow_on(faces: &[&Expression]) -> bool {
+    let n = faces.len();
+    if n < 2 {
+        return true;
+    }
+    let median = |mut d: Vec<f32>| {
+        d.sort_by(f32::total_cmp);
+        d[d.len() / 2]
+    };
+    let apart = |a: &Expression, b: &Expression| -> f32 {
+        a.scores
+            .iter()
+            .zip(&b.scores)
+            .skip(1)
+            .map(|(x, y)| (x - y).abs())
+            .sum()
+    };
+    let next = median(faces.windows(2).map(|w| apart(w[0], w[1])).collect());
+    // A quarter, half and three quarters of the take apart, so that a video whose face comes
+    // back on a beat (a mouth opening and shutting) is not taken for unrelated photos.
+    let far = median(
+        [n / 4, n / 2, 3 * n / 4]
+            .into_iter()
+            .filter(|&offset| offset > 0)
+            .flat_map(|offset| (0..n).map(move |k| (k, (k + offset) % n)))
+            .map(|(a, b)| apart(faces[a], faces[b]))
+            .collect(),
+    );
+    next <= FOLLOW_ON * far
 }
 
 /// The neutral face made of each part of `expressions` at its frame in `parts`: scores and
@@ -462,6 +557,68 @@ mod tests {
         assert_eq!((parts.lids, parts.mouth), (1, 2));
         assert_eq!(PartFrames::all(4).to_string(), "frame 4");
         assert_eq!(rest_face(&faces, PartFrames::all(1)).unwrap(), open);
+    }
+
+    /// Twelve unrelated photos of a face whose brows read raised at rest (`browInnerUp` 0.7,
+    /// `browOuterUp` 0.5), each with its own mouth and lids; photo 5 lowers its brows, which
+    /// MediaPipe reads only as brows less raised (the least brow energy), photo 2 raises them.
+    fn photos() -> Vec<Expression> {
+        let (inner, outer) = (score("browInnerUp"), score("browOuterUpLeft"));
+        let (jaw, blink) = (score("jawOpen"), score("eyeBlinkLeft"));
+        (0..12)
+            .map(|k| {
+                let mut e = Expression {
+                    scores: vec![0.0; SCORES],
+                    landmarks: landmarks(),
+                };
+                e.scores[inner] = 0.7 + 0.01 * (k % 3) as f32;
+                e.scores[outer] = match k {
+                    5 => 0.15,
+                    2 => 0.9,
+                    _ => 0.5 + 0.02 * (k % 2) as f32,
+                };
+                e.scores[jaw] = [0.0, 0.8, 0.1, 0.6, 0.05, 0.9, 0.3, 0.7, 0.5, 0.2, 0.85, 0.4][k];
+                e.scores[blink] = [0.9, 0.0, 0.6, 0.1, 0.8, 0.2, 0.7, 0.0, 0.5, 0.9, 0.3, 0.6][k];
+                e
+            })
+            .collect()
+    }
+
+    #[test]
+    fn unrelated_photos_rest_at_a_typical_calm_face_and_a_video_at_its_calmest() {
+        let photos = photos();
+        let folder: Vec<Option<&Expression>> = photos.iter().map(Some).collect();
+        let faces: Vec<&Expression> = photos.iter().collect();
+        assert!(
+            !frames_follow_on(&faces),
+            "unrelated photos do not follow on"
+        );
+        let parts = calmest_parts(&folder).unwrap();
+        // Not photo 5, whose brows are pulled the other way, nor the raised ones of photo 2.
+        assert!(
+            ![5, 2].contains(&parts.brows),
+            "the brows rest at photo {}",
+            parts.brows
+        );
+        // The mouth rests where it is closed or nearly (photos 0, 2, 4), the lids where they
+        // are open or nearly (photos 1, 3, 7).
+        assert!([0, 2, 4].contains(&parts.mouth), "{parts}");
+        assert!([1, 3, 7].contains(&parts.lids), "{parts}");
+        // Eight photos are too few to say what is typical: the calmest.
+        let few = &folder[..8];
+        assert_eq!(calmest_parts(few).unwrap().brows, 5);
+
+        // The same faces as a video, each held for four frames: its calmest frame is the rest,
+        // photo 5's brows included.
+        let video: Vec<Option<&Expression>> = photos
+            .iter()
+            .flat_map(|e| std::iter::repeat_n(Some(e), 4))
+            .collect();
+        let frames: Vec<&Expression> = video.iter().flatten().copied().collect();
+        assert!(frames_follow_on(&frames), "a video follows on");
+        let parts = calmest_parts(&video).unwrap();
+        assert_eq!(parts.brows, 5 * 4, "{parts}");
+        assert_eq!(parts.mouth, 0, "{parts}");
     }
 
     #[test]
