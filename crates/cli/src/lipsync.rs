@@ -46,8 +46,9 @@ pub struct LipsyncArgs {
     /// nothing of a mouth (neither visemes nor ARKit names).
     #[arg(long, value_name = "ADAPTER")]
     pub adapter: Option<PathBuf>,
-    /// Without --text: recognise words (English; about a sixth of real time) or phones (any
-    /// language; faster, a little less exact in English).
+    /// Without --text: recognise words (English; a quarter to a half of real time on a line
+    /// of a few seconds, a fifth on a longer reading) or phones (any language; about a tenth,
+    /// a little less exact in English).
     #[arg(long, value_enum, default_value_t = Blind::Words)]
     pub recognise: Blind,
     /// Whose vocal tract the recogniser hears the voice through (its models were trained on

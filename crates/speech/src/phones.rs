@@ -48,7 +48,8 @@ impl Phone {
 #[serde(rename_all = "snake_case")]
 pub enum Recognition {
     /// Words recognised with the English language model, spoken as the dictionary says (the
-    /// default without a transcript: about a sixth of real time; Rhubarb Lip Sync works so).
+    /// default without a transcript: a quarter to a half of real time on a line of a few
+    /// seconds, a fifth on a longer reading; Rhubarb Lip Sync works so).
     Words,
     /// Any phone after any other (no words assumed: other languages, gibberish, singing), at
     /// about a tenth of real time.

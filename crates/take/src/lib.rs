@@ -13,7 +13,7 @@
 //! - [`calibration`]: a live performer's neutral face (Calibrate, or a face held still); a
 //!   take's is made of each part of the face at its calmest frame, or is the frame the user
 //!   names ([`Session::set_neutral`]).
-//! - [`layer`]: the one rule that puts a sketch over a take.
+//! - [`layer`](mod@layer): the one rule that puts a sketch over a take.
 //!
 //! ```
 //! use faceanim_take::{ByName, Estimator, Filtering, Footage, Take};

@@ -134,7 +134,7 @@ impl Filtering {
 }
 
 /// A session: one input's frames with their estimates, and the user's [`Edits`]. See the module
-/// docs. Its file is [`SessionFile`]'s JSON.
+/// docs. Its file is the JSON of `SessionFile` (version 1, with the edits inline).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(from = "SessionFile", into = "SessionFile")]
 pub struct Session {
