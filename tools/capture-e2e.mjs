@@ -403,18 +403,27 @@ try {
   const heard = await page.evaluate(async () => {
     const v = window.studio.capture.voice;
     const jaw = window.studio.capture.view.blendshapes.indexOf('jawOpen');
-    // Every answer the server gives, in order (each one at least a 20 ms chunk of sound): the
-    // page's frames may fall between them on a loaded machine.
-    let most = 0, quietMost = 0, quietRun = 0, quietAnswers = 0;
+    // Every answer the server gives, in order (each one for a chunk of at least 20 ms of
+    // sound, longer on a loaded machine, where the page sends what it gathered meanwhile):
+    // the page's frames may fall between them.
+    let most = 0, quietMost = 0, quietMs = 0, quietAnswers = 0;
     const pageFetch = window.fetch;
     window.fetch = async (...args) => {
       const response = await pageFetch(...args);
       if (String(args[0]).endsWith('api/capture/voice/chunk') && response.ok) {
         const r = await response.clone().json();
+        const init = args[1] || {};
+        const rate = Number((init.headers || {})['x-sample-rate']) || 16000;
+        const chunkMs = init.body && init.body.size ? (init.body.size / 2 / rate) * 1000 : 20;
         if (r.live && r.weights) most = Math.max(most, r.weights[jaw]);
-        // Well into a pause (five answers, 100 ms or more of silence; the release is 50 ms): shut.
-        quietRun = r.level_db < -80 ? quietRun + 1 : 0;
-        if (quietRun >= 5) { quietMost = Math.max(quietMost, r.open); quietAnswers++; }
+        // Well into a pause (100 ms or more of silence heard before this answer's chunk; the
+        // release is 50 ms): shut. Counted in time, not answers, whatever the chunks' size.
+        if (r.level_db < -80) {
+          if (quietMs >= 100) { quietMost = Math.max(quietMost, r.open); quietAnswers++; }
+          quietMs += chunkMs;
+        } else {
+          quietMs = 0;
+        }
       }
       return response;
     };
