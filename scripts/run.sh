@@ -3,7 +3,9 @@
 # with everything speech needs. On a machine with apt-get it first installs what lip sync links
 # when it is missing (`scripts/setup.sh libraries`: CMU PocketSphinx with its US English
 # models, and eSpeak NG for transcripts in any language), so that the build is never made
-# without them; elsewhere it says what to install. Arguments go to `faceanim studio` (e.g.
+# without them; elsewhere (macOS, Windows with Git Bash, another Linux) it fetches PocketSphinx
+# 5.1's source package with its models from PyPI, which the build compiles, and says where
+# eSpeak NG comes from. Arguments go to `faceanim studio` (e.g.
 # scripts/run.sh my.glb).
 set -euo pipefail
 cd "$(dirname "$0")/.."

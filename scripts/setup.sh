@@ -14,10 +14,13 @@
 #     test data — real LibriVox speech with transcripts) and flite, the synthetic voices whose
 #     exact phone timings the viseme accuracy test compares with;
 #   - eSpeak NG (Debian: the library lip sync in other languages links, and its program), which
-#     speaks a transcript in its language to align it by synthesis.
+#     speaks a transcript in its language to align it by synthesis;
+#   - PocketSphinx 5.1's source package (PyPI, into target/), which the tests compile the
+#     recogniser from as a machine without Debian's packages does.
 # Safe to run again: it installs only what is not there. `scripts/setup.sh libraries` installs
 # only what faceanim's build links (PocketSphinx, eSpeak NG: their bindings' build scripts look
-# for them), so that the rest can install while faceanim builds (scripts/test.sh).
+# for them), so that the rest can install while faceanim builds (scripts/test.sh); without
+# dpkg it fetches PocketSphinx's source package instead (scripts/fetch-pocketsphinx.py).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -45,7 +48,15 @@ apt_install() {
 
 if [ "${1:-}" = libraries ]; then
   if ! command -v dpkg >/dev/null 2>&1; then
-    echo "setup: lip sync needs CMU PocketSphinx 0.8 (libpocketsphinx, with its en-us models) and eSpeak NG (libespeak-ng); install them with your system's packages, or faceanim's speech features will say they are missing" >&2
+    # No Debian packages here (macOS, Windows, another Linux): PocketSphinx is compiled from
+    # its PyPI source package, which carries the US English models too.
+    python=$(command -v python3 || command -v python || true)
+    if [ -n "$python" ]; then
+      "$python" scripts/fetch-pocketsphinx.py || echo "setup: PocketSphinx's sources could not be fetched: lip sync will say the recogniser is missing" >&2
+    else
+      echo "setup: fetching PocketSphinx's sources needs Python 3: without them lip sync will say the recogniser is missing" >&2
+    fi
+    echo "setup: transcripts in languages other than English are aligned by eSpeak NG's library: install it with your system's packages (brew install espeak-ng; Windows: the espeak-ng installer) or those lines are aligned by the recogniser (English) or not at all" >&2
     exit 0
   fi
   want "${libraries[@]}"
@@ -65,6 +76,11 @@ apt_install "${packages[@]}"
 if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ ! -d tools/node_modules/iwer ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
   echo "setup: installing the glTF-Validator, playwright-core, gltfpack and gltf-transform (npm ci in tools/)"
   (cd tools && npm ci --no-audit --no-fund --loglevel=error)
+fi
+
+if [ ! -f target/pocketsphinx-5.1.0/src/pocketsphinx.c ]; then
+  echo "setup: fetching PocketSphinx 5.1's source package (PyPI), for the test of the recogniser machines without Debian's get"
+  python3 scripts/fetch-pocketsphinx.py target/pocketsphinx-5.1.0
 fi
 
 if ! python3 -c 'import pythonosc' >/dev/null 2>&1; then

@@ -1,4 +1,5 @@
-//! Links Debian's libespeak-ng (`apt-get install libespeak-ng-dev`) when it is installed;
+//! Links libespeak-ng (Debian's `apt-get install libespeak-ng-dev`, Homebrew's `brew install
+//! espeak-ng`) when it is installed;
 //! otherwise the crate builds without it and every call reports that the synthesiser is
 //! missing, so the rest of faceanim builds and runs on any machine.
 //!
@@ -35,6 +36,11 @@ fn main() {
     }
     if found.is_some() && std::env::var_os("FACEANIM_NO_ESPEAK").is_none() {
         println!("cargo::rustc-cfg=espeak");
+        // Where it was found: Homebrew's folder on Apple silicon is not one the linker
+        // searches by itself.
+        if let Some(dir) = found.as_deref().and_then(Path::parent) {
+            println!("cargo::rustc-link-search=native={}", dir.display());
+        }
         println!("cargo::rustc-link-lib=dylib=espeak-ng");
     } else {
         println!(

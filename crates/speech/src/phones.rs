@@ -284,7 +284,7 @@ impl Dictionary {
     fn read(path: &Path, only: &std::collections::HashSet<&str>) -> Result<Dictionary, PhoneError> {
         let text = std::fs::read_to_string(path).map_err(|e| PhoneError::Dictionary {
             path: path.display().to_string(),
-            message: format!("{e} (apt-get install pocketsphinx-en-us)"),
+            message: format!("{e} (scripts/setup.sh libraries installs the US English models)"),
         })?;
         let mut words = HashMap::new();
         for line in text.lines() {

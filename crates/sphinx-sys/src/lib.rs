@@ -1,8 +1,11 @@
-//! # faceanim-sphinx-sys: CMU PocketSphinx, as Debian ships it
+//! # faceanim-sphinx-sys: CMU PocketSphinx, as Debian ships it or built from its sources
 //!
-//! Thin bindings to `libpocketsphinx` 0.8 (`apt-get install libpocketsphinx-dev
-//! pocketsphinx-en-us`; BSD licence), the maintained offline recogniser whose acoustic model,
-//! phone language model and pronouncing dictionary come from a package registry. The old
+//! Thin bindings to `libpocketsphinx` (BSD licence), the maintained offline recogniser whose
+//! acoustic model, phone language model and pronouncing dictionary come from a package
+//! registry: Debian's 0.8 (`apt-get install libpocketsphinx-dev pocketsphinx-en-us`), or, on a
+//! machine without it (macOS, Windows, other Linux), 5.1.0 compiled from its PyPI source
+//! package with the US English models inside it (`scripts/setup.sh libraries` fetches it;
+//! the build script says where it looks). The old
 //! `pocketsphinx-sys` crates target other versions and are unmaintained; these bindings declare
 //! only the dozen functions faceanim calls ([`ffi`]) and wrap them in one safe call,
 //! [`decode`]: 16 kHz mono speech in, time-aligned labels out (phones from a phone loop, words
@@ -36,11 +39,22 @@ pub const SAMPLE_RATE: u32 = 16_000;
 pub const FRAME_RATE: u32 = 100;
 
 /// Where Debian's `pocketsphinx-en-us` puts US English.
+#[cfg(not(pocketsphinx_source))]
 pub const EN_US: Models<'static> = Models {
     acoustic: "/usr/share/pocketsphinx/model/en-us/en-us",
     language_model: "/usr/share/pocketsphinx/model/en-us/en-us.lm.bin",
     phone_lm: "/usr/share/pocketsphinx/model/en-us/en-us-phone.lm.bin",
     dictionary: "/usr/share/pocketsphinx/model/en-us/cmudict-en-us.dict",
+};
+
+/// US English in the source package the library was compiled from (`model/en-us`: the same
+/// models Debian ships).
+#[cfg(pocketsphinx_source)]
+pub const EN_US: Models<'static> = Models {
+    acoustic: concat!(env!("FACEANIM_POCKETSPHINX_MODEL"), "/en-us"),
+    language_model: concat!(env!("FACEANIM_POCKETSPHINX_MODEL"), "/en-us.lm.bin"),
+    phone_lm: concat!(env!("FACEANIM_POCKETSPHINX_MODEL"), "/en-us-phone.lm.bin"),
+    dictionary: concat!(env!("FACEANIM_POCKETSPHINX_MODEL"), "/cmudict-en-us.dict"),
 };
 
 /// A language's model files.
@@ -201,11 +215,11 @@ pub struct Decoded {
 pub enum SphinxError {
     /// faceanim was built where libpocketsphinx was not installed.
     #[error(
-        "speech recognition needs CMU PocketSphinx: apt-get install libpocketsphinx-dev pocketsphinx-en-us, then build faceanim again"
+        "speech recognition needs CMU PocketSphinx: run scripts/setup.sh libraries (Debian's packages where apt-get is, its PyPI sources elsewhere), then build faceanim again"
     )]
     NotInstalled,
     /// A model file is missing.
-    #[error("{0}: missing; apt-get install pocketsphinx-en-us")]
+    #[error("{0}: missing; scripts/setup.sh libraries installs the US English models")]
     MissingModel(PathBuf),
     /// The decoder refused its configuration or failed.
     #[error("the recogniser failed: {0}")]
@@ -380,7 +394,8 @@ mod imp {
     }
 }
 
-/// The C functions, as `pocketsphinx.h` and `sphinxbase/cmd_ln.h` of 0.8 declare them.
+/// The C functions, as `pocketsphinx.h` and `sphinxbase/cmd_ln.h` of 0.8 declare them (5.1
+/// declares the same ones the same way, in `pocketsphinx.h` and `util/cmd_ln.h`).
 #[cfg(pocketsphinx)]
 #[allow(missing_docs, non_camel_case_types, reason = "C's names")]
 pub mod ffi {
@@ -407,6 +422,8 @@ pub mod ffi {
             argv: *mut *mut c_char,
             strict: i32,
         ) -> *mut cmd_ln_t;
+        /// 5.1 names it `ps_config_free` (and declares the old name without defining it).
+        #[cfg_attr(pocketsphinx_source, link_name = "ps_config_free")]
         pub fn cmd_ln_free_r(cmdln: *mut cmd_ln_t) -> c_int;
         pub fn ps_init(config: *mut cmd_ln_t) -> *mut ps_decoder_t;
         pub fn ps_free(ps: *mut ps_decoder_t) -> c_int;
@@ -525,9 +542,10 @@ mod imp {
             // of a pause (or, after a click, the silence before the speech) and numbers the
             // frames after it as if the pause had not been, so that everything after a pause of
             // 1.5 s was placed 0.7 s early.
-            let mut args: Vec<String> = ["-hmm", &text(&search.acoustic), "-remove_silence", "no"]
-                .map(str::to_owned)
-                .to_vec();
+            let mut args: Vec<String> = vec!["-hmm".into(), text(&search.acoustic)];
+            // 5.1 has no detection of its own to turn off: it decodes every frame it is given.
+            #[cfg(not(pocketsphinx_source))]
+            args.extend(["-remove_silence".into(), "no".into()]);
             if search.frame_rate != super::FRAME_RATE {
                 // The model's 25.625 ms windows, lengthened with the sound; the transform
                 // long enough to hold them.
@@ -734,10 +752,23 @@ mod tests {
     /// "go forward ten meters", 16 kHz raw, from Debian's pocketsphinx-testdata.
     #[cfg(pocketsphinx)]
     fn go_forward() -> Option<Vec<i16>> {
+        // The same recording is in PocketSphinx 5.1's source package.
+        #[cfg(pocketsphinx_source)]
+        let path = concat!(
+            env!("FACEANIM_POCKETSPHINX_MODEL"),
+            "/../../test/data/goforward.raw"
+        );
+        #[cfg(not(pocketsphinx_source))]
         let path = "/usr/share/pocketsphinx/test/data/goforward.raw";
         let Ok(bytes) = std::fs::read(path) else {
-            eprintln!("{path} is missing: apt-get install pocketsphinx-testdata");
-            return None;
+            // Built from the source package, the recording came with the library tested.
+            #[cfg(pocketsphinx_source)]
+            panic!("{path} is missing from the source package");
+            #[cfg(not(pocketsphinx_source))]
+            {
+                eprintln!("{path} is missing: apt-get install pocketsphinx-testdata");
+                return None;
+            }
         };
         Some(
             bytes
@@ -772,6 +803,17 @@ mod tests {
             .filter(|w| !w.starts_with('<') && !w.starts_with('['))
             .collect();
         assert_eq!(words, ["go", "forward", "ten", "meters"]);
+        // Recognised without being told: the language model's words.
+        let heard = decode(&EN_US.words(), &samples).unwrap();
+        let heard: Vec<&str> = heard
+            .iter()
+            .map(|w| w.label.as_str())
+            .filter(|w| !w.starts_with('<') && !w.starts_with('['))
+            .collect();
+        assert!(
+            heard.contains(&"forward") && heard.len() >= 3,
+            "go forward ten meters: {heard:?}"
+        );
     }
 
     /// Real speech scores as the acoustic model's own (a formant synthesiser's lines score
