@@ -46,21 +46,31 @@ apt_install() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "$@" >/dev/null
 }
 
+# PocketSphinx compiled from its PyPI source package, which carries the US English models too
+# (scripts/fetch-pocketsphinx.py), where Debian's packages are not to be had.
+from_sources() {
+  local python
+  python=$(command -v python3 || command -v python || true)
+  if [ -n "$python" ]; then
+    "$python" scripts/fetch-pocketsphinx.py || echo "setup: PocketSphinx's sources could not be fetched: lip sync will say the recogniser is missing" >&2
+  else
+    echo "setup: fetching PocketSphinx's sources needs Python 3: without them lip sync will say the recogniser is missing" >&2
+  fi
+}
+
 if [ "${1:-}" = libraries ]; then
   if ! command -v dpkg >/dev/null 2>&1; then
-    # No Debian packages here (macOS, Windows, another Linux): PocketSphinx is compiled from
-    # its PyPI source package, which carries the US English models too.
-    python=$(command -v python3 || command -v python || true)
-    if [ -n "$python" ]; then
-      "$python" scripts/fetch-pocketsphinx.py || echo "setup: PocketSphinx's sources could not be fetched: lip sync will say the recogniser is missing" >&2
-    else
-      echo "setup: fetching PocketSphinx's sources needs Python 3: without them lip sync will say the recogniser is missing" >&2
-    fi
+    # No Debian packages here (macOS, Windows, another Linux).
+    from_sources
     echo "setup: transcripts in languages other than English are aligned by eSpeak NG's library: install it with your system's packages (brew install espeak-ng; Windows: the espeak-ng installer) or those lines are aligned by the recogniser (English) or not at all" >&2
     exit 0
   fi
   want "${libraries[@]}"
-  apt_install "${packages[@]}"
+  if ! apt_install "${packages[@]}"; then
+    # No root and no sudo, or no apt-get: the recogniser from its sources all the same.
+    echo "setup: apt-get could not install ${packages[*]}" >&2
+    dpkg -s libpocketsphinx-dev pocketsphinx-en-us >/dev/null 2>&1 || from_sources
+  fi
   exit 0
 fi
 
