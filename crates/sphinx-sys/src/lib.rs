@@ -47,8 +47,8 @@ pub const EN_US: Models<'static> = Models {
     dictionary: "/usr/share/pocketsphinx/model/en-us/cmudict-en-us.dict",
 };
 
-/// US English in the source package the library was compiled from (`model/en-us`: the same
-/// models Debian ships).
+/// US English in the source package the library was compiled from (`model/en-us`: Debian's
+/// acoustic and language models byte for byte, a newer revision of the dictionary).
 #[cfg(pocketsphinx_source)]
 pub const EN_US: Models<'static> = Models {
     acoustic: concat!(env!("FACEANIM_POCKETSPHINX_MODEL"), "/en-us"),
