@@ -186,6 +186,9 @@ fn build_source(source: &Path) -> Result<(), String> {
         .define("HAVE_CONFIG_H", None)
         .define("POCKETSPHINX_EXPORTS", None)
         .define("SPHINXBASE_EXPORTS", None)
+        // Its random numbers (dithering) per thread, as its own build has them by default: a
+        // line's decoders run on threads of their own.
+        .define("PS_USE_THREAD_LOCAL_RNG", None)
         // The library's own code, not ours: its warnings are its maintainers'.
         .warnings(false)
         .opt_level(2);
