@@ -88,10 +88,9 @@ if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playw
   (cd tools && npm ci --no-audit --no-fund --loglevel=error)
 fi
 
-if [ ! -f target/pocketsphinx-5.1.0/src/pocketsphinx.c ]; then
-  echo "setup: fetching PocketSphinx 5.1's source package (PyPI), for the test of the recogniser machines without Debian's get"
-  python3 scripts/fetch-pocketsphinx.py target/pocketsphinx-5.1.0
-fi
+# PocketSphinx 5.1's source package (PyPI), for the test of the recogniser machines without
+# Debian's get (the script fetches nothing where it is there already).
+python3 scripts/fetch-pocketsphinx.py target/pocketsphinx-5.1.0
 
 if ! python3 -c 'import pythonosc' >/dev/null 2>&1; then
   echo "setup: installing python-osc (pip)"
