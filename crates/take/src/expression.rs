@@ -251,13 +251,17 @@ pub fn calmest_parts(expressions: &[Option<&Expression>]) -> Option<PartFrames> 
     let rest = |part: FacePart| {
         let mut calm: Vec<(usize, &Expression, f32)> =
             faces.iter().map(|&(k, e)| (k, e, part.energy(e))).collect();
+        let keep = share.map_or(1, |share| (calm.len() as f32 * share).ceil() as usize);
+        // Fewer than three say nothing of what is typical: the calmest, the earliest of equal
+        // energies (`min_by` keeps the first), found without sorting a video's every frame.
+        if keep < 3 {
+            return calm
+                .iter()
+                .min_by(|a, b| a.2.total_cmp(&b.2))
+                .map_or(0, |c| c.0);
+        }
         // Stable: the earliest of equal energies first.
         calm.sort_by(|a, b| a.2.total_cmp(&b.2));
-        let keep = share.map_or(1, |share| (calm.len() as f32 * share).ceil() as usize);
-        // Fewer than three say nothing of what is typical.
-        if keep < 3 {
-            return calm[0].0;
-        }
         calm.truncate(keep);
         // The most typical; of equals, the calmest.
         calm.iter()
