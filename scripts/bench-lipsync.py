@@ -21,7 +21,7 @@ Voices: flite's (kal, slt, rms, awb; `-psdur`), festival's (English diphone and 
 with `festival-it:`; `utt.save.segs`),
 eSpeak NG's (through its library with ctypes, phoneme events: a voice variant and rate other
 than the ones faceanim aligns with). Languages other than English through eSpeak NG with
-`--language`.
+`--language` (eighteen: `--voices espeak:es,espeak:hi,…`).
 
 Usage: scripts/bench-lipsync.py [--faceanim PATH] [--voices a,b] [--json OUT] [--lines N]
        [--modes text,audio] [--recognise words|phones] [--ffmpeg-first]
@@ -58,6 +58,16 @@ FOREIGN = {
     "ko": ["안녕하세요, 만나서 반갑습니다.", "엄마는 매일 밥을 먹어요."],
     "it": ["Buongiorno, come stai?", "Mamma mia, il mare è bellissimo."],
     "pt": ["Bom dia, meu amigo.", "A minha mãe bebe muito café."],
+    "ru": ["Мама мыла раму.", "Папа купил большую белую машину."],
+    "pl": ["Mama ma małego psa.", "Proszę podać mi ten biały papier."],
+    "tr": ["Bugün hava çok güzel.", "Babam bana mavi bir balon aldı."],
+    "hi": ["मेरा नाम राम है।", "माँ बाज़ार से आम लाई।"],
+    "ar": ["مرحبا كيف حالك؟", "أمي تحب الماء البارد."],
+    "el": ["Καλημέρα, τι κάνεις;", "Η μαμά μου μαγειρεύει μπάμιες."],
+    "vi": ["Xin chào, bạn khỏe không?", "Mẹ mua bánh mì buổi sáng."],
+    "sw": ["Habari za asubuhi.", "Mama anapika mboga na mkate."],
+    "nl": ["Goedemorgen, hoe gaat het?", "Mijn moeder maakt brood met boter."],
+    "fi": ["Hyvää huomenta.", "Mummo paistaa pullaa ja piirakkaa."],
     # Mandarin in characters, told `zh` as users name it; spoken by eSpeak NG's pinyin voice
     # (its `zh` voice reads characters as numbered pinyin in English).
     "zh": ["妈妈每天买面包。", "你好，谢谢你的帮助。"],

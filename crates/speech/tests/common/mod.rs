@@ -82,14 +82,20 @@ pub type Said = Vec<(Viseme, f32, f32)>;
 /// with half a second of silence either side, written as a WAV and read as any is, and the
 /// phones it said.
 pub fn espeak(line: &str, voice: &str, rate: Option<u32>) -> (Said, Sound) {
+    espeak_padded(line, voice, rate, 0.5)
+}
+
+/// As [`espeak`], with `pad` seconds of silence either side (0: the line as eSpeak NG writes
+/// it, trimmed to its words).
+pub fn espeak_padded(line: &str, voice: &str, rate: Option<u32>, pad: f32) -> (Said, Sound) {
     assert!(
         faceanim_espeak_sys::available(),
         "eSpeak NG is needed: run scripts/setup.sh (libespeak-ng-dev) and build again"
     );
     let spoken = faceanim_espeak_sys::speak(line, voice, rate).unwrap();
     // As a user has it: the synthesiser's WAV (22,050 Hz), read as any WAV is.
-    let pad = vec![0i16; spoken.sample_rate as usize / 2];
-    let samples: Vec<i16> = [&pad[..], &spoken.samples, &pad].concat();
+    let silence = vec![0i16; (spoken.sample_rate as f32 * pad).round() as usize];
+    let samples: Vec<i16> = [&silence[..], &spoken.samples, &silence].concat();
     let wav = std::env::temp_dir().join(format!(
         "faceanim-espeak-{}-{:?}.wav",
         std::process::id(),
@@ -114,8 +120,8 @@ pub fn espeak(line: &str, voice: &str, rate: Option<u32>) -> (Said, Sound) {
                 .map_or(end, |n| n.start_ms as f32 / 1000.0);
             (
                 viseme_of_ipa(&p.ipa),
-                0.5 + p.start_ms as f32 / 1000.0,
-                0.5 + next,
+                pad + p.start_ms as f32 / 1000.0,
+                pad + next,
             )
         })
         .collect();
