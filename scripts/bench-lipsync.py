@@ -271,8 +271,10 @@ EFFECTS = {
               lambda r: "[0:a]volume=-30dB"),
     "dc": ("a DC offset of a tenth of full scale (a cheap sound card)",
            lambda r: "[0:a]dcshift=0.1"),
+    # The same noise on every run (ffmpeg's default seed is random: unseeded, P/B/M moved by
+    # up to 0.07 between two runs of the same binary).
     "noisy": ("pink noise (a fan, a room) about 15 dB under the voice",
-              lambda r: f"anoisesrc=c=pink:a=0.02:r={r}[n];[0:a][n]amix=inputs=2:duration=first:normalize=0"),
+              lambda r: f"anoisesrc=c=pink:a=0.02:r={r}:seed=1[n];[0:a][n]amix=inputs=2:duration=first:normalize=0"),
 }
 
 
