@@ -3,8 +3,9 @@
 //! the recording is not the alignment's own voice), and the visemes faceanim puts on the
 //! mouth are compared, 10 ms at a time (±40 ms), with the phones the variant reported saying
 //! then: their class (closed lips, lip to teeth, open, spread, round, tongue and teeth) must
-//! agree, every bilabial must close the lips, and the silence around the line must rest. And an
-//! English line in a voice whose words the recogniser cannot make out still moves the mouth.
+//! agree, every bilabial must close the lips, and the silence around the line must rest; lines
+//! trimmed to their words, with no silence around them, agree as well. And an English line in
+//! a voice whose words the recogniser cannot make out still moves the mouth.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 mod common;
