@@ -236,7 +236,7 @@ impl Sound {
         }
         let mut sorted = levels.clone();
         sorted.sort_by(f32::total_cmp);
-        let peak = sorted[(sorted.len() * 98 / 100).min(sorted.len() - 1)];
+        let peak = level_under(&sorted, 98);
         let floor = noise_floor(&sorted, peak);
         match voice_threshold(floor, peak, (peak - 35.0).min(-55.0), -70.0) {
             Some(threshold) => levels.iter().map(|&l| l > threshold).collect(),
@@ -272,13 +272,21 @@ const ONE_FLOOR_DB: f32 = 10.0;
 /// vowels under the threshold (the mouth shut through the final vowel of Hindi `लाई`, 17 of
 /// 17 frames); its floor is the level its closures ([`TRIMMED_PAUSE_PERCENT`]) lie under.
 fn noise_floor(sorted: &[f32], peak: f32) -> f32 {
-    let at = |percent: usize| sorted[(sorted.len() * percent / 100).min(sorted.len() - 1)];
-    let (pauses, closures) = (at(PAUSE_PERCENT), at(TRIMMED_PAUSE_PERCENT));
+    let (pauses, closures) = (
+        level_under(sorted, PAUSE_PERCENT),
+        level_under(sorted, TRIMMED_PAUSE_PERCENT),
+    );
     if peak - pauses < PAUSE_UNDER_PEAK_DB || pauses - closures > ONE_FLOOR_DB {
         closures
     } else {
         pauses
     }
+}
+
+/// The level `percent` of the frames lie under, from their levels in ascending order (at
+/// least one).
+fn level_under(sorted: &[f32], percent: usize) -> f32 {
+    sorted[(sorted.len() * percent / 100).min(sorted.len() - 1)]
 }
 
 /// The runs of `value` in `flags` (one per 10 ms frame, as [`Sound::voice_activity`] gives
@@ -842,7 +850,7 @@ mod tests {
 
     #[test]
     fn a_line_trimmed_to_its_words_is_heard_through_its_quiet_vowels() {
-        // No pause: loud vowels, quieter ones, consonants and four stop closures, shuffled.
+        // No pause: loud vowels, quieter ones, consonants and four stop closures, interleaved.
         let mut levels = Vec::new();
         for k in 0..100 {
             levels.push(match k % 25 {
