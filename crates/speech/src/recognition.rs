@@ -26,7 +26,10 @@ pub fn is_english(language: &str) -> bool {
 /// synthesiser's own rendition sharply (a synthesiser's voice of eSpeak NG's kind); that line,
 /// a line the recogniser cannot align, or one in another language, is aligned by synthesis
 /// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
-/// note saying why. Without a transcript the sound is recognised by `blind`
+/// note saying why. Speech the transcript does not say (a second or more of voice in one of
+/// its alignment's silences) is recognised without it, and a note says so; so does one when a
+/// recording aligned by synthesis holds twice the speech of its transcript or more. Without a
+/// transcript the sound is recognised by `blind`
 /// ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words only in English, phones in any
 /// other language). Every route of the recogniser hears a woman's or child's voice through a
 /// longer vocal tract, as its pitch says ([`Voice::Auto`]). The notes say what was done
@@ -257,6 +260,7 @@ pub fn recognise_loaded(
                 Some(Ok(timed)) => {
                     tracing::debug!(
                         sharpness = timed.sharpness,
+                        voice_ratio = timed.voice_ratio,
                         "how sharply the synthesiser's rendition follows the voice"
                     );
                     timed.sharpness >= SAME_VOICE
@@ -271,7 +275,11 @@ pub fn recognise_loaded(
             } else {
                 match phones::align_english(&heard, &words) {
                     Ok(phones) => {
-                        let phones = phones::voiced_pauses(phones, &sound.voice_activity());
+                        let voiced = sound.voice_activity();
+                        let phones = phones::voiced_pauses(phones, &voiced);
+                        let phones = unsaid_recognised(
+                            sound, phones, &voiced, language, blind, voice, &mut notes,
+                        );
                         return Ok((phones, Recognition::Transcript, notes));
                     }
                     Err(reason) => why = Some(reason),
@@ -283,7 +291,27 @@ pub fn recognise_loaded(
                 if let Some(why) = why {
                     notes.push(format!("{why}: the transcript was aligned by synthesis"));
                 }
-                return Ok((timed.phones, Recognition::Synthesis, notes));
+                tracing::debug!(
+                    voice_ratio = timed.voice_ratio,
+                    "how many times the rendition's voice the recording holds"
+                );
+                if timed.voice_ratio >= UNSAID_RATIO {
+                    notes.push(format!(
+                        "the recording holds {:.1} times the speech of its transcript spoken: if the transcript does not say all of it, its phones are spread over more than was said",
+                        timed.voice_ratio
+                    ));
+                }
+                let voiced = sound.voice_activity();
+                let phones = unsaid_recognised(
+                    sound,
+                    timed.phones,
+                    &voiced,
+                    language,
+                    blind,
+                    voice,
+                    &mut notes,
+                );
+                return Ok((phones, Recognition::Synthesis, notes));
             }
             Err(failed) => failed,
         };
@@ -373,6 +401,123 @@ pub fn recognise_loaded(
         blind,
         notes,
     ))
+}
+
+/// The least voice, seconds, a silence of a transcript's alignment may hold before that
+/// stretch is taken for speech the transcript does not say ([`unsaid_recognised`]). A
+/// speaker's pauses, breaths and a room's noise leave at most a few tenths of a second of
+/// frames heard inside one pause (LibriVox readings: none over 0.3 s).
+const UNSAID: f32 = 1.0;
+
+/// How many times the voice of the transcript's rendition a recording aligned by synthesis
+/// may hold before a note says the transcript may not say all of it ([`crate::synthesis`]'s
+/// warping spreads a transcript over the whole recording, however much more was said).
+/// Measured: 0.9–1.3 for whole transcripts at a speaker's own pace (the five LibriVox readings;
+/// flite's slt, kal, awb and rms; eSpeak NG in Japanese, German, French, Chinese and Korean),
+/// 1.6–2.0 for those eSpeak NG lines at its slow 100 words a minute, 2.2 for a Spanish line
+/// of two sentences with the first as its transcript.
+const UNSAID_RATIO: f32 = 2.0;
+
+/// How far before its first frame of voice and after its last a stretch the transcript does
+/// not say is recognised, seconds: its first and last sounds' onsets and releases.
+const UNSAID_MARGIN: f32 = 0.1;
+
+/// `phones` (a transcript aligned to `sound`, its frames `voiced` as
+/// [`Sound::voice_activity`] says) with each of its silences (runs of them taken as one) that
+/// holds at least [`UNSAID`] of voice recognised without the transcript (by `blind`, in
+/// `language`): speech the transcript does not say (a line's transcript given for a longer
+/// take, an ad-lib after it), which would otherwise move the mouth through no phones. A note
+/// says how much was; a stretch the recogniser cannot recognise (it is not installed, or hears
+/// nothing) stays silence, its voice moving the mouth as any silence heard does.
+fn unsaid_recognised(
+    sound: &Sound,
+    phones: Vec<Phone>,
+    voiced: &[bool],
+    language: &str,
+    blind: Recognition,
+    voice: Voice,
+    notes: &mut Vec<String>,
+) -> Vec<Phone> {
+    let silence = |start: f32, end: f32| Phone {
+        label: "SIL".to_owned(),
+        start,
+        end,
+    };
+    // Runs of silences as one.
+    let mut merged: Vec<Phone> = Vec::with_capacity(phones.len());
+    for phone in phones {
+        match merged.last_mut() {
+            Some(last) if last.label == "SIL" && phone.label == "SIL" => last.end = phone.end,
+            _ => merged.push(phone),
+        }
+    }
+    let mut out = Vec::with_capacity(merged.len());
+    let (mut unsaid, mut stretches, mut span) = (0.0f32, 0usize, (f32::MAX, 0.0f32));
+    for phone in merged {
+        let frames = phone.frames(voiced);
+        let heard = frames.iter().filter(|&&v| v).count();
+        let first = phone.first_frame(voiced.len());
+        if phone.label == "SIL" {
+            tracing::trace!(
+                start = phone.start,
+                end = phone.end,
+                heard = heard as f32 / 100.0,
+                "a silence of the transcript's alignment, and the voice heard in it"
+            );
+        }
+        let ends = frames
+            .iter()
+            .position(|&v| v)
+            .zip(frames.iter().rposition(|&v| v));
+        let (true, Some((a, b))) = (phone.label == "SIL" && heard as f32 >= UNSAID * 100.0, ends)
+        else {
+            out.push(phone);
+            continue;
+        };
+        let start = ((first + a) as f32 / 100.0 - UNSAID_MARGIN).max(phone.start);
+        let end = ((first + b + 1) as f32 / 100.0 + UNSAID_MARGIN).min(phone.end);
+        let sample = |t: f32| ((t * SAMPLE_RATE as f32) as usize).min(sound.samples.len());
+        let stretch = Sound {
+            samples: sound.samples[sample(start)..sample(end)].to_vec(),
+        };
+        let said = match recognise_loaded(&stretch, None, Some(language), blind, None, voice) {
+            Ok((said, _, _)) if said.iter().any(|p| p.label != "SIL") => said,
+            Ok(_) | Err(_) => {
+                tracing::debug!(
+                    start,
+                    end,
+                    "speech the transcript does not say, not recognised"
+                );
+                out.push(phone);
+                continue;
+            }
+        };
+        unsaid += heard as f32 / 100.0;
+        stretches += 1;
+        span = (span.0.min(start), span.1.max(end));
+        if start > phone.start {
+            out.push(silence(phone.start, start));
+        }
+        out.extend(said.into_iter().map(|p| Phone {
+            start: p.start + start,
+            end: (p.end + start).min(end),
+            ..p
+        }));
+        if phone.end > end {
+            out.push(silence(end, phone.end));
+        }
+    }
+    if stretches > 0 {
+        let stretches = match stretches {
+            1 => String::new(),
+            n => format!(" in {n} stretches"),
+        };
+        notes.push(format!(
+            "the transcript does not cover {unsaid:.1} s of the voice{stretches} ({:.2}–{:.2} s): that speech was recognised without it",
+            span.0, span.1
+        ));
+    }
+    out
 }
 
 /// The phone loop's acoustic score per frame of speech ([`Decoded::score_per_frame`]) below

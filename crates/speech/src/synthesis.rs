@@ -49,6 +49,10 @@ pub(crate) struct Timed {
     /// How far the frames of the recording a few frames either side of the warping path are
     /// from the rendition's, against the frames on it ([`sharpness`]); 0 with no speech.
     pub(crate) sharpness: f32,
+    /// How many times as many frames of voice the recording holds as the rendition: about 1
+    /// for a transcript that says the whole recording (more for a slow speaker), 2 or more for
+    /// one that says half of it; 0 with no speech.
+    pub(crate) voice_ratio: f32,
 }
 
 /// [`align`], with the warping's [`sharpness`].
@@ -74,6 +78,7 @@ pub(crate) fn timed_by_synthesis(
         return Ok(Timed {
             phones: Vec::new(),
             sharpness: 0.0,
+            voice_ratio: 0.0,
         });
     };
     let (theirs, ours) = (features(&theirs[a0..=a1]), features(&ours[b0..=b1]));
@@ -100,9 +105,14 @@ pub(crate) fn timed_by_synthesis(
         time_of(a0 + first[j])
     };
     let phones = timed(&spoken, sound.seconds(), on_recording);
+    let voiced = sound.voice_activity();
+    let heard = |voiced: &[bool]| voiced.iter().filter(|&&v| v).count() as f32;
+    let voice_ratio =
+        heard(&voiced) / heard(&Sound { samples: synthetic }.voice_activity()).max(1.0);
     Ok(Timed {
-        phones: carve_pauses(phones, &sound.voice_activity()),
+        phones: carve_pauses(phones, &voiced),
         sharpness,
+        voice_ratio,
     })
 }
 

@@ -155,6 +155,15 @@ fn transcripts_in_seven_languages_lip_sync_on_time() {
             synced.reading.notes
         );
         report.push(synced.said);
+        assert!(
+            !synced
+                .reading
+                .notes
+                .iter()
+                .any(|n| n.contains("times the speech")),
+            "{language}: a whole transcript taken for a part: {:?}",
+            synced.reading.notes
+        );
         assert!(synced.bilabials > 0, "{language}: no bilabial in {line}");
         assert!(synced.agreement >= 0.8, "{}", report.join("\n"));
         assert!(
@@ -230,4 +239,32 @@ fn lines_trimmed_to_their_words_lip_sync_through_their_quiet_sounds() {
         assert_eq!(synced.closed, synced.bilabials, "{}", report.join("\n"));
     }
     eprintln!("{}", report.join("\n"));
+}
+
+/// A transcript aligned by synthesis is spread over the whole recording, however much more was
+/// said: one that says half of what the recording holds is named in a note.
+#[test]
+fn a_transcript_that_says_half_the_recording_is_noted() {
+    let first = "El perro come carne todos los días.";
+    let (_, sound) = espeak_padded(
+        &format!("{first} Mañana vamos a la playa con mis amigos."),
+        "es",
+        Some(140),
+        0.5,
+    );
+    let reading = faceanim_speech::read(
+        &sound,
+        Some(first),
+        Some("es"),
+        faceanim_speech::Recognition::Words,
+    )
+    .unwrap();
+    assert!(
+        reading
+            .notes
+            .iter()
+            .any(|n| n.contains("times the speech of its transcript")),
+        "{:?}",
+        reading.notes
+    );
 }
