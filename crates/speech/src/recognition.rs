@@ -28,7 +28,7 @@ pub fn is_english(language: &str) -> bool {
 /// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
 /// note saying why. Speech the transcript does not say (a second or more of voice in one of
 /// its alignment's silences) is recognised without it, and a note says so; so does one when a
-/// recording aligned by synthesis holds twice the speech of its transcript or more. Without a
+/// recording aligned by synthesis holds twice the speech of its transcript or more, or half. Without a
 /// transcript the sound is recognised by `blind`
 /// ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words only in English, phones in any
 /// other language). Every route of the recogniser hears a woman's or child's voice through a
@@ -300,6 +300,11 @@ pub fn recognise_loaded(
                         "the recording holds {:.1} times the speech of its transcript spoken: if the transcript does not say all of it, its phones are spread over more than was said",
                         timed.voice_ratio
                     ));
+                } else if timed.voice_ratio > 0.0 && timed.voice_ratio * UNSAID_RATIO <= 1.0 {
+                    notes.push(format!(
+                        "the transcript spoken holds {:.1} times the speech of the recording: if the recording does not say all of it, its phones are squeezed into what was said",
+                        1.0 / timed.voice_ratio
+                    ));
                 }
                 let voiced = sound.voice_activity();
                 let phones = unsaid_recognised(
@@ -415,7 +420,9 @@ const UNSAID: f32 = 1.0;
 /// Measured: 0.9–1.3 for whole transcripts at a speaker's own pace (the five LibriVox readings;
 /// flite's slt, kal, awb and rms; eSpeak NG in Japanese, German, French, Chinese and Korean),
 /// 1.6–2.0 for those eSpeak NG lines at its slow 100 words a minute, 2.2 for a Spanish line
-/// of two sentences with the first as its transcript.
+/// of two sentences with the first as its transcript. Its inverse bounds the other way: a
+/// transcript that says twice what the recording holds or more (flite's slt saying two
+/// sentences of a transcript of three, 0.43) is squeezed into it, and noted too.
 const UNSAID_RATIO: f32 = 2.0;
 
 /// How far before its first frame of voice and after its last a stretch the transcript does

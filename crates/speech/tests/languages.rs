@@ -241,30 +241,43 @@ fn lines_trimmed_to_their_words_lip_sync_through_their_quiet_sounds() {
     eprintln!("{}", report.join("\n"));
 }
 
-/// A transcript aligned by synthesis is spread over the whole recording, however much more was
-/// said: one that says half of what the recording holds is named in a note.
+/// A transcript aligned by synthesis is spread over the whole recording, however much more or
+/// less was said: one that says half of what the recording holds, or twice as much, is named
+/// in a note; the whole one is not.
 #[test]
-fn a_transcript_that_says_half_the_recording_is_noted() {
-    let first = "El perro come carne todos los días.";
-    let (_, sound) = espeak_padded(
-        &format!("{first} Mañana vamos a la playa con mis amigos."),
-        "es",
-        Some(140),
-        0.5,
+fn a_transcript_that_says_half_the_recording_or_twice_it_is_noted() {
+    let (first, second) = (
+        "El perro come carne todos los días.",
+        "Mañana vamos a la playa con mis amigos.",
     );
-    let reading = faceanim_speech::read(
-        &sound,
-        Some(first),
-        Some("es"),
-        faceanim_speech::Recognition::Words,
-    )
-    .unwrap();
+    let both = format!("{first} {second}");
+    let notes = |said: &str, transcript: &str| {
+        let (_, sound) = espeak_padded(said, "es", Some(140), 0.5);
+        faceanim_speech::read(
+            &sound,
+            Some(transcript),
+            Some("es"),
+            faceanim_speech::Recognition::Words,
+        )
+        .unwrap()
+        .notes
+    };
+    let half = notes(&both, first);
     assert!(
-        reading
-            .notes
-            .iter()
+        half.iter()
             .any(|n| n.contains("times the speech of its transcript")),
-        "{:?}",
-        reading.notes
+        "{half:?}"
+    );
+    let twice = notes(second, &format!("{both} {both}"));
+    assert!(
+        twice
+            .iter()
+            .any(|n| n.contains("times the speech of the recording")),
+        "{twice:?}"
+    );
+    let whole = notes(&both, &both);
+    assert!(
+        !whole.iter().any(|n| n.contains("times the speech")),
+        "{whole:?}"
     );
 }
