@@ -166,7 +166,8 @@ impl Sound {
     }
 
     fn checked(self, path: &Path) -> Result<Sound, AudioError> {
-        if self.samples.is_empty() {
+        // Less than one 10 ms frame holds nothing to hear.
+        if self.samples.len() < FRAME_SAMPLES {
             return Err(AudioError::Empty(path.to_owned()));
         }
         let seconds = self.seconds();
@@ -420,9 +421,19 @@ fn read_wav(path: &Path, resampling: Resampling) -> Result<Wav, String> {
             format = Some((tag, u16_at(2), rate, u16_at(14)));
         } else if id == b"data" {
             // Streams written live often leave the size 0 or too large: read what is there.
+            // A size larger than the file (short of those placeholders, 0x7FFFFFFF and
+            // 0xFFFFFFFF) is also a recording cut short — a crash, a copy interrupted — and
+            // is said, so that its missing end is not lost silently.
             let end = if size == 0 {
                 bytes.len()
             } else {
+                if end > bytes.len() && size < 0x7FFF_FFFF {
+                    tracing::warn!(
+                        "{}: the WAV is cut short: {} of the {size} bytes of sound its header names are there",
+                        path.display(),
+                        bytes.len() - body
+                    );
+                }
                 end.min(bytes.len())
             };
             data = Some(&bytes[body..end]);
@@ -786,6 +797,28 @@ mod tests {
         std::fs::write(dir.join("cut.wav"), &wav(&[1, 2, 3], 16_000)[..20]).unwrap();
         let cut = Sound::read(&dir.join("cut.wav")).unwrap_err().to_string();
         assert!(cut.contains("cut.wav"), "{cut}");
+        // A recording cut short (its header names more sound than is there) is read as far as
+        // it goes, as is a stream's whose header names none or the placeholder size.
+        let whole = wav(&vec![100; 16_000], 16_000);
+        std::fs::write(dir.join("half.wav"), &whole[..44 + 16_000]).unwrap();
+        assert_eq!(
+            Sound::read(&dir.join("half.wav")).unwrap().samples.len(),
+            8_000
+        );
+        let mut streamed = whole.clone();
+        streamed[40..44].copy_from_slice(&u32::MAX.to_le_bytes());
+        std::fs::write(dir.join("streamed.wav"), &streamed).unwrap();
+        assert_eq!(
+            Sound::read(&dir.join("streamed.wav"))
+                .unwrap()
+                .samples
+                .len(),
+            16_000
+        );
+        // Less than one 10 ms frame of it holds nothing to hear.
+        std::fs::write(dir.join("crumb.wav"), &whole[..44 + 200]).unwrap();
+        let crumb = Sound::read(&dir.join("crumb.wav")).unwrap_err().to_string();
+        assert!(crumb.contains("crumb.wav: there is no sound"), "{crumb}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 
