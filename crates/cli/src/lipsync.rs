@@ -235,6 +235,8 @@ fn read_speech(
         Blind::Words => faceanim_speech::Recognition::Words,
         Blind::Phones => faceanim_speech::Recognition::PhoneLoop,
     };
+    faceanim_speech::recognition::check_language(&args.language)
+        .map_err(|e| anyhow::anyhow!("--language {}: {e}", args.language))?;
     let sound = Sound::read(&args.speech)?;
     if let Some((text, from)) = transcript {
         faceanim_speech::phones::transcript_words(text, sound.seconds())

@@ -375,15 +375,26 @@ fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
         "too much head motion"
     );
     assert_valid_gltf(&out.join("mama.glb"));
-    // A language eSpeak NG does not speak is said, and the sound still moves the mouth.
-    let (summary, _) = run_lipsync(
-        &wav,
-        &["--text", line, "--language", "xx-nowhere"],
-        &out.join("nowhere.json"),
-    );
-    let notes = summary["notes"].to_string();
-    assert!(notes.contains("no voice 'xx-nowhere'"), "{notes}");
-    assert_eq!(summary["recognition"], "phone_loop", "{summary}");
+    // A language eSpeak NG does not speak (a misspelt one) is refused by name, with or
+    // without a transcript, before anything is written: it would choose the route as if it
+    // were another language's.
+    for more in [&["--text", line][..], &[]] {
+        let nowhere = out.join("nowhere.json");
+        let _ = std::fs::remove_file(&nowhere);
+        let args: Vec<&str> = ["lipsync", wav.to_str().unwrap(), "--clip"]
+            .into_iter()
+            .chain([nowhere.to_str().unwrap(), "--language", "en_us"])
+            .chain(more.iter().copied())
+            .collect();
+        let run = faceanim(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{stderr}");
+        assert!(
+            stderr.contains("--language en_us: eSpeak NG has no language or voice 'en_us'"),
+            "{stderr}"
+        );
+        assert!(!nowhere.exists());
+    }
 }
 
 #[test]

@@ -110,6 +110,19 @@ pub fn voices() -> Result<Vec<Voice>, EspeakError> {
     imp::voices()
 }
 
+/// Checks that eSpeak NG has `voice` (a language such as `es`, or a voice with a variant,
+/// `en-us+f3`), as [`speak`] would choose it.
+///
+/// # Errors
+/// [`EspeakError::NoVoice`] when it has not; [`EspeakError::NotInstalled`],
+/// [`EspeakError::NoData`] or [`EspeakError::Nul`] as [`speak`] gives them.
+pub fn check_voice(voice: &str) -> Result<(), EspeakError> {
+    if voice.contains('\0') {
+        return Err(EspeakError::Nul);
+    }
+    imp::check_voice(voice)
+}
+
 /// Whether this build can speak (the library was found when it was built).
 #[must_use]
 pub fn available() -> bool {
@@ -360,6 +373,19 @@ mod imp {
         })
     }
 
+    pub(super) fn check_voice(voice: &str) -> Result<(), EspeakError> {
+        let mut engine = ENGINE
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        started(&mut engine)?;
+        let name = CString::new(voice).map_err(|_| EspeakError::Nul)?;
+        // SAFETY: the string outlives the call.
+        if unsafe { ffi::espeak_SetVoiceByName(name.as_ptr()) } != 0 {
+            return Err(EspeakError::NoVoice(voice.to_owned()));
+        }
+        Ok(())
+    }
+
     pub(super) fn voices() -> Result<Vec<Voice>, EspeakError> {
         let mut engine = ENGINE
             .lock()
@@ -404,6 +430,10 @@ mod imp {
     pub(super) fn voices() -> Result<Vec<Voice>, EspeakError> {
         Err(EspeakError::NotInstalled)
     }
+
+    pub(super) fn check_voice(_: &str) -> Result<(), EspeakError> {
+        Err(EspeakError::NotInstalled)
+    }
 }
 
 #[cfg(test)]
@@ -435,5 +465,23 @@ mod tests {
             got,
             [("_", 0, 0), ("h", 10, 0), ("ˈoː", 60, 0), ("tʃ", 200, 1)]
         );
+    }
+
+    #[test]
+    fn a_voice_is_known_by_its_language_or_refused_by_its_name() {
+        if !available() {
+            assert!(matches!(check_voice("es"), Err(EspeakError::NotInstalled)));
+            return;
+        }
+        for voice in ["es", "en-us", "en-us+f3", "ja", "cmn"] {
+            check_voice(voice).unwrap_or_else(|e| panic!("{voice}: {e}"));
+        }
+        let error = check_voice("xx").unwrap_err();
+        assert!(
+            matches!(&error, EspeakError::NoVoice(v) if v == "xx"),
+            "{error}"
+        );
+        assert!(error.to_string().contains("'xx'"), "{error}");
+        assert!(matches!(check_voice("e\0s"), Err(EspeakError::Nul)));
     }
 }

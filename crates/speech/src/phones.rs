@@ -87,6 +87,11 @@ pub enum PhoneError {
         /// The sound's length.
         seconds: f32,
     },
+    /// The language is not one eSpeak NG speaks (nor a voice of one).
+    #[error(
+        "eSpeak NG has no language or voice '{0}' (`espeak-ng --voices` lists those it speaks: en-us, es, ja, de, fr, …)"
+    )]
+    UnknownLanguage(String),
     /// The transcript has no word to align.
     #[error("the transcript has no words")]
     EmptyTranscript,

@@ -47,6 +47,22 @@ pub fn recognise(
     recognise_loaded(sound, transcript, language, blind, None, Voice::Auto)
 }
 
+/// Checks that eSpeak NG speaks `language` (a language such as `es`, or a voice of one,
+/// `en-us+f3`): a name it does not know would otherwise choose the route as if it were another
+/// language's (a misspelt English, `en_us`, recognised by its phones) and leave its transcript
+/// unspoken. Where this build has no eSpeak NG, any name passes: only the route depends on it.
+///
+/// # Errors
+/// [`PhoneError::UnknownLanguage`] naming it.
+pub fn check_language(language: &str) -> Result<(), PhoneError> {
+    match faceanim_espeak_sys::check_voice(language) {
+        Err(
+            faceanim_espeak_sys::EspeakError::NoVoice(_) | faceanim_espeak_sys::EspeakError::Nul,
+        ) => Err(PhoneError::UnknownLanguage(language.to_owned())),
+        Ok(()) | Err(_) => Ok(()),
+    }
+}
+
 /// The route [`recognise`] takes without a transcript in `language`: `blind`, except that
 /// words are recognised in English only (other languages by their phones).
 fn blind_route(language: &str, blind: Recognition) -> Recognition {
@@ -224,6 +240,7 @@ pub fn recognise_loaded(
     voice: Voice,
 ) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
     let language = language.unwrap_or(ENGLISH);
+    check_language(language)?;
     let mut notes = Vec::new();
     let asked = blind;
     let blind = blind_route(language, blind);
