@@ -431,6 +431,13 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language_and_voice(
     let (status, body) = upload("language=es%3Brm");
     assert_eq!(status, 400, "{body}");
     assert!(body.contains("language"), "{body}");
+    // So is a name eSpeak NG does not speak (the page's field is free text).
+    let (status, body) = upload("language=sp");
+    assert_eq!(status, 400, "{body}");
+    assert!(
+        body.contains("language: eSpeak NG has no language or voice 'sp'"),
+        "{body}"
+    );
     // Whose voice it is: every choice the page offers is one the studio takes, and reaches the
     // recogniser (heard through another vocal tract, the phones recognised differ).
     let page = std::fs::read_to_string(support::repo().join("web/index.html")).unwrap();

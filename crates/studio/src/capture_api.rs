@@ -231,6 +231,10 @@ async fn upload(
                 faceanim_rig::excerpt(language)
             )));
         }
+        if let Some(language) = &language {
+            faceanim_speech::recognition::check_language(language)
+                .map_err(|e| bad(format!("language: {e}")))?;
+        }
         let voice: faceanim_speech::Voice = match batch.voice.as_deref().map(str::trim) {
             None | Some("") => faceanim_speech::Voice::Auto,
             Some(voice) => voice.parse().map_err(|e| bad(format!("voice: {e}")))?,
