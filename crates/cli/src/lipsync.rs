@@ -268,14 +268,32 @@ fn read_speech(
 const MAX_TEXT_BYTES: u64 = 1 << 20;
 
 /// `--text`: the words themselves, or a file that holds them; with how to name it in a
-/// message (the file, or "(the words given)").
+/// message (the file, or "(the words given)"). One word that names a file which is not there
+/// (a path, or a name ending in [`TRANSCRIPT_FILES`]) is an error.
 fn transcript(text: &str) -> anyhow::Result<(String, String)> {
     let path = Path::new(text);
-    if !text.contains(char::is_whitespace) && path.is_file() {
-        return Ok((read_text(path, "--text")?, path.display().to_string()));
+    if !text.contains(char::is_whitespace) {
+        if path.is_file() {
+            return Ok((read_text(path, "--text")?, path.display().to_string()));
+        }
+        // A file's name that names none (mistyped, or relative to another folder) would
+        // otherwise be spoken as the words "script dot t x t".
+        let named_file = text.contains(['/', '\\'])
+            || path
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| TRANSCRIPT_FILES.contains(&e.to_ascii_lowercase().as_str()));
+        if named_file {
+            anyhow::bail!(
+                "--text {text}: no such file (give the words themselves, or a file that holds them)"
+            );
+        }
     }
     Ok((text.to_owned(), "(the words given)".to_owned()))
 }
+
+/// Extensions of the files a transcript comes in: plain text, a subtitle, a label file.
+const TRANSCRIPT_FILES: [&str; 6] = ["txt", "text", "lab", "srt", "vtt", "md"];
 
 /// The UTF-8 text of `path`, given as `option`: at most [`MAX_TEXT_BYTES`], read only after
 /// its size is known; errors name the option and the file.

@@ -505,6 +505,21 @@ fn the_command_refuses_what_it_cannot_use_by_name() {
             "{stderr}"
         );
     }
+    // A transcript file's name that names none is refused, not spoken as its words.
+    let missing = dir.path().join("wrods.txt");
+    let (code, stderr) = command(&[
+        os("lipsync"),
+        speech.as_os_str(),
+        os("--text"),
+        missing.as_os_str(),
+        os("-o"),
+        clip.as_os_str(),
+    ]);
+    assert_eq!(code, 1, "{stderr}");
+    assert!(
+        stderr.contains("--text") && stderr.contains("wrods.txt: no such file"),
+        "{stderr}"
+    );
     let slow = dir.path().join("slow.wav");
     std::fs::write(&slow, wav(&[0; 200_000], 1, 1)).unwrap();
     let started = std::time::Instant::now();
