@@ -294,9 +294,17 @@ pub fn recognise_loaded(
                     Ok(phones) => {
                         let voiced = sound.voice_activity();
                         let phones = phones::voiced_pauses(phones, &voiced);
+                        let told = notes.len();
                         let phones = unsaid_recognised(
                             sound, phones, &voiced, language, blind, voice, &mut notes,
                         );
+                        // Forced alignment spreads a transcript over speech it does not say
+                        // too, where no silence is left over.
+                        if notes.len() == told
+                            && let Some(Ok(timed)) = &by_synthesis
+                        {
+                            notes.extend(mismatch(timed.voice_ratio));
+                        }
                         return Ok((phones, Recognition::Transcript, notes));
                     }
                     Err(reason) => why = Some(reason),
@@ -312,17 +320,7 @@ pub fn recognise_loaded(
                     voice_ratio = timed.voice_ratio,
                     "how many times the rendition's voice the recording holds"
                 );
-                if timed.voice_ratio >= UNSAID_RATIO {
-                    notes.push(format!(
-                        "the recording holds {:.1} times the speech of its transcript spoken: if the transcript does not say all of it, its phones are spread over more than was said",
-                        timed.voice_ratio
-                    ));
-                } else if timed.voice_ratio > 0.0 && timed.voice_ratio * UNSAID_RATIO <= 1.0 {
-                    notes.push(format!(
-                        "the transcript spoken holds {:.1} times the speech of the recording: if the recording does not say all of it, its phones are squeezed into what was said",
-                        1.0 / timed.voice_ratio
-                    ));
-                }
+                notes.extend(mismatch(timed.voice_ratio));
                 let voiced = sound.voice_activity();
                 let phones = unsaid_recognised(
                     sound,
@@ -441,6 +439,24 @@ const UNSAID: f32 = 1.0;
 /// transcript that says twice what the recording holds or more (flite's slt saying two
 /// sentences of a transcript of three, 0.43) is squeezed into it, and noted too.
 const UNSAID_RATIO: f32 = 2.0;
+
+/// The note a transcript aligned to a recording that holds `voice_ratio` times the voice of
+/// its rendition gets: one when it says half of what the recording holds or less (its phones
+/// spread over the rest), or twice as much or more (squeezed) — see [`UNSAID_RATIO`].
+fn mismatch(voice_ratio: f32) -> Option<String> {
+    if voice_ratio >= UNSAID_RATIO {
+        Some(format!(
+            "the recording holds {voice_ratio:.1} times the speech of its transcript spoken: if the transcript does not say all of it, its phones are spread over more than was said"
+        ))
+    } else if voice_ratio > 0.0 && voice_ratio * UNSAID_RATIO <= 1.0 {
+        Some(format!(
+            "the transcript spoken holds {:.1} times the speech of the recording: if the recording does not say all of it, its phones are squeezed into what was said",
+            1.0 / voice_ratio
+        ))
+    } else {
+        None
+    }
+}
 
 /// How far before its first frame of voice and after its last a stretch the transcript does
 /// not say is recognised, seconds: its first and last sounds' onsets and releases.

@@ -359,6 +359,18 @@ fn speech_the_transcript_does_not_say_is_recognised_and_noted() {
         "{:?}",
         reading.notes
     );
+    // The second sentence's transcript alone: the first is before it, and the user is told
+    // either way.
+    let reading = faceanim_speech::read(&sound, Some(LINES[1]), None, Recognition::Words).unwrap();
+    eprintln!("{:?}", reading.notes);
+    assert!(
+        reading
+            .notes
+            .iter()
+            .any(|n| n.contains("does not cover") || n.contains("times the speech")),
+        "{:?}",
+        reading.notes
+    );
 }
 
 /// A whisper's words are seldom made out, and slowly: without its transcript, a voice heard
