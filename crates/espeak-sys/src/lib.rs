@@ -336,15 +336,12 @@ mod imp {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         let sample_rate = started(&mut engine)?;
-        let name = CString::new(voice).map_err(|_| EspeakError::Nul)?;
+        set_voice(voice)?;
         let text = CString::new(text).map_err(|_| EspeakError::Nul)?;
         let mut gathered = Gathered::default();
         // SAFETY: the strings outlive the calls; `gathered` outlives espeak_Synth, which in
         // synchronous mode returns only when every callback has been made.
         let status = unsafe {
-            if ffi::espeak_SetVoiceByName(name.as_ptr()) != 0 {
-                return Err(EspeakError::NoVoice(voice.to_owned()));
-            }
             let rate = words_per_minute.map_or(175, |w| w.clamp(80, 450));
             ffi::espeak_SetParameter(ffi::RATE, rate as c_int, 0);
             let bytes = text.as_bytes_with_nul();
@@ -378,12 +375,39 @@ mod imp {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         started(&mut engine)?;
-        let name = CString::new(voice).map_err(|_| EspeakError::Nul)?;
-        // SAFETY: the string outlives the call.
-        if unsafe { ffi::espeak_SetVoiceByName(name.as_ptr()) } != 0 {
-            return Err(EspeakError::NoVoice(voice.to_owned()));
+        set_voice(voice)
+    }
+
+    /// Chooses `voice` as the `espeak-ng` program does: by its name (`en-us`, `cmn`,
+    /// `en-us+f3`), else as a language one of the voices speaks (`zh`, which the Mandarin
+    /// voice lists among its languages), keeping a `+variant`. The engine must be started and
+    /// its lock held.
+    fn set_voice(voice: &str) -> Result<(), EspeakError> {
+        let by_name = |name: &str| -> Result<bool, EspeakError> {
+            let name = CString::new(name).map_err(|_| EspeakError::Nul)?;
+            // SAFETY: the string outlives the call.
+            Ok(unsafe { ffi::espeak_SetVoiceByName(name.as_ptr()) } == 0)
+        };
+        if by_name(voice)? {
+            return Ok(());
         }
-        Ok(())
+        let (language, variant) = voice
+            .split_once('+')
+            .map_or((voice, None), |(l, v)| (l, Some(v)));
+        let speaker = listed()
+            .into_iter()
+            .find(|v| v.languages.iter().any(|l| l.eq_ignore_ascii_case(language)))
+            .and_then(|v| v.languages.into_iter().next());
+        if let Some(speaker) = speaker {
+            let named = match variant {
+                Some(variant) => format!("{speaker}+{variant}"),
+                None => speaker,
+            };
+            if by_name(&named)? {
+                return Ok(());
+            }
+        }
+        Err(EspeakError::NoVoice(voice.to_owned()))
     }
 
     pub(super) fn voices() -> Result<Vec<Voice>, EspeakError> {
@@ -391,6 +415,11 @@ mod imp {
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
         started(&mut engine)?;
+        Ok(listed())
+    }
+
+    /// The voices, with the engine started and its lock held.
+    fn listed() -> Vec<Voice> {
         let mut out = Vec::new();
         // SAFETY: espeak_ListVoices(NULL) returns a NULL-terminated array of voices whose
         // strings live as long as the library; `languages` is a list of (priority byte,
@@ -415,7 +444,7 @@ mod imp {
                 list = list.add(1);
             }
         }
-        Ok(out)
+        out
     }
 }
 
@@ -473,7 +502,8 @@ mod tests {
             assert!(matches!(check_voice("es"), Err(EspeakError::NotInstalled)));
             return;
         }
-        for voice in ["es", "en-us", "en-us+f3", "ja", "cmn"] {
+        // By name, with a variant, or as a language a voice lists (zh: the Mandarin voice's).
+        for voice in ["es", "en-us", "en-us+f3", "ja", "cmn", "zh", "zh+f2"] {
             check_voice(voice).unwrap_or_else(|e| panic!("{voice}: {e}"));
         }
         let error = check_voice("xx").unwrap_err();
