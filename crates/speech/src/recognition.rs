@@ -27,8 +27,8 @@ pub fn is_english(language: &str) -> bool {
 /// a line the recogniser cannot align, or one in another language, is aligned by synthesis
 /// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
 /// note saying why. Speech the transcript does not say (a second or more of voice in one of
-/// its alignment's silences) is recognised without it, and a note says so; so does one when a
-/// recording aligned by synthesis holds twice the speech of its transcript or more, or half. Without a
+/// its alignment's silences) is recognised without it, and a note says so; so does one when
+/// the recording holds twice the speech of its transcript spoken or more, or half. Without a
 /// transcript the sound is recognised by `blind`
 /// ([`Recognition::Words`] or [`Recognition::PhoneLoop`]; words only in English, phones in any
 /// other language). Every route of the recogniser hears a woman's or child's voice through a
@@ -425,13 +425,15 @@ pub fn recognise_loaded(
 
 /// The least voice, seconds, a silence of a transcript's alignment may hold before that
 /// stretch is taken for speech the transcript does not say ([`unsaid_recognised`]). A
-/// speaker's pauses, breaths and a room's noise leave at most a few tenths of a second of
-/// frames heard inside one pause (LibriVox readings: none over 0.3 s).
+/// speaker's pauses, breaths and a room's noise leave a few hundredths of a second of frames
+/// heard inside one pause (the five LibriVox readings with their transcripts: at most 0.05 s;
+/// two flite lines with 3 s of pink room noise between them: 0.01 s).
 const UNSAID: f32 = 1.0;
 
-/// How many times the voice of the transcript's rendition a recording aligned by synthesis
-/// may hold before a note says the transcript may not say all of it ([`crate::synthesis`]'s
-/// warping spreads a transcript over the whole recording, however much more was said).
+/// How many times the voice of its transcript's rendition a recording may hold before a note
+/// says the transcript may not say all of it: [`crate::synthesis`]'s warping spreads a
+/// transcript over the whole recording, however much more was said, and the recogniser's
+/// forced alignment does so where no silence is left over.
 /// Measured: 0.9–1.3 for whole transcripts at a speaker's own pace (the five LibriVox readings;
 /// flite's slt, kal, awb and rms; eSpeak NG in Japanese, German, French, Chinese and Korean),
 /// 1.6–2.0 for those eSpeak NG lines at its slow 100 words a minute, 2.2 for a Spanish line
