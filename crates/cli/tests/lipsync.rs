@@ -299,6 +299,33 @@ fn visemes_of_synthetic_voices_match_their_phones_within_40_ms() {
         overall >= 0.8,
         "viseme accuracy within ±40 ms: {overall:.3}\n{report:?}"
     );
+    // The same line's subtitle file, as a player has it (a cue number, a timecode, a
+    // direction for the deaf, styling), is aligned as its words are: nothing of it is spoken
+    // but the words, and the note says what was left out.
+    let subtitle = out.join("slt-0.srt");
+    std::fs::write(
+        &subtitle,
+        format!(
+            "1\n00:00:00,000 --> 00:00:03,000\n[calmly] <i>{}</i>\n",
+            lines[0]
+        ),
+    )
+    .unwrap();
+    let phones = |summary: &Value| summary["phones"].to_string();
+    let wav = out.join("slt-0.wav");
+    let (plain, _) = run_lipsync(&wav, &["--text", lines[0]], &out.join("slt-0-plain.json"));
+    let (read, _) = run_lipsync(
+        &wav,
+        &["--text", subtitle.to_str().unwrap()],
+        &out.join("slt-0-srt.json"),
+    );
+    assert_eq!(read["recognition"], "transcript", "{read}");
+    assert_eq!(phones(&read), phones(&plain));
+    let notes = read["notes"].to_string();
+    assert!(
+        notes.contains("[calmly]") && notes.contains("a subtitle timecode"),
+        "{notes}"
+    );
 }
 
 #[test]

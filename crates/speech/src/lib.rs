@@ -36,6 +36,7 @@ pub mod listen;
 pub mod mouth;
 pub mod phones;
 pub mod recognition;
+pub mod script;
 pub mod synthesis;
 pub mod visemes;
 mod warp;

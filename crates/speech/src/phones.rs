@@ -113,16 +113,20 @@ pub enum PhoneError {
 /// 6; conversational English is 2 to 3).
 pub const MAX_WORDS_PER_SECOND: f32 = 10.0;
 
-/// The transcript's words, checked against the sound's length before any work is done with
-/// them: not empty, and no more than [`MAX_WORDS_PER_SECOND`] allow (plus a few, for very
+/// The transcript's words — those it says aloud ([`crate::script::spoken`]: a subtitle's
+/// timecodes, markup and bracketed directions left out) — checked against the sound's length
+/// before any work is done with them: not empty, and no more than [`MAX_WORDS_PER_SECOND`] allow (plus a few, for very
 /// short sounds), so that a wrong file given as a transcript is refused at once instead of
 /// growing the recogniser's grammar without bound.
 ///
 /// # Errors
 /// [`PhoneError::EmptyTranscript`] or [`PhoneError::TranscriptTooLong`].
 pub fn transcript_words(text: &str, seconds: f32) -> Result<Vec<String>, PhoneError> {
+    let spoken = crate::script::spoken(text);
+    let text = spoken.text.as_str();
     let most = (seconds.max(0.0) * MAX_WORDS_PER_SECOND) as usize + 8;
-    // Counted before the words are made: a huge text costs no allocation to refuse.
+    // Counted before the words are made: a huge text costs one copy, not a word list, to
+    // refuse.
     let words = text
         .split(|c: char| !(c.is_alphanumeric() || c == '\''))
         .filter(|w| !w.trim_matches('\'').is_empty())

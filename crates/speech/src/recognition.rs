@@ -257,6 +257,11 @@ pub fn recognise_loaded(
         .unwrap_or_else(|| Hearing::of(sound, voice));
     let heard = Heard::as_decided(sound, hearing);
     if let Some(text) = transcript {
+        // Only what is said aloud: a subtitle's timecodes, markup and bracketed directions
+        // would be aligned as words nobody said.
+        let spoken = crate::script::spoken(text);
+        notes.extend(spoken.note());
+        let text = spoken.text.as_str();
         let words = phones::transcript_words(text, sound.seconds())?;
         let synthesis = || match crate::synthesis::timed_by_synthesis(sound, text, language) {
             Ok(timed) if !timed.phones.is_empty() => Ok(timed),

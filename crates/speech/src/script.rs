@@ -1,0 +1,193 @@
+//! What a transcript says aloud: the words of a line as people have them, without what is not
+//! spoken.
+//!
+//! Transcripts come from scripts, subtitles and TTS prompts, and carry more than their words:
+//! - subtitles (SubRip `.srt`, WebVTT `.vtt`): a `WEBVTT` header, cue numbers, timecodes
+//!   (`00:00:01,000 --> 00:00:02,500`);
+//! - markup: SSML (`<break time="500ms"/>`, `<prosody …>`), subtitle styling (`<i>`,
+//!   `<v Roger>`, `{\an8}`);
+//! - directions in square brackets (`[laughs]`, `[music]`), as subtitles for the deaf and game
+//!   scripts write them;
+//! - a speaker's name in capitals before a colon at the start of a line (`NARRATOR: …`).
+//!
+//! Spoken, each would become words nobody said ("zero zero colon zero one…", "break time
+//! five hundred ms"), aligned onto the speech of others. They are left out, and said so.
+//! Parentheses are kept: prose puts spoken asides in them as often as scripts put directions.
+
+/// A transcript's spoken words and what was left out of it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Spoken {
+    /// The text, without what is not spoken (lines kept as lines).
+    pub text: String,
+    /// What was left out: each bracketed direction and tag as written (the first few), and
+    /// how many timecodes.
+    pub left_out: Vec<String>,
+}
+
+impl Spoken {
+    /// The note that says what was left out, when anything was.
+    #[must_use]
+    pub fn note(&self) -> Option<String> {
+        (!self.left_out.is_empty()).then(|| {
+            format!(
+                "left out of the transcript as not spoken: {}",
+                self.left_out.join(", ")
+            )
+        })
+    }
+}
+
+/// The directions, tags and names a note lists by name; more are counted.
+const LISTED: usize = 6;
+
+/// The longest speaker's name taken as one before a colon, characters.
+const LONGEST_NAME: usize = 30;
+
+/// What `text` says aloud (see the module's docs).
+#[must_use]
+pub fn spoken(text: &str) -> Spoken {
+    let lines: Vec<&str> = text.lines().collect();
+    let (mut kept, mut timecodes) = (Vec::with_capacity(lines.len()), 0usize);
+    for (k, line) in lines.iter().enumerate() {
+        let trimmed = line.trim();
+        let cue_number = !trimmed.is_empty()
+            && trimmed.chars().all(|c| c.is_ascii_digit())
+            && lines.get(k + 1).is_some_and(|next| next.contains("-->"));
+        if trimmed.contains("-->") {
+            timecodes += 1;
+        } else if !(cue_number || (k == 0 && trimmed.starts_with("WEBVTT"))) {
+            kept.push(*line);
+        }
+    }
+    let mut left_out = Vec::new();
+    let mut out = String::with_capacity(text.len());
+    for (k, line) in kept.iter().enumerate() {
+        if k > 0 {
+            out.push('\n');
+        }
+        let line = unbracketed(line, &mut left_out);
+        out.push_str(unnamed(&line, &mut left_out));
+    }
+    let mut listed: Vec<String> = Vec::new();
+    for item in &left_out {
+        if !listed.contains(item) {
+            listed.push(item.clone());
+        }
+    }
+    if listed.len() > LISTED {
+        let more = listed.len() - LISTED;
+        listed.truncate(LISTED);
+        listed.push(format!("{more} more"));
+    }
+    match timecodes {
+        0 => {}
+        1 => listed.push("a subtitle timecode".to_owned()),
+        n => listed.push(format!("{n} subtitle timecodes")),
+    }
+    Spoken {
+        text: out,
+        left_out: listed,
+    }
+}
+
+/// `line` without its `<…>`, `[…]` and `{…}` spans, each pushed onto `left_out`; a bracket
+/// that is never closed is kept (it is punctuation, and no word).
+fn unbracketed(line: &str, left_out: &mut Vec<String>) -> String {
+    let mut out = String::with_capacity(line.len());
+    let mut rest = line;
+    while let Some(open) = rest.find(['<', '[', '{']) {
+        let close = match rest.as_bytes()[open] {
+            b'<' => '>',
+            b'[' => ']',
+            _ => '}',
+        };
+        let Some(length) = rest[open..].find(close) else {
+            break;
+        };
+        out.push_str(&rest[..open]);
+        // A space where the span was, so that the words either side stay two.
+        out.push(' ');
+        let span = &rest[open..=open + length];
+        left_out.push(span.chars().take(40).collect());
+        rest = &rest[open + length + 1..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// `line` without a speaker's name in capitals and its colon at its start (`NARRATOR:`,
+/// `DR. JONES:`), pushed onto `left_out`.
+fn unnamed<'a>(line: &'a str, left_out: &mut Vec<String>) -> &'a str {
+    let start = line.len() - line.trim_start().len();
+    let Some(colon) = line[start..].find(':') else {
+        return line;
+    };
+    let name = &line[start..start + colon];
+    let letters = name.chars().filter(|c| c.is_alphabetic()).count();
+    let named = letters >= 2
+        && name.chars().count() <= LONGEST_NAME
+        && name.chars().all(|c| {
+            c.is_uppercase() || c.is_ascii_digit() || c.is_whitespace() || ".'-_".contains(c)
+        });
+    if !named {
+        return line;
+    }
+    left_out.push(format!("{name}:"));
+    &line[start + colon + 1..]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn subtitles_are_read_for_their_words() {
+        let srt = "1\n00:00:00,100 --> 00:00:01,000\nHello there,\n\n2\n00:00:01,000 --> 00:00:03,000\n<i>how are you today?</i> I am fine.\n";
+        let said = spoken(srt);
+        assert_eq!(
+            said.text.split_whitespace().collect::<Vec<_>>(),
+            [
+                "Hello", "there,", "how", "are", "you", "today?", "I", "am", "fine."
+            ]
+        );
+        assert_eq!(said.left_out, ["<i>", "</i>", "2 subtitle timecodes"]);
+        let vtt = "WEBVTT\n\n00:01.000 --> 00:04.000\n<v Roger>Never drink liquid nitrogen.\n";
+        let said = spoken(vtt);
+        assert_eq!(said.text.trim(), "Never drink liquid nitrogen.");
+        assert_eq!(said.left_out, ["<v Roger>", "a subtitle timecode"]);
+    }
+
+    #[test]
+    fn markup_directions_and_speakers_are_left_out_and_said() {
+        let said = spoken(
+            "NARRATOR: [laughs] Hello there,<break time=\"500ms\"/>how are you?\n{\\an8}DR. JONES: Fine.",
+        );
+        assert_eq!(
+            said.text.split_whitespace().collect::<Vec<_>>(),
+            ["Hello", "there,", "how", "are", "you?", "Fine."]
+        );
+        assert_eq!(
+            said.note().unwrap(),
+            "left out of the transcript as not spoken: [laughs], <break time=\"500ms\"/>, NARRATOR:, {\\an8}, DR. JONES:"
+        );
+    }
+
+    #[test]
+    fn plain_words_are_kept_as_they_are() {
+        for text in [
+            "Mama made my bed before breakfast.",
+            "Note: the numbers 1 2 3 are said (all of them) — and 2 < 3.",
+            "I: me, myself",
+            "妈妈骂马吗？",
+            "42",
+        ] {
+            let said = spoken(text);
+            assert_eq!(said.text, text);
+            assert_eq!(said.note(), None, "{text}");
+        }
+        // More directions than a note lists are counted.
+        let many = spoken("[a] [b] [c] [d] [e] [f] [g] [h] words");
+        assert_eq!(many.left_out.last().unwrap(), "2 more");
+        assert_eq!(many.text.trim(), "words");
+    }
+}
