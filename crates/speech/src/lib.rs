@@ -5,8 +5,8 @@
 //! 1. [`audio`]: the sound at 16 kHz mono (WAV read directly; MP3, Ogg, FLAC and the sound of
 //!    a video through `ffmpeg`), and where a voice is heard in it;
 //! 2. [`phones`]: phones and their times from CMU PocketSphinx ([`faceanim_sphinx_sys`]):
-//!    the transcript aligned to the sound when there is one; else the words recognised and
-//!    spoken as the dictionary says, or a phone loop;
+//!    the transcript (what it says aloud: [`script`]) aligned to the sound when there is one;
+//!    else the words recognised and spoken as the dictionary says, or a phone loop;
 //! 3. [`visemes`]: phones to the 15 Oculus visemes, with animators' timing rules
 //!    (anticipation, a minimum hold, closed lips on P/B/M, pauses that relax or close);
 //! 4. [`mouth`]: visemes onto the character's own shapes — its visemes by name, or its ARKit
