@@ -47,15 +47,29 @@ const LONGEST_NAME: usize = 30;
 #[must_use]
 pub fn spoken(text: &str) -> Spoken {
     let lines: Vec<&str> = text.lines().collect();
+    let webvtt = lines
+        .first()
+        .is_some_and(|l| l.trim().starts_with("WEBVTT"));
     let (mut kept, mut timecodes) = (Vec::with_capacity(lines.len()), 0usize);
+    // Inside a WebVTT comment, style or region block: up to the next blank line.
+    let mut block = false;
     for (k, line) in lines.iter().enumerate() {
         let trimmed = line.trim();
+        if trimmed.is_empty() {
+            block = false;
+        } else if webvtt
+            && ["NOTE", "STYLE", "REGION"]
+                .iter()
+                .any(|b| trimmed.starts_with(b))
+        {
+            block = true;
+        }
         let cue_number = !trimmed.is_empty()
             && trimmed.chars().all(|c| c.is_ascii_digit())
             && lines.get(k + 1).is_some_and(|next| next.contains("-->"));
         if trimmed.contains("-->") {
             timecodes += 1;
-        } else if !(cue_number || (k == 0 && trimmed.starts_with("WEBVTT"))) {
+        } else if !(block || cue_number || (k == 0 && webvtt)) {
             kept.push(*line);
         }
     }
@@ -151,7 +165,7 @@ mod tests {
             ]
         );
         assert_eq!(said.left_out, ["<i>", "</i>", "2 subtitle timecodes"]);
-        let vtt = "WEBVTT\n\n00:01.000 --> 00:04.000\n<v Roger>Never drink liquid nitrogen.\n";
+        let vtt = "WEBVTT - a talk\n\nNOTE written by hand,\nover two lines\n\nSTYLE\n::cue { color: red }\n\n00:01.000 --> 00:04.000 align:start\n<v Roger>Never drink liquid nitrogen.\n";
         let said = spoken(vtt);
         assert_eq!(said.text.trim(), "Never drink liquid nitrogen.");
         assert_eq!(said.left_out, ["<v Roger>", "a subtitle timecode"]);
