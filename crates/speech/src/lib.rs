@@ -35,6 +35,7 @@ mod holds;
 pub mod listen;
 pub mod mouth;
 pub mod phones;
+pub mod pronounce;
 pub mod recognition;
 pub mod script;
 pub mod synthesis;

@@ -211,9 +211,27 @@ pub(crate) fn phones_of(
 }
 
 /// An English transcript's `words` aligned by the recogniser, or why they could not be (a
-/// word the dictionary lacks, an alignment that failed).
-pub(crate) fn align_english(heard: &Heard<'_>, words: &[String]) -> Result<Vec<Phone>, String> {
-    let dictionary = Dictionary::english_words(words).map_err(|e| e.to_string())?;
+/// word neither the dictionary nor eSpeak NG can pronounce, an alignment that failed). Words
+/// the dictionary lacks are said as eSpeak NG says them ([`crate::pronounce`]), and pushed
+/// onto `pronounced` once each.
+pub(crate) fn align_english(
+    heard: &Heard<'_>,
+    words: &[String],
+    pronounced: &mut Vec<String>,
+) -> Result<Vec<Phone>, String> {
+    let mut dictionary = Dictionary::english_words(words).map_err(|e| e.to_string())?;
+    // Words it lacks, as eSpeak NG says them (see `crate::pronounce`).
+    for word in words {
+        if !dictionary.has(word)
+            && let Some(phones) = crate::pronounce::english(word)
+        {
+            dictionary.words.insert(word.clone(), phones);
+            let shown = faceanim_rig::excerpt(word).into_owned();
+            if !pronounced.contains(&shown) {
+                pronounced.push(shown);
+            }
+        }
+    }
     let unknown: Vec<&str> = words
         .iter()
         .filter(|w| !dictionary.has(w))

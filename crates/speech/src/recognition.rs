@@ -295,8 +295,17 @@ pub fn recognise_loaded(
                         .to_owned(),
                 );
             } else {
-                match phones::align_english(&heard, &words) {
+                let mut pronounced: Vec<String> = Vec::new();
+                let aligned = phones::align_english(&heard, &words, &mut pronounced);
+                match aligned {
                     Ok(phones) => {
+                        if !pronounced.is_empty() {
+                            notes.push(format!(
+                                "the pronouncing dictionary lacks {}: said as eSpeak NG says {}",
+                                pronounced.join(", "),
+                                if pronounced.len() == 1 { "it" } else { "them" }
+                            ));
+                        }
                         let voiced = sound.voice_activity();
                         let phones = phones::voiced_pauses(phones, &voiced);
                         let told = notes.len();

@@ -462,3 +462,33 @@ fn a_sound_without_a_voice_rests_the_mouth_and_says_so() {
         );
     }
 }
+
+/// A line with names and a number the pronouncing dictionary lacks is aligned by the
+/// recogniser all the same (their phones as eSpeak NG says them), not sent whole to alignment
+/// by synthesis, which times a natural voice less closely.
+#[test]
+fn names_and_numbers_the_dictionary_lacks_are_aligned_by_the_recogniser() {
+    let line = "Thorvald pumped water for Mireth and 12 of his men.";
+    let wav = std::env::temp_dir().join(format!("faceanim-names-{}.wav", std::process::id()));
+    let said = flite("awb", line, &wav);
+    let sound = Sound::read(&wav).unwrap();
+    let _ = std::fs::remove_file(&wav);
+    let reading = faceanim_speech::read(&sound, Some(line), None, Recognition::Words).unwrap();
+    let agreement = agreement_from(&reading.track.sample(100.0), &said, 0.0);
+    eprintln!("agreement {agreement:.3}, {:?}", reading.notes);
+    assert_eq!(
+        reading.recognition,
+        Recognition::Transcript,
+        "{:?}",
+        reading.notes
+    );
+    assert!(
+        says(
+            &reading.notes,
+            &["mireth, 12: said as eSpeak NG says them"]
+        ),
+        "{:?}",
+        reading.notes
+    );
+    assert!(agreement >= 0.85, "{agreement:.3}");
+}
