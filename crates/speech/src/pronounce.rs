@@ -7,59 +7,25 @@
 //! eSpeak NG pronounces any written English (its rules and its own dictionary, digits read as
 //! numbers): its phones, in IPA, become the recogniser's ARPAbet here.
 
-/// The ARPAbet phones of an eSpeak NG phone (IPA, its stress marks removed), in order.
-fn arpabet(ipa: &str) -> Option<&'static [&'static str]> {
-    Some(match ipa {
-        "p" => &["P"],
-        "b" => &["B"],
-        "t" | "ʔ" => &["T"],
-        "d" => &["D"],
-        // The American flap, a T or a D between vowels: the recogniser's T fits it.
-        "ɾ" => &["T"],
-        "k" | "x" => &["K"],
-        "ɡ" | "g" => &["G"],
-        "m" | "m̩" => &["M"],
-        "n" | "n̩" => &["N"],
-        "ŋ" => &["NG"],
-        "f" => &["F"],
-        "v" => &["V"],
-        "θ" => &["TH"],
-        "ð" => &["DH"],
-        "s" => &["S"],
-        "z" => &["Z"],
-        "ʃ" => &["SH"],
-        "ʒ" => &["ZH"],
-        "h" => &["HH"],
-        "tʃ" => &["CH"],
-        "dʒ" => &["JH"],
-        "l" | "l̩" | "ɫ" | "ɬ" => &["L"],
-        "ɹ" | "r" => &["R"],
-        "j" => &["Y"],
-        "w" | "ʍ" => &["W"],
-        "ɑː" | "ɑ" | "ɒ" | "a" | "aː" => &["AA"],
-        "æ" => &["AE"],
-        "ʌ" | "ə" | "ɐ" => &["AH"],
-        "ɔː" | "ɔ" => &["AO"],
-        "aʊ" => &["AW"],
-        "aɪ" => &["AY"],
-        "ɛ" | "e" => &["EH"],
-        "ɜː" | "ɜ" | "ɚ" | "ɝ" => &["ER"],
-        "eɪ" => &["EY"],
-        "ɪ" | "ᵻ" | "ɨ" => &["IH"],
-        "iː" | "i" => &["IY"],
-        "oʊ" | "o" | "oː" | "əʊ" => &["OW"],
-        "ɔɪ" => &["OY"],
-        "ʊ" => &["UH"],
-        "uː" | "u" => &["UW"],
-        "ɑːɹ" | "ɑɹ" => &["AA", "R"],
-        "ɔːɹ" | "oːɹ" | "ɔɹ" | "oɹ" => &["AO", "R"],
-        "ɛɹ" | "eɹ" | "ɛə" => &["EH", "R"],
-        "ɪɹ" | "iɹ" | "ɪə" | "iə" => &["IH", "R"],
-        "ʊɹ" | "ʊə" => &["UH", "R"],
-        "aɪɚ" | "aɪə" => &["AY", "ER"],
-        "aʊɚ" | "aʊə" => &["AW", "ER"],
-        "əl" => &["AH", "L"],
-        _ => return None,
+/// eSpeak NG's phones (IPA, stress marks removed) and the ARPAbet phones each is, in order:
+/// `said … : phones …`, entries parted by `;`. The American flap (`ɾ`, a T or a D
+/// between vowels) is the recogniser's T, which fits it.
+const ARPABET: &str = "\
+p : P ; b : B ; t ʔ : T ; d : D ; ɾ : T ; k x : K ; ɡ g : G ; m m̩ : M ; n n̩ : N ; ŋ : NG ;\
+f : F ; v : V ; θ : TH ; ð : DH ; s : S ; z : Z ; ʃ : SH ; ʒ : ZH ; h : HH ; tʃ : CH ;\
+dʒ : JH ; l l̩ ɫ ɬ : L ; ɹ r : R ; j : Y ; w ʍ : W ; ɑː ɑ ɒ a aː : AA ; æ : AE ;\
+ʌ ə ɐ : AH ; ɔː ɔ : AO ; aʊ : AW ; aɪ : AY ; ɛ e : EH ; ɜː ɜ ɚ ɝ : ER ; eɪ : EY ;\
+ɪ ᵻ ɨ : IH ; iː i : IY ; oʊ o oː əʊ : OW ; ɔɪ : OY ; ʊ : UH ; uː u : UW ; ɑːɹ ɑɹ : AA R ;\
+ɔːɹ oːɹ ɔɹ oɹ : AO R ; ɛɹ eɹ ɛə : EH R ; ɪɹ iɹ ɪə iə : IH R ; ʊɹ ʊə : UH R ;\
+aɪɚ aɪə : AY ER ; aʊɚ aʊə : AW ER ; əl : AH L";
+
+/// The ARPAbet phones of an eSpeak NG phone ([`ARPABET`]).
+fn arpabet(ipa: &str) -> Option<Vec<&'static str>> {
+    ARPABET.split(';').find_map(|entry| {
+        let (said, phones) = entry.split_once(':')?;
+        said.split_whitespace()
+            .any(|s| s == ipa)
+            .then(|| phones.split_whitespace().collect())
     })
 }
 
@@ -78,7 +44,7 @@ pub fn english(word: &str) -> Option<Vec<String>> {
             .chars()
             .filter(|c| !matches!(c, 'ˈ' | 'ˌ'))
             .collect();
-        phones.extend(arpabet(&bare)?.iter().map(|p| (*p).to_owned()));
+        phones.extend(arpabet(&bare)?.into_iter().map(str::to_owned));
     }
     (!phones.is_empty()).then_some(phones)
 }
@@ -120,5 +86,10 @@ mod tests {
             assert!(arpabet(ipa).is_some(), "{ipa}");
         }
         assert_eq!(arpabet("ʁ"), None);
+        // Entries either side of the table's line breaks stay apart.
+        assert_eq!(arpabet("ŋ").unwrap(), ["NG"]);
+        assert_eq!(arpabet("f").unwrap(), ["F"]);
+        assert_eq!(arpabet("əl").unwrap(), ["AH", "L"]);
+        assert_eq!(arpabet("ɑːɹ").unwrap(), ["AA", "R"]);
     }
 }

@@ -483,10 +483,7 @@ fn names_and_numbers_the_dictionary_lacks_are_aligned_by_the_recogniser() {
         reading.notes
     );
     assert!(
-        says(
-            &reading.notes,
-            &["mireth, 12: said as eSpeak NG says them"]
-        ),
+        says(&reading.notes, &["mireth, 12: said as eSpeak NG says them"]),
         "{:?}",
         reading.notes
     );
