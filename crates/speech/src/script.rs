@@ -130,7 +130,8 @@ fn unbracketed(line: &str, left_out: &mut Vec<String>) -> String {
 }
 
 /// `line` without a speaker's name in capitals and its colon at its start (`NARRATOR:`,
-/// `DR. JONES:`), pushed onto `left_out`.
+/// `DR. JONES:`), pushed onto `left_out`; three letters at least, so that a line that starts
+/// `OK:` keeps it.
 fn unnamed<'a>(line: &'a str, left_out: &mut Vec<String>) -> &'a str {
     let start = line.len() - line.trim_start().len();
     let Some(colon) = line[start..].find(':') else {
@@ -138,7 +139,7 @@ fn unnamed<'a>(line: &'a str, left_out: &mut Vec<String>) -> &'a str {
     };
     let name = &line[start..start + colon];
     let letters = name.chars().filter(|c| c.is_alphabetic()).count();
-    let named = letters >= 2
+    let named = letters >= 3
         && name.chars().count() <= LONGEST_NAME
         && name.chars().all(|c| {
             c.is_uppercase() || c.is_ascii_digit() || c.is_whitespace() || ".'-_".contains(c)
@@ -192,6 +193,7 @@ mod tests {
             "Mama made my bed before breakfast.",
             "Note: the numbers 1 2 3 are said (all of them) — and 2 < 3.",
             "I: me, myself",
+            "OK: let's go.",
             "妈妈骂马吗？",
             "42",
         ] {
