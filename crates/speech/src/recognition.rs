@@ -21,8 +21,9 @@ pub fn is_english(language: &str) -> bool {
 /// The phones of `sound` in `language` (an eSpeak NG voice name: `en-us`, `es`, `ja`, …;
 /// [`ENGLISH`] when `None`).
 ///
-/// With `transcript`, its words are never thrown away: an English line is aligned by the
-/// recogniser (its words in the pronouncing dictionary, in order) unless its voice follows the
+/// With `transcript` (what it says aloud: [`crate::script`]), its words are never thrown
+/// away: an English line is aligned by the recogniser (its words in the pronouncing
+/// dictionary, in order; one it lacks as eSpeak NG says it, [`crate::pronounce`]) unless its voice follows the
 /// synthesiser's own rendition sharply (a synthesiser's voice of eSpeak NG's kind); that line,
 /// a line the recogniser cannot align, or one in another language, is aligned by synthesis
 /// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
