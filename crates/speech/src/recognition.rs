@@ -264,13 +264,15 @@ pub fn recognise_loaded(
         notes.extend(spoken.note());
         let text = spoken.text.as_str();
         let words = phones::transcript_words(text, sound.seconds())?;
-        let synthesis = || match crate::synthesis::timed_by_synthesis(sound, text, language) {
-            Ok(timed) if !timed.phones.is_empty() => Ok(timed),
-            Ok(_) => Err("the transcript could not be aligned by synthesis".to_owned()),
-            Err(e) => Err(format!(
-                "the transcript could not be aligned by synthesis ({e})"
-            )),
-        };
+        let voiced = sound.voice_activity();
+        let synthesis =
+            || match crate::synthesis::timed_by_synthesis(sound, &voiced, text, language) {
+                Ok(timed) if !timed.phones.is_empty() => Ok(timed),
+                Ok(_) => Err("the transcript could not be aligned by synthesis".to_owned()),
+                Err(e) => Err(format!(
+                    "the transcript could not be aligned by synthesis ({e})"
+                )),
+            };
         let english = is_english(language);
         // Timed by synthesis first (a few hundredths of the line's time): a voice the
         // synthesiser's own rendition follows sharply is timed by it; any other English line
@@ -307,7 +309,6 @@ pub fn recognise_loaded(
                                 if pronounced.len() == 1 { "it" } else { "them" }
                             ));
                         }
-                        let voiced = sound.voice_activity();
                         let phones = phones::voiced_pauses(phones, &voiced);
                         let told = notes.len();
                         let phones = unsaid_recognised(
@@ -336,7 +337,6 @@ pub fn recognise_loaded(
                     "how many times the rendition's voice the recording holds"
                 );
                 notes.extend(mismatch(timed.voice_ratio));
-                let voiced = sound.voice_activity();
                 let phones = unsaid_recognised(
                     sound,
                     timed.phones,

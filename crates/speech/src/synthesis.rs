@@ -37,7 +37,7 @@ const PAUSE_SECONDS: f32 = 0.15;
 /// [`PhoneError::Synthesis`] when eSpeak NG is missing or does not know the language,
 /// [`PhoneError::TooLongToAlign`] for a recording too long to warp at once.
 pub fn align(sound: &Sound, text: &str, language: &str) -> Result<Vec<Phone>, PhoneError> {
-    timed_by_synthesis(sound, text, language).map(|t| t.phones)
+    timed_by_synthesis(sound, &sound.voice_activity(), text, language).map(|t| t.phones)
 }
 
 /// A transcript's phones timed by synthesis ([`align`]), and how sharply the synthesiser's
@@ -55,9 +55,11 @@ pub(crate) struct Timed {
     pub(crate) voice_ratio: f32,
 }
 
-/// [`align`], with the warping's [`sharpness`].
+/// [`align`], with the warping's [`sharpness`]; `voiced` is `sound`'s
+/// [`Sound::voice_activity`].
 pub(crate) fn timed_by_synthesis(
     sound: &Sound,
+    voiced: &[bool],
     text: &str,
     language: &str,
 ) -> Result<Timed, PhoneError> {
@@ -105,12 +107,11 @@ pub(crate) fn timed_by_synthesis(
         time_of(a0 + first[j])
     };
     let phones = timed(&spoken, sound.seconds(), on_recording);
-    let voiced = sound.voice_activity();
     let heard = |voiced: &[bool]| voiced.iter().filter(|&&v| v).count() as f32;
     let voice_ratio =
-        heard(&voiced) / heard(&Sound { samples: synthetic }.voice_activity()).max(1.0);
+        heard(voiced) / heard(&Sound { samples: synthetic }.voice_activity()).max(1.0);
     Ok(Timed {
-        phones: carve_pauses(phones, &voiced),
+        phones: carve_pauses(phones, voiced),
         sharpness,
         voice_ratio,
     })
