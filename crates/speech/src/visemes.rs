@@ -204,7 +204,8 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
     // How long a phone is quiet, seconds.
     let quiet = |p: &Phone| p.frames(voiced).iter().filter(|v| !**v).count() as f32 / 100.0;
     // A consonant is often quiet itself — the lips of a P held shut, the hold of a T — and is
-    // said when a sound beside it is heard.
+    // said when a sound beside it is heard: a phone, or a voice the recogniser heard as
+    // silence (mouthed below; a closure found inside such a silence lies between two).
     let said = |k: usize| {
         let p = &phones[k];
         let viseme = viseme_of(&p.label);
@@ -212,11 +213,8 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
             || (viseme != Viseme::Sil
                 && !is_vowel(viseme)
                 && quiet(p) <= CLOSURE
-                && (k.checked_sub(1).is_some_and(|j| {
-                    heard(&phones[j]) && viseme_of(&phones[j].label) != Viseme::Sil
-                }) || phones
-                    .get(k + 1)
-                    .is_some_and(|n| heard(n) && viseme_of(&n.label) != Viseme::Sil)))
+                && (k.checked_sub(1).is_some_and(|j| heard(&phones[j]))
+                    || phones.get(k + 1).is_some_and(heard)))
     };
     let mut runs: Vec<(Viseme, f32, f32)> = Vec::new();
     let mut extend = |viseme: Viseme, start: f32, end: f32| {
@@ -441,6 +439,21 @@ mod tests {
             "{:?}",
             track.keys
         );
+    }
+
+    #[test]
+    fn a_closure_inside_a_voice_heard_as_silence_closes_the_lips() {
+        // "…p…" the recogniser heard as one silence, a P's closure found inside it (quiet,
+        // 0.45–0.51 s) between two stretches of voice.
+        let phones = phones("AA 0 0.3, SIL 0.3 0.45, P 0.45 0.51, SIL 0.51 0.65, AA 0.65 1");
+        let voiced: Vec<bool> = (0..100).map(|f| !(45..51).contains(&f)).collect();
+        let track = track(&phones, &voiced, 1.0);
+        let pp = index(Viseme::PP);
+        assert!(track.weights_at(0.49)[pp] > 0.9, "{:?}", track.keys);
+        // The same quiet between two silences that are quiet too is a pause, not a P.
+        let quiet: Vec<bool> = (0..100).map(|f| !(30..65).contains(&f)).collect();
+        let paused = super::track(&phones, &quiet, 1.0);
+        assert!(paused.weights_at(0.49)[pp] < 0.1, "{:?}", paused.keys);
     }
 
     #[test]
