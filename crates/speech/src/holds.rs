@@ -20,6 +20,10 @@
 //! where the lips can be shut: it is quiet above 1 kHz (a stop's closure), or its sound is a
 //! nasal murmur (an M: its energy under 300 Hz, the nasal resonance; an L's, a W's or a
 //! vowel's first formant lies above it — Mermelstein, 1977).
+//!
+//! Some voices' stops, and the sounds between them, are heard as one longer silence ("big
+//! purple", "map to"): such a silence is searched for its closures, runs of frames as quiet as
+//! a stop's, and each the lips release becomes a P inside it.
 
 use crate::audio::{SAMPLE_RATE, Sound};
 use crate::phones::Phone;
