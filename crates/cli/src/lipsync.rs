@@ -116,6 +116,15 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         None => MouthTable::default(),
     };
     let transcript = args.text.as_deref().map(transcript).transpose()?;
+    // A character or adapter named by a path that is not there is refused before the speech
+    // is read: the character loads beside the recognition, whose hour of speech would
+    // otherwise be heard first.
+    for path in [args.character.as_deref(), args.adapter.as_deref()]
+        .into_iter()
+        .flatten()
+    {
+        std::fs::metadata(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    }
     let started = Instant::now();
     // The character loads while the speech is read: neither needs the other until the
     // visemes are put on the mouth.

@@ -655,6 +655,26 @@ fn silence_and_noise_keep_the_mouth_closed_and_bad_files_are_named() {
         assert!(stderr.contains(says), "{}: {stderr}", file.display());
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
+    // A character or an adapter that is not there is named before any speech is heard.
+    for option in ["--character", "--adapter"] {
+        let missing = out.join("missing.glb");
+        let run = faceanim(&[
+            "lipsync",
+            noise.to_str().unwrap(),
+            option,
+            missing.to_str().unwrap(),
+            "--clip",
+            out.join("x.json").to_str().unwrap(),
+            "-v",
+        ]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{option}: {stderr}");
+        assert!(stderr.contains("missing.glb"), "{option}: {stderr}");
+        assert!(
+            !stderr.contains("as the recogniser hears it"),
+            "{option}: the speech was heard first: {stderr}"
+        );
+    }
 }
 
 #[test]
