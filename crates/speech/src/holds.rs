@@ -113,8 +113,8 @@ const MURMUR_DB: f32 = -3.5;
 /// purple": 0.2–0.45 s on eSpeak NG's voices), a longer one is a pause.
 const LONGEST_HELD_SILENCE: f32 = 0.5;
 
-/// A closure found inside a longer silence lasts at least this, seconds (a stop's hold: 40 ms
-/// and more on every tuning voice; a gap of a frame or two is a fricative's edge).
+/// A closure found inside a longer silence lasts at least this, seconds: three 10 ms frames
+/// (a gap of one or two is more likely a fricative's or a vowel's quiet edge than a stop).
 const SHORTEST_CLOSURE: f32 = 0.03;
 
 /// `phones` (recognised without a transcript) with each short silence between two phones
