@@ -160,7 +160,7 @@ struct Line<'a> {
     /// transform is planned once.
     planner: FftPlanner<f32>,
     /// The line's loud level and floor in the hush band, read when a hold first needs them
-    /// ([`loud_and_floor`]).
+    /// ([`Line::levels`]).
     levels: Option<Option<(f32, f32)>>,
 }
 
@@ -192,18 +192,58 @@ impl Line<'_> {
         })
     }
 
-    /// The line's loud level and floor in the hush band.
-    fn levels(&mut self) -> Option<(f32, f32)> {
-        let (sound, warp) = (self.sound, self.warp);
-        *self
-            .levels
-            .get_or_insert_with(|| loud_and_floor(sound, &mut self.planner, warp))
+    /// The level (dB) in the hush band ([`hush_band`]) of each frame from `span`'s start to
+    /// its end, `hop` seconds apart.
+    fn hush_levels(&mut self, span: (f32, f32), hop: f32) -> Vec<f32> {
+        band_levels(
+            self.sound,
+            &mut self.planner,
+            span,
+            hush_band(self.warp),
+            hop,
+        )
     }
 
-    /// Whether the lips may be shut through `hold` (start, end: seconds): see [`shut`].
+    /// The line's loud level and its floor in the hush band (dB; see
+    /// [`HUSHED_UNDER_LOUD_DB`], [`HUSHED_OVER_FLOOR_DB`]), read once; `None` for a line
+    /// shorter than a frame.
+    fn levels(&mut self) -> Option<(f32, f32)> {
+        if let Some(levels) = self.levels {
+            return levels;
+        }
+        let mut levels = self.hush_levels((0.0, self.sound.seconds()), FRAME);
+        levels.sort_by(f32::total_cmp);
+        let at = |percent: usize| levels[(levels.len() * percent / 100).min(levels.len() - 1)];
+        let read = (!levels.is_empty()).then(|| (at(95), at(5)));
+        self.levels = Some(read);
+        read
+    }
+
+    /// Whether the lips may be shut through `hold` (start, end: seconds): hushed above 1 kHz,
+    /// as a stop's closure is, or a nasal murmur (the module's docs).
     fn shut(&mut self, hold: (f32, f32)) -> bool {
-        let levels = self.levels();
-        shut(self.sound, &mut self.planner, hold, self.warp, levels)
+        // Past the sound before the hold: the recogniser's boundary is a frame or so late.
+        let span = (hold.0 + FRAME, hold.1);
+        let quietest = self
+            .hush_levels(span, FRAME / 2.0)
+            .into_iter()
+            .reduce(f32::min);
+        let (Some(quietest), Some((loud, floor))) = (quietest, self.levels()) else {
+            // Too short to tell: as the burst says.
+            return true;
+        };
+        if hushed(quietest, loud, floor) {
+            return true;
+        }
+        let warp = self.warp;
+        let [low, over] = MURMUR_BANDS
+            .map(|(a, b)| band_power(self.sound, &mut self.planner, span, (a * warp, b * warp)));
+        match (low, over) {
+            (Some(low), Some(over)) if low > 0.0 => {
+                10.0 * (over.max(f64::MIN_POSITIVE) / low).log10() < f64::from(MURMUR_DB)
+            }
+            _ => false,
+        }
     }
 
     /// `silence` split at the closures in it: each run of hushed frames from
@@ -214,14 +254,11 @@ impl Line<'_> {
             return vec![silence.clone()];
         };
         let hop = FRAME / 2.0;
-        let levels = band_levels(
-            self.sound,
-            &mut self.planner,
-            (silence.start, silence.end),
-            hush_band(self.warp),
-            hop,
-        );
-        let hushed: Vec<bool> = levels.iter().map(|&l| hushed(l, loud, floor)).collect();
+        let hushed: Vec<bool> = self
+            .hush_levels((silence.start, silence.end), hop)
+            .into_iter()
+            .map(|l| hushed(l, loud, floor))
+            .collect();
         let mut pieces = Vec::new();
         let mut from = silence.start;
         for run in crate::audio::runs(&hushed, true, 1) {
@@ -267,55 +304,6 @@ fn hush_band(warp: f32) -> (f32, f32) {
         HUSH_BAND.0 * warp,
         (HUSH_BAND.1 * warp).min(nyquist - 100.0),
     )
-}
-
-/// The line's loud level and its floor in [`hush_band`] (dB; see [`HUSHED_UNDER_LOUD_DB`],
-/// [`HUSHED_OVER_FLOOR_DB`]), `None` for a line shorter than a frame.
-fn loud_and_floor(sound: &Sound, planner: &mut FftPlanner<f32>, warp: f32) -> Option<(f32, f32)> {
-    let mut levels = band_levels(
-        sound,
-        planner,
-        (0.0, sound.seconds()),
-        hush_band(warp),
-        FRAME,
-    );
-    if levels.is_empty() {
-        return None;
-    }
-    levels.sort_by(f32::total_cmp);
-    let at = |percent: usize| levels[(levels.len() * percent / 100).min(levels.len() - 1)];
-    Some((at(95), at(5)))
-}
-
-/// Whether the lips may be shut through `hold` (start, end: seconds): hushed above 1 kHz, as
-/// a stop's closure is, or a nasal murmur (module docs). `line`: its loud level and floor.
-fn shut(
-    sound: &Sound,
-    planner: &mut FftPlanner<f32>,
-    hold: (f32, f32),
-    warp: f32,
-    line: Option<(f32, f32)>,
-) -> bool {
-    // Past the sound before the hold: the recogniser's boundary is a frame or so late.
-    let span = (hold.0 + FRAME, hold.1);
-    let quietest = band_levels(sound, planner, span, hush_band(warp), FRAME / 2.0)
-        .into_iter()
-        .reduce(f32::min);
-    let (Some(quietest), Some((loud, floor))) = (quietest, line) else {
-        // Too short to tell: as the burst says.
-        return true;
-    };
-    if hushed(quietest, loud, floor) {
-        return true;
-    }
-    let [low, over] =
-        MURMUR_BANDS.map(|(a, b)| band_power(sound, planner, span, (a * warp, b * warp)));
-    match (low, over) {
-        (Some(low), Some(over)) if low > 0.0 => {
-            10.0 * (over.max(f64::MIN_POSITIVE) / low).log10() < f64::from(MURMUR_DB)
-        }
-        _ => false,
-    }
 }
 
 /// Whether a frame at `level` (dB, in the hush band) is as quiet as a closure in a line whose
