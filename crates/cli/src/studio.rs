@@ -92,7 +92,7 @@ pub(crate) fn run(args: StudioArgs) -> anyhow::Result<()> {
         .enable_all()
         .build()
         .context("starting the server runtime")?;
-    runtime.block_on(async move {
+    let served = runtime.block_on(async move {
         let (listener, address) = faceanim_studio::bind(port).await?;
         let url = format!("http://{address}/");
         outln!(
@@ -121,5 +121,9 @@ pub(crate) fn run(args: StudioArgs) -> anyhow::Result<()> {
         )
         .await?;
         anyhow::Ok(())
-    })
+    });
+    // Stopped (Ctrl-C, SIGTERM): its scratch folder is gone and its work saved; work still on
+    // the runtime's blocking threads (a recording being heard) is not waited for.
+    runtime.shutdown_background();
+    served
 }

@@ -339,9 +339,34 @@ fn a_take_and_its_corrections_survive_closing_the_studio() {
     support::encode_h264(&video, 256, 24, &support::ict_jaw_frames(&jaw, 256));
     let project = dir.path().join("take.faceanim.json");
     let json = [("Content-Type", "application/json")];
-    let studio = start(&project);
+    // The studio's own temporary folder, holding what a studio killed outright left: its
+    // scratch folder, with a recording, whose lock no process holds.
+    let temp = dir.path().join("tmp");
+    let left = temp.join("faceanim-studio-left");
+    std::fs::create_dir_all(&left).unwrap();
+    std::fs::write(left.join("running.lock"), b"").unwrap();
+    std::fs::write(left.join("microphone.wav"), b"RIFF").unwrap();
+    let mut studio = support::start_on_env(
+        Some(&faceanim_testdata::shared("characters/ict-face.glb")),
+        &project,
+        &[],
+        &[("TMPDIR", temp.as_os_str())],
+    );
     let state = open_and_settle(studio.port, &video);
     assert_eq!(state["take"]["frames"], 12, "{}", state["job"]);
+    // Swept before the studio answered anything.
+    assert!(!left.exists(), "a killed studio's scratch folder was kept");
+    // The frames' previews are in the studio's scratch folder, the only thing it made there.
+    let made: Vec<_> = std::fs::read_dir(&temp).unwrap().flatten().collect();
+    assert_eq!(made.len(), 1, "{made:?}");
+    assert!(
+        made[0]
+            .file_name()
+            .to_string_lossy()
+            .starts_with("faceanim-studio-")
+            && std::fs::read_dir(made[0].path()).unwrap().count() >= 2,
+        "{made:?}"
+    );
     let (status, body) = request(
         studio.port,
         "POST",
@@ -370,6 +395,12 @@ fn a_take_and_its_corrections_survive_closing_the_studio() {
         state["take"]["corrections"]["5"].is_null(),
         "one undo takes both sides back: {body}"
     );
+    // Stopped as Ctrl-C or a service manager stops it, the studio ends cleanly and takes its
+    // scratch folder (the previews, any upload or recording) with it.
+    let stopped = studio.stop();
+    assert!(stopped.is_some_and(|s| s.success()), "{stopped:?}");
+    let kept: Vec<_> = std::fs::read_dir(&temp).unwrap().flatten().collect();
+    assert!(kept.is_empty(), "the stopped studio left {kept:?}");
     drop(studio);
 
     // A new studio on the same project reopens the take with the correction.

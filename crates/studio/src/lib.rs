@@ -14,8 +14,9 @@
 //! own are refused (a web page elsewhere cannot drive it through DNS rebinding); request bodies
 //! are size-limited; it writes only the project file it was started with (and its autosave
 //! beside it), the take being captured (`.NAME.take.json` beside it), the character's adapter and
-//! its cached training set (uploaded inputs go to a private temporary folder removed on exit) —
-//! exports are downloads the browser saves.
+//! its cached training set (uploads, recordings and previews go to a private temporary folder,
+//! [`scratch`], removed when the studio stops — Ctrl-C and SIGTERM stop it) — exports are
+//! downloads the browser saves.
 #![deny(missing_docs)]
 
 mod api;
@@ -23,6 +24,7 @@ pub mod capture;
 mod capture_api;
 pub mod error;
 mod http;
+pub mod scratch;
 mod state;
 pub mod views;
 
@@ -80,6 +82,9 @@ pub enum StudioError {
     /// The server stopped with an error.
     #[error("server: {0}")]
     Serve(std::io::Error),
+    /// The studio's private temporary folder could not be made.
+    #[error("making the studio's temporary folder: {0}")]
+    Scratch(std::io::Error),
 }
 
 /// Binds 127.0.0.1:`port` (0 picks a free port) and returns the listener with its address.
@@ -116,6 +121,7 @@ pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<
             tracing::info!("removed {}, a save that was interrupted", stale.display());
         }
     }
+    let scratch = scratch::Scratch::open().map_err(StudioError::Scratch)?;
     let take_path = state::take_autosave_path(&config.project_path);
     let visemes_path = state::visemes_path(&config.project_path);
     let studio =
@@ -142,5 +148,52 @@ pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<
             tracing::debug!("TCP_NODELAY could not be set: {e}");
         }
     });
-    axum::serve(listener, app).await.map_err(StudioError::Serve)
+    let stopping = Arc::new(tokio::sync::Notify::new());
+    let stop = {
+        let stopping = stopping.clone();
+        async move {
+            stop_asked().await;
+            stopping.notify_one();
+        }
+    };
+    let server = axum::serve(listener, app).with_graceful_shutdown(stop);
+    tokio::select! {
+        served = server => served.map_err(StudioError::Serve)?,
+        () = async {
+            stopping.notified().await;
+            tokio::time::sleep(GRACE).await;
+        } => tracing::warn!("requests still running {} s after the stop were cut short", GRACE.as_secs()),
+    }
+    drop(scratch);
+    tracing::info!("the studio stopped; its scratch folder is removed");
+    Ok(())
+}
+
+/// How long requests under way when the studio is asked to stop may take to finish.
+const GRACE: std::time::Duration = std::time::Duration::from_secs(3);
+
+/// Waits until the studio is asked to stop: Ctrl-C, or (on Unix) SIGTERM, as a service
+/// manager or `kill` sends. Either lets the studio remove its scratch folder on the way out.
+async fn stop_asked() {
+    let interrupt = async {
+        if tokio::signal::ctrl_c().await.is_err() {
+            std::future::pending::<()>().await;
+        }
+    };
+    #[cfg(unix)]
+    let terminate = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut signal) => {
+                signal.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let terminate = std::future::pending::<()>();
+    tokio::select! {
+        () = interrupt => {},
+        () = terminate => {},
+    }
+    tracing::info!("stopping the studio");
 }

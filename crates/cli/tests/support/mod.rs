@@ -496,16 +496,38 @@ pub fn free_udp_port() -> u16 {
         .port()
 }
 
-/// A running studio, stopped when dropped.
+/// A running studio, stopped when dropped (as [`Studio::stop`] stops it).
 pub struct Studio {
     pub child: Child,
     pub port: u16,
 }
 
-impl Drop for Studio {
-    fn drop(&mut self) {
+impl Studio {
+    /// Asks the studio to stop as a service manager or `kill` does (SIGTERM) and waits for it
+    /// to end; one still running after 10 s is killed. How it ended (`None` when killed).
+    pub fn stop(&mut self) -> Option<std::process::ExitStatus> {
+        if let Ok(Some(status)) = self.child.try_wait() {
+            return Some(status);
+        }
+        let _ = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status();
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+        while std::time::Instant::now() < deadline {
+            if let Ok(Some(status)) = self.child.try_wait() {
+                return Some(status);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
         let _ = self.child.kill();
         let _ = self.child.wait();
+        None
+    }
+}
+
+impl Drop for Studio {
+    fn drop(&mut self) {
+        self.stop();
     }
 }
 
@@ -515,12 +537,23 @@ pub fn start_on(
     project: &std::path::Path,
     more: &[&std::ffi::OsStr],
 ) -> Studio {
+    start_on_env(character, project, more, &[])
+}
+
+/// [`start_on`], with environment variables `env` set for the studio.
+pub fn start_on_env(
+    character: Option<&std::path::Path>,
+    project: &std::path::Path,
+    more: &[&std::ffi::OsStr],
+    env: &[(&str, &std::ffi::OsStr)],
+) -> Studio {
     let mut child = Command::new(env!("CARGO_BIN_EXE_faceanim"))
         .arg("studio")
         .args(character)
         .args(["--port", "0", "--project"])
         .arg(project)
         .args(more)
+        .envs(env.iter().copied())
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()

@@ -167,13 +167,10 @@ pub(super) fn private_dir<'a>(
 ) -> Result<&'a std::path::Path, ApiError> {
     let dir = match slot.take() {
         Some(dir) => dir,
-        None => tempfile::Builder::new()
-            .prefix(prefix)
-            .tempdir()
-            .map_err(|source| ApiError::Scratch {
-                what: format!("making a folder for {what}"),
-                source,
-            })?,
+        None => crate::scratch::private_dir(prefix).map_err(|source| ApiError::Scratch {
+            what: format!("making a folder for {what}"),
+            source,
+        })?,
     };
     Ok(slot.insert(dir).path())
 }
