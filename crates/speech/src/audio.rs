@@ -1,18 +1,20 @@
 //! Speech as the recogniser wants it: 16 kHz, mono, 16-bit.
 //!
-//! A WAV file in 8-, 16-, 24- or 32-bit PCM or 32-bit float, of any channels, recorded at
-//! 16 kHz or more (what recorders, TTS voices and editors write) is read here: its channels
-//! mixed and resampled by band-limited interpolation ([`resample`]), with no other program on
-//! any platform and no process started (about a tenth of a second of a short line's command).
-//! Anything else — MP3, Ogg, FLAC, the sound of a video, a WAV in another encoding — is
-//! converted by the `ffmpeg` program, and so is a WAV below 16 kHz (a telephone line's 8 kHz)
-//! where ffmpeg is installed, else it too is resampled here. How each was chosen, on
-//! `scripts/bench-lipsync.py`'s lines: from 22,050 Hz (eSpeak NG's m3, f2 and whisperf, clean
-//! and in a noisy room) the recogniser reads the same viseme classes from either conversion
-//! (agreement within ±0.01 with the transcript and ±0.025 without, and half the command's time
-//! with the transcript: 0.04× real time against 0.08–0.09×); from 8 kHz (flite's kal),
-//! ffmpeg's conversion read 0.80 of the classes without the transcript and [`resample`]'s
-//! 0.77–0.80 (a decision or two of a recogniser that is sensitive to the least change).
+//! A WAV file in 8-, 16-, 24- or 32-bit PCM or 32-bit float, of any channels and any rate
+//! (what recorders, TTS voices, editors and telephone systems write) is read here: its
+//! channels mixed and resampled by band-limited interpolation ([`resample`]), with no other
+//! program on any platform and no process started. Anything else — MP3, Ogg, FLAC, the sound
+//! of a video, a WAV in another encoding — is converted by the `ffmpeg` program. How each was
+//! chosen, on `scripts/bench-lipsync.py`'s lines: from 22,050 Hz (eSpeak NG's m3, f2 and
+//! whisperf, clean and in a noisy room) the recogniser reads the same viseme classes from
+//! either conversion (agreement within ±0.01 with the transcript and ±0.025 without, and half
+//! the command's time with the transcript: 0.04× real time against 0.08–0.09×). From 8 kHz
+//! (the bench's telephone effect on flite's slt, rms and awb and eSpeak NG's en-us, m1, m3, m7
+//! and whisperf) the classes read without the transcript differ by a decision or two of a
+//! recogniser sensitive to the least change, neither way better (mean agreement 0.663 from
+//! ffmpeg's conversion, 0.659 from [`resample`]; lips closed for 181 and 183 of 232 P, B and
+//! M), while starting ffmpeg cost 0.06–0.08 s of every line's command (on a Harvard
+//! sentence, 0.03× of its real time).
 //!
 //! Errors name the file and what is wrong with it: not audio, no sound in it, longer than
 //! [`MAX_SECONDS`].
@@ -95,7 +97,7 @@ impl Sound {
         if metadata.len() == 0 {
             return Err(AudioError::Empty(path.to_owned()));
         }
-        let sound = match read_wav(path, Resampling::Down).map_err(bad)? {
+        let sound = match read_wav(path).map_err(bad)? {
             Wav::Plain(sound) => sound,
             Wav::Other(header) => {
                 header.check().map_err(bad)?;
@@ -105,17 +107,8 @@ impl Sound {
                         seconds: header.seconds() as f32,
                     });
                 }
-                // ffmpeg where it is installed (see the module's docs); where it is not, a PCM
-                // or float WAV of a lower rate is resampled here too.
-                match convert(path) {
-                    Err(AudioError::NoFfmpeg(_)) => {
-                        match read_wav(path, Resampling::Any).map_err(bad)? {
-                            Wav::Plain(sound) => sound,
-                            _ => return Err(AudioError::NoFfmpeg(path.to_owned())),
-                        }
-                    }
-                    converted => converted?,
-                }
+                // An encoding not read here (µ-law, ADPCM, …): ffmpeg's.
+                convert(path)?
             }
             Wav::Elsewhere => convert(path)?,
         };
@@ -374,19 +367,10 @@ impl WavHeader {
     }
 }
 
-/// Which PCM and float WAVs [`read_wav`] resamples itself (see the module's docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Resampling {
-    /// Those recorded at 16 kHz or more; a lower rate is left to the `ffmpeg` program.
-    Down,
-    /// Every one.
-    Any,
-}
-
 /// Reads `path`'s WAV header: a canonical 16 kHz mono 16-bit PCM WAV is read whole here, and
-/// any other PCM or float WAV that `resampling` allows is mixed to mono and resampled to
-/// 16 kHz here; an error for a WAV that is cut short or lacks its format.
-fn read_wav(path: &Path, resampling: Resampling) -> Result<Wav, String> {
+/// any other PCM or float WAV is mixed to mono and resampled to 16 kHz here; an error for a
+/// WAV that is cut short or lacks its format.
+fn read_wav(path: &Path) -> Result<Wav, String> {
     // The header first: an MP3 or a video is left to ffmpeg without being read here.
     let mut header = [0u8; 12];
     let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
@@ -458,9 +442,7 @@ fn read_wav(path: &Path, resampling: Resampling) -> Result<Wav, String> {
             let encoding = Encoding::of(tag, bits);
             match (encoding, data) {
                 (Some(encoding), Some(data))
-                    if (resampling == Resampling::Any || rate >= SAMPLE_RATE)
-                        && header.check().is_ok()
-                        && header.seconds() <= f64::from(MAX_SECONDS) =>
+                    if header.check().is_ok() && header.seconds() <= f64::from(MAX_SECONDS) =>
                 {
                     let mono = mixed(data, encoding, usize::from(channels));
                     Ok(Wav::Plain(Sound {
@@ -939,7 +921,7 @@ mod tests {
 
     /// `path` read as it is without ffmpeg.
     fn here(path: &Path) -> Sound {
-        match read_wav(path, Resampling::Any) {
+        match read_wav(path) {
             Ok(Wav::Plain(sound)) => sound,
             _ => panic!("{} is not read here", path.display()),
         }
@@ -973,33 +955,25 @@ mod tests {
         }
     }
 
-    /// A WAV recorded at 16 kHz or more is resampled here, whether or not ffmpeg is installed;
-    /// one below 16 kHz is left to ffmpeg where it is (see the module's docs).
+    /// Every PCM or float WAV is resampled here, whatever its rate (no ffmpeg process is
+    /// started for it).
     #[test]
-    fn wavs_from_16_khz_up_are_resampled_here_and_lower_ones_left_to_ffmpeg() {
+    fn wavs_of_every_rate_are_resampled_here() {
         let dir = tempfile::tempdir().unwrap();
-        for (rate, tag, bits, here) in [
-            (22_050, 1, 16, true),
-            (44_100, 1, 24, true),
-            (48_000, 3, 32, true),
-            (16_000, 1, 24, true),
-            (8_000, 1, 16, false),
-            (11_025, 1, 8, false),
+        for (rate, tag, bits) in [
+            (22_050, 1, 16),
+            (44_100, 1, 24),
+            (48_000, 3, 32),
+            (16_000, 1, 24),
+            (8_000, 1, 16),
+            (11_025, 1, 8),
         ] {
             let tone = tone(440.0, rate, 0.5, 0.5);
             let frames: Vec<Vec<f32>> = tone.iter().map(|&v| vec![v, v]).collect();
             let path = dir.path().join(format!("{rate}.wav"));
             std::fs::write(&path, encoded(&frames, rate, tag, bits)).unwrap();
-            let read = read_wav(&path, Resampling::Down).unwrap();
-            assert_eq!(
-                matches!(read, Wav::Plain(_)),
-                here,
-                "{rate} Hz, {bits} bits"
-            );
-            assert!(matches!(
-                read_wav(&path, Resampling::Any).unwrap(),
-                Wav::Plain(_)
-            ));
+            let read = read_wav(&path).unwrap();
+            assert!(matches!(read, Wav::Plain(_)), "{rate} Hz, {bits} bits");
         }
     }
 
