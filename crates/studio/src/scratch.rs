@@ -40,8 +40,8 @@ pub struct Scratch {
 }
 
 impl Scratch {
-    /// Removes the folders of studios that are gone ([`sweep`]), then makes this studio's
-    /// and makes it the one [`private_dir`] makes folders in.
+    /// Removes the folders of studios that are gone, then makes this studio's, the one every
+    /// upload's, recording's and preview's folder is made in from now on.
     ///
     /// # Errors
     /// The file error, naming what could not be made.
@@ -88,7 +88,7 @@ fn root() -> std::sync::MutexGuard<'static, Option<PathBuf>> {
 ///
 /// # Errors
 /// The file error.
-pub fn private_dir(prefix: &str) -> Result<tempfile::TempDir, std::io::Error> {
+pub(crate) fn private_dir(prefix: &str) -> Result<tempfile::TempDir, std::io::Error> {
     let mut builder = tempfile::Builder::new();
     builder.prefix(prefix);
     match root().clone() {
@@ -100,7 +100,7 @@ pub fn private_dir(prefix: &str) -> Result<tempfile::TempDir, std::io::Error> {
 /// Removes the studio folders in `temp` that no running studio holds; the folders removed.
 /// One whose lock cannot be read is left alone, and so is one without a lock file that
 /// changed within [`MAKING`].
-pub fn sweep(temp: &Path) -> Vec<PathBuf> {
+pub(crate) fn sweep(temp: &Path) -> Vec<PathBuf> {
     let Ok(entries) = std::fs::read_dir(temp) else {
         return Vec::new();
     };
