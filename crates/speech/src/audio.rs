@@ -955,28 +955,7 @@ mod tests {
         }
     }
 
-    /// Every PCM or float WAV is resampled here, whatever its rate (no ffmpeg process is
-    /// started for it).
-    #[test]
-    fn wavs_of_every_rate_are_resampled_here() {
-        let dir = tempfile::tempdir().unwrap();
-        for (rate, tag, bits) in [
-            (22_050, 1, 16),
-            (44_100, 1, 24),
-            (48_000, 3, 32),
-            (16_000, 1, 24),
-            (8_000, 1, 16),
-            (11_025, 1, 8),
-        ] {
-            let tone = tone(440.0, rate, 0.5, 0.5);
-            let frames: Vec<Vec<f32>> = tone.iter().map(|&v| vec![v, v]).collect();
-            let path = dir.path().join(format!("{rate}.wav"));
-            std::fs::write(&path, encoded(&frames, rate, tag, bits)).unwrap();
-            let read = read_wav(&path).unwrap();
-            assert!(matches!(read, Wav::Plain(_)), "{rate} Hz, {bits} bits");
-        }
-    }
-
+    /// Every PCM or float WAV is read here (no ffmpeg process is started for it).
     #[test]
     fn wavs_of_any_rate_channels_and_sample_size_are_read_at_16_khz_without_aliasing() {
         let dir = tempfile::tempdir().unwrap();
@@ -986,6 +965,8 @@ mod tests {
             (44_100, 1, 16),
             (48_000, 3, 32),
             (22_050, 1, 24),
+            (16_000, 1, 24),
+            (11_025, 1, 16),
             (8_000, 1, 8),
             (96_000, 1, 32),
         ] {
