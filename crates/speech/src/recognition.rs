@@ -265,15 +265,18 @@ pub fn recognise_loaded(
         let text = spoken.text.as_str();
         let words = phones::transcript_words(text, sound.seconds())?;
         let voiced = sound.voice_activity();
-        let synthesis =
-            || match crate::synthesis::timed_by_synthesis(sound, &voiced, text, language) {
-                Ok(timed) if !timed.phones.is_empty() => Ok(timed),
-                Ok(_) => Err("the transcript could not be aligned by synthesis".to_owned()),
-                Err(e) => Err(format!(
-                    "the transcript could not be aligned by synthesis ({e})"
-                )),
-            };
         let english = is_english(language);
+        // How sharply the voice follows a synthesiser's is asked of English lines only (the
+        // others are timed by synthesis whatever it is).
+        let synthesis = || match crate::synthesis::timed_by_synthesis(
+            sound, &voiced, text, language, english,
+        ) {
+            Ok(timed) if !timed.phones.is_empty() => Ok(timed),
+            Ok(_) => Err("the transcript could not be aligned by synthesis".to_owned()),
+            Err(e) => Err(format!(
+                "the transcript could not be aligned by synthesis ({e})"
+            )),
+        };
         // Timed by synthesis first (a few hundredths of the line's time): a voice the
         // synthesiser's own rendition follows sharply is timed by it; any other English line
         // by the recogniser, and by synthesis where the recogniser cannot align it.

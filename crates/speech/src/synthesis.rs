@@ -37,7 +37,7 @@ const PAUSE_SECONDS: f32 = 0.15;
 /// [`PhoneError::Synthesis`] when eSpeak NG is missing or does not know the language,
 /// [`PhoneError::TooLongToAlign`] for a recording too long to warp at once.
 pub fn align(sound: &Sound, text: &str, language: &str) -> Result<Vec<Phone>, PhoneError> {
-    timed_by_synthesis(sound, &sound.voice_activity(), text, language).map(|t| t.phones)
+    timed_by_synthesis(sound, &sound.voice_activity(), text, language, false).map(|t| t.phones)
 }
 
 /// A transcript's phones timed by synthesis ([`align`]), and how sharply the synthesiser's
@@ -59,18 +59,20 @@ pub(crate) struct Timed {
 /// [`Sound::voice_activity`]. The transcript is spoken in each of `language`'s [`accents`],
 /// each in a man's and a woman's register; the accent whose renditions the recording follows
 /// most sharply times it, through its own voice's rendition, and the sharpest of them all says
-/// how closely the recording follows a synthesiser's voice.
+/// how closely the recording follows a synthesiser's voice. Without `judged` (where nothing asks
+/// that), no woman's register is spoken.
 pub(crate) fn timed_by_synthesis(
     sound: &Sound,
     voiced: &[bool],
     text: &str,
     language: &str,
+    judged: bool,
 ) -> Result<Timed, PhoneError> {
     let mut best: Option<Timed> = None;
     for accent in accents(language) {
         let mut timed = timed_by(sound, voiced, text, &accent)?;
         tracing::debug!(voice = %accent, sharpness = timed.sharpness, "a rendition of the transcript");
-        if !accent.contains('+') {
+        if judged && !accent.contains('+') {
             // Only a judge: an install without the variant times the line as before.
             let register = format!("{accent}+{WOMAN}");
             if let Ok(other) = timed_by(sound, voiced, text, &register) {
