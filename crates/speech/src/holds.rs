@@ -236,10 +236,9 @@ impl Line<'_> {
             return true;
         }
         let warp = self.warp;
-        let [low, over] = MURMUR_BANDS
-            .map(|(a, b)| band_power(self.sound, &mut self.planner, span, (a * warp, b * warp)));
-        match (low, over) {
-            (Some(low), Some(over)) if low > 0.0 => {
+        let bands = MURMUR_BANDS.map(|(a, b)| (a * warp, b * warp));
+        match band_powers(self.sound, &mut self.planner, span, bands) {
+            Some([low, over]) if low > 0.0 => {
                 10.0 * (over.max(f64::MIN_POSITIVE) / low).log10() < f64::from(MURMUR_DB)
             }
             _ => false,
@@ -328,7 +327,7 @@ fn band_levels(
     let mut levels = Vec::new();
     let mut start = span.0;
     while start + FRAME <= span.1 + 1e-4 {
-        if let Some(power) = band_power(sound, planner, (start, start + FRAME), band) {
+        if let Some([power]) = band_powers(sound, planner, (start, start + FRAME), [band]) {
             levels.push(
                 (10.0 * (power / f64::from(FRAME * SAMPLE_RATE as f32) + 1e-3).log10()) as f32,
             );
@@ -396,23 +395,23 @@ fn centroid(
     (total > 0.0).then(|| (weighted / total) as f32)
 }
 
-/// The power of `sound` between `band`'s two frequencies over `span` (seconds), as
-/// [`spectrum`] reads it; `None` where the span is cut short.
-fn band_power(
+/// The power of `sound` between each of `bands`' two frequencies over `span` (seconds), from
+/// one spectrum as [`spectrum`] reads it; `None` where the span is cut short.
+fn band_powers<const N: usize>(
     sound: &Sound,
     planner: &mut FftPlanner<f32>,
     span: (f32, f32),
-    band: (f32, f32),
-) -> Option<f64> {
+    bands: [(f32, f32); N],
+) -> Option<[f64; N]> {
     let (powers, bin) = spectrum(sound, planner, span.0, span.1)?;
-    Some(
+    Some(bands.map(|band| {
         powers
             .iter()
             .enumerate()
             .filter(|(i, _)| (band.0..band.1).contains(&(*i as f32 * bin)))
             .map(|(_, &p)| f64::from(p))
-            .sum(),
-    )
+            .sum()
+    }))
 }
 
 #[cfg(test)]
