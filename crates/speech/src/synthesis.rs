@@ -68,14 +68,24 @@ pub(crate) fn timed_by_synthesis(
     language: &str,
     judged: bool,
 ) -> Result<Timed, PhoneError> {
+    // The recording's side of every warping, read once: the first frame of its speech, and
+    // its speech's features (only speech is warped onto speech: the silence a recording
+    // starts and ends with is its own, however long).
+    let recording = {
+        let cepstra = Frontend::cepstra(&sound.samples);
+        speech(&cepstra).map(|(first, last)| (first, features(&cepstra[first..=last])))
+    };
+    let recording = recording
+        .as_ref()
+        .map(|(first, features)| (*first, features.as_slice()));
     let mut best: Option<Timed> = None;
     for accent in accents(language) {
-        let mut timed = timed_by(sound, voiced, text, &accent)?;
+        let mut timed = timed_by(sound, recording, voiced, text, &accent)?;
         tracing::debug!(voice = %accent, sharpness = timed.sharpness, "a rendition of the transcript");
         if judged && !accent.contains('+') {
             // Only a judge: an install without the variant times the line as before.
             let register = format!("{accent}+{WOMAN}");
-            if let Ok(other) = timed_by(sound, voiced, text, &register) {
+            if let Ok(other) = timed_by(sound, recording, voiced, text, &register) {
                 tracing::debug!(voice = %register, sharpness = other.sharpness, "a rendition of the transcript");
                 timed.sharpness = timed.sharpness.max(other.sharpness);
             }
@@ -114,8 +124,15 @@ fn accents(language: &str) -> Vec<String> {
     voices
 }
 
-/// [`timed_by_synthesis`] against one rendition, spoken by `voice`.
-fn timed_by(sound: &Sound, voiced: &[bool], text: &str, voice: &str) -> Result<Timed, PhoneError> {
+/// [`timed_by_synthesis`] against one rendition, spoken by `voice`; `recording` is the first
+/// frame of `sound`'s speech and that speech's features, `None` without speech.
+fn timed_by(
+    sound: &Sound,
+    recording: Option<(usize, &[[f32; DIMS]])>,
+    voiced: &[bool],
+    text: &str,
+    voice: &str,
+) -> Result<Timed, PhoneError> {
     let spoken = faceanim_espeak_sys::speak(text, &voice_for(text, voice), None)?;
     if spoken.phones.iter().all(|p| p.ipa == PAUSE) {
         return Err(PhoneError::EmptyTranscript);
@@ -123,20 +140,15 @@ fn timed_by(sound: &Sound, voiced: &[bool], text: &str, voice: &str) -> Result<T
     // eSpeak NG speaks at 22,050 Hz: brought to the recording's 16 kHz as a recording is
     // (band-limited, so nothing above 8 kHz folds into the cepstra).
     let synthetic = crate::audio::resample_pcm(&spoken.samples, spoken.sample_rate);
-    let (ours, theirs) = (
-        Frontend::cepstra(&synthetic),
-        Frontend::cepstra(&sound.samples),
-    );
-    // Only speech is warped onto speech: the silence a recording starts and ends with is
-    // its own, however long.
-    let (Some((a0, a1)), Some((b0, b1))) = (speech(&theirs), speech(&ours)) else {
+    let ours = Frontend::cepstra(&synthetic);
+    let (Some((a0, theirs)), Some((b0, b1))) = (recording, speech(&ours)) else {
         return Ok(Timed {
             phones: Vec::new(),
             sharpness: 0.0,
             voice_ratio: 0.0,
         });
     };
-    let (theirs, ours) = (features(&theirs[a0..=a1]), features(&ours[b0..=b1]));
+    let ours = features(&ours[b0..=b1]);
     let band = band(theirs.len(), ours.len());
     let cells = theirs.len().saturating_mul(2 * band + 1);
     if cells > MAX_CELLS {
@@ -144,8 +156,8 @@ fn timed_by(sound: &Sound, voiced: &[bool], text: &str, voice: &str) -> Result<T
             seconds: sound.seconds(),
         });
     }
-    let path = warp(&theirs, &ours, band);
-    let sharpness = sharpness(&path, &theirs, &ours);
+    let path = warp(theirs, &ours, band);
+    let sharpness = sharpness(&path, theirs, &ours);
     // Where each frame of the spoken version starts on the recording.
     let mut first = vec![usize::MAX; ours.len()];
     for &(i, j) in &path {
