@@ -28,6 +28,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod adapt;
 pub mod audio;
 pub mod face;
 pub mod features;

@@ -185,7 +185,8 @@ pub(crate) fn blind_search(route: Recognition) -> faceanim_sphinx_sys::Search {
     }
 }
 
-/// Any phone after any other (no words assumed: other languages, gibberish, singing).
+/// Any phone after any other (no words assumed: other languages, gibberish, singing), by
+/// the model as `heard` is decoded (adapted to its voice or not).
 ///
 /// # Errors
 /// [`PhoneError`] when the recogniser or its models are missing or fail.
@@ -193,21 +194,22 @@ pub(crate) fn phone_loop(
     heard: &Heard<'_>,
     recogniser: Option<crate::warp::Loaded>,
 ) -> Result<Vec<Phone>, PhoneError> {
-    phones_of(heard.decode(blind_search(Recognition::PhoneLoop), recogniser)?)
+    Ok(phones_of(heard.decode(
+        blind_search(Recognition::PhoneLoop),
+        recogniser,
+    )?))
 }
 
 /// A phone loop's segments as phones.
-pub(crate) fn phones_of(
-    segments: Vec<faceanim_sphinx_sys::Segment>,
-) -> Result<Vec<Phone>, PhoneError> {
-    Ok(segments
+pub(crate) fn phones_of(segments: Vec<faceanim_sphinx_sys::Segment>) -> Vec<Phone> {
+    segments
         .into_iter()
         .map(|s| Phone {
             label: phone_label(&s.label),
             start: frame_time(s.start),
             end: frame_time(s.end + 1),
         })
-        .collect())
+        .collect()
 }
 
 /// An English transcript's `words` aligned by the recogniser, or why they could not be (a

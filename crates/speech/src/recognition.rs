@@ -4,6 +4,7 @@
 
 use faceanim_sphinx_sys::{Decoded, Recogniser, SphinxError, Turn};
 
+use crate::adapt::FirstPass;
 use crate::audio::{SAMPLE_RATE, Sound};
 use crate::phones::{self, Phone, PhoneError, Recognition};
 use crate::warp::{Heard, Hearing, Loaded, Voice};
@@ -99,11 +100,16 @@ struct Ready {
     phones: Option<Result<Scored, SphinxError>>,
 }
 
-/// A line's phones from its start, and whether they are the whole line's.
+/// A line's phones from its start, and whether they are the whole line's; what adapts the
+/// model to the voice they were decoded from, when it is heard poorly ([`crate::adapt`]);
+/// and the phone loop's recogniser, for the line's phones when its words are not searched
+/// for.
 #[derive(Debug)]
 struct Scored {
     decoded: Decoded,
     whole: bool,
+    first: Option<FirstPass>,
+    recogniser: Recogniser,
 }
 
 /// Frames of voice (10 ms each) a line's phones are scored on before its words are searched
@@ -142,11 +148,20 @@ fn prepare(route: Recognition, sound: &Sound, heard: &Heard<'_>) -> Ready {
         });
     std::thread::scope(|scope| {
         let phones = scope.spawn(|| {
-            let decoded =
-                Recogniser::load_on(&loop_search, Some(&turn))?.decode_scored(&samples[..cut])?;
+            let mut recogniser = Recogniser::load_on(&loop_search, Some(&turn))?;
+            let decoded = recogniser.decode_scored(&samples[..cut])?;
+            let first = crate::adapt::first_pass(
+                &mut recogniser,
+                &samples[..cut],
+                &decoded,
+                sound,
+                heard.warp(),
+            );
             Ok(Scored {
                 decoded,
                 whole: cut == samples.len(),
+                first,
+                recogniser,
             })
         });
         let recogniser = Recogniser::load_on(&search, Some(&turn));
@@ -379,25 +394,50 @@ pub fn recognise_loaded(
         return Ok((
             crate::holds::lips_held(
                 sound,
-                phones::phone_loop(&heard, Some(loaded))?,
+                phone_loop_adapting(sound, &heard, Some(loaded))?,
                 heard.warp(),
             ),
             blind,
             notes,
         ));
     };
-    let Scored { decoded, whole } = phones?;
+    let Scored {
+        decoded,
+        whole,
+        first,
+        recogniser: loop_recogniser,
+    } = phones?;
     tracing::debug!(
         score_per_frame = decoded.score_per_frame,
         whole,
+        adapted = first.is_some(),
         "the phone loop's acoustic score a frame of speech"
     );
-    // The line's phones: those decoded already when they are the whole line's.
-    let segments = decoded.segments;
+    // Every later decode of the line by the model adapted to its voice: the words, their
+    // alignment, the phones; with the closures of the lips the first pass heard.
+    let (adaptation, closures) = first.map(|f| (f.adaptation, f.closures)).unzip();
+    let adapted = adaptation.is_some();
+    let closures = |phones: Vec<Phone>| match &closures {
+        Some(closures) => crate::adapt::keep_closures(phones, closures),
+        None => phones,
+    };
+    let keep = &closures;
+    let heard = heard.adapted(adaptation);
     let heard_ref = &heard;
-    let phones_heard = move || match whole {
-        true => phones::phones_of(segments),
-        false => phones::phone_loop(heard_ref, None),
+    let frame_rate = heard.frame_rate();
+    // The line's phones: those decoded already when they are the whole line's and the model
+    // was not adapted; else decoded (again) by the phone loop loaded already when its first
+    // pass was the whole line's.
+    let segments = decoded.segments;
+    let phones_heard = move || {
+        if whole && !adapted {
+            return Ok(phones::phones_of(segments));
+        }
+        let loaded = whole.then_some(Loaded {
+            recogniser: loop_recogniser,
+            frame_rate,
+        });
+        phone_loop_adapting(sound, heard_ref, loaded).map(keep)
     };
     // A voice the acoustic model hears poorly (a formant synthesiser's buzz) is recognised
     // by its phones: its words are mostly wrong, and slow to search for.
@@ -414,7 +454,7 @@ pub fn recognise_loaded(
             notes,
         ));
     }
-    let words = phones::recognise_words(&heard, Some(loaded))?;
+    let words = closures(phones::recognise_words(&heard, Some(loaded))?);
     // Words the recogniser could not make out leave the voice unsaid (a formant synthesiser,
     // a whisper): the phones heard there, where they say more.
     let voiced = sound.voice_activity();
@@ -439,6 +479,34 @@ pub fn recognise_loaded(
         blind,
         notes,
     ))
+}
+
+/// `heard`'s phones by a phone loop (`loaded`, or one loaded now): when `heard` is not adapted
+/// yet and its first pass hears the voice poorly, decoded a second time by the model adapted
+/// to that voice, with the lips' closures the first pass's silences held ([`crate::adapt`]).
+fn phone_loop_adapting(
+    sound: &Sound,
+    heard: &Heard<'_>,
+    loaded: Option<Loaded>,
+) -> Result<Vec<Phone>, PhoneError> {
+    if heard.is_adapted() {
+        return phones::phone_loop(heard, loaded);
+    }
+    let search = phones::blind_search(Recognition::PhoneLoop);
+    let mut recogniser = heard.recogniser(search, loaded)?;
+    let first = recogniser.decode_scored(heard.samples())?;
+    let Some(pass) = crate::adapt::first_pass(
+        &mut recogniser,
+        heard.samples(),
+        &first,
+        sound,
+        heard.warp(),
+    ) else {
+        return Ok(phones::phones_of(first.segments));
+    };
+    recogniser.adapt(&pass.adaptation)?;
+    let second = phones::phones_of(recogniser.decode(heard.samples())?);
+    Ok(crate::adapt::keep_closures(second, &pass.closures))
 }
 
 /// The least voice, seconds, a silence of a transcript's alignment may hold before that

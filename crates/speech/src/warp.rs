@@ -20,7 +20,7 @@
 
 use std::borrow::Cow;
 
-use faceanim_sphinx_sys::{FRAME_RATE, Recogniser, Search, Segment, SphinxError};
+use faceanim_sphinx_sys::{FRAME_RATE, Recogniser, Search, Segment, SphinxError, Transform};
 
 use crate::audio::{SAMPLE_RATE, Sound};
 
@@ -75,6 +75,8 @@ impl std::str::FromStr for Voice {
 pub(crate) struct Heard<'a> {
     samples: Cow<'a, [i16]>,
     frame_rate: u32,
+    /// The model adapted to this voice ([`crate::adapt`]), once a first pass has said how.
+    adaptation: Option<Transform>,
 }
 
 /// The least voice (10 ms frames) without a pitch that is a whisper, not a word too short to
@@ -87,6 +89,7 @@ impl<'a> Heard<'a> {
         Heard {
             samples: audible(Cow::Borrowed(&sound.samples)),
             frame_rate: FRAME_RATE,
+            adaptation: None,
         }
     }
 
@@ -108,7 +111,18 @@ impl<'a> Heard<'a> {
                     .samples,
             )),
             frame_rate,
+            adaptation: None,
         }
+    }
+
+    /// Whether this sound is decoded by a model adapted to its voice.
+    pub(crate) fn is_adapted(&self) -> bool {
+        self.adaptation.is_some()
+    }
+
+    /// This sound decoded from now on by the model adapted with `adaptation`.
+    pub(crate) fn adapted(self, adaptation: Option<Transform>) -> Heard<'a> {
+        Heard { adaptation, ..self }
     }
 
     /// The samples the recogniser reads.
@@ -135,12 +149,26 @@ impl<'a> Heard<'a> {
         search: Search,
         loaded: Option<Loaded>,
     ) -> Result<Vec<Segment>, SphinxError> {
+        let mut recogniser = self.recogniser(search, loaded)?;
+        if let Some(adaptation) = &self.adaptation {
+            recogniser.adapt(adaptation)?;
+        }
+        recogniser.decode(&self.samples)
+    }
+
+    /// `loaded` where it was loaded for this sound's frame rate, else `search`'s recogniser
+    /// loaded now.
+    pub(crate) fn recogniser(
+        &self,
+        search: Search,
+        loaded: Option<Loaded>,
+    ) -> Result<Recogniser, SphinxError> {
         match loaded {
             Some(Loaded {
-                mut recogniser,
+                recogniser,
                 frame_rate,
-            }) if frame_rate == self.frame_rate => recogniser.decode(&self.samples),
-            _ => faceanim_sphinx_sys::decode(&search.warped(self.frame_rate), &self.samples),
+            }) if frame_rate == self.frame_rate => Ok(recogniser),
+            _ => Recogniser::load(&search.warped(self.frame_rate)),
         }
     }
 }

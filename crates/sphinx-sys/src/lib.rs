@@ -7,10 +7,11 @@
 //! package with the US English models inside it (`scripts/setup.sh libraries` fetches it;
 //! the build script says where it looks). The old
 //! `pocketsphinx-sys` crates target other versions and are unmaintained; these bindings declare
-//! only the dozen functions faceanim calls ([`ffi`]) and wrap them in one safe call,
+//! only the functions faceanim calls ([`ffi`]) and wrap them in one safe call,
 //! [`decode`]: 16 kHz mono speech in, time-aligned labels out (phones from a phone loop, words
 //! recognised, or words from a grammar for forced alignment), one frame every 10 ms; or in two
-//! steps, a [`Recogniser`] loaded before the speech is at hand, then decoding it. A word search
+//! steps, a [`Recogniser`] loaded before the speech is at hand, then decoding it (and, for a
+//! second pass, its front end's cepstra and a speaker adaptation of its model: [`model`]). A word search
 //! reads the pronouncing dictionary cut to its language model's words, kept in the user's
 //! cache folder.
 //!
@@ -32,6 +33,9 @@ use std::path::{Path, PathBuf};
 
 #[cfg(pocketsphinx)]
 mod known;
+pub mod model;
+
+pub use model::{Codebooks, ModelError, Transform};
 
 /// Samples per second the models expect.
 pub const SAMPLE_RATE: u32 = 16_000;
@@ -154,6 +158,12 @@ pub struct Search {
 }
 
 impl Search {
+    /// The folder of the acoustic model this search decodes with.
+    #[must_use]
+    pub fn acoustic(&self) -> &Path {
+        &self.acoustic
+    }
+
     /// This search over a sound slowed to `100 / frame_rate` of its speed (every frequency
     /// divided as much, as a longer vocal tract would say it), read `frame_rate` frames a
     /// second with each window as much longer: each frame then covers the same 10 ms of the
@@ -320,6 +330,26 @@ impl Recogniser {
     pub fn decode_scored(&mut self, samples: &[i16]) -> Result<Decoded, SphinxError> {
         self.decoder.decode(samples)
     }
+
+    /// The cepstra of `samples` as this recogniser's front end computes them (its frame rate,
+    /// windows and filters; before any normalisation): one row a frame, its frames those of
+    /// [`Recogniser::decode`] (the last part-frame left out).
+    ///
+    /// # Errors
+    /// [`SphinxError::Decoder`] when the front end fails.
+    pub fn cepstra(&mut self, samples: &[i16]) -> Result<Vec<Vec<f32>>, SphinxError> {
+        self.decoder.cepstra(samples)
+    }
+
+    /// Decodes from now on with the acoustic model's means moved by `transform` (a speaker
+    /// adaptation; it replaces any earlier one).
+    ///
+    /// # Errors
+    /// [`SphinxError::Decoder`] when the decoder refuses the transform (one whose streams are
+    /// not its model's).
+    pub fn adapt(&mut self, transform: &Transform) -> Result<(), SphinxError> {
+        self.decoder.adapt(transform)
+    }
 }
 
 /// A turn of the cores: at most one line is recognised per core at once (its decoders hold
@@ -391,6 +421,14 @@ mod imp {
         pub fn decode(&mut self, _: &[i16]) -> Result<Decoded, SphinxError> {
             match *self {}
         }
+
+        pub fn cepstra(&mut self, _: &[i16]) -> Result<Vec<Vec<f32>>, SphinxError> {
+            match *self {}
+        }
+
+        pub fn adapt(&mut self, _: &super::Transform) -> Result<(), SphinxError> {
+            match *self {}
+        }
     }
 }
 
@@ -411,7 +449,7 @@ pub mod ffi {
             }
         )*};
     }
-    opaque!(ps_decoder_t, cmd_ln_t, ps_seg_t, arg_t);
+    opaque!(ps_decoder_t, cmd_ln_t, ps_seg_t, arg_t, fe_t, ps_mllr_t);
 
     unsafe extern "C" {
         pub fn ps_args() -> *const arg_t;
@@ -448,6 +486,23 @@ pub mod ffi {
         pub fn ps_seg_frames(seg: *mut ps_seg_t, out_sf: *mut c_int, out_ef: *mut c_int);
         pub fn ps_seg_free(seg: *mut ps_seg_t);
         pub fn err_set_logfp(stream: *mut std::ffi::c_void);
+        pub fn ps_get_fe(ps: *mut ps_decoder_t) -> *mut fe_t;
+        pub fn ps_start_stream(ps: *mut ps_decoder_t) -> c_int;
+        pub fn fe_start_utt(fe: *mut fe_t) -> c_int;
+        /// `mfcc_t` is `float` in both libraries (neither is built for fixed point).
+        pub fn fe_process_utt(
+            fe: *mut fe_t,
+            spch: *const i16,
+            nsamps: usize,
+            cep_block: *mut *mut *mut f32,
+            nframes: *mut i32,
+        ) -> c_int;
+        pub fn fe_get_output_size(fe: *mut fe_t) -> c_int;
+        pub fn fe_free_2d(arr: *mut std::ffi::c_void);
+        pub fn ps_mllr_read(file: *const c_char) -> *mut ps_mllr_t;
+        pub fn ps_mllr_free(mllr: *mut ps_mllr_t) -> c_int;
+        /// 0.8 keeps the caller's reference; 5.1 takes one of its own.
+        pub fn ps_update_mllr(ps: *mut ps_decoder_t, mllr: *mut ps_mllr_t) -> *mut ps_mllr_t;
     }
 }
 
@@ -677,6 +732,9 @@ mod imp {
             let decoder = self;
             // SAFETY: a live decoder; `samples` is valid for its length during the call.
             let processed = unsafe {
+                // The front end's noise estimate from its first frame, as a decoder just
+                // loaded starts (it otherwise runs on from the last utterance decoded).
+                ffi::ps_start_stream(decoder.ps);
                 if ffi::ps_start_utt(decoder.ps) < 0 {
                     return Err(SphinxError::Decoder("could not start the utterance".into()));
                 }
@@ -724,6 +782,68 @@ mod imp {
                 segments,
                 score_per_frame: (frames > 0).then(|| score as f32 / frames as f32),
             })
+        }
+    }
+
+    impl Decoder {
+        pub fn cepstra(&mut self, samples: &[i16]) -> Result<Vec<Vec<f32>>, SphinxError> {
+            let mut block: *mut *mut f32 = std::ptr::null_mut();
+            let mut frames: i32 = 0;
+            // SAFETY: a live decoder owns its front end; `samples` is valid for its length
+            // during the call; the block the front end allocates is read within its
+            // `frames` rows of `width` values, then freed once by the function that pairs
+            // with its allocation.
+            unsafe {
+                // As a decode starts: the noise estimate from the first frame.
+                ffi::ps_start_stream(self.ps);
+                let fe = ffi::ps_get_fe(self.ps);
+                if fe.is_null() || ffi::fe_start_utt(fe) < 0 {
+                    return Err(SphinxError::Decoder("the front end could not start".into()));
+                }
+                let width = usize::try_from(ffi::fe_get_output_size(fe)).unwrap_or(0);
+                let done = ffi::fe_process_utt(
+                    fe,
+                    samples.as_ptr(),
+                    samples.len(),
+                    &raw mut block,
+                    &raw mut frames,
+                );
+                if block.is_null() {
+                    return Err(SphinxError::Decoder("the front end failed".into()));
+                }
+                let rows = if done < 0 || width == 0 {
+                    Vec::new()
+                } else {
+                    (0..usize::try_from(frames).unwrap_or(0))
+                        .map(|f| std::slice::from_raw_parts(*block.add(f), width).to_vec())
+                        .collect()
+                };
+                ffi::fe_free_2d(block.cast());
+                if done < 0 {
+                    return Err(SphinxError::Decoder("the front end failed".into()));
+                }
+                Ok(rows)
+            }
+        }
+
+        pub fn adapt(&mut self, transform: &super::Transform) -> Result<(), SphinxError> {
+            let file = Scratch::write("mllr", &transform.text())?;
+            let path = CString::new(text(&file.0))
+                .map_err(|_| SphinxError::Decoder("a path holds a NUL byte".into()))?;
+            // SAFETY: a live decoder; the transform read is handed to it (0.8 keeps this
+            // reference, 5.1 takes its own, so ours is freed there).
+            unsafe {
+                let mllr = ffi::ps_mllr_read(path.as_ptr());
+                if mllr.is_null() {
+                    return Err(SphinxError::Decoder(
+                        "the speaker adaptation could not be read".into(),
+                    ));
+                }
+                ffi::ps_update_mllr(self.ps, mllr);
+                #[cfg(pocketsphinx_source)]
+                ffi::ps_mllr_free(mllr);
+            }
+            Ok(())
         }
     }
 
@@ -882,5 +1002,63 @@ mod tests {
         }
         // Out of range: read as it is.
         assert_eq!(EN_US.phone_loop().warped(7), EN_US.phone_loop());
+    }
+
+    #[test]
+    #[cfg(pocketsphinx)]
+    fn a_recogniser_gives_its_cepstra_and_takes_an_adaptation() {
+        let Some(samples) = go_forward() else {
+            return;
+        };
+        let codebooks = Codebooks::read(EN_US.phone_loop().acoustic()).unwrap();
+        assert_eq!(codebooks.phones.len(), 42);
+        assert!(codebooks.codebook("SIL").is_some() && codebooks.codebook("AA").is_some());
+        assert_eq!(codebooks.streams, vec![13, 13, 13]);
+        assert_eq!(codebooks.means.len(), 42 * 39 * codebooks.density);
+        assert!(codebooks.variances.iter().all(|v| *v >= 1e-4));
+
+        let mut recogniser = Recogniser::load(&EN_US.phone_loop()).unwrap();
+        let plain = recogniser.decode(&samples).unwrap();
+        let cepstra = recogniser.cepstra(&samples).unwrap();
+        let frames = plain.last().unwrap().end as usize + 1;
+        assert!(
+            cepstra.len().abs_diff(frames) <= 2,
+            "{} {frames}",
+            cepstra.len()
+        );
+        assert!(cepstra.iter().all(|c| c.len() == 13));
+        // c0 follows the energy: louder speech than the silence before it.
+        let loudest = cepstra.iter().map(|c| c[0]).fold(f32::MIN, f32::max);
+        assert!(loudest > cepstra[0][0] + 1.0);
+
+        let identity = |scale: f32, shift: f32| Transform {
+            streams: (0..3)
+                .map(|_| {
+                    let matrix = (0..13)
+                        .map(|i| (0..13).map(|j| if i == j { scale } else { 0.0 }).collect())
+                        .collect();
+                    (matrix, vec![shift; 13])
+                })
+                .collect(),
+        };
+        // The identity: the same phones (the means reloaded and their constants computed
+        // again, a boundary may move by a frame).
+        recogniser.adapt(&identity(1.0, 0.0)).unwrap();
+        let same = recogniser.decode(&samples).unwrap();
+        let labels = |d: &[Segment]| d.iter().map(|s| s.label.clone()).collect::<Vec<_>>();
+        assert!(
+            labels(&same).len().abs_diff(labels(&plain).len()) <= 1,
+            "{same:?}"
+        );
+        assert!(
+            same.iter().zip(&plain).filter(|(a, b)| a == b).count() + 3 >= plain.len(),
+            "{same:?}"
+        );
+        // Means moved far from every frame: other phones are heard.
+        recogniser.adapt(&identity(0.2, 3.0)).unwrap();
+        assert_ne!(labels(&recogniser.decode(&samples).unwrap()), labels(&same));
+        // And back: a new transform replaces the last.
+        recogniser.adapt(&identity(1.0, 0.0)).unwrap();
+        assert_eq!(recogniser.decode(&samples).unwrap(), same);
     }
 }
