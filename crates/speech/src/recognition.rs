@@ -426,15 +426,17 @@ pub fn recognise_loaded(
     let heard_ref = &heard;
     let frame_rate = heard.frame_rate();
     // The line's phones: those decoded already when they are the whole line's and the model
-    // was not adapted; else decoded (again) by the phone loop loaded already when its first
-    // pass was the whole line's.
+    // was not adapted; else decoded (again) by the phone loop `loaded`, when its first pass
+    // was the whole line's, or by one loaded now. A recogniser is loaded only when this line
+    // holds no other: each holds a turn of the cores, and a line that waits for a second turn
+    // while it holds one would wait forever once every core's turn is held so.
     let segments = decoded.segments;
-    let phones_heard = move || {
+    let phones_heard = move |loaded: Option<Recogniser>| {
         if whole && !adapted {
             return Ok(phones::phones_of(segments));
         }
-        let loaded = whole.then_some(Loaded {
-            recogniser: loop_recogniser,
+        let loaded = loaded.filter(|_| whole).map(|recogniser| Loaded {
+            recogniser,
             frame_rate,
         });
         phone_loop_adapting(sound, heard_ref, loaded).map(keep)
@@ -443,7 +445,7 @@ pub fn recognise_loaded(
     // by its phones: its words are mostly wrong, and slow to search for.
     if decoded.score_per_frame.is_some_and(|s| s < HEARD_POORLY) {
         drop(loaded);
-        let phones_heard = phones_heard()?;
+        let phones_heard = phones_heard(Some(loop_recogniser))?;
         notes.push(
             "the recogniser hears this voice poorly (as a formant synthesiser's): its phones were recognised, not its words"
                 .to_owned(),
@@ -454,6 +456,8 @@ pub fn recognise_loaded(
             notes,
         ));
     }
+    // The words' alignment loads a recogniser of its own.
+    drop(loop_recogniser);
     let words = closures(phones::recognise_words(&heard, Some(loaded))?);
     // Words the recogniser could not make out leave the voice unsaid (a formant synthesiser,
     // a whisper): the phones heard there, where they say more.
@@ -461,7 +465,7 @@ pub fn recognise_loaded(
     let said = said_share(&words, &voiced);
     tracing::debug!(said, "the words recognised cover this share of the voice");
     if said < WORDS_SAY_ENOUGH {
-        let phones = phones_heard()?;
+        let phones = phones_heard(None)?;
         if said_share(&phones, &voiced) > said {
             notes.push(format!(
                 "the words recognised cover {:.0} % of the voice: its phones were recognised instead",
