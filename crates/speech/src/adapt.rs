@@ -269,24 +269,25 @@ fn estimate(
                 }
             }
         }
-        let mut matrix = Vec::with_capacity(width);
-        let mut bias = Vec::with_capacity(width);
-        for i in 0..width {
-            let size = width + 1;
-            let mut g = vec![0.0f64; size * size];
-            let mut k = vec![0.0f64; size];
-            for book in 0..n_books {
-                let base = codebooks.offset(book, stream);
-                for d in 0..density {
-                    let slot = book * density + d;
-                    if occupancy[slot] == 0.0 {
-                        continue;
-                    }
-                    let at = base + d * width;
+        // Every row's system, filled in one pass over the Gaussians (each one's `ξ` read once).
+        let size = width + 1;
+        let mut gs = vec![vec![0.0f64; size * size]; width];
+        let mut ks = vec![vec![0.0f64; size]; width];
+        let mut xi = vec![0.0f64; size];
+        for book in 0..n_books {
+            let base = codebooks.offset(book, stream);
+            for d in 0..density {
+                let slot = book * density + d;
+                if occupancy[slot] == 0.0 {
+                    continue;
+                }
+                let at = base + d * width;
+                xi[0] = 1.0;
+                for (x, mean) in xi[1..].iter_mut().zip(&codebooks.means[at..at + width]) {
+                    *x = f64::from(*mean);
+                }
+                for (i, (g, k)) in gs.iter_mut().zip(&mut ks).enumerate() {
                     let var = f64::from(codebooks.variances[at + i]);
-                    let xi: Vec<f64> = std::iter::once(1.0)
-                        .chain((0..width).map(|m| f64::from(codebooks.means[at + m])))
-                        .collect();
                     let w = occupancy[slot] / var;
                     let o = sums[slot * width + i] / var;
                     for r in 0..size {
@@ -297,6 +298,10 @@ fn estimate(
                     }
                 }
             }
+        }
+        let mut matrix = Vec::with_capacity(width);
+        let mut bias = Vec::with_capacity(width);
+        for (i, (mut g, mut k)) in gs.into_iter().zip(ks).enumerate() {
             for r in 0..size {
                 g[r * size + r] += PRIOR;
             }
