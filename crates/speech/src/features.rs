@@ -1,7 +1,8 @@
 //! Speech features: 25 ms windows every 10 ms, pre-emphasised, through 26 mel bands to 12
 //! cepstra — streaming, with the speaker's running mean removed and their change added (what
 //! the live classifier of [`crate::listen`] reads), or over a whole recording without
-//! normalising (what an alignment by synthesis warps, [`crate::synthesis`]).
+//! normalising (what an alignment by synthesis warps, [`crate::synthesis`]), heard through
+//! an adult's vocal tract or a shorter or longer one ([`Frontend::heard_through`]).
 
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -127,6 +128,15 @@ impl Frontend {
     /// A front end starting from the speaker's cepstral mean `mean` (a model's) or none.
     #[must_use]
     pub fn new(mean: Option<[f32; CEPSTRA]>) -> Frontend {
+        Frontend::heard_through(mean, 1.0)
+    }
+
+    /// [`Frontend::new`], hearing the voice through a vocal tract `warp` times shorter than
+    /// an adult man's: each mel band's frequencies are `warp` times the usual ones (up to a
+    /// knee, then linear to the band's top), so a voice whose resonances lie `warp` times as
+    /// high gives a man's cepstra.
+    #[must_use]
+    pub fn heard_through(mean: Option<[f32; CEPSTRA]>, warp: f32) -> Frontend {
         let fft = FftPlanner::new().plan_fft_forward(FFT_SIZE);
         let window = (0..WINDOW)
             .map(|n| {
@@ -135,7 +145,19 @@ impl Frontend {
             .collect();
         let rate = faceanim_sphinx_sys::SAMPLE_RATE as f32;
         let (low, high) = (mel(130.0), mel(6800.0));
-        let edge = |k: usize| hz(low + (high - low) * k as f32 / (MEL_BANDS + 1) as f32);
+        let top_hz = hz(high);
+        let (top, knee) = {
+            let top = (top_hz * warp).min(rate / 2.0 - 100.0);
+            (top, (0.8 * top / warp).min(top_hz))
+        };
+        let warped = |f: f32| {
+            if f <= knee {
+                warp * f
+            } else {
+                warp * knee + (f - knee) * (top - warp * knee) / (top_hz - knee).max(1.0)
+            }
+        };
+        let edge = |k: usize| warped(hz(low + (high - low) * k as f32 / (MEL_BANDS + 1) as f32));
         let bin_hz = rate / FFT_SIZE as f32;
         let bands = (0..MEL_BANDS)
             .map(|b| {
@@ -204,8 +226,15 @@ impl Frontend {
     /// normalises them over the whole recording.
     #[must_use]
     pub fn cepstra(samples: &[i16]) -> Vec<([f32; CEPSTRA], f32)> {
+        Frontend::cepstra_heard_through(samples, 1.0)
+    }
+
+    /// [`Frontend::cepstra`], heard through a vocal tract `warp` times shorter than a man's
+    /// ([`Frontend::heard_through`]).
+    #[must_use]
+    pub fn cepstra_heard_through(samples: &[i16], warp: f32) -> Vec<([f32; CEPSTRA], f32)> {
         let mut out = Vec::with_capacity(samples.len() / HOP + 1);
-        Frontend::new(None).feed(samples, |frontend| out.push(frontend.analyse()));
+        Frontend::heard_through(None, warp).feed(samples, |frontend| out.push(frontend.analyse()));
         out
     }
 
@@ -294,5 +323,71 @@ impl Frontend {
             open,
             vector,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two seconds of a voice at 120 Hz through resonators at `formants` (Hz, bandwidth 80
+    /// Hz): an impulse train through two-pole resonators in cascade.
+    fn vowel(formants: &[f32]) -> Vec<i16> {
+        let rate = faceanim_sphinx_sys::SAMPLE_RATE as f32;
+        let mut signal: Vec<f32> = (0..2 * faceanim_sphinx_sys::SAMPLE_RATE as usize)
+            .map(|k| if k % 133 == 0 { 1.0 } else { 0.0 })
+            .collect();
+        for &f in formants {
+            let radius = (-std::f32::consts::PI * 80.0 / rate).exp();
+            let angle = std::f32::consts::TAU * f / rate;
+            let (b1, b2) = (2.0 * radius * angle.cos(), -radius * radius);
+            let (mut y1, mut y2) = (0.0, 0.0);
+            for x in &mut signal {
+                let y = *x + b1 * y1 + b2 * y2;
+                (y2, y1) = (y1, y);
+                *x = y;
+            }
+        }
+        let peak = signal.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        signal.iter().map(|v| (v / peak * 12000.0) as i16).collect()
+    }
+
+    /// The mean cepstra of `samples` heard through `warp`.
+    fn mean_cepstra(samples: &[i16], warp: f32) -> [f32; CEPSTRA] {
+        let frames = Frontend::cepstra_heard_through(samples, warp);
+        let mut mean = [0.0; CEPSTRA];
+        for (c, _) in &frames {
+            for k in 0..CEPSTRA {
+                mean[k] += c[k] / frames.len() as f32;
+            }
+        }
+        mean
+    }
+
+    fn distance(a: &[f32; CEPSTRA], b: &[f32; CEPSTRA]) -> f32 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).powi(2))
+            .sum::<f32>()
+            .sqrt()
+    }
+
+    #[test]
+    fn a_shorter_tracts_vowel_heard_through_it_sounds_like_the_mans() {
+        let mans = [550.0, 1450.0, 2450.0, 3400.0];
+        let childs = mans.map(|f| f * 1.4);
+        let reference = mean_cepstra(&vowel(&mans), 1.0);
+        let child = vowel(&childs);
+        let as_it_is = distance(&mean_cepstra(&child, 1.0), &reference);
+        let heard_through = distance(&mean_cepstra(&child, 1.4), &reference);
+        assert!(
+            heard_through < 0.5 * as_it_is,
+            "heard through a child's tract {heard_through}, as it is {as_it_is}"
+        );
+        // Through an adult's tract, the front end is the one it always was.
+        assert_eq!(
+            Frontend::cepstra(&child),
+            Frontend::cepstra_heard_through(&child, 1.0)
+        );
     }
 }

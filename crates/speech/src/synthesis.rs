@@ -4,7 +4,9 @@
 //! 1. eSpeak NG speaks the transcript in the recording's language ([`faceanim_espeak_sys`]),
 //!    which gives its phones (IPA) and when each is said in that spoken version;
 //! 2. both sounds become the same features — 12 cepstra every 10 ms, normalised over each
-//!    recording (so that the voices' own colour cancels), their change, and loudness;
+//!    recording (so that the voices' own colour cancels), their change, and loudness; the
+//!    recording's are heard through an adult's vocal tract, a child's and a deeper one, and
+//!    the one it follows a rendition clearly most sharply through is kept;
 //! 3. dynamic time warping finds the cheapest path between the two (a band around the
 //!    diagonal bounds the work; a diagonal step costs what the others do, which keeps the two
 //!    voices moving together);
@@ -57,10 +59,12 @@ pub(crate) struct Timed {
 
 /// [`align`], with the warping's [`sharpness`]; `voiced` is `sound`'s
 /// [`Sound::voice_activity`]. The transcript is spoken in each of `language`'s [`accents`],
-/// each in a man's and a woman's register; the accent whose renditions the recording follows
-/// most sharply times it, through its own voice's rendition, and the sharpest of them all says
-/// how closely the recording follows a synthesiser's voice. Without `judged` (where nothing asks
-/// that), no woman's register is spoken.
+/// each in a man's and a woman's register; the recording is heard through each of
+/// [`HEARD_THROUGH`]'s vocal tracts, and is timed through an adult's unless it follows a
+/// rendition [`SHARPER`] times as sharply through another. There, the accent whose renditions the recording
+/// follows most sharply times it, through its own voice's rendition, and the sharpest of them
+/// all says how closely the recording follows a synthesiser's voice. Without `judged` (where
+/// nothing asks that), no woman's register is spoken.
 pub(crate) fn timed_by_synthesis(
     sound: &Sound,
     voiced: &[bool],
@@ -68,27 +72,71 @@ pub(crate) fn timed_by_synthesis(
     language: &str,
     judged: bool,
 ) -> Result<Timed, PhoneError> {
-    // The recording's side of every warping, read once: the first frame of its speech, and
-    // its speech's features (only speech is warped onto speech: the silence a recording
-    // starts and ends with is its own, however long).
-    let recording = {
-        let cepstra = Frontend::cepstra(&sound.samples);
-        speech(&cepstra).map(|(first, last)| (first, features(&cepstra[first..=last])))
-    };
-    let recording = recording
-        .as_ref()
-        .map(|(first, features)| (*first, features.as_slice()));
-    let mut best: Option<Timed> = None;
+    // The recording's side of every warping, read once per vocal tract: the first frame of its
+    // speech, and its speech's features (only speech is warped onto speech: the silence a
+    // recording starts and ends with is its own, however long). Loudness is the same through
+    // every tract, so where its speech lies is too.
+    let span = speech(&Frontend::cepstra(&sound.samples));
+    let recordings: Vec<Recording> = HEARD_THROUGH
+        .iter()
+        .map(|&warp| Recording {
+            warp,
+            speech: span.map(|(first, last)| {
+                let cepstra = Frontend::cepstra_heard_through(&sound.samples, warp);
+                let last = last.min(cepstra.len() - 1);
+                (first, features(&cepstra[first..=last]))
+            }),
+        })
+        .collect();
+    // Every rendition: each accent's own, and its woman's register as a judge.
+    let mut renditions = Vec::new();
     for accent in accents(language) {
-        let mut timed = timed_by(sound, recording, voiced, text, &accent)?;
-        tracing::debug!(voice = %accent, sharpness = timed.sharpness, "a rendition of the transcript");
-        if judged && !accent.contains('+') {
+        let own = render(text, &accent)?;
+        let judge = if judged && !accent.contains('+') {
             // Only a judge: an install without the variant times the line as before.
-            let register = format!("{accent}+{WOMAN}");
-            if let Ok(other) = timed_by(sound, recording, voiced, text, &register) {
-                tracing::debug!(voice = %register, sharpness = other.sharpness, "a rendition of the transcript");
-                timed.sharpness = timed.sharpness.max(other.sharpness);
-            }
+            render(text, &format!("{accent}+{WOMAN}")).ok()
+        } else {
+            None
+        };
+        renditions.push((accent, own, judge));
+    }
+    // The vocal tract the recording follows a rendition most sharply through: an adult's
+    // unless another is clearly sharper.
+    let sharpest = |recording: &Recording| {
+        renditions
+            .iter()
+            .flat_map(|(_, own, judge)| std::iter::once(own).chain(judge))
+            .map(|rendition| follow(recording.speech(), rendition).map_or(0.0, |f| f.sharpness))
+            .fold(0.0f32, f32::max)
+    };
+    let mut chosen = &recordings[ADULT];
+    let adults = sharpest(chosen);
+    let mut best_sharpness = adults;
+    for (k, candidate) in recordings.iter().enumerate() {
+        let sharpness = if k == ADULT {
+            adults
+        } else {
+            sharpest(candidate)
+        };
+        tracing::debug!(
+            warp = candidate.warp,
+            sharpness,
+            "the recording heard through a vocal tract"
+        );
+        if sharpness > best_sharpness.max(adults * SHARPER) {
+            (chosen, best_sharpness) = (candidate, sharpness);
+        }
+    }
+    let recording = chosen.speech();
+    let mut best: Option<Timed> = None;
+    for (accent, own, judge) in &renditions {
+        let mut timed = timed_by(sound, recording, voiced, own)?;
+        tracing::debug!(voice = %accent, warp = chosen.warp, sharpness = timed.sharpness, "a rendition of the transcript");
+        if let Some(judge) = judge
+            && let Some(other) = follow(recording, judge)
+        {
+            tracing::debug!(voice = %format!("{accent}+{WOMAN}"), sharpness = other.sharpness, "a rendition of the transcript");
+            timed.sharpness = timed.sharpness.max(other.sharpness);
         }
         if best.as_ref().is_none_or(|b| timed.sharpness > b.sharpness) {
             best = Some(timed);
@@ -96,6 +144,39 @@ pub(crate) fn timed_by_synthesis(
     }
     best.ok_or(PhoneError::EmptyTranscript)
 }
+
+/// The vocal tracts a recording is heard through when it is timed by synthesis, as multiples
+/// of the frequencies of an adult man's resonances ([`Frontend::heard_through`]): a voice
+/// deeper than a man's (an effect, a monster's), an adult's, a child's. A woman's voice is
+/// followed through an adult's: in English its rendition in a woman's register judges it, and
+/// heard through a woman's tract (1.2), eSpeak NG's f2 in Spanish and f3 in German followed
+/// their renditions more sharply (1.7 → 2.0, 1.2 → 1.9–2.4) but were timed less exactly
+/// (0.984 → 0.968, 0.979 → 0.971).
+const HEARD_THROUGH: [f32; 3] = [0.8, 1.0, 1.4];
+/// Where the adult's tract is in [`HEARD_THROUGH`].
+const ADULT: usize = 1;
+
+/// A recording heard through a vocal tract `warp` times shorter than a man's: the first frame
+/// of its speech and that speech's features (`None` without speech).
+struct Recording {
+    warp: f32,
+    speech: Option<(usize, Vec<[f32; DIMS]>)>,
+}
+
+impl Recording {
+    fn speech(&self) -> Option<(usize, &[[f32; DIMS]])> {
+        self.speech
+            .as_ref()
+            .map(|(first, f)| (*first, f.as_slice()))
+    }
+}
+
+/// How much more sharply a recording must follow a rendition through another vocal tract than
+/// through an adult's to be heard through it: a child's voice (eSpeak NG's f2 and m3, pitch
+/// and resonances raised 40 %) follows one 2.2–2.7 times as sharply through a child's tract,
+/// a deepened one 3.2 times through a deeper tract; a woman's voice in German at most 1.06
+/// times through a child's.
+const SHARPER: f32 = 1.5;
 
 /// eSpeak NG's variant whose register a woman's voice follows best among its own (chosen on
 /// the tuning voices, below): `f1`.
@@ -124,15 +205,16 @@ fn accents(language: &str) -> Vec<String> {
     voices
 }
 
-/// [`timed_by_synthesis`] against one rendition, spoken by `voice`; `recording` is the first
-/// frame of `sound`'s speech and that speech's features, `None` without speech.
-fn timed_by(
-    sound: &Sound,
-    recording: Option<(usize, &[[f32; DIMS]])>,
-    voiced: &[bool],
-    text: &str,
-    voice: &str,
-) -> Result<Timed, PhoneError> {
+/// A rendition of a transcript: what eSpeak NG said, its voice's frames, and the first frame
+/// of its speech and that speech's features (`None` without speech).
+struct Rendition {
+    spoken: Spoken,
+    voice_frames: f32,
+    speech: Option<(usize, Vec<[f32; DIMS]>)>,
+}
+
+/// `text` spoken by eSpeak NG's `voice`.
+fn render(text: &str, voice: &str) -> Result<Rendition, PhoneError> {
     let spoken = faceanim_espeak_sys::speak(text, &voice_for(text, voice), None)?;
     if spoken.phones.iter().all(|p| p.ipa == PAUSE) {
         return Err(PhoneError::EmptyTranscript);
@@ -141,23 +223,61 @@ fn timed_by(
     // (band-limited, so nothing above 8 kHz folds into the cepstra).
     let synthetic = crate::audio::resample_pcm(&spoken.samples, spoken.sample_rate);
     let ours = Frontend::cepstra(&synthetic);
-    let (Some((a0, theirs)), Some((b0, b1))) = (recording, speech(&ours)) else {
+    let speech = speech(&ours).map(|(b0, b1)| (b0, features(&ours[b0..=b1])));
+    let voice_frames = Sound { samples: synthetic }
+        .voice_activity()
+        .iter()
+        .filter(|&&v| v)
+        .count() as f32;
+    Ok(Rendition {
+        spoken,
+        voice_frames,
+        speech,
+    })
+}
+
+/// How a recording follows a rendition: the warping path between their speech, and how
+/// sharply it follows.
+struct Followed {
+    path: Vec<(usize, usize)>,
+    sharpness: f32,
+}
+
+/// The warping of `recording` (its speech's first frame and features) onto `rendition`'s
+/// speech; `None` where either holds none, or the warping would be too large
+/// ([`MAX_CELLS`]).
+fn follow(recording: Option<(usize, &[[f32; DIMS]])>, rendition: &Rendition) -> Option<Followed> {
+    let ((_, theirs), (_, ours)) = (recording?, rendition.speech.as_ref()?);
+    let band = band(theirs.len(), ours.len());
+    if theirs.len().saturating_mul(2 * band + 1) > MAX_CELLS {
+        return None;
+    }
+    let path = warp(theirs, ours, band);
+    let sharpness = sharpness(&path, theirs, ours);
+    Some(Followed { path, sharpness })
+}
+
+/// [`timed_by_synthesis`] against one rendition; `recording` is the first frame of `sound`'s
+/// speech and that speech's features, `None` without speech.
+fn timed_by(
+    sound: &Sound,
+    recording: Option<(usize, &[[f32; DIMS]])>,
+    voiced: &[bool],
+    rendition: &Rendition,
+) -> Result<Timed, PhoneError> {
+    let (Some((a0, _)), Some((b0, ours))) = (recording, rendition.speech.as_ref()) else {
         return Ok(Timed {
             phones: Vec::new(),
             sharpness: 0.0,
             voice_ratio: 0.0,
         });
     };
-    let ours = features(&ours[b0..=b1]);
-    let band = band(theirs.len(), ours.len());
-    let cells = theirs.len().saturating_mul(2 * band + 1);
-    if cells > MAX_CELLS {
-        return Err(PhoneError::TooLongToAlign {
+    let b0 = *b0;
+    // Only a warping too large to make has no path.
+    let Followed { path, sharpness } =
+        follow(recording, rendition).ok_or(PhoneError::TooLongToAlign {
             seconds: sound.seconds(),
-        });
-    }
-    let path = warp(theirs, &ours, band);
-    let sharpness = sharpness(&path, theirs, &ours);
+        })?;
     // Where each frame of the spoken version starts on the recording.
     let mut first = vec![usize::MAX; ours.len()];
     for &(i, j) in &path {
@@ -171,10 +291,9 @@ fn timed_by(
         let j = (j - b0).min(ours.len() - 1);
         time_of(a0 + first[j])
     };
-    let phones = timed(&spoken, sound.seconds(), on_recording);
-    let heard = |voiced: &[bool]| voiced.iter().filter(|&&v| v).count() as f32;
-    let voice_ratio =
-        heard(voiced) / heard(&Sound { samples: synthetic }.voice_activity()).max(1.0);
+    let phones = timed(&rendition.spoken, sound.seconds(), on_recording);
+    let heard = voiced.iter().filter(|&&v| v).count() as f32;
+    let voice_ratio = heard / rendition.voice_frames.max(1.0);
     Ok(Timed {
         phones: carve_pauses(phones, voiced),
         sharpness,
