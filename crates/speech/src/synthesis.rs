@@ -76,13 +76,21 @@ pub(crate) fn timed_by_synthesis(
     // speech, and its speech's features (only speech is warped onto speech: the silence a
     // recording starts and ends with is its own, however long). Loudness is the same through
     // every tract, so where its speech lies is too.
-    let span = speech(&Frontend::cepstra(&sound.samples));
+    let plain = Frontend::cepstra(&sound.samples);
+    let span = speech(&plain);
     let recordings: Vec<Recording> = HEARD_THROUGH
         .iter()
-        .map(|&warp| Recording {
+        .enumerate()
+        .map(|(k, &warp)| Recording {
             warp,
             speech: span.map(|(first, last)| {
-                let cepstra = Frontend::cepstra_heard_through(&sound.samples, warp);
+                let heard;
+                let cepstra = if k == ADULT {
+                    &plain
+                } else {
+                    heard = Frontend::cepstra_heard_through(&sound.samples, warp);
+                    &heard
+                };
                 let last = last.min(cepstra.len() - 1);
                 (first, features(&cepstra[first..=last]))
             }),
@@ -100,41 +108,50 @@ pub(crate) fn timed_by_synthesis(
         };
         renditions.push((accent, own, judge));
     }
+    // Each recording warped onto every rendition: each accent's own and its judge.
+    let mut follows: Vec<Vec<(Option<Followed>, Option<Followed>)>> = recordings
+        .iter()
+        .map(|recording| {
+            renditions
+                .iter()
+                .map(|(_, own, judge)| {
+                    let judged = judge.as_ref().and_then(|j| follow(recording.speech(), j));
+                    (follow(recording.speech(), own), judged)
+                })
+                .collect()
+        })
+        .collect();
     // The vocal tract the recording follows a rendition most sharply through: an adult's
     // unless another is clearly sharper.
-    let sharpest = |recording: &Recording| {
-        renditions
+    let sharpest = |k: usize| {
+        follows[k]
             .iter()
-            .flat_map(|(_, own, judge)| std::iter::once(own).chain(judge))
-            .map(|rendition| follow(recording.speech(), rendition).map_or(0.0, |f| f.sharpness))
+            .flat_map(|(own, judge)| [own, judge])
+            .flatten()
+            .map(|f| f.sharpness)
             .fold(0.0f32, f32::max)
     };
-    let mut chosen = &recordings[ADULT];
-    let adults = sharpest(chosen);
-    let mut best_sharpness = adults;
+    let adults = sharpest(ADULT);
+    let (mut chosen, mut best_sharpness) = (ADULT, adults);
     for (k, candidate) in recordings.iter().enumerate() {
-        let sharpness = if k == ADULT {
-            adults
-        } else {
-            sharpest(candidate)
-        };
+        let sharpness = sharpest(k);
         tracing::debug!(
             warp = candidate.warp,
             sharpness,
             "the recording heard through a vocal tract"
         );
         if sharpness > best_sharpness.max(adults * SHARPER) {
-            (chosen, best_sharpness) = (candidate, sharpness);
+            (chosen, best_sharpness) = (k, sharpness);
         }
     }
-    let recording = chosen.speech();
+    let (recording, warp) = (recordings[chosen].speech(), recordings[chosen].warp);
     let mut best: Option<Timed> = None;
-    for (accent, own, judge) in &renditions {
-        let mut timed = timed_by(sound, recording, voiced, own)?;
-        tracing::debug!(voice = %accent, warp = chosen.warp, sharpness = timed.sharpness, "a rendition of the transcript");
-        if let Some(judge) = judge
-            && let Some(other) = follow(recording, judge)
-        {
+    for ((accent, own, _), (own_followed, judge_followed)) in
+        renditions.iter().zip(std::mem::take(&mut follows[chosen]))
+    {
+        let mut timed = timed_by(sound, recording, voiced, own, own_followed)?;
+        tracing::debug!(voice = %accent, warp, sharpness = timed.sharpness, "a rendition of the transcript");
+        if let Some(other) = judge_followed {
             tracing::debug!(voice = %format!("{accent}+{WOMAN}"), sharpness = other.sharpness, "a rendition of the transcript");
             timed.sharpness = timed.sharpness.max(other.sharpness);
         }
@@ -258,12 +275,14 @@ fn follow(recording: Option<(usize, &[[f32; DIMS]])>, rendition: &Rendition) -> 
 }
 
 /// [`timed_by_synthesis`] against one rendition; `recording` is the first frame of `sound`'s
-/// speech and that speech's features, `None` without speech.
+/// speech and that speech's features, `None` without speech; `followed`, how it follows the
+/// rendition ([`follow`]).
 fn timed_by(
     sound: &Sound,
     recording: Option<(usize, &[[f32; DIMS]])>,
     voiced: &[bool],
     rendition: &Rendition,
+    followed: Option<Followed>,
 ) -> Result<Timed, PhoneError> {
     let (Some((a0, _)), Some((b0, ours))) = (recording, rendition.speech.as_ref()) else {
         return Ok(Timed {
@@ -274,10 +293,9 @@ fn timed_by(
     };
     let b0 = *b0;
     // Only a warping too large to make has no path.
-    let Followed { path, sharpness } =
-        follow(recording, rendition).ok_or(PhoneError::TooLongToAlign {
-            seconds: sound.seconds(),
-        })?;
+    let Followed { path, sharpness } = followed.ok_or(PhoneError::TooLongToAlign {
+        seconds: sound.seconds(),
+    })?;
     // Where each frame of the spoken version starts on the recording.
     let mut first = vec![usize::MAX; ours.len()];
     for &(i, j) in &path {
