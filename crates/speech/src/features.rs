@@ -134,9 +134,15 @@ impl Frontend {
     /// [`Frontend::new`], hearing the voice through a vocal tract `warp` times shorter than
     /// an adult man's: each mel band's frequencies are `warp` times the usual ones (up to a
     /// knee, then linear to the band's top), so a voice whose resonances lie `warp` times as
-    /// high gives a man's cepstra.
+    /// high gives a man's cepstra. A warp outside 0.5–2 is taken as the nearest of them, one
+    /// that is not a number as 1.
     #[must_use]
     pub fn heard_through(mean: Option<[f32; CEPSTRA]>, warp: f32) -> Frontend {
+        let warp = if warp.is_nan() {
+            1.0
+        } else {
+            warp.clamp(0.5, 2.0)
+        };
         let fft = FftPlanner::new().plan_fft_forward(FFT_SIZE);
         let window = (0..WINDOW)
             .map(|n| {
@@ -384,10 +390,16 @@ mod tests {
             heard_through < 0.5 * as_it_is,
             "heard through a child's tract {heard_through}, as it is {as_it_is}"
         );
-        // Through an adult's tract, the front end is the one it always was.
-        assert_eq!(
-            Frontend::cepstra(&child),
-            Frontend::cepstra_heard_through(&child, 1.0)
-        );
+        // A warp that is no warp is taken as one that is.
+        for warp in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let heard = Frontend::cepstra_heard_through(&child, warp);
+            assert_eq!(heard.len(), Frontend::cepstra(&child).len());
+            assert!(
+                heard
+                    .iter()
+                    .all(|(c, db)| c.iter().all(|v| v.is_finite()) && db.is_finite()),
+                "{warp}"
+            );
+        }
     }
 }
