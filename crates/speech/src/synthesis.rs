@@ -83,16 +83,12 @@ pub(crate) fn timed_by_synthesis(
         .enumerate()
         .map(|(k, &warp)| Recording {
             warp,
-            speech: span.map(|(first, last)| {
-                let heard;
-                let cepstra = if k == ADULT {
-                    &plain
+            speech: span.map(|span| {
+                if k == ADULT {
+                    Speech::within(&plain, span)
                 } else {
-                    heard = Frontend::cepstra_heard_through(&sound.samples, warp);
-                    &heard
-                };
-                let last = last.min(cepstra.len() - 1);
-                (first, features(&cepstra[first..=last]))
+                    Speech::within(&Frontend::cepstra_heard_through(&sound.samples, warp), span)
+                }
             }),
         })
         .collect();
@@ -115,8 +111,11 @@ pub(crate) fn timed_by_synthesis(
             renditions
                 .iter()
                 .map(|(_, own, judge)| {
-                    let judged = judge.as_ref().and_then(|j| follow(recording.speech(), j));
-                    (follow(recording.speech(), own), judged)
+                    let speech = recording.speech.as_ref();
+                    let judged = judge
+                        .as_ref()
+                        .and_then(|j| follow(speech, j.speech.as_ref()));
+                    (follow(speech, own.speech.as_ref()), judged)
                 })
                 .collect()
         })
@@ -144,7 +143,7 @@ pub(crate) fn timed_by_synthesis(
             (chosen, best_sharpness) = (k, sharpness);
         }
     }
-    let (recording, warp) = (recordings[chosen].speech(), recordings[chosen].warp);
+    let (recording, warp) = (recordings[chosen].speech.as_ref(), recordings[chosen].warp);
     let mut best: Option<Timed> = None;
     for ((accent, own, _), (own_followed, judge_followed)) in
         renditions.iter().zip(std::mem::take(&mut follows[chosen]))
@@ -173,18 +172,28 @@ const HEARD_THROUGH: [f32; 3] = [0.8, 1.0, 1.4];
 /// Where the adult's tract is in [`HEARD_THROUGH`].
 const ADULT: usize = 1;
 
-/// A recording heard through a vocal tract `warp` times shorter than a man's: the first frame
-/// of its speech and that speech's features (`None` without speech).
+/// A recording heard through a vocal tract `warp` times shorter than a man's: its speech
+/// (`None` without speech).
 struct Recording {
     warp: f32,
-    speech: Option<(usize, Vec<[f32; DIMS]>)>,
+    speech: Option<Speech>,
 }
 
-impl Recording {
-    fn speech(&self) -> Option<(usize, &[[f32; DIMS]])> {
-        self.speech
-            .as_ref()
-            .map(|(first, f)| (*first, f.as_slice()))
+/// A sound's speech, the part that is warped: the frame it starts at, and each frame's
+/// features from there to its last frame of speech.
+struct Speech {
+    first: usize,
+    features: Vec<[f32; DIMS]>,
+}
+
+impl Speech {
+    /// The speech of `cepstra` from the first to the last frame of `span` ([`speech`]).
+    fn within(cepstra: &[([f32; CEPSTRA], f32)], (first, last): (usize, usize)) -> Speech {
+        let last = last.min(cepstra.len() - 1);
+        Speech {
+            first,
+            features: features(&cepstra[first..=last]),
+        }
     }
 }
 
@@ -222,12 +231,12 @@ fn accents(language: &str) -> Vec<String> {
     voices
 }
 
-/// A rendition of a transcript: what eSpeak NG said, its voice's frames, and the first frame
-/// of its speech and that speech's features (`None` without speech).
+/// A rendition of a transcript: what eSpeak NG said, its voice's frames, and its speech
+/// (`None` without speech).
 struct Rendition {
     spoken: Spoken,
     voice_frames: f32,
-    speech: Option<(usize, Vec<[f32; DIMS]>)>,
+    speech: Option<Speech>,
 }
 
 /// `text` spoken by eSpeak NG's `voice`.
@@ -240,7 +249,7 @@ fn render(text: &str, voice: &str) -> Result<Rendition, PhoneError> {
     // (band-limited, so nothing above 8 kHz folds into the cepstra).
     let synthetic = crate::audio::resample_pcm(&spoken.samples, spoken.sample_rate);
     let ours = Frontend::cepstra(&synthetic);
-    let speech = speech(&ours).map(|(b0, b1)| (b0, features(&ours[b0..=b1])));
+    let speech = speech(&ours).map(|span| Speech::within(&ours, span));
     let voice_frames = Sound { samples: synthetic }
         .voice_activity()
         .iter()
@@ -260,11 +269,10 @@ struct Followed {
     sharpness: f32,
 }
 
-/// The warping of `recording` (its speech's first frame and features) onto `rendition`'s
-/// speech; `None` where either holds none, or the warping would be too large
-/// ([`MAX_CELLS`]).
-fn follow(recording: Option<(usize, &[[f32; DIMS]])>, rendition: &Rendition) -> Option<Followed> {
-    let ((_, theirs), (_, ours)) = (recording?, rendition.speech.as_ref()?);
+/// The warping of a recording's speech onto a rendition's; `None` where either has none, or
+/// the warping would be too large ([`MAX_CELLS`]).
+fn follow(recording: Option<&Speech>, rendition: Option<&Speech>) -> Option<Followed> {
+    let (theirs, ours) = (&recording?.features, &rendition?.features);
     let band = band(theirs.len(), ours.len());
     if theirs.len().saturating_mul(2 * band + 1) > MAX_CELLS {
         return None;
@@ -274,24 +282,27 @@ fn follow(recording: Option<(usize, &[[f32; DIMS]])>, rendition: &Rendition) -> 
     Some(Followed { path, sharpness })
 }
 
-/// [`timed_by_synthesis`] against one rendition; `recording` is the first frame of `sound`'s
-/// speech and that speech's features, `None` without speech; `followed`, how it follows the
-/// rendition ([`follow`]).
+/// [`timed_by_synthesis`] against one rendition; `recording` is `sound`'s speech, `None`
+/// without speech; `followed`, how it follows the rendition ([`follow`]).
 fn timed_by(
     sound: &Sound,
-    recording: Option<(usize, &[[f32; DIMS]])>,
+    recording: Option<&Speech>,
     voiced: &[bool],
     rendition: &Rendition,
     followed: Option<Followed>,
 ) -> Result<Timed, PhoneError> {
-    let (Some((a0, _)), Some((b0, ours))) = (recording, rendition.speech.as_ref()) else {
+    let (Some(recording), Some(rendition_speech)) = (recording, rendition.speech.as_ref()) else {
         return Ok(Timed {
             phones: Vec::new(),
             sharpness: 0.0,
             voice_ratio: 0.0,
         });
     };
-    let b0 = *b0;
+    let (a0, b0, ours) = (
+        recording.first,
+        rendition_speech.first,
+        &rendition_speech.features,
+    );
     // Only a warping too large to make has no path.
     let Followed { path, sharpness } = followed.ok_or(PhoneError::TooLongToAlign {
         seconds: sound.seconds(),
