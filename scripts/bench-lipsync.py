@@ -17,8 +17,9 @@ the audio alone:
   shapes' largest weight (all but viseme_sil and viseme_PP);
 - the command's wall-clock time over the sound's length.
 
-Voices: flite's (kal, slt, rms, awb; `-psdur`), festival's (English diphone and HTS voices, and Italian
-with `festival-it:`; `utt.save.segs`),
+Voices: flite's (kal, slt, rms, awb; `-psdur`), festival's (English diphone and HTS voices, and
+Italian, Finnish and Czech with `festival-it:`, `festival-fi:`, `festival-cs:`, as
+`festival-fi:voice_suo_fi_lj_diphone`; `utt.save.segs`),
 eSpeak NG's (through its library with ctypes, phoneme events: a voice variant and rate other
 than the ones faceanim aligns with). Languages other than English through eSpeak NG with
 `--language` (eighteen: `--voices espeak:es,espeak:hi,…`).
@@ -76,12 +77,28 @@ FOREIGN = {
 # The voice that speaks a language's lines, where it is not the language's own.
 SPEAKER = {"zh": "cmn-latn-pinyin"}
 
-# More Italian for Festival's Italian voices (held out of every choice).
-ITALIAN = [
-    "Il babbo porta il pane buono a casa.",
-    "Paolo beve molto latte ogni mattina.",
-    "Bianca mangia una mela matura nel prato.",
-]
+# Lines for Festival's voices in other languages (`festival-it:`, `festival-fi:`, `festival-cs:`;
+# Debian's festvox-italp16k and -itapc16k, festvox-suopuhe-lj and -mv, festvox-czech-krb and
+# -ph), with held (geminate) stops in Italian and Finnish.
+FESTIVAL_LINES = {
+    "it": FOREIGN["it"] + [
+        "Il babbo porta il pane buono a casa.",
+        "Paolo beve molto latte ogni mattina.",
+        "Bianca mangia una mela matura nel prato.",
+    ],
+    "fi": FOREIGN["fi"] + [
+        "Pekka meni metsään marjoja poimimaan.",
+        "Tämä on minun pieni punainen talo.",
+    ],
+    "cs": [
+        "Máma mele maso.",
+        "Babička peče buchty a pije mléko.",
+        "Pepa má modrou bundu a bílé boty.",
+        "Dobré ráno, jak se máš?",
+    ],
+}
+# How Festival reads a language's text (its scripts are bytes).
+FESTIVAL_ENCODING = {"cs": "iso-8859-2"}
 
 VISEMES = ["sil", "PP", "FF", "TH", "DD", "kk", "CH", "SS", "nn", "RR", "aa", "E", "ih", "oh", "ou"]
 CLASS = {
@@ -149,7 +166,7 @@ def flite(voice, text, wav):
     return phones
 
 
-# Festival's Italian voices speak SAMPA (stress as a digit, `#` a pause).
+# Festival's Italian, Finnish and Czech voices speak SAMPA (stress as a digit, `#` a pause).
 SAMPA = {"E": "ɛ", "O": "ɔ", "dZ": "dʒ", "tS": "tʃ", "S": "ʃ", "Z": "ʒ", "J": "ɲ", "L": "ʎ"}
 
 
@@ -158,11 +175,11 @@ def sampa_viseme(phone):
     return None if phone in ("#", "pau") else ipa_viseme(SAMPA.get(phone, phone))
 
 
-def festival(voice, text, wav, work, viseme=ARPABET.get):
+def festival(voice, text, wav, work, viseme=ARPABET.get, encoding="latin-1"):
     segs = os.path.join(work, "f.segs")
     script = os.path.join(work, "f.scm")
     quoted = text.replace("\\", "\\\\").replace('"', '\\"')
-    with open(script, "w", encoding="latin-1") as f:
+    with open(script, "w", encoding=encoding) as f:
         f.write(f'({voice})\n(set! utt (Utterance Text "{quoted}"))\n(utt.synth utt)\n'
                 f'(utt.save.wave utt "{wav}" \'riff)\n(utt.save.segs utt "{segs}")\n')
     subprocess.run(["festival", "-b", script], check=True, capture_output=True)
@@ -374,8 +391,9 @@ def main():
             if engine == "espeak" and not voice.startswith("en"):
                 language = voice.split("+")[0]
                 lines = FOREIGN[language]
-            elif engine == "festival-it":
-                language, lines = "it", FOREIGN["it"] + ITALIAN
+            elif engine.startswith("festival-"):
+                language = engine.split("-", 1)[1]
+                lines = FESTIVAL_LINES[language]
             totals = {}
             for k, line in enumerate(lines):
                 wav = os.path.join(work, f"{engine}-{voice}-{k}.wav")
@@ -383,8 +401,9 @@ def main():
                     phones = flite(voice, line, wav)
                 elif engine == "festival":
                     phones = festival(voice, line, wav, work)
-                elif engine == "festival-it":
-                    phones = festival(voice, line, wav, work, sampa_viseme)
+                elif engine.startswith("festival-"):
+                    phones = festival(voice, line, wav, work, sampa_viseme,
+                                      FESTIVAL_ENCODING.get(language, "latin-1"))
                 else:
                     base, plus, variant = voice.partition("+")
                     phones = espeak_line(SPEAKER.get(base, base) + plus + variant, line, wav)

@@ -20,6 +20,7 @@ use faceanim_espeak_sys::{PAUSE, Spoken};
 use crate::audio::{SAMPLE_RATE, Sound};
 use crate::features::{CEPSTRA, Frontend, HOP, WINDOW};
 use crate::phones::{Phone, PhoneError};
+use crate::visemes::LONG_PAUSE;
 
 /// Features per frame: cepstra, their change, loudness.
 const DIMS: usize = 2 * CEPSTRA + 1;
@@ -375,10 +376,9 @@ fn sharpness(path: &[(usize, usize)], a: &[[f32; DIMS]], b: &[[f32; DIMS]]) -> f
 /// where the next starts (the last at the end of the recording's speech); labels cleaned.
 fn timed(spoken: &Spoken, seconds: f32, on_recording: impl Fn(u32) -> f32) -> Vec<Phone> {
     let mut phones: Vec<Phone> = Vec::with_capacity(spoken.phones.len() + 1);
-    let starts: Vec<f32> = spoken
-        .phones
-        .iter()
-        .map(|p| on_recording(p.start_ms))
+    let starts: Vec<f32> = closures_owned(spoken)
+        .into_iter()
+        .map(&on_recording)
         .collect();
     let spoken_end = spoken.samples.len() as f32 * 1000.0 / spoken.sample_rate as f32;
     let end_of_speech = on_recording(spoken_end as u32).min(seconds);
@@ -427,27 +427,86 @@ fn timed(spoken: &Spoken, seconds: f32, on_recording: impl Fn(u32) -> f32) -> Ve
     phones
 }
 
+/// The loudest sample (of 32,767) a synthesiser's stop closure holds: eSpeak NG makes the
+/// closure of a stop exact silence.
+const CLOSED: i32 = 8;
+/// The shortest closure that is a held (long, geminate) stop's, milliseconds: eSpeak NG closes
+/// a single stop for at most 55 ms (English, Spanish, German, French, Japanese, Korean,
+/// Italian, Portuguese, Finnish, Polish, Hindi, Arabic lines), a held one (Italian "latte",
+/// Finnish "Pekka", Arabic shadda) for 110–170 ms.
+const HELD_MS: u32 = 80;
+/// The longest: a silence longer than this before a stop is a pause (eSpeak NG marks its
+/// own pauses, and a stop after one is left alone).
+const HELD_MOST_MS: u32 = 250;
+/// The least of the phone before a stop that keeps its sound, milliseconds.
+const KEPT_MS: u32 = 20;
+
+/// Whether `ipa` is a stop (plosive or affricate): the tongue or lips closed, then released.
+fn is_stop(ipa: &str) -> bool {
+    ipa.starts_with([
+        'p', 'b', 't', 'd', 'k', 'g', 'ɡ', 'c', 'ɟ', 'q', 'ʔ', 'ʈ', 'ɖ',
+    ])
+}
+
+/// When each of `spoken`'s phones starts, milliseconds, with a held stop's closure its own.
+/// eSpeak NG reports a stop when its lips or tongue release it, and the silence it held them
+/// closed for falls in the phone before: the `a` of Italian "latte" holds the 120 ms closure
+/// of its `tː`, and a mouth timed so would stay open through that silence and shut only as
+/// the sound returns. A single stop's closure is short enough for the shape's own lead
+/// ([`crate::visemes::LEAD`]); a held one ([`HELD_MS`] or longer) starts the stop, as
+/// speech is annotated (Festival's and flite's voices time their stops so).
+fn closures_owned(spoken: &Spoken) -> Vec<u32> {
+    let per_ms = spoken.sample_rate as f32 / 1000.0;
+    let silent_ms = |ms: u32| {
+        let a = (ms as f32 * per_ms) as usize;
+        let b = (((ms + 1) as f32 * per_ms) as usize).min(spoken.samples.len());
+        a < b
+            && spoken.samples[a..b]
+                .iter()
+                .all(|s| i32::from(*s).abs() <= CLOSED)
+    };
+    let mut starts: Vec<u32> = spoken.phones.iter().map(|p| p.start_ms).collect();
+    for k in 1..spoken.phones.len() {
+        let phone = &spoken.phones[k];
+        if !is_stop(&phone.ipa) || spoken.phones[k - 1].ipa == PAUSE {
+            continue;
+        }
+        let floor = starts[k - 1] + KEPT_MS;
+        let mut start = phone.start_ms;
+        while start > floor && silent_ms(start - 1) {
+            start -= 1;
+        }
+        if (HELD_MS..=HELD_MOST_MS).contains(&(phone.start_ms - start)) {
+            starts[k] = start;
+        }
+    }
+    starts
+}
+
 /// Marks as silence every quiet stretch of at least [`PAUSE_SECONDS`] (one flag per 10 ms in
 /// `voiced`): the phone it fell in keeps its heard part (a pause the transcript did not mark,
 /// or one the voice made longer than the synthesiser did).
 fn carve_pauses(phones: Vec<Phone>, voiced: &[bool]) -> Vec<Phone> {
     let shortest = (PAUSE_SECONDS * 100.0).round() as usize;
     // A few frames in from each edge: the ends of the words either side stay theirs.
-    let pauses: Vec<(f32, f32)> = crate::audio::runs(voiced, false, shortest)
+    let pauses: Vec<(f32, f32, f32)> = crate::audio::runs(voiced, false, shortest)
         .into_iter()
         .map(|r| {
             (
                 (r.start + 3) as f32 / 100.0,
                 r.end.saturating_sub(3) as f32 / 100.0,
+                r.len() as f32 / 100.0,
             )
         })
         .collect();
     let mut out = Vec::with_capacity(phones.len() + 2 * pauses.len());
     for phone in phones {
         let mut rest = Some(phone);
-        for &(a, b) in &pauses {
+        for &(a, b, seconds) in &pauses {
             let Some(p) = rest.take() else { break };
-            if b <= p.start || a >= p.end || p.label == "SIL" {
+            // A held stop's closure (Italian "latte": 110–250 ms) is the stop's own.
+            let closure = is_stop(&p.label) && seconds < LONG_PAUSE;
+            if b <= p.start || a >= p.end || p.label == "SIL" || closure {
                 rest = Some(p);
                 continue;
             }
@@ -701,6 +760,60 @@ mod tests {
     }
 
     #[test]
+    fn a_held_stops_closure_is_its_own() {
+        use faceanim_espeak_sys::PhoneEvent;
+        // At 1,000 samples a second: sound, then `silent` ms of zeros before each release.
+        let spoken = |phones: &[(&str, u32)], silences: &[(u32, u32)]| {
+            let end = phones.last().map_or(0, |p| p.1) + 100;
+            let samples = (0..end)
+                .map(|ms| {
+                    if silences.iter().any(|&(a, b)| (a..b).contains(&ms)) {
+                        0
+                    } else {
+                        1000 * if ms % 2 == 0 { 1 } else { -1 }
+                    }
+                })
+                .collect();
+            Spoken {
+                samples,
+                sample_rate: 1000,
+                phones: phones
+                    .iter()
+                    .map(|&(ipa, start_ms)| PhoneEvent {
+                        ipa: ipa.into(),
+                        start_ms,
+                        word: 0,
+                    })
+                    .collect(),
+                words_ms: vec![0],
+            }
+        };
+        // Italian "latte": the `a` holds 120 ms of the `t`'s closure, which becomes the t's.
+        let latte = spoken(
+            &[("l", 0), ("a", 60), ("t", 300), ("e", 330)],
+            &[(180, 300)],
+        );
+        assert_eq!(closures_owned(&latte), [0, 60, 180, 330]);
+        // A single stop's 40 ms closure stays in the vowel: the shape's lead covers it.
+        let lato = spoken(
+            &[("l", 0), ("a", 60), ("t", 200), ("o", 230)],
+            &[(160, 200)],
+        );
+        assert_eq!(closures_owned(&lato), [0, 60, 200, 230]);
+        // A silence after a pause is the pause's; one too long is a pause eSpeak NG left
+        // unmarked; a phone quiet all through keeps its first 20 ms.
+        let after_pause = spoken(&[("a", 0), (PAUSE, 100), ("t", 300)], &[(100, 300)]);
+        assert_eq!(closures_owned(&after_pause), [0, 100, 300]);
+        let long = spoken(&[("a", 0), ("t", 500)], &[(100, 500)]);
+        assert_eq!(closures_owned(&long), [0, 500]);
+        let quiet = spoken(&[("n", 0), ("ʔ", 150), ("a", 170)], &[(0, 150)]);
+        assert_eq!(closures_owned(&quiet), [0, 20, 170]);
+        // Only stops own a closure: a silence before an `m` is not moved.
+        let m = spoken(&[("a", 0), ("m", 300)], &[(150, 300)]);
+        assert_eq!(closures_owned(&m), [0, 300]);
+    }
+
+    #[test]
     fn quiet_stretches_inside_phones_become_silence() {
         let phone = |label: &str, start: f32, end: f32| Phone {
             label: label.into(),
@@ -721,6 +834,12 @@ mod tests {
         let voiced: Vec<bool> = (0..100).map(|k| !(30..38).contains(&k)).collect();
         let kept = carve_pauses(vec![phone("p", 0.0, 1.0)], &voiced);
         assert_eq!(kept.len(), 1);
+        // So is a held stop's (0.2 s, under a long pause), but not a vowel's.
+        let voiced: Vec<bool> = (0..100).map(|k| !(30..50).contains(&k)).collect();
+        let held = carve_pauses(vec![phone("a", 0.0, 0.3), phone("tː", 0.3, 1.0)], &voiced);
+        assert_eq!(held.len(), 2);
+        let vowel = carve_pauses(vec![phone("a", 0.0, 1.0)], &voiced);
+        assert_eq!(vowel.len(), 3);
     }
 
     #[test]

@@ -206,15 +206,18 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
     // A consonant is often quiet itself — the lips of a P held shut, the hold of a T — and is
     // said when a sound beside it is heard: a phone, or a voice the recogniser heard as
     // silence (mouthed below; a closure found inside such a silence lies between two).
+    // A quiet between two heard sounds shorter than a long pause is the consonant's own too:
+    // a held stop's closure (Italian "latte", Finnish "Pekka") lasts longer than a single one.
     let said = |k: usize| {
         let p = &phones[k];
         let viseme = viseme_of(&p.label);
+        let before = k.checked_sub(1).is_some_and(|j| heard(&phones[j]));
+        let after = phones.get(k + 1).is_some_and(heard);
         heard(p)
             || (viseme != Viseme::Sil
                 && !is_vowel(viseme)
-                && quiet(p) <= CLOSURE
-                && (k.checked_sub(1).is_some_and(|j| heard(&phones[j]))
-                    || phones.get(k + 1).is_some_and(heard)))
+                && (quiet(p) <= CLOSURE && (before || after)
+                    || quiet(p) < LONG_PAUSE && before && after))
     };
     let mut runs: Vec<(Viseme, f32, f32)> = Vec::new();
     let mut extend = |viseme: Viseme, start: f32, end: f32| {
@@ -454,6 +457,28 @@ mod tests {
         let quiet: Vec<bool> = (0..100).map(|f| !(30..65).contains(&f)).collect();
         let paused = super::track(&phones, &quiet, 1.0);
         assert!(paused.weights_at(0.49)[pp] < 0.1, "{:?}", paused.keys);
+    }
+
+    #[test]
+    fn a_held_stop_between_two_sounds_holds_its_shape() {
+        // Italian "cappa": the P's lips held shut for 0.2 s between two heard vowels.
+        let cappa =
+            phones("SIL 0 0.2, K 0.2 0.25, AA 0.25 0.4, P 0.4 0.6, AA 0.6 0.9, SIL 0.9 1.5");
+        let voiced: Vec<bool> = (0..150)
+            .map(|f| (20..90).contains(&f) && !(40..60).contains(&f))
+            .collect();
+        let held = track(&cappa, &voiced, 1.5);
+        let pp = index(Viseme::PP);
+        assert!(held.weights_at(0.5)[pp] > 0.9, "{:?}", held.keys);
+        // A quiet as long after the last sound is a pause: the mouth closes to rest.
+        let at = phones("SIL 0 0.2, AA 0.2 0.4, T 0.4 0.6, SIL 0.6 1.5");
+        let voiced: Vec<bool> = (0..150).map(|f| (20..40).contains(&f)).collect();
+        let paused = track(&at, &voiced, 1.5);
+        assert!(
+            paused.weights_at(0.55).iter().all(|w| *w < 0.1),
+            "{:?}",
+            paused.keys
+        );
     }
 
     #[test]
