@@ -18,8 +18,8 @@ the audio alone:
 - the command's wall-clock time over the sound's length.
 
 Voices: flite's (kal, slt, rms, awb; `-psdur`), festival's (English diphone and HTS voices, and
-Italian, Finnish and Czech with `festival-it:`, `festival-fi:`, `festival-cs:`, as
-`festival-fi:voice_suo_fi_lj_diphone`; `utt.save.segs`),
+Italian, Finnish, Czech and Catalan with `festival-it:`, `festival-fi:`, `festival-cs:`,
+`festival-ca:`, as `festival-fi:voice_suo_fi_lj_diphone`; `utt.save.segs`),
 eSpeak NG's (through its library with ctypes, phoneme events: a voice variant and rate other
 than the ones faceanim aligns with). Languages other than English through eSpeak NG with
 `--language` (eighteen: `--voices espeak:es,espeak:hi,…`).
@@ -77,9 +77,10 @@ FOREIGN = {
 # The voice that speaks a language's lines, where it is not the language's own.
 SPEAKER = {"zh": "cmn-latn-pinyin"}
 
-# Lines for Festival's voices in other languages (`festival-it:`, `festival-fi:`, `festival-cs:`;
-# Debian's festvox-italp16k and -itapc16k, festvox-suopuhe-lj and -mv, festvox-czech-krb and
-# -ph), with held (geminate) stops in Italian and Finnish.
+# Lines for Festival's voices in other languages (`festival-it:`, `festival-fi:`, `festival-cs:`,
+# `festival-ca:`; Debian's festvox-italp16k and -itapc16k, festvox-suopuhe-lj and -mv,
+# festvox-czech-krb, -ph and -dita, festvox-ca-ona-hts), with held (geminate) stops in Italian
+# and Finnish.
 FESTIVAL_LINES = {
     "it": FOREIGN["it"] + [
         "Il babbo porta il pane buono a casa.",
@@ -95,6 +96,12 @@ FESTIVAL_LINES = {
         "Babička peče buchty a pije mléko.",
         "Pepa má modrou bundu a bílé boty.",
         "Dobré ráno, jak se máš?",
+    ],
+    "ca": [
+        "La mare menja pa amb tomàquet.",
+        "El meu pare porta un barret blau.",
+        "Bon dia, com estàs?",
+        "Mireia beu aigua cada matí a la platja.",
     ],
 }
 # How Festival reads a language's text (its scripts are bytes).
@@ -166,8 +173,9 @@ def flite(voice, text, wav):
     return phones
 
 
-# Festival's Italian, Finnish and Czech voices speak SAMPA (stress as a digit, `#` a pause).
-SAMPA = {"E": "ɛ", "O": "ɔ", "dZ": "dʒ", "tS": "tʃ", "S": "ʃ", "Z": "ʒ", "J": "ɲ", "L": "ʎ"}
+# Festival's Italian, Finnish, Czech and Catalan voices speak SAMPA (stress as a digit, `#` or
+# `pau` a pause).
+SAMPA = {"ax": "ə", "E": "ɛ", "O": "ɔ", "dZ": "dʒ", "tS": "tʃ", "S": "ʃ", "Z": "ʒ", "J": "ɲ", "L": "ʎ"}
 
 
 def sampa_viseme(phone):

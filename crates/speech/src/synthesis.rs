@@ -441,7 +441,8 @@ const HELD_MOST_MS: u32 = 250;
 /// The least of the phone before a stop that keeps its sound, milliseconds.
 const KEPT_MS: u32 = 20;
 
-/// Whether `ipa` is a stop (plosive or affricate): the tongue or lips closed, then released.
+/// Whether `ipa` is a stop (a plosive or an affricate): the lips, the tongue or the glottis
+/// closed, then released.
 fn is_stop(ipa: &str) -> bool {
     ipa.starts_with([
         'p', 'b', 't', 'd', 'k', 'g', 'ɡ', 'c', 'ɟ', 'q', 'ʔ', 'ʈ', 'ɖ',
