@@ -20,7 +20,7 @@ use faceanim_espeak_sys::{PAUSE, Spoken};
 use crate::audio::{SAMPLE_RATE, Sound};
 use crate::features::{CEPSTRA, Frontend, HOP, WINDOW};
 use crate::phones::{Phone, PhoneError};
-use crate::visemes::LONG_PAUSE;
+use crate::visemes::{LONG_PAUSE, is_held_stop, is_stop};
 
 /// Features per frame: cepstra, their change, loudness.
 const DIMS: usize = 2 * CEPSTRA + 1;
@@ -376,10 +376,8 @@ fn sharpness(path: &[(usize, usize)], a: &[[f32; DIMS]], b: &[[f32; DIMS]]) -> f
 /// where the next starts (the last at the end of the recording's speech); labels cleaned.
 fn timed(spoken: &Spoken, seconds: f32, on_recording: impl Fn(u32) -> f32) -> Vec<Phone> {
     let mut phones: Vec<Phone> = Vec::with_capacity(spoken.phones.len() + 1);
-    let starts: Vec<f32> = closures_owned(spoken)
-        .into_iter()
-        .map(&on_recording)
-        .collect();
+    let owned = closures_owned(spoken);
+    let starts: Vec<f32> = owned.iter().map(|&(ms, _)| on_recording(ms)).collect();
     let spoken_end = spoken.samples.len() as f32 * 1000.0 / spoken.sample_rate as f32;
     let end_of_speech = on_recording(spoken_end as u32).min(seconds);
     for (k, phone) in spoken.phones.iter().enumerate() {
@@ -395,6 +393,9 @@ fn timed(spoken: &Spoken, seconds: f32, on_recording: impl Fn(u32) -> f32) -> Ve
             .clamp(start, seconds);
         let label = if phone.ipa == PAUSE {
             "SIL".to_owned()
+        } else if owned[k].1 && !phone.ipa.contains('ː') {
+            // A held stop, marked long as IPA writes it (`tː`).
+            format!("{}ː", phone.ipa)
         } else {
             phone.ipa.clone()
         };
@@ -441,22 +442,15 @@ const HELD_MOST_MS: u32 = 250;
 /// The least of the phone before a stop that keeps its sound, milliseconds.
 const KEPT_MS: u32 = 20;
 
-/// Whether `ipa` is a stop (a plosive or an affricate): the lips, the tongue or the glottis
-/// closed, then released.
-fn is_stop(ipa: &str) -> bool {
-    ipa.starts_with([
-        'p', 'b', 't', 'd', 'k', 'g', 'ɡ', 'c', 'ɟ', 'q', 'ʔ', 'ʈ', 'ɖ',
-    ])
-}
-
-/// When each of `spoken`'s phones starts, milliseconds, with a held stop's closure its own.
+/// When each of `spoken`'s phones starts, milliseconds, with a held stop's closure its own,
+/// and whether it is a held stop.
 /// eSpeak NG reports a stop when its lips or tongue release it, and the silence it held them
 /// closed for falls in the phone before: the `a` of Italian "latte" holds the 120 ms closure
 /// of its `tː`, and a mouth timed so would stay open through that silence and shut only as
 /// the sound returns. A single stop's closure is short enough for the shape's own lead
 /// ([`crate::visemes::LEAD`]); a held one ([`HELD_MS`] or longer) starts the stop, as
 /// speech is annotated (Festival's and flite's voices time their stops so).
-fn closures_owned(spoken: &Spoken) -> Vec<u32> {
+fn closures_owned(spoken: &Spoken) -> Vec<(u32, bool)> {
     let per_ms = spoken.sample_rate as f32 / 1000.0;
     let silent_ms = |ms: u32| {
         let a = (ms as f32 * per_ms) as usize;
@@ -466,19 +460,19 @@ fn closures_owned(spoken: &Spoken) -> Vec<u32> {
                 .iter()
                 .all(|s| i32::from(*s).abs() <= CLOSED)
     };
-    let mut starts: Vec<u32> = spoken.phones.iter().map(|p| p.start_ms).collect();
+    let mut starts: Vec<(u32, bool)> = spoken.phones.iter().map(|p| (p.start_ms, false)).collect();
     for k in 1..spoken.phones.len() {
         let phone = &spoken.phones[k];
         if !is_stop(&phone.ipa) || spoken.phones[k - 1].ipa == PAUSE {
             continue;
         }
-        let floor = starts[k - 1] + KEPT_MS;
+        let floor = starts[k - 1].0 + KEPT_MS;
         let mut start = phone.start_ms;
         while start > floor && silent_ms(start - 1) {
             start -= 1;
         }
         if (HELD_MS..=HELD_MOST_MS).contains(&(phone.start_ms - start)) {
-            starts[k] = start;
+            starts[k] = (start, true);
         }
     }
     starts
@@ -506,7 +500,7 @@ fn carve_pauses(phones: Vec<Phone>, voiced: &[bool]) -> Vec<Phone> {
         for &(a, b, seconds) in &pauses {
             let Some(p) = rest.take() else { break };
             // A held stop's closure (Italian "latte": 110–250 ms) is the stop's own.
-            let closure = is_stop(&p.label) && seconds < LONG_PAUSE;
+            let closure = is_held_stop(&p.label) && seconds < LONG_PAUSE;
             if b <= p.start || a >= p.end || p.label == "SIL" || closure {
                 rest = Some(p);
                 continue;
@@ -794,24 +788,30 @@ mod tests {
             &[("l", 0), ("a", 60), ("t", 300), ("e", 330)],
             &[(180, 300)],
         );
-        assert_eq!(closures_owned(&latte), [0, 60, 180, 330]);
+        let starts = |spoken: &Spoken| -> Vec<u32> {
+            closures_owned(spoken).iter().map(|&(ms, _)| ms).collect()
+        };
+        assert_eq!(
+            closures_owned(&latte),
+            [(0, false), (60, false), (180, true), (330, false)]
+        );
         // A single stop's 40 ms closure stays in the vowel: the shape's lead covers it.
         let lato = spoken(
             &[("l", 0), ("a", 60), ("t", 200), ("o", 230)],
             &[(160, 200)],
         );
-        assert_eq!(closures_owned(&lato), [0, 60, 200, 230]);
+        assert_eq!(starts(&lato), [0, 60, 200, 230]);
         // A silence after a pause is the pause's; one too long is a pause eSpeak NG left
         // unmarked; a phone quiet all through keeps its first 20 ms.
         let after_pause = spoken(&[("a", 0), (PAUSE, 100), ("t", 300)], &[(100, 300)]);
-        assert_eq!(closures_owned(&after_pause), [0, 100, 300]);
+        assert_eq!(starts(&after_pause), [0, 100, 300]);
         let long = spoken(&[("a", 0), ("t", 500)], &[(100, 500)]);
-        assert_eq!(closures_owned(&long), [0, 500]);
+        assert_eq!(starts(&long), [0, 500]);
         let quiet = spoken(&[("n", 0), ("ʔ", 150), ("a", 170)], &[(0, 150)]);
-        assert_eq!(closures_owned(&quiet), [0, 20, 170]);
+        assert_eq!(starts(&quiet), [0, 20, 170]);
         // Only stops own a closure: a silence before an `m` is not moved.
         let m = spoken(&[("a", 0), ("m", 300)], &[(150, 300)]);
-        assert_eq!(closures_owned(&m), [0, 300]);
+        assert_eq!(starts(&m), [0, 300]);
     }
 
     #[test]

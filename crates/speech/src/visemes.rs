@@ -106,6 +106,21 @@ fn is_modifier(c: char) -> bool {
         || c.is_ascii_digit()
 }
 
+/// Whether an IPA phone is a stop (a plosive or an affricate): the lips, the tongue or the
+/// glottis closed, then released (ARPAbet's upper-case names are not IPA).
+pub(crate) fn is_stop(phone: &str) -> bool {
+    phone.starts_with([
+        'p', 'b', 't', 'd', 'k', 'g', 'ɡ', 'c', 'ɟ', 'q', 'ʔ', 'ʈ', 'ɖ',
+    ])
+}
+
+/// Whether an IPA phone is a held (long, geminate) stop, marked long (`tː` of Italian
+/// "latte", `kː` of Finnish "Pekka"): its closure, silent, lasts two or three times a single
+/// stop's.
+pub(crate) fn is_held_stop(phone: &str) -> bool {
+    is_stop(phone) && phone.contains('ː')
+}
+
 /// The viseme of an IPA phone, by how it is articulated: the place of a consonant (lips,
 /// lip and teeth, teeth, tongue tip, the back of the tongue, palate), the height, backness and
 /// rounding of a vowel (a diphthong by the vowel it starts from). Affricates go by their
@@ -206,8 +221,8 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
     // A consonant is often quiet itself — the lips of a P held shut, the hold of a T — and is
     // said when a sound beside it is heard: a phone, or a voice the recogniser heard as
     // silence (mouthed below; a closure found inside such a silence lies between two).
-    // A quiet between two heard sounds shorter than a long pause is the consonant's own too:
-    // a held stop's closure (Italian "latte", Finnish "Pekka") lasts longer than a single one.
+    // A held stop's closure (Italian "latte", Finnish "Pekka") lasts longer than a single
+    // one's: between two heard sounds, a quiet up to a long pause is its own.
     let said = |k: usize| {
         let p = &phones[k];
         let viseme = viseme_of(&p.label);
@@ -217,7 +232,7 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
             || (viseme != Viseme::Sil
                 && !is_vowel(viseme)
                 && (quiet(p) <= CLOSURE && (before || after)
-                    || quiet(p) < LONG_PAUSE && before && after))
+                    || is_held_stop(&p.label) && quiet(p) < LONG_PAUSE && before && after))
     };
     let mut runs: Vec<(Viseme, f32, f32)> = Vec::new();
     let mut extend = |viseme: Viseme, start: f32, end: f32| {
@@ -461,15 +476,18 @@ mod tests {
 
     #[test]
     fn a_held_stop_between_two_sounds_holds_its_shape() {
-        // Italian "cappa": the P's lips held shut for 0.2 s between two heard vowels.
-        let cappa =
-            phones("SIL 0 0.2, K 0.2 0.25, AA 0.25 0.4, P 0.4 0.6, AA 0.6 0.9, SIL 0.9 1.5");
+        // Italian "cappa": the held P's lips shut for 0.2 s between two heard vowels.
+        let cappa = phones("SIL 0 0.2, k 0.2 0.25, a 0.25 0.4, pː 0.4 0.6, a 0.6 0.9, SIL 0.9 1.5");
         let voiced: Vec<bool> = (0..150)
             .map(|f| (20..90).contains(&f) && !(40..60).contains(&f))
             .collect();
         let held = track(&cappa, &voiced, 1.5);
         let pp = index(Viseme::PP);
         assert!(held.weights_at(0.5)[pp] > 0.9, "{:?}", held.keys);
+        // A single stop as quiet is a pause the recogniser put a stop in: the mouth relaxes.
+        let capa = phones("SIL 0 0.2, k 0.2 0.25, a 0.25 0.4, p 0.4 0.6, a 0.6 0.9, SIL 0.9 1.5");
+        let single = track(&capa, &voiced, 1.5);
+        assert!(single.weights_at(0.5)[pp] < 0.1, "{:?}", single.keys);
         // A quiet as long after the last sound is a pause: the mouth closes to rest.
         let at = phones("SIL 0 0.2, AA 0.2 0.4, T 0.4 0.6, SIL 0.6 1.5");
         let voiced: Vec<bool> = (0..150).map(|f| (20..40).contains(&f)).collect();
