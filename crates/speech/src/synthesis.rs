@@ -444,6 +444,7 @@ const KEPT_MS: u32 = 20;
 
 /// When each of `spoken`'s phones starts, milliseconds, with a held stop's closure its own,
 /// and whether it is a held stop.
+///
 /// eSpeak NG reports a stop when its lips or tongue release it, and the silence it held them
 /// closed for falls in the phone before: the `a` of Italian "latte" holds the 120 ms closure
 /// of its `tː`, and a mouth timed so would stay open through that silence and shut only as
