@@ -139,14 +139,16 @@ fn ict_heads_whose_names_say_nothing_follow_real_people() {
     }
     std::fs::write(out.join("ict.json"), format!("{:#}", Value::Object(report))).unwrap();
     // Every moving channel of every identity on every video follows at 0.85 or better (the
-    // issue's bar; by name the same heads give 0.89 and up): 0.875 and up on the three
-    // identities the map's making was tuned on. The held-out identity, measured once at the
-    // end: every channel at 0.875 and up but one, mouthLowerDown_R on cap12 at 0.772 — on
-    // that face the jaw's row recruits the lower lip's shape (jawOpen answers with it at 0.31),
-    // so the lip's shape moves with the jaw as well as with its own channel. That is the
-    // finding; it was left as it is rather than tuned on the identity held out to catch it.
+    // issue's bar; by name the same heads give 0.89 and up): 0.875 and up on all four. The
+    // identity held out of the map's making gave, when first measured, every channel at 0.875
+    // and up but one, mouthLowerDown_R on cap12 at 0.772: the jaw's row had recruited that
+    // lip's shape (0.31) for 0.2 % of the jaw's displacement, so the lip moved with the jaw as
+    // well as with its own channel. Rows now leave out a shape that adds under half a percent
+    // (`faceanim_fit`'s mapping, chosen on id3's rows, where the same pattern is smaller, and
+    // the Blender avatar); that lip then follows at 0.992, id48's least channel at 0.875. It
+    // is no longer held out of that rule.
     eprintln!("held out, under 0.85: {held_out_weak:?}");
-    assert!(held_out_weak.len() <= 1, "{held_out_weak:#?}");
+    assert!(held_out_weak.is_empty(), "{held_out_weak:#?}");
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
