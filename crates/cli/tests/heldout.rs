@@ -343,8 +343,8 @@ fn the_calibrated_map_reads_people_and_renderers_it_never_saw() {
         //
         // Those figures are from before the map stopped dropping channels: a channel the
         // per-frame solve took, but whose shapes it could not move, drove nothing (on the third
-        // person: both eyeWide, mouthClose, mouthStretch_L, mouthRollLower, mouthLowerDown_R and
-        // browInnerUp). Driven by their rows, the held-out stills give 0.1132 instead of 0.1151
+        // person: both eyeWide and eyeLookUp, mouthClose, mouthStretch_L, mouthRollLower,
+        // mouthShrugLower, mouthLowerDown_R and browInnerUp). Driven by their rows, the held-out stills give 0.1132 instead of 0.1151
         // (dense 0.303; one, two, three shapes 0.035, 0.058, 0.057), without their neutral 0.126
         // instead of 0.124; on 60 stills 0.1177 against 0.1183 and 0.131 against 0.126. Those
         // channels are among the ones MediaPipe reads least faithfully on renders, so answering
