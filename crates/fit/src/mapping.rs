@@ -311,22 +311,17 @@ fn fit_shapes(
             kept.iter().position(|&j| free[j] == partner.index())
         })
         .collect();
-    let region_share = |i: usize, r: Region| -> f64 {
-        let own = share_in(i, r);
-        let k = kept.iter().position(|&j| j == i);
-        match k.and_then(|k| twin[k]) {
-            Some(t) => own.max(share_in(kept[t], r)),
-            None => own,
-        }
+    let region_share = |k: usize, r: Region| -> f64 {
+        let own = share_in(kept[k], r);
+        twin[k].map_or(own, |t| own.max(share_in(kept[t], r)))
     };
     let allowed: Vec<Vec<bool>> = channels
         .iter()
         .map(|&c| {
             let r = Region::of_channel(faceanim_rig::names::ARKIT_52[c]);
             let side = displacement[c].as_deref().map_or(0.5, right_share);
-            kept.iter()
-                .enumerate()
-                .map(|(k, &i)| {
+            (0..kept.len())
+                .map(|k| {
                     let same_side = if side > ONE_SIDED {
                         shape_sides[k] >= 1.0 - ONE_SIDED
                     } else if side < 1.0 - ONE_SIDED {
@@ -334,7 +329,7 @@ fn fit_shapes(
                     } else {
                         true
                     };
-                    same_side && region_share(i, r) >= REGION_SHARE
+                    same_side && region_share(k, r) >= REGION_SHARE
                 })
                 .collect()
         })
@@ -360,7 +355,7 @@ fn fit_shapes(
         .iter()
         .map(|&c| displacement[c].as_ref().map_or(0.0, |d| dot(d, d)) / scale)
         .collect();
-    let solve = Solve {
+    let mut solve = Solve {
         shapes: kept
             .iter()
             .map(|&i| shapes[free[i]].name().to_owned())
@@ -380,7 +375,6 @@ fn fit_shapes(
         sparsity: SPARSITY,
     };
     // Each channel alone: its row, and how much of it the shapes explain.
-    let mut solve = solve;
     let mut rows = Vec::new();
     let mut reached = Vec::new();
     for (col, &c) in channels.iter().enumerate() {
@@ -404,19 +398,19 @@ fn fit_shapes(
                     let mut without = allowed_here.clone();
                     without[k] = false;
                     let y = solve.weights_among(&unit, &without);
-                    let kept = share(&y);
+                    let without_it = share(&y);
                     let size = x[k] * solve.gram[k][k].sqrt();
-                    (explained - kept < MIN_GAIN).then_some((size, k, y, kept))
+                    (explained - without_it < MIN_GAIN).then_some((size, k, y, without_it))
                 })
                 .min_by(|a, b| a.0.total_cmp(&b.0));
             match weakest {
-                Some((_, k, y, kept)) => {
+                Some((_, k, y, without_it)) => {
                     allowed_here[k] = false;
                     solve.projections[k][col] = 0.0;
                     x = y;
-                    explained = kept;
+                    explained = without_it;
                 }
-                _ => break,
+                None => break,
             }
         }
         let shapes_of_row: BTreeMap<String, f32> = if explained >= MIN_EXPLAINED {
