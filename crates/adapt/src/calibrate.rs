@@ -51,20 +51,28 @@ impl FaceCamera {
                     .then_some((c, score))
             })
             .collect();
-        let work: Vec<(usize, usize, f32)> = channels
+        let shown_with: Vec<Option<usize>> = channels
             .iter()
-            .flat_map(|&(c, score)| INTENSITIES.iter().map(move |&x| (c, score, x)))
+            .map(|&(c, _)| shown_with_twin(map, c))
+            .collect();
+        let work: Vec<(usize, usize, Option<usize>, f32)> = channels
+            .iter()
+            .zip(&shown_with)
+            .flat_map(|(&(c, score), &twin)| INTENSITIES.iter().map(move |&x| (c, score, twin, x)))
             .collect();
         let total = work.len();
         let done = std::sync::atomic::AtomicUsize::new(0);
         let rises: Vec<(usize, f32, f32)> = work
             .par_iter()
-            .map_init(Pose::default, |pose, &(c, score, x)| {
+            .map_init(Pose::default, |pose, &(c, score, twin, x)| {
                 if control.cancelled() {
                     return Err(AdaptError::Cancelled);
                 }
                 let mut values = vec![0.0; faceanim_retarget::CHANNELS];
                 values[c] = x;
+                if let Some(t) = twin {
+                    values[t] = x;
+                }
                 let weights = map.weights(&values);
                 let read = self.expression(character, models, &weights, pose)?.0;
                 let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
@@ -92,5 +100,57 @@ impl FaceCamera {
             }
         }
         Ok(calibration)
+    }
+}
+
+/// The channel `c` is shown with when calibrated: its twin on the other side of the face
+/// ([`faceanim_rig::names::Channel::twin`]) when most of what the map moves for it (half its
+/// weight or more) is shapes it moves for the twin too: a shape that moves both sides, which
+/// each side drives at half (`Fcl_BRW_Angry` for both `browDownLeft` and `browDownRight`, or
+/// a name that merges the two). Shown alone, such a channel moves its shape half way, and the
+/// score that half reads would be taken for the whole: a person lowering both brows would
+/// move the character's twice as far.
+fn shown_with_twin(map: &RetargetMap, c: usize) -> Option<usize> {
+    let twin = faceanim_rig::names::Channel::named(faceanim_rig::names::ARKIT_52[c])?
+        .twin()?
+        .index();
+    let moves = |c: usize| {
+        let mut unit = vec![0.0; faceanim_retarget::CHANNELS];
+        unit[c] = 1.0;
+        map.weights(&unit)
+    };
+    let (one, other) = (moves(c), moves(twin));
+    let shared: f32 = one.iter().zip(&other).map(|(a, b)| a.min(*b)).sum();
+    (shared > 0.0 && 2.0 * shared >= one.iter().sum::<f32>()).then_some(twin)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn index(name: &str) -> usize {
+        faceanim_retarget::channel_index(name).unwrap()
+    }
+
+    /// VRoid's lowered brows are one shape for both sides (each side drives it at half): each
+    /// side is calibrated with the other. Its blinks are a shape for each eye: alone.
+    #[test]
+    fn a_shape_both_sides_drive_is_calibrated_with_both() {
+        let names: Vec<String> = ["Fcl_BRW_Angry", "Fcl_EYE_Close_L", "Fcl_EYE_Close_R"]
+            .map(String::from)
+            .to_vec();
+        let map = RetargetMap::by_name("vroid", &names, &[]);
+        assert_eq!(
+            shown_with_twin(&map, index("browDownLeft")),
+            Some(index("browDownRight")),
+            "{}",
+            map.to_json()
+        );
+        assert_eq!(
+            shown_with_twin(&map, index("browDownRight")),
+            Some(index("browDownLeft"))
+        );
+        assert_eq!(shown_with_twin(&map, index("eyeBlinkLeft")), None);
+        assert_eq!(shown_with_twin(&map, index("jawOpen")), None);
     }
 }

@@ -375,51 +375,25 @@ fn fit_shapes(
         sparsity: SPARSITY,
     };
     // Each channel alone: its row, and how much of it the shapes explain.
+    let column = |col: usize| -> Vec<f64> { projections.iter().map(|row| row[col]).collect() };
     let mut rows = Vec::new();
     let mut reached = Vec::new();
     for (col, &c) in channels.iter().enumerate() {
         let mut unit = vec![0.0; channels.len()];
         unit[col] = 1.0;
-        let share = |x: &[f32]| explained_share(&solve.gram, &projections, energy[col], col, x);
-        let mut allowed_here = allowed[col].clone();
-        let mut x = solve.weights_among(&unit, &allowed_here);
-        let mut explained = share(&x);
-        // Few shapes per channel: a shape whose part of the row adds under [`MIN_GAIN`] of the
-        // channel is left out of it (and of the channel's pull in the solve), the one that
-        // moves least first, so that of two near twins the one the fit leans on stays.
-        loop {
-            let used: Vec<usize> = (0..x.len()).filter(|&k| x[k] > 0.0).collect();
-            if used.len() < 2 {
-                break;
-            }
-            let weakest = used
-                .iter()
-                .filter_map(|&k| {
-                    let mut without = allowed_here.clone();
-                    without[k] = false;
-                    let y = solve.weights_among(&unit, &without);
-                    let without_it = share(&y);
-                    let size = x[k] * solve.gram[k][k].sqrt();
-                    (explained - without_it < MIN_GAIN).then_some((size, k, y, without_it))
-                })
-                .min_by(|a, b| a.0.total_cmp(&b.0));
-            match weakest {
-                Some((_, k, y, without_it)) => {
-                    allowed_here[k] = false;
-                    solve.projections[k][col] = 0.0;
-                    x = y;
-                    explained = without_it;
-                }
-                None => break,
-            }
-        }
-        let shapes_of_row: BTreeMap<String, f32> = if explained >= MIN_EXPLAINED {
+        let b = column(col);
+        let (x, explained, kept_here) = pruned_row(&solve, &unit, allowed[col].clone(), |x| {
+            explained_share(&solve.gram, &b, energy[col], x)
+        });
+        let shapes_of_row = if explained >= MIN_EXPLAINED {
             reached.push(col);
-            x.iter()
-                .zip(&solve.shapes)
-                .filter(|(w, _)| **w >= ROW_FLOOR)
-                .map(|(w, name)| (name.clone(), (*w * 1000.0).round() / 1000.0))
-                .collect()
+            // A pruned shape loses the channel's pull in the solve as well.
+            for (k, here) in kept_here.iter().enumerate() {
+                if !here {
+                    solve.projections[k][col] = 0.0;
+                }
+            }
+            row_of(&x, &solve.shapes, 1.0)
         } else {
             BTreeMap::new()
         };
@@ -429,6 +403,57 @@ fn fit_shapes(
             explained: (explained * 1000.0).round() / 1000.0,
         });
     }
+    // A channel of one side that no shape of one side makes, with its twin that none makes
+    // either, is made of the shapes that move both sides at once: VRoid's brows, wide eyes,
+    // frowns and sneers are one shape for the two sides, which explains only half of either
+    // side's channel. The two sides' displacements together are matched among the shapes both
+    // may take, and each side's row is half of that match, as a name that merges a left and
+    // right channel is driven by their mean: both sides raised move the shape fully, one side
+    // half. (Without it, a VRoid avatar with its names scrambled kept its brows still when a
+    // person lowered them, its eyes when they widened.)
+    for col in 0..channels.len() {
+        let twin =
+            faceanim_rig::names::Channel::named(faceanim_rig::names::ARKIT_52[channels[col]])
+                .and_then(faceanim_rig::names::Channel::twin)
+                .and_then(|twin| channels.iter().position(|&c| c == twin.index()));
+        let Some(t) = twin.filter(|&t| t > col) else {
+            continue;
+        };
+        if !rows[col].shapes.is_empty() || !rows[t].shapes.is_empty() {
+            continue;
+        }
+        let (Some(one), Some(other)) = (&displacement[channels[col]], &displacement[channels[t]])
+        else {
+            continue;
+        };
+        let mut pair = vec![0.0; channels.len()];
+        pair[col] = 1.0;
+        pair[t] = 1.0;
+        let both: Vec<bool> = allowed[col]
+            .iter()
+            .zip(&allowed[t])
+            .map(|(a, b)| *a && *b)
+            .collect();
+        let b: Vec<f64> = projections.iter().map(|row| row[col] + row[t]).collect();
+        let e = energy[col] + energy[t] + 2.0 * dot(one, other) / scale;
+        let (x, explained, kept_here) = pruned_row(&solve, &pair, both, |x| {
+            explained_share(&solve.gram, &b, e, x)
+        });
+        if explained < MIN_EXPLAINED {
+            continue;
+        }
+        for side in [col, t] {
+            for (k, here) in kept_here.iter().enumerate() {
+                if !here {
+                    solve.projections[k][side] = 0.0;
+                }
+            }
+            rows[side].shapes = row_of(&x, &solve.shapes, 0.5);
+            rows[side].explained = (explained * 1000.0).round() / 1000.0;
+            reached.push(side);
+        }
+    }
+    reached.sort_unstable();
     // A channel with a shape of its own (one shape makes it, and that shape makes no other
     // channel) is driven by its row, as a named one is; the solve matches, frame by frame,
     // the channels that share shapes or need several at once. (Measured on ICT's heads with
@@ -524,16 +549,57 @@ fn fit_shapes(
     (rows, solve)
 }
 
-/// The share of channel `col`'s displacement (of region-weighted size `energy`) that weights
-/// `x` of the shapes reproduce: `1 − |Bx − D|² / |D|²`, from the Gram matrix and the shapes'
-/// products with the channel.
-fn explained_share(
-    gram: &[Vec<f32>],
-    projections: &[Vec<f64>],
-    energy: f64,
-    col: usize,
-    x: &[f32],
-) -> f32 {
+/// A row's weights for channel values `values` among the shapes `allowed`, with few shapes: a
+/// shape whose part adds under [`MIN_GAIN`] of the displacement (as `share` measures the share
+/// weights explain) is left out, the one that moves least first, so that of two near twins the
+/// one the fit leans on stays. The weights, their share, and the shapes left allowed.
+fn pruned_row(
+    solve: &Solve,
+    values: &[f32],
+    mut allowed: Vec<bool>,
+    share: impl Fn(&[f32]) -> f32,
+) -> (Vec<f32>, f32, Vec<bool>) {
+    let mut x = solve.weights_among(values, &allowed);
+    let mut explained = share(&x);
+    loop {
+        let used: Vec<usize> = (0..x.len()).filter(|&k| x[k] > 0.0).collect();
+        if used.len() < 2 {
+            break;
+        }
+        let weakest = used
+            .iter()
+            .filter_map(|&k| {
+                let mut without = allowed.clone();
+                without[k] = false;
+                let y = solve.weights_among(values, &without);
+                let without_it = share(&y);
+                let size = x[k] * solve.gram[k][k].sqrt();
+                (explained - without_it < MIN_GAIN).then_some((size, k, y, without_it))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        let Some((_, k, y, without_it)) = weakest else {
+            break;
+        };
+        allowed[k] = false;
+        x = y;
+        explained = without_it;
+    }
+    (x, explained, allowed)
+}
+
+/// A row from weights `x` of the shapes `names`: those at [`ROW_FLOOR`] or more, times `scale`.
+fn row_of(x: &[f32], names: &[String], scale: f32) -> BTreeMap<String, f32> {
+    x.iter()
+        .zip(names)
+        .filter(|(w, _)| **w >= ROW_FLOOR)
+        .map(|(w, name)| (name.clone(), (*w * scale * 1000.0).round() / 1000.0))
+        .collect()
+}
+
+/// The share of a displacement (of region-weighted size `energy`, with products `b` with the
+/// shapes) that weights `x` of the shapes reproduce: `1 − |Bx − D|² / |D|²`, from the Gram
+/// matrix.
+fn explained_share(gram: &[Vec<f32>], b: &[f64], energy: f64, x: &[f32]) -> f32 {
     if energy <= 0.0 {
         return 0.0;
     }
@@ -544,9 +610,7 @@ fn explained_share(
                 .sum::<f64>()
         })
         .sum();
-    let xh: f64 = (0..x.len())
-        .map(|i| f64::from(x[i]) * projections[i][col])
-        .sum();
+    let xh: f64 = (0..x.len()).map(|i| f64::from(x[i]) * b[i]).sum();
     (1.0 - (xgx - 2.0 * xh + energy) / energy).clamp(0.0, 1.0) as f32
 }
 
@@ -772,5 +836,59 @@ mod tests {
         let names = |row: &Fitted| row.shapes.keys().cloned().collect::<Vec<_>>();
         assert_eq!(names(&rows[0]), ["wide_l"], "{:?}", rows[0]);
         assert_eq!(names(&rows[1]), ["wide_r"], "{:?}", rows[1]);
+    }
+
+    /// The face lowers its brows with one shape for both sides, as VRoid's `Fcl_BRW_Angry`
+    /// does: it makes half of either side's channel, and neither alone reaches. Together they
+    /// do: each side's row is the shape at half, so both sides lowered move it fully, one side
+    /// half, and the solve answers one side as its row does. The twin channels of a mouth that
+    /// has a shape for each side keep their own.
+    #[test]
+    fn twin_channels_share_a_shape_that_moves_both_sides() {
+        let regions = [(Region::Brows, 8), (Region::Mouth, 8)];
+        let n = 16;
+        let down = -Vec3::Y;
+        let lowered = |side| moving(n, 0..8, side, down);
+        let frown = |side| moving(n, 8..16, side, down);
+        let face = face(
+            &regions,
+            &[
+                ("brows_down", lowered(None)),
+                ("frown_l", frown(Some(false))),
+                ("frown_r", frown(Some(true))),
+                ("mouth_up", moving(n, 8..16, None, Vec3::Y)),
+            ],
+        );
+        let (rows, solve) = fitted(
+            &face,
+            &[
+                ("browDownLeft", lowered(Some(false))),
+                ("browDownRight", lowered(Some(true))),
+                ("mouthFrownLeft", frown(Some(false))),
+                ("mouthFrownRight", frown(Some(true))),
+            ],
+        );
+        for row in &rows[..2] {
+            assert_eq!(row.shapes.len(), 1, "{row:?}");
+            assert!((row.shapes["brows_down"] - 0.5).abs() < 0.02, "{row:?}");
+            assert!(row.explained > 0.99, "{row:?}");
+        }
+        let names = |row: &Fitted| row.shapes.keys().cloned().collect::<Vec<_>>();
+        assert_eq!(names(&rows[2]), ["frown_l"], "{:?}", rows[2]);
+        assert_eq!(names(&rows[3]), ["frown_r"], "{:?}", rows[3]);
+        let names: Vec<String> = face.character.blendshape_names();
+        let mut map = RetargetMap::by_name("face", &names, &[]);
+        map.set_geometry(rows, solve, Mode::Frame);
+        let brows = |left: f32, right: f32| {
+            let mut values = [0.0; faceanim_retarget::CHANNELS];
+            values[channel_index("browDownLeft").unwrap()] = left;
+            values[channel_index("browDownRight").unwrap()] = right;
+            map.weights(&values)
+        };
+        let both = brows(0.8, 0.8);
+        assert!((both[0] - 0.8).abs() < 0.05, "{both:?}");
+        assert!(both[1..].iter().all(|w| *w < 0.05), "{both:?}");
+        let one = brows(0.8, 0.0);
+        assert!((one[0] - 0.4).abs() < 0.05, "{one:?}");
     }
 }

@@ -220,6 +220,32 @@ impl Channel {
     pub fn index(self) -> usize {
         usize::from(self.0)
     }
+
+    /// The same movement on the other side of the face (`eyeBlinkLeft` ↔ `eyeBlinkRight`);
+    /// `None` for a channel of the middle (`jawOpen`) and for the directions `jawLeft`,
+    /// `jawRight`, `mouthLeft` and `mouthRight`, which move the whole jaw or mouth one way
+    /// rather than one side of the face.
+    ///
+    /// ```
+    /// use faceanim_rig::names::Channel;
+    /// let blink = Channel::named("eyeBlinkLeft").unwrap();
+    /// assert_eq!(blink.twin().map(Channel::name), Some("eyeBlinkRight"));
+    /// assert_eq!(Channel::named("mouthLeft").unwrap().twin(), None);
+    /// assert_eq!(Channel::named("jawOpen").unwrap().twin(), None);
+    /// ```
+    #[must_use]
+    pub fn twin(self) -> Option<Channel> {
+        let name = self.name();
+        let (stem, other) = if let Some(stem) = name.strip_suffix("Left") {
+            (stem, "Right")
+        } else {
+            (name.strip_suffix("Right")?, "Left")
+        };
+        if matches!(stem, "jaw" | "mouth") {
+            return None;
+        }
+        Channel::named(&format!("{stem}{other}"))
+    }
 }
 
 /// A viseme of the Oculus / OpenXR set of 15 (Ready Player Me's `viseme_*`).
