@@ -387,12 +387,7 @@ fn fit_shapes(
         });
         let shapes_of_row = if explained >= MIN_EXPLAINED {
             reached.push(col);
-            // A pruned shape loses the channel's pull in the solve as well.
-            for (k, here) in kept_here.iter().enumerate() {
-                if !here {
-                    solve.projections[k][col] = 0.0;
-                }
-            }
+            leave_out_pull(&mut solve, &kept_here, col);
             row_of(&x, &solve.shapes, 1.0)
         } else {
             BTreeMap::new()
@@ -443,11 +438,7 @@ fn fit_shapes(
             continue;
         }
         for side in [col, t] {
-            for (k, here) in kept_here.iter().enumerate() {
-                if !here {
-                    solve.projections[k][side] = 0.0;
-                }
-            }
+            leave_out_pull(&mut solve, &kept_here, side);
             rows[side].shapes = row_of(&x, &solve.shapes, 0.5);
             rows[side].explained = (explained * 1000.0).round() / 1000.0;
             reached.push(side);
@@ -585,6 +576,16 @@ fn pruned_row(
         explained = without_it;
     }
     (x, explained, allowed)
+}
+
+/// Channel `col` no longer pulls, in the per-frame solve, on the shapes its row left out
+/// (`kept` false): a shape pruned from a row is out of the channel's solve as well.
+fn leave_out_pull(solve: &mut Solve, kept: &[bool], col: usize) {
+    for (projection, kept) in solve.projections.iter_mut().zip(kept) {
+        if !kept {
+            projection[col] = 0.0;
+        }
+    }
 }
 
 /// A row from weights `x` of the shapes `names`: those at [`ROW_FLOOR`] or more, times `scale`.
