@@ -73,7 +73,9 @@ export function showMap(/** @type {any} */ map, /** @type {(view: any) => void} 
     cell.append(field);
     const from = document.createElement('td');
     from.className = 'note';
-    from.textContent = `${FROM[row.from] ?? row.from}${row.explained != null ? ` ${Math.round(100 * row.explained)}%` : ''}${row.calibrated ? ', calibrated' : ''}`;
+    const twin = row.with_twin ? ` with ${row.with_twin}` : '';
+    const share = row.explained != null ? ` ${Math.round(100 * row.explained)}%${row.with_twin ? ' of both' : ''}` : '';
+    from.textContent = `${FROM[row.from] ?? row.from}${twin}${share}${row.calibrated ? ', calibrated' : ''}`;
     tr.append(channel, cell, from);
     return tr;
   }));

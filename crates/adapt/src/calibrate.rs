@@ -6,7 +6,7 @@
 //! ([`faceanim_retarget::Curve`]) turns a score into the value that makes the character look
 //! so. About two hundred renders, in parallel.
 
-use faceanim_retarget::{Calibration, Curve, RetargetMap, RowSource};
+use faceanim_retarget::{Calibration, Curve, RetargetMap};
 use faceanim_rig::{Character, Pose};
 use faceanim_track::FaceModels;
 use rayon::prelude::*;
@@ -51,9 +51,11 @@ impl FaceCamera {
                     .then_some((c, score))
             })
             .collect();
+        // A channel made with its twin (one shape for both sides, each at half) is shown with
+        // the twin raised too: alone it moves its shape half way.
         let shown_with: Vec<Option<usize>> = channels
             .iter()
-            .map(|&(c, _)| shown_with_twin(map, c))
+            .map(|&(c, _)| map.shares_with_twin(c))
             .collect();
         let work: Vec<(usize, usize, Option<usize>, f32)> = channels
             .iter()
@@ -100,86 +102,5 @@ impl FaceCamera {
             }
         }
         Ok(calibration)
-    }
-}
-
-/// The channel `c` is shown with when calibrated: its twin on the other side of the face
-/// ([`faceanim_rig::names::Channel::twin`]) when both are made by geometry and most of what
-/// the map moves for it (half its weight or more) is shapes it moves for the twin too: a shape
-/// that moves both sides, which each side drives at half (`Fcl_BRW_Angry` for both
-/// `browDownLeft` and `browDownRight` on a rig whose names say nothing). Shown alone, such a
-/// channel moves its shape half way, and the score that half reads would be taken for the
-/// whole: a person lowering both brows would move the character's twice as far.
-///
-/// A name that merges the two sides (`Fcl_MTH_Joy` read as both smiles) is calibrated side by
-/// side as before: by-name channels stay as they were. Shown with their twins, the tests'
-/// VRoid-style avatar by its own names followed people's lids, lips and lowered brows a little
-/// more closely (r +0.01 to +0.02) but its mouth corners less (0.72 → 0.53 and 0.40 → 0.22 on
-/// two videos: its smile, calibrated at half the gain, no longer outweighs the corners' drop
-/// as the jaw opens).
-fn shown_with_twin(map: &RetargetMap, c: usize) -> Option<usize> {
-    let twin = faceanim_rig::names::Channel::named(faceanim_rig::names::ARKIT_52[c])?
-        .twin()?
-        .index();
-    let geometric = |c: usize| map.rows[c].from == RowSource::Geometry;
-    if !geometric(c) || !geometric(twin) {
-        return None;
-    }
-    let moves = |c: usize| {
-        let mut unit = vec![0.0; faceanim_retarget::CHANNELS];
-        unit[c] = 1.0;
-        map.weights(&unit)
-    };
-    let (one, other) = (moves(c), moves(twin));
-    let shared: f32 = one.iter().zip(&other).map(|(a, b)| a.min(*b)).sum();
-    (shared > 0.0 && 2.0 * shared >= one.iter().sum::<f32>()).then_some(twin)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn index(name: &str) -> usize {
-        faceanim_retarget::channel_index(name).unwrap()
-    }
-
-    /// A rig whose lowered brows are one shape for both sides, made by geometry with each side
-    /// at half: each side is calibrated with the other. A shape for each eye: alone. A name
-    /// that merges both sides stays calibrated side by side, as by-name channels were.
-    #[test]
-    fn a_shape_both_sides_drive_is_calibrated_with_both() {
-        let names: Vec<String> = ["shape_0", "shape_1", "shape_2", "Fcl_MTH_Joy"]
-            .map(String::from)
-            .to_vec();
-        let mut map = RetargetMap::by_name("vroid", &names, &[]);
-        let row = |channel: &str, shapes: &[(&str, f32)]| faceanim_retarget::Fitted {
-            channel: index(channel),
-            shapes: shapes.iter().map(|(n, w)| ((*n).to_owned(), *w)).collect(),
-            explained: 0.95,
-        };
-        map.set_geometry(
-            vec![
-                row("browDownLeft", &[("shape_0", 0.5)]),
-                row("browDownRight", &[("shape_0", 0.5)]),
-                row("eyeBlinkLeft", &[("shape_1", 1.0)]),
-                row("eyeBlinkRight", &[("shape_2", 1.0)]),
-            ],
-            None,
-            faceanim_retarget::Mode::Frame,
-        );
-        assert_eq!(
-            shown_with_twin(&map, index("browDownLeft")),
-            Some(index("browDownRight")),
-            "{}",
-            map.to_json()
-        );
-        assert_eq!(
-            shown_with_twin(&map, index("browDownRight")),
-            Some(index("browDownLeft"))
-        );
-        assert_eq!(shown_with_twin(&map, index("eyeBlinkLeft")), None);
-        assert_eq!(shown_with_twin(&map, index("jawOpen")), None);
-        assert_eq!(map.rows[index("mouthSmileLeft")].from, RowSource::ByName);
-        assert_eq!(shown_with_twin(&map, index("mouthSmileLeft")), None);
     }
 }

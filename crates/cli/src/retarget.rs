@@ -116,21 +116,33 @@ pub fn run(args: RetargetArgs) -> anyhow::Result<()> {
 /// The map's rows in words: one line per channel that reaches a shape.
 pub fn table(map: &RetargetMap) -> String {
     let mut text = String::new();
-    for (row, name) in map.rows.iter().zip(faceanim_rig::names::ARKIT_52) {
+    for (c, (row, name)) in map
+        .rows
+        .iter()
+        .zip(faceanim_rig::names::ARKIT_52)
+        .enumerate()
+    {
         if row.shapes.is_empty() {
             continue;
         }
         let shapes: Vec<String> = map
-            .answers(faceanim_retarget::channel_index(name).unwrap_or_default())
+            .answers(c)
             .iter()
             .map(|(s, w)| format!("{s} {w:.2}"))
             .collect();
         let from = match row.from {
             RowSource::ByName => "by name".to_owned(),
-            RowSource::Geometry => format!(
-                "geometry, {:.0}% of it",
-                100.0 * row.explained.unwrap_or(0.0)
-            ),
+            RowSource::Geometry => match map.shares_with_twin(c) {
+                Some(twin) => format!(
+                    "geometry with {}, {:.0}% of both",
+                    faceanim_rig::names::ARKIT_52[twin],
+                    100.0 * row.explained.unwrap_or(0.0)
+                ),
+                None => format!(
+                    "geometry, {:.0}% of it",
+                    100.0 * row.explained.unwrap_or(0.0)
+                ),
+            },
             RowSource::User => "set by you".to_owned(),
             RowSource::None => String::new(),
         };

@@ -331,6 +331,12 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
     assert_eq!(jaw["from"], "geometry", "{jaw}");
     assert!(!jaw["shapes"].as_array().unwrap().is_empty(), "{jaw}");
     assert_eq!(state["take"]["estimator"], "retarget", "{}", state["take"]);
+    // Its brows are lowered by one shape for both sides: each side's row is made with the
+    // other's, and says so (the share explained is the pair's); a smile has a shape a side.
+    let brow = row(rows, "browDownLeft");
+    assert_eq!(brow["with_twin"], "browDownRight", "{brow}");
+    assert_eq!(row(rows, "browDownRight")["with_twin"], "browDownLeft");
+    assert!(row(rows, "mouthSmileLeft")["with_twin"].is_null());
     let saved = std::path::PathBuf::from(map["path"].as_str().unwrap());
     assert!(saved.exists() && saved.starts_with(&out), "{}", map["path"]);
     // The open mouth reads as the jaw row's shapes.
@@ -381,6 +387,12 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
     assert!(
         jaw_line.contains(&shape) && jaw_line.contains("set by you"),
         "{jaw_line}"
+    );
+    assert!(
+        text.lines().any(|l| l.starts_with("browDownLeft ")
+            && l.contains("geometry with browDownRight")
+            && l.contains("of both")),
+        "{text}"
     );
     let info: Value = serde_json::from_str(&support::faceanim_ok(&[
         "info",

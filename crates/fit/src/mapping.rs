@@ -261,6 +261,7 @@ fn fit_shapes(
             channel: c,
             shapes: BTreeMap::new(),
             explained: 0.0,
+            with_twin: false,
         };
         return (channels.iter().map(none).collect(), None);
     }
@@ -396,6 +397,7 @@ fn fit_shapes(
             channel: c,
             shapes: shapes_of_row,
             explained: (explained * 1000.0).round() / 1000.0,
+            with_twin: false,
         });
     }
     // A channel of one side that no shape of one side makes, with its twin that none makes
@@ -441,6 +443,7 @@ fn fit_shapes(
             leave_out_pull(&mut solve, &kept_here, side);
             rows[side].shapes = row_of(&x, &solve.shapes, 0.5);
             rows[side].explained = (explained * 1000.0).round() / 1000.0;
+            rows[side].with_twin = true;
             reached.push(side);
         }
     }
@@ -840,7 +843,7 @@ mod tests {
     }
 
     /// The face lowers its brows with one shape for both sides, as VRoid's `Fcl_BRW_Angry`
-    /// does: it makes half of either side's channel, and neither alone reaches. Together they
+    /// does (its shapes' names say nothing): it makes half of either side's channel, and neither alone reaches. Together they
     /// do: each side's row is the shape at half, so both sides lowered move it fully, one side
     /// half, and the solve answers one side as its row does. The twin channels of a mouth that
     /// has a shape for each side keep their own.
@@ -854,10 +857,10 @@ mod tests {
         let face = face(
             &regions,
             &[
-                ("brows_down", lowered(None)),
-                ("frown_l", frown(Some(false))),
-                ("frown_r", frown(Some(true))),
-                ("mouth_up", moving(n, 8..16, None, Vec3::Y)),
+                ("shape_0", lowered(None)),
+                ("shape_1", frown(Some(false))),
+                ("shape_2", frown(Some(true))),
+                ("shape_3", moving(n, 8..16, None, Vec3::Y)),
             ],
         );
         let (rows, solve) = fitted(
@@ -871,15 +874,25 @@ mod tests {
         );
         for row in &rows[..2] {
             assert_eq!(row.shapes.len(), 1, "{row:?}");
-            assert!((row.shapes["brows_down"] - 0.5).abs() < 0.02, "{row:?}");
+            assert!((row.shapes["shape_0"] - 0.5).abs() < 0.02, "{row:?}");
             assert!(row.explained > 0.99, "{row:?}");
+            assert!(row.with_twin, "{row:?}");
         }
         let names = |row: &Fitted| row.shapes.keys().cloned().collect::<Vec<_>>();
-        assert_eq!(names(&rows[2]), ["frown_l"], "{:?}", rows[2]);
-        assert_eq!(names(&rows[3]), ["frown_r"], "{:?}", rows[3]);
+        assert_eq!(names(&rows[2]), ["shape_1"], "{:?}", rows[2]);
+        assert_eq!(names(&rows[3]), ["shape_2"], "{:?}", rows[3]);
+        assert!(!rows[2].with_twin && !rows[3].with_twin);
         let names: Vec<String> = face.character.blendshape_names();
         let mut map = RetargetMap::by_name("face", &names, &[]);
         map.set_geometry(rows, solve, Mode::Frame);
+        let index = |name: &str| channel_index(name).unwrap();
+        // Kept in the map's file: calibration shows the pair together, `info` says so.
+        let map = RetargetMap::from_json(map.to_json().as_bytes(), &names).unwrap();
+        assert_eq!(
+            map.shares_with_twin(index("browDownLeft")),
+            Some(index("browDownRight"))
+        );
+        assert_eq!(map.shares_with_twin(index("mouthFrownLeft")), None);
         let brows = |left: f32, right: f32| {
             let mut values = [0.0; faceanim_retarget::CHANNELS];
             values[channel_index("browDownLeft").unwrap()] = left;

@@ -50,7 +50,7 @@ use faceanim_rig::name_map::{Entry, Use};
 use faceanim_rig::names::{ARKIT_52, Channel, Drive};
 use serde::{Deserialize, Serialize};
 
-pub use calibration::{Calibration, Curve, MIN_RESPONSE};
+pub use calibration::{Calibration, Curve, MAX_GAIN, MIN_RESPONSE};
 pub use solve::Solve;
 
 /// ARKit's channels, in Apple's order ([`ARKIT_52`]).
@@ -116,6 +116,11 @@ pub struct Row {
     /// rest has no shape of the character's to go to).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub explained: Option<f32>,
+    /// For a geometric row: made together with its twin on the other side of the face, of the
+    /// shapes that move both sides at once, each side at half (see [`Fitted::with_twin`]);
+    /// [`Row::explained`] is then the pair's.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub with_twin: bool,
 }
 
 /// One channel's fit by geometry, as the map's maker gives it ([`RetargetMap::set_geometry`]).
@@ -127,6 +132,11 @@ pub struct Fitted {
     pub shapes: BTreeMap<String, f32>,
     /// The share of the channel's displacement they reproduce.
     pub explained: f32,
+    /// Whether it was made with its twin ([`Channel::twin`]): a channel of one side that no
+    /// shape of one side makes, matched with its twin's displacement among the shapes that
+    /// move both sides (`Fcl_BRW_Angry` for `browDownLeft` and `browDownRight`), each side's
+    /// row half of that match and `explained` the pair's.
+    pub with_twin: bool,
 }
 
 /// How the geometric channels reach the shapes: the per-frame solve, or each channel's row
@@ -215,6 +225,7 @@ impl RetargetMap {
                 from: RowSource::None,
                 shapes: BTreeMap::new(),
                 explained: None,
+                with_twin: false,
             })
             .collect();
         for (i, drive) in name_map.driven_drives() {
@@ -283,6 +294,7 @@ impl RetargetMap {
             channel: c,
             shapes,
             explained,
+            with_twin,
         } in rows
         {
             let row = &mut self.rows[c];
@@ -294,6 +306,7 @@ impl RetargetMap {
             } else {
                 RowSource::Geometry
             };
+            row.with_twin = with_twin && !shapes.is_empty();
             row.shapes = shapes;
             row.explained = Some(explained);
         }
@@ -341,6 +354,7 @@ impl RetargetMap {
         row.from = RowSource::User;
         row.shapes = shapes;
         row.explained = None;
+        row.with_twin = false;
         self.resolve();
         Ok(())
     }
@@ -389,6 +403,64 @@ impl RetargetMap {
             *w = w.clamp(0.0, 1.0);
         }
         out
+    }
+
+    /// The channel whose row `channel`'s was made with: its twin on the other side of the
+    /// face ([`Channel::twin`]) where the geometric fit matched the two together among the
+    /// shapes that move both sides ([`Row::with_twin`]: `Fcl_BRW_Angry` for both
+    /// `browDownLeft` and `browDownRight` on a rig whose names say nothing, each at half).
+    /// Such a channel is calibrated with its twin raised too (alone it moves its shape half
+    /// way, and the score of that half would be taken for the whole), and its row's share
+    /// explained is the pair's.
+    ///
+    /// Rows by name are not: a name that merges the two sides (`Fcl_MTH_Joy` read as both
+    /// smiles) is calibrated side by side, as by-name channels always were (shown with their
+    /// twins, the tests' VRoid-style avatar by its own names followed people's mouth corners
+    /// less: 0.72 → 0.53 and 0.40 → 0.22 on two videos); nor is a row the user set, nor one
+    /// fitted alone that happens to take a shape of both sides.
+    ///
+    /// ```
+    /// use faceanim_retarget::{Fitted, Mode, RetargetMap, RowSource, channel_index};
+    /// let names: Vec<String> = ["shape_0", "shape_1", "shape_2", "Fcl_MTH_Joy"]
+    ///     .map(String::from)
+    ///     .to_vec();
+    /// let mut map = RetargetMap::by_name("head", &names, &[]);
+    /// let index = |name: &str| channel_index(name).unwrap();
+    /// let row = |channel: &str, shape: &str, weight: f32, with_twin: bool| Fitted {
+    ///     channel: index(channel),
+    ///     shapes: [(shape.to_owned(), weight)].into(),
+    ///     explained: 0.9,
+    ///     with_twin,
+    /// };
+    /// map.set_geometry(
+    ///     vec![
+    ///         row("browDownLeft", "shape_0", 0.5, true),
+    ///         row("browDownRight", "shape_0", 0.5, true),
+    ///         row("eyeBlinkLeft", "shape_1", 1.0, false),
+    ///         row("eyeBlinkRight", "shape_2", 1.0, false),
+    ///     ],
+    ///     None,
+    ///     Mode::Matrix,
+    /// );
+    /// assert_eq!(map.shares_with_twin(index("browDownLeft")), Some(index("browDownRight")));
+    /// assert_eq!(map.shares_with_twin(index("browDownRight")), Some(index("browDownLeft")));
+    /// assert_eq!(map.shares_with_twin(index("eyeBlinkLeft")), None);
+    /// assert_eq!(map.shares_with_twin(index("jawOpen")), None);
+    /// // VRoid's smile, read by name as both smiles.
+    /// assert_eq!(map.rows[index("mouthSmileLeft")].from, RowSource::ByName);
+    /// assert_eq!(map.shares_with_twin(index("mouthSmileLeft")), None);
+    /// // The user's row is theirs.
+    /// map.set_row("browDownLeft", [("shape_0".to_owned(), 0.8)].into())?;
+    /// assert_eq!(map.shares_with_twin(index("browDownLeft")), None);
+    /// # Ok::<(), faceanim_retarget::RetargetError>(())
+    /// ```
+    #[must_use]
+    pub fn shares_with_twin(&self, channel: usize) -> Option<usize> {
+        let row = self.rows.get(channel)?;
+        if row.from != RowSource::Geometry || !row.with_twin {
+            return None;
+        }
+        Some(Channel::named(&row.channel)?.twin()?.index())
     }
 
     /// Which shapes answer to `channel` (its row), strongest first.

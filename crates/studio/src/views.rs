@@ -409,8 +409,12 @@ pub struct RetargetRowView {
     pub from: faceanim_retarget::RowSource,
     /// The shapes answering to the channel at 1, with their weights.
     pub shapes: Vec<(String, f32)>,
-    /// For a geometric row: the share of the channel's displacement the shapes reproduce.
+    /// For a geometric row: the share of the channel's displacement the shapes reproduce
+    /// (of both sides' together where it shares its shapes with its twin).
     pub explained: Option<f32>,
+    /// The channel on the other side of the face this row shares its shapes with, made
+    /// together by geometry ([`faceanim_retarget::RetargetMap::shares_with_twin`]).
+    pub with_twin: Option<&'static str>,
     /// Whether the channel's scores are scaled to the character on its renders.
     pub calibrated: bool,
 }

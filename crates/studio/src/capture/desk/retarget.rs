@@ -105,6 +105,9 @@ impl CaptureDesk {
                         .map(|(s, w)| (s.to_owned(), w))
                         .collect(),
                     explained: row.explained,
+                    with_twin: map
+                        .shares_with_twin(c)
+                        .map(|t| faceanim_rig::names::ARKIT_52[t]),
                     calibrated: map
                         .calibration
                         .as_ref()
