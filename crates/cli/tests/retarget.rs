@@ -115,6 +115,22 @@ fn ict_heads_whose_names_say_nothing_follow_real_people() {
                     continue;
                 }
                 let r = follows(&frames, k, &reference, theirs);
+                // A full blink closes the character's eyes: its blink shape reaches 1 where
+                // MediaPipe reads the person's blink at 0.5 or more. (Before a calibrated
+                // channel could pass 1, id7's right eye stopped at its row, 0.67.)
+                let peak = |column: &mut dyn Iterator<Item = f64>| column.fold(0.0, f64::max);
+                if c.name().starts_with("eyeBlink")
+                    && peak(&mut theirs.iter().filter_map(Value::as_f64)) >= 0.5
+                {
+                    let shown = peak(&mut frames.iter().filter_map(|f| f[k].as_f64()));
+                    if shown < 0.95 {
+                        failures.push(format!(
+                            "{file} {}: shape_{} ({name}) closes only to {shown:.2}",
+                            video.file,
+                            k + 1
+                        ));
+                    }
+                }
                 if r < 0.85 {
                     let what = format!("{file} {}: shape_{} ({name}) {r:.3}", video.file, k + 1);
                     if file == HELD_OUT && r >= 0.75 {

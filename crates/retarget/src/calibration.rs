@@ -151,15 +151,18 @@ impl Calibration {
     /// Channel values (in [`faceanim_rig::names::ARKIT_52`]'s order) from MediaPipe's scores:
     /// `rise(name)` is how far the score of channel `name` is above the face's neutral (or the
     /// score itself, without a neutral). A calibrated channel's rise is multiplied by its
-    /// [`Curve::gain`]; the others keep their rise.
+    /// [`Curve::gain`], and may pass 1 (up to the gain: how far the character may go is the
+    /// map's to say, [`crate::RetargetMap::reach`]); the others keep their rise, within 0..=1.
     #[must_use]
     pub fn values(&self, rise: impl Fn(&str) -> f32) -> Vec<f32> {
         faceanim_rig::names::ARKIT_52
             .iter()
             .map(|name| {
-                let r = rise(name);
-                let gain = self.channels.get(*name).map_or(1.0, Curve::gain);
-                (gain * r).clamp(0.0, 1.0)
+                let r = rise(name).clamp(0.0, 1.0);
+                match self.channels.get(*name) {
+                    Some(curve) => curve.gain() * r,
+                    None => r,
+                }
             })
             .collect()
     }

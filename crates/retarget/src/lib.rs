@@ -360,11 +360,15 @@ impl RetargetMap {
     }
 
     /// The character's weights for ARKit channel `values` (in [`ARKIT_52`]'s order, each in
-    /// 0..=1), each in 0..=1.
+    /// 0..=1, or up to its [`RetargetMap::reach`] where calibration took it past 1), each in
+    /// 0..=1.
     #[must_use]
     pub fn weights(&self, values: &[f32]) -> Vec<f32> {
         let mut out = vec![0.0; self.blendshapes.len()];
-        let value = |c: usize| values.get(c).copied().unwrap_or(0.0).clamp(0.0, 1.0);
+        let value = |c: usize| {
+            let v = values.get(c).copied().unwrap_or(0.0).max(0.0);
+            if v > 1.0 { v.min(self.reach(c)) } else { v }
+        };
         for (c, row) in self.rows.iter().enumerate() {
             let linear = match row.from {
                 RowSource::ByName | RowSource::User => true,
@@ -461,6 +465,84 @@ impl RetargetMap {
             return None;
         }
         Some(Channel::named(&row.channel)?.twin()?.index())
+    }
+
+    /// How far `channel`'s value may go ([`RetargetMap::weights`] takes values up to it): 1,
+    /// or, for a calibrated channel made by geometry that drives a shape of its own by its row
+    /// (its strongest: no other row moves it), past 1 until that shape reaches 1.
+    ///
+    /// Such a row says how much of the character's shape makes the template's channel: an ICT
+    /// head's blink is 0.67–0.82 of its own `eyeBlink_R` (its eye is larger than the
+    /// template's), so at 1 the channel left the eye a third open, and a person's full blink,
+    /// however far the calibration's gain took it, stopped there. A calibrated channel's value
+    /// is measured on the character's own renders, not in the template's units: it may close
+    /// the eye the character's artist made. A channel sharing its shapes (a twin's, a merged
+    /// name's, the per-frame solve's) stays within 1: one side would otherwise move both.
+    ///
+    /// ```
+    /// use faceanim_retarget::{Calibration, Curve, Fitted, Mode, RetargetMap, channel_index};
+    /// let names: Vec<String> = ["shape_0", "shape_1", "shape_2"].map(String::from).to_vec();
+    /// let mut map = RetargetMap::by_name("head", &names, &[]);
+    /// let index = |name: &str| channel_index(name).unwrap();
+    /// let row = |channel: &str, shape: &str, weight: f32| Fitted {
+    ///     channel: index(channel),
+    ///     shapes: [(shape.to_owned(), weight)].into(),
+    ///     explained: 0.9,
+    ///     with_twin: false,
+    /// };
+    /// map.set_geometry(
+    ///     vec![
+    ///         row("eyeBlinkRight", "shape_0", 0.67),
+    ///         row("eyeBlinkLeft", "shape_1", 0.8),
+    ///         row("jawOpen", "shape_2", 0.5),
+    ///     ],
+    ///     None,
+    ///     Mode::Matrix,
+    /// );
+    /// let curve = Curve { rises: vec![0.0, 0.4], values: vec![0.0, 1.0] };
+    /// let mut calibration = Calibration::default();
+    /// calibration.channels.insert("eyeBlinkRight".to_owned(), curve);
+    /// map.calibration = Some(calibration);
+    /// assert!((map.reach(index("eyeBlinkRight")) - 1.0 / 0.67).abs() < 1e-5);
+    /// // Not calibrated: its value's scale is the template's.
+    /// assert_eq!(map.reach(index("eyeBlinkLeft")), 1.0);
+    /// let mut values = [0.0; 52];
+    /// values[index("eyeBlinkRight")] = 2.0;
+    /// values[index("eyeBlinkLeft")] = 2.0;
+    /// let weights = map.weights(&values);
+    /// assert_eq!(weights[..2], [1.0, 0.8]);
+    /// ```
+    #[must_use]
+    pub fn reach(&self, channel: usize) -> f32 {
+        let Some(row) = self.rows.get(channel) else {
+            return 1.0;
+        };
+        let calibrated = self
+            .calibration
+            .as_ref()
+            .is_some_and(|k| k.channels.contains_key(&row.channel));
+        let in_solve = self.mode == Mode::Frame && self.solve_channels.contains(&channel);
+        if row.from != RowSource::Geometry || row.with_twin || !calibrated || in_solve {
+            return 1.0;
+        }
+        // Its strongest shape, which no other row (nor the solve) moves.
+        let Some(&(strongest, weight)) = self.resolved[channel]
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+        else {
+            return 1.0;
+        };
+        let shared = self
+            .resolved
+            .iter()
+            .enumerate()
+            .any(|(d, other)| d != channel && other.iter().any(|&(i, _)| i == strongest))
+            || self.solve_shapes.contains(&strongest);
+        if shared || weight <= 0.0 {
+            1.0
+        } else {
+            (1.0 / weight).max(1.0)
+        }
     }
 
     /// Which shapes answer to `channel` (its row), strongest first.
