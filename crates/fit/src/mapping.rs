@@ -10,7 +10,7 @@
 //! matrix `G = BᵀWB` and the products `H = BᵀWD` of the per-frame solve
 //! ([`faceanim_retarget::Solve`]), and each channel's own row.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use faceanim_retarget::{Fitted, Mode, RetargetMap, RowSource, Solve, channel_index};
 use faceanim_rig::Character;
@@ -379,6 +379,8 @@ fn fit_shapes(
     let column = |col: usize| -> Vec<f64> { projections.iter().map(|row| row[col]).collect() };
     let mut rows = Vec::new();
     let mut reached = Vec::new();
+    // The fits that fell short of MIN_EXPLAINED, each with the shapes its pruning kept.
+    let mut short: Vec<Option<(Vec<f32>, Vec<bool>)>> = vec![None; channels.len()];
     for (col, &c) in channels.iter().enumerate() {
         let mut unit = vec![0.0; channels.len()];
         unit[col] = 1.0;
@@ -391,6 +393,7 @@ fn fit_shapes(
             leave_out_pull(&mut solve, &kept_here, col);
             row_of(&x, &solve.shapes, 1.0)
         } else {
+            short[col] = Some((x, kept_here));
             BTreeMap::new()
         };
         rows.push(Fitted {
@@ -399,6 +402,41 @@ fn fit_shapes(
             explained: (explained * 1000.0).round() / 1000.0,
             with_twin: false,
         });
+    }
+    // The channel on the other side of the face (`eyeBlinkRight` for `eyeBlinkLeft`), by its
+    // column.
+    let twin_column = |col: usize| {
+        faceanim_rig::names::Channel::named(faceanim_rig::names::ARKIT_52[channels[col]])
+            .and_then(faceanim_rig::names::Channel::twin)
+            .and_then(|twin| channels.iter().position(|&c| c == twin.index()))
+    };
+    // A channel whose fit falls short while its twin's passes, and takes the mirror images of
+    // its twin's shapes, is judged as its twin is, as the region gate judges mirror twins:
+    // registration is never quite even. (An ICT head exported again by Blender, which flattens
+    // its vertex colours, was registered so that its left blink explained 0.675 with its own
+    // `eyeBlink_L` and its right 0.734 with `eyeBlink_R`: a person's left blink moved nothing.)
+    for col in 0..channels.len() {
+        let (Some((x, kept_here)), Some(t)) = (short[col].take(), twin_column(col)) else {
+            continue;
+        };
+        if rows[t].shapes.is_empty() {
+            continue;
+        }
+        let used: BTreeSet<usize> = (0..x.len()).filter(|&k| x[k] > 0.0).collect();
+        let mirrored: Option<BTreeSet<usize>> = rows[t]
+            .shapes
+            .keys()
+            .map(|name| {
+                let k = solve.shapes.iter().position(|s| s == name)?;
+                twin[k]
+            })
+            .collect();
+        if used.is_empty() || mirrored.as_ref() != Some(&used) {
+            continue;
+        }
+        reached.push(col);
+        leave_out_pull(&mut solve, &kept_here, col);
+        rows[col].shapes = row_of(&x, &solve.shapes, 1.0);
     }
     // A channel of one side that no shape of one side makes, with its twin that none makes
     // either, is made of the shapes that move both sides at once: VRoid's brows, wide eyes,
@@ -409,11 +447,7 @@ fn fit_shapes(
     // half. (Without it, a VRoid avatar with its names scrambled kept its brows still when a
     // person lowered them, its eyes when they widened.)
     for col in 0..channels.len() {
-        let twin =
-            faceanim_rig::names::Channel::named(faceanim_rig::names::ARKIT_52[channels[col]])
-                .and_then(faceanim_rig::names::Channel::twin)
-                .and_then(|twin| channels.iter().position(|&c| c == twin.index()));
-        let Some(t) = twin.filter(|&t| t > col) else {
+        let Some(t) = twin_column(col).filter(|&t| t > col) else {
             continue;
         };
         if !rows[col].shapes.is_empty() || !rows[t].shapes.is_empty() {
@@ -840,6 +874,39 @@ mod tests {
         let names = |row: &Fitted| row.shapes.keys().cloned().collect::<Vec<_>>();
         assert_eq!(names(&rows[0]), ["wide_l"], "{:?}", rows[0]);
         assert_eq!(names(&rows[1]), ["wide_r"], "{:?}", rows[1]);
+    }
+
+    /// Registration placed the template's right lid off the face's: the right blink's
+    /// displacement is half sideways, and its own shape explains under [`MIN_EXPLAINED`] of it.
+    /// Its twin passes with the mirror image of that shape: the two are judged alike, and each
+    /// eye has its blink. A shape of the other side alone is not taken so.
+    #[test]
+    fn a_twin_that_falls_short_with_the_mirror_shapes_is_judged_as_its_twin() {
+        let regions = [(Region::Lids, 8)];
+        let n = 8;
+        let lid = |right: bool| moving(n, 0..8, Some(right), Vec3::Y);
+        let face = face(&regions, &[("shape_0", lid(false)), ("shape_1", lid(true))]);
+        let off: Vec<Vec3> = lid(true)
+            .iter()
+            .zip(moving(n, 0..8, Some(true), 0.9 * Vec3::Z))
+            .map(|(a, b)| *a + b)
+            .collect();
+        let (rows, _) = fitted(
+            &face,
+            &[("eyeBlinkLeft", lid(false)), ("eyeBlinkRight", off.clone())],
+        );
+        let names = |row: &Fitted| row.shapes.keys().cloned().collect::<Vec<_>>();
+        assert_eq!(names(&rows[0]), ["shape_0"], "{:?}", rows[0]);
+        assert!(rows[1].explained < MIN_EXPLAINED, "{:?}", rows[1]);
+        assert_eq!(names(&rows[1]), ["shape_1"], "{:?}", rows[1]);
+        assert!(
+            (rows[1].shapes["shape_1"] - 1.0).abs() < 0.05,
+            "{:?}",
+            rows[1]
+        );
+        // Alone, the same short fit is no row.
+        let (rows, _) = fitted(&face, &[("eyeBlinkRight", off)]);
+        assert!(rows[0].shapes.is_empty(), "{:?}", rows[0]);
     }
 
     /// The face lowers its brows with one shape for both sides, as VRoid's `Fcl_BRW_Angry`
