@@ -469,15 +469,17 @@ impl RetargetMap {
 
     /// How far `channel`'s value may go ([`RetargetMap::weights`] takes values up to it): 1,
     /// or, for a calibrated channel made by geometry that drives a shape of its own by its row
-    /// (its strongest: no other row moves it), past 1 until that shape reaches 1.
+    /// (its strongest: no other row moves it), past 1 until that shape reaches 1; for one made
+    /// with its twin ([`RetargetMap::shares_with_twin`]: one shape for both sides), until the
+    /// two together move it fully, each side alone half.
     ///
     /// Such a row says how much of the character's shape makes the template's channel: an ICT
     /// head's blink is 0.67–0.82 of its own `eyeBlink_R` (its eye is larger than the
     /// template's), so at 1 the channel left the eye a third open, and a person's full blink,
     /// however far the calibration's gain took it, stopped there. A calibrated channel's value
     /// is measured on the character's own renders, not in the template's units: it may close
-    /// the eye the character's artist made. A channel sharing its shapes (a twin's, a merged
-    /// name's, the per-frame solve's) stays within 1: one side would otherwise move both.
+    /// the eye the character's artist made. A channel sharing its strongest shape otherwise (a
+    /// merged name's, another channel's, the per-frame solve's) stays within 1.
     ///
     /// ```
     /// use faceanim_retarget::{Calibration, Curve, Fitted, Mode, RetargetMap, channel_index};
@@ -490,27 +492,33 @@ impl RetargetMap {
     ///     explained: 0.9,
     ///     with_twin: false,
     /// };
-    /// map.set_geometry(
-    ///     vec![
-    ///         row("eyeBlinkRight", "shape_0", 0.67),
-    ///         row("eyeBlinkLeft", "shape_1", 0.8),
-    ///         row("jawOpen", "shape_2", 0.5),
-    ///     ],
-    ///     None,
-    ///     Mode::Matrix,
-    /// );
+    /// let mut rows = vec![
+    ///     row("eyeBlinkRight", "shape_0", 0.67),
+    ///     row("eyeBlinkLeft", "shape_1", 0.8),
+    ///     // One shape lowers both brows, each side's row half of it and a little less.
+    ///     row("browDownLeft", "shape_2", 0.4),
+    ///     row("browDownRight", "shape_2", 0.4),
+    /// ];
+    /// rows[2].with_twin = true;
+    /// rows[3].with_twin = true;
+    /// map.set_geometry(rows, None, Mode::Matrix);
     /// let curve = Curve { rises: vec![0.0, 0.4], values: vec![0.0, 1.0] };
     /// let mut calibration = Calibration::default();
-    /// calibration.channels.insert("eyeBlinkRight".to_owned(), curve);
+    /// for channel in ["eyeBlinkRight", "browDownLeft", "browDownRight"] {
+    ///     calibration.channels.insert(channel.to_owned(), curve.clone());
+    /// }
     /// map.calibration = Some(calibration);
     /// assert!((map.reach(index("eyeBlinkRight")) - 1.0 / 0.67).abs() < 1e-5);
     /// // Not calibrated: its value's scale is the template's.
     /// assert_eq!(map.reach(index("eyeBlinkLeft")), 1.0);
+    /// assert!((map.reach(index("browDownLeft")) - 1.0 / 0.8).abs() < 1e-5);
     /// let mut values = [0.0; 52];
     /// values[index("eyeBlinkRight")] = 2.0;
     /// values[index("eyeBlinkLeft")] = 2.0;
-    /// let weights = map.weights(&values);
-    /// assert_eq!(weights[..2], [1.0, 0.8]);
+    /// values[index("browDownLeft")] = 2.0;
+    /// assert_eq!(map.weights(&values), [1.0, 0.8, 0.5]);
+    /// values[index("browDownRight")] = 2.0;
+    /// assert_eq!(map.weights(&values), [1.0, 0.8, 1.0]);
     /// ```
     #[must_use]
     pub fn reach(&self, channel: usize) -> f32 {
@@ -522,26 +530,32 @@ impl RetargetMap {
             .as_ref()
             .is_some_and(|k| k.channels.contains_key(&row.channel));
         let in_solve = self.mode == Mode::Frame && self.solve_channels.contains(&channel);
-        if row.from != RowSource::Geometry || row.with_twin || !calibrated || in_solve {
+        if row.from != RowSource::Geometry || !calibrated || in_solve {
             return 1.0;
         }
-        // Its strongest shape, which no other row (nor the solve) moves.
+        // Its strongest shape, which no other row (nor the solve) moves but its twin's, where
+        // the two were made together: then both together reach 1.
         let Some(&(strongest, weight)) = self.resolved[channel]
             .iter()
             .max_by(|a, b| a.1.total_cmp(&b.1))
         else {
             return 1.0;
         };
-        let shared = self
-            .resolved
-            .iter()
-            .enumerate()
-            .any(|(d, other)| d != channel && other.iter().any(|&(i, _)| i == strongest))
+        let twin = self.shares_with_twin(channel);
+        let on = |d: usize| {
+            self.resolved[d]
+                .iter()
+                .find(|&&(i, _)| i == strongest)
+                .map(|&(_, w)| w)
+        };
+        let shared = (0..self.rows.len())
+            .any(|d| d != channel && Some(d) != twin && on(d).is_some())
             || self.solve_shapes.contains(&strongest);
-        if shared || weight <= 0.0 {
+        let together = weight + twin.and_then(on).unwrap_or(0.0);
+        if shared || together <= 0.0 {
             1.0
         } else {
-            (1.0 / weight).max(1.0)
+            (1.0 / together).max(1.0)
         }
     }
 
