@@ -71,12 +71,19 @@ export function showMap(/** @type {any} */ map, /** @type {(view: any) => void} 
       send('PUT', 'api/capture/retarget/row', { channel: row.channel, shapes });
     };
     cell.append(field);
-    const from = document.createElement('td');
+    // Where the row comes from, under the channel's name: the field keeps the row's width.
+    const from = document.createElement('div');
     from.className = 'note';
-    const twin = row.with_twin ? ` with ${row.with_twin}` : '';
-    const share = row.explained != null ? ` ${Math.round(100 * row.explained)}%${row.with_twin ? ' of both' : ''}` : '';
-    from.textContent = `${FROM[row.from] ?? row.from}${twin}${share}${row.calibrated ? ', calibrated' : ''}`;
-    tr.append(channel, cell, from);
+    const percent = row.explained != null ? `${Math.round(100 * row.explained)}%` : '';
+    if (row.from === 'none') {
+      from.textContent = percent ? `no shape (the best fit: ${percent})` : 'no shape';
+    } else {
+      const twin = row.with_twin ? ` with ${row.with_twin}` : '';
+      const share = percent ? ` ${percent}${row.with_twin ? ' of both' : ''}` : '';
+      from.textContent = `${FROM[row.from] ?? row.from}${twin}${share}${row.calibrated ? ', calibrated' : ''}`;
+    }
+    channel.append(from);
+    tr.append(channel, cell);
     return tr;
   }));
 }
