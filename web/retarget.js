@@ -9,7 +9,7 @@ import { showMarks } from './face-marks.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 
-const FROM = { by_name: 'by name', geometry: 'geometry', user: 'set by you', none: '' };
+const FROM = { by_name: 'by name', geometry: 'geometry', user: 'set by you' };
 
 /** Where answers go: the Capture tab's state (given by `showMap`). */
 let applyState = (/** @type {any} */ _view) => {};

@@ -53,14 +53,12 @@ impl FaceCamera {
             .collect();
         // A channel made with its twin (one shape for both sides, each at half) is shown with
         // the twin raised too: alone it moves its shape half way.
-        let shown_with: Vec<Option<usize>> = channels
-            .iter()
-            .map(|&(c, _)| map.shares_with_twin(c))
-            .collect();
         let work: Vec<(usize, usize, Option<usize>, f32)> = channels
             .iter()
-            .zip(&shown_with)
-            .flat_map(|(&(c, score), &twin)| INTENSITIES.iter().map(move |&x| (c, score, twin, x)))
+            .flat_map(|&(c, score)| {
+                let twin = map.shares_with_twin(c);
+                INTENSITIES.iter().map(move |&x| (c, score, twin, x))
+            })
             .collect();
         let total = work.len();
         let done = std::sync::atomic::AtomicUsize::new(0);

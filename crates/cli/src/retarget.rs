@@ -132,17 +132,16 @@ pub fn table(map: &RetargetMap) -> String {
             .collect();
         let from = match row.from {
             RowSource::ByName => "by name".to_owned(),
-            RowSource::Geometry => match map.shares_with_twin(c) {
-                Some(twin) => format!(
-                    "geometry with {}, {:.0}% of both",
-                    faceanim_rig::names::ARKIT_52[twin],
-                    100.0 * row.explained.unwrap_or(0.0)
-                ),
-                None => format!(
-                    "geometry, {:.0}% of it",
-                    100.0 * row.explained.unwrap_or(0.0)
-                ),
-            },
+            RowSource::Geometry => {
+                let share = 100.0 * row.explained.unwrap_or(0.0);
+                match map.shares_with_twin(c) {
+                    Some(twin) => format!(
+                        "geometry with {}, {share:.0}% of both",
+                        faceanim_rig::names::ARKIT_52[twin]
+                    ),
+                    None => format!("geometry, {share:.0}% of it"),
+                }
+            }
             RowSource::User => "set by you".to_owned(),
             RowSource::None => String::new(),
         };
