@@ -2,6 +2,7 @@
 //! `AᵀA x = Aᵀb` gathered row by row and solved by faer's sparse Cholesky factorisation.
 
 use faer::linalg::solvers::Solve as _;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side};
 
@@ -42,18 +43,39 @@ impl Normal {
 
     /// The factorised matrix, and the right-hand side gathered so far.
     pub(crate) fn factor(self) -> Result<(Factor, Vec<[f64; 3]>), FitError> {
+        self.factor_alike(&mut None)
+    }
+
+    /// As [`Normal::factor`], with `analysis` the symbolic factorisation (the ordering and
+    /// the pattern) of matrices gathered with the same rows and other weights: made on the
+    /// first call, reused on the next.
+    pub(crate) fn factor_alike(
+        self,
+        analysis: &mut Option<SymbolicLlt<usize>>,
+    ) -> Result<(Factor, Vec<[f64; 3]>), FitError> {
+        let failed = |e: &dyn std::fmt::Debug| FitError::Solve(format!("{e:?}"));
         let matrix =
             SparseColMat::<usize, f64>::try_new_from_triplets(self.n, self.n, &self.entries)
-                .map_err(|e| FitError::Solve(format!("{e:?}")))?;
-        let llt = matrix
-            .sp_cholesky(Side::Lower)
-            .map_err(|e| FitError::Solve(format!("{e:?}")))?;
+                .map_err(|e| failed(&e))?;
+        let symbolic = match analysis {
+            Some(symbolic) => symbolic.clone(),
+            None => {
+                let symbolic =
+                    SymbolicLlt::try_new(matrix.symbolic(), Side::Lower).map_err(|e| failed(&e))?;
+                analysis.insert(symbolic).clone()
+            }
+        };
+        let llt = Llt::try_new_with_symbolic(symbolic, matrix.as_ref(), Side::Lower)
+            .map_err(|e| failed(&e))?;
         Ok((Factor { n: self.n, llt }, self.rhs))
     }
 
-    /// Solves for the points.
-    pub(crate) fn solve(self) -> Result<Vec<[f64; 3]>, FitError> {
-        let (factor, rhs) = self.factor()?;
+    /// Solves for the points, `analysis` as in [`Normal::factor_alike`].
+    pub(crate) fn solve(
+        self,
+        analysis: &mut Option<SymbolicLlt<usize>>,
+    ) -> Result<Vec<[f64; 3]>, FitError> {
+        let (factor, rhs) = self.factor_alike(analysis)?;
         Ok(factor.solve(&[rhs]).swap_remove(0))
     }
 }
@@ -61,7 +83,7 @@ impl Normal {
 /// A factorised normal matrix, for right-hand sides that share it.
 pub(crate) struct Factor {
     n: usize,
-    llt: faer::sparse::linalg::solvers::Llt<usize, f64>,
+    llt: Llt<usize, f64>,
 }
 
 impl Factor {
@@ -97,9 +119,22 @@ mod tests {
         normal.row(&[(0, 1.0)], [0.0; 3], 1.0);
         normal.edge(0, 1, [1.0, 0.0, 0.0], 1.0);
         normal.edge(1, 2, [1.0, 0.0, 0.0], 1.0);
-        let x = normal.solve().unwrap();
+        let mut analysis = None;
+        let x = normal.solve(&mut analysis).unwrap();
         for (i, p) in x.iter().enumerate() {
             assert!((p[0] - i as f64).abs() < 1e-9 && p[1].abs() < 1e-9, "{x:?}");
+        }
+        // The same rows with other weights, solved with the first one's analysis.
+        let mut normal = Normal::new(3);
+        normal.row(&[(0, 1.0)], [0.0; 3], 5.0);
+        normal.edge(0, 1, [2.0, 0.0, 0.0], 3.0);
+        normal.edge(1, 2, [2.0, 0.0, 0.0], 0.5);
+        let x = normal.solve(&mut analysis).unwrap();
+        for (i, p) in x.iter().enumerate() {
+            assert!(
+                (p[0] - 2.0 * i as f64).abs() < 1e-9 && p[1].abs() < 1e-9,
+                "{x:?}"
+            );
         }
     }
 }

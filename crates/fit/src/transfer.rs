@@ -15,6 +15,13 @@ use crate::sparse::{Factor, Normal};
 /// settles what gradients cannot: where each separate piece sits).
 const ANCHOR: f64 = 0.1;
 
+/// How many of the fitted template's nearest vertices a point looks among for the triangle it
+/// lies on. A triangle's centre can lie nearer to other vertices than to its own corners (a
+/// large triangle beside small ones, a fold of skin): with four, ICT's template moved onto its
+/// own mesh found the wrong triangle or none for 463 of its 48,836 (36 where the blinks move),
+/// and its blinks came out 13 % off; with sixteen for two, and every shape within 0.1 %.
+const CANDIDATES: usize = 16;
+
 /// Where each of the user's vertices lies on the fitted template.
 pub(crate) struct Correspondence {
     /// Per user vertex, its point on the template; `None` where the template is not near.
@@ -45,7 +52,8 @@ impl Correspondence {
             .collect();
         let nearest = |p: Vec3, normal: Vec3| -> Option<SurfacePoint> {
             let mut best: Option<(f32, SurfacePoint)> = None;
-            for hit in tree.nearest_n::<SquaredEuclidean>(&p.to_array(), std::num::NonZero::new(4)?)
+            for hit in tree
+                .nearest_n::<SquaredEuclidean>(&p.to_array(), std::num::NonZero::new(CANDIDATES)?)
             {
                 for &t in &around[hit.item as usize] {
                     if template_normals[t as usize].dot(normal) < 0.3 {
@@ -227,5 +235,50 @@ impl<'a> Transfer<'a> {
                     .collect()
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The template moved onto its own mesh keeps every shape: its triangles find themselves
+    /// (with four candidates 463 did not, and the blinks came out 13 % off).
+    #[test]
+    fn a_head_moved_onto_itself_keeps_its_shapes() -> Result<(), FitError> {
+        let template = crate::templates::realistic()?;
+        let (positions, triangles) = (template.positions(), template.triangles());
+        let correspondence = Correspondence::new(
+            positions,
+            triangles,
+            positions,
+            triangles,
+            0.02 * template.size(),
+        );
+        let missed = correspondence
+            .triangles
+            .iter()
+            .enumerate()
+            .filter(|(i, t)| **t != u32::try_from(*i).ok())
+            .count();
+        // Sixteen candidates leave two; four left 463, 1 %.
+        assert!(
+            missed * 1000 <= triangles.len(),
+            "{missed} triangles did not find themselves"
+        );
+        let channels = crate::channel_deltas(&template);
+        let deltas: Vec<Vec<Vec3>> = channels.iter().map(|(_, d)| d.clone()).collect();
+        let moved = Transfer::new(positions, triangles)?.shapes(
+            &correspondence,
+            (positions, triangles),
+            &deltas,
+            Mat3::IDENTITY,
+            1.0,
+        );
+        for ((name, theirs), ours) in channels.iter().zip(&moved) {
+            let error = crate::relative_error(ours, theirs);
+            assert!(error < 0.01, "{name}: {error}");
+        }
+        Ok(())
     }
 }
