@@ -287,18 +287,19 @@ fn a_full_body_avatar_of_another_topology_follows_people_on_its_own_geometry() {
             // The lip, the lids and the brows at 0.8 on every video (the bar). The corners'
             // height also falls as the jaw opens, on this rig as on a person, which MediaPipe's
             // smile does not count: 0.94, 0.99 and, on the man talking most (cap13), 0.795. They
-            // were 0.89, 0.99 and 0.75 before the registration looked past folds of skin and held
-            // the landmarks loosely once the head was placed, which also moved the lids on franck
-            // from 0.93 and 0.96 to 0.88 and 0.91 and on cap13 from 0.93 and 0.95 to 0.95 and 0.96
-            // (the rig's blink, wide-eye and squint rows grew 5–15 %, and its wide eyes and squints
-            // move its lids too). The people's own corners, measured the same way on their faces
-            // (`scripts/footage-geometry.py` on `faceanim track --raw`), follow their smile scores
-            // at 0.46, 0.82 and 0.31 (their lips 0.96, 0.74, 0.97, their lids 0.95–0.98): the
-            // avatar's corners follow the scores more closely than the person's do, and an avatar
-            // moving exactly as the person does would be further under 0.8 on cap13. Over the lips'
-            // middle (the jaw's part taken out) the people's corners follow at 0.76, 0.93 and 0.57.
-            // The brows lowered (franck: 0.93) are one shape for both sides on this rig, made with
-            // the twin channel (0.26 before: this rig's brows did not move with browDown at all).
+            // were 0.89, 0.99 and 0.75 before registration and transfer looked past folds of skin
+            // and held the landmarks loosely once the head was placed, which also moved the lids on
+            // franck from 0.93 and 0.96 to 0.88 and 0.91 and on cap13 from 0.93 and 0.95 to 0.95
+            // and 0.96 (the rig's blink, wide-eye and squint rows grew 5–15 %, and its wide eyes
+            // and squints move its lids too). The people's own corners, measured the same way on
+            // their faces (`scripts/footage-geometry.py` on `faceanim track --raw`), follow their
+            // smile scores at 0.46, 0.82 and 0.31 (their lips 0.96, 0.74, 0.97, their lids
+            // 0.95–0.98): the avatar's corners follow the scores more closely than the person's do,
+            // and an avatar moving exactly as the person does would be further under 0.8 on cap13.
+            // Over the lips' middle (the jaw's part taken out) the people's corners follow at 0.76,
+            // 0.93 and 0.57. The brows lowered (franck: 0.93) are one shape for both sides on this
+            // rig, made with the twin channel (0.26 before: this rig's brows did not move with
+            // browDown at all).
             let bar = if *what == "mouth corners" { 0.65 } else { 0.8 };
             if r < bar {
                 weak.push(format!("{} {what}: {r:.3}", video.file));
