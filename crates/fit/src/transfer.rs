@@ -253,7 +253,7 @@ mod tests {
             triangles,
             positions,
             triangles,
-            0.02 * template.size(),
+            crate::REACH * template.size(),
         );
         let missed = correspondence
             .triangles
