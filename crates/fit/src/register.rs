@@ -115,12 +115,6 @@ impl<'a> Target<'a> {
         normal: Vec3,
         facing: f32,
     ) -> Option<(usize, f32)> {
-        // The nearest alone mostly faces the same way; the few nearest are asked for only when
-        // it does not.
-        let nearest = self.tree.nearest_one::<SquaredEuclidean>(&p.to_array());
-        if self.normals[nearest.item as usize].dot(normal) >= facing {
-            return Some((nearest.item as usize, nearest.distance.sqrt()));
-        }
         self.tree
             .nearest_n::<SquaredEuclidean>(&p.to_array(), std::num::NonZero::new(NEAREST_K)?)
             .into_iter()
