@@ -32,6 +32,63 @@ pub(crate) fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<
     normals
 }
 
+/// For each vertex, the first vertex of its part (`part[v]`: the glTF primitive it came from)
+/// at the same place, to the bit: exporters split a primitive into copies of a vertex along
+/// its UV seams and hard edges (a flat-shaded one has three of its own per triangle). Parts are
+/// not joined: a VRoid face's lashes and eye whites are primitives of their own whose borders
+/// lie on the skin's.
+pub(crate) fn first_copies(positions: &[Vec3], part: &[u32]) -> Vec<u32> {
+    let mut seen = std::collections::HashMap::with_capacity(positions.len());
+    positions
+        .iter()
+        .zip(part)
+        .enumerate()
+        .map(|(v, (p, &k))| {
+            // Minus zero is zero.
+            let key = (k, (*p + Vec3::ZERO).to_array().map(f32::to_bits));
+            *seen.entry(key).or_insert(v as u32)
+        })
+        .collect()
+}
+
+/// The part (index into [`Character::parts`]) each vertex's triangles belong to; 0 for a
+/// vertex no triangle uses.
+///
+/// [`Character::parts`]: faceanim_rig::Character::parts
+pub(crate) fn vertex_parts(character: &faceanim_rig::Character) -> Vec<u32> {
+    let triangles = character.triangles();
+    let mut part = vec![0; character.vertex_count()];
+    for (k, p) in character.parts().iter().enumerate() {
+        for t in triangles.get(p.triangles.clone()).unwrap_or_default() {
+            for &v in t {
+                part[v as usize] = k as u32;
+            }
+        }
+    }
+    part
+}
+
+/// [`vertex_normals`] with the copies of a vertex (see [`first_copies`]) taken as one: each
+/// has the normal of every triangle around the place, not only of its own side's.
+pub(crate) fn welded_vertex_normals(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    first: &[u32],
+) -> Vec<Vec3> {
+    let mut sums = vec![Vec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let n = (b - a).cross(c - a);
+        for &v in t {
+            sums[first[v as usize] as usize] += n;
+        }
+    }
+    first
+        .iter()
+        .map(|&f| sums[f as usize].normalize_or_zero())
+        .collect()
+}
+
 /// The triangles around each vertex.
 pub(crate) fn vertex_triangles(triangles: &[[u32; 3]], vertices: usize) -> Vec<Vec<u32>> {
     let mut around = vec![Vec::new(); vertices];
@@ -44,7 +101,10 @@ pub(crate) fn vertex_triangles(triangles: &[[u32; 3]], vertices: usize) -> Vec<V
 }
 
 /// The connected piece each vertex belongs to (pieces numbered from 0), and how many there are.
-pub(crate) fn pieces(triangles: &[[u32; 3]], vertices: usize) -> (Vec<u32>, usize) {
+/// The copies of a vertex (`first`, see [`first_copies`]) are one: a face split along its seams
+/// is still one skin.
+pub(crate) fn pieces(triangles: &[[u32; 3]], first: &[u32]) -> (Vec<u32>, usize) {
+    let vertices = first.len();
     let mut parent: Vec<u32> = (0..vertices as u32).collect();
     fn root(parent: &mut [u32], mut v: u32) -> u32 {
         while parent[v as usize] != v {
@@ -52,6 +112,12 @@ pub(crate) fn pieces(triangles: &[[u32; 3]], vertices: usize) -> (Vec<u32>, usiz
             v = parent[v as usize];
         }
         v
+    }
+    for (v, &f) in first.iter().enumerate() {
+        let (a, b) = (root(&mut parent, f), root(&mut parent, v as u32));
+        if a != b {
+            parent[b as usize] = a;
+        }
     }
     for t in triangles {
         let a = root(&mut parent, t[0]);
@@ -134,11 +200,35 @@ mod tests {
     }
 
     #[test]
-    fn two_triangles_apart_are_two_pieces() {
-        let (piece, count) = pieces(&[[0, 1, 2], [3, 4, 5], [2, 1, 6]], 7);
+    fn two_triangles_apart_are_two_pieces_and_a_seam_is_not_a_cut() {
+        let at = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+        let mut positions = vec![
+            at(0.0, 0.0),
+            at(1.0, 0.0),
+            at(0.0, 1.0),
+            at(5.0, 0.0),
+            at(6.0, 0.0),
+            at(5.0, 1.0),
+            at(1.0, 1.0),
+        ];
+        let one_part = |positions: &[Vec3]| first_copies(positions, &vec![0; positions.len()]);
+        let (piece, count) = pieces(&[[0, 1, 2], [3, 4, 5], [2, 1, 6]], &one_part(&positions));
         assert_eq!(count, 2);
         assert_eq!(piece[6], piece[0]);
         assert_ne!(piece[3], piece[0]);
+        // The second triangle split off along a seam: its own copies of vertices 1 and 2.
+        positions.extend([at(1.0, 0.0), at(0.0, 1.0)]);
+        let split = [[0, 1, 2], [3, 4, 5], [8, 7, 6]];
+        let (piece, count) = pieces(&split, &one_part(&positions));
+        assert_eq!(count, 2);
+        assert_eq!(piece[6], piece[0]);
+        let normals = welded_vertex_normals(&positions, &split, &one_part(&positions));
+        assert_eq!(normals[1], normals[7]);
+        // The same triangle as a part of its own (a lash on the lid's border) stays apart.
+        let parts = [0, 0, 0, 0, 0, 0, 1, 1, 1];
+        let (piece, count) = pieces(&split, &first_copies(&positions, &parts));
+        assert_eq!(count, 3);
+        assert_ne!(piece[6], piece[0]);
         assert_eq!(edges(&[[0, 1, 2], [2, 1, 3]], 4).len(), 5);
     }
 }

@@ -217,3 +217,46 @@ fn a_face_the_model_cannot_find_is_placed_by_ten_marks() {
         "by marks {by_marks}, by the face model {by_model}"
     );
 }
+
+/// A head split along every edge, as a flat-shaded export is (glTF Transform's `unweld` gives
+/// each triangle three vertices of its own; exporters split a mesh the same way along its UV
+/// seams and hard edges): it is still one face. Each landmark lands where it lands on the
+/// head as its artist saved it (before, the skin was taken to be only the triangles under the
+/// nose and chin, 12 of the 478 landmarks landed on it and the map refused the head).
+#[test]
+fn a_head_split_along_every_edge_is_still_one_face() {
+    use faceanim_rig::import::{NoExternalResources, import_gltf};
+    let models = faceanim_track::FaceModels::load().unwrap();
+    let file = "ict-face-id3.glb";
+    let saved = std::fs::read(faceanim_testdata::shared(&format!("characters/{file}"))).unwrap();
+    let split = faceanim_testdata::gltf_transform(&saved, "unweld");
+    let [saved, split] = [&saved, &split].map(|bytes| {
+        import_gltf(bytes, file, &NoExternalResources)
+            .unwrap()
+            .character
+    });
+    assert_eq!(split.vertex_count(), 3 * split.triangles().len());
+    let [on_saved, on_split] = [&saved, &split].map(|head| {
+        let marks = faceanim_fit::FaceLandmarks::find(head, &models).unwrap();
+        marks
+            .points
+            .iter()
+            .map(|p| p.map(|p| p.on(head.triangles(), head.positions())))
+            .collect::<Vec<_>>()
+    });
+    let landed = on_saved.iter().flatten().count();
+    assert!(landed >= 450, "{landed} landmarks landed on the saved head");
+    let size = saved.size();
+    let apart = on_saved
+        .iter()
+        .zip(&on_split)
+        .filter(|(a, b)| match (a, b) {
+            (Some(a), Some(b)) => a.distance(*b) > 0.01 * size,
+            (a, b) => a.is_some() != b.is_some(),
+        })
+        .count();
+    assert!(
+        apart <= 5,
+        "{apart} landmarks land elsewhere on the split head"
+    );
+}
