@@ -171,7 +171,7 @@ pub(crate) fn detect(
     // on the lid's edge can see past it to the eyeball; cast again, it lands on the lid.
     let (piece, _) = crate::mesh::pieces(
         triangles,
-        &crate::mesh::first_copies(character.positions(), &crate::mesh::vertex_parts(character)),
+        &crate::mesh::copies_in_parts(character, &crate::mesh::places(character)),
     );
     let piece_of = |t: u32| piece[triangles[t as usize][0] as usize];
     let skin: Vec<u32> = SKIN

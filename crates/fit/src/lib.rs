@@ -275,7 +275,7 @@ impl<'a> OnUser<'a> {
         let (positions, triangles) = (user.positions(), user.triangles());
         Ok(OnUser {
             user,
-            target: register::Target::new(positions, triangles),
+            target: register::Target::new(positions, triangles, &mesh::places(user)),
             transfer: transfer::Transfer::new(positions, triangles)?,
             size: user.size(),
         })

@@ -32,40 +32,44 @@ pub(crate) fn vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<
     normals
 }
 
-/// For each vertex, the first vertex of its part (`part[v]`: the glTF primitive it came from)
-/// at the same place, to the bit: exporters split a primitive into copies of a vertex along
-/// its UV seams and hard edges (a flat-shaded one has three of its own per triangle). Parts are
-/// not joined: a VRoid face's lashes and eye whites are primitives of their own whose borders
-/// lie on the skin's.
-pub(crate) fn first_copies(positions: &[Vec3], part: &[u32]) -> Vec<u32> {
-    let mut seen = std::collections::HashMap::with_capacity(positions.len());
-    positions
-        .iter()
-        .zip(part)
-        .enumerate()
-        .map(|(v, (p, &k))| {
-            // Minus zero is zero.
-            let key = (k, (*p + Vec3::ZERO).to_array().map(f32::to_bits));
-            *seen.entry(key).or_insert(v as u32)
-        })
+/// Each vertex's place: the first vertex at its position, to the bit, as the rig welds its
+/// seams ([`EdgeGraph::weld_representative`]).
+///
+/// [`EdgeGraph::weld_representative`]: faceanim_rig::EdgeGraph::weld_representative
+pub(crate) fn places(character: &faceanim_rig::Character) -> Vec<u32> {
+    let graph = character.graph();
+    (0..character.vertex_count() as u32)
+        .map(|v| graph.weld_representative(v))
         .collect()
 }
 
-/// The part (index into [`Character::parts`]) each vertex's triangles belong to; 0 for a
-/// vertex no triangle uses.
-///
-/// [`Character::parts`]: faceanim_rig::Character::parts
-pub(crate) fn vertex_parts(character: &faceanim_rig::Character) -> Vec<u32> {
+/// For each vertex, the first vertex of its part at its place (`place`, see [`places`]):
+/// exporters split a primitive into copies of a vertex along its UV seams and hard edges (a
+/// flat-shaded one has three of its own per triangle). Parts (`character`'s glTF primitives)
+/// are not joined: a VRoid face's lashes and eye whites are primitives of their own whose
+/// borders lie on the skin's.
+pub(crate) fn copies_in_parts(character: &faceanim_rig::Character, place: &[u32]) -> Vec<u32> {
+    let mut part = vec![0; place.len()];
     let triangles = character.triangles();
-    let mut part = vec![0; character.vertex_count()];
     for (k, p) in character.parts().iter().enumerate() {
         for t in triangles.get(p.triangles.clone()).unwrap_or_default() {
             for &v in t {
-                part[v as usize] = k as u32;
+                part[v as usize] = k;
             }
         }
     }
-    part
+    first_in_group(place, &part)
+}
+
+/// For each vertex, the first vertex with its place and group.
+fn first_in_group(place: &[u32], group: &[usize]) -> Vec<u32> {
+    let mut seen = std::collections::HashMap::with_capacity(place.len());
+    place
+        .iter()
+        .zip(group)
+        .enumerate()
+        .map(|(v, key)| *seen.entry(key).or_insert(v as u32))
+        .collect()
 }
 
 /// [`vertex_normals`] with the copies of a vertex (see [`first_copies`]) taken as one: each
@@ -211,22 +215,23 @@ mod tests {
             at(5.0, 1.0),
             at(1.0, 1.0),
         ];
-        let one_part = |positions: &[Vec3]| first_copies(positions, &vec![0; positions.len()]);
-        let (piece, count) = pieces(&[[0, 1, 2], [3, 4, 5], [2, 1, 6]], &one_part(&positions));
+        // The places of the seven vertices, and of the two copies added below.
+        let place: Vec<u32> = vec![0, 1, 2, 3, 4, 5, 6, 1, 2];
+        let (piece, count) = pieces(&[[0, 1, 2], [3, 4, 5], [2, 1, 6]], &place[..7]);
         assert_eq!(count, 2);
         assert_eq!(piece[6], piece[0]);
         assert_ne!(piece[3], piece[0]);
-        // The second triangle split off along a seam: its own copies of vertices 1 and 2.
+        // The third triangle split off along a seam: its own copies of vertices 1 and 2.
         positions.extend([at(1.0, 0.0), at(0.0, 1.0)]);
         let split = [[0, 1, 2], [3, 4, 5], [8, 7, 6]];
-        let (piece, count) = pieces(&split, &one_part(&positions));
+        let (piece, count) = pieces(&split, &place);
         assert_eq!(count, 2);
         assert_eq!(piece[6], piece[0]);
-        let normals = welded_vertex_normals(&positions, &split, &one_part(&positions));
+        let normals = welded_vertex_normals(&positions, &split, &place);
         assert_eq!(normals[1], normals[7]);
         // The same triangle as a part of its own (a lash on the lid's border) stays apart.
         let parts = [0, 0, 0, 0, 0, 0, 1, 1, 1];
-        let (piece, count) = pieces(&split, &first_copies(&positions, &parts));
+        let (piece, count) = pieces(&split, &first_in_group(&place, &parts));
         assert_eq!(count, 3);
         assert_ne!(piece[6], piece[0]);
         assert_eq!(edges(&[[0, 1, 2], [2, 1, 3]], 4).len(), 5);

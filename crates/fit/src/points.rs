@@ -337,7 +337,7 @@ pub fn carried(
     let (positions, triangles) = (character.positions(), character.triangles());
     let (piece, _) = mesh::pieces(
         triangles,
-        &mesh::first_copies(positions, &mesh::vertex_parts(character)),
+        &mesh::copies_in_parts(character, &mesh::places(character)),
     );
     let around = mesh::vertex_triangles(triangles, character.vertex_count());
     let nearest_vertex = |p: Vec3, allowed: &dyn Fn(usize) -> bool| {
