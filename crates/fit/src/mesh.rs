@@ -72,22 +72,22 @@ fn first_in_group(place: &[u32], group: &[usize]) -> Vec<u32> {
         .collect()
 }
 
-/// [`vertex_normals`] with the copies of a vertex (see [`first_copies`]) taken as one: each
+/// [`vertex_normals`] with the vertices at one place (`place`, see [`places`]) taken as one: each
 /// has the normal of every triangle around the place, not only of its own side's.
 pub(crate) fn welded_vertex_normals(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
-    first: &[u32],
+    place: &[u32],
 ) -> Vec<Vec3> {
     let mut sums = vec![Vec3::ZERO; positions.len()];
     for t in triangles {
         let [a, b, c] = t.map(|v| positions[v as usize]);
         let n = (b - a).cross(c - a);
         for &v in t {
-            sums[first[v as usize] as usize] += n;
+            sums[place[v as usize] as usize] += n;
         }
     }
-    first
+    place
         .iter()
         .map(|&f| sums[f as usize].normalize_or_zero())
         .collect()
@@ -105,7 +105,7 @@ pub(crate) fn vertex_triangles(triangles: &[[u32; 3]], vertices: usize) -> Vec<V
 }
 
 /// The connected piece each vertex belongs to (pieces numbered from 0), and how many there are.
-/// The copies of a vertex (`first`, see [`first_copies`]) are one: a face split along its seams
+/// The copies of a vertex (`first`, see [`copies_in_parts`]) are one: a face split along its seams
 /// is still one skin.
 pub(crate) fn pieces(triangles: &[[u32; 3]], first: &[u32]) -> (Vec<u32>, usize) {
     let vertices = first.len();
