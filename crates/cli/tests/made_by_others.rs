@@ -4,7 +4,8 @@
 //! face's 108 shape keys on all of its 12 primitives, two skins, a rig in centimetres under a
 //! 0.01 scale, `KHR_materials_*`), the same made a VRM 0.x and a VRM 1.0 by adding the
 //! extension's JSON as UniVRM lays it out, and compressed by gltfpack and by gltf-transform
-//! (meshopt, and Draco, which faceanim decodes natively).
+//! (meshopt, and Draco, which faceanim decodes natively), and made sparse by gltf-transform (its
+//! shape keys that leave a primitive still are accessors without data).
 //! Each imports, `faceanim info` lists its shapes with what drives them by name, capture by
 //! name moves it, strokes through the studio's API animate it, and the export is the user's
 //! file with the animation added: counts and names kept, the Khronos validator passes it,
@@ -34,10 +35,10 @@ use support::{
 /// The Blender avatar's shape keys.
 const SHAPE_KEYS: usize = 108;
 
-/// The six files, written into `dir`: (file, is a VRM, compressed).
+/// The seven files, written into `dir`: (file, is a VRM, compressed).
 fn variants(dir: &Path) -> Vec<(PathBuf, bool, bool)> {
     let plain = blender_avatar();
-    let files: [(&str, Vec<u8>, bool, bool); 6] = [
+    let files: [(&str, Vec<u8>, bool, bool); 7] = [
         ("blender.glb", plain.to_vec(), false, false),
         ("blender-0.vrm", with_vrm(plain, VrmKind::V0), true, false),
         ("blender-1.vrm", with_vrm(plain, VrmKind::V1), true, false),
@@ -58,6 +59,15 @@ fn variants(dir: &Path) -> Vec<(PathBuf, bool, bool)> {
             gltf_transform(plain, "draco"),
             false,
             true,
+        ),
+        // Made sparse as `gltf-transform optimize` makes it: a shape key that does not move
+        // one of the face's primitives is an accessor with no data (all zeros, as the
+        // specification reads it), which the `gltf` crate's validation refused.
+        (
+            "blender-sparse.glb",
+            gltf_transform(plain, "sparse"),
+            false,
+            false,
         ),
     ];
     files
@@ -254,8 +264,9 @@ fn exports_of_blender_avatars_keep_the_file_and_open_everywhere() {
     }
 
     // three.js in Chromium (with meshoptimizer's own decoder): every primitive skinned, both
-    // rigs' bones, the face moving.
-    for out in [&outputs[0], &outputs[1], &outputs[4]] {
+    // rigs' bones, the face moving; the sparse file's export too, its accessors without data
+    // kept as they were.
+    for out in [&outputs[0], &outputs[1], &outputs[4], &outputs[6]] {
         assert_avatar_drawn(&threejs_render(out, "2.4"), 19, 13, 5_000);
     }
 }

@@ -17,7 +17,10 @@
 //! - `EXT_texture_webp` and `KHR_texture_basisu` textures get their image as `source`;
 //!   `KHR_texture_transform` on a base-colour texture is recorded so the importer can bake it
 //!   into the UVs;
-//! - VRM 0.x (`VRM`) and 1.0 (`VRMC_vrm`) expressions are read (see [`super::vrm`]).
+//! - VRM 0.x (`VRM`) and 1.0 (`VRMC_vrm`) expressions are read (see [`super::vrm`]);
+//! - an accessor with neither a buffer view nor sparse values, which the specification makes
+//!   all zeros (glTF Transform writes a morph target that does not move a primitive so), gets
+//!   one sparse zero, as the `gltf` crate requires one or the other.
 //!
 //! Then the JSON, rewritten, goes to the `gltf` crate's own validation as before.
 
@@ -110,6 +113,7 @@ pub(crate) fn prepare<'a>(
     decode_meshopt(&mut value, &mut buffers)?;
     super::draco::decode(&mut value, &mut buffers)?;
     let kept = keep(&value, &buffers, resources, &mut warnings);
+    zeros_as_sparse(&mut value, &mut buffers);
     resolve_texture_sources(&mut value);
     let uv_transforms = uv_transforms(&value);
     let vrm = super::vrm::read(&value, &mut warnings);
@@ -426,6 +430,58 @@ fn decode_meshopt(
         buffers.push(Cow::Owned(decoded));
     }
     Ok(())
+}
+
+/// The largest element an accessor has: a float `MAT4`.
+const LARGEST_ELEMENT: usize = 64;
+
+/// Every accessor with neither `bufferView` nor `sparse` gets a sparse substitution of one
+/// zero at index 0, read from a new buffer of zeros: the specification initialises such an
+/// accessor with zeros, and the `gltf` crate's validation refuses it as missing its data.
+fn zeros_as_sparse(value: &mut Value, buffers: &mut Vec<Cow<'_, [u8]>>) {
+    let Some(Value::Array(accessors)) = value.get("accessors") else {
+        return;
+    };
+    let empty: Vec<usize> = accessors
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| a.get("bufferView").is_none() && a.get("sparse").is_none())
+        .map(|(i, _)| i)
+        .collect();
+    if empty.is_empty() {
+        return;
+    }
+    let buffer = buffers.len();
+    let views = value.as_object_mut().map(|root| {
+        root.entry("bufferViews")
+            .or_insert_with(|| Value::Array(Vec::new()))
+    });
+    let Some(Value::Array(views)) = views else {
+        return;
+    };
+    let indices = views.len();
+    views.push(serde_json::json!({ "buffer": buffer, "byteOffset": 0, "byteLength": 4 }));
+    views.push(serde_json::json!({
+        "buffer": buffer, "byteOffset": 4, "byteLength": LARGEST_ELEMENT
+    }));
+    if let Some(Value::Array(accessors)) = value.get_mut("accessors") {
+        for i in empty {
+            accessors[i]["sparse"] = serde_json::json!({
+                "count": 1,
+                "indices": { "bufferView": indices, "componentType": 5125 },
+                "values": { "bufferView": indices + 1 },
+            });
+        }
+    }
+    let length = 4 + LARGEST_ELEMENT;
+    if let Some(root) = value.as_object_mut()
+        && let Value::Array(list) = root
+            .entry("buffers")
+            .or_insert_with(|| Value::Array(Vec::new()))
+    {
+        list.push(serde_json::json!({ "byteLength": length }));
+    }
+    buffers.push(Cow::Owned(vec![0; length]));
 }
 
 /// A byte block of `N` bytes: one vertex of the meshopt vertex codec, whose element size is a
