@@ -106,6 +106,7 @@ impl<'a> Target<'a> {
     /// [`crate::mapping`]), and its mouth corners followed the people's smiles at 0.65 and
     /// 0.31 instead of 0.94 and 0.79 on two of the three videos; ICT's heads, which have no
     /// copies where the template lands, fit the same either way.
+    ///
     /// `place`: each vertex's place ([`crate::mesh::places`]).
     pub(crate) fn new(positions: &'a [Vec3], triangles: &[[u32; 3]], place: &[u32]) -> Target<'a> {
         let points: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();

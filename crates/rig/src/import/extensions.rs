@@ -445,7 +445,10 @@ fn zeros_as_sparse(value: &mut Value, buffers: &mut Vec<Cow<'_, [u8]>>) {
     let empty: Vec<usize> = accessors
         .iter()
         .enumerate()
-        .filter(|(_, a)| a.get("bufferView").is_none() && a.get("sparse").is_none())
+        .filter(|(_, a)| {
+            // Anything but an object is left to the `gltf` crate's validation to name.
+            a.is_object() && a.get("bufferView").is_none() && a.get("sparse").is_none()
+        })
         .map(|(i, _)| i)
         .collect();
     if empty.is_empty() {

@@ -172,6 +172,16 @@ fn absurd_sizes_and_lying_layouts() {
 
 #[test]
 fn schema_errors_and_cycles() {
+    // An accessor that is not an object is named, not indexed into.
+    let mut b = GltfBuilder::default();
+    let root = tiny_face_gltf(&mut b, &tiny_face(), false);
+    let mut file: serde_json::Value = serde_json::from_slice(&b.gltf_data_uri(root)).unwrap();
+    file["accessors"].as_array_mut().unwrap().push(json!(7));
+    let e = error_of("number-accessor.gltf", &serde_json::to_vec(&file).unwrap());
+    assert!(
+        e.starts_with("number-accessor.gltf: invalid glTF JSON: ") && e.contains("accessors["),
+        "{e}"
+    );
     let bytes = tiny(|root, _| root["meshes"][0]["primitives"][0]["indices"] = json!(99));
     assert_eq!(
         error_of("dangling.glb", &bytes),
