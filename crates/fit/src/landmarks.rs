@@ -169,10 +169,7 @@ pub(crate) fn detect(
     };
     // The skin: the pieces of the mesh under landmarks that can only be skin. A landmark
     // on the lid's edge can see past it to the eyeball; cast again, it lands on the lid.
-    let (piece, _) = crate::mesh::pieces(
-        triangles,
-        &crate::mesh::copies_in_parts(character, &crate::mesh::places(character)),
-    );
+    let (piece, _) = crate::mesh::pieces(triangles, &crate::mesh::copies_in_parts(character));
     let piece_of = |t: u32| piece[triangles[t as usize][0] as usize];
     let skin: Vec<u32> = SKIN
         .iter()

@@ -43,12 +43,13 @@ pub(crate) fn places(character: &faceanim_rig::Character) -> Vec<u32> {
         .collect()
 }
 
-/// For each vertex, the first vertex of its part at its place (`place`, see [`places`]):
+/// For each vertex, the first vertex of its part at its place (see [`places`]):
 /// exporters split a primitive into copies of a vertex along its UV seams and hard edges (a
 /// flat-shaded one has three of its own per triangle). Parts (`character`'s glTF primitives)
 /// are not joined: a VRoid face's lashes and eye whites are primitives of their own whose
 /// borders lie on the skin's.
-pub(crate) fn copies_in_parts(character: &faceanim_rig::Character, place: &[u32]) -> Vec<u32> {
+pub(crate) fn copies_in_parts(character: &faceanim_rig::Character) -> Vec<u32> {
+    let place = places(character);
     let mut part = vec![0; place.len()];
     let triangles = character.triangles();
     for (k, p) in character.parts().iter().enumerate() {
@@ -58,7 +59,7 @@ pub(crate) fn copies_in_parts(character: &faceanim_rig::Character, place: &[u32]
             }
         }
     }
-    first_in_group(place, &part)
+    first_in_group(&place, &part)
 }
 
 /// For each vertex, the first vertex with its place and group.

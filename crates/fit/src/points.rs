@@ -335,10 +335,7 @@ pub fn carried(
     let to: Vec<Vec3> = FacePoint::ALL.iter().map(|p| points.at(*p)).collect();
     let warp = Warp::fit(&from, &to)?;
     let (positions, triangles) = (character.positions(), character.triangles());
-    let (piece, _) = mesh::pieces(
-        triangles,
-        &mesh::copies_in_parts(character, &mesh::places(character)),
-    );
+    let (piece, _) = mesh::pieces(triangles, &mesh::copies_in_parts(character));
     let around = mesh::vertex_triangles(triangles, character.vertex_count());
     let nearest_vertex = |p: Vec3, allowed: &dyn Fn(usize) -> bool| {
         positions
