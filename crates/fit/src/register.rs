@@ -102,10 +102,10 @@ impl<'a> Target<'a> {
     /// surface there has one normal, and which copy the search meets first must not change
     /// the fit (a flat-shaded head's copies had each its own triangle's normal). Joined within
     /// parts only (as [`crate::mesh::pieces`] joins them), the VRoid-style avatar's jaw row
-    /// lost its second mouth shape, whose gain fell under `MIN_GAIN` (see
-    /// [`crate::mapping`]), and its mouth corners followed the people's smiles at 0.65 and
-    /// 0.31 instead of 0.94 and 0.79 on two of the three videos; ICT's heads, which have no
-    /// copies where the template lands, fit the same either way.
+    /// lost its second mouth shape, whose gain fell under `MIN_GAIN` as rows were then pruned
+    /// (see [`crate::mapping`]), and its mouth corners followed the people's smiles at 0.65
+    /// and 0.31 instead of 0.94 and 0.79 on two of the three videos; ICT's heads, which have
+    /// no copies where the template lands, fit the same either way.
     ///
     /// `place`: each vertex's place ([`crate::mesh::places`]).
     pub(crate) fn new(positions: &'a [Vec3], triangles: &[[u32; 3]], place: &[u32]) -> Target<'a> {
