@@ -265,3 +265,89 @@ pub(crate) fn nonrigid(
     }
     Ok((current, residual))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A sphere of `rings` × `segments` quads whose seam (the first and last column) is two
+    /// copies of each vertex, as an exporter splits a mesh along a UV seam; and each vertex's
+    /// place.
+    fn seamed_sphere(rings: usize, segments: usize) -> (Vec<Vec3>, Vec<[u32; 3]>, Vec<u32>) {
+        let mut positions = Vec::new();
+        for r in 0..=rings {
+            let theta = std::f32::consts::PI * (r as f32 + 0.5) / (rings as f32 + 1.0);
+            for s in 0..=segments {
+                let phi = std::f32::consts::TAU * (s % segments) as f32 / segments as f32;
+                positions.push(Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    theta.sin() * phi.sin(),
+                ));
+            }
+        }
+        let width = segments + 1;
+        let mut triangles = Vec::new();
+        for r in 0..rings {
+            for s in 0..segments {
+                let [a, b] = [r * width + s, r * width + s + 1].map(|v| v as u32);
+                let [c, d] = [a + width as u32, b + width as u32];
+                triangles.push([a, c, b]);
+                triangles.push([b, c, d]);
+            }
+        }
+        let place = (0..positions.len())
+            .map(|v| if v % width == segments { v - segments } else { v } as u32)
+            .collect();
+        (positions, triangles, place)
+    }
+
+    /// Asking for the nearest vertex first changes nothing: whatever a point and its normal,
+    /// the answer has the place, normal and distance of the first of the nearest eight that
+    /// faces the same way (found here by sorting every vertex).
+    #[test]
+    fn the_nearest_facing_vertex_is_the_first_of_the_nearest_eight_that_faces() {
+        let (positions, triangles, place) = seamed_sphere(12, 24);
+        let target = Target::new(&positions, &triangles, &place);
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut unit = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut first, mut further, mut none) = (0, 0, 0);
+        for _ in 0..2000 {
+            let direction =
+                Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize_or(Vec3::Y);
+            let p = direction * (0.9 + 0.2 * unit());
+            let normal = Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize_or(Vec3::X);
+            let mut order: Vec<usize> = (0..positions.len()).collect();
+            order.sort_by(|&a, &b| {
+                positions[a]
+                    .distance_squared(p)
+                    .total_cmp(&positions[b].distance_squared(p))
+            });
+            let expected = order[..NEAREST_K]
+                .iter()
+                .position(|&v| target.normals[v].dot(normal) >= 0.5);
+            let found = target.nearest_facing(p, normal, 0.5);
+            match (expected, found) {
+                (None, None) => none += 1,
+                (Some(k), Some((j, distance))) => {
+                    let v = order[k];
+                    assert_eq!(positions[j], positions[v]);
+                    assert_eq!(target.normals[j], target.normals[v]);
+                    assert!((distance - positions[v].distance(p)).abs() < 1e-6);
+                    if k == 0 { first += 1 } else { further += 1 }
+                }
+                other => panic!("at {p} facing {normal}: {other:?}"),
+            }
+        }
+        // Every case is met: the nearest facing, a further one, and none.
+        assert!(
+            first > 100 && further > 100 && none > 100,
+            "{first} {further} {none}"
+        );
+    }
+}
