@@ -316,13 +316,13 @@ fn a_full_body_avatar_of_another_topology_follows_people_on_its_own_geometry() {
 
 /// The same avatar optimised by glTF Transform (`optimize`, the usual command before shipping:
 /// vertices merged, attributes quantized, meshopt-compressed) gets the plain file's map: every
-/// row moves the avatar as the plain file's row does, within 5 % of the motion (at most 1.3 %
-/// now; a row may take a near twin of a shape, as this avatar's right smile does). Its
-/// registration lands a little differently, and with each shape of a row judged alone against
-/// the row it was left out of, its jaw lost four shapes for under 0.5 % each and 1.1 %
-/// together, the mouth's second shape among them (10.5 % of the row's motion); its mouth
-/// corners then followed the people's smiles at 0.66, 0.32 and 0.97 (0.95, 0.81 and 0.99
-/// now).
+/// row moves the avatar as the plain file's row does, within 5 % of the motion
+/// (`faceanim_fit::relative_error`; at most 1.3 % now; a row may take a near twin of a shape,
+/// as this avatar's right smile does). Its registration lands a little differently, and with
+/// each shape of a row judged alone against the row it was left out of, its jaw lost four
+/// shapes for under 0.5 % each and 1.1 % together, the mouth's second shape among them (10.6 %
+/// of the row's motion); its mouth corners then followed the people's smiles at 0.66, 0.32 and
+/// 0.97 (0.95, 0.81 and 0.99 now).
 #[test]
 fn an_avatar_optimised_by_gltf_transform_gets_the_plain_files_map() {
     let models = FaceModels::load().unwrap();
@@ -349,26 +349,21 @@ fn an_avatar_optimised_by_gltf_transform_gets_the_plain_files_map() {
     );
     // What a row does: the plain avatar's motion under it.
     let names = character.blendshape_names();
-    let rest = character.pose(&vec![0.0; names.len()]).positions;
     let motion = |row: &faceanim_retarget::Row| -> Vec<glam::Vec3> {
         let weights: Vec<f32> = names
             .iter()
             .map(|n| row.shapes.get(n).copied().unwrap_or(0.0))
             .collect();
         let posed = character.pose(&weights).positions;
-        posed.iter().zip(&rest).map(|(p, r)| *p - *r).collect()
+        posed
+            .iter()
+            .zip(character.positions())
+            .map(|(p, r)| *p - *r)
+            .collect()
     };
-    let size = |d: &[glam::Vec3]| d.iter().map(|v| v.length_squared()).sum::<f32>().sqrt();
     let mut differ = Vec::new();
     for (a, b) in plain_map.rows.iter().zip(&optimised.1.rows) {
-        let (da, db) = (motion(a), motion(b));
-        let apart: Vec<glam::Vec3> = da.iter().zip(&db).map(|(p, q)| *p - *q).collect();
-        let largest = size(&da).max(size(&db));
-        let off = if largest > 0.0 {
-            size(&apart) / largest
-        } else {
-            0.0
-        };
+        let off = faceanim_fit::relative_error(&motion(b), &motion(a));
         eprintln!(
             "{}: {:?} against {:?}: apart by {off:.3} of the motion",
             a.channel, a.shapes, b.shapes
