@@ -203,7 +203,7 @@ pub(super) fn decode(
         Some(Value::Array(views)) => views.extend(new_views),
         _ => value["bufferViews"] = Value::Array(new_views),
     }
-    super::extensions::push_buffer(value, buffers, decoded);
+    super::buffers::push_buffer(value, buffers, decoded);
     for list in ["extensionsRequired", "extensionsUsed"] {
         if let Some(Value::Array(names)) = value.get_mut(list) {
             names.retain(|n| n.as_str() != Some(EXTENSION));

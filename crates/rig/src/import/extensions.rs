@@ -424,7 +424,7 @@ fn decode_meshopt(
         view["byteLength"] = Value::from(total);
     }
     if !decoded.is_empty() {
-        push_buffer(value, buffers, decoded);
+        super::buffers::push_buffer(value, buffers, decoded);
     }
     Ok(())
 }
@@ -473,20 +473,7 @@ fn zeros_as_sparse(value: &mut Value, buffers: &mut Vec<Cow<'_, [u8]>>) {
             });
         }
     }
-    push_buffer(value, buffers, vec![0; 4 + LARGEST_ELEMENT]);
-}
-
-/// Appends `bytes` as a new buffer: its entry in the JSON's `buffers` (made if missing) and its
-/// bytes beside the others, at index `buffers.len()`, which the caller's new views name.
-pub(super) fn push_buffer(value: &mut Value, buffers: &mut Vec<Cow<'_, [u8]>>, bytes: Vec<u8>) {
-    if let Some(root) = value.as_object_mut()
-        && let Value::Array(list) = root
-            .entry("buffers")
-            .or_insert_with(|| Value::Array(Vec::new()))
-    {
-        list.push(serde_json::json!({ "byteLength": bytes.len() }));
-    }
-    buffers.push(Cow::Owned(bytes));
+    super::buffers::push_buffer(value, buffers, vec![0; 4 + LARGEST_ELEMENT]);
 }
 
 /// A byte block of `N` bytes: one vertex of the meshopt vertex codec, whose element size is a

@@ -8,6 +8,7 @@
 
 mod accessor;
 mod animations;
+mod buffers;
 mod draco;
 mod extensions;
 mod gltf;
