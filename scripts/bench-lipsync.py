@@ -25,9 +25,10 @@ than the ones faceanim aligns with). Languages other than English through eSpeak
 `--language` (eighteen: `--voices espeak:es,espeak:hi,…`).
 
 Usage: scripts/bench-lipsync.py [--faceanim PATH] [--voices a,b] [--json OUT] [--lines N]
-       [--modes text,audio] [--recognise words|phones] [--ffmpeg-first]
+       [--modes text,audio] [--recognise words|phones] [--ffmpeg-first] [--breakdown]
 """
 import argparse
+import collections
 import ctypes
 import json
 import os
@@ -303,7 +304,10 @@ EFFECTS = {
 }
 
 
-def score(phones, clip, seconds):
+def score(phones, clip, seconds, classes=None):
+    """The line's figures (see the module's docs). `classes`, when given, gathers per 10 ms of
+    speech the phone's class and the class shown instead where none within ±40 ms matched
+    (`{class: [frames, hits, Counter of shown classes]}`)."""
     names = clip["blendshapes"]
     columns = {v: names.index(f"viseme_{v}") for v in VISEMES}
     frames = clip["frames"]
@@ -324,8 +328,14 @@ def score(phones, clip, seconds):
         while t < end:
             k = round(t * fps)
             total += 1
-            if any(dominant(k + d) == CLASS[viseme] for d in range(-4, 5)):
-                hits += 1
+            hit = any(dominant(k + d) == CLASS[viseme] for d in range(-4, 5))
+            hits += hit
+            if classes is not None:
+                seen = classes.setdefault(CLASS[viseme], [0, 0, collections.Counter()])
+                seen[0] += 1
+                seen[1] += hit
+                if not hit:
+                    seen[2][dominant(k)] += 1
             t += 0.01
     closed = bilabials = 0
     for _, start, end, viseme in phones:
@@ -386,6 +396,10 @@ def main():
                         help="change each line before faceanim hears it, keeping its timing: "
                              # argparse formats help with %: a literal one is doubled.
                              + "; ".join(f"{k}: {v[0]}" for k, v in sorted(EFFECTS.items())).replace("%", "%%"))
+    parser.add_argument("--breakdown", action="store_true",
+                        help="also print, per mode, the agreement of each class of phone (closed, "
+                             "open, spread, round, lip-teeth, tongue) and what the rig showed "
+                             "where it missed: where a voice loses its agreement")
     parser.add_argument("--json")
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="faceanim-bench-lipsync-")
@@ -403,6 +417,7 @@ def main():
                 language = engine.split("-", 1)[1]
                 lines = FESTIVAL_LINES[language]
             totals = {}
+            breakdowns = {}
             for k, line in enumerate(lines):
                 wav = os.path.join(work, f"{engine}-{voice}-{k}.wav")
                 if engine == "flite":
@@ -444,7 +459,9 @@ def main():
                         print(f"{spec} line {k} {mode}: {run.stderr.strip()}", file=sys.stderr)
                         continue
                     clip = json.load(open(clip_path))
-                    hits, total, closed, bilabials, silence, elsewhere, runs = score(phones, clip, seconds)
+                    classes = breakdowns.setdefault(mode, {}) if args.breakdown else None
+                    hits, total, closed, bilabials, silence, elsewhere, runs = score(
+                        phones, clip, seconds, classes)
                     t = totals.setdefault(mode, [0, 0, 0, 0, 0.0, 0.0, 0.0, 0, 0])
                     t[0] += hits; t[1] += total; t[2] += closed; t[3] += bilabials
                     t[4] = max(t[4], silence); t[5] += wall; t[6] += seconds
@@ -459,6 +476,12 @@ def main():
                       f"{t[2]}/{t[3]} = {t[2] / max(t[3], 1):.2f}  closures elsewhere {t[7]}/{t[8]}  "
                       f"silence open ≤ {t[4]:.2f}  "
                       f"{t[5] / t[6]:.2f}× real time", flush=True)
+                for name, (frames, hit, shown) in sorted(breakdowns.get(mode, {}).items(),
+                                                         key=lambda c: -c[1][0]):
+                    missed = ", ".join(f"{c} {n}" for c, n in shown.most_common(3))
+                    print(f"    {name:10s} {frames:5d} frames ({frames / max(t[1], 1):4.0%})  "
+                          f"agreement {hit / frames:.2f}  costs {(frames - hit) / max(t[1], 1):.3f}"
+                          + (f"  (shown instead: {missed})" if missed else ""), flush=True)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     if args.json:
