@@ -52,10 +52,17 @@ pub struct LipsyncArgs {
     #[arg(long, value_enum, default_value_t = Blind::Words)]
     pub recognise: Blind,
     /// Whose vocal tract the recogniser hears the voice through (its models were trained on
-    /// adults and hear a man best): `auto` (by the voice's pitch), `man` (as it is), `woman`,
-    /// `child`, or a warp from 0.6 to 1.8 that every frequency is divided by (under 1 for a
-    /// voice deeper than a man's: an effect, a monster's).
-    #[arg(long, default_value = "auto", value_name = "auto|man|woman|child|WARP")]
+    /// adults and hear a man best): `auto` (by the voice's pitch), `search` (by listening
+    /// through warps from 0.8 to 1.6, for a voice raised or lowered whole — an effect, a voice
+    /// changer — whose pitch says too little; not for a formant synthesiser's; about a second
+    /// more per line), `man` (as it is), `woman`, `child`, or a warp from 0.6 to 1.8 that every
+    /// frequency is divided by (under 1 for a voice deeper than a man's: an effect, a
+    /// monster's).
+    #[arg(
+        long,
+        default_value = "auto",
+        value_name = "auto|search|man|woman|child|WARP"
+    )]
     pub voice: faceanim_speech::Voice,
     /// The face around the mouth too: blinks at phrase boundaries and natural rates, brows
     /// raised on accented syllables (ARKit blink and brow channels, on any rig through its

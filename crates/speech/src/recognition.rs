@@ -134,18 +134,8 @@ fn prepare(route: Recognition, sound: &Sound, heard: &Heard<'_>) -> Ready {
         };
     }
     let loop_search = phones::blind_search(Recognition::PhoneLoop).warped(heard.frame_rate());
-    // The sound up to its last frame of voice scored, in the heard sound's samples (its
-    // frames are the sound's, each `SAMPLE_RATE / frame_rate` samples long).
     let samples = heard.samples();
-    let cut = sound
-        .voice_activity()
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| **v)
-        .nth(SCORED_VOICE)
-        .map_or(samples.len(), |(frame, _)| {
-            (frame * SAMPLE_RATE as usize / heard.frame_rate() as usize).min(samples.len())
-        });
+    let cut = scored_cut(sound, heard);
     std::thread::scope(|scope| {
         let phones = scope.spawn(|| {
             let mut recogniser = Recogniser::load_on(&loop_search, Some(&turn))?;
@@ -177,6 +167,116 @@ fn prepare(route: Recognition, sound: &Sound, heard: &Heard<'_>) -> Ready {
     })
 }
 
+/// The end of `sound`'s first [`SCORED_VOICE`] frames of voice, in `heard`'s samples (its
+/// frames are the sound's, each `SAMPLE_RATE / frame_rate` samples long): what a phone loop
+/// scores a voice on.
+fn scored_cut(sound: &Sound, heard: &Heard<'_>) -> usize {
+    let samples = heard.samples().len();
+    sound
+        .voice_activity()
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v)
+        .nth(SCORED_VOICE)
+        .map_or(samples, |(frame, _)| {
+            (frame * SAMPLE_RATE as usize / heard.frame_rate() as usize).min(samples)
+        })
+}
+
+/// How `sound` is heard through `voice` ([`Hearing::of`]), a [`Voice::Search`] found by
+/// listening ([`searched`]).
+fn hearing(sound: &Sound, voice: Voice) -> Hearing {
+    let by_pitch = Hearing::of(sound, voice);
+    if voice != Voice::Search || by_pitch.whispered {
+        return by_pitch;
+    }
+    match searched(sound, by_pitch.frame_rate) {
+        Some(warp) => {
+            tracing::debug!(
+                warp,
+                "the warp the acoustic model hears the voice best through"
+            );
+            Hearing::of(sound, Voice::Warp(warp))
+        }
+        None => by_pitch,
+    }
+}
+
+/// The warps a [`Voice::Search`] tries: from a voice lowered below a man's to a child's.
+const SEARCHED_WARPS: [f32; 8] = [0.8, 0.9, 1.0, 1.1, 1.2, 1.3, 1.45, 1.6];
+
+/// How much better (log-likelihood a frame) the phone loop must hear a voice through another
+/// warp than through its pitch's for [`Voice::Search`] to take it. Chosen with
+/// [`HEARD_POORLY`] on the bench's Harvard lines (`scripts/bench-lipsync.py --voice`,
+/// audio alone; the mean score of eight lines at each warp): flite's slt, rms, awb, festival's
+/// ked, eSpeak NG's m3, f2 and f3 score best within 0.1–0.4 of their pitch's warp (slt at 1.1,
+/// −9.6 against −10.0 at 1.2, where it agrees better, 0.933 against 0.919), while voices
+/// raised or lowered whole score 0.7–2.6 better at the warp that lip-syncs them (slt raised
+/// 40 %: 0.653 → 0.857 at 1.6; rms raised 40 %: 0.678 → 0.862 at 1.45; rms lowered 20 %:
+/// 0.635 → 0.835 at 0.9; f2 lowered 20 %: 0.522 → 0.769 at 0.9). A formant synthesiser's
+/// scores do not say its tract: eSpeak NG's m3 scores best at 1.6 (−16.7, against −18.1), where
+/// it agrees at 0.304 against 0.728; a voice heard poorly through its pitch's warp (under
+/// [`HEARD_POORLY`]) keeps it. Each line searched on its own, those voices give slt raised
+/// 0.855, rms raised 0.884 and lowered 0.947, f2 lowered 0.565; as recorded, slt, rms and f2
+/// lose 0.007–0.013 (a line here and there takes a neighbouring warp). Measured after the
+/// choice, per line, on voices and effects it was not chosen on (the bench, audio alone):
+/// flite's kal raised 40 % 0.615 → 0.684 and lowered 20 % 0.560 → 0.597, ked 0.648 → 0.767
+/// and 0.630 → 0.719, awb lowered 0.692 → 0.911 (raised 0.820 → 0.796); as recorded, kal, awb
+/// and ked within 0.006 of their pitch's warp.
+/// eSpeak NG's f5 and m1 lose as they are (0.763 → 0.704, 0.773 → 0.707): a formant
+/// synthesiser heard well enough on some lines still scores as no recorded voice does, which
+/// is why the search is asked for, not the default.
+const SEARCH_GAIN: f32 = 0.5;
+
+/// The warp among [`SEARCHED_WARPS`] through which a phone loop hears `sound`'s first
+/// [`SCORED_VOICE`] best, when that is at least [`SEARCH_GAIN`] a frame better than through
+/// its pitch's warp (read at `by_pitch` frames a second); `None` to keep that one (also when
+/// the recogniser fails: the line is then recognised as it would have been).
+fn searched(sound: &Sound, by_pitch: u32) -> Option<f32> {
+    let score = |frame_rate: u32| -> Option<f32> {
+        let heard = Heard::warped(sound, frame_rate);
+        let cut = scored_cut(sound, &heard);
+        let search = phones::blind_search(Recognition::PhoneLoop).warped(frame_rate);
+        let mut recogniser = Recogniser::load(&search).ok()?;
+        recogniser
+            .decode_scored(&heard.samples()[..cut])
+            .ok()?
+            .score_per_frame
+    };
+    let own = score(by_pitch)?;
+    if own < HEARD_POORLY {
+        return None;
+    }
+    let others: Vec<f32> = SEARCHED_WARPS
+        .into_iter()
+        .filter(|&w| crate::warp::frame_rate_of(w) != by_pitch)
+        .collect();
+    // Two at a time: each phone loop takes a turn of the cores of its own.
+    let scored: Vec<(f32, f32)> = std::thread::scope(|scope| {
+        let halves: Vec<_> = [0, 1]
+            .map(|half| {
+                let (others, score) = (&others, &score);
+                scope.spawn(move || {
+                    others
+                        .iter()
+                        .skip(half)
+                        .step_by(2)
+                        .filter_map(|&w| Some((w, score(crate::warp::frame_rate_of(w))?)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .into_iter()
+            .collect();
+        halves
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_default())
+            .collect()
+    });
+    let (warp, best) = scored.into_iter().max_by(|a, b| a.1.total_cmp(&b.1))?;
+    tracing::debug!(own, warp, best, "the best warp found against the pitch's");
+    (best >= own + SEARCH_GAIN).then_some(warp)
+}
+
 impl Loading {
     /// Starts loading the recogniser for `sound` in `language` (English when `None`)
     /// recognised by `blind`, heard through the vocal tract `voice` says: decides how it is
@@ -189,7 +289,7 @@ impl Loading {
         blind: Recognition,
         voice: Voice,
     ) -> Loading {
-        let hearing = Hearing::of(sound, voice);
+        let hearing = hearing(sound, voice);
         let route = heard_route(blind_route(language.unwrap_or(ENGLISH), blind), hearing);
         let owned = sound.clone();
         Loading {
@@ -270,7 +370,13 @@ pub fn recognise_loaded(
     let hearing = loading
         .as_ref()
         .and_then(|l| l.hearing_of(sound, voice))
-        .unwrap_or_else(|| Hearing::of(sound, voice));
+        .unwrap_or_else(|| hearing(sound, voice));
+    if voice == Voice::Search && !hearing.whispered {
+        notes.push(format!(
+            "found by listening: the voice is heard through a vocal tract {:.2} times as long as the acoustic model's",
+            faceanim_sphinx_sys::FRAME_RATE as f32 / hearing.frame_rate as f32
+        ));
+    }
     let heard = Heard::as_decided(sound, hearing);
     if let Some(text) = transcript {
         // Only what is said aloud: a subtitle's timecodes, markup and bracketed directions

@@ -37,6 +37,12 @@ pub enum Voice {
     /// This warp: every frequency divided by it (1: as it is; a woman's 1.2, a child's 1.45;
     /// under 1 for a voice deeper than a man's, lowered by an effect, say).
     Warp(f32),
+    /// Found by listening: the warp its pitch says, unless the acoustic model hears the voice
+    /// clearly better through another (for a voice whose pitch and resonances were moved
+    /// together: an effect, a voice changer, a recording played fast or slow). Costs a phone
+    /// loop over the line's first seconds at each warp tried
+    /// (`faceanim_speech::recognition`'s search).
+    Search,
 }
 
 impl Voice {
@@ -47,15 +53,18 @@ impl Voice {
 impl std::str::FromStr for Voice {
     type Err = String;
 
-    /// `auto`, `man` (1), `woman` (1.2), `child` (1.45) or a warp from 0.6 to 1.8.
+    /// `auto`, `search`, `man` (1), `woman` (1.2), `child` (1.45) or a warp from 0.6 to 1.8.
     fn from_str(text: &str) -> Result<Voice, String> {
         let warp = match text.trim().to_ascii_lowercase().as_str() {
             "auto" => return Ok(Voice::Auto),
+            "search" => return Ok(Voice::Search),
             "man" => 1.0,
             "woman" => 1.2,
             "child" => 1.45,
             other => other.parse::<f32>().map_err(|_| {
-                format!("'{text}' is not a voice: auto, man, woman, child, or a warp such as 0.8")
+                format!(
+                    "'{text}' is not a voice: auto, search, man, woman, child, or a warp such as 0.8"
+                )
             })?,
         };
         if !Voice::WARPS.contains(&warp) {
@@ -180,7 +189,7 @@ pub(crate) struct Hearing {
     /// Frames a second: [`FRAME_RATE`] for a voice heard as it is, fewer for a longer tract.
     pub(crate) frame_rate: u32,
     /// Whether the voice is heard for at least [`WHISPER`] without a pitch (only decided
-    /// for [`Voice::Auto`]).
+    /// for [`Voice::Auto`] and [`Voice::Search`]).
     pub(crate) whispered: bool,
 }
 
@@ -193,15 +202,15 @@ impl Hearing {
                 (None, warp.clamp(*Voice::WARPS.start(), *Voice::WARPS.end()))
             }
             Voice::Warp(_) => (None, 1.0),
-            Voice::Auto => {
+            // The search starts from the pitch's warp (and is made where the recogniser is).
+            Voice::Auto | Voice::Search => {
                 let voiced = sound.voice_activity();
                 let pitch = median_pitch(sound, &voiced);
                 whispered = pitch.is_none() && voiced.iter().filter(|&&v| v).count() >= WHISPER;
                 (pitch, pitch.map_or(1.0, warp))
             }
         };
-        // A whole number of frames a second, so the frames stay exactly 10 ms of the sound.
-        let frame_rate = (FRAME_RATE as f32 / warp).round() as u32;
+        let frame_rate = frame_rate_of(warp);
         tracing::debug!(
             ?pitch,
             warp,
@@ -214,6 +223,12 @@ impl Hearing {
             whispered,
         }
     }
+}
+
+/// The frames a second a sound heard through `warp` is read at: a whole number, so that the
+/// frames stay exactly 10 ms of the sound.
+pub(crate) fn frame_rate_of(warp: f32) -> u32 {
+    (FRAME_RATE as f32 / warp).round() as u32
 }
 
 /// A recogniser loaded ahead, and the frame rate it reads at: only a sound heard at that
@@ -489,6 +504,7 @@ pub(crate) mod tests {
     #[test]
     fn voices_are_named_or_given_by_their_warp() {
         assert_eq!("auto".parse(), Ok(Voice::Auto));
+        assert_eq!("Search".parse(), Ok(Voice::Search));
         assert_eq!("Woman".parse(), Ok(Voice::Warp(1.2)));
         assert_eq!(" child ".parse(), Ok(Voice::Warp(1.45)));
         assert_eq!("0.8".parse(), Ok(Voice::Warp(0.8)));
@@ -496,7 +512,7 @@ pub(crate) mod tests {
         assert!(outside.contains("outside"), "{outside}");
         let unknown = "robot".parse::<Voice>().unwrap_err();
         assert!(
-            unknown.contains("'robot'") && unknown.contains("woman"),
+            unknown.contains("'robot'") && unknown.contains("woman") && unknown.contains("search"),
             "{unknown}"
         );
         assert!("NaN".parse::<Voice>().is_err());
