@@ -659,7 +659,7 @@ pub fn train_on(
         members,
         epochs: trained.iter().map(|m| m.epochs).max().unwrap_or(0),
         best_epoch: trained.iter().map(|m| m.best_epoch).max().unwrap_or(0),
-        seconds: started.elapsed().as_secs_f64(),
+        seconds: to_the_millisecond(started.elapsed().as_secs_f64()),
         corrections: 0,
         mae_test_front: None,
         mae_test_groups: Vec::new(),
@@ -996,9 +996,29 @@ pub fn finetune(
     Ok((tuned, report))
 }
 
+/// `seconds` to the millisecond: a time the adapter's file keeps (in JSON), read back exactly.
+/// serde_json reads a number of more digits than a double holds exactly only to within one unit
+/// in its last place: a training's 18.104729077000002 s came back as 18.104729077, and the
+/// adapter read from its file was not the one written.
+fn to_the_millisecond(seconds: f64) -> f64 {
+    (seconds * 1000.0).round() / 1000.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_training_time_reads_back_from_json_as_it_was_written() {
+        // Times as a training's clock gives them (seconds with every digit a double holds).
+        for k in 0..20_000u32 {
+            let seconds = to_the_millisecond(0.5 + f64::from(k) * 0.000_923_456_789_123_4);
+            let back: f64 =
+                serde_json::from_str(&serde_json::to_string(&seconds).unwrap()).unwrap();
+            assert_eq!(back.to_bits(), seconds.to_bits(), "{seconds}");
+        }
+        assert!((to_the_millisecond(18.104_729_077_000_002) - 18.105).abs() < 1e-12);
+    }
 
     /// The network's raw outputs for one input row, written out (no candle).
     fn outputs(weights: &[Vec<f32>; 4], hidden: usize, x: &[f32]) -> Vec<f32> {
