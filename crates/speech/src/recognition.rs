@@ -135,7 +135,7 @@ fn prepare(route: Recognition, sound: &Sound, heard: &Heard<'_>) -> Ready {
     }
     let loop_search = phones::blind_search(Recognition::PhoneLoop).warped(heard.frame_rate());
     let samples = heard.samples();
-    let cut = scored_cut(sound, heard);
+    let cut = scored_cut(&sound.voice_activity(), heard);
     std::thread::scope(|scope| {
         let phones = scope.spawn(|| {
             let mut recogniser = Recogniser::load_on(&loop_search, Some(&turn))?;
@@ -167,13 +167,12 @@ fn prepare(route: Recognition, sound: &Sound, heard: &Heard<'_>) -> Ready {
     })
 }
 
-/// The end of `sound`'s first [`SCORED_VOICE`] frames of voice, in `heard`'s samples (its
-/// frames are the sound's, each `SAMPLE_RATE / frame_rate` samples long): what a phone loop
-/// scores a voice on.
-fn scored_cut(sound: &Sound, heard: &Heard<'_>) -> usize {
+/// The end of a sound's first [`SCORED_VOICE`] frames of voice (`voiced`: its voice
+/// activity), in `heard`'s samples (its frames are the sound's, each `SAMPLE_RATE /
+/// frame_rate` samples long): what a phone loop scores a voice on.
+fn scored_cut(voiced: &[bool], heard: &Heard<'_>) -> usize {
     let samples = heard.samples().len();
-    sound
-        .voice_activity()
+    voiced
         .iter()
         .enumerate()
         .filter(|(_, v)| **v)
@@ -233,9 +232,10 @@ const SEARCH_GAIN: f32 = 0.5;
 /// its pitch's warp (read at `by_pitch` frames a second); `None` to keep that one (also when
 /// the recogniser fails: the line is then recognised as it would have been).
 fn searched(sound: &Sound, by_pitch: u32) -> Option<f32> {
+    let voiced = sound.voice_activity();
     let score = |frame_rate: u32| -> Option<f32> {
         let heard = Heard::warped(sound, frame_rate);
-        let cut = scored_cut(sound, &heard);
+        let cut = scored_cut(&voiced, &heard);
         let search = phones::blind_search(Recognition::PhoneLoop).warped(frame_rate);
         let mut recogniser = Recogniser::load(&search).ok()?;
         recogniser
