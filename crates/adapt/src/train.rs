@@ -996,10 +996,10 @@ pub fn finetune(
     Ok((tuned, report))
 }
 
-/// `seconds` to the millisecond: a time the adapter's file keeps (in JSON), read back exactly.
-/// serde_json reads a number of more digits than a double holds exactly only to within one unit
-/// in its last place: a training's 18.104729077000002 s came back as 18.104729077, and the
-/// adapter read from its file was not the one written.
+/// `seconds` to the millisecond: the training's time as its report keeps it. (That it reads
+/// back exactly is serde_json's `float_roundtrip`, the workspace's for every file: without it,
+/// a training's 18.104729077000002 s came back as 18.104729077, and the adapter read from its
+/// file was not the one written.)
 fn to_the_millisecond(seconds: f64) -> f64 {
     (seconds * 1000.0).round() / 1000.0
 }
@@ -1010,12 +1010,15 @@ mod tests {
 
     #[test]
     fn a_training_time_reads_back_from_json_as_it_was_written() {
-        // Times as a training's clock gives them (seconds with every digit a double holds).
+        // Times as a training's clock gives them (seconds with every digit a double holds),
+        // and as the report keeps them.
         for k in 0..20_000u32 {
-            let seconds = to_the_millisecond(0.5 + f64::from(k) * 0.000_923_456_789_123_4);
-            let back: f64 =
-                serde_json::from_str(&serde_json::to_string(&seconds).unwrap()).unwrap();
-            assert_eq!(back.to_bits(), seconds.to_bits(), "{seconds}");
+            let clock = 0.5 + f64::from(k) * 0.000_923_456_789_123_4;
+            for seconds in [clock, to_the_millisecond(clock), 18.104_729_077_000_002] {
+                let back: f64 =
+                    serde_json::from_str(&serde_json::to_string(&seconds).unwrap()).unwrap();
+                assert_eq!(back.to_bits(), seconds.to_bits(), "{seconds}");
+            }
         }
         assert!((to_the_millisecond(18.104_729_077_000_002) - 18.105).abs() < 1e-12);
     }

@@ -7,8 +7,8 @@
 //! probability), which makes the search tree a third of the size and a line's whole command
 //! about a third faster, at the same agreement on the voices it was chosen on.
 //!
-//! The cut dictionary is made once per pair of model files (by their sizes and times) and kept
-//! in the user's cache folder. Where the unigrams cannot be read every word of the model is
+//! The cut dictionary is made once per pair of model files (told apart by their contents) and
+//! kept in the user's cache folder. Where the unigrams cannot be read every word of the model is
 //! kept; where nothing can be read or kept the whole dictionary is used.
 
 use std::collections::HashSet;
@@ -44,10 +44,7 @@ pub(crate) fn dictionary_for(language_model: &Path, dictionary: &Path) -> PathBu
 fn cut(folder: &Path, language_model: &Path, dictionary: &Path) -> Option<PathBuf> {
     let mut key = std::collections::hash_map::DefaultHasher::new();
     for file in [language_model, dictionary] {
-        let meta = std::fs::metadata(file).ok()?;
-        file.hash(&mut key);
-        meta.len().hash(&mut key);
-        meta.modified().ok()?.hash(&mut key);
+        fingerprint(file, &mut key)?;
     }
     let stem = dictionary.file_stem()?.to_string_lossy();
     let path = folder.join(format!("{stem}-{:016x}-{KEPT_WORDS}.dict", key.finish()));
@@ -85,6 +82,35 @@ fn cut(folder: &Path, language_model: &Path, dictionary: &Path) -> Option<PathBu
             None
         }
     }
+}
+
+/// Bytes read from each of three places of a file (its start, middle and end) to tell it from
+/// another.
+const SAMPLED: usize = 1 << 16;
+
+/// Hashes what tells `file` from another into `key`: its length and [`SAMPLED`] bytes from its
+/// start, middle and end. Not its path or time: the same model built into another folder (a
+/// second checkout, a reinstall) is the same model and finds the cut made for it, where a
+/// key by path and time left one more file in the cache for each. A model changed in place
+/// with its length and those bytes kept would be missed; models are not edited so.
+fn fingerprint(file: &Path, key: &mut impl std::hash::Hasher) -> Option<()> {
+    let mut file = std::fs::File::open(file).ok()?;
+    let len = file.metadata().ok()?.len();
+    len.hash(key);
+    let mut buffer = vec![0u8; SAMPLED];
+    for at in [0, len / 2, len.saturating_sub(SAMPLED as u64)] {
+        file.seek(SeekFrom::Start(at)).ok()?;
+        let mut read = 0;
+        loop {
+            match file.read(&mut buffer[read..]) {
+                Ok(0) => break,
+                Ok(n) => read += n,
+                Err(_) => return None,
+            }
+        }
+        buffer[..read].hash(key);
+    }
+    Some(())
 }
 
 /// Where faceanim keeps what it can make again: `$XDG_CACHE_HOME/faceanim`,
@@ -288,6 +314,37 @@ mod tests {
         short.truncate(TRIE_HEADER.len() + 1 + 8 + 4 + 4 * quantised_values(2) + 20);
         short.extend(tail(&[], &["<s>", "the", "zyuganov", "birch"]));
         assert_eq!(likeliest_of(&short, 2).map(|k| k.len()), Some(4));
+    }
+
+    #[test]
+    fn a_cut_is_found_again_by_its_models_contents_wherever_they_lie() {
+        let root =
+            std::env::temp_dir().join(format!("faceanim-known-copies-{}", std::process::id()));
+        let cache = root.join("cache");
+        let words = [("<s>", -99.0), ("the", -1.2), ("birch", -5.0)];
+        let dictionary = b"the DH AH0\nthe(2) DH IY0\nbirch B ER1 CH\nplanks P L AE1 NG K S\n";
+        let place = |folder: &str, dictionary: &[u8]| {
+            let folder = root.join(folder);
+            std::fs::create_dir_all(&folder).unwrap();
+            let (lm, dict) = (folder.join("m.lm.bin"), folder.join("m.dict"));
+            std::fs::write(&lm, model(&words)).unwrap();
+            std::fs::write(&dict, dictionary).unwrap();
+            cut(&cache, &lm, &dict).unwrap()
+        };
+        let first = place("checkout-1", dictionary);
+        assert_eq!(
+            std::fs::read(&first).unwrap(),
+            b"the DH AH0\nthe(2) DH IY0\nbirch B ER1 CH\n",
+            "the model's words, not the others"
+        );
+        // The same files in another folder, written at another time: the same cut.
+        assert_eq!(place("checkout-2", dictionary), first);
+        // Another dictionary: a cut of its own.
+        let mut changed = dictionary.to_vec();
+        changed.extend_from_slice(b"birch(2) B IH1 R CH\n");
+        assert_ne!(place("checkout-3", &changed), first);
+        assert_eq!(std::fs::read_dir(&cache).unwrap().count(), 2);
+        let _ = std::fs::remove_dir_all(&root);
     }
 
     #[test]
