@@ -402,6 +402,10 @@ def main():
                              "where it missed: where a voice loses its agreement")
     parser.add_argument("--json")
     args = parser.parse_args()
+    # A mode misspelt ("transcript") would otherwise be run as audio alone under its own name.
+    unknown = sorted(set(args.modes.split(",")) - {"text", "audio"})
+    if unknown:
+        parser.error(f"--modes: {', '.join(unknown)} is not a mode (text, audio)")
     work = tempfile.mkdtemp(prefix="faceanim-bench-lipsync-")
     results = []
     try:

@@ -383,10 +383,16 @@ pub fn recognise_loaded(
         // would be aligned as words nobody said.
         let spoken = crate::script::spoken(text);
         notes.extend(spoken.note());
-        let text = spoken.text.as_str();
+        let english = is_english(language);
+        // Symbols said as words ("$5": "5 dollars"); eSpeak NG says another language's itself.
+        let said = if english {
+            crate::script::english_symbols(&spoken.text)
+        } else {
+            spoken.text
+        };
+        let text = said.as_str();
         let words = phones::transcript_words(text, sound.seconds())?;
         let voiced = sound.voice_activity();
-        let english = is_english(language);
         // How sharply the voice follows a synthesiser's is asked of English lines only (the
         // others are timed by synthesis whatever it is).
         let synthesis = || match crate::synthesis::timed_by_synthesis(

@@ -104,6 +104,145 @@ pub fn spoken(text: &str) -> Spoken {
     }
 }
 
+/// An English transcript's symbols as their words, the way a speaker says them: `$5.50` is
+/// "5 dollars 50", `1,000` "1000", `3.14` "3 point 1 4", `50%` "50 percent", `20°C` "20
+/// degrees Celsius", `&` "and", `@` "at", `+` "plus", `=` "equals", `#3` "number 3". The words
+/// left (numbers among them) are said as the dictionary or eSpeak NG says them. Without it a
+/// symbol is no word: "$5" loses its "dollars", and the speech of it is spread over its
+/// neighbours'.
+#[must_use]
+pub fn english_symbols(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len() + 16);
+    let mut k = 0;
+    while k < chars.len() {
+        let c = chars[k];
+        if c.is_ascii_digit() {
+            let start = k;
+            while k < chars.len()
+                && (chars[k].is_ascii_digit()
+                    || (matches!(chars[k], ',' | '.')
+                        && chars.get(k + 1).is_some_and(char::is_ascii_digit)))
+            {
+                k += 1;
+            }
+            let number: String = chars[start..k].iter().collect();
+            let currency = start
+                .checked_sub(1)
+                .and_then(|p| currency_word(chars[p], number.split('.').next() == Some("1")));
+            say_number(&number, currency, &mut out);
+            let unit = matches!(chars.get(k), Some('%' | '°'));
+            match chars.get(k) {
+                Some('%') => {
+                    out.push_str(" percent");
+                    k += 1;
+                }
+                Some('°') => {
+                    out.push_str(" degrees");
+                    k += 1;
+                    let scale = chars.get(k).and_then(|c| match c {
+                        'C' => Some(" Celsius"),
+                        'F' => Some(" Fahrenheit"),
+                        _ => None,
+                    });
+                    if let Some(scale) = scale
+                        && !chars.get(k + 1).is_some_and(|c| c.is_alphanumeric())
+                    {
+                        out.push_str(scale);
+                        k += 1;
+                    }
+                }
+                _ => {}
+            }
+            // `100%sure`: the unit's word apart from the next.
+            if unit && chars.get(k).is_some_and(|c| c.is_alphanumeric()) {
+                out.push(' ');
+            }
+            continue;
+        }
+        let next_is_digit = chars.get(k + 1).is_some_and(char::is_ascii_digit);
+        let word = match c {
+            // Said after its number.
+            _ if currency_word(c, false).is_some() && next_is_digit => "",
+            '&' => "and",
+            '@' => "at",
+            '+' => "plus",
+            '=' => "equals",
+            '#' if next_is_digit => "number",
+            _ => {
+                out.push(c);
+                k += 1;
+                continue;
+            }
+        };
+        // Apart from the words either side (`US$5`, `me@home`), without doubling a space.
+        if out.chars().next_back().is_some_and(char::is_alphanumeric) {
+            out.push(' ');
+        }
+        out.push_str(word);
+        if !word.is_empty() && chars.get(k + 1).is_some_and(|n| n.is_alphanumeric()) {
+            out.push(' ');
+        }
+        k += 1;
+    }
+    out
+}
+
+/// The word for the currency symbol `c` (`one`: of an amount of one), when it is one.
+fn currency_word(c: char, one: bool) -> Option<&'static str> {
+    Some(match (c, one) {
+        ('$', false) => "dollars",
+        ('$', true) => "dollar",
+        ('€', false) => "euros",
+        ('€', true) => "euro",
+        ('£', false) => "pounds",
+        ('£', true) => "pound",
+        ('¥', _) => "yen",
+        _ => return None,
+    })
+}
+
+/// `number` (digits with `,` and `.` between them) as it is said, pushed onto `out`, with its
+/// `currency` after its whole part.
+fn say_number(number: &str, currency: Option<&str>, out: &mut String) {
+    let (whole, fraction) = match number.split_once('.') {
+        Some((whole, fraction)) if !fraction.contains(['.', ',']) => (whole, Some(fraction)),
+        // Two points (a version, a date): said part by part.
+        Some(_) => (number, None),
+        None => (number, None),
+    };
+    let groups: Vec<&str> = whole.split(',').collect();
+    let thousands = groups.len() > 1
+        && (1..=3).contains(&groups[0].len())
+        && groups[1..].iter().all(|g| g.len() == 3);
+    if thousands {
+        out.extend(groups);
+    } else {
+        out.push_str(&whole.replace([',', '.'], " "));
+    }
+    match (currency, fraction) {
+        (Some(currency), fraction) => {
+            out.push(' ');
+            out.push_str(currency);
+            // Cents as a number: "5 dollars 50".
+            if let Some(cents) = fraction.map(|f| f.trim_start_matches('0'))
+                && !cents.is_empty()
+            {
+                out.push(' ');
+                out.push_str(cents);
+            }
+        }
+        (None, Some(fraction)) => {
+            out.push_str(" point");
+            for digit in fraction.chars() {
+                out.push(' ');
+                out.push(digit);
+            }
+        }
+        (None, None) => {}
+    }
+}
+
 /// `line` without its `<…>`, `[…]` and `{…}` spans, each pushed onto `left_out`; a bracket
 /// that is never closed is kept (it is punctuation, and no word).
 fn unbracketed(line: &str, left_out: &mut Vec<String>) -> String {
@@ -185,6 +324,35 @@ mod tests {
             said.note().unwrap(),
             "left out of the transcript as not spoken: [laughs], <break time=\"500ms\"/>, NARRATOR:, {\\an8}, DR. JONES:"
         );
+    }
+
+    #[test]
+    fn english_symbols_are_said_as_words() {
+        for (text, said) in [
+            ("It costs $5.50 today.", "It costs 5 dollars 50 today."),
+            (
+                "$1 or €1,000,000 or £20.00",
+                "1 dollar or 1000000 euros or 20 pounds",
+            ),
+            (
+                "¥300 & 50% off, US$5",
+                "300 yen and 50 percent off, US 5 dollars",
+            ),
+            (
+                "pi is 3.14, it's 20°C, 68°F or 5°Cs",
+                "pi is 3 point 1 4, it's 20 degrees Celsius, 68 degrees Fahrenheit or 5 degrees Cs",
+            ),
+            ("3rd and 100%sure", "3rd and 100 percent sure"),
+            ("1,2,3 and 10.0.1", "1 2 3 and 10 0 1"),
+            (
+                "mail me@home: 2+2=4, #1",
+                "mail me at home: 2 plus 2 equals 4, number 1",
+            ),
+            ("Mama made my bed.", "Mama made my bed."),
+            ("$ alone, a # and 100 $", "$ alone, a # and 100 $"),
+        ] {
+            assert_eq!(english_symbols(text), said, "{text}");
+        }
     }
 
     #[test]
