@@ -105,7 +105,7 @@ pub fn spoken(text: &str) -> Spoken {
 }
 
 /// An English transcript's symbols as their words, the way a speaker says them: `$5.50` is
-/// "5 dollars 50", `1,000` "1000", `3.14` "3 point 1 4", `50%` "50 percent", `20°C` "20
+/// "5 dollars 50", `$0.99` "99 cents", `1,000` "1000", `3.14` "3 point 1 4", `50%` "50 percent", `20°C` "20
 /// degrees Celsius", `&` "and", `@` "at", `+` "plus", `=` "equals", `#3` "number 3". The words
 /// left (numbers among them) are said as the dictionary or eSpeak NG says them. Without it a
 /// symbol is no word: "$5" loses its "dollars", and the speech of it is spread over its
@@ -129,7 +129,8 @@ pub fn english_symbols(text: &str) -> String {
             let number: String = chars[start..k].iter().collect();
             let currency = start
                 .checked_sub(1)
-                .and_then(|p| currency_word(chars[p], number.split('.').next() == Some("1")));
+                .map(|p| chars[p])
+                .filter(|&c| currency_word(c, false).is_some());
             say_number(&number, currency, &mut out);
             let unit = matches!(chars.get(k), Some('%' | '°'));
             match chars.get(k) {
@@ -202,15 +203,27 @@ fn currency_word(c: char, one: bool) -> Option<&'static str> {
     })
 }
 
-/// `number` (digits with `,` and `.` between them) as it is said, pushed onto `out`, with its
-/// `currency` after its whole part.
-fn say_number(number: &str, currency: Option<&str>, out: &mut String) {
+/// `number` (digits with `,` and `.` between them) as it is said, pushed onto `out`, with the
+/// words of the `currency` symbol before it (`$`, `€`, `£`, `¥`) after its whole part.
+fn say_number(number: &str, currency: Option<char>, out: &mut String) {
     let (whole, fraction) = match number.split_once('.') {
         Some((whole, fraction)) if !fraction.contains(['.', ',']) => (whole, Some(fraction)),
         // Two points (a version, a date): said part by part.
         Some(_) => (number, None),
         None => (number, None),
     };
+    let cents = fraction
+        .map(|f| f.trim_start_matches('0'))
+        .filter(|c| !c.is_empty());
+    // `$0.99`: "99 cents".
+    if let (Some(minor), Some(cents)) = (currency.and_then(minor_unit), cents)
+        && whole.trim_start_matches('0').is_empty()
+    {
+        out.push_str(cents);
+        out.push(' ');
+        out.push_str(minor);
+        return;
+    }
     let groups: Vec<&str> = whole.split(',').collect();
     let thousands = groups.len() > 1
         && (1..=3).contains(&groups[0].len())
@@ -220,14 +233,13 @@ fn say_number(number: &str, currency: Option<&str>, out: &mut String) {
     } else {
         out.push_str(&whole.replace([',', '.'], " "));
     }
-    match (currency, fraction) {
-        (Some(currency), fraction) => {
+    let one = whole.trim_start_matches('0') == "1";
+    match (currency.and_then(|c| currency_word(c, one)), fraction) {
+        (Some(word), _) => {
             out.push(' ');
-            out.push_str(currency);
+            out.push_str(word);
             // Cents as a number: "5 dollars 50".
-            if let Some(cents) = fraction.map(|f| f.trim_start_matches('0'))
-                && !cents.is_empty()
-            {
+            if let Some(cents) = cents {
                 out.push(' ');
                 out.push_str(cents);
             }
@@ -240,6 +252,15 @@ fn say_number(number: &str, currency: Option<&str>, out: &mut String) {
             }
         }
         (None, None) => {}
+    }
+}
+
+/// The hundredth of the currency of symbol `c`, when it has one said so.
+fn minor_unit(c: char) -> Option<&'static str> {
+    match c {
+        '$' | '€' => Some("cents"),
+        '£' => Some("pence"),
+        _ => None,
     }
 }
 
