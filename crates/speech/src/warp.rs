@@ -16,7 +16,8 @@
 //! a man's voice costs more (`rms` 0.93 → 0.69 at 1.2) than leaving a woman's unwarped does,
 //! and a warp that grows on with the pitch through women's voices (as a power of it) suited
 //! `slt` but not eSpeak NG's women, whose resonances rise less with their pitch. A whisper
-//! has no pitch and is not warped.
+//! has no pitch and is not warped, unless the user says whose tract it is; told or not, it is
+//! recognised as a whisper.
 
 use std::borrow::Cow;
 
@@ -188,27 +189,26 @@ impl<'a> Heard<'a> {
 pub(crate) struct Hearing {
     /// Frames a second: [`FRAME_RATE`] for a voice heard as it is, fewer for a longer tract.
     pub(crate) frame_rate: u32,
-    /// Whether the voice is heard for at least [`WHISPER`] without a pitch (only decided
-    /// for [`Voice::Auto`] and [`Voice::Search`]).
+    /// Whether the voice is heard for at least [`WHISPER`] without a pitch (for any
+    /// [`Voice`]).
     pub(crate) whispered: bool,
 }
 
 impl Hearing {
     /// How `voice` says `sound` is heard: by hand, or as its pitch says ([`warp`]).
     pub(crate) fn of(sound: &Sound, voice: Voice) -> Hearing {
-        let mut whispered = false;
-        let (pitch, warp) = match voice {
+        // Whether it is whispered is the sound's, whatever tract the user says it has: a
+        // whisper told to be a woman's is still recognised by its phones.
+        let voiced = sound.voice_activity();
+        let pitch = median_pitch(sound, &voiced);
+        let whispered = pitch.is_none() && voiced.iter().filter(|&&v| v).count() >= WHISPER;
+        let warp = match voice {
             Voice::Warp(warp) if warp.is_finite() => {
-                (None, warp.clamp(*Voice::WARPS.start(), *Voice::WARPS.end()))
+                warp.clamp(*Voice::WARPS.start(), *Voice::WARPS.end())
             }
-            Voice::Warp(_) => (None, 1.0),
+            Voice::Warp(_) => 1.0,
             // The search starts from the pitch's warp (and is made where the recogniser is).
-            Voice::Auto | Voice::Search => {
-                let voiced = sound.voice_activity();
-                let pitch = median_pitch(sound, &voiced);
-                whispered = pitch.is_none() && voiced.iter().filter(|&&v| v).count() >= WHISPER;
-                (pitch, pitch.map_or(1.0, warp))
-            }
+            Voice::Auto | Voice::Search => pitch.map_or(1.0, warp),
         };
         let frame_rate = frame_rate_of(warp);
         tracing::debug!(
