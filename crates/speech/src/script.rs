@@ -105,11 +105,11 @@ pub fn spoken(text: &str) -> Spoken {
 }
 
 /// An English transcript's symbols as their words, the way a speaker says them: `$5.50` is
-/// "5 dollars 50", `$0.99` "99 cents", `1,000` "1000", `3.14` "3 point 1 4", `50%` "50 percent", `20°C` "20
-/// degrees Celsius", `&` "and", `@` "at", `+` "plus", `=` "equals", `#3` "number 3". The words
-/// left (numbers among them) are said as the dictionary or eSpeak NG says them. Without it a
-/// symbol is no word: "$5" loses its "dollars", and the speech of it is spread over its
-/// neighbours'.
+/// "5 dollars 50", `$0.99` "99 cents", `1,000` "1000", `3.14` "3 point 1 4", `50%` "50
+/// percent", `20°C` "20 degrees Celsius", `&` "and", `@` "at", `+` "plus", `=` "equals", `#3`
+/// "number 3". The words left (numbers among them) are said as the dictionary or eSpeak NG says
+/// them. Without it a symbol is no word: "$5" loses its "dollars", and the speech of it is
+/// spread over its neighbours'.
 #[must_use]
 pub fn english_symbols(text: &str) -> String {
     let chars: Vec<char> = text.chars().collect();
