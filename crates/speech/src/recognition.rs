@@ -195,7 +195,12 @@ fn hearing(sound: &Sound, voice: Voice) -> Hearing {
                 warp,
                 "the warp the acoustic model hears the voice best through"
             );
-            Hearing::of(sound, Voice::Warp(warp))
+            // The sound's own findings (its pitch, whether it is whispered) stand; only the
+            // tract it is heard through is the one found.
+            Hearing {
+                frame_rate: crate::warp::frame_rate_of(warp),
+                ..by_pitch
+            }
         }
         None => by_pitch,
     }

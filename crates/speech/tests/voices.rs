@@ -412,8 +412,8 @@ fn says(notes: &[String], said: &[&str]) -> bool {
 
 /// A whisper's words are seldom made out, and slowly: without its transcript, a voice heard
 /// with no pitch is read by its phones (whatever tract the user says it has), and the user is
-/// told so (eSpeak NG's whisperf: 0.65
-/// agreement at a quarter of the time, where its words gave 0.58).
+/// told so (eSpeak NG's whisperf: 0.65 agreement at a quarter of the time, where its words gave
+/// 0.58).
 #[test]
 fn a_whisper_without_its_transcript_is_read_by_its_phones() {
     let (_, sound) = espeak(LINES[3], "en-us+whisperf", None);
