@@ -659,7 +659,7 @@ pub fn train_on(
         members,
         epochs: trained.iter().map(|m| m.epochs).max().unwrap_or(0),
         best_epoch: trained.iter().map(|m| m.best_epoch).max().unwrap_or(0),
-        seconds: to_the_millisecond(started.elapsed().as_secs_f64()),
+        seconds: started.elapsed().as_secs_f64(),
         corrections: 0,
         mae_test_front: None,
         mae_test_groups: Vec::new(),
@@ -996,31 +996,24 @@ pub fn finetune(
     Ok((tuned, report))
 }
 
-/// `seconds` to the millisecond: the training's time as its report keeps it. (That it reads
-/// back exactly is serde_json's `float_roundtrip`, the workspace's for every file: without it,
-/// a training's 18.104729077000002 s came back as 18.104729077, and the adapter read from its
-/// file was not the one written.)
-fn to_the_millisecond(seconds: f64) -> f64 {
-    (seconds * 1000.0).round() / 1000.0
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// A training's time, as its clock gives it (every digit a double holds), reads back from
+    /// the report's JSON bit for bit: serde_json's `float_roundtrip`, the workspace's for every
+    /// file. Without it, 18.104729077000002 s came back as 18.104729077, and the adapter read
+    /// from its file was not the one written.
     #[test]
     fn a_training_time_reads_back_from_json_as_it_was_written() {
-        // Times as a training's clock gives them (seconds with every digit a double holds),
-        // and as the report keeps them.
         for k in 0..20_000u32 {
             let clock = 0.5 + f64::from(k) * 0.000_923_456_789_123_4;
-            for seconds in [clock, to_the_millisecond(clock), 18.104_729_077_000_002] {
+            for seconds in [clock, 18.104_729_077_000_002] {
                 let back: f64 =
                     serde_json::from_str(&serde_json::to_string(&seconds).unwrap()).unwrap();
                 assert_eq!(back.to_bits(), seconds.to_bits(), "{seconds}");
             }
         }
-        assert!((to_the_millisecond(18.104_729_077_000_002) - 18.105).abs() < 1e-12);
     }
 
     /// The network's raw outputs for one input row, written out (no candle).
