@@ -119,7 +119,8 @@ pub enum Field {
     Text,
     /// What was said, as a text file.
     Transcript,
-    /// The language spoken (eSpeak NG's name).
+    /// The language spoken (eSpeak NG's name, a voice of it, a BCP 47 tag or a locale:
+    /// `en-us`, `en-us+f3`, `ja-JP`, `pt_BR`).
     Language,
     /// The character's adapter.
     Adapter,
@@ -765,7 +766,7 @@ fn check_row(
     if let Some(language) = fields.get("language")
         && !language
             .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '-')
+            .all(|c| c.is_ascii_alphanumeric() || "-_+.@".contains(c))
     {
         return Err(fail(
             "language",

@@ -21,8 +21,10 @@ pub struct LipsyncArgs {
     #[arg(long, value_name = "TEXT|FILE")]
     pub text: Option<String>,
     /// The language spoken, as eSpeak NG names it (`en-us`, `es`, `ja`, `de`, `fr`, `ko`,
-    /// `it`, `pt`, … : `espeak-ng --voices`). A transcript in any of them is aligned by
-    /// synthesis; without one, English words are recognised, other languages by their phones.
+    /// `it`, `pt`, … : `espeak-ng --voices`) or as a BCP 47 tag or locale (`ja-JP`, `pt_BR`,
+    /// `es-MX`, `zh-Hant-TW`), taken to eSpeak NG's nearest language. A transcript in any of
+    /// them is aligned by synthesis; without one, English words are recognised, other
+    /// languages by their phones.
     #[arg(long, default_value = faceanim_speech::recognition::ENGLISH)]
     pub language: String,
     /// Outputs by extension, as `faceanim track` writes them (.glb/.vrm the character with
@@ -251,7 +253,8 @@ fn read_speech(
         Blind::Words => faceanim_speech::Recognition::Words,
         Blind::Phones => faceanim_speech::Recognition::PhoneLoop,
     };
-    faceanim_speech::recognition::check_language(&args.language)
+    // As eSpeak NG names it (`ja-JP`: `ja`), for every route below.
+    let language = faceanim_speech::recognition::check_language(&args.language)
         .map_err(|e| anyhow::anyhow!("--language {}: {e}", args.language))?;
     let sound = Sound::read(&args.speech)?;
     if let Some((text, from)) = transcript {
@@ -262,17 +265,12 @@ fn read_speech(
     // the character loads: the ones this voice is heard with (a woman's, a child's, a
     // whisper's), decided from the sound first.
     let loading = transcript.is_none().then(|| {
-        faceanim_speech::recognition::Loading::start(
-            &sound,
-            Some(&args.language),
-            blind,
-            args.voice,
-        )
+        faceanim_speech::recognition::Loading::start(&sound, Some(&language), blind, args.voice)
     });
     let heard = faceanim_speech::read_loaded(
         &sound,
         transcript.map(|(text, _)| text.as_str()),
-        Some(&args.language),
+        Some(&language),
         blind,
         loading,
         args.voice,

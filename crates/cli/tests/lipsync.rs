@@ -410,14 +410,14 @@ fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
         let _ = std::fs::remove_file(&nowhere);
         let args: Vec<&str> = ["lipsync", wav.to_str().unwrap(), "--clip"]
             .into_iter()
-            .chain([nowhere.to_str().unwrap(), "--language", "en_us"])
+            .chain([nowhere.to_str().unwrap(), "--language", "englsh"])
             .chain(more.iter().copied())
             .collect();
         let run = faceanim(&args);
         let stderr = String::from_utf8_lossy(&run.stderr);
         assert!(!run.status.success(), "{stderr}");
         assert!(
-            stderr.contains("--language en_us: eSpeak NG has no language or voice 'en_us'"),
+            stderr.contains("--language englsh: eSpeak NG has no language or voice 'englsh'"),
             "{stderr}"
         );
         assert!(!nowhere.exists());

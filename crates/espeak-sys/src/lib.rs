@@ -380,8 +380,9 @@ mod imp {
 
     /// Chooses `voice` as the `espeak-ng` program does: by its name (`en-us`, `cmn`,
     /// `en-us+f3`), else as a language one of the voices speaks (`zh`, which the Mandarin
-    /// voice lists among its languages), keeping a `+variant`. The engine must be started and
-    /// its lock held.
+    /// voice lists among its languages; `en-gb` and `fr-fr`, the languages `espeak-ng
+    /// --voices` shows for the voices in the files `gmw/en` and `roa/fr`), keeping a
+    /// `+variant`. The engine must be started and its lock held.
     fn set_voice(voice: &str) -> Result<(), EspeakError> {
         let by_name = |name: &str| -> Result<bool, EspeakError> {
             let name = CString::new(name).map_err(|_| EspeakError::Nul)?;
@@ -394,10 +395,12 @@ mod imp {
         let (language, variant) = voice
             .split_once('+')
             .map_or((voice, None), |(l, v)| (l, Some(v)));
+        // Chosen by its file (`gmw/en`): a voice's first language is not always a name it
+        // answers to (`en-gb` is not, the voice's file being `en`).
         let speaker = listed()
             .into_iter()
             .find(|v| v.languages.iter().any(|l| l.eq_ignore_ascii_case(language)))
-            .and_then(|v| v.languages.into_iter().next());
+            .map(|v| v.name);
         if let Some(speaker) = speaker {
             let named = match variant {
                 Some(variant) => format!("{speaker}+{variant}"),
@@ -503,8 +506,17 @@ mod tests {
             return;
         }
         // By name, with a variant, or as a language a voice lists (zh: the Mandarin voice's).
-        for voice in ["es", "en-us", "en-us+f3", "ja", "cmn", "zh", "zh+f2"] {
+        // Every language `espeak-ng --voices` lists is one it takes (`en-gb`, `fr-fr` were not).
+        for voice in [
+            "es", "en-us", "en-us+f3", "ja", "cmn", "zh", "zh+f2", "en-gb", "en-gb+f3", "fr-fr",
+            "EN-GB",
+        ] {
             check_voice(voice).unwrap_or_else(|e| panic!("{voice}: {e}"));
+        }
+        for voice in voices().unwrap() {
+            for language in &voice.languages {
+                check_voice(language).unwrap_or_else(|e| panic!("{language} ({voice:?}): {e}"));
+            }
         }
         let error = check_voice("xx").unwrap_err();
         assert!(

@@ -49,20 +49,103 @@ pub fn recognise(
     recognise_loaded(sound, transcript, language, blind, None, Voice::Auto)
 }
 
-/// Checks that eSpeak NG speaks `language` (a language such as `es`, or a voice of one,
-/// `en-us+f3`): a name it does not know would otherwise choose the route as if it were another
-/// language's (a misspelt English, `en_us`, recognised by its phones) and leave its transcript
-/// unspoken. Where this build has no eSpeak NG, any name passes: only the route depends on it.
+/// Checks that eSpeak NG speaks `language` and gives the name faceanim speaks it by. The
+/// language may be named as eSpeak NG names it (`es`, `en-gb`, `cmn`), as a voice of one
+/// (`en-us+f3`), or as other software tags it: BCP 47 (`ja-JP`, `pt-BR`, `zh-Hant-TW`,
+/// `es-MX`: game engines' and localisation tools' tags) or a POSIX locale (`en_US.UTF-8`).
+/// A tag is taken to the language of eSpeak NG's nearest it (`spellings`): its region's where
+/// eSpeak NG has one (`pt-br`, `en-us`, `fr-be`), Latin American Spanish for Spanish of the
+/// Americas (`es-419`), Cantonese for Chinese of Hong Kong and Macau (`yue`), else the
+/// language's own (`ja`; `zh`, Mandarin; `en`, British English). A name it does not know would
+/// otherwise choose the route as if it were another language's (a misspelt English recognised
+/// by its phones) and leave its transcript unspoken. Where this build has no eSpeak NG, any
+/// name passes, written as eSpeak NG would name it: only the route depends on it.
 ///
 /// # Errors
-/// [`PhoneError::UnknownLanguage`] naming it.
-pub fn check_language(language: &str) -> Result<(), PhoneError> {
-    match faceanim_espeak_sys::check_voice(language) {
+/// [`PhoneError::UnknownLanguage`] naming it as given.
+pub fn check_language(language: &str) -> Result<String, PhoneError> {
+    let spellings = spellings(language);
+    for spelling in &spellings {
+        match faceanim_espeak_sys::check_voice(spelling) {
+            Ok(()) => return Ok(spelling.clone()),
+            Err(
+                faceanim_espeak_sys::EspeakError::NoVoice(_)
+                | faceanim_espeak_sys::EspeakError::Nul,
+            ) => {}
+            Err(_) => break,
+        }
+    }
+    match faceanim_espeak_sys::check_voice(ENGLISH) {
         Err(
             faceanim_espeak_sys::EspeakError::NoVoice(_) | faceanim_espeak_sys::EspeakError::Nul,
-        ) => Err(PhoneError::UnknownLanguage(language.to_owned())),
-        Ok(()) | Err(_) => Ok(()),
+        )
+        | Ok(()) => Err(PhoneError::UnknownLanguage(language.to_owned())),
+        // No eSpeak NG here to ask.
+        Err(_) => Ok(spellings.into_iter().next().unwrap_or_default()),
     }
+}
+
+/// `language` as the name faceanim speaks it by where eSpeak NG knows it ([`check_language`]),
+/// else as given (which the checks that need eSpeak NG then refuse by name).
+fn language_named(language: &str) -> String {
+    check_language(language).unwrap_or_else(|_| language.to_owned())
+}
+
+/// The countries whose Spanish is Latin America's (eSpeak NG's `es-419`): BCP 47's regions
+/// for the Americas, and `419` itself.
+const SPANISH_OF_THE_AMERICAS: [&str; 21] = [
+    "419", "ar", "bo", "cl", "co", "cr", "cu", "do", "ec", "gt", "hn", "mx", "ni", "pa", "pe",
+    "pr", "py", "sv", "us", "uy", "ve",
+];
+
+/// The names eSpeak NG may know `language` by, nearest first: as eSpeak NG writes names (lower
+/// case, `-` between parts; a POSIX locale's codeset and modifier left out: `en_US.UTF-8@euro`
+/// is `en-us`), then without a BCP 47 script (`zh-hant-tw`: `zh-tw`), then the regional
+/// languages eSpeak NG names otherwise (`es-mx`: `es-419`; `zh-hk`: `yue`), then shorter and
+/// shorter (`zh-tw`: `zh`), then as given; each with its `+variant`.
+fn spellings(language: &str) -> Vec<String> {
+    let given = language.trim();
+    let (tag, variant) = given
+        .split_once('+')
+        .map_or((given, None), |(t, v)| (t, Some(v)));
+    let tag = tag.split(['.', '@']).next().unwrap_or(tag);
+    let tag = tag.replace('_', "-").to_ascii_lowercase();
+    let parts: Vec<&str> = tag.split('-').filter(|p| !p.is_empty()).collect();
+    let script = |k: usize, part: &str| {
+        k > 0 && part.len() == 4 && part.chars().all(|c| c.is_ascii_alphabetic())
+    };
+    let unscripted: Vec<&str> = parts
+        .iter()
+        .enumerate()
+        .filter(|&(k, part)| !script(k, part))
+        .map(|(_, part)| *part)
+        .collect();
+    let mut names = vec![tag.clone(), unscripted.join("-")];
+    match unscripted.as_slice() {
+        ["zh", "hk" | "mo", ..] => names.push("yue".to_owned()),
+        ["es", region, ..] if SPANISH_OF_THE_AMERICAS.contains(region) => {
+            names.push("es-419".to_owned());
+        }
+        _ => {}
+    }
+    for n in (1..unscripted.len()).rev() {
+        names.push(unscripted[..n].join("-"));
+    }
+    names.push(given.split_once('+').map_or(given, |(t, _)| t).to_owned());
+    let mut out: Vec<String> = Vec::with_capacity(names.len());
+    for name in names {
+        if name.is_empty() {
+            continue;
+        }
+        let name = match variant {
+            Some(variant) => format!("{name}+{variant}"),
+            None => name,
+        };
+        if !out.contains(&name) {
+            out.push(name);
+        }
+    }
+    out
 }
 
 /// The route [`recognise`] takes without a transcript in `language`: `blind`, except that
@@ -295,7 +378,8 @@ impl Loading {
         voice: Voice,
     ) -> Loading {
         let hearing = hearing(sound, voice);
-        let route = heard_route(blind_route(language.unwrap_or(ENGLISH), blind), hearing);
+        let language = language_named(language.unwrap_or(ENGLISH));
+        let route = heard_route(blind_route(&language, blind), hearing);
         let owned = sound.clone();
         Loading {
             route,
@@ -360,8 +444,8 @@ pub fn recognise_loaded(
     loading: Option<Loading>,
     voice: Voice,
 ) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
-    let language = language.unwrap_or(ENGLISH);
-    check_language(language)?;
+    let language = check_language(language.unwrap_or(ENGLISH))?;
+    let language = language.as_str();
     let mut notes = Vec::new();
     let asked = blind;
     let blind = blind_route(language, blind);
@@ -389,9 +473,10 @@ pub fn recognise_loaded(
         let spoken = crate::script::spoken(text);
         notes.extend(spoken.note());
         let english = is_english(language);
-        // Symbols said as words ("$5": "5 dollars"); eSpeak NG says another language's itself.
+        // Symbols and abbreviations said as words ("$5": "5 dollars", "Dr. Jones": "doctor
+        // Jones"); eSpeak NG says another language's itself.
         let said = if english {
-            crate::script::english_symbols(&spoken.text)
+            crate::script::english_abbreviations(&crate::script::english_symbols(&spoken.text))
         } else {
             spoken.text
         };
@@ -830,6 +915,72 @@ fn said_share(phones: &[Phone], voiced: &[bool]) -> f32 {
 mod tests {
     use super::*;
     use crate::warp::tests::buzz;
+
+    /// Tags as game engines, localisation tools and locales write them are tried as eSpeak NG
+    /// names them, nearest first.
+    #[test]
+    fn a_language_tag_is_spelt_as_espeak_ng_names_languages() {
+        let first = |tag: &str| spellings(tag).into_iter().next().unwrap();
+        assert_eq!(first("ja-JP"), "ja-jp");
+        assert_eq!(first("en_US.UTF-8"), "en-us");
+        assert_eq!(first("de_DE@euro"), "de-de");
+        assert_eq!(first(" EN "), "en");
+        assert_eq!(spellings("ja-JP"), ["ja-jp", "ja", "ja-JP"]);
+        assert_eq!(
+            spellings("zh-Hant-TW"),
+            ["zh-hant-tw", "zh-tw", "zh", "zh-Hant-TW"]
+        );
+        assert_eq!(spellings("zh_HK"), ["zh-hk", "yue", "zh", "zh_HK"]);
+        assert_eq!(spellings("es-MX"), ["es-mx", "es-419", "es", "es-MX"]);
+        assert_eq!(spellings("es-ES"), ["es-es", "es", "es-ES"]);
+        assert_eq!(spellings("en-US+f3"), ["en-us+f3", "en+f3", "en-US+f3"]);
+        assert_eq!(spellings("cmn"), ["cmn"]);
+        assert_eq!(spellings("Japanese"), ["japanese", "Japanese"]);
+    }
+
+    /// Each tag reaches the language eSpeak NG speaks nearest it, and the routes see it as that
+    /// language (an English locale is English, recognised by words).
+    #[test]
+    fn a_language_tag_is_spoken_as_the_nearest_language_espeak_ng_has() {
+        if faceanim_espeak_sys::check_voice(ENGLISH).is_err() {
+            return;
+        }
+        for (tag, named) in [
+            ("en-us", "en-us"),
+            ("en_US.UTF-8", "en-us"),
+            ("EN", "en"),
+            ("en-GB", "en-gb"),
+            ("en-AU", "en"),
+            ("en-US+f3", "en-us+f3"),
+            ("ja-JP", "ja"),
+            ("pt_BR", "pt-br"),
+            ("pt-PT", "pt-pt"),
+            ("es-MX", "es-mx"),
+            ("es-AR", "es-419"),
+            ("es-ES", "es"),
+            ("fr-FR", "fr-fr"),
+            ("fr-CA", "fr"),
+            ("zh-CN", "zh"),
+            ("zh-Hant-TW", "zh"),
+            ("zh-HK", "yue"),
+            ("sr-Latn-RS", "sr"),
+            ("ko-KR", "ko"),
+        ] {
+            assert_eq!(check_language(tag).unwrap(), named, "{tag}");
+        }
+        assert!(is_english(&check_language("en_GB.UTF-8").unwrap()));
+        assert_eq!(
+            blind_route(&language_named("en_US"), Recognition::Words),
+            Recognition::Words
+        );
+        for wrong in ["englsh", "xx-YY", "e\0s"] {
+            let error = check_language(wrong).unwrap_err();
+            assert!(
+                matches!(&error, PhoneError::UnknownLanguage(l) if l == wrong),
+                "{error}"
+            );
+        }
+    }
 
     /// A recogniser loaded once the sound is at hand is the one its voice is heard with, and
     /// its decision is used for that sound and voice only.

@@ -13,6 +13,12 @@
 //! Spoken, each would become words nobody said ("zero zero colon zero one…", "break time
 //! five hundred ms"), aligned onto the speech of others. They are left out, and said so.
 //! Parentheses are kept: prose puts spoken asides in them as often as scripts put directions.
+//!
+//! The words left are read as they were meant, whatever program typed them ([`plain`]): a
+//! word processor's curly apostrophe (`It’s`), macOS's decomposed accents (`e` + `◌́`, Korean
+//! as separate jamo), full-width digits and letters, ligatures a PDF copies (`ﬁ`).
+
+use unicode_normalization::UnicodeNormalization;
 
 /// A transcript's spoken words and what was left out of it.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -46,6 +52,7 @@ const LONGEST_NAME: usize = 30;
 /// What `text` says aloud (see the module's docs).
 #[must_use]
 pub fn spoken(text: &str) -> Spoken {
+    let text = plain(text);
     let lines: Vec<&str> = text.lines().collect();
     let webvtt = lines
         .first()
@@ -101,6 +108,182 @@ pub fn spoken(text: &str) -> Spoken {
     Spoken {
         text: out,
         left_out: listed,
+    }
+}
+
+/// Titles written short before a name, and what is said for them (`Dr. Jones`, `Sgt Hale`).
+/// The pronouncing dictionary reads `dr` as "drive" and `st` as "street", and lacks the rest,
+/// which eSpeak NG then says letter by letter or as another word (`Lt.` "L T", `Gen.` "Jen").
+const TITLES: [(&str, &str); 24] = [
+    ("Adm", "admiral"),
+    ("Capt", "captain"),
+    ("Cmdr", "commander"),
+    ("Col", "colonel"),
+    ("Cpl", "corporal"),
+    ("Det", "detective"),
+    ("Dr", "doctor"),
+    ("Fr", "father"),
+    ("Ft", "fort"),
+    ("Gen", "general"),
+    ("Gov", "governor"),
+    ("Insp", "inspector"),
+    ("Lt", "lieutenant"),
+    ("Maj", "major"),
+    ("Mt", "mount"),
+    ("Pres", "president"),
+    ("Prof", "professor"),
+    ("Pvt", "private"),
+    ("Rep", "representative"),
+    ("Rev", "reverend"),
+    ("Sen", "senator"),
+    ("Sgt", "sergeant"),
+    ("Sr", "senior"),
+    ("St", "saint"),
+];
+
+/// Words of an address written short after a name (`Main St.`, `Oak Dr.`, `5th Ave.`), and
+/// what is said for them.
+const STREETS: [(&str, &str); 5] = [
+    ("Ave", "avenue"),
+    ("Blvd", "boulevard"),
+    ("Dr", "drive"),
+    ("Rd", "road"),
+    ("St", "street"),
+];
+
+/// An English transcript's abbreviations as the words said for them: a title before a name
+/// (`Dr. Jones`: "doctor Jones", `St. Louis`: "saint Louis", `Sgt Hale`: "sergeant Hale"), a
+/// street after one (`Main St.`: "Main street", `Oak Dr.`: "Oak drive"), and `vs.` "versus".
+/// Only where the capitals say which (a title is followed by a capitalised word, a street
+/// follows one); any other use is left to the dictionary.
+#[must_use]
+pub fn english_abbreviations(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 16);
+    let mut rest = text;
+    // Whether the word before was a name or a number (a street follows one): capitalised
+    // where a sentence does not start.
+    let mut after_name = false;
+    let mut sentence_starts = true;
+    while let Some(start) = rest.find(char::is_alphanumeric) {
+        let gap = &rest[..start];
+        if gap.contains(['.', '!', '?', '\n']) {
+            sentence_starts = true;
+        }
+        if gap.contains(|c: char| !c.is_whitespace()) {
+            // `Paris, Dr. Jones`: the name before is not the street's.
+            after_name &= !gap.contains([',', ';', ':', '(', ')', '"']);
+        }
+        out.push_str(gap);
+        let word_and_after = &rest[start..];
+        let end = word_and_after
+            .find(|c: char| !c.is_alphanumeric() && c != '\'')
+            .unwrap_or(word_and_after.len());
+        let word = &word_and_after[..end];
+        let after = &word_and_after[end..];
+        // A word inside another (`e2e`, `x86`) or right after one is not an abbreviation.
+        let alone = !out.chars().next_back().is_some_and(char::is_alphanumeric);
+        let dotted = after.starts_with('.');
+        let following = after[usize::from(dotted)..].trim_start();
+        let named_next = after[usize::from(dotted)..].starts_with(char::is_whitespace)
+            && following.starts_with(|c: char| c.is_uppercase());
+        // A street after a name before a title before one: `Main St. Then …` ends a sentence,
+        // while `Ask Dr. Banks` starts one.
+        // What is said, and whether its full stop only marked it short (a title's is not a
+        // sentence's end; a street's may be).
+        let said = if !alone {
+            None
+        } else if word.eq_ignore_ascii_case("vs") || (word == "v" && dotted && named_next) {
+            Some(("versus", dotted))
+        } else if after_name
+            && (dotted || !following.starts_with(|c: char| c.is_alphanumeric()))
+            && let Some((_, street)) = STREETS.iter().find(|(t, _)| *t == word)
+        {
+            Some((*street, false))
+        } else if named_next && let Some((_, title)) = TITLES.iter().find(|(t, _)| *t == word) {
+            Some((*title, dotted))
+        } else {
+            None
+        };
+        match said {
+            Some((said, short)) => {
+                out.push_str(said);
+                rest = if short { &after[1..] } else { after };
+            }
+            None => {
+                out.push_str(word);
+                rest = after;
+            }
+        }
+        after_name = word.starts_with(|c: char| c.is_ascii_digit())
+            || (!sentence_starts && word.starts_with(|c: char| c.is_uppercase()));
+        sentence_starts = false;
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Marks typed for an apostrophe: the word processor's (’, and ‘ where it turned the wrong
+/// way), Unicode's modifier letter (ʼ, Ukrainian's), a prime (′), and the accents keyboards
+/// without an apostrophe key offer (´, `).
+const APOSTROPHES: [char; 6] = [
+    '\u{2019}', '\u{2018}', '\u{02BC}', '\u{2032}', '\u{00B4}', '`',
+];
+
+/// Characters kept as typed, although Unicode has a plainer form for them: eSpeak NG says
+/// them as words that the plain form loses (`1º` "primero" in Spanish, `1o` "uno o"; `µm`
+/// "micrometre", `μm` "mu m"; `™` "trademark", `TM` "T M"; `½` "a half", `1⁄2` "one two").
+fn kept_as_typed(c: char) -> bool {
+    matches!(
+        c,
+        '\u{00AA}'
+            | '\u{00BA}'
+            | '\u{00B5}'
+            | '\u{2122}'
+            | '\u{00BC}'..='\u{00BE}'
+            | '\u{2150}'..='\u{215F}'
+            | '\u{2189}'
+    )
+        // Korean's letters written alone (`ㅋㅋ`): their compatibility form is the one eSpeak
+        // NG reads.
+        || ('\u{3130}'..='\u{318F}').contains(&c)
+}
+
+/// `text` as the dictionaries and eSpeak NG read it, the same words however they were typed:
+/// - every apostrophe-like mark as `'` (`It’s` is one word, "it's", not "it" and the letter
+///   "s"; `I’m` has no "M" to close the lips on);
+/// - Unicode's compatibility forms as their plain letters (NFKC): full-width `１２３`, `ＯＫ`,
+///   ligatures `ﬁ`, `ﬃ`, Arabic presentation forms, `ᵉʳ`, `Ⅻ`, `㎞` — but for punctuation
+///   and spaces (a full-width `？`) and the few letters that eSpeak NG says better as typed
+///   (`kept_as_typed`);
+/// - letters and their accents composed (NFC): macOS and some editors write `é` as `e` and a
+///   combining accent, and Korean syllables as their separate letters, which eSpeak NG reads
+///   as other words (`mère` as "mer", `엄마` letter by letter).
+#[must_use]
+pub fn plain(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.is_ascii() && !text.contains('`') {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut decomposed = String::with_capacity(text.len());
+    for c in text.chars() {
+        let c = if APOSTROPHES.contains(&c) { '\'' } else { c };
+        let folded = std::iter::once(c).nfkd();
+        // Punctuation and spaces stay as typed: eSpeak NG pauses at a full-width `？` or `，`
+        // in Chinese, Japanese and Korean, and reads on through (or says) an ASCII one there.
+        if kept_as_typed(c)
+            || folded
+                .clone()
+                .all(|f| f.is_ascii_punctuation() || f.is_whitespace())
+        {
+            decomposed.push(c);
+        } else {
+            decomposed.extend(folded);
+        }
+    }
+    let plain: String = decomposed.nfc().collect();
+    if plain == text {
+        std::borrow::Cow::Borrowed(text)
+    } else {
+        std::borrow::Cow::Owned(plain)
     }
 }
 
@@ -316,6 +499,52 @@ mod tests {
     use super::*;
 
     #[test]
+    fn text_is_read_the_same_however_it_was_typed() {
+        let same = |typed: &str, meant: &str| assert_eq!(plain(typed), meant, "{typed:?}");
+        // A word processor's apostrophes, Ukrainian's modifier letter, keyboards' accents.
+        same("It\u{2019}s easy, I\u{2019}m sure", "It's easy, I'm sure");
+        same("\u{2018}Hello,\u{2019} she said", "'Hello,' she said");
+        same(
+            "\u{043c}\u{02bc}\u{044f}\u{0441}\u{043e}",
+            "\u{043c}'\u{044f}\u{0441}\u{043e}",
+        );
+        same("don\u{00b4}t won`t", "don't won't");
+        // Decomposed accents and Korean letters, as macOS writes them.
+        same("me\u{0300}re M\u{00fc}ller", "m\u{00e8}re M\u{00fc}ller");
+        same("mu\u{0308}de", "m\u{00fc}de");
+        same(
+            "\u{110b}\u{1165}\u{11b7}\u{1106}\u{1161}",
+            "\u{c5c4}\u{b9c8}",
+        );
+        // Compatibility forms: full width, ligatures, letters as units.
+        same(
+            "\u{ff11}\u{ff12}\u{ff13}\u{5186}\u{ff0c}\u{ff2f}\u{ff2b}",
+            "123\u{5186}\u{ff0c}OK",
+        );
+        same(
+            "\u{fb01}fty \u{fb03}ce \u{2162} 5\u{338f}",
+            "fifty ffice III 5kg",
+        );
+        same("le 1\u{1d49}\u{02b3} mai", "le 1er mai");
+        // What eSpeak NG says better as typed stays: ordinals, micro, trademark, fractions,
+        // Korean letters alone.
+        for typed in [
+            "el 1\u{00ba} de mayo, la 2\u{00aa} vez",
+            "5 \u{00b5}m",
+            "the \u{2122} sign",
+            "\u{00bd} cup, \u{2153} left",
+            "\u{314b}\u{314b}",
+            "\u{4f60}\u{597d}\u{ff0c}\u{8c22}\u{8c22}\u{ff01}\u{3000}\u{2026}",
+            "plain ASCII, untouched",
+        ] {
+            same(typed, typed);
+            assert!(matches!(plain(typed), std::borrow::Cow::Borrowed(_)));
+        }
+        // And the transcript's words are read from it.
+        assert_eq!(spoken("I\u{2019}m here.").text, "I'm here.");
+    }
+
+    #[test]
     fn subtitles_are_read_for_their_words() {
         let srt = "1\n00:00:00,100 --> 00:00:01,000\nHello there,\n\n2\n00:00:01,000 --> 00:00:03,000\n<i>how are you today?</i> I am fine.\n";
         let said = spoken(srt);
@@ -373,6 +602,49 @@ mod tests {
             ("$ alone, a # and 100 $", "$ alone, a # and 100 $"),
         ] {
             assert_eq!(english_symbols(text), said, "{text}");
+        }
+    }
+
+    #[test]
+    fn english_abbreviations_are_said_as_words() {
+        for (text, said) in [
+            (
+                "Dr. Jones met St. Patrick on Main St.",
+                "doctor Jones met saint Patrick on Main street.",
+            ),
+            (
+                "Sgt Hale and Lt. Dan, vs. Capt. Price",
+                "sergeant Hale and lieutenant Dan, versus captain Price",
+            ),
+            (
+                "Lakers vs Bulls, 5th Ave. and Oak Dr",
+                "Lakers versus Bulls, 5th avenue. and Oak drive",
+            ),
+            (
+                "Meet at 10 Downing St, then leave.",
+                "Meet at 10 Downing street, then leave.",
+            ),
+            // Where the capitals do not say which, the dictionary reads them.
+            ("the dr. said st. is fine", "the dr. said st. is fine"),
+            ("Dr. no capital", "Dr. no capital"),
+            ("the St. of it", "the St. of it"),
+            (
+                "DrJones, Xdr. Smith, Gen3 Lee",
+                "DrJones, Xdr. Smith, Gen3 Lee",
+            ),
+            ("", ""),
+            // A street ends a sentence; a title may start one.
+            (
+                "We live on Main St. Then Dr. Banks came.",
+                "We live on Main street. Then doctor Banks came.",
+            ),
+            (
+                "Ask Dr. Banks to drive to Oak Dr.",
+                "Ask doctor Banks to drive to Oak drive.",
+            ),
+            ("In Paris, Dr. Jones", "In Paris, doctor Jones"),
+        ] {
+            assert_eq!(english_abbreviations(text), said, "{text}");
         }
     }
 

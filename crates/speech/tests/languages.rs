@@ -250,6 +250,36 @@ fn transcripts_in_seven_languages_lip_sync_on_time() {
     eprintln!("{}", report.join("\n"));
 }
 
+/// A transcript whose letters and accents were typed apart (NFD: macOS writes `è` as `e` and
+/// a combining accent, and Korean syllables as their separate letters) lip-syncs as the same
+/// words composed: eSpeak NG read French `mère` as "mer" and the Korean letter by letter.
+#[test]
+fn a_transcript_typed_decomposed_lip_syncs_as_composed() {
+    use unicode_normalization::UnicodeNormalization;
+    for line in [&LINES[2], &LINES[4]] {
+        let (said, sound) = espeak_padded(line.text, line.voice, Some(140), 0.5);
+        let read = |text: &str| {
+            faceanim_speech::read(
+                &sound,
+                Some(text),
+                Some(line.language),
+                faceanim_speech::Recognition::Words,
+            )
+            .unwrap()
+        };
+        let decomposed: String = line.text.nfd().collect();
+        assert_ne!(decomposed, line.text);
+        let [composed, apart] = [read(line.text), read(&decomposed)];
+        let labels = |reading: &faceanim_speech::Reading| -> Vec<String> {
+            reading.phones.iter().map(|p| p.label.clone()).collect()
+        };
+        assert_eq!(labels(&apart), labels(&composed), "{}", line.language);
+        let [hits, total, closed, bilabials] = judged(&apart.track.sample(100.0), &said);
+        assert!(hits * 10 >= total * 8, "{}: {hits}/{total}", line.language);
+        assert_eq!(closed, bilabials, "{}", line.language);
+    }
+}
+
 #[test]
 fn ipa_phones_take_the_shape_of_their_articulation() {
     let cases = [

@@ -542,14 +542,15 @@ fn names_and_numbers_the_dictionary_lacks_are_aligned_by_the_recogniser() {
     assert!(agreement >= 0.85, "{agreement:.3}");
 }
 
-/// A transcript's symbols are aligned as the words the speaker said for them: "$5.50" as
-/// "five dollars fifty", "50%" as "fifty percent", "&" as "and", timed as the line written out.
+/// A transcript's symbols and abbreviations are aligned as the words the speaker said for
+/// them: "Dr." as "doctor" (the dictionary's "dr" is "drive"), "$5.50" as "five dollars fifty",
+/// "50%" as "fifty percent", "&" as "and", timed as the line written out.
 #[test]
 fn symbols_in_a_transcript_are_aligned_as_their_words() {
     let wav = std::env::temp_dir().join(format!("faceanim-symbols-{}.wav", std::process::id()));
     let said = flite(
         "awb",
-        "It costs five dollars fifty, and we take fifty percent off.",
+        "Doctor Banks says it costs five dollars fifty, and we take fifty percent off.",
         &wav,
     );
     let sound = Sound::read(&wav).unwrap();
@@ -559,9 +560,32 @@ fn symbols_in_a_transcript_are_aligned_as_their_words() {
     let labels = |reading: &faceanim_speech::Reading| -> Vec<String> {
         reading.phones.iter().map(|p| p.label.clone()).collect()
     };
-    let written = read("It costs $5.50, & we take 50% off.");
-    let spelled = read("It costs five dollars fifty, and we take fifty percent off.");
+    let written = read("Dr. Banks says it costs $5.50, & we take 50% off.");
+    let spelled =
+        read("Doctor Banks says it costs five dollars fifty, and we take fifty percent off.");
     assert_eq!(labels(&written), labels(&spelled), "{:?}", written.notes);
     let agreement = agreement_from(&written.track.sample(100.0), &said, 0.0);
     assert!(agreement >= 0.85, "{agreement:.3} {:?}", written.notes);
+}
+
+/// A transcript typed with a word processor's curly apostrophes (`I’m`, `it’s`, `we’ll`) is
+/// aligned as the same words typed with straight ones: not as "I" and the letter "M" (a
+/// closure of the lips nobody made), "it" and "S", "we" and "ll".
+#[test]
+fn curly_apostrophes_are_read_as_apostrophes() {
+    let line = "I'm sure it's easy, so don't worry: we'll bring Mom's map.";
+    let wav = std::env::temp_dir().join(format!("faceanim-curly-{}.wav", std::process::id()));
+    let said = flite("awb", line, &wav);
+    let sound = Sound::read(&wav).unwrap();
+    let _ = std::fs::remove_file(&wav);
+    let read =
+        |text: &str| faceanim_speech::read(&sound, Some(text), None, Recognition::Words).unwrap();
+    let labels = |reading: &faceanim_speech::Reading| -> Vec<String> {
+        reading.phones.iter().map(|p| p.label.clone()).collect()
+    };
+    let straight = read(line);
+    let curly = read(&line.replace('\'', "\u{2019}"));
+    assert_eq!(labels(&curly), labels(&straight), "{:?}", curly.notes);
+    let agreement = agreement_from(&curly.track.sample(100.0), &said, 0.0);
+    assert!(agreement >= 0.85, "{agreement:.3} {:?}", curly.notes);
 }

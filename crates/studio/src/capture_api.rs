@@ -231,10 +231,13 @@ async fn upload(
                 faceanim_rig::excerpt(language)
             )));
         }
-        if let Some(language) = &language {
-            faceanim_speech::recognition::check_language(language)
-                .map_err(|e| bad(format!("language: {e}")))?;
-        }
+        // As eSpeak NG names it (`ja-JP`: `ja`).
+        let language = language
+            .map(|l| {
+                faceanim_speech::recognition::check_language(&l)
+                    .map_err(|e| bad(format!("language: {e}")))
+            })
+            .transpose()?;
         let voice: faceanim_speech::Voice = match batch.voice.as_deref().map(str::trim) {
             None | Some("") => faceanim_speech::Voice::Auto,
             Some(voice) => voice.parse().map_err(|e| bad(format!("voice: {e}")))?,
