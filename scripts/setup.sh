@@ -2,7 +2,8 @@
 # Installs what the test suite checks faceanim's files with, when it is missing:
 #   - Blender 3.4 and NumPy for its glTF importer (Debian packages), to open exports as users do;
 #   - Node.js and the Khronos glTF-Validator (npm, pinned in tools/package-lock.json);
-#   - ffmpeg, which faceanim uses to read video and the tests use to make videos;
+#   - ffmpeg, which faceanim uses to read video and the tests use to make videos, and
+#     ExifTool, which marks the tests' photos turned as a phone's camera does (EXIF);
 #   - Chromium (Debian) and playwright-core (npm), to test the studio in a real browser, and iwer
 #     (npm), the emulated Meta Quest 3 its VR test runs in;
 #   - gltfpack and @gltf-transform/cli (npm), which compress the tests' avatars as people's
@@ -79,6 +80,8 @@ want python3-numpy
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
+# ExifTool: it turns the tests' photos as a phone's camera stores them (EXIF orientation).
+command -v exiftool >/dev/null 2>&1 || packages+=(libimage-exiftool-perl)
 want "${libraries[@]}" pocketsphinx-testdata flite espeak-ng
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 apt_install "${packages[@]}"

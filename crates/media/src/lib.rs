@@ -386,7 +386,10 @@ fn decode_jpeg(bytes: &[u8]) -> Result<Image, String> {
     Ok(Image { width, height, rgb })
 }
 
-/// Reads and decodes a PNG or JPEG file.
+/// Reads and decodes a photo or frame (PNG, JPEG, WebP, KTX2), upright as a viewer shows it: a
+/// JPEG whose EXIF says how it is turned (a phone's portrait photo, its pixels stored
+/// sideways) is turned so. Textures are read with [`decode_image`], as glTF uses them: never
+/// turned.
 ///
 /// # Errors
 /// [`MediaError::Io`] or [`MediaError::BadImage`].
@@ -395,7 +398,105 @@ pub fn read_image(path: &Path) -> Result<Image, MediaError> {
         path: path.to_owned(),
         source,
     })?;
-    decode_image(path, &bytes)
+    let image = decode_image(path, &bytes)?;
+    Ok(match exif_orientation(&bytes) {
+        Some(orientation) => image.oriented(orientation),
+        None => image,
+    })
+}
+
+/// The EXIF orientation (2 to 8: 1 is upright) of a JPEG's first `Exif` segment, from its first
+/// image directory's tag 0x0112; `None` for any other image, upright ones, or EXIF that does
+/// not hold one where it says.
+#[must_use]
+pub fn exif_orientation(bytes: &[u8]) -> Option<u8> {
+    if !bytes.starts_with(&[0xFF, 0xD8]) {
+        return None;
+    }
+    let mut at = 2;
+    // The segments before the image's data: each a marker and a big-endian length that counts
+    // itself.
+    while at + 4 <= bytes.len() && bytes[at] == 0xFF {
+        let marker = bytes[at + 1];
+        if marker == 0xDA || marker == 0xD9 {
+            return None;
+        }
+        let length = usize::from(u16::from_be_bytes([bytes[at + 2], bytes[at + 3]]));
+        let segment = bytes.get(at + 4..at + 2 + length)?;
+        if marker == 0xE1
+            && let Some(tiff) = segment.strip_prefix(b"Exif\0\0")
+        {
+            return tiff_orientation(tiff).filter(|o| (2..=8).contains(o));
+        }
+        at += 2 + length;
+    }
+    None
+}
+
+/// Tag 0x0112 of a TIFF header's first directory.
+fn tiff_orientation(tiff: &[u8]) -> Option<u8> {
+    let little = match tiff.get(..4)? {
+        [b'I', b'I', 42, 0] => true,
+        [b'M', b'M', 0, 42] => false,
+        _ => return None,
+    };
+    let u16_at = |at: usize| -> Option<u16> {
+        let pair: [u8; 2] = tiff.get(at..at + 2)?.try_into().ok()?;
+        Some(if little {
+            u16::from_le_bytes(pair)
+        } else {
+            u16::from_be_bytes(pair)
+        })
+    };
+    let quad: [u8; 4] = tiff.get(4..8)?.try_into().ok()?;
+    let directory = usize::try_from(if little {
+        u32::from_le_bytes(quad)
+    } else {
+        u32::from_be_bytes(quad)
+    })
+    .ok()?;
+    let entries = usize::from(u16_at(directory)?);
+    (0..entries).find_map(|k| {
+        let entry = directory.checked_add(2 + 12 * k)?;
+        // A SHORT (type 3), one of it, held in the entry itself.
+        (u16_at(entry)? == 0x0112 && u16_at(entry + 2)? == 3)
+            .then(|| u16_at(entry + 8))
+            .flatten()
+            .and_then(|o| u8::try_from(o).ok())
+    })
+}
+
+impl Image {
+    /// The image as a viewer shows it when its EXIF orientation is `orientation` (1 to 8):
+    /// mirrored (2, 4), turned half round (3), or turned a quarter (6 clockwise, 8
+    /// anticlockwise) and mirrored across a diagonal (5, 7). Any other value leaves it as it
+    /// is.
+    #[must_use]
+    pub fn oriented(self, orientation: u8) -> Image {
+        if !(2..=8).contains(&orientation) {
+            return self;
+        }
+        let (w, h) = (self.width, self.height);
+        let (width, height) = if orientation >= 5 { (h, w) } else { (w, h) };
+        let mut rgb = vec![0u8; self.rgb.len()];
+        for y in 0..height {
+            for x in 0..width {
+                // Where the shown pixel (x, y) is stored.
+                let (sx, sy) = match orientation {
+                    2 => (w - 1 - x, y),
+                    3 => (w - 1 - x, h - 1 - y),
+                    4 => (x, h - 1 - y),
+                    5 => (y, x),
+                    6 => (y, h - 1 - x),
+                    7 => (w - 1 - y, h - 1 - x),
+                    _ => (w - 1 - y, x),
+                };
+                let (d, s) = ((y * width + x) * 3, (sy * w + sx) * 3);
+                rgb[d..d + 3].copy_from_slice(&self.rgb[s..s + 3]);
+            }
+        }
+        Image { width, height, rgb }
+    }
 }
 
 /// Facts about a source, known before its frames are read.
