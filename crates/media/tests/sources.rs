@@ -332,28 +332,26 @@ fn a_phone_photo_is_read_upright_as_its_exif_says() {
         );
         let read = read_image(&path).unwrap();
         assert_eq!((read.width, read.height), (shown.width, shown.height));
-        let error = read
-            .rgb
-            .iter()
-            .zip(&shown.rgb)
-            .map(|(a, b)| f64::from(a.abs_diff(*b)))
-            .sum::<f64>()
-            / shown.rgb.len() as f64;
+        let error = mean_difference(&read, &shown);
         assert!(
             error < 3.0,
             "orientation {orientation}: {error:.2} a channel"
         );
         // Not turned, the same pixels are far off (a face is not symmetric enough to pass).
         let unturned = faceanim_media::decode_image(&path, &bytes).unwrap();
-        let off = unturned
-            .rgb
-            .iter()
-            .zip(&shown.rgb)
-            .map(|(a, b)| f64::from(a.abs_diff(*b)))
-            .sum::<f64>()
-            / shown.rgb.len() as f64;
+        let off = mean_difference(&unturned, &shown);
         assert!(off > 10.0, "orientation {orientation}: {off:.2}");
         let mut source = FrameSource::open(&path, 30.0).unwrap();
         assert_eq!(read_all(&mut source), [read]);
     }
+}
+
+/// The mean difference of two images' channels, out of 255.
+fn mean_difference(a: &faceanim_media::Image, b: &faceanim_media::Image) -> f64 {
+    a.rgb
+        .iter()
+        .zip(&b.rgb)
+        .map(|(x, y)| f64::from(x.abs_diff(*y)))
+        .sum::<f64>()
+        / b.rgb.len() as f64
 }
