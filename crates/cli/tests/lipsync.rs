@@ -448,6 +448,12 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language_and_voice(
         "the transcript was used: {state}"
     );
     assert!(peak(&state["take"]["weights"]) > 0.3, "{state}");
+    // As a POSIX locale names it (the field once refused the `.`), the same language.
+    let (status, state) =
+        upload("text=El%20perro%20de%20Pablo%20bebe%20mucho.&language=es_ES.UTF-8");
+    assert_eq!(status, 200, "{state}");
+    let state: Value = serde_json::from_str(&state).unwrap();
+    assert!(state["notice"].is_null(), "Spanish by its locale: {state}");
     // Without the language the Spanish words are not English: the note says what was done.
     let (status, state) = upload("text=El%20perro%20de%20Pablo%20bebe%20mucho.");
     assert_eq!(status, 200, "{state}");

@@ -8,10 +8,14 @@
 //!   `<v Roger>`, `{\an8}`);
 //! - directions in square brackets (`[laughs]`, `[music]`), as subtitles for the deaf and game
 //!   scripts write them;
-//! - a speaker's name in capitals before a colon at the start of a line (`NARRATOR: …`).
+//! - a speaker's name in capitals before a colon at the start of a line (`NARRATOR: …`);
+//! - emoji and pictographs (`😀`, `👍🏽`, `❤️`, `🇫🇷`, `✨`, `▶`, `→`), as chat messages read
+//!   by a TTS voice and social posts carry them, and the `♪` that subtitles put around
+//!   singing.
 //!
 //! Spoken, each would become words nobody said ("zero zero colon zero one…", "break time
-//! five hundred ms"), aligned onto the speech of others. They are left out, and said so.
+//! five hundred ms"; eSpeak NG says an emoji's name, `👍` "thumbs up", `⭐` "estrella blanca
+//! mediana"), aligned onto the speech of others. They are left out, and said so.
 //! Parentheses are kept: prose puts spoken asides in them as often as scripts put directions.
 //!
 //! The words left are read as they were meant, whatever program typed them ([`plain`]): a
@@ -87,6 +91,7 @@ pub fn spoken(text: &str) -> Spoken {
             out.push('\n');
         }
         let line = unbracketed(line, &mut left_out);
+        let line = unpictured(&line, &mut left_out);
         out.push_str(unnamed(&line, &mut left_out));
     }
     let mut listed: Vec<String> = Vec::new();
@@ -472,6 +477,83 @@ fn unbracketed(line: &str, left_out: &mut Vec<String>) -> String {
     out
 }
 
+/// A pictograph: an emoji or a symbol drawn rather than read (Unicode's emoji blocks,
+/// miscellaneous symbols, dingbats, arrows, geometric shapes, and the emoji among the
+/// technical symbols). The music signs that name a note's pitch (`♭`, `♮`, `♯`: "C sharp")
+/// are read, and kept; so are `©`, `®`, `™` and `°`, which are said as words.
+fn pictograph(c: char) -> bool {
+    matches!(
+        c,
+        '\u{1F000}'..='\u{1FAFF}'
+            | '\u{2600}'..='\u{266C}'
+            | '\u{2670}'..='\u{27BF}'
+            | '\u{2B00}'..='\u{2BFF}'
+            | '\u{2190}'..='\u{21FF}'
+            | '\u{25A0}'..='\u{25FF}'
+            | '\u{231A}'..='\u{231B}'
+            | '\u{2328}'
+            | '\u{23CF}'
+            | '\u{23E9}'..='\u{23F3}'
+            | '\u{23F8}'..='\u{23FA}'
+            | '\u{3030}'
+            | '\u{303D}'
+    )
+}
+
+/// What only shapes how an emoji is drawn and is never itself seen: the text and emoji
+/// presentation selectors, the keycap's enclosing square (`1️⃣` is a `1`), and the tags of a
+/// subdivision's flag.
+fn emoji_mark(c: char) -> bool {
+    matches!(
+        c,
+        '\u{FE0E}' | '\u{FE0F}' | '\u{20E3}' | '\u{E0020}'..='\u{E007F}'
+    )
+}
+
+/// `line` without its pictographs (`pictograph`): each run of them (with the joiners and marks
+/// that build one emoji of several, `👨‍👩‍👧`, `👍🏽`) becomes a space and is pushed onto
+/// `left_out`; the marks alone go unsaid. A zero-width joiner between letters is kept: Indic
+/// scripts write with it.
+fn unpictured<'a>(line: &'a str, left_out: &mut Vec<String>) -> std::borrow::Cow<'a, str> {
+    if line.is_ascii() {
+        return std::borrow::Cow::Borrowed(line);
+    }
+    let chars: Vec<char> = line.chars().collect();
+    let part_of_emoji = |k: usize| {
+        let c = chars[k];
+        pictograph(c)
+            || emoji_mark(c)
+            || (c == '\u{200D}'
+                && (k
+                    .checked_sub(1)
+                    .is_some_and(|p| pictograph(chars[p]) || emoji_mark(chars[p]))
+                    || chars.get(k + 1).copied().is_some_and(pictograph)))
+    };
+    if !(0..chars.len()).any(part_of_emoji) {
+        return std::borrow::Cow::Borrowed(line);
+    }
+    let mut out = String::with_capacity(line.len());
+    let mut k = 0;
+    while k < chars.len() {
+        if !part_of_emoji(k) {
+            out.push(chars[k]);
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < chars.len() && part_of_emoji(k) {
+            k += 1;
+        }
+        let run = &chars[start..k];
+        if run.iter().copied().any(pictograph) {
+            // A space where the run was, so that the words either side stay two.
+            out.push(' ');
+            left_out.push(run.iter().take(12).collect());
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
 /// `line` without a speaker's name in capitals and its colon at its start (`NARRATOR:`,
 /// `DR. JONES:`), pushed onto `left_out`; three letters at least, so that a line that starts
 /// `OK:` keeps it.
@@ -574,6 +656,32 @@ mod tests {
             said.note().unwrap(),
             "left out of the transcript as not spoken: [laughs], <break time=\"500ms\"/>, NARRATOR:, {\\an8}, DR. JONES:"
         );
+    }
+
+    #[test]
+    fn emoji_and_pictographs_are_left_out_and_said() {
+        let said = spoken(
+            "\u{266A} Happy birthday \u{266A}\nGreat job\u{1F44D}\u{1F3FD} I love it \u{2764}\u{FE0F}\u{1F602}\u{1F602}\nOur family \u{1F468}\u{200D}\u{1F469}\u{200D}\u{1F467} in \u{1F1EB}\u{1F1F7}, \u{2B50} five stars \u{2192} done",
+        );
+        assert_eq!(
+            said.text.split_whitespace().collect::<Vec<_>>(),
+            [
+                "Happy", "birthday", "Great", "job", "I", "love", "it", "Our", "family", "in", ",",
+                "five", "stars", "done"
+            ]
+        );
+        assert_eq!(
+            said.note().unwrap(),
+            "left out of the transcript as not spoken: \u{266A}, \u{1F44D}\u{1F3FD}, \u{2764}\u{FE0F}\u{1F602}\u{1F602}, \u{1F468}\u{200D}\u{1F469}\u{200D}\u{1F467}, \u{1F1EB}\u{1F1F7}, \u{2B50}, 1 more"
+        );
+        // What is read stays: a note's sharp and flat, the signs said as words, a keycap's
+        // digit, and the joiner Indic scripts write with (Malayalam's chillu).
+        let kept =
+            "C\u{266F} minor, B\u{266D}, \u{00A9} 2024, 20\u{00B0}, \u{0D28}\u{0D4D}\u{200D}";
+        assert_eq!(spoken(kept).text, kept);
+        assert!(spoken(kept).left_out.is_empty());
+        assert_eq!(spoken("Press 1\u{FE0F}\u{20E3} now").text, "Press 1 now");
+        assert!(spoken("Press 1\u{FE0F}\u{20E3} now").left_out.is_empty());
     }
 
     #[test]

@@ -220,11 +220,10 @@ async fn upload(
         }
         let text = batch.text.filter(|t| !t.trim().is_empty());
         let language = batch.language.filter(|l| !l.trim().is_empty());
+        // Any spelling eSpeak NG or other software gives a language (`en_US.UTF-8`, `sr@latin`)
+        // is checked by name below; only a text too long for one is refused here.
         if let Some(language) = &language
-            && (language.len() > 40
-                || !language
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || "-+_".contains(c)))
+            && language.len() > 40
         {
             return Err(bad(format!(
                 "language: '{}' is not a language name (en-us, es, ja, …)",
