@@ -404,21 +404,26 @@ const DECADES: [&str; 9] = [
     "nineties",
 ];
 
-/// An English transcript's years and decades as speakers say them: a year in two pairs
-/// (`1985` "19 85", `1905` "19 oh 5", `1900` "19 hundred", `2024` "20 24") and a decade as its
-/// tens (`the 1960s` "19 sixties", `'80s` and `80s` "eighties", `the 1800s` "18 hundreds",
-/// `the 2000s` "2 thousands"). The dictionary lacks numbers and eSpeak NG says `1985` as a count,
-/// "one thousand nine hundred and eighty five", and `1960s` as "… sixty" and the letter "s":
-/// six lines with years and decades in digits lost 0.07–0.18 agreement on flite's slt, awb
-/// and rms against the same lines spelled out, most of them aligned whole by synthesis.
+/// An English transcript's years, decades, ranges and telephone numbers as speakers say them:
+/// - a year in two pairs (`1985` "19 85", `1905` "19 oh 5", `1900` "19 hundred", `2024` "20
+///   24") and a decade by its tens (`the 1960s` "19 sixties", `'80s` and `80s` "eighties",
+///   `the 1800s` "18 hundreds", `the 2000s` "2 thousands");
+/// - a range with "to" (`9-5` "9 to 5", `1939–1945` "19 39 to 19 45");
+/// - a telephone number digit by digit, `0` as "oh" (`555-0199` "5 5 5 oh 1 9 9",
+///   `1-800-555-0199` "1 8 hundred 5 5 5 …", `(555) 123-4567`, `555.123.4567`).
+///
+/// The dictionary lacks numbers, and eSpeak NG counts them ("one thousand nine hundred and
+/// eighty five", "five hundred fifty five"), says `1960s` as "… sixty" and the letter "s",
+/// and leaves the `-` of a range unsaid: six lines with years and decades in digits lost
+/// 0.07–0.18 agreement on flite's slt, awb and rms against the same lines spelled out, six
+/// with ranges and telephone numbers 0.07–0.1, most of them aligned whole by synthesis.
 ///
 /// A year is a number of four digits from 1100 to 1999 or from 2010 to 2099, standing alone:
 /// a count written with its comma (`1,985`), an amount (`$1985`), a part of another number
-/// (`1985.5`, `10:1985`, `555-1985`) or a number after a word that says it counts (`about
-/// 1985 people`) is left as it is. Must run before [`english_symbols`], which drops the
-/// comma of a count.
+/// (`1985.5`, `10:1985`) or a number after a word that says it counts (`about 1985 people`)
+/// is left as it is. Must run before [`english_symbols`], which drops the comma of a count.
 #[must_use]
-pub fn english_years(text: &str) -> String {
+pub fn english_numbers(text: &str) -> String {
     let chars: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len() + 16);
     let mut k = 0;
@@ -433,10 +438,12 @@ pub fn english_years(text: &str) -> String {
             k += 1;
             continue;
         }
-        let mut end = k;
-        while chars.get(end).is_some_and(char::is_ascii_digit) {
-            end += 1;
+        if let Some((end, words)) = telephone(&chars, k).or_else(|| range(&chars, k)) {
+            out.push_str(&words);
+            k = end;
+            continue;
         }
+        let end = digits_end(&chars, k);
         let digits: String = chars[k..end].iter().collect();
         // A decade's plural: `60s`, `1960s`, `1960's`.
         let plural = match (chars.get(end), chars.get(end + 1)) {
@@ -444,17 +451,9 @@ pub fn english_years(text: &str) -> String {
             (Some('\''), Some('s')) => 2,
             _ => 0,
         };
-        let ends_word = |at: usize| {
-            chars.get(at).is_none_or(|&after| {
-                !(after.is_alphanumeric()
-                    || "%‰°".contains(after)
-                    || (".,:/-–".contains(after)
-                        && chars.get(at + 1).is_some_and(char::is_ascii_digit)))
-            })
-        };
-        let words = if plural > 0 && ends_word(end + plural) {
+        let words = if plural > 0 && ends_number(&chars, end + plural) {
             decade(&digits)
-        } else if ends_word(end) && !after_count_cue(&chars[..k]) {
+        } else if ends_number(&chars, end) && !after_count_cue(&chars[..k]) {
             year(&digits)
         } else {
             None
@@ -466,7 +465,7 @@ pub fn english_years(text: &str) -> String {
                     out.pop();
                 }
                 out.push_str(&words);
-                k = end + if plural > 0 { plural } else { 0 };
+                k = end + plural;
             }
             None => {
                 out.push_str(&digits);
@@ -475,6 +474,98 @@ pub fn english_years(text: &str) -> String {
         }
     }
     out
+}
+
+/// Where the digits that start at `k` end.
+fn digits_end(chars: &[char], k: usize) -> usize {
+    let mut end = k;
+    while chars.get(end).is_some_and(char::is_ascii_digit) {
+        end += 1;
+    }
+    end
+}
+
+/// Whether a number ends at `at`: no letter or digit follows, nor a sign that makes it part of
+/// another number or a measure (`%`, `°`; `.5`, `,000`, `:30`, `/2`, `-3`).
+fn ends_number(chars: &[char], at: usize) -> bool {
+    chars.get(at).is_none_or(|&after| {
+        !(after.is_alphanumeric()
+            || "%‰°".contains(after)
+            || (".,:/-–".contains(after) && chars.get(at + 1).is_some_and(char::is_ascii_digit)))
+    })
+}
+
+/// The groups of digits from `k` joined by one separator among `separators` (the same each
+/// time), with where they end.
+fn digit_groups(chars: &[char], k: usize, separators: &str) -> (Vec<String>, usize) {
+    let mut groups = Vec::new();
+    let (mut at, mut separator) = (k, None);
+    loop {
+        let end = digits_end(chars, at);
+        groups.push(chars[at..end].iter().collect());
+        let next = chars.get(end).copied();
+        let joins = next
+            .is_some_and(|c| separators.contains(c) && separator.is_none_or(|s| s == c))
+            && chars.get(end + 1).is_some_and(char::is_ascii_digit);
+        if !joins {
+            return (groups, end);
+        }
+        separator = next;
+        at = end + 1;
+    }
+}
+
+/// A telephone number at `k` (`555-0199`, `555-123-4567`, `1-800-555-0199`, `555.123.4567`,
+/// `(555) 123-4567`) as it is said, with where it ends.
+fn telephone(chars: &[char], k: usize) -> Option<(usize, String)> {
+    let (mut groups, mut end) = digit_groups(chars, k, "-.");
+    // An area code in parentheses, then a space.
+    if groups.len() == 1
+        && groups[0].len() == 3
+        && k.checked_sub(1).is_some_and(|p| chars[p] == '(')
+        && chars.get(end) == Some(&')')
+        && chars.get(end + 1) == Some(&' ')
+        && chars.get(end + 2).is_some_and(char::is_ascii_digit)
+    {
+        let (rest, rest_end) = digit_groups(chars, end + 2, "-");
+        groups.extend(rest);
+        end = rest_end;
+    }
+    let lengths: Vec<usize> = groups.iter().map(String::len).collect();
+    let telephone = matches!(lengths.as_slice(), [3, 4] | [3, 3, 4])
+        || (lengths == [1, 3, 3, 4] && groups[0] == "1");
+    if !telephone || !ends_number(chars, end) {
+        return None;
+    }
+    let mut said = Vec::new();
+    for (n, group) in groups.iter().enumerate() {
+        // A toll-free or area code of hundreds: "8 hundred".
+        if n + 1 < groups.len() && group.len() == 3 && group.ends_with("00") {
+            said.push(format!("{} hundred", &group[..1]));
+            continue;
+        }
+        said.extend(group.chars().map(|d| match d {
+            '0' => "oh".to_owned(),
+            d => d.to_string(),
+        }));
+    }
+    Some((end, said.join(" ")))
+}
+
+/// A range of two numbers at `k` (`9-5`, `5–12`, `1939-1945`), said with "to" (a year as a
+/// year), with where it ends.
+fn range(chars: &[char], k: usize) -> Option<(usize, String)> {
+    let (groups, end) = digit_groups(chars, k, "-–");
+    let [from, to] = groups.as_slice() else {
+        return None;
+    };
+    // `1-800-FLOWERS` is no range.
+    let joined_on = chars.get(end).is_some_and(|c| "-–".contains(*c));
+    if from.len() > 4 || to.len() > 4 || joined_on || !ends_number(chars, end) {
+        return None;
+    }
+    let said = |number: &String| year(number).unwrap_or_else(|| number.clone());
+    Some((end, format!("{} to {}", said(from), said(to))))
 }
 
 /// Whether the word before a number (`before`, the text up to it) says that it counts.
@@ -491,7 +582,7 @@ fn after_count_cue(before: &[char]) -> bool {
     COUNT_CUES.contains(&word.to_lowercase().as_str())
 }
 
-/// A year's digits as said in two pairs (`english_years`), when `digits` is one.
+/// A year's digits as said in two pairs (`english_numbers`), when `digits` is one.
 fn year(digits: &str) -> Option<String> {
     let value: u32 = digits.parse().ok()?;
     if digits.len() != 4 || !((1100..=1999).contains(&value) || (2010..=2099).contains(&value)) {
@@ -864,8 +955,9 @@ mod tests {
     }
 
     #[test]
-    fn english_years_and_decades_are_said_as_speakers_say_them() {
-        let said = |typed: &str, meant: &str| assert_eq!(english_years(typed), meant, "{typed:?}");
+    fn english_numbers_and_decades_are_said_as_speakers_say_them() {
+        let said =
+            |typed: &str, meant: &str| assert_eq!(english_numbers(typed), meant, "{typed:?}");
         said(
             "Born in 1985, moved in 1999.",
             "Born in 19 85, moved in 19 99.",
@@ -881,14 +973,23 @@ mod tests {
             "the 1800s and the 2000s",
             "the 18 hundreds and the 2 thousands",
         );
+        said("open 9-5, ages 5\u{2013}12", "open 9 to 5, ages 5 to 12");
+        said("from 1939-1945.", "from 19 39 to 19 45.");
+        said("Call 555-0199, or", "Call 5 5 5 oh 1 9 9, or");
+        said("dial 1-800-555-2346!", "dial 1 8 hundred 5 5 5 2 3 4 6!");
+        said("(555) 123-4567", "(5 5 5 1 2 3 4 5 6 7");
+        said("555.123.4567", "5 5 5 1 2 3 4 5 6 7");
         // Left as they are: counts, amounts, parts of other numbers, other years and numbers.
         for kept in [
             "1,985 people",
             "$1985",
             "1985.5",
             "10:30",
-            "555-1985",
-            "1939-1945",
+            "2024-12-05",
+            "1-800-FLOWERS",
+            "-5",
+            "COVID-19",
+            "12345-6789",
             "about 1985 people",
             "over 1500",
             "in 2008",

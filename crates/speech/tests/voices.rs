@@ -583,15 +583,22 @@ fn curly_apostrophes_are_read_as_apostrophes() {
     typed_reads_as_spelled("curly", "awb", line, &line.replace('\'', "\u{2019}"));
 }
 
-/// Years and decades in digits are aligned as speakers say them, "nineteen eighty-five" and
-/// "the sixties", not as eSpeak NG counts them ("one thousand nine hundred and eighty five",
-/// "sixty" and the letter "s"), which left the line to be aligned whole by synthesis.
+/// Years, decades, ranges and telephone numbers in digits are aligned as speakers say them,
+/// "nineteen eighty-five", "the sixties", "nine to five", "five five five, oh one…", not as
+/// eSpeak NG counts them ("one thousand nine hundred and eighty five", "sixty" and the letter
+/// "s", "five hundred fifty five"), which left such lines to be aligned whole by synthesis.
 #[test]
-fn years_and_decades_are_aligned_as_said() {
+fn numbers_are_aligned_as_said() {
     typed_reads_as_spelled(
         "years",
         "slt",
         "She was born in nineteen eighty five, and by nineteen oh five the mill, a relic of the eighteen hundreds, had closed, back in the sixties.",
         "She was born in 1985, and by 1905 the mill, a relic of the 1800s, had closed, back in the '60s.",
+    );
+    typed_reads_as_spelled(
+        "ranges",
+        "rms",
+        "Call five five five, oh one nine nine, from nine to five for help with nineteen forty five.",
+        "Call 555-0199, from 9-5 for help with 1945.",
     );
 }
