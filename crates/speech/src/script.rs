@@ -410,7 +410,9 @@ const DECADES: [&str; 9] = [
 ///   `the 1800s` "18 hundreds", `the 2000s` "2 thousands");
 /// - a range with "to" (`9-5` "9 to 5", `1939–1945` "19 39 to 19 45");
 /// - a telephone number digit by digit, `0` as "oh" (`555-0199` "5 5 5 oh 1 9 9",
-///   `1-800-555-0199` "1 8 hundred 5 5 5 …", `(555) 123-4567`, `555.123.4567`).
+///   `1-800-555-0199` "1 8 hundred 5 5 5 …", `(555) 123-4567`, `555.123.4567`);
+/// - a time on the hour as "o'clock" (`7:00` "7 o'clock", `7:00 pm` "7 pm") and minutes under
+///   ten with "oh" (`7:05` "7 oh 5"), where eSpeak NG says "zero".
 ///
 /// The dictionary lacks numbers, and eSpeak NG counts them ("one thousand nine hundred and
 /// eighty five", "five hundred fifty five"), says `1960s` as "… sixty" and the letter "s",
@@ -438,7 +440,10 @@ pub fn english_numbers(text: &str) -> String {
             k += 1;
             continue;
         }
-        if let Some((end, words)) = telephone(&chars, k).or_else(|| range(&chars, k)) {
+        if let Some((end, words)) = telephone(&chars, k)
+            .or_else(|| range(&chars, k))
+            .or_else(|| clock(&chars, k))
+        {
             out.push_str(&words);
             k = end;
             continue;
@@ -552,6 +557,39 @@ fn telephone(chars: &[char], k: usize) -> Option<(usize, String)> {
     Some((end, said.join(" ")))
 }
 
+/// A time at `k` (`7:00`, `7:05`, `19:00`) where eSpeak NG would say its minutes' zeros, as it
+/// is said, with where it ends.
+fn clock(chars: &[char], k: usize) -> Option<(usize, String)> {
+    let (groups, end) = digit_groups(chars, k, ":");
+    let [hours, minutes] = groups.as_slice() else {
+        return None;
+    };
+    let hour: u32 = hours.parse().ok()?;
+    if hours.len() > 2 || hour > 24 || minutes.len() != 2 || !ends_number(chars, end) {
+        return None;
+    }
+    let said = match minutes.as_bytes() {
+        b"00" => {
+            // "7 pm", not "7 o'clock pm".
+            let rest: String = chars[end..]
+                .iter()
+                .skip_while(|c| c.is_whitespace())
+                .take(4)
+                .filter(|c| c.is_alphabetic())
+                .collect::<String>()
+                .to_lowercase();
+            if ["am", "pm"].iter().any(|m| rest.starts_with(m)) {
+                hours.clone()
+            } else {
+                format!("{hours} o'clock")
+            }
+        }
+        [b'0', minute] => format!("{hours} oh {}", char::from(*minute)),
+        _ => return None,
+    };
+    Some((end, said))
+}
+
 /// A range of two numbers at `k` (`9-5`, `5–12`, `1939-1945`), said with "to" (a year as a
 /// year), with where it ends.
 fn range(chars: &[char], k: usize) -> Option<(usize, String)> {
@@ -616,6 +654,89 @@ fn decade(digits: &str) -> Option<String> {
         }
         _ => None,
     }
+}
+
+/// Units written short after a number, and the words said for them: one, and more than one.
+const UNITS: [(&str, &str, &str); 33] = [
+    ("GB", "gigabyte", "gigabytes"),
+    ("GHz", "gigahertz", "gigahertz"),
+    ("Hz", "hertz", "hertz"),
+    ("KB", "kilobyte", "kilobytes"),
+    ("MB", "megabyte", "megabytes"),
+    ("MHz", "megahertz", "megahertz"),
+    ("TB", "terabyte", "terabytes"),
+    ("cm", "centimeter", "centimeters"),
+    ("ft", "foot", "feet"),
+    ("g", "gram", "grams"),
+    ("hr", "hour", "hours"),
+    ("hrs", "hour", "hours"),
+    ("kHz", "kilohertz", "kilohertz"),
+    ("kW", "kilowatt", "kilowatts"),
+    ("kWh", "kilowatt hour", "kilowatt hours"),
+    ("kg", "kilogram", "kilograms"),
+    ("km", "kilometer", "kilometers"),
+    ("km/h", "kilometer per hour", "kilometers per hour"),
+    ("kph", "kilometer per hour", "kilometers per hour"),
+    ("lb", "pound", "pounds"),
+    ("lbs", "pound", "pounds"),
+    ("mL", "milliliter", "milliliters"),
+    ("mg", "milligram", "milligrams"),
+    ("mi", "mile", "miles"),
+    ("min", "minute", "minutes"),
+    ("mins", "minute", "minutes"),
+    ("ml", "milliliter", "milliliters"),
+    ("mm", "millimeter", "millimeters"),
+    ("mph", "mile per hour", "miles per hour"),
+    ("ms", "millisecond", "milliseconds"),
+    ("oz", "ounce", "ounces"),
+    ("sec", "second", "seconds"),
+    ("yd", "yard", "yards"),
+];
+
+/// An English transcript's units written short after a number as their words: `5 kg` "5
+/// kilograms", `1 km` "1 kilometer", `100mph` "100 miles per hour", `2 point 5 GB` "… gigabytes".
+/// Only after a number, and only units no word is written as (`in`, `m`, `s` are left to the
+/// dictionary); the dictionary lacks the rest, and eSpeak NG spells them out ("K G").
+#[must_use]
+pub fn english_units(text: &str) -> String {
+    let unit = |core: &str| UNITS.iter().find(|(short, ..)| *short == core);
+    let mut out = String::with_capacity(text.len() + 16);
+    // The number just said (its last word: `5`, or the `5` of `2 point 5`), and whether it was
+    // one.
+    let mut number: Option<bool> = None;
+    let mut before_number = "";
+    for piece in text.split_inclusive(char::is_whitespace) {
+        let word = piece.trim_end();
+        let core = word.trim_end_matches(|c: char| ".,;:!?)\"'".contains(c));
+        let ending = &word[core.len()..];
+        let digits = core.len() - core.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+        let one = |digits: &str, before: &str| digits == "1" && before != "point";
+        if digits > 0
+            && digits < core.len()
+            && let Some((_, single, plural)) = unit(&core[digits..])
+        {
+            // Written together: `5kg`.
+            out.push_str(&core[..digits]);
+            out.push(' ');
+            out.push_str(if one(&core[..digits], before_number) {
+                single
+            } else {
+                plural
+            });
+            out.push_str(&piece[core.len()..]);
+            number = None;
+        } else if let (Some(one), Some((_, single, plural))) = (number, unit(core)) {
+            out.push_str(if one { single } else { plural });
+            out.push_str(&piece[core.len()..]);
+            number = None;
+        } else {
+            out.push_str(piece);
+            number = (digits == core.len() && digits > 0 && ending.is_empty())
+                .then(|| one(core, before_number));
+        }
+        before_number = core;
+    }
+    out
 }
 
 /// The word for the currency symbol `c` (`one`: of an amount of one), when it is one.
@@ -955,7 +1076,7 @@ mod tests {
     }
 
     #[test]
-    fn english_numbers_and_decades_are_said_as_speakers_say_them() {
+    fn english_numbers_are_said_as_speakers_say_them() {
         let said =
             |typed: &str, meant: &str| assert_eq!(english_numbers(typed), meant, "{typed:?}");
         said(
@@ -979,6 +1100,11 @@ mod tests {
         said("dial 1-800-555-2346!", "dial 1 8 hundred 5 5 5 2 3 4 6!");
         said("(555) 123-4567", "(5 5 5 1 2 3 4 5 6 7");
         said("555.123.4567", "5 5 5 1 2 3 4 5 6 7");
+        said(
+            "at 7:00, at 7:00 pm, 7:00 a.m.",
+            "at 7 o'clock, at 7 pm, 7 a.m.",
+        );
+        said("at 19:05 or 3:45", "at 19 oh 5 or 3:45");
         // Left as they are: counts, amounts, parts of other numbers, other years and numbers.
         for kept in [
             "1,985 people",
@@ -986,6 +1112,8 @@ mod tests {
             "1985.5",
             "10:30",
             "2024-12-05",
+            "3:1",
+            "10:30:15",
             "1-800-FLOWERS",
             "-5",
             "COVID-19",
@@ -1000,6 +1128,28 @@ mod tests {
             "R2D2 1985x",
             "the 85s",
             "00s",
+        ] {
+            said(kept, kept);
+        }
+    }
+
+    #[test]
+    fn english_units_are_said_as_words() {
+        let said = |typed: &str, meant: &str| assert_eq!(english_units(typed), meant, "{typed:?}");
+        said("Add 5 kg, then 1 km.", "Add 5 kilograms, then 1 kilometer.");
+        said(
+            "at 100mph for 2 point 5 GB",
+            "at 100 miles per hour for 2 point 5 gigabytes",
+        );
+        said("1 point 5 lbs and 1 oz", "1 point 5 pounds and 1 ounce");
+        said("10\nmin", "10\nminutes");
+        for kept in [
+            "5 in a row",
+            "5 m",
+            "kg alone",
+            "5, mg",
+            "5G phones",
+            "ms Smith",
         ] {
             said(kept, kept);
         }

@@ -583,10 +583,11 @@ fn curly_apostrophes_are_read_as_apostrophes() {
     typed_reads_as_spelled("curly", "awb", line, &line.replace('\'', "\u{2019}"));
 }
 
-/// Years, decades, ranges and telephone numbers in digits are aligned as speakers say them,
-/// "nineteen eighty-five", "the sixties", "nine to five", "five five five, oh one…", not as
-/// eSpeak NG counts them ("one thousand nine hundred and eighty five", "sixty" and the letter
-/// "s", "five hundred fifty five"), which left such lines to be aligned whole by synthesis.
+/// Years, decades, ranges, telephone numbers, times and units in digits are aligned as speakers
+/// say them, "nineteen eighty-five", "the sixties", "nine to five", "five five five, oh one…",
+/// "seven o'clock", "five kilometers", not as eSpeak NG counts and spells them ("one thousand
+/// nine hundred and eighty five", "sixty" and the letter "s", "five hundred fifty five", "K
+/// M"), which left such lines to be aligned whole by synthesis.
 #[test]
 fn numbers_are_aligned_as_said() {
     typed_reads_as_spelled(
@@ -600,5 +601,11 @@ fn numbers_are_aligned_as_said() {
         "rms",
         "Call five five five, oh one nine nine, from nine to five for help with nineteen forty five.",
         "Call 555-0199, from 9-5 for help with 1945.",
+    );
+    typed_reads_as_spelled(
+        "units",
+        "awb",
+        "At seven o'clock run five kilometers at ten miles per hour, then lift two kilograms.",
+        "At 7:00 run 5 km at 10 mph, then lift 2 kg.",
     );
 }
