@@ -146,6 +146,23 @@ const TITLES: [(&str, &str); 24] = [
     ("St", "saint"),
 ];
 
+/// Months written short before a day or a year (`Jan. 5`, `Oct 1990`), and their names: the
+/// dictionary says `jan` "jan", `oct` "ocked" and `sept` "sept".
+const MONTHS: [(&str, &str); 12] = [
+    ("Jan", "January"),
+    ("Feb", "February"),
+    ("Mar", "March"),
+    ("Apr", "April"),
+    ("Jun", "June"),
+    ("Jul", "July"),
+    ("Aug", "August"),
+    ("Sep", "September"),
+    ("Sept", "September"),
+    ("Oct", "October"),
+    ("Nov", "November"),
+    ("Dec", "December"),
+];
+
 /// Words of an address written short after a name (`Main St.`, `Oak Dr.`, `5th Ave.`), and
 /// what is said for them.
 const STREETS: [(&str, &str); 5] = [
@@ -158,9 +175,10 @@ const STREETS: [(&str, &str); 5] = [
 
 /// An English transcript's abbreviations as the words said for them: a title before a name
 /// (`Dr. Jones`: "doctor Jones", `St. Louis`: "saint Louis", `Sgt Hale`: "sergeant Hale"), a
-/// street after one (`Main St.`: "Main street", `Oak Dr.`: "Oak drive"), and `vs.` "versus".
-/// Only where the capitals say which (a title is followed by a capitalised word, a street
-/// follows one); any other use is left to the dictionary.
+/// street after one (`Main St.`: "Main street", `Oak Dr.`: "Oak drive"), a month before a day
+/// or a year (`Jan. 5`: "January 5"), `No. 5` "number 5", and `vs.` "versus". Only where the
+/// capitals and numbers say which (a title is followed by a capitalised word, a street follows
+/// one, a month and `No.` are followed by a number); any other use is left to the dictionary.
 #[must_use]
 pub fn english_abbreviations(text: &str) -> String {
     let mut out = String::with_capacity(text.len() + 16);
@@ -189,8 +207,9 @@ pub fn english_abbreviations(text: &str) -> String {
         let alone = !out.chars().next_back().is_some_and(char::is_alphanumeric);
         let dotted = after.starts_with('.');
         let following = after[usize::from(dotted)..].trim_start();
-        let named_next = after[usize::from(dotted)..].starts_with(char::is_whitespace)
-            && following.starts_with(|c: char| c.is_uppercase());
+        let spaced = after[usize::from(dotted)..].starts_with(char::is_whitespace);
+        let named_next = spaced && following.starts_with(|c: char| c.is_uppercase());
+        let numbered_next = spaced && following.starts_with(|c: char| c.is_ascii_digit());
         // A street after a name before a title before one: `Main St. Then …` ends a sentence,
         // while `Ask Dr. Banks` starts one.
         // What is said, and whether its full stop only marked it short (a title's is not a
@@ -206,6 +225,10 @@ pub fn english_abbreviations(text: &str) -> String {
             Some((*street, false))
         } else if named_next && let Some((_, title)) = TITLES.iter().find(|(t, _)| *t == word) {
             Some((*title, dotted))
+        } else if numbered_next && dotted && word == "No" {
+            Some(("number", true))
+        } else if numbered_next && let Some((_, month)) = MONTHS.iter().find(|(m, _)| *m == word) {
+            Some((*month, dotted))
         } else {
             None
         };
@@ -1193,6 +1216,11 @@ mod tests {
                 "Ask doctor Banks to drive to Oak drive.",
             ),
             ("In Paris, Dr. Jones", "In Paris, doctor Jones"),
+            (
+                "On Jan. 5 and Oct 19 90, No. 1 fan",
+                "On January 5 and October 19 90, number 1 fan",
+            ),
+            ("Say No. Then Jan said Dec.", "Say No. Then Jan said Dec."),
         ] {
             assert_eq!(english_abbreviations(text), said, "{text}");
         }

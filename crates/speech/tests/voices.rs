@@ -608,4 +608,10 @@ fn numbers_are_aligned_as_said() {
         "At seven o'clock run five kilometers at ten miles per hour, then lift two kilograms.",
         "At 7:00 run 5 km at 10 mph, then lift 2 kg.",
     );
+    typed_reads_as_spelled(
+        "dates",
+        "rms",
+        "By September ninth the number five brush was back, and in March we painted.",
+        "By Sept. 9th the No. 5 brush was back, and in March we painted.",
+    );
 }
