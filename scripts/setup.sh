@@ -67,6 +67,10 @@ if [ "${1:-}" = libraries ]; then
     exit 0
   fi
   want "${libraries[@]}"
+  # And the programs faceanim runs: ffmpeg for video and compressed sound, libheif's
+  # heif-convert for phones' HEIC photos (each says how to install it where it is missing).
+  command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
+  command -v heif-convert >/dev/null 2>&1 || command -v heif-dec >/dev/null 2>&1 || packages+=(libheif-examples)
   if ! apt_install "${packages[@]}"; then
     # No root and no sudo, or no apt-get: the recogniser from its sources all the same.
     echo "setup: apt-get could not install ${packages[*]}" >&2
@@ -82,6 +86,9 @@ command -v npm >/dev/null 2>&1 || packages+=(npm)
 command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
 # ExifTool: it turns the tests' photos as a phone's camera stores them (EXIF orientation).
 command -v exiftool >/dev/null 2>&1 || packages+=(libimage-exiftool-perl)
+# libheif's programs: faceanim reads phones' HEIC photos through heif-convert, and the tests make
+# them with heif-enc.
+command -v heif-enc >/dev/null 2>&1 || packages+=(libheif-examples)
 want "${libraries[@]}" pocketsphinx-testdata flite espeak-ng
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 apt_install "${packages[@]}"

@@ -26,7 +26,8 @@ pub enum FilterChoice {
 /// `faceanim track`'s arguments.
 #[derive(Debug, clap::Args)]
 pub struct TrackArgs {
-    /// A PNG or JPEG, a folder of them (an image sequence, in name order), or a video
+    /// A photo (PNG, JPEG, WebP, or HEIC/AVIF through libheif's heif-dec), a folder of them (an
+    /// image sequence, in name order), or a video
     /// (read with the ffmpeg program).
     pub input: PathBuf,
     /// The character (default: the built-in head).

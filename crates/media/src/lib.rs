@@ -1,7 +1,8 @@
 //! # faceanim-media: where capture's frames come from
 //!
-//! One [`FrameSource`] for every input a user points capture at: a still image (PNG or JPEG,
-//! told apart by their bytes, not their names), a folder of images (in name order, as an
+//! One [`FrameSource`] for every input a user points capture at: a still image (PNG, JPEG,
+//! WebP, or a phone's HEIF — HEIC, AVIF — through libheif's `heif-dec`; told apart by their
+//! bytes, not their names; turned upright as their EXIF or HEIF says), a folder of images (in name order, as an
 //! image sequence), or a video file, decoded by Debian's `ffmpeg` program through a pipe.
 //! Every frame comes out as 8-bit RGB, upright (a phone's rotated video is turned as a player
 //! shows it). Video is resampled to a constant frame rate (the rate ffmpeg takes as the
@@ -118,8 +119,18 @@ pub enum MediaError {
         /// What is wrong.
         message: String,
     },
-    /// A folder holds no PNG or JPEG files.
-    #[error("{path}: the folder has no PNG or JPEG images")]
+    /// A HEIF photo (HEIC, as iPhones save them; AVIF), and no program here to decode it.
+    #[error(
+        "{path}: a HEIF photo (HEIC, as iPhones save them, or AVIF): reading it needs libheif's \
+         heif-dec or heif-convert, which was not found. Install it (Debian/Ubuntu: `sudo apt-get \
+         install libheif-examples`; macOS: `brew install libheif`), or save the photo as JPEG"
+    )]
+    HeifDecoderMissing {
+        /// The photo.
+        path: PathBuf,
+    },
+    /// A folder holds no photos.
+    #[error("{path}: the folder has no PNG, JPEG, WebP or HEIF images")]
     EmptyFolder {
         /// The folder.
         path: PathBuf,
@@ -398,11 +409,158 @@ pub fn read_image(path: &Path) -> Result<Image, MediaError> {
         path: path.to_owned(),
         source,
     })?;
+    if heif_still(&bytes) {
+        return read_heif(path, &bytes);
+    }
     let image = decode_image(path, &bytes)?;
     Ok(match exif_orientation(&bytes) {
         Some(orientation) => image.oriented(orientation),
         None => image,
     })
+}
+
+/// Whether `bytes` are a HEIF still image (ISO/IEC 23008-12): an ISO media file whose brand
+/// says HEVC-coded (`heic`, `heix`: iPhones' photos since iOS 11), the general image brand
+/// (`mif1`) or AVIF.
+fn heif_still(bytes: &[u8]) -> bool {
+    bytes.get(4..8) == Some(b"ftyp")
+        && matches!(
+            bytes.get(8..12),
+            Some(b"heic" | b"heix" | b"heim" | b"heis" | b"mif1" | b"avif")
+        )
+}
+
+/// A HEIF photo, decoded by libheif's own program (`heif-dec`, called `heif-convert` before
+/// libheif 1.17) into a JPEG beside the system's temporary files, which is read and removed.
+/// libheif turns the picture as the file's rotation and mirroring say (HEIF keeps them in its
+/// own boxes, not in EXIF), so it comes out upright; of several top-level images (a burst),
+/// the first.
+fn read_heif(path: &Path, photo: &[u8]) -> Result<Image, MediaError> {
+    static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    // JPEG at high quality, not PNG: libheif's PNG writer fails on the colour profiles phones
+    // embed (Display P3) and still exits 0.
+    let out = std::env::temp_dir().join(format!("faceanim-heif-{}-{n}.jpg", std::process::id()));
+    let bad = |message: String| MediaError::BadImage {
+        path: path.to_owned(),
+        message,
+    };
+    let mut ran = None;
+    for program in ["heif-dec", "heif-convert"] {
+        match Command::new(program)
+            .args(["-q", "95"])
+            .arg(path)
+            .arg(&out)
+            .stdin(Stdio::null())
+            .output()
+        {
+            Ok(output) => {
+                ran = Some((program, output));
+                break;
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(source) => {
+                return Err(MediaError::Io {
+                    path: path.to_owned(),
+                    source,
+                });
+            }
+        }
+    }
+    let Some((program, output)) = ran else {
+        return Err(MediaError::HeifDecoderMissing {
+            path: path.to_owned(),
+        });
+    };
+    // Several top-level images are written numbered from 1.
+    let stem = out
+        .file_stem()
+        .unwrap_or_default()
+        .to_string_lossy()
+        .into_owned();
+    let numbered = |k: usize| out.with_file_name(format!("{stem}-{k}.jpg"));
+    let written = [out.clone(), numbered(1)].into_iter().find(|p| p.exists());
+    let bytes = written.map(std::fs::read);
+    // Every file it wrote goes.
+    let _ = std::fs::remove_file(&out);
+    let mut k = 1;
+    while std::fs::remove_file(numbered(k)).is_ok() {
+        k += 1;
+    }
+    match bytes {
+        Some(Ok(decoded)) if output.status.success() && !decoded.is_empty() => {
+            let image = decode_image(path, &decoded)?;
+            // A HEIF that says its rotation only in EXIF (as some encoders write it, libheif
+            // 1.15's own heif-enc among them) is turned as a JPEG would be; one with HEIF's own
+            // rotation or mirroring was turned by libheif, and its EXIF (which iPhones keep in
+            // step) is not read again.
+            Ok(match heif_exif_orientation(photo) {
+                Some(orientation) => image.oriented(orientation),
+                None => image,
+            })
+        }
+        _ => {
+            let said = String::from_utf8_lossy(&output.stderr);
+            let said = said
+                .lines()
+                .rev()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("no image written");
+            Err(bad(format!("HEIF: {program}: {}", said.trim())))
+        }
+    }
+}
+
+/// The EXIF orientation (2 to 8) of a HEIF photo that has no rotation or mirroring of HEIF's
+/// own (`irot`, `imir` among its item properties, `meta` → `iprp` → `ipco`): its Exif item's.
+fn heif_exif_orientation(bytes: &[u8]) -> Option<u8> {
+    let meta = iso_box(bytes, b"meta")?;
+    // `meta` is a full box: a version and flags before its boxes.
+    let properties = iso_box(meta.get(4..)?, b"iprp").and_then(|p| iso_box(p, b"ipco"))?;
+    if iso_box(properties, b"irot").is_some() || iso_box(properties, b"imir").is_some() {
+        return None;
+    }
+    // An Exif item is the offset of its TIFF header past these four bytes, then the EXIF:
+    // the header at once (0, as libheif writes it) or after `Exif\0\0` (6, as cameras do).
+    let tiff = [&b"\0\0\0\0"[..], b"\0\0\0\x06Exif\0\0"]
+        .iter()
+        .find_map(|prefix| {
+            [&b"MM\0*"[..], b"II*\0"].iter().find_map(|header| {
+                let marked = [*prefix, *header].concat();
+                bytes
+                    .windows(marked.len())
+                    .position(|w| w == marked)
+                    .map(|at| at + prefix.len())
+            })
+        })?;
+    tiff_orientation(&bytes[tiff..]).filter(|o| (2..=8).contains(o))
+}
+
+/// The contents of the first ISO media box of type `kind` among those `bytes` hold, one level
+/// down (each box a big-endian length that counts its own eight bytes, and its type; a length
+/// of 1 says a 64-bit one follows, 0 that the box runs to the end).
+fn iso_box<'a>(bytes: &'a [u8], kind: &[u8; 4]) -> Option<&'a [u8]> {
+    let mut at = 0usize;
+    while at + 8 <= bytes.len() {
+        let size = u32::from_be_bytes(bytes[at..at + 4].try_into().ok()?);
+        let (header, size) = match size {
+            0 => (8, bytes.len() - at),
+            1 => {
+                let large = u64::from_be_bytes(bytes.get(at + 8..at + 16)?.try_into().ok()?);
+                (16, usize::try_from(large).ok()?)
+            }
+            n => (8, usize::try_from(n).ok()?),
+        };
+        if size < header {
+            return None;
+        }
+        let contents = bytes.get(at + header..at.checked_add(size)?)?;
+        if &bytes[at + 4..at + 8] == kind {
+            return Some(contents);
+        }
+        at += size;
+    }
+    None
 }
 
 /// The EXIF orientation (2 to 8: 1 is upright) of a JPEG's first `Exif` segment, from its first
@@ -553,7 +711,10 @@ impl FrameSource {
                 .map(|entry| entry.path())
                 .filter(|p| {
                     p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
-                        matches!(e.to_ascii_lowercase().as_str(), "png" | "jpg" | "jpeg")
+                        matches!(
+                            e.to_ascii_lowercase().as_str(),
+                            "png" | "jpg" | "jpeg" | "webp" | "heic" | "heif" | "avif"
+                        )
                     })
                 })
                 .collect();
@@ -581,11 +742,11 @@ impl FrameSource {
                 image_names,
             });
         }
-        let mut head = [0u8; 8];
+        let mut head = [0u8; 12];
         let read = std::fs::File::open(path)
             .and_then(|mut f| f.read(&mut head))
             .map_err(io)?;
-        if image_kind(&head[..read]).is_some() {
+        if image_kind(&head[..read]).is_some() || heif_still(&head[..read]) {
             let image = read_image(path)?;
             return Ok(FrameSource {
                 path: path.to_owned(),

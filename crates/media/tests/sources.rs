@@ -239,7 +239,7 @@ fn inputs_that_are_not_frames_get_errors_that_name_them() {
         (&text, "not an image or a video"),
         (&empty, "not an image or a video"),
         (&broken_png, "not a readable image"),
-        (&empty_folder, "has no PNG or JPEG"),
+        (&empty_folder, "has no PNG, JPEG, WebP or HEIF"),
     ] {
         let err = FrameSource::open(path, 30.0).unwrap_err();
         let message = err.to_string();
@@ -344,6 +344,60 @@ fn a_phone_photo_is_read_upright_as_its_exif_says() {
         let mut source = FrameSource::open(&path, 30.0).unwrap();
         assert_eq!(read_all(&mut source), [read]);
     }
+}
+
+/// An iPhone's photo is HEIC (HEIF with HEVC), which before was refused as "not an image or a
+/// video … damaged, or another kind of file". Photos encoded by libheif's own encoder (upright,
+/// and stored turned with the turn said in EXIF, as the encoders that write no HEIF rotation
+/// do) read back upright, as the photo itself; in a folder and as a capture source too.
+#[test]
+fn a_heif_photo_is_read_upright() {
+    let dir = tempfile::tempdir().unwrap();
+    let face = faceanim_testdata::shared("images/astronaut.png");
+    let shown = read_image(&face).unwrap();
+    let heif = |input: &Path, output: &Path| {
+        let made = Command::new("heif-enc")
+            .args(["-q", "90"])
+            .arg(input)
+            .arg("-o")
+            .arg(output)
+            .output()
+            .expect("libheif's heif-enc is needed: run scripts/setup.sh");
+        assert!(made.status.success(), "{made:?}");
+    };
+    let upright = dir.path().join("upright.heic");
+    heif(&face, &upright);
+    // Stored turned a quarter, the turn said in EXIF.
+    let sideways = dir.path().join("sideways.jpg");
+    ffmpeg(&[
+        "-i",
+        face.to_str().unwrap(),
+        "-vf",
+        "transpose=2",
+        "-q:v",
+        "2",
+        sideways.to_str().unwrap(),
+    ]);
+    let marked = Command::new("exiftool")
+        .args(["-q", "-overwrite_original", "-Orientation#=6"])
+        .arg(&sideways)
+        .status()
+        .expect("ExifTool is needed: run scripts/setup.sh");
+    assert!(marked.success());
+    let turned = dir.path().join("turned.HEIC");
+    heif(&sideways, &turned);
+    for path in [&upright, &turned] {
+        let read = read_image(path).unwrap();
+        assert_eq!((read.width, read.height), (shown.width, shown.height));
+        let error = mean_difference(&read, &shown);
+        assert!(error < 4.0, "{}: {error:.2} a channel", path.display());
+        let mut source = FrameSource::open(path, 30.0).unwrap();
+        assert!(source.is_still());
+        assert_eq!(read_all(&mut source), [read]);
+    }
+    // A folder of them, as a phone's photos are copied off it.
+    let folder = FrameSource::open(dir.path(), 30.0).unwrap();
+    assert_eq!(folder.info().frames, Some(3));
 }
 
 /// The mean difference of two images' channels, out of 255.
