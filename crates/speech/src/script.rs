@@ -163,6 +163,49 @@ const MONTHS: [(&str, &str); 12] = [
     ("Dec", "December"),
 ];
 
+/// Abbreviations written with their full stops, and what is said for them: the dictionary
+/// reads each letter (`e.g.` "E G") and lacks the rest (`approx.`, which eSpeak NG says
+/// "approks"). `etc.` keeps its full stop, which may end a sentence.
+const DOTTED: [(&str, &str); 8] = [
+    ("approx.", "approximately"),
+    ("dept.", "department"),
+    ("e.g.", "for example"),
+    ("esp.", "especially"),
+    ("etc.", "et cetera."),
+    ("govt.", "government"),
+    ("i.e.", "that is"),
+    ("incl.", "including"),
+];
+
+/// `text` with its [`DOTTED`] abbreviations said (in any case: `E.g.`), where each stands
+/// alone: not after a letter, a digit or a full stop.
+fn latin_abbreviations(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 16);
+    let mut k = 0;
+    'text: while k < text.len() {
+        let alone = !out
+            .chars()
+            .next_back()
+            .is_some_and(|c: char| c.is_alphanumeric() || c == '.');
+        if alone {
+            for (short, said) in DOTTED {
+                if text
+                    .get(k..k + short.len())
+                    .is_some_and(|t| t.eq_ignore_ascii_case(short))
+                {
+                    out.push_str(said);
+                    k += short.len();
+                    continue 'text;
+                }
+            }
+        }
+        let c = text[k..].chars().next().unwrap_or(' ');
+        out.push(c);
+        k += c.len_utf8();
+    }
+    out
+}
+
 /// Words of an address written short after a name (`Main St.`, `Oak Dr.`, `5th Ave.`), and
 /// what is said for them.
 const STREETS: [(&str, &str); 5] = [
@@ -176,13 +219,15 @@ const STREETS: [(&str, &str); 5] = [
 /// An English transcript's abbreviations as the words said for them: a title before a name
 /// (`Dr. Jones`: "doctor Jones", `St. Louis`: "saint Louis", `Sgt Hale`: "sergeant Hale"), a
 /// street after one (`Main St.`: "Main street", `Oak Dr.`: "Oak drive"), a month before a day
-/// or a year (`Jan. 5`: "January 5"), `No. 5` "number 5", and `vs.` "versus". Only where the
+/// or a year (`Jan. 5`: "January 5"), `No. 5` "number 5", `vs.` "versus", and the
+/// abbreviations written with full stops (`e.g.`, `i.e.`, `etc.`, `approx.`). Only where the
 /// capitals and numbers say which (a title is followed by a capitalised word, a street follows
 /// one, a month and `No.` are followed by a number); any other use is left to the dictionary.
 #[must_use]
 pub fn english_abbreviations(text: &str) -> String {
+    let text = latin_abbreviations(text);
     let mut out = String::with_capacity(text.len() + 16);
-    let mut rest = text;
+    let mut rest = text.as_str();
     // Whether the word before was a name or a number (a street follows one): capitalised
     // where a sentence does not start.
     let mut after_name = false;
@@ -1221,6 +1266,11 @@ mod tests {
                 "On January 5 and October 19 90, number 1 fan",
             ),
             ("Say No. Then Jan said Dec.", "Say No. Then Jan said Dec."),
+            (
+                "Fruit, e.g. pears, etc. E.g. approx. 5, i.e. few.",
+                "Fruit, for example pears, et cetera. for example approximately 5, that is few.",
+            ),
+            ("tree.g. bee.i.e. dept", "tree.g. bee.i.e. dept"),
         ] {
             assert_eq!(english_abbreviations(text), said, "{text}");
         }

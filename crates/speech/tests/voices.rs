@@ -572,6 +572,12 @@ fn symbols_in_a_transcript_are_aligned_as_their_words() {
         "Doctor Banks says it costs five dollars fifty, and we take fifty percent off.",
         "Dr. Banks says it costs $5.50, & we take 50% off.",
     );
+    typed_reads_as_spelled(
+        "latin",
+        "awb",
+        "Bring fruit, for example apples, pears, et cetera, approximately ten, that is plenty.",
+        "Bring fruit, e.g. apples, pears, etc., approx. 10, i.e. plenty.",
+    );
 }
 
 /// A transcript typed with a word processor's curly apostrophes (`I’m`, `it’s`, `we’ll`) is
