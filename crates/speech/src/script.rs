@@ -363,7 +363,7 @@ pub fn plain(text: &str) -> std::borrow::Cow<'_, str> {
 /// An English transcript's symbols as their words, the way a speaker says them: `$5.50` is
 /// "5 dollars 50", `$0.99` "99 cents", `1,000` "1000", `3.14` "3 point 1 4", `50%` "50
 /// percent", `20°C` "20 degrees Celsius", `&` "and", `@` "at", `+` "plus", `=` "equals", `#3`
-/// "number 3". The words left (numbers among them) are said as the dictionary or eSpeak NG says
+/// "number 3", the dots of `example.com` and `notes.pdf` "dot". The words left (numbers among them) are said as the dictionary or eSpeak NG says
 /// them. Without it a symbol is no word: "$5" loses its "dollars", and the speech of it is
 /// spread over its neighbours'.
 #[must_use]
@@ -426,6 +426,17 @@ pub fn english_symbols(text: &str) -> String {
             '+' => "plus",
             '=' => "equals",
             '#' if next_is_digit => "number",
+            // A web address's or a file's dots (`example.com`, `notes.pdf`): between two
+            // letters each side, lower case after it, so that `U.S.`, `e.g.` and a sentence
+            // typed on without its space (`end.Then`) are not read so.
+            '.' if k >= 2
+                && chars[k - 2..k].iter().all(|c| c.is_alphabetic())
+                && chars
+                    .get(k + 1..k + 3)
+                    .is_some_and(|n| n.iter().all(|c| c.is_lowercase())) =>
+            {
+                "dot"
+            }
             _ => {
                 out.push(c);
                 k += 1;
@@ -1138,6 +1149,14 @@ mod tests {
             ),
             ("Mama made my bed.", "Mama made my bed."),
             ("$ alone, a # and 100 $", "$ alone, a # and 100 $"),
+            (
+                "see shop.example.com, notes.pdf, me@mail.org.",
+                "see shop dot example dot com, notes dot pdf, me at mail dot org.",
+            ),
+            (
+                "the U.S. e.g. Ph.D a.m. end.Then",
+                "the U.S. e.g. Ph.D a.m. end.Then",
+            ),
         ] {
             assert_eq!(english_symbols(text), said, "{text}");
         }

@@ -578,6 +578,12 @@ fn symbols_in_a_transcript_are_aligned_as_their_words() {
         "Bring fruit, for example apples, pears, et cetera, approximately ten, that is plenty.",
         "Bring fruit, e.g. apples, pears, etc., approx. 10, i.e. plenty.",
     );
+    typed_reads_as_spelled(
+        "web",
+        "slt",
+        "Visit shop dot example dot com, or mail me at home dot org.",
+        "Visit shop.example.com, or mail me@home.org.",
+    );
 }
 
 /// A transcript typed with a word processor's curly apostrophes (`I’m`, `it’s`, `we’ll`) is
