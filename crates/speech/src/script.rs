@@ -1314,4 +1314,19 @@ mod tests {
         assert_eq!(many.left_out.last().unwrap(), "2 more");
         assert_eq!(many.text.trim(), "words");
     }
+
+    proptest::proptest! {
+        /// Whatever is typed, the English readings end (no panic, on any character boundary),
+        /// and words without digits or signs pass through the number, symbol and unit readings
+        /// as they are.
+        #[test]
+        fn any_text_is_read_without_a_panic(
+            typed in "[0-9a-zA-Z .,:;'()\\-\u{2013}/$%°@&#+=!?\u{1F600}\u{2764}\u{FE0F}\u{200D}\u{266A}éü]{0,60}",
+            words in "[a-zA-Z ]{0,40}",
+        ) {
+            let said = spoken(&typed);
+            let _ = english_abbreviations(&english_units(&english_symbols(&english_numbers(&said.text))));
+            proptest::prop_assert_eq!(english_units(&english_symbols(&english_numbers(&words))), words);
+        }
+    }
 }
