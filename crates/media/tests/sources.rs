@@ -305,25 +305,7 @@ fn a_phone_photo_is_read_upright_as_its_exif_says() {
         (8, "transpose=1"),
     ] {
         let path = dir.path().join(format!("turned-{orientation}.jpg"));
-        ffmpeg(&[
-            "-i",
-            face.to_str().unwrap(),
-            "-vf",
-            stored,
-            "-q:v",
-            "2",
-            path.to_str().unwrap(),
-        ]);
-        let marked = Command::new("exiftool")
-            .args([
-                "-q",
-                "-overwrite_original",
-                &format!("-Orientation#={orientation}"),
-            ])
-            .arg(&path)
-            .status()
-            .expect("ExifTool is needed: run scripts/setup.sh");
-        assert!(marked.success());
+        stored_turned(&face, stored, orientation, &path);
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(
             faceanim_media::exif_orientation(&bytes),
@@ -369,21 +351,7 @@ fn a_heif_photo_is_read_upright() {
     heif(&face, &upright);
     // Stored turned a quarter, the turn said in EXIF.
     let sideways = dir.path().join("sideways.jpg");
-    ffmpeg(&[
-        "-i",
-        face.to_str().unwrap(),
-        "-vf",
-        "transpose=2",
-        "-q:v",
-        "2",
-        sideways.to_str().unwrap(),
-    ]);
-    let marked = Command::new("exiftool")
-        .args(["-q", "-overwrite_original", "-Orientation#=6"])
-        .arg(&sideways)
-        .status()
-        .expect("ExifTool is needed: run scripts/setup.sh");
-    assert!(marked.success());
+    stored_turned(&face, "transpose=2", 6, &sideways);
     let turned = dir.path().join("turned.HEIC");
     heif(&sideways, &turned);
     for path in [&upright, &turned] {
@@ -398,6 +366,32 @@ fn a_heif_photo_is_read_upright() {
     // A folder of them, as a phone's photos are copied off it.
     let folder = FrameSource::open(dir.path(), 30.0).unwrap();
     assert_eq!(folder.info().frames, Some(3));
+}
+
+/// `face` as a camera turned by EXIF `orientation` stores it: its pixels turned by ffmpeg's
+/// `filter`, as a JPEG at `path` that ExifTool marks with the orientation.
+fn stored_turned(face: &Path, filter: &str, orientation: u8, path: &Path) {
+    ffmpeg(&[
+        "-i",
+        face.to_str().unwrap(),
+        "-vf",
+        filter,
+        "-q:v",
+        "2",
+        path.to_str().unwrap(),
+    ]);
+    let marked = Command::new("exiftool")
+        .args([
+            "-q",
+            "-overwrite_original",
+            &format!("-Orientation#={orientation}"),
+        ])
+        .arg(path)
+        .status();
+    assert!(
+        marked.as_ref().is_ok_and(std::process::ExitStatus::success),
+        "ExifTool is needed: run scripts/setup.sh ({marked:?})"
+    );
 }
 
 /// The mean difference of two images' channels, out of 255.

@@ -363,15 +363,12 @@ pub fn plain(text: &str) -> std::borrow::Cow<'_, str> {
 /// An English transcript's symbols as their words, the way a speaker says them: `$5.50` is
 /// "5 dollars 50", `$0.99` "99 cents", `1,000` "1000", `3.14` "3 point 1 4", `50%` "50
 /// percent", `20°C` "20 degrees Celsius", `&` "and", `@` "at", `+` "plus", `=` "equals", `#3`
-/// "number 3", the dots of `example.com` and `notes.pdf` "dot". The words left (numbers among them) are said as the dictionary or eSpeak NG says
-/// them. Without it a symbol is no word: "$5" loses its "dollars", and the speech of it is
-/// spread over its neighbours'.
+/// "number 3", the dots of `example.com` and `notes.pdf` "dot". The words left (numbers among
+/// them) are said as the dictionary or eSpeak NG says them. Without it a symbol is no word:
+/// "$5" loses its "dollars", and the speech of it is spread over its neighbours'.
 #[must_use]
 pub fn english_symbols(text: &str) -> String {
-    let chars: Vec<char> = text.chars().collect();
-    let mut out = String::with_capacity(text.len() + 16);
-    let mut k = 0;
-    while k < chars.len() {
+    rewritten(text, |chars, mut k, out| {
         let c = chars[k];
         if c.is_ascii_digit() {
             let start = k;
@@ -387,7 +384,7 @@ pub fn english_symbols(text: &str) -> String {
                 .checked_sub(1)
                 .map(|p| chars[p])
                 .filter(|&c| currency_word(c, false).is_some());
-            say_number(&number, currency, &mut out);
+            say_number(&number, currency, out);
             let unit = matches!(chars.get(k), Some('%' | '°'));
             match chars.get(k) {
                 Some('%') => {
@@ -415,7 +412,7 @@ pub fn english_symbols(text: &str) -> String {
             if unit && chars.get(k).is_some_and(|c| c.is_alphanumeric()) {
                 out.push(' ');
             }
-            continue;
+            return k;
         }
         let next_is_digit = chars.get(k + 1).is_some_and(char::is_ascii_digit);
         let word = match c {
@@ -439,8 +436,7 @@ pub fn english_symbols(text: &str) -> String {
             }
             _ => {
                 out.push(c);
-                k += 1;
-                continue;
+                return k + 1;
             }
         };
         // Apart from the words either side (`US$5`, `me@home`), without doubling a space.
@@ -451,9 +447,8 @@ pub fn english_symbols(text: &str) -> String {
         if !word.is_empty() && chars.get(k + 1).is_some_and(|n| n.is_alphanumeric()) {
             out.push(' ');
         }
-        k += 1;
-    }
-    out
+        k + 1
+    })
 }
 
 /// Words before a number that say it is a count, not a year (`about 1500 people`).
@@ -505,10 +500,7 @@ const DECADES: [&str; 9] = [
 /// is left as it is. Must run before [`english_symbols`], which drops the comma of a count.
 #[must_use]
 pub fn english_numbers(text: &str) -> String {
-    let chars: Vec<char> = text.chars().collect();
-    let mut out = String::with_capacity(text.len() + 16);
-    let mut k = 0;
-    while k < chars.len() {
+    rewritten(text, |chars, k, out| {
         let standalone_start = chars[k].is_ascii_digit()
             && k.checked_sub(1).is_none_or(|p| {
                 let before = chars[p];
@@ -516,18 +508,16 @@ pub fn english_numbers(text: &str) -> String {
             });
         if !standalone_start {
             out.push(chars[k]);
-            k += 1;
-            continue;
+            return k + 1;
         }
-        if let Some((end, words)) = telephone(&chars, k)
-            .or_else(|| range(&chars, k))
-            .or_else(|| clock(&chars, k))
+        if let Some((end, words)) = telephone(chars, k)
+            .or_else(|| range(chars, k))
+            .or_else(|| clock(chars, k))
         {
             out.push_str(&words);
-            k = end;
-            continue;
+            return end;
         }
-        let end = digits_end(&chars, k);
+        let end = digits_end(chars, k);
         let digits: String = chars[k..end].iter().collect();
         // A decade's plural: `60s`, `1960s`, `1960's`.
         let plural = match (chars.get(end), chars.get(end + 1)) {
@@ -535,9 +525,9 @@ pub fn english_numbers(text: &str) -> String {
             (Some('\''), Some('s')) => 2,
             _ => 0,
         };
-        let words = if plural > 0 && ends_number(&chars, end + plural) {
+        let words = if plural > 0 && ends_number(chars, end + plural) {
             decade(&digits)
-        } else if ends_number(&chars, end) && !after_count_cue(&chars[..k]) {
+        } else if ends_number(chars, end) && !after_count_cue(&chars[..k]) {
             year(&digits)
         } else {
             None
@@ -549,13 +539,25 @@ pub fn english_numbers(text: &str) -> String {
                     out.pop();
                 }
                 out.push_str(&words);
-                k = end + plural;
+                end + plural
             }
             None => {
                 out.push_str(&digits);
-                k = end;
+                end
             }
         }
+    })
+}
+
+/// `text` rewritten as it is read, character by character: `step` is given the characters,
+/// where it stands and the text written so far; it writes what it reads there and says where
+/// to read on (past where it stands).
+fn rewritten(text: &str, mut step: impl FnMut(&[char], usize, &mut String) -> usize) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len() + 16);
+    let mut k = 0;
+    while k < chars.len() {
+        k = step(&chars, k, &mut out).max(k + 1);
     }
     out
 }
@@ -735,42 +737,54 @@ fn decade(digits: &str) -> Option<String> {
     }
 }
 
-/// Units written short after a number, and the words said for them: one, and more than one.
-const UNITS: [(&str, &str, &str); 33] = [
-    ("GB", "gigabyte", "gigabytes"),
-    ("GHz", "gigahertz", "gigahertz"),
-    ("Hz", "hertz", "hertz"),
-    ("KB", "kilobyte", "kilobytes"),
-    ("MB", "megabyte", "megabytes"),
-    ("MHz", "megahertz", "megahertz"),
-    ("TB", "terabyte", "terabytes"),
-    ("cm", "centimeter", "centimeters"),
-    ("ft", "foot", "feet"),
-    ("g", "gram", "grams"),
-    ("hr", "hour", "hours"),
-    ("hrs", "hour", "hours"),
-    ("kHz", "kilohertz", "kilohertz"),
-    ("kW", "kilowatt", "kilowatts"),
-    ("kWh", "kilowatt hour", "kilowatt hours"),
-    ("kg", "kilogram", "kilograms"),
-    ("km", "kilometer", "kilometers"),
-    ("km/h", "kilometer per hour", "kilometers per hour"),
-    ("kph", "kilometer per hour", "kilometers per hour"),
-    ("lb", "pound", "pounds"),
-    ("lbs", "pound", "pounds"),
-    ("mL", "milliliter", "milliliters"),
-    ("mg", "milligram", "milligrams"),
-    ("mi", "mile", "miles"),
-    ("min", "minute", "minutes"),
-    ("mins", "minute", "minutes"),
-    ("ml", "milliliter", "milliliters"),
-    ("mm", "millimeter", "millimeters"),
-    ("mph", "mile per hour", "miles per hour"),
-    ("ms", "millisecond", "milliseconds"),
-    ("oz", "ounce", "ounces"),
-    ("sec", "second", "seconds"),
-    ("yd", "yard", "yards"),
+/// Units written short after a number, and the word said for one of them (more than one:
+/// `plural`).
+const UNITS: [(&str, &str); 33] = [
+    ("GB", "gigabyte"),
+    ("GHz", "gigahertz"),
+    ("Hz", "hertz"),
+    ("KB", "kilobyte"),
+    ("MB", "megabyte"),
+    ("MHz", "megahertz"),
+    ("TB", "terabyte"),
+    ("cm", "centimeter"),
+    ("ft", "foot"),
+    ("g", "gram"),
+    ("hr", "hour"),
+    ("hrs", "hour"),
+    ("kHz", "kilohertz"),
+    ("kW", "kilowatt"),
+    ("kWh", "kilowatt hour"),
+    ("kg", "kilogram"),
+    ("km", "kilometer"),
+    ("km/h", "kilometer per hour"),
+    ("kph", "kilometer per hour"),
+    ("lb", "pound"),
+    ("lbs", "pound"),
+    ("mL", "milliliter"),
+    ("mg", "milligram"),
+    ("mi", "mile"),
+    ("min", "minute"),
+    ("mins", "minute"),
+    ("ml", "milliliter"),
+    ("mm", "millimeter"),
+    ("mph", "mile per hour"),
+    ("ms", "millisecond"),
+    ("oz", "ounce"),
+    ("sec", "second"),
+    ("yd", "yard"),
 ];
+
+/// `unit` (a word, or words with "per") said of more than one: `kilograms`, `feet`, `hertz`,
+/// `miles per hour`.
+fn plural(unit: &str) -> String {
+    match unit.split_once(" per ") {
+        Some((each, per)) => format!("{} per {per}", plural(each)),
+        None if unit.ends_with("hertz") => unit.to_owned(),
+        None if unit.ends_with("foot") => format!("{}feet", &unit[..unit.len() - 4]),
+        None => format!("{unit}s"),
+    }
+}
 
 /// An English transcript's units written short after a number as their words: `5 kg` "5
 /// kilograms", `1 km` "1 kilometer", `100mph` "100 miles per hour", `2 point 5 GB` "… gigabytes".
@@ -790,22 +804,19 @@ pub fn english_units(text: &str) -> String {
         let ending = &word[core.len()..];
         let digits = core.len() - core.trim_start_matches(|c: char| c.is_ascii_digit()).len();
         let one = |digits: &str, before: &str| digits == "1" && before != "point";
+        let said = |word: &str, one: bool| if one { word.to_owned() } else { plural(word) };
         if digits > 0
             && digits < core.len()
-            && let Some((_, single, plural)) = unit(&core[digits..])
+            && let Some((_, word)) = unit(&core[digits..])
         {
             // Written together: `5kg`.
             out.push_str(&core[..digits]);
             out.push(' ');
-            out.push_str(if one(&core[..digits], before_number) {
-                single
-            } else {
-                plural
-            });
+            out.push_str(&said(word, one(&core[..digits], before_number)));
             out.push_str(&piece[core.len()..]);
             number = None;
-        } else if let (Some(one), Some((_, single, plural))) = (number, unit(core)) {
-            out.push_str(if one { single } else { plural });
+        } else if let (Some(one), Some((_, word))) = (number, unit(core)) {
+            out.push_str(&said(word, one));
             out.push_str(&piece[core.len()..]);
             number = None;
         } else {
@@ -1084,36 +1095,34 @@ mod tests {
         assert_eq!(said.left_out, ["<v Roger>", "a subtitle timecode"]);
     }
 
-    #[test]
-    fn markup_directions_and_speakers_are_left_out_and_said() {
-        let said = spoken(
-            "NARRATOR: [laughs] Hello there,<break time=\"500ms\"/>how are you?\n{\\an8}DR. JONES: Fine.",
-        );
-        assert_eq!(
-            said.text.split_whitespace().collect::<Vec<_>>(),
-            ["Hello", "there,", "how", "are", "you?", "Fine."]
-        );
+    /// Asserts that `typed` says `words` aloud, and that its note lists what was left out.
+    fn says(typed: &str, words: &[&str], note: &str) {
+        let said = spoken(typed);
+        assert_eq!(said.text.split_whitespace().collect::<Vec<_>>(), words);
         assert_eq!(
             said.note().unwrap(),
-            "left out of the transcript as not spoken: [laughs], <break time=\"500ms\"/>, NARRATOR:, {\\an8}, DR. JONES:"
+            format!("left out of the transcript as not spoken: {note}")
+        );
+    }
+
+    #[test]
+    fn markup_directions_and_speakers_are_left_out_and_said() {
+        says(
+            "NARRATOR: [laughs] Hello there,<break time=\"500ms\"/>how are you?\n{\\an8}DR. JONES: Fine.",
+            &["Hello", "there,", "how", "are", "you?", "Fine."],
+            "[laughs], <break time=\"500ms\"/>, NARRATOR:, {\\an8}, DR. JONES:",
         );
     }
 
     #[test]
     fn emoji_and_pictographs_are_left_out_and_said() {
-        let said = spoken(
+        says(
             "\u{266A} Happy birthday \u{266A}\nGreat job\u{1F44D}\u{1F3FD} I love it \u{2764}\u{FE0F}\u{1F602}\u{1F602}\nOur family \u{1F468}\u{200D}\u{1F469}\u{200D}\u{1F467} in \u{1F1EB}\u{1F1F7}, \u{2B50} five stars \u{2192} done",
-        );
-        assert_eq!(
-            said.text.split_whitespace().collect::<Vec<_>>(),
-            [
+            &[
                 "Happy", "birthday", "Great", "job", "I", "love", "it", "Our", "family", "in", ",",
-                "five", "stars", "done"
-            ]
-        );
-        assert_eq!(
-            said.note().unwrap(),
-            "left out of the transcript as not spoken: \u{266A}, \u{1F44D}\u{1F3FD}, \u{2764}\u{FE0F}\u{1F602}\u{1F602}, \u{1F468}\u{200D}\u{1F469}\u{200D}\u{1F467}, \u{1F1EB}\u{1F1F7}, \u{2B50}, 1 more"
+                "five", "stars", "done",
+            ],
+            "\u{266A}, \u{1F44D}\u{1F3FD}, \u{2764}\u{FE0F}\u{1F602}\u{1F602}, \u{1F468}\u{200D}\u{1F469}\u{200D}\u{1F467}, \u{1F1EB}\u{1F1F7}, \u{2B50}, 1 more",
         );
         // What is read stays: a note's sharp and flat, the signs said as words, a keycap's
         // digit, and the joiner Indic scripts write with (Malayalam's chillu).

@@ -27,6 +27,16 @@ pub fn flite(voice: &str, text: &str, wav: &Path) -> Vec<(Viseme, f32)> {
         .collect()
 }
 
+/// Flite's `voice` saying `text`, as a sound read from the WAV flite writes (named by `name`
+/// and this process, removed once read), and the visemes spoken with their end times.
+pub fn flite_sound(voice: &str, text: &str, name: &str) -> (Vec<(Viseme, f32)>, Sound) {
+    let wav = std::env::temp_dir().join(format!("faceanim-{name}-{}.wav", std::process::id()));
+    let said = flite(voice, text, &wav);
+    let sound = Sound::read(&wav).unwrap();
+    let _ = std::fs::remove_file(&wav);
+    (said, sound)
+}
+
 /// What the lips do for a viseme: the classes an animator checks (the tongue's shapes are one).
 pub fn class(v: Viseme) -> &'static str {
     let lips = "closed:PP lip-teeth:FF open:aa spread:E spread:ih round:oh round:ou rest:sil";
