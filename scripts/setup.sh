@@ -67,15 +67,18 @@ if [ "${1:-}" = libraries ]; then
     exit 0
   fi
   want "${libraries[@]}"
-  # And the programs faceanim runs: ffmpeg for video and compressed sound, libheif's
-  # heif-convert for phones' HEIC photos (each says how to install it where it is missing).
-  command -v ffmpeg >/dev/null 2>&1 || packages+=(ffmpeg)
-  command -v heif-convert >/dev/null 2>&1 || command -v heif-dec >/dev/null 2>&1 || packages+=(libheif-examples)
   if ! apt_install "${packages[@]}"; then
     # No root and no sudo, or no apt-get: the recogniser from its sources all the same.
     echo "setup: apt-get could not install ${packages[*]}" >&2
     dpkg -s libpocketsphinx-dev pocketsphinx-en-us >/dev/null 2>&1 || from_sources
   fi
+  # The programs faceanim runs: ffmpeg for video and compressed sound, libheif's heif-convert
+  # for phones' HEIC photos. Apart from the libraries, so that one missing here never costs the
+  # build its recogniser; faceanim says how to install each where it is missing.
+  programs=()
+  command -v ffmpeg >/dev/null 2>&1 || programs+=(ffmpeg)
+  command -v heif-convert >/dev/null 2>&1 || command -v heif-dec >/dev/null 2>&1 || programs+=(libheif-examples)
+  apt_install "${programs[@]}" || echo "setup: apt-get could not install ${programs[*]}: video or HEIC photos will say how to install them" >&2
   exit 0
 fi
 

@@ -473,8 +473,8 @@ pub fn recognise_loaded(
         let spoken = crate::script::spoken(text);
         notes.extend(spoken.note());
         let english = is_english(language);
-        // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5 dollars",
-        // "Dr. Jones": "doctor Jones"); eSpeak NG says another language's itself.
+        // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5
+        // dollars", "Dr. Jones": "doctor Jones"); eSpeak NG says another language's itself.
         let said = if english {
             crate::script::english_abbreviations(&crate::script::english_units(
                 &crate::script::english_symbols(&crate::script::english_numbers(&spoken.text)),
