@@ -2,8 +2,8 @@
 //!
 //! One [`FrameSource`] for every input a user points capture at: a still image (PNG, JPEG,
 //! WebP, or a phone's HEIF — HEIC, AVIF — through libheif's `heif-dec`; told apart by their
-//! bytes, not their names; turned upright as their EXIF or HEIF says), a folder of images (in name order, as an
-//! image sequence), or a video file, decoded by Debian's `ffmpeg` program through a pipe.
+//! bytes, not their names; turned upright as their EXIF or HEIF says), a folder of images (in
+//! name order, as an image sequence), or a video file, decoded by Debian's `ffmpeg` program through a pipe.
 //! Every frame comes out as 8-bit RGB, upright (a phone's rotated video is turned as a player
 //! shows it). Video is resampled to a constant frame rate (the rate ffmpeg takes as the
 //! stream's own) so that frame `i` is always at `i / fps` seconds: a dropped or duplicated
@@ -397,9 +397,9 @@ fn decode_jpeg(bytes: &[u8]) -> Result<Image, String> {
     Ok(Image { width, height, rgb })
 }
 
-/// Reads and decodes a photo or frame (PNG, JPEG, WebP, KTX2), upright as a viewer shows it: a
-/// JPEG whose EXIF says how it is turned (a phone's portrait photo, its pixels stored
-/// sideways) is turned so. Textures are read with [`decode_image`], as glTF uses them: never
+/// Reads and decodes a photo or frame (PNG, JPEG, WebP, KTX2, or HEIF through libheif's own
+/// program), upright as a viewer shows it: a JPEG whose EXIF says how it is turned (a phone's
+/// portrait photo, its pixels stored sideways) is turned so, a HEIF as its own rotation says. Textures are read with [`decode_image`], as glTF uses them: never
 /// turned.
 ///
 /// # Errors

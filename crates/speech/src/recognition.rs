@@ -476,9 +476,7 @@ pub fn recognise_loaded(
         // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5
         // dollars", "Dr. Jones": "doctor Jones"); eSpeak NG says another language's itself.
         let said = if english {
-            crate::script::english_abbreviations(&crate::script::english_units(
-                &crate::script::english_symbols(&crate::script::english_numbers(&spoken.text)),
-            ))
+            crate::script::english_said(&spoken.text)
         } else {
             spoken.text
         };

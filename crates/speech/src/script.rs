@@ -478,6 +478,15 @@ const DECADES: [&str; 9] = [
     "nineties",
 ];
 
+/// An English transcript's words as they are said: its numbers ([`english_numbers`]), symbols
+/// ([`english_symbols`]), units ([`english_units`]) and abbreviations
+/// ([`english_abbreviations`]), read in that order (a count's comma is read before the symbols
+/// drop it; a unit follows the number the symbols made of an amount).
+#[must_use]
+pub fn english_said(text: &str) -> String {
+    english_abbreviations(&english_units(&english_symbols(&english_numbers(text))))
+}
+
 /// An English transcript's years, decades, ranges and telephone numbers as speakers say them:
 /// - a year in two pairs (`1985` "19 85", `1905` "19 oh 5", `1900` "19 hundred", `2024` "20
 ///   24") and a decade by its tens (`the 1960s` "19 sixties", `'80s` and `80s` "eighties",
@@ -497,7 +506,8 @@ const DECADES: [&str; 9] = [
 /// A year is a number of four digits from 1100 to 1999 or from 2010 to 2099, standing alone:
 /// a count written with its comma (`1,985`), an amount (`$1985`), a part of another number
 /// (`1985.5`, `10:1985`) or a number after a word that says it counts (`about 1985 people`)
-/// is left as it is. Must run before [`english_symbols`], which drops the comma of a count.
+/// is left as it is. Runs before [`english_symbols`], which drops the comma of a count: see
+/// [`english_said`].
 #[must_use]
 pub fn english_numbers(text: &str) -> String {
     rewritten(text, |chars, k, out| {
@@ -1334,7 +1344,7 @@ mod tests {
             words in "[a-zA-Z ]{0,40}",
         ) {
             let said = spoken(&typed);
-            let _ = english_abbreviations(&english_units(&english_symbols(&english_numbers(&said.text))));
+            let _ = english_said(&said.text);
             proptest::prop_assert_eq!(english_units(&english_symbols(&english_numbers(&words))), words);
         }
     }
