@@ -79,14 +79,6 @@ pub enum PhoneError {
     /// The transcript could not be spoken to align it by synthesis.
     #[error(transparent)]
     Synthesis(#[from] faceanim_espeak_sys::EspeakError),
-    /// The recording is too long to align by synthesis at once.
-    #[error(
-        "{seconds:.0} s of sound is too long to align to a transcript at once: cut it into lines"
-    )]
-    TooLongToAlign {
-        /// The sound's length.
-        seconds: f32,
-    },
     /// The language is not one eSpeak NG speaks (nor a voice of one).
     #[error(
         "eSpeak NG has no language or voice '{0}' (`espeak-ng --voices` lists those it speaks: en-us, es, ja, de, fr, …)"

@@ -45,7 +45,7 @@ pub fn recognise(
     transcript: Option<&str>,
     language: Option<&str>,
     blind: Recognition,
-) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
+) -> Result<Recognised, PhoneError> {
     recognise_loaded(sound, transcript, language, blind, None, Voice::Auto)
 }
 
@@ -443,7 +443,37 @@ pub fn recognise_loaded(
     blind: Recognition,
     loading: Option<Loading>,
     voice: Voice,
-) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
+) -> Result<Recognised, PhoneError> {
+    recognise_line(
+        sound,
+        transcript.map(Transcript::Typed),
+        language,
+        blind,
+        loading,
+        voice,
+    )
+}
+
+/// A line's phones, how they were found, and what was done instead of what was asked.
+pub type Recognised = (Vec<Phone>, Recognition, Vec<String>);
+
+/// A transcript as it was typed, or as it is said already (a piece of a longer one whose
+/// numbers, symbols and what is not spoken were read: [`in_pieces`]).
+#[derive(Clone, Copy)]
+enum Transcript<'a> {
+    Typed(&'a str),
+    Said(&'a str),
+}
+
+/// [`recognise_loaded`], with a transcript typed or said.
+fn recognise_line(
+    sound: &Sound,
+    transcript: Option<Transcript<'_>>,
+    language: Option<&str>,
+    blind: Recognition,
+    loading: Option<Loading>,
+    voice: Voice,
+) -> Result<Recognised, PhoneError> {
     let language = check_language(language.unwrap_or(ENGLISH))?;
     let language = language.as_str();
     let mut notes = Vec::new();
@@ -467,22 +497,42 @@ pub fn recognise_loaded(
         ));
     }
     let heard = Heard::as_decided(sound, hearing);
-    if let Some(text) = transcript {
-        // Only what is said aloud: a subtitle's timecodes, markup and bracketed directions
-        // would be aligned as words nobody said.
-        let spoken = crate::script::spoken(text);
-        notes.extend(spoken.note());
+    if let Some(transcript) = transcript {
         let english = is_english(language);
-        // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5
-        // dollars", "Dr. Jones": "doctor Jones"); eSpeak NG says another language's itself.
-        let said = if english {
-            crate::script::english_said(&spoken.text)
-        } else {
-            spoken.text
+        let said = match transcript {
+            Transcript::Typed(text) => {
+                // Only what is said aloud: a subtitle's timecodes, markup and bracketed
+                // directions would be aligned as words nobody said.
+                let spoken = crate::script::spoken(text);
+                notes.extend(spoken.note());
+                // Numbers, symbols, units and abbreviations said as words ("1985": "19 85",
+                // "$5": "5 dollars", "Dr. Jones": "doctor Jones"); eSpeak NG says another
+                // language's itself.
+                if english {
+                    crate::script::english_said(&spoken.text)
+                } else {
+                    spoken.text
+                }
+            }
+            Transcript::Said(text) => text.to_owned(),
         };
         let text = said.as_str();
         let words = phones::transcript_words(text, sound.seconds())?;
         let voiced = sound.voice_activity();
+        // A long English recording is aligned a piece at a time.
+        if english && sound.seconds() > WHOLE_LINE {
+            let pieces = crate::script::pieces(text, PIECE_WORDS);
+            if pieces.len() > 1 {
+                match in_pieces(sound, &voiced, &pieces, language, blind, voice) {
+                    Ok(Some((phones, recognition, told))) => {
+                        notes.extend(told);
+                        return Ok((phones, recognition, notes));
+                    }
+                    Ok(None) => {}
+                    Err(e) => tracing::debug!(%e, "the recording could not be cut into pieces"),
+                }
+            }
+        }
         // How sharply the voice follows a synthesiser's is asked of English lines only (the
         // others are timed by synthesis whatever it is).
         let synthesis = || match crate::synthesis::timed_by_synthesis(
@@ -687,6 +737,81 @@ pub fn recognise_loaded(
     ))
 }
 
+/// The longest English line, seconds, the recogniser aligns to its transcript whole; a longer
+/// one is aligned a piece at a time ([`in_pieces`]), as quickly whatever its length (flite's
+/// slt reading a paragraph 70 times over, 20 minutes: 0.959 agreement at 0.03× real time;
+/// whole, 0.958 at 0.21×, the search growing faster than the line), and where the recogniser
+/// cannot align a piece, only that piece is aligned by synthesis.
+const WHOLE_LINE: f32 = 30.0;
+
+/// About how many words a piece of a long English line holds ([`crate::script::pieces`]):
+/// 15–20 s of speech.
+const PIECE_WORDS: usize = 45;
+
+/// `sound`, an English recording of a long transcript cut into `pieces`, aligned a piece at a
+/// time: where each piece starts and ends is found by synthesis ([`crate::synthesis::seams`]:
+/// the pieces spoken one after the other, the recording warped onto them, each seam moved into
+/// the pause nearest it), and each piece of the recording is then a line of its own
+/// ([`recognise_line`]: aligned by the recogniser, or by synthesis where that fails), its phones
+/// placed back at its start. The notes are the pieces' own, each once, and one that says the
+/// line was aligned in pieces; the route is the recogniser's where it aligned any piece. `None`
+/// where either sound holds no speech.
+fn in_pieces(
+    sound: &Sound,
+    voiced: &[bool],
+    pieces: &[String],
+    language: &str,
+    blind: Recognition,
+    voice: Voice,
+) -> Result<Option<Recognised>, PhoneError> {
+    let Some(seams) = crate::synthesis::seams(sound, voiced, pieces, language)? else {
+        return Ok(None);
+    };
+    let rate = crate::audio::SAMPLE_RATE as f32;
+    let sample = |t: f32| ((t * rate).round() as usize).min(sound.samples.len());
+    let starts = std::iter::once(0.0).chain(seams.iter().copied());
+    let ends = seams
+        .iter()
+        .copied()
+        .chain(std::iter::once(sound.seconds()));
+    let (mut phones, mut notes, mut routes) = (Vec::new(), Vec::new(), Vec::new());
+    for ((start, end), piece) in starts.zip(ends).zip(pieces) {
+        let part = Sound {
+            samples: sound.samples[sample(start)..sample(end)].to_vec(),
+        };
+        let offset = sample(start) as f32 / rate;
+        let (said, route, told) = recognise_line(
+            &part,
+            Some(Transcript::Said(piece)),
+            Some(language),
+            blind,
+            None,
+            voice,
+        )?;
+        phones.extend(said.into_iter().map(|p| Phone {
+            start: p.start + offset,
+            end: p.end + offset,
+            ..p
+        }));
+        for note in told {
+            if !notes.contains(&note) {
+                notes.push(note);
+            }
+        }
+        routes.push(route);
+    }
+    notes.push(format!(
+        "the recording is long: its transcript was aligned in {} pieces, each a few sentences",
+        pieces.len()
+    ));
+    let route = if routes.contains(&Recognition::Transcript) {
+        Recognition::Transcript
+    } else {
+        routes.first().copied().unwrap_or(Recognition::Synthesis)
+    };
+    Ok(Some((phones, route, notes)))
+}
+
 /// `heard`'s phones by a phone loop (`loaded`, or one loaded now): when `heard` is not adapted
 /// yet and its first pass hears the voice poorly, decoded a second time by the model adapted
 /// to that voice, with the lips' closures the first pass's silences held ([`crate::adapt`]).
@@ -884,8 +1009,9 @@ const SAME_VOICE: f32 = 2.0;
 /// The longest English line, seconds, timed by synthesis before the recogniser aligns it (to
 /// see whether its voice is a synthesiser's, [`SAME_VOICE`]): a line of dialogue. Warping a
 /// longer recording onto its rendition costs memory and time that grow with the square of its
-/// length (a minute: about 20 MB and half a second; three minutes, 200 MB), so a longer one is
-/// aligned by the recogniser, and by synthesis only where the recogniser cannot.
+/// length up to three minutes (a minute: about 20 MB and half a second; three minutes,
+/// 200 MB), so a longer one (whose transcript is too short to cut into pieces: [`WHOLE_LINE`])
+/// is aligned by the recogniser, and by synthesis only where the recogniser cannot.
 const SYNTHESIS_FIRST: f32 = 60.0;
 
 /// The share of a line's voice its words recognised must cover (`said_share`), below which its

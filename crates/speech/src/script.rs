@@ -478,6 +478,47 @@ const DECADES: [&str; 9] = [
     "nineties",
 ];
 
+/// `text` cut into pieces of at most about `most` words, each whole sentences where the
+/// sentences allow (a sentence ends at `.`, `!`, `?` or `;` before a space, or with its line),
+/// a longer sentence into equal runs of words: the pieces a long recording is aligned in, one
+/// after the other. Every word is in one piece, in order; a text of `most` words or fewer is
+/// one piece.
+#[must_use]
+pub fn pieces(text: &str, most: usize) -> Vec<String> {
+    let most = most.max(1);
+    let mut sentences: Vec<Vec<&str>> = Vec::new();
+    for line in text.lines() {
+        let mut sentence = Vec::new();
+        for word in line.split_whitespace() {
+            sentence.push(word);
+            if word.ends_with(['.', '!', '?', ';']) {
+                sentences.push(std::mem::take(&mut sentence));
+            }
+        }
+        if !sentence.is_empty() {
+            sentences.push(sentence);
+        }
+    }
+    let mut pieces: Vec<Vec<&str>> = Vec::new();
+    let mut piece: Vec<&str> = Vec::new();
+    for sentence in sentences {
+        if !piece.is_empty() && piece.len() + sentence.len() > most {
+            pieces.push(std::mem::take(&mut piece));
+        }
+        if sentence.len() <= most {
+            piece.extend(sentence);
+            continue;
+        }
+        // A sentence longer than a piece: equal runs of its words.
+        let (n, runs) = (sentence.len(), sentence.len().div_ceil(most));
+        pieces.extend((0..runs).map(|r| sentence[r * n / runs..(r + 1) * n / runs].to_vec()));
+    }
+    if !piece.is_empty() {
+        pieces.push(piece);
+    }
+    pieces.into_iter().map(|words| words.join(" ")).collect()
+}
+
 /// An English transcript's words as they are said: its numbers ([`english_numbers`]), symbols
 /// ([`english_symbols`]), units ([`english_units`]) and abbreviations
 /// ([`english_abbreviations`]), read in that order (a count's comma is read before the symbols
@@ -1347,5 +1388,23 @@ mod tests {
             let _ = english_said(&said.text);
             proptest::prop_assert_eq!(english_units(&english_symbols(&english_numbers(&words))), words);
         }
+    }
+
+    #[test]
+    fn a_long_text_is_cut_between_sentences() {
+        let text = "One two three. Four five six seven!\nEight nine ten eleven twelve; thirteen";
+        assert_eq!(
+            pieces(text, 7),
+            [
+                "One two three. Four five six seven!",
+                "Eight nine ten eleven twelve; thirteen"
+            ]
+        );
+        assert_eq!(pieces(text, 100), [text.replace('\n', " ")]);
+        // A sentence longer than a piece is cut into equal runs.
+        let words: Vec<String> = (0..10).map(|k| format!("w{k}")).collect();
+        let run_on = words.join(" ");
+        assert_eq!(pieces(&run_on, 4), ["w0 w1 w2", "w3 w4 w5", "w6 w7 w8 w9"]);
+        assert!(pieces("", 4).is_empty());
     }
 }

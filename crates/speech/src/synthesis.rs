@@ -9,7 +9,8 @@
 //!    the one it follows a rendition clearly most sharply through is kept;
 //! 3. dynamic time warping finds the cheapest path between the two (a band around the
 //!    diagonal bounds the work; a diagonal step costs what the others do, which keeps the two
-//!    voices moving together);
+//!    voices moving together; a recording of minutes is warped coarse to fine, so that its
+//!    length never costs it its transcript);
 //! 4. each phone's start in the spoken version is carried along the path onto the recording,
 //!    and stretches where the recording is quiet for a while become silence.
 //!
@@ -27,8 +28,8 @@ const DIMS: usize = 2 * CEPSTRA + 1;
 /// The band's half-width as a share of the longer recording's frames, and its bounds.
 const BAND_SHARE: f32 = 0.3;
 const BAND_MIN: usize = 60;
-/// The most cells the warping may visit (about 200 MB of path at one byte each): a line of
-/// dialogue needs a tiny part of it; an hour of audio must be cut into lines.
+/// The most cells one warping visits (about 200 MB of path at one byte each): a line of
+/// dialogue needs a tiny part of it; a longer recording is warped coarse to fine.
 const MAX_CELLS: usize = 200_000_000;
 /// A quiet stretch at least this long inside a phone's time is a pause, not a stop closure.
 const PAUSE_SECONDS: f32 = 0.15;
@@ -37,8 +38,8 @@ const PAUSE_SECONDS: f32 = 0.15;
 /// `es`, `ja`, …) says them; labels are IPA, pauses `SIL`.
 ///
 /// # Errors
-/// [`PhoneError::Synthesis`] when eSpeak NG is missing or does not know the language,
-/// [`PhoneError::TooLongToAlign`] for a recording too long to warp at once.
+/// [`PhoneError::Synthesis`] when eSpeak NG is missing or does not know the language. A
+/// recording of any length is aligned (minutes or an hour: warped coarse to fine).
 pub fn align(sound: &Sound, text: &str, language: &str) -> Result<Vec<Phone>, PhoneError> {
     timed_by_synthesis(sound, &sound.voice_activity(), text, language, false).map(|t| t.phones)
 }
@@ -270,15 +271,11 @@ struct Followed {
     sharpness: f32,
 }
 
-/// The warping of a recording's speech onto a rendition's; `None` where either has none, or
-/// the warping would be too large ([`MAX_CELLS`]).
+/// The warping of a recording's speech onto a rendition's, however long ([`warp_any`]);
+/// `None` where either has none.
 fn follow(recording: Option<&Speech>, rendition: Option<&Speech>) -> Option<Followed> {
     let (theirs, ours) = (&recording?.features, &rendition?.features);
-    let band = band(theirs.len(), ours.len());
-    if theirs.len().saturating_mul(2 * band + 1) > MAX_CELLS {
-        return None;
-    }
-    let path = warp(theirs, ours, band);
+    let path = warp_any(theirs, ours);
     let sharpness = sharpness(&path, theirs, ours);
     Some(Followed { path, sharpness })
 }
@@ -292,7 +289,9 @@ fn timed_by(
     rendition: &Rendition,
     followed: Option<Followed>,
 ) -> Result<Timed, PhoneError> {
-    let (Some(recording), Some(rendition_speech)) = (recording, rendition.speech.as_ref()) else {
+    let (Some(recording), Some(rendition_speech), Some(Followed { path, sharpness })) =
+        (recording, rendition.speech.as_ref(), followed)
+    else {
         return Ok(Timed {
             phones: Vec::new(),
             sharpness: 0.0,
@@ -304,24 +303,10 @@ fn timed_by(
         rendition_speech.first,
         &rendition_speech.features,
     );
-    // Only a warping too large to make has no path.
-    let Followed { path, sharpness } = followed.ok_or(PhoneError::TooLongToAlign {
-        seconds: sound.seconds(),
-    })?;
-    // Where each frame of the spoken version starts on the recording.
-    let mut first = vec![usize::MAX; ours.len()];
-    for &(i, j) in &path {
-        first[j] = first[j].min(i);
-    }
-    let on_recording = |ms: u32| {
-        let j = frame_of(ms as f32 / 1000.0);
-        if j < b0 {
-            return time_of(a0) - time_of(b0 - j) + time_of(0);
-        }
-        let j = (j - b0).min(ours.len() - 1);
-        time_of(a0 + first[j])
-    };
-    let phones = timed(&rendition.spoken, sound.seconds(), on_recording);
+    let carried = Carried::along(&path, a0, b0, ours.len());
+    let phones = timed(&rendition.spoken, sound.seconds(), |ms| {
+        carried.on_recording(ms as f32 / 1000.0)
+    });
     let heard = voiced.iter().filter(|&&v| v).count() as f32;
     let voice_ratio = heard / rendition.voice_frames.max(1.0);
     Ok(Timed {
@@ -329,6 +314,113 @@ fn timed_by(
         sharpness,
         voice_ratio,
     })
+}
+
+/// A warping path between a recording's speech (from its frame `a0`) and a rendition's (from
+/// `b0`), as a map of the rendition's times onto the recording's.
+struct Carried {
+    /// Where each frame of the rendition's speech starts on the recording's.
+    first: Vec<usize>,
+    a0: usize,
+    b0: usize,
+}
+
+impl Carried {
+    fn along(path: &[(usize, usize)], a0: usize, b0: usize, frames: usize) -> Carried {
+        let mut first = vec![usize::MAX; frames];
+        for &(i, j) in path {
+            first[j] = first[j].min(i);
+        }
+        Carried { first, a0, b0 }
+    }
+
+    /// The recording's time, seconds, for the rendition's `seconds` (before its speech, as
+    /// far before the recording's).
+    fn on_recording(&self, seconds: f32) -> f32 {
+        let j = frame_of(seconds);
+        if j < self.b0 {
+            return time_of(self.a0) - time_of(self.b0 - j) + time_of(0);
+        }
+        let j = (j - self.b0).min(self.first.len() - 1);
+        time_of(self.a0 + self.first[j])
+    }
+}
+
+/// Where a recording passes from one of a transcript's `pieces` to the next, seconds (one
+/// fewer than the pieces, in order): each piece spoken by eSpeak NG's `voice` in turn, the
+/// recording warped onto them all ([`warp_any`]), each seam between two renditions carried
+/// onto the recording and moved to the middle of the longest pause within [`SEAM_REACH`]
+/// (`voiced`: [`Sound::voice_activity`]), where a reader pauses between sentences. `None`
+/// where either sound holds no speech.
+///
+/// # Errors
+/// [`PhoneError::Synthesis`] when eSpeak NG cannot speak a piece.
+pub(crate) fn seams(
+    sound: &Sound,
+    voiced: &[bool],
+    pieces: &[String],
+    voice: &str,
+) -> Result<Option<Vec<f32>>, PhoneError> {
+    let mut samples = Vec::new();
+    let mut ends = Vec::with_capacity(pieces.len());
+    let mut rate = SAMPLE_RATE;
+    for piece in pieces {
+        let spoken = faceanim_espeak_sys::speak(piece, &voice_for(piece, voice), None)?;
+        rate = spoken.sample_rate;
+        samples.extend_from_slice(&spoken.samples);
+        ends.push(samples.len() as f32 / rate as f32);
+    }
+    let ours = Frontend::cepstra(&crate::audio::resample_pcm(&samples, rate));
+    let theirs = Frontend::cepstra(&sound.samples);
+    let (Some(ours_span), Some(theirs_span)) = (speech(&ours), speech(&theirs)) else {
+        return Ok(None);
+    };
+    let (rendition, recording) = (
+        Speech::within(&ours, ours_span),
+        Speech::within(&theirs, theirs_span),
+    );
+    let path = warp_any(&recording.features, &rendition.features);
+    let carried = Carried::along(
+        &path,
+        recording.first,
+        rendition.first,
+        rendition.features.len(),
+    );
+    let mut seams: Vec<f32> = Vec::with_capacity(pieces.len());
+    for &end in &ends[..ends.len().saturating_sub(1)] {
+        let at = in_a_pause(carried.on_recording(end), voiced);
+        let after = seams.last().copied().unwrap_or(0.0);
+        seams.push(at.clamp(after, sound.seconds()));
+    }
+    Ok(Some(seams))
+}
+
+/// How far from where the warping puts a seam between two pieces a pause is looked for,
+/// seconds.
+const SEAM_REACH: f32 = 0.75;
+
+/// The middle of the longest pause (frames not `voiced`) within [`SEAM_REACH`] of `seconds`;
+/// `seconds` where there is none.
+fn in_a_pause(seconds: f32, voiced: &[bool]) -> f32 {
+    let rate = crate::audio::FRAME_RATE as f32;
+    let frame = |t: f32| ((t * rate).round().max(0.0) as usize).min(voiced.len());
+    let (from, to) = (frame(seconds - SEAM_REACH), frame(seconds + SEAM_REACH));
+    let mut best: Option<(usize, usize)> = None;
+    let mut k = from;
+    while k < to {
+        if voiced[k] {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < voiced.len() && !voiced[k] {
+            k += 1;
+        }
+        if best.is_none_or(|(a, b)| k - start > b - a) {
+            best = Some((start, k));
+        }
+    }
+    best.map_or(seconds, |(a, b)| (a + b) as f32 / 2.0 / rate)
 }
 
 /// Frames of the rendition either side of the warping path that [`sharpness`] compares with
@@ -626,18 +718,86 @@ fn band(n: usize, m: usize) -> usize {
 }
 
 /// The cheapest warping path from (0, 0) to the two ends, as (frame of `a`, frame of `b`)
-/// pairs in order, within `band` frames of the diagonal. Every step costs the distance of the
+/// pairs in order, within `band` frames of the diagonal ([`warp_within`]).
+fn warp(a: &[[f32; DIMS]], b: &[[f32; DIMS]], band: usize) -> Vec<(usize, usize)> {
+    let (n, m) = (a.len(), b.len());
+    let centre = |i: usize| (i * m) / n.max(1);
+    let rows: Vec<(usize, usize)> = (0..n)
+        .map(|i| {
+            (
+                centre(i).saturating_sub(band),
+                (centre(i) + band).min(m - 1),
+            )
+        })
+        .collect();
+    warp_within(a, b, &rows)
+}
+
+/// The warping of `a` onto `b` however long they are: within [`band`] of the diagonal where
+/// that is at most [`MAX_CELLS`] cells (every line of dialogue), else coarse to fine, as
+/// FastDTW does — both halved (each pair of frames averaged), the halves warped so, and the
+/// whole warped again only within [`RADIUS`] frames of that path, so that a recording of
+/// minutes or an hour keeps its transcript at a few cells per frame.
+fn warp_any(a: &[[f32; DIMS]], b: &[[f32; DIMS]]) -> Vec<(usize, usize)> {
+    coarse_to_fine(a, b, MAX_CELLS)
+}
+
+/// [`warp_any`], warping within the diagonal's band where that is at most `most` cells.
+fn coarse_to_fine(a: &[[f32; DIMS]], b: &[[f32; DIMS]], most: usize) -> Vec<(usize, usize)> {
+    let (n, m) = (a.len(), b.len());
+    let band = band(n, m);
+    if n.saturating_mul(2 * band + 1) <= most || n < 2 || m < 2 {
+        return warp(a, b, band);
+    }
+    let coarse = coarse_to_fine(&halved(a), &halved(b), most);
+    warp_within(a, b, &around(&coarse, n, m))
+}
+
+/// How far either side of a coarse path, in frames, the finer warping looks ([`warp_any`]):
+/// 0.2 s, where the halves' path may have placed a phone a frame or two off.
+const RADIUS: usize = 20;
+
+/// Each pair of frames averaged (a last odd frame kept).
+fn halved(a: &[[f32; DIMS]]) -> Vec<[f32; DIMS]> {
+    a.chunks(2)
+        .map(|pair| {
+            std::array::from_fn(|k| pair.iter().map(|f| f[k]).sum::<f32>() / pair.len() as f32)
+        })
+        .collect()
+}
+
+/// The columns each of `n` rows may visit around `coarse`, a path between the halves of `n`
+/// and `m` frames ([`halved`]): the frames its cells stand for, [`RADIUS`] either side.
+/// Every row's range starts and ends no earlier than the row before's, and reaches the next
+/// row's start, so a path runs through them from (0, 0) to (`n` − 1, `m` − 1).
+fn around(coarse: &[(usize, usize)], n: usize, m: usize) -> Vec<(usize, usize)> {
+    let mut rows = vec![(usize::MAX, 0usize); n];
+    for &(i, j) in coarse {
+        for row in [2 * i, 2 * i + 1].into_iter().filter(|&r| r < n) {
+            let (lo, hi) = &mut rows[row];
+            *lo = (*lo).min(2 * j);
+            *hi = (*hi).max((2 * j + 1).min(m - 1));
+        }
+    }
+    rows.iter()
+        .map(|&(lo, hi)| (lo.saturating_sub(RADIUS), (hi + RADIUS).min(m - 1)))
+        .collect()
+}
+
+/// The cheapest warping path from (0, 0) to the two ends, as (frame of `a`, frame of `b`)
+/// pairs in order, row `i` of `a` visiting only the columns of `b` in `rows[i]` (an inclusive
+/// range; neither end falls from one row to the next, the first row's holds 0 and the last's
+/// `b`'s last frame). Every step costs the distance of the
 /// pair it reaches, a diagonal one too: the path keeps both voices moving together unless
 /// they clearly part (against a diagonal step weighted twice, as symmetric warping does,
 /// phones aligned between flite's voices and eSpeak NG's went from 0.84 to 0.91 within
 /// ±40 ms).
-fn warp(a: &[[f32; DIMS]], b: &[[f32; DIMS]], band: usize) -> Vec<(usize, usize)> {
+fn warp_within(
+    a: &[[f32; DIMS]],
+    b: &[[f32; DIMS]],
+    rows: &[(usize, usize)],
+) -> Vec<(usize, usize)> {
     let (n, m) = (a.len(), b.len());
-    let width = 2 * band + 1;
-    // Row i covers columns centre(i) - band ..= centre(i) + band.
-    let centre = |i: usize| (i * m) / n.max(1);
-    let lo = |i: usize| centre(i).saturating_sub(band);
-    let hi = |i: usize| (centre(i) + band).min(m - 1);
     let distance = |i: usize, j: usize| {
         a[i].iter()
             .zip(&b[j])
@@ -645,18 +805,24 @@ fn warp(a: &[[f32; DIMS]], b: &[[f32; DIMS]], band: usize) -> Vec<(usize, usize)
             .sum::<f32>()
             .sqrt()
     };
-    let mut previous = vec![f32::INFINITY; width];
-    let mut current = vec![f32::INFINITY; width];
+    // Where each row's cells start in `steps`.
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0usize);
+    for &(l, h) in rows {
+        offsets.push(offsets.last().copied().unwrap_or(0) + (h + 1 - l));
+    }
+    let widest = rows.iter().map(|&(l, h)| h + 1 - l).max().unwrap_or(0);
+    let mut previous = vec![f32::INFINITY; widest];
+    let mut current = vec![f32::INFINITY; widest];
     // 0: diagonal, 1: from the row above, 2: from the left.
-    let mut steps = vec![0u8; n * width];
-    let mut previous_lo = 0usize;
-    for i in 0..n {
+    let mut steps = vec![0u8; offsets[n]];
+    let (mut previous_lo, mut previous_hi) = (0usize, 0usize);
+    for (i, &(l, h)) in rows.iter().enumerate() {
         current.fill(f32::INFINITY);
-        let (l, h) = (lo(i), hi(i));
         for j in l..=h {
             let d = distance(i, j);
             let above = |jj: usize| -> f32 {
-                if i == 0 || jj < previous_lo || jj - previous_lo >= width {
+                if i == 0 || jj < previous_lo || jj > previous_hi {
                     f32::INFINITY
                 } else {
                     previous[jj - previous_lo]
@@ -685,10 +851,10 @@ fn warp(a: &[[f32; DIMS]], b: &[[f32; DIMS]], band: usize) -> Vec<(usize, usize)
                 }
             };
             current[j - l] = cost;
-            steps[i * width + (j - l)] = step;
+            steps[offsets[i] + (j - l)] = step;
         }
         std::mem::swap(&mut previous, &mut current);
-        previous_lo = l;
+        (previous_lo, previous_hi) = (l, h);
     }
     // Back from the end.
     let mut path = Vec::with_capacity(n + m);
@@ -698,8 +864,7 @@ fn warp(a: &[[f32; DIMS]], b: &[[f32; DIMS]], band: usize) -> Vec<(usize, usize)
         if i == 0 && j == 0 {
             break;
         }
-        let l = lo(i);
-        match steps[i * width + (j - l)] {
+        match steps[offsets[i] + (j - rows[i].0)] {
             0 if i > 0 && j > 0 => {
                 i -= 1;
                 j -= 1;
@@ -753,6 +918,35 @@ mod tests {
         for &(i, j) in &path {
             assert_eq!(i / 2, j, "{path:?}");
         }
+    }
+
+    #[test]
+    fn a_long_warping_coarse_to_fine_finds_the_banded_one() {
+        // Two "recordings" of the same 600 sounds, each held for its own number of frames (a
+        // speaker's pace and a synthesiser's), with a little noise of their own.
+        let mut seed = 7u32;
+        let mut next = move || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let sounds: Vec<[f32; DIMS]> = (0..600)
+            .map(|_| std::array::from_fn(|_| next() * 4.0))
+            .collect();
+        let mut said = |pace: f32| {
+            let mut frames = Vec::new();
+            for sound in &sounds {
+                for _ in 0..(1 + (next() * pace) as usize) {
+                    frames.push(std::array::from_fn(|k| sound[k] + next() * 0.2));
+                }
+            }
+            frames
+        };
+        let (a, b): (Vec<[f32; DIMS]>, Vec<[f32; DIMS]>) = (said(8.0), said(6.0));
+        let banded = warp(&a, &b, band(a.len(), b.len()));
+        // Few enough cells that the halves are halved again.
+        let fine = coarse_to_fine(&a, &b, a.len() * 50);
+        assert!(a.len() > 2000 && b.len() > 1500);
+        assert_eq!(fine, banded);
     }
 
     #[test]

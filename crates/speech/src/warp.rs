@@ -21,7 +21,9 @@
 
 use std::borrow::Cow;
 
-use faceanim_sphinx_sys::{FRAME_RATE, Recogniser, Search, Segment, SphinxError, Transform};
+use faceanim_sphinx_sys::{
+    FRAME_RATE, Recogniser, Search, Segment, SphinxError, Transform, frame_shift,
+};
 
 use crate::audio::{SAMPLE_RATE, Sound};
 
@@ -108,18 +110,15 @@ impl<'a> Heard<'a> {
         Heard::warped(sound, hearing.frame_rate)
     }
 
-    /// `sound` slowed to `100 / frame_rate` of its speed, every frequency divided as much:
-    /// played as if recorded at 160 × `frame_rate` samples a second.
+    /// `sound` slowed to about `frame_rate / 100` of its speed, every frequency divided as
+    /// much ([`slowed_rate`]), so that each of the recogniser's frames at `frame_rate` is
+    /// 10 ms of the sound.
     pub(crate) fn warped(sound: &'a Sound, frame_rate: u32) -> Heard<'a> {
         if frame_rate == FRAME_RATE {
             return Heard::plain(sound);
         }
         Heard {
-            samples: audible(Cow::Owned(
-                sound
-                    .played_at(SAMPLE_RATE / FRAME_RATE * frame_rate)
-                    .samples,
-            )),
+            samples: audible(Cow::Owned(sound.played_at(slowed_rate(frame_rate)).samples)),
             frame_rate,
             adaptation: None,
         }
@@ -227,6 +226,17 @@ impl Hearing {
 
 /// The frames a second a sound heard through `warp` is read at: a whole number, so that the
 /// frames stay exactly 10 ms of the sound.
+/// The rate a sound is played as ([`Sound::played_at`]) to be read at `frame_rate` frames a
+/// second 10 ms at a time: each frame moves on by [`frame_shift`] samples of the slowed
+/// sound, which must be 160 of the sound's own (16,000 × 160 / 193 = 13,264 for 83 frames a
+/// second; within 0.2 s an hour). Played at 160 × `frame_rate` (13,280), every frame was
+/// 10.012 ms: a woman's voice, heard so, was placed later and later (0.94 agreement in a line's
+/// first half minute, 0.49 three and a half minutes on).
+pub(crate) fn slowed_rate(frame_rate: u32) -> u32 {
+    let shift = frame_shift(frame_rate);
+    (SAMPLE_RATE * (SAMPLE_RATE / FRAME_RATE) + shift / 2) / shift
+}
+
 pub(crate) fn frame_rate_of(warp: f32) -> u32 {
     (FRAME_RATE as f32 / warp).round() as u32
 }
@@ -525,6 +535,18 @@ pub(crate) mod tests {
         assert_ne!(heard.frame_rate, FRAME_RATE);
         let ratio = heard.samples.len() as f32 / sound.samples.len() as f32;
         assert!((ratio - 1.25).abs() < 0.01, "{ratio}");
+        // Each of the recogniser's frames is 10 ms of the sound, whole samples as they are:
+        // at 83 frames a second a frame moves on 193 samples, not 192.77.
+        for frame_rate in 60..=100 {
+            let stretch = f64::from(SAMPLE_RATE) / f64::from(slowed_rate(frame_rate));
+            let per_frame = f64::from(frame_shift(frame_rate)) / stretch / f64::from(SAMPLE_RATE);
+            // Off by at most the rate's rounding: half a sample a second.
+            let most = 0.5 / f64::from(slowed_rate(frame_rate));
+            assert!(
+                (per_frame / 0.01 - 1.0).abs() <= most,
+                "{frame_rate}: {per_frame}"
+            );
+        }
         // Its pitch is lowered as much.
         let slowed = Sound {
             samples: heard.samples.into_owned(),

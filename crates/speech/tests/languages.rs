@@ -250,6 +250,32 @@ fn transcripts_in_seven_languages_lip_sync_on_time() {
     eprintln!("{}", report.join("\n"));
 }
 
+/// A recording of minutes (a podcast's segment, a narrated video) keeps its transcript: it was
+/// refused as "too long to align at once" past about three minutes and recognised without its
+/// words (Spanish, 258 s: 0.464 agreement, P/B/M 127 of 360), and is now warped coarse to fine.
+#[test]
+fn a_recording_of_minutes_keeps_its_transcript() {
+    let paragraph = "El sol de la mañana entraba por la ventana mientras María preparaba el café. \
+        Su hermano Pablo buscaba las llaves del coche por toda la casa. Después de media hora, \
+        las encontró en el bolsillo de su propia chaqueta.";
+    let text = [paragraph; 14].join(" ");
+    let synced = synced("es", "es+f3", &text, 0.5);
+    assert!(synced.frames.len() > 20_000, "{}", synced.said);
+    assert_eq!(
+        synced.reading.recognition,
+        faceanim_speech::Recognition::Synthesis,
+        "{:?}",
+        synced.reading.notes
+    );
+    assert!(synced.agreement >= 0.9, "{}", synced.said);
+    assert!(
+        synced.closed * 10 >= synced.bilabials * 9,
+        "{}",
+        synced.said
+    );
+    eprintln!("{}", synced.said);
+}
+
 /// A transcript whose letters and accents were typed apart (NFD: macOS writes `è` as `e` and
 /// a combining accent, and Korean syllables as their separate letters) lip-syncs as the same
 /// words composed: eSpeak NG read French `mère` as "mer" and the Korean letter by letter.

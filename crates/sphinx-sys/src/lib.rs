@@ -42,6 +42,19 @@ pub const SAMPLE_RATE: u32 = 16_000;
 /// Decoder frames per second (one every 10 ms).
 pub const FRAME_RATE: u32 = 100;
 
+/// The samples each frame moves on by when the decoder reads `frame_rate` frames a second
+/// ([`Search::warped`]), rounded to whole samples as PocketSphinx rounds them (83 frames a
+/// second: 193, not 192.77).
+#[must_use]
+pub const fn frame_shift(frame_rate: u32) -> u32 {
+    let frame_rate = if frame_rate == 0 {
+        FRAME_RATE
+    } else {
+        frame_rate
+    };
+    (SAMPLE_RATE + frame_rate / 2) / frame_rate
+}
+
 /// Where Debian's `pocketsphinx-en-us` puts US English.
 #[cfg(not(pocketsphinx_source))]
 pub const EN_US: Models<'static> = Models {
