@@ -499,25 +499,41 @@ fn recognise_line(
     let heard = Heard::as_decided(sound, hearing);
     if let Some(transcript) = transcript {
         let english = is_english(language);
-        let said = match transcript {
+        // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5
+        // dollars", "Dr. Jones": "doctor Jones"); eSpeak NG says another language's itself.
+        let as_said = |text: String| {
+            if english {
+                crate::script::english_said(&text)
+            } else {
+                text
+            }
+        };
+        let (said, cues) = match transcript {
             Transcript::Typed(text) => {
                 // Only what is said aloud: a subtitle's timecodes, markup and bracketed
                 // directions would be aligned as words nobody said.
                 let spoken = crate::script::spoken(text);
                 notes.extend(spoken.note());
-                // Numbers, symbols, units and abbreviations said as words ("1985": "19 85",
-                // "$5": "5 dollars", "Dr. Jones": "doctor Jones"); eSpeak NG says another
-                // language's itself.
-                if english {
-                    crate::script::english_said(&spoken.text)
-                } else {
-                    spoken.text
-                }
+                (as_said(spoken.text), spoken.cues)
             }
-            Transcript::Said(text) => text.to_owned(),
+            Transcript::Said(text) => (text.to_owned(), Vec::new()),
         };
         let text = said.as_str();
         let words = phones::transcript_words(text, sound.seconds())?;
+        // A subtitle is aligned cue by cue, each within its own time.
+        if !cues.is_empty() {
+            let cued = within_cues(&cues, sound.seconds())
+                .into_iter()
+                .map(|(start, end, text)| (start, end, as_said(text)))
+                .collect::<Vec<_>>();
+            let (phones, recognition, told) = aligned_within(sound, &cued, language, blind, voice)?;
+            notes.extend(told);
+            notes.push(format!(
+                "aligned cue by cue within the subtitle's times ({} cues)",
+                cued.len()
+            ));
+            return Ok((phones, recognition, notes));
+        }
         let voiced = sound.voice_activity();
         // A long English recording is aligned a piece at a time.
         if english && sound.seconds() > WHOLE_LINE {
@@ -752,10 +768,7 @@ const PIECE_WORDS: usize = 45;
 /// time: where each piece starts and ends is found by synthesis ([`crate::synthesis::seams`]:
 /// the pieces spoken one after the other, the recording warped onto them, each seam moved into
 /// the pause nearest it), and each piece of the recording is then a line of its own
-/// ([`recognise_line`]: aligned by the recogniser, or by synthesis where that fails), its phones
-/// placed back at its start. The notes are the pieces' own, each once, and one that says the
-/// line was aligned in pieces; the route is the recogniser's where it aligned any piece. `None`
-/// where either sound holds no speech.
+/// ([`aligned_within`]), with a note that says so. `None` where either sound holds no speech.
 fn in_pieces(
     sound: &Sound,
     voiced: &[bool],
@@ -767,22 +780,83 @@ fn in_pieces(
     let Some(seams) = crate::synthesis::seams(sound, voiced, pieces, language)? else {
         return Ok(None);
     };
-    let rate = crate::audio::SAMPLE_RATE as f32;
-    let sample = |t: f32| ((t * rate).round() as usize).min(sound.samples.len());
     let starts = std::iter::once(0.0).chain(seams.iter().copied());
     let ends = seams
         .iter()
         .copied()
         .chain(std::iter::once(sound.seconds()));
-    let (mut phones, mut notes, mut routes) = (Vec::new(), Vec::new(), Vec::new());
-    for ((start, end), piece) in starts.zip(ends).zip(pieces) {
+    let windows: Vec<(f32, f32, String)> = starts
+        .zip(ends)
+        .zip(pieces)
+        .map(|((start, end), piece)| (start, end, piece.clone()))
+        .collect();
+    let (phones, recognition, mut notes) = aligned_within(sound, &windows, language, blind, voice)?;
+    notes.push(format!(
+        "the recording is long: its transcript was aligned in {} pieces, each a few sentences",
+        pieces.len()
+    ));
+    Ok(Some((phones, recognition, notes)))
+}
+
+/// How long before a subtitle's cue shows its words are looked for, seconds: cues are timed by
+/// hand, often a little late. None are looked for after it hides: a cue is held on screen
+/// until its words end or after, and what follows them (music, a sound effect) would be
+/// taken for their end.
+const CUE_MARGIN: f32 = 0.5;
+
+/// The stretch of a recording of `seconds` each of `cues` is aligned within, with its words:
+/// the cue's time from [`CUE_MARGIN`] before it, but never before the middle of the gap after
+/// the cue before, nor outside the recording (a cue that starts after it ends is left out).
+fn within_cues(cues: &[crate::script::Cue], seconds: f32) -> Vec<(f32, f32, String)> {
+    let mut windows = Vec::with_capacity(cues.len());
+    for (k, cue) in cues.iter().enumerate() {
+        let after = k
+            .checked_sub(1)
+            .map_or(0.0, |p| (cues[p].end + cue.start) / 2.0);
+        let start = (cue.start - CUE_MARGIN).max(after).max(0.0);
+        let end = cue.end.min(seconds);
+        if end > start {
+            windows.push((start, end, cue.text.clone()));
+        }
+    }
+    windows
+}
+
+/// `sound` aligned a stretch at a time: each of `windows` (start, end, seconds, in order and
+/// apart, and the words said in it) is a line of its own ([`recognise_line`]: aligned by the
+/// recogniser, or by synthesis where that fails), its phones placed back at its start, and
+/// what lies between them said by nobody ([`crate::visemes::NOTHING_SAID`]). The notes are the stretches' own, each once; the route is
+/// the recogniser's where it aligned any stretch.
+fn aligned_within(
+    sound: &Sound,
+    windows: &[(f32, f32, String)],
+    language: &str,
+    blind: Recognition,
+    voice: Voice,
+) -> Result<Recognised, PhoneError> {
+    let rate = crate::audio::SAMPLE_RATE as f32;
+    let sample = |t: f32| ((t.max(0.0) * rate).round() as usize).min(sound.samples.len());
+    let (mut phones, mut notes, mut routes) = (Vec::<Phone>::new(), Vec::new(), Vec::new());
+    // How much of the sound the stretches so far reach, samples.
+    let mut covered = 0;
+    let silence = |start: f32, end: f32| Phone {
+        label: crate::visemes::NOTHING_SAID.to_owned(),
+        start,
+        end,
+    };
+    for (start, end, text) in windows {
+        let (from, to) = (sample(*start), sample(*end));
+        let offset = from as f32 / rate;
+        let reached = phones.last().map_or(0.0, |p| p.end);
+        if offset > reached {
+            phones.push(silence(reached, offset));
+        }
         let part = Sound {
-            samples: sound.samples[sample(start)..sample(end)].to_vec(),
+            samples: sound.samples[from..to.max(from)].to_vec(),
         };
-        let offset = sample(start) as f32 / rate;
         let (said, route, told) = recognise_line(
             &part,
-            Some(Transcript::Said(piece)),
+            Some(Transcript::Said(text)),
             Some(language),
             blind,
             None,
@@ -793,6 +867,12 @@ fn in_pieces(
             end: p.end + offset,
             ..p
         }));
+        // A stretch that something said by nobody follows is its phones' to its end (the
+        // alignment's last may end a frame short).
+        if let Some(last) = phones.last_mut().filter(|_| to < sound.samples.len()) {
+            last.end = last.end.max(to as f32 / rate);
+        }
+        covered = to;
         for note in told {
             if !notes.contains(&note) {
                 notes.push(note);
@@ -800,16 +880,16 @@ fn in_pieces(
         }
         routes.push(route);
     }
-    notes.push(format!(
-        "the recording is long: its transcript was aligned in {} pieces, each a few sentences",
-        pieces.len()
-    ));
+    if covered < sound.samples.len() {
+        let reached = phones.last().map_or(0.0, |p| p.end);
+        phones.push(silence(reached, sound.seconds()));
+    }
     let route = if routes.contains(&Recognition::Transcript) {
         Recognition::Transcript
     } else {
         routes.first().copied().unwrap_or(Recognition::Synthesis)
     };
-    Ok(Some((phones, route, notes)))
+    Ok((phones, route, notes))
 }
 
 /// `heard`'s phones by a phone loop (`loaded`, or one loaded now): when `heard` is not adapted

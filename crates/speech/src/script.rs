@@ -15,7 +15,9 @@
 //!
 //! Spoken, each would become words nobody said ("zero zero colon zero one…", "break time
 //! five hundred ms"; eSpeak NG says an emoji's name, `👍` "thumbs up", `⭐` "estrella blanca
-//! mediana"), aligned onto the speech of others. They are left out, and said so.
+//! mediana"), aligned onto the speech of others. They are left out, and said so. A
+//! subtitle's timecodes still say when each cue's words are shown ([`Spoken::cues`]), so that
+//! each can be aligned within its own time.
 //! Parentheses are kept: prose puts spoken asides in them as often as scripts put directions.
 //!
 //! The words left are read as they were meant, whatever program typed them ([`plain`]): a
@@ -25,13 +27,47 @@
 use unicode_normalization::UnicodeNormalization;
 
 /// A transcript's spoken words and what was left out of it.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Spoken {
     /// The text, without what is not spoken (lines kept as lines).
     pub text: String,
     /// What was left out: each bracketed direction and tag as written (the first few), and
     /// how many timecodes.
     pub left_out: Vec<String>,
+    /// A subtitle's cues, in order of their start, each with what it says aloud (empty for
+    /// a transcript without timecodes). Cues that overlap (two speakers at once) are one.
+    pub cues: Vec<Cue>,
+}
+
+/// One cue of a subtitle: when it is shown and what it says aloud.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cue {
+    /// When it is shown, seconds.
+    pub start: f32,
+    /// When it is hidden, seconds.
+    pub end: f32,
+    /// What it says aloud ([`spoken`]).
+    pub text: String,
+}
+
+/// The times of a SubRip or WebVTT timecode line (`00:01:02,500 --> 00:01:04,000`, `01:02.500
+/// --> 01:04.000 align:start`), seconds; `None` for another line or an end before the start.
+fn timecode(line: &str) -> Option<(f32, f32)> {
+    let (from, to) = line.split_once("-->")?;
+    let time = |t: &str| -> Option<f32> {
+        let t = t.split_whitespace().next()?.replace(',', ".");
+        let mut seconds = 0.0f64;
+        for part in t.split(':') {
+            let value: f64 = part
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite() && *v >= 0.0)?;
+            seconds = seconds * 60.0 + value;
+        }
+        (t.contains(':')).then_some(seconds as f32)
+    };
+    let (start, end) = (time(from)?, time(to)?);
+    (end > start).then_some((start, end))
 }
 
 impl Spoken {
@@ -64,10 +100,13 @@ pub fn spoken(text: &str) -> Spoken {
     let (mut kept, mut timecodes) = (Vec::with_capacity(lines.len()), 0usize);
     // Inside a WebVTT comment, style or region block: up to the next blank line.
     let mut block = false;
+    // The cues' times, and the cue (an index into them) the line being read belongs to.
+    let (mut times, mut cue): (Vec<(f32, f32)>, Option<usize>) = (Vec::new(), None);
     for (k, line) in lines.iter().enumerate() {
         let trimmed = line.trim();
         if trimmed.is_empty() {
             block = false;
+            cue = None;
         } else if webvtt
             && ["NOTE", "STYLE", "REGION"]
                 .iter()
@@ -80,19 +119,31 @@ pub fn spoken(text: &str) -> Spoken {
             && lines.get(k + 1).is_some_and(|next| next.contains("-->"));
         if trimmed.contains("-->") {
             timecodes += 1;
+            cue = timecode(trimmed).map(|t| {
+                times.push(t);
+                times.len() - 1
+            });
         } else if !(block || cue_number || (k == 0 && webvtt)) {
-            kept.push(*line);
+            kept.push((*line, cue));
         }
     }
     let mut left_out = Vec::new();
     let mut out = String::with_capacity(text.len());
-    for (k, line) in kept.iter().enumerate() {
+    let mut said: Vec<String> = vec![String::new(); times.len()];
+    for (k, (line, cue)) in kept.iter().enumerate() {
         if k > 0 {
             out.push('\n');
         }
         let line = unbracketed(line, &mut left_out);
         let line = unpictured(&line, &mut left_out);
-        out.push_str(unnamed(&line, &mut left_out));
+        let line = unnamed(&line, &mut left_out);
+        out.push_str(line);
+        if let Some(text) = cue.and_then(|c| said.get_mut(c)) {
+            if !text.is_empty() {
+                text.push('\n');
+            }
+            text.push_str(line);
+        }
     }
     let mut listed: Vec<String> = Vec::new();
     for item in &left_out {
@@ -113,7 +164,32 @@ pub fn spoken(text: &str) -> Spoken {
     Spoken {
         text: out,
         left_out: listed,
+        cues: merged(times, said),
     }
+}
+
+/// Cues from their `times` and what each `said`, in order of their start: those that overlap
+/// one cue (both texts, the first's first), those that say nothing left out.
+fn merged(times: Vec<(f32, f32)>, said: Vec<String>) -> Vec<Cue> {
+    let mut cues: Vec<Cue> = times
+        .into_iter()
+        .zip(said)
+        .filter(|(_, text)| !text.trim().is_empty())
+        .map(|((start, end), text)| Cue { start, end, text })
+        .collect();
+    cues.sort_by(|a, b| a.start.total_cmp(&b.start));
+    let mut out: Vec<Cue> = Vec::with_capacity(cues.len());
+    for cue in cues {
+        match out.last_mut() {
+            Some(last) if cue.start < last.end => {
+                last.end = last.end.max(cue.end);
+                last.text.push('\n');
+                last.text.push_str(&cue.text);
+            }
+            _ => out.push(cue),
+        }
+    }
+    out
 }
 
 /// Titles written short before a name, and what is said for them (`Dr. Jones`, `Sgt Hale`).
@@ -1406,5 +1482,40 @@ mod tests {
         let run_on = words.join(" ");
         assert_eq!(pieces(&run_on, 4), ["w0 w1 w2", "w3 w4 w5", "w6 w7 w8 w9"]);
         assert!(pieces("", 4).is_empty());
+    }
+
+    #[test]
+    fn a_subtitles_cues_keep_their_times_and_spoken_words() {
+        let srt = "1\n00:00:01,250 --> 00:00:03,000\n<i>Hello</i> there.\n\n\
+                   2\n00:00:05,000 --> 00:00:06,000\n[music]\n\n\
+                   3\n00:00:07,000 --> 00:00:09,500\nNARRATOR: Two lines\nof words.\n\n\
+                   4\n00:00:09,000 --> 00:00:10,000\n- Over it!\n";
+        let cues = spoken(srt).cues;
+        let said: Vec<(f32, f32, String)> = cues
+            .iter()
+            .map(|c| {
+                (
+                    c.start,
+                    c.end,
+                    c.text.split_whitespace().collect::<Vec<_>>().join(" "),
+                )
+            })
+            .collect();
+        // The music's cue says nothing; the last two overlap and are one.
+        assert_eq!(
+            said,
+            [
+                (1.25, 3.0, "Hello there.".to_owned()),
+                (7.0, 10.0, "Two lines of words. - Over it!".to_owned())
+            ]
+        );
+        let vtt = "WEBVTT\n\n01:02.500 --> 01:04.000 align:start position:10%\nHola.\n";
+        let cues = spoken(vtt).cues;
+        assert_eq!(cues.len(), 1);
+        assert!((cues[0].start - 62.5).abs() < 1e-4 && (cues[0].end - 64.0).abs() < 1e-4);
+        // A line with an arrow but no times, and a cue that ends before it starts, are no cues.
+        assert!(spoken("a --> b").cues.is_empty());
+        assert!(spoken("00:00:03,000 --> 00:00:01,000\nNo.").cues.is_empty());
+        assert!(spoken("Just words.").cues.is_empty());
     }
 }

@@ -76,6 +76,11 @@ pub fn is_vowel(viseme: Viseme) -> bool {
     )
 }
 
+/// The label of a stretch where nothing is said, whatever is heard there: between a subtitle's
+/// cues (music, effects, another language's dub). A voice heard in a pause (`SIL`) opens the
+/// mouth, as a word the recogniser did not make out; heard in this, it does not.
+pub const NOTHING_SAID: &str = "NSN";
+
 /// Whether a phone is breath (`HH`, IPA `h`, `ɦ`), which takes the shape of the vowel after it.
 #[must_use]
 pub fn is_breath(phone: &str) -> bool {
@@ -244,6 +249,10 @@ pub fn track(phones: &[Phone], voiced: &[bool], seconds: f32) -> Track {
         }
     };
     for (k, p) in phones.iter().enumerate() {
+        if p.label == NOTHING_SAID {
+            extend(Viseme::Sil, p.start, p.end);
+            continue;
+        }
         if viseme_of(&p.label) == Viseme::Sil && !is_breath(&p.label) {
             // A voice heard where the recogniser found silence (a word it did not make out: a
             // formant synthesiser, a whisper, a name out of its vocabulary) still moves the

@@ -276,6 +276,87 @@ fn a_recording_of_minutes_keeps_its_transcript() {
     eprintln!("{}", synced.said);
 }
 
+/// A video's subtitle as its transcript (SubRip, cues timed by hand: a quarter second late,
+/// held half a second after the words), with music between its lines: each cue is aligned
+/// within its own time, and the mouth rests through the music. Aligned as one text, the music
+/// took words and opened the mouth throughout (a voice heard in a pause opens it).
+#[test]
+fn a_subtitles_cues_are_aligned_within_their_times_and_music_between_rests() {
+    let lines = [
+        "Mi mamá me mima mucho, y el perro de Pablo bebe agua.",
+        "Por la mañana, Pablo compra pan y manzanas en el mercado.",
+    ];
+    let music_seconds = 12.0f32;
+    let rate = faceanim_speech::audio::SAMPLE_RATE as f32;
+    // Chords that change every quarter second, loud as the voice.
+    let music: Vec<i16> = (0..(music_seconds * rate) as usize)
+        .map(|n| {
+            let t = n as f32 / rate;
+            let chord = [220.0f32, 277.2, 329.6, 440.0][(n / 4000) % 4];
+            let v = (std::f32::consts::TAU * chord * t).sin()
+                + 0.5 * (std::f32::consts::TAU * chord * 1.5 * t).sin();
+            (v * 6000.0) as i16
+        })
+        .collect();
+    let (first_said, first) = espeak_padded(lines[0], "es+f3", Some(140), 0.5);
+    let (second_said, second) = espeak_padded(lines[1], "es+f3", Some(140), 0.5);
+    let second_at = first.seconds() + music_seconds;
+    let sound = Sound {
+        samples: [&first.samples[..], &music, &second.samples].concat(),
+    };
+    let mut said = first_said;
+    said.extend(
+        second_said
+            .iter()
+            .map(|&(v, a, b)| (v, a + second_at, b + second_at)),
+    );
+    let stamp = |t: f32| {
+        let ms = (t * 1000.0).round() as u32;
+        format!(
+            "00:{:02}:{:02},{:03}",
+            ms / 60_000,
+            ms / 1000 % 60,
+            ms % 1000
+        )
+    };
+    let cue = |k: usize, from: f32, to: f32| {
+        format!(
+            "{}\n{} --> {}\n{}\n",
+            k + 1,
+            stamp(from),
+            stamp(to),
+            lines[k]
+        )
+    };
+    let subtitle = [
+        cue(0, 0.75, first.seconds()),
+        cue(1, second_at + 0.75, sound.seconds()),
+    ]
+    .join("\n");
+    let reading = faceanim_speech::read(
+        &sound,
+        Some(&subtitle),
+        Some("es"),
+        faceanim_speech::Recognition::Words,
+    )
+    .unwrap();
+    assert!(
+        reading.notes.iter().any(|n| n.contains("cue by cue")),
+        "{:?}",
+        reading.notes
+    );
+    let frames = reading.track.sample(100.0);
+    let [hits, total, closed, bilabials] = judged(&frames, &said);
+    let agreement = hits as f64 / total.max(1) as f64;
+    eprintln!("two cues, music between: {agreement:.3}, P/B/M {closed}/{bilabials}");
+    assert!(agreement >= 0.9, "{agreement:.3}");
+    assert_eq!(closed, bilabials);
+    // The music, a second in from either end of it, rests.
+    for k in ((first.seconds() + 1.0) * 100.0) as i64..((second_at - 1.0) * 100.0) as i64 {
+        assert_eq!(shown(&frames, k), "rest", "frame {k} moves in the music");
+    }
+}
+
 /// A transcript whose letters and accents were typed apart (NFD: macOS writes `è` as `e` and
 /// a combining accent, and Korean syllables as their separate letters) lip-syncs as the same
 /// words composed: eSpeak NG read French `mère` as "mer" and the Korean letter by letter.
