@@ -45,7 +45,7 @@ pub fn recognise(
     transcript: Option<&str>,
     language: Option<&str>,
     blind: Recognition,
-) -> Result<Recognised, PhoneError> {
+) -> Result<(Vec<Phone>, Recognition, Vec<String>), PhoneError> {
     recognise_loaded(sound, transcript, language, blind, None, Voice::Auto)
 }
 
@@ -459,10 +459,9 @@ pub type Recognised = (Vec<Phone>, Recognition, Vec<String>);
 
 /// A transcript as it was typed, or as it is said already (a piece of a longer one whose
 /// numbers, symbols and what is not spoken were read: [`in_pieces`]).
-#[derive(Clone, Copy)]
 enum Transcript<'a> {
     Typed(&'a str),
-    Said(&'a str),
+    Said(String),
 }
 
 /// [`recognise_loaded`], with a transcript typed or said.
@@ -516,7 +515,7 @@ fn recognise_line(
                 notes.extend(spoken.note());
                 (as_said(spoken.text), spoken.cues)
             }
-            Transcript::Said(text) => (text.to_owned(), Vec::new()),
+            Transcript::Said(text) => (text, Vec::new()),
         };
         let text = said.as_str();
         let words = phones::transcript_words(text, sound.seconds())?;
@@ -812,9 +811,9 @@ fn within_cues(cues: &[crate::script::Cue], seconds: f32) -> Vec<(f32, f32, Stri
     for (k, cue) in cues.iter().enumerate() {
         let after = k
             .checked_sub(1)
-            .map_or(0.0, |p| (cues[p].end + cue.start) / 2.0);
-        let start = (cue.start - CUE_MARGIN).max(after).max(0.0);
-        let end = cue.end.min(seconds);
+            .map_or(0.0, |p| (cues[p].shown.end + cue.shown.start) / 2.0);
+        let start = (cue.shown.start - CUE_MARGIN).max(after).max(0.0);
+        let end = cue.shown.end.min(seconds);
         if end > start {
             windows.push((start, end, cue.text.clone()));
         }
@@ -856,7 +855,7 @@ fn aligned_within(
         };
         let (said, route, told) = recognise_line(
             &part,
-            Some(Transcript::Said(text)),
+            Some(Transcript::Said(text.clone())),
             Some(language),
             blind,
             None,

@@ -39,13 +39,11 @@ pub struct Spoken {
     pub cues: Vec<Cue>,
 }
 
-/// One cue of a subtitle: when it is shown and what it says aloud.
+/// One cue of a subtitle.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cue {
-    /// When it is shown, seconds.
-    pub start: f32,
-    /// When it is hidden, seconds.
-    pub end: f32,
+    /// When it is shown, seconds: from its start to its end.
+    pub shown: std::ops::Range<f32>,
     /// What it says aloud ([`spoken`]).
     pub text: String,
 }
@@ -175,14 +173,17 @@ fn merged(times: Vec<(f32, f32)>, said: Vec<String>) -> Vec<Cue> {
         .into_iter()
         .zip(said)
         .filter(|(_, text)| !text.trim().is_empty())
-        .map(|((start, end), text)| Cue { start, end, text })
+        .map(|((start, end), text)| Cue {
+            shown: start..end,
+            text,
+        })
         .collect();
-    cues.sort_by(|a, b| a.start.total_cmp(&b.start));
+    cues.sort_by(|a, b| a.shown.start.total_cmp(&b.shown.start));
     let mut out: Vec<Cue> = Vec::with_capacity(cues.len());
     for cue in cues {
         match out.last_mut() {
-            Some(last) if cue.start < last.end => {
-                last.end = last.end.max(cue.end);
+            Some(last) if cue.shown.start < last.shown.end => {
+                last.shown.end = last.shown.end.max(cue.shown.end);
                 last.text.push('\n');
                 last.text.push_str(&cue.text);
             }
@@ -1495,8 +1496,8 @@ mod tests {
             .iter()
             .map(|c| {
                 (
-                    c.start,
-                    c.end,
+                    c.shown.start,
+                    c.shown.end,
                     c.text.split_whitespace().collect::<Vec<_>>().join(" "),
                 )
             })
@@ -1512,7 +1513,8 @@ mod tests {
         let vtt = "WEBVTT\n\n01:02.500 --> 01:04.000 align:start position:10%\nHola.\n";
         let cues = spoken(vtt).cues;
         assert_eq!(cues.len(), 1);
-        assert!((cues[0].start - 62.5).abs() < 1e-4 && (cues[0].end - 64.0).abs() < 1e-4);
+        assert!((cues[0].shown.start - 62.5).abs() < 1e-4);
+        assert!((cues[0].shown.end - 64.0).abs() < 1e-4);
         // A line with an arrow but no times, and a cue that ends before it starts, are no cues.
         assert!(spoken("a --> b").cues.is_empty());
         assert!(spoken("00:00:03,000 --> 00:00:01,000\nNo.").cues.is_empty());
