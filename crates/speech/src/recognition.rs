@@ -525,13 +525,38 @@ fn recognise_line(
                 .into_iter()
                 .map(|(start, end, text)| (start, end, as_said(text)))
                 .collect::<Vec<_>>();
-            let (phones, recognition, told) = aligned_within(sound, &cued, language, blind, voice)?;
-            notes.extend(told);
-            notes.push(format!(
-                "aligned cue by cue within the subtitle's times ({} cues)",
-                cued.len()
-            ));
-            return Ok((phones, recognition, notes));
+            // A cue whose time cannot hold its words (a subtitle for another cut of the video,
+            // or another recording) says its times are not this recording's.
+            let crowded = cued.iter().find(|(start, end, text)| {
+                text.split_whitespace().count() as f32
+                    > phones::MAX_WORDS_PER_SECOND * (end - start) + 1.0
+            });
+            let fits = match crowded {
+                Some((start, end, text)) => Err(format!(
+                    "the cue at {start:.1} s holds {} words for {:.1} s",
+                    text.split_whitespace().count(),
+                    end - start
+                )),
+                None if cued.is_empty() => Err("every cue starts after it ends".to_owned()),
+                None => Ok(()),
+            };
+            let aligned = fits.and_then(|()| {
+                aligned_within(sound, &cued, language, blind, voice).map_err(|e| e.to_string())
+            });
+            match aligned {
+                Ok((phones, recognition, told)) => {
+                    notes.extend(told);
+                    notes.push(format!(
+                        "aligned cue by cue within the subtitle's times ({} cues)",
+                        cued.len()
+                    ));
+                    return Ok((phones, recognition, notes));
+                }
+                // The words are aligned together, as a transcript's.
+                Err(e) => notes.push(format!(
+                    "the subtitle's times do not fit the recording ({e}): its words were aligned together"
+                )),
+            }
         }
         let voiced = sound.voice_activity();
         // A long English recording is aligned a piece at a time.
@@ -866,10 +891,20 @@ fn aligned_within(
             end: p.end + offset,
             ..p
         }));
-        // A stretch that something said by nobody follows is its phones' to its end (the
-        // alignment's last may end a frame short).
-        if let Some(last) = phones.last_mut().filter(|_| to < sound.samples.len()) {
-            last.end = last.end.max(to as f32 / rate);
+        // A stretch that something said by nobody follows is its phones' to its end: the
+        // alignment's last may end a frame short, or at the end of its speech.
+        let end = to as f32 / rate;
+        match phones.last_mut().filter(|_| to < sound.samples.len()) {
+            Some(last) if end - last.end < 0.05 => last.end = last.end.max(end),
+            Some(last) => {
+                let start = last.end;
+                phones.push(Phone {
+                    label: "SIL".to_owned(),
+                    start,
+                    end,
+                });
+            }
+            None => {}
         }
         covered = to;
         for note in told {

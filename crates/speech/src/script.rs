@@ -112,8 +112,10 @@ pub fn spoken(text: &str) -> Spoken {
         {
             block = true;
         }
+        // A cue's number (SubRip) or identifier (WebVTT: any text) stands on the line before
+        // its timecode.
         let cue_number = !trimmed.is_empty()
-            && trimmed.chars().all(|c| c.is_ascii_digit())
+            && (trimmed.chars().all(|c| c.is_ascii_digit()) || webvtt)
             && lines.get(k + 1).is_some_and(|next| next.contains("-->"));
         if trimmed.contains("-->") {
             timecodes += 1;
@@ -162,7 +164,16 @@ pub fn spoken(text: &str) -> Spoken {
     Spoken {
         text: out,
         left_out: listed,
-        cues: merged(times, said),
+        // Cue by cue only where every word is in a cue whose time was read.
+        cues: if timecodes == times.len()
+            && kept
+                .iter()
+                .all(|(line, cue)| cue.is_some() || line.trim().is_empty())
+        {
+            merged(times, said)
+        } else {
+            Vec::new()
+        },
     }
 }
 
@@ -1510,7 +1521,8 @@ mod tests {
                 (7.0, 10.0, "Two lines of words. - Over it!".to_owned())
             ]
         );
-        let vtt = "WEBVTT\n\n01:02.500 --> 01:04.000 align:start position:10%\nHola.\n";
+        let vtt = "WEBVTT\n\nintro\n01:02.500 --> 01:04.000 align:start position:10%\nHola.\n";
+        assert_eq!(spoken(vtt).text.trim(), "Hola.");
         let cues = spoken(vtt).cues;
         assert_eq!(cues.len(), 1);
         assert!((cues[0].shown.start - 62.5).abs() < 1e-4);
@@ -1519,5 +1531,17 @@ mod tests {
         assert!(spoken("a --> b").cues.is_empty());
         assert!(spoken("00:00:03,000 --> 00:00:01,000\nNo.").cues.is_empty());
         assert!(spoken("Just words.").cues.is_empty());
+        // Where a word is in no cue, or a cue's time cannot be read, none is used: the words
+        // are aligned together, none left out.
+        assert!(
+            spoken("Before.\n\n00:00:01,000 --> 00:00:02,000\nIn.")
+                .cues
+                .is_empty()
+        );
+        assert!(
+            spoken("00:00:01,000 --> 00:00:02,000\nIn.\n\n00:0x:03,000 --> 00:00:04,000\nOut.")
+                .cues
+                .is_empty()
+        );
     }
 }

@@ -355,6 +355,22 @@ fn a_subtitles_cues_are_aligned_within_their_times_and_music_between_rests() {
     for k in ((first.seconds() + 1.0) * 100.0) as i64..((second_at - 1.0) * 100.0) as i64 {
         assert_eq!(shown(&frames, k), "rest", "frame {k} moves in the music");
     }
+    // A subtitle whose times cannot be this recording's (its first cue a third of a second for
+    // eleven words) is not kept: the words are aligned together, and the user told why.
+    let elsewhere = [cue(0, 0.0, 0.3), cue(1, 0.4, 0.6)].join("\n");
+    let reading = faceanim_speech::read(
+        &sound,
+        Some(&elsewhere),
+        Some("es"),
+        faceanim_speech::Recognition::Words,
+    )
+    .unwrap();
+    assert!(
+        reading.notes.iter().any(|n| n.contains("do not fit")),
+        "{:?}",
+        reading.notes
+    );
+    assert!(reading.phones.iter().all(|p| p.label != "NSN"));
 }
 
 /// A transcript whose letters and accents were typed apart (NFD: macOS writes `è` as `e` and
