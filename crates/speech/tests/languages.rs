@@ -333,18 +333,23 @@ fn a_subtitles_cues_are_aligned_within_their_times_and_music_between_rests() {
         cue(1, second_at + 0.75, sound.seconds()),
     ]
     .join("\n");
-    let reading = faceanim_speech::read(
-        &sound,
-        Some(&subtitle),
-        Some("es"),
-        faceanim_speech::Recognition::Words,
-    )
-    .unwrap();
-    assert!(
-        reading.notes.iter().any(|n| n.contains("cue by cue")),
-        "{:?}",
-        reading.notes
-    );
+    // The subtitle read, and a note that says `how`.
+    let read = |subtitle: &str, how: &str| {
+        let reading = faceanim_speech::read(
+            &sound,
+            Some(subtitle),
+            Some("es"),
+            faceanim_speech::Recognition::Words,
+        )
+        .unwrap();
+        assert!(
+            reading.notes.iter().any(|n| n.contains(how)),
+            "{:?}",
+            reading.notes
+        );
+        reading
+    };
+    let reading = read(&subtitle, "cue by cue");
     let frames = reading.track.sample(100.0);
     let [hits, total, closed, bilabials] = judged(&frames, &said);
     let agreement = hits as f64 / total.max(1) as f64;
@@ -358,18 +363,7 @@ fn a_subtitles_cues_are_aligned_within_their_times_and_music_between_rests() {
     // A subtitle whose times cannot be this recording's (its first cue a third of a second for
     // eleven words) is not kept: the words are aligned together, and the user told why.
     let elsewhere = [cue(0, 0.0, 0.3), cue(1, 0.4, 0.6)].join("\n");
-    let reading = faceanim_speech::read(
-        &sound,
-        Some(&elsewhere),
-        Some("es"),
-        faceanim_speech::Recognition::Words,
-    )
-    .unwrap();
-    assert!(
-        reading.notes.iter().any(|n| n.contains("do not fit")),
-        "{:?}",
-        reading.notes
-    );
+    let reading = read(&elsewhere, "do not fit");
     assert!(reading.phones.iter().all(|p| p.label != "NSN"));
 }
 
