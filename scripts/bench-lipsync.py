@@ -24,8 +24,12 @@ eSpeak NG's (through its library with ctypes, phoneme events: a voice variant an
 than the ones faceanim aligns with). Languages other than English through eSpeak NG with
 `--language` (eighteen: `--voices espeak:es,espeak:hi,…`).
 
+A long reading: `--repeat 10` says each voice's lines as one recording, ten times over (flite's
+slt: about four minutes; a woman's voice drifted there before the recogniser's frames were
+whole samples, and English lines over 30 s are aligned a few sentences at a time).
+
 Usage: scripts/bench-lipsync.py [--faceanim PATH] [--voices a,b] [--json OUT] [--lines N]
-       [--modes text,audio] [--recognise words|phones] [--ffmpeg-first] [--breakdown]
+       [--repeat N] [--modes text,audio] [--recognise words|phones] [--ffmpeg-first] [--breakdown]
 """
 import argparse
 import collections
@@ -386,6 +390,9 @@ def main():
     parser.add_argument("--faceanim", default="target/release/faceanim")
     parser.add_argument("--voices", default="flite:kal,flite:slt,flite:rms,flite:awb,festival:voice_kal_diphone,espeak:en-us+m3")
     parser.add_argument("--lines", type=int, default=len(HARVARD))
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="say a voice's lines as one recording, all of them this many times "
+                             "over (a reading of minutes: 10 is about four)")
     parser.add_argument("--modes", default="text,audio")
     parser.add_argument("--recognise", default="words", help="audio alone: words or phones")
     parser.add_argument("--voice", help="faceanim's --voice (auto, man, woman, child or a warp)")
@@ -420,6 +427,8 @@ def main():
             elif engine.startswith("festival-"):
                 language = engine.split("-", 1)[1]
                 lines = FESTIVAL_LINES[language]
+            if args.repeat > 1:
+                lines = [" ".join(lines * args.repeat)]
             totals = {}
             breakdowns = {}
             for k, line in enumerate(lines):
