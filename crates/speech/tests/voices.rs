@@ -390,9 +390,9 @@ fn says(notes: &[String], said: &[&str]) -> bool {
 
 /// A long reading (a podcast's segment, an audiobook's page: a paragraph read four times over
 /// by flite's slt, over a minute) is aligned to its transcript as well as a line is, a piece
-/// at a time. A woman's voice, slowed for the recogniser, was placed later and later (every
-/// frame heard as 10.012 ms): 0.893 agreement at 69 s against 0.949 for the paragraph alone; 4
-/// min 0.686, a seventh of its P, B and M open.
+/// at a time. A woman's voice, slowed for the recogniser by a fraction of a sample a frame too
+/// much, drifted: 0.893 agreement at 69 s against 0.949 for the paragraph alone; 4 min 0.686, a
+/// seventh of its P, B and M open.
 #[test]
 fn a_long_reading_is_aligned_to_its_transcript_a_piece_at_a_time() {
     let paragraph = "The morning sun came through the window while Mary made the coffee. Her \
@@ -425,8 +425,8 @@ fn a_long_reading_is_aligned_to_its_transcript_a_piece_at_a_time() {
 
 /// A woman's voice, slowed for the recogniser, is timed on the sound's own clock however far
 /// into a recording it is: a line after two minutes of quiet is placed two minutes after the
-/// same line alone. Each of the recogniser's frames was 10.012 ms of the sound, and the line
-/// came 0.14 s early.
+/// same line alone. Slowed by a fraction of a sample a frame too much, the line came 0.14 s
+/// early.
 #[test]
 fn a_slowed_voice_is_timed_on_the_sounds_own_clock() {
     let line = "The birch canoe slid on the smooth planks.";
