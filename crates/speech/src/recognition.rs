@@ -525,30 +525,15 @@ fn recognise_line(
                 .into_iter()
                 .map(|(start, end, text)| (start, end, as_said(text)))
                 .collect::<Vec<_>>();
-            // A cue whose time cannot hold its words (a subtitle for another cut of the video,
-            // or another recording) says its times are not this recording's.
-            let crowded = cued.iter().find(|(start, end, text)| {
-                text.split_whitespace().count() as f32
-                    > phones::MAX_WORDS_PER_SECOND * (end - start) + 1.0
-            });
-            let fits = match crowded {
-                Some((start, end, text)) => Err(format!(
-                    "the cue at {start:.1} s holds {} words for {:.1} s",
-                    text.split_whitespace().count(),
-                    end - start
-                )),
-                None if cued.is_empty() => Err("every cue starts after it ends".to_owned()),
-                None => Ok(()),
-            };
-            let aligned = fits.and_then(|()| {
-                aligned_within(sound, &cued, language, blind, voice).map_err(|e| e.to_string())
+            let cues = cued.len();
+            let aligned = cues_fit(&cued).and_then(|()| {
+                aligned_within(sound, cued, language, blind, voice).map_err(|e| e.to_string())
             });
             match aligned {
                 Ok((phones, recognition, told)) => {
                     notes.extend(told);
                     notes.push(format!(
-                        "aligned cue by cue within the subtitle's times ({} cues)",
-                        cued.len()
+                        "aligned cue by cue within the subtitle's times ({cues} cues)"
                     ));
                     return Ok((phones, recognition, notes));
                 }
@@ -809,12 +794,12 @@ fn in_pieces(
         .iter()
         .copied()
         .chain(std::iter::once(sound.seconds()));
-    let windows: Vec<(f32, f32, String)> = starts
+    let windows = starts
         .zip(ends)
-        .zip(pieces)
-        .map(|((start, end), piece)| (start, end, piece.clone()))
+        .zip(pieces.iter().cloned())
+        .map(|((start, end), piece)| (start, end, piece))
         .collect();
-    let (phones, recognition, mut notes) = aligned_within(sound, &windows, language, blind, voice)?;
+    let (phones, recognition, mut notes) = aligned_within(sound, windows, language, blind, voice)?;
     notes.push(format!(
         "the recording is long: its transcript was aligned in {} pieces, each a few sentences",
         pieces.len()
@@ -846,6 +831,25 @@ fn within_cues(cues: &[crate::script::Cue], seconds: f32) -> Vec<(f32, f32, Stri
     windows
 }
 
+/// Whether `cued`, the stretch each cue is aligned within and its words ([`within_cues`]),
+/// can be this recording's; why not where it cannot: a cue whose time cannot hold its words
+/// (a subtitle for another cut of the video, or another recording), or none within it.
+fn cues_fit(cued: &[(f32, f32, String)]) -> Result<(), String> {
+    if cued.is_empty() {
+        return Err("every cue starts after it ends".to_owned());
+    }
+    for (start, end, text) in cued {
+        let words = text.split_whitespace().count();
+        if words as f32 > phones::MAX_WORDS_PER_SECOND * (end - start) + 1.0 {
+            return Err(format!(
+                "the cue at {start:.1} s holds {words} words for {:.1} s",
+                end - start
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// `sound` aligned a stretch at a time: each of `windows` (start, end, seconds, in order and
 /// apart, and the words said in it) is a line of its own ([`recognise_line`]: aligned by the
 /// recogniser, or by synthesis where that fails), its phones placed back at its start, and
@@ -853,7 +857,7 @@ fn within_cues(cues: &[crate::script::Cue], seconds: f32) -> Vec<(f32, f32, Stri
 /// the recogniser's where it aligned any stretch.
 fn aligned_within(
     sound: &Sound,
-    windows: &[(f32, f32, String)],
+    windows: Vec<(f32, f32, String)>,
     language: &str,
     blind: Recognition,
     voice: Voice,
@@ -861,15 +865,15 @@ fn aligned_within(
     let rate = crate::audio::SAMPLE_RATE as f32;
     let sample = |t: f32| ((t.max(0.0) * rate).round() as usize).min(sound.samples.len());
     let (mut phones, mut notes, mut routes) = (Vec::<Phone>::new(), Vec::new(), Vec::new());
-    // How much of the sound the stretches so far reach, samples.
-    let mut covered = 0;
+    // Whether the last stretch ends before the sound does.
+    let short = windows.last().map_or(0, |w| sample(w.1)) < sound.samples.len();
     let silence = |start: f32, end: f32| Phone {
         label: crate::visemes::NOTHING_SAID.to_owned(),
         start,
         end,
     };
     for (start, end, text) in windows {
-        let (from, to) = (sample(*start), sample(*end));
+        let (from, to) = (sample(start), sample(end));
         let offset = from as f32 / rate;
         let reached = phones.last().map_or(0.0, |p| p.end);
         if offset > reached {
@@ -880,7 +884,7 @@ fn aligned_within(
         };
         let (said, route, told) = recognise_line(
             &part,
-            Some(Transcript::Said(text.clone())),
+            Some(Transcript::Said(text)),
             Some(language),
             blind,
             None,
@@ -906,7 +910,6 @@ fn aligned_within(
             }
             None => {}
         }
-        covered = to;
         for note in told {
             if !notes.contains(&note) {
                 notes.push(note);
@@ -914,7 +917,7 @@ fn aligned_within(
         }
         routes.push(route);
     }
-    if covered < sound.samples.len() {
+    if short {
         let reached = phones.last().map_or(0.0, |p| p.end);
         phones.push(silence(reached, sound.seconds()));
     }

@@ -189,6 +189,11 @@ struct Speech {
 }
 
 impl Speech {
+    /// The speech of `cepstra` ([`speech`]); `None` without speech.
+    fn of(cepstra: &[([f32; CEPSTRA], f32)]) -> Option<Speech> {
+        speech(cepstra).map(|span| Speech::within(cepstra, span))
+    }
+
     /// The speech of `cepstra` from the first to the last frame of `span` ([`speech`]).
     fn within(cepstra: &[([f32; CEPSTRA], f32)], (first, last): (usize, usize)) -> Speech {
         let last = last.min(cepstra.len() - 1);
@@ -250,8 +255,7 @@ fn render(text: &str, voice: &str) -> Result<Rendition, PhoneError> {
     // eSpeak NG speaks at 22,050 Hz: brought to the recording's 16 kHz as a recording is
     // (band-limited, so nothing above 8 kHz folds into the cepstra).
     let synthetic = crate::audio::resample_pcm(&spoken.samples, spoken.sample_rate);
-    let ours = Frontend::cepstra(&synthetic);
-    let speech = speech(&ours).map(|span| Speech::within(&ours, span));
+    let speech = Speech::of(&Frontend::cepstra(&synthetic));
     let voice_frames = Sound { samples: synthetic }
         .voice_activity()
         .iter()
@@ -370,15 +374,13 @@ pub(crate) fn seams(
         samples.extend_from_slice(&spoken.samples);
         ends.push(samples.len() as f32 / rate as f32);
     }
-    let ours = Frontend::cepstra(&crate::audio::resample_pcm(&samples, rate));
-    let theirs = Frontend::cepstra(&sound.samples);
-    let (Some(ours_span), Some(theirs_span)) = (speech(&ours), speech(&theirs)) else {
+    let rendition = Speech::of(&Frontend::cepstra(&crate::audio::resample_pcm(
+        &samples, rate,
+    )));
+    let recording = Speech::of(&Frontend::cepstra(&sound.samples));
+    let (Some(rendition), Some(recording)) = (rendition, recording) else {
         return Ok(None);
     };
-    let (rendition, recording) = (
-        Speech::within(&ours, ours_span),
-        Speech::within(&theirs, theirs_span),
-    );
     let path = warp_any(&recording.features, &rendition.features);
     let carried = Carried::along(
         &path,

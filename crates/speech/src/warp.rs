@@ -224,8 +224,6 @@ impl Hearing {
     }
 }
 
-/// The frames a second a sound heard through `warp` is read at: a whole number, so that the
-/// frames stay exactly 10 ms of the sound.
 /// The rate a sound is played as ([`Sound::played_at`]) to be read at `frame_rate` frames a
 /// second 10 ms at a time: each frame moves on by [`frame_shift`] samples of the slowed
 /// sound, which must be 160 of the sound's own (16,000 × 160 / 193 = 13,264 for 83 frames a
@@ -239,6 +237,8 @@ pub(crate) fn slowed_rate(frame_rate: u32) -> u32 {
     (SAMPLE_RATE * (SAMPLE_RATE / FRAME_RATE) + shift / 2) / shift
 }
 
+/// The frames a second a sound heard through `warp` is read at: a whole number, so that the
+/// frames stay exactly 10 ms of the sound.
 pub(crate) fn frame_rate_of(warp: f32) -> u32 {
     (FRAME_RATE as f32 / warp).round() as u32
 }
