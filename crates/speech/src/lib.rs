@@ -32,6 +32,7 @@ mod adapt;
 pub mod audio;
 pub mod face;
 pub mod features;
+pub mod german;
 mod holds;
 pub mod listen;
 pub mod mouth;

@@ -19,6 +19,12 @@ pub fn is_english(language: &str) -> bool {
     language == "en" || language.starts_with("en-") || language.starts_with("en+")
 }
 
+/// Whether `language` (an eSpeak NG voice name) is German, whose numbers eSpeak NG reads
+/// otherwise than its speakers ([`crate::german`]).
+fn is_german(language: &str) -> bool {
+    language == "de" || language.starts_with("de-") || language.starts_with("de+")
+}
+
 /// The phones of `sound` in `language` (an eSpeak NG voice name: `en-us`, `es`, `ja`, …;
 /// [`ENGLISH`] when `None`).
 ///
@@ -499,10 +505,13 @@ fn recognise_line(
     if let Some(transcript) = transcript {
         let english = is_english(language);
         // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5
-        // dollars", "Dr. Jones": "doctor Jones"); eSpeak NG says another language's itself.
+        // dollars", "Dr. Jones": "doctor Jones"; German "1985" "neunzehnhundert…", "am 3."
+        // "am dritten"); eSpeak NG says the other languages' as their speakers do.
         let as_said = |text: String| {
             if english {
                 crate::script::english_said(&text)
+            } else if is_german(language) {
+                crate::german::german_said(&text)
             } else {
                 text
             }

@@ -639,16 +639,7 @@ pub fn english_said(text: &str) -> String {
 /// [`english_said`].
 #[must_use]
 pub fn english_numbers(text: &str) -> String {
-    rewritten(text, |chars, k, out| {
-        let standalone_start = chars[k].is_ascii_digit()
-            && k.checked_sub(1).is_none_or(|p| {
-                let before = chars[p];
-                !(before.is_alphanumeric() || "$€£¥.,:/#+-_–".contains(before))
-            });
-        if !standalone_start {
-            out.push(chars[k]);
-            return k + 1;
-        }
+    numbers_rewritten(text, |chars, k, out| {
         if let Some((end, words)) = telephone(chars, k)
             .or_else(|| range(chars, k))
             .or_else(|| clock(chars, k))
@@ -688,10 +679,40 @@ pub fn english_numbers(text: &str) -> String {
     })
 }
 
+/// Whether a number of its own starts at `k`: a digit after no letter, digit or sign that
+/// would make it part of another word, number or amount (`A4`, `1.5`, `$5`, `#3`).
+fn starts_number(chars: &[char], k: usize) -> bool {
+    chars[k].is_ascii_digit()
+        && k.checked_sub(1).is_none_or(|p| {
+            let before = chars[p];
+            !(before.is_alphanumeric() || "$€£¥.,:/#+-_–".contains(before))
+        })
+}
+
+/// `text` with each number of its own ([`starts_number`]) rewritten by `number`, given the
+/// characters, where the number starts and the text written so far: it writes what it reads
+/// there and says where to read on. Everything else is kept as it is.
+pub(crate) fn numbers_rewritten(
+    text: &str,
+    mut number: impl FnMut(&[char], usize, &mut String) -> usize,
+) -> String {
+    rewritten(text, |chars, k, out| {
+        if starts_number(chars, k) {
+            number(chars, k, out)
+        } else {
+            out.push(chars[k]);
+            k + 1
+        }
+    })
+}
+
 /// `text` rewritten as it is read, character by character: `step` is given the characters,
 /// where it stands and the text written so far; it writes what it reads there and says where
 /// to read on (past where it stands).
-fn rewritten(text: &str, mut step: impl FnMut(&[char], usize, &mut String) -> usize) -> String {
+pub(crate) fn rewritten(
+    text: &str,
+    mut step: impl FnMut(&[char], usize, &mut String) -> usize,
+) -> String {
     let chars: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len() + 16);
     let mut k = 0;
@@ -702,7 +723,7 @@ fn rewritten(text: &str, mut step: impl FnMut(&[char], usize, &mut String) -> us
 }
 
 /// Where the digits that start at `k` end.
-fn digits_end(chars: &[char], k: usize) -> usize {
+pub(crate) fn digits_end(chars: &[char], k: usize) -> usize {
     let mut end = k;
     while chars.get(end).is_some_and(char::is_ascii_digit) {
         end += 1;
@@ -712,7 +733,7 @@ fn digits_end(chars: &[char], k: usize) -> usize {
 
 /// Whether a number ends at `at`: no letter or digit follows, nor a sign that makes it part of
 /// another number or a measure (`%`, `°`; `.5`, `,000`, `:30`, `/2`, `-3`).
-fn ends_number(chars: &[char], at: usize) -> bool {
+pub(crate) fn ends_number(chars: &[char], at: usize) -> bool {
     chars.get(at).is_none_or(|&after| {
         !(after.is_alphanumeric()
             || "%‰°".contains(after)
@@ -828,6 +849,11 @@ fn range(chars: &[char], k: usize) -> Option<(usize, String)> {
 
 /// Whether the word before a number (`before`, the text up to it) says that it counts.
 fn after_count_cue(before: &[char]) -> bool {
+    COUNT_CUES.contains(&word_before(before).as_str())
+}
+
+/// The word at the end of `before` (the text up to a number), past any space, in lower case.
+pub(crate) fn word_before(before: &[char]) -> String {
     let word: String = before
         .iter()
         .rev()
@@ -837,7 +863,7 @@ fn after_count_cue(before: &[char]) -> bool {
         .into_iter()
         .rev()
         .collect();
-    COUNT_CUES.contains(&word.to_lowercase().as_str())
+    word.to_lowercase()
 }
 
 /// A year's digits as said in two pairs (`english_numbers`), when `digits` is one.
