@@ -137,6 +137,8 @@ def ipa_viseme(ipa):
     s = "".join(c for c in ipa if not unicodedata.combining(c) and c not in "ˈˌːˑʰʲʷ-'" and not c.isdigit())
     if not s:
         return None
+    if s == "??":
+        return "ou"  # eSpeak NG's German UR (ʊɐ̯, "wurde", "durch"), for which it writes no IPA
     if s[:2] in ("tʃ", "dʒ", "tɕ", "dʑ", "ʈʂ"):
         return "CH"
     if s[:2] in ("ts", "dz"):

@@ -119,6 +119,12 @@ pub(crate) fn is_stop(phone: &str) -> bool {
     ])
 }
 
+/// What eSpeak NG 1.51 writes for a phoneme it has no IPA for. On the bench's lines in 19
+/// languages (`scripts/bench-lipsync.py`) and a few more in Dutch and the Scandinavian
+/// languages, only German's `UR` (`ʊɐ̯`, the vowel of "wurde", "durch", "Turm") is written
+/// so; read as a pause, it shut the mouth inside those words.
+pub const UNWRITTEN: &str = "??";
+
 /// Whether an IPA phone is a held (long, geminate) stop, marked long (`tː` of Italian
 /// "latte", `kː` of Finnish "Pekka"): its closure, silent, lasts two or three times a single
 /// stop's.
@@ -131,9 +137,15 @@ pub(crate) fn is_held_stop(phone: &str) -> bool {
 /// rounding of a vowel (a diphthong by the vowel it starts from). Affricates go by their
 /// release (`tʃ` as `ʃ`, `ts` as `s`); Spanish `β` (a `b` between vowels) brings the lips
 /// together as `b` does, Japanese `ɸ` (`fu`) only narrows them, as `f` does.
+///
+/// eSpeak NG writes one phoneme of its German as `??` ([`UNWRITTEN`]): the `ur` of "wurde",
+/// "durch", "Sturm" (its `UR`, `ʊɐ̯`), a rounded vowel.
 #[must_use]
 pub fn viseme_of_ipa(phone: &str) -> Viseme {
     let sound: String = phone.chars().filter(|c| !is_modifier(*c)).collect();
+    if sound == UNWRITTEN {
+        return Viseme::Ou;
+    }
     let mut chars = sound.chars();
     let Some(first) = chars.next() else {
         return Viseme::Sil;
