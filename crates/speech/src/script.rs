@@ -709,10 +709,7 @@ pub(crate) fn numbers_rewritten(
 /// `text` rewritten as it is read, character by character: `step` is given the characters,
 /// where it stands and the text written so far; it writes what it reads there and says where
 /// to read on (past where it stands).
-pub(crate) fn rewritten(
-    text: &str,
-    mut step: impl FnMut(&[char], usize, &mut String) -> usize,
-) -> String {
+fn rewritten(text: &str, mut step: impl FnMut(&[char], usize, &mut String) -> usize) -> String {
     let chars: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len() + 16);
     let mut k = 0;
