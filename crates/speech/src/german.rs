@@ -1,41 +1,54 @@
-//! A German transcript's numbers as German speakers say them, where eSpeak NG's German reads
-//! them otherwise (`eSpeak NG 1.51`, its `de` voice, which aligns every German line by
-//! synthesis: [`crate::synthesis`]):
+//! A German transcript's numbers and abbreviations as German speakers say them, where eSpeak
+//! NG's German reads them otherwise (eSpeak NG 1.51, its `de` voice, which times every German
+//! line: alignment by synthesis, [`crate::synthesis`]):
 //!
 //! - a **year** from 1100 to 1999 in hundreds (`1989` "neunzehnhundertneunundachtzig", where
 //!   eSpeak NG counts "eintausend neunhundert neunundachtzig"), one from 2000 to 2099 as one
-//!   word (`2001` "zweitausendeins", where eSpeak NG pauses after "zweitausend"), and a range
-//!   of them with "bis" (`1939–1945`);
+//!   word (`2001` "zweitausendeins", where eSpeak NG pauses after "zweitausend"), a range of
+//!   them with "bis" (`1939–1945`), a decade with its `-er` (`1980er` "neunzehnhundertachtziger",
+//!   `70er` "siebziger");
 //! - an **ordinal**, a number and a dot (`am 3. Oktober` "am dritten Oktober", `im 19.
-//!   Jahrhundert`, `ihren 30. Geburtstag`), where eSpeak NG says the number as a count and
-//!   ends the sentence at its dot: a pause the speaker never made, in the rendition the
-//!   recording is warped onto.
+//!   Jahrhundert`, `ihren 30. Geburtstag`), and a **date** in digits (`am 9.11.1989` "am
+//!   neunten elften neunzehnhundert…", `3.10.1990` "dritter zehnter …"), where eSpeak NG says
+//!   the numbers as counts ("neun Punkt elf Punkt …") and ends the sentence at an ordinal's
+//!   dot: a pause the speaker never made, in the rendition the recording is warped onto;
+//! - a **time** (`14:30 Uhr` "vierzehn Uhr dreißig", where eSpeak NG says "Uhr" twice);
+//! - **abbreviations** (`z. B.` "zum Beispiel", `d. h.`, `u. a.`, `usw.`, `bzw.`, `ca.`, `Nr.`,
+//!   `Dr.`, `Prof.`, `evtl.`, `ggf.`, `inkl.`, `vgl.`), which eSpeak NG spells ("zet be") and
+//!   ends a sentence at.
 //!
 //! A number is read as an ordinal only where German writes one: before a month, or after an
 //! article or preposition that needs one (`am`, `im`, `zum`, `der`, `ihren` …), or before a
 //! noun that counts in order (`Jahrhundert`, `Mal`, `Platz`, `Geburtstag` …). Its ending
-//! follows the word before it: `-te` after `der`, `die`, `das`, `jede`; `-ten` otherwise (`am
-//! dritten`, `den dritten`, `9. November` as in a date). A number at a sentence's end
+//! follows the word before it: `-te` after `der`, `die`, `das`, `jede`; `-ten` after the other
+//! cues; a date without one `-ter`, as a date is read on its own. A number at a sentence's end
 //! (`Er kam 1952. Dann …`) stays a number, as do counts written with a dot (`1.500`), decimals
-//! (`1,5`) and a number after a word that says it counts (`etwa 1500`).
+//! (`1,5`), versions (`1.2.3`), scores (`3:1`) and a number after a word that says it counts
+//! (`etwa 1500`).
 //!
-//! Four lines with years and ordinals, spoken as written out and aligned from the transcript
-//! with its digits, scored 0.907 and 0.918 viseme agreement on eSpeak NG's German voices (m3,
-//! de; each line 0.04–0.13 under the same line aligned from its written-out transcript, 0.991
-//! and 0.987 over the four). They now score as the written-out lines; so do five lines in a
-//! voice (f2) that no choice was made on (0.923 before, 0.989, one more P/B/M closed).
+//! Eight lines with years, ordinals, a time, a date and abbreviations, spoken as written out
+//! and aligned from the transcript as typed, scored 0.898–0.918 viseme agreement on eSpeak NG's
+//! German voices (de, m3; a line up to 0.19 under the same line aligned from its written-out
+//! transcript). They now score as the written-out lines (0.976–0.991); so do ten lines in two
+//! voices (f2, f4) that no choice was made on (0.836–0.923 before).
 
 use crate::script::{digits_end, ends_number, numbers_rewritten, word_before};
 
-/// The words of a German transcript as they are said ([`self`]): its years and ordinals.
+/// The words of a German transcript as they are said ([`self`]): its abbreviations, times,
+/// dates, decades, years and ordinals.
 #[must_use]
 pub fn german_said(text: &str) -> String {
-    numbers_rewritten(text, |chars, k, out| {
+    let text = abbreviations(text);
+    numbers_rewritten(&text, |chars, k, out| {
         let end = digits_end(chars, k);
         let digits: String = chars[k..end].iter().collect();
         let before = word_before(&chars[..k]);
-        match ordinal(chars, end, &digits, &before).or_else(|| years(chars, end, &digits, &before))
-        {
+        let read = clock(chars, k, end)
+            .or_else(|| date(chars, k, end, &before))
+            .or_else(|| decade(chars, end, &digits))
+            .or_else(|| ordinal(chars, end, &digits, &before))
+            .or_else(|| years(chars, end, &digits, &before));
+        match read {
             Some((next, words)) => {
                 out.push_str(&words);
                 next
@@ -46,6 +59,165 @@ pub fn german_said(text: &str) -> String {
             }
         }
     })
+}
+
+/// Abbreviations as written (with and without their inner space) and as said; whether one
+/// may end a sentence (its dot then stays: `… Birnen usw. Dann`).
+const ABBREVIATIONS: [(&[&str], &str, bool); 13] = [
+    (&["z. B.", "z.B."], "zum Beispiel", false),
+    (&["d. h.", "d.h."], "das heißt", false),
+    (&["u. a.", "u.a."], "unter anderem", true),
+    (&["usw."], "und so weiter", true),
+    (&["bzw."], "beziehungsweise", false),
+    (&["ca."], "circa", false),
+    (&["Nr."], "Nummer", false),
+    (&["Dr."], "Doktor", false),
+    (&["Prof."], "Professor", false),
+    (&["evtl."], "eventuell", false),
+    (&["ggf."], "gegebenenfalls", false),
+    (&["inkl."], "inklusive", false),
+    (&["vgl."], "vergleiche", false),
+];
+
+/// `text` with its [`ABBREVIATIONS`] said (eSpeak NG spells `z. B.` "zet be" and ends a
+/// sentence at each dot; `ca.` "ka", `Nr.` "en er"): a capital at a sentence's start kept.
+fn abbreviations(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len() + 16);
+    let mut k = 0;
+    'scan: while k < chars.len() {
+        if k == 0 || !chars[k - 1].is_alphanumeric() {
+            for &(written, said, ends) in &ABBREVIATIONS {
+                for form in written {
+                    let form: Vec<char> = form.chars().collect();
+                    let Some(here) = chars.get(k..k + form.len()) else {
+                        continue;
+                    };
+                    let capital =
+                        here[0] != form[0] && here[0].to_lowercase().eq(form[0].to_lowercase());
+                    if here[1..] != form[1..] || !(here[0] == form[0] || capital) {
+                        continue;
+                    }
+                    let after = k + form.len();
+                    if chars.get(after).is_some_and(|c| c.is_alphanumeric()) {
+                        continue;
+                    }
+                    if capital {
+                        let mut letters = said.chars();
+                        out.extend(letters.next().into_iter().flat_map(char::to_uppercase));
+                        out.extend(letters);
+                    } else {
+                        out.push_str(said);
+                    }
+                    // A dot that also ends the sentence: the text ends, or a capital follows.
+                    let next = chars[after..].iter().find(|c| !c.is_whitespace());
+                    if ends && next.is_none_or(|c| c.is_uppercase()) {
+                        out.push('.');
+                    }
+                    k = after;
+                    continue 'scan;
+                }
+            }
+        }
+        out.push(chars[k]);
+        k += 1;
+    }
+    out
+}
+
+/// A time (`14:30`, `8:05 Uhr`) as said, "vierzehn Uhr dreißig", with where the text reads on
+/// (past its `Uhr`): eSpeak NG said "vierzehn Uhr dreißig Uhr".
+fn clock(chars: &[char], k: usize, end: usize) -> Option<(usize, String)> {
+    if chars.get(end) != Some(&':') || end - k > 2 || digits_end(chars, end + 1) != end + 3 {
+        return None;
+    }
+    let hours: u32 = chars[k..end].iter().collect::<String>().parse().ok()?;
+    let minutes: u32 = chars[end + 1..end + 3]
+        .iter()
+        .collect::<String>()
+        .parse()
+        .ok()?;
+    let mut next = end + 3;
+    if hours > 24 || minutes > 59 || !ends_number(chars, next) {
+        return None;
+    }
+    let after: String = chars[next..].iter().take(4).collect();
+    if after == " Uhr" && !chars.get(next + 4).is_some_and(|c| c.is_alphanumeric()) {
+        next += 4;
+    }
+    let hour = match hours {
+        0 => "null".to_owned(),
+        1 => "ein".to_owned(),
+        _ => cardinal(hours)?,
+    };
+    Some((
+        next,
+        match minutes {
+            0 => format!("{hour} Uhr"),
+            _ => format!("{hour} Uhr {}", cardinal(minutes)?),
+        },
+    ))
+}
+
+/// A date in digits (`9.11.1989`, `9.11.`) as said: "neunter elfter
+/// neunzehnhundertneunundachtzig", declined by the word `before` it ("am neunten elften").
+fn date(chars: &[char], k: usize, end: usize, before: &str) -> Option<(usize, String)> {
+    let month_end = digits_end(chars, end + 1);
+    if chars.get(end) != Some(&'.')
+        || end - k > 2
+        || !(end + 2..=end + 3).contains(&month_end)
+        || chars.get(month_end) != Some(&'.')
+    {
+        return None;
+    }
+    let day: u32 = chars[k..end].iter().collect::<String>().parse().ok()?;
+    let month: u32 = chars[end + 1..month_end]
+        .iter()
+        .collect::<String>()
+        .parse()
+        .ok()?;
+    if !(1..=31).contains(&day) || !(1..=12).contains(&month) {
+        return None;
+    }
+    let ending = match before {
+        "der" | "die" | "das" | "jede" => "e",
+        _ if ORDINAL_CUES.contains(&before) => "en",
+        _ => "er",
+    };
+    let mut said = format!(
+        "{}{ending} {}{ending}",
+        ordinal_stem(day)?,
+        ordinal_stem(month)?
+    );
+    let year_end = digits_end(chars, month_end + 1);
+    if year_end == month_end + 5 && ends_number(chars, year_end) {
+        let digits: String = chars[month_end + 1..year_end].iter().collect();
+        said.push(' ');
+        said.push_str(&year(&digits).unwrap_or(digits));
+        return Some((year_end, said));
+    }
+    // `9.11.` with no year (`1.2.3` is a version's number, no date).
+    if chars.get(month_end + 1).is_some_and(char::is_ascii_digit) {
+        return None;
+    }
+    Some((month_end + 1, said))
+}
+
+/// A decade (`1980er`, `80er`) as said, "neunzehnhundertachtziger", "achtziger": eSpeak NG
+/// counted "eintausend neunhundert achtziger".
+fn decade(chars: &[char], end: usize, digits: &str) -> Option<(usize, String)> {
+    if chars.get(end..end + 2) != Some(&['e', 'r'])
+        || chars.get(end + 2).is_some_and(|c| c.is_alphanumeric())
+    {
+        return None;
+    }
+    let value: u32 = digits.parse().ok()?;
+    let tens = match digits.len() {
+        2 if value >= 20 && value.is_multiple_of(10) => cardinal(value)?,
+        4 if value.is_multiple_of(10) => year(digits)?,
+        _ => return None,
+    };
+    Some((end + 2, format!("{tens}er")))
 }
 
 /// The word that starts at `at` (letters only), as written.
@@ -283,6 +455,37 @@ mod tests {
                 "ab zweitausendeins, bis zweitausendvierundzwanzig",
             ),
             ("Er kam 1952.", "Er kam neunzehnhundertzweiundfünfzig."),
+            ("um 14:30 Uhr essen", "um vierzehn Uhr dreißig essen"),
+            ("um 8:00 Uhr und 1:05", "um acht Uhr und ein Uhr fünf"),
+            (
+                "am 9.11.1989 fiel",
+                "am neunten elften neunzehnhundertneunundachtzig fiel",
+            ),
+            (
+                "Berlin, 3.10.1990",
+                "Berlin, dritter zehnter neunzehnhundertneunzig",
+            ),
+            (
+                "bis zum 24.12. frei",
+                "bis zum vierundzwanzigsten zwölften frei",
+            ),
+            (
+                "die 1980er Jahre, die 70er",
+                "die neunzehnhundertachtziger Jahre, die siebziger",
+            ),
+            (
+                "Obst, z. B. Äpfel, d.h. nichts",
+                "Obst, zum Beispiel Äpfel, das heißt nichts",
+            ),
+            (
+                "Z. B. ca. 20 Leute, Nr. 5",
+                "Zum Beispiel circa 20 Leute, Nummer 5",
+            ),
+            (
+                "Birnen usw. Dann Dr. Weber",
+                "Birnen und so weiter. Dann Doktor Weber",
+            ),
+            ("Birnen usw. und Kiwis", "Birnen und so weiter und Kiwis"),
         ] {
             assert_eq!(german_said(typed), said, "{typed}");
         }
@@ -301,6 +504,10 @@ mod tests {
             "12345",
             "A1985 und 1985b",
             "1939-45",
+            "Spiel 3:1 und 25:61",
+            "Version 1.2.3 und 32.13.2020",
+            "1985er Wein",
+            "Anzug, Abbau, Nrn",
         ];
         assert_eq!(kept.map(german_said), kept.map(str::to_owned));
     }

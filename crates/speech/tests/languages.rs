@@ -419,10 +419,12 @@ fn a_transcript_with_emoji_lip_syncs_as_without_them() {
     }
 }
 
-/// A German transcript's years and ordinals are aligned as German speakers say them
-/// ("neunzehnhundertneunzig", "am dritten"), not as eSpeak NG reads the digits ("eintausend
-/// neunhundert neunzig", "am drei" and the end of a sentence at the dot): four such lines lost
-/// 0.04–0.13 agreement each against the same lines written out (eSpeak NG's de and m3).
+/// A German transcript's years, ordinals, times, dates and abbreviations are aligned as German
+/// speakers say them ("neunzehnhundertneunzig", "am dritten", "vierzehn Uhr dreißig", "zum
+/// Beispiel"), not as eSpeak NG reads them ("eintausend neunhundert neunzig", "am drei" and
+/// the end of a sentence at the dot, "vierzehn Uhr dreißig Uhr", "zet be"): of eight such
+/// lines, seven lost 0.04–0.19 agreement against the same lines written out (eSpeak NG's de
+/// and m3; the line with `z. B.` the most, and one of its six P/B/M).
 #[test]
 fn german_years_and_ordinals_are_aligned_as_said() {
     let line = Line {
@@ -431,6 +433,12 @@ fn german_years_and_ordinals_are_aligned_as_said() {
         text: "Am dritten Oktober neunzehnhundertneunzig kam sie zum zweiten Mal nach Bremen.",
     };
     typed_reads_as_written(&line, "Am 3. Oktober 1990 kam sie zum 2. Mal nach Bremen.");
+    let line = Line {
+        language: "de",
+        voice: "de",
+        text: "Um vierzehn Uhr dreißig, zum Beispiel am neunten elften, kam Doktor Weber.",
+    };
+    typed_reads_as_written(&line, "Um 14:30 Uhr, z. B. am 9.11., kam Dr. Weber.");
 }
 
 /// eSpeak NG writes the vowel of German "wurde", "durch", "Sturm" as `??` (it has no IPA for
