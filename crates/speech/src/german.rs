@@ -83,40 +83,45 @@ const ABBREVIATIONS: [(&[&str], &str, bool); 13] = [
 /// sentence at each dot; `ca.` "ka", `Nr.` "en er"): a capital at a sentence's start kept.
 fn abbreviations(text: &str) -> String {
     let chars: Vec<char> = text.chars().collect();
+    let forms: Vec<(Vec<char>, &str, bool)> = ABBREVIATIONS
+        .iter()
+        .flat_map(|&(written, said, ends)| {
+            written
+                .iter()
+                .map(move |form| (form.chars().collect(), said, ends))
+        })
+        .collect();
     let mut out = String::with_capacity(text.len() + 16);
     let mut k = 0;
     'scan: while k < chars.len() {
         if k == 0 || !chars[k - 1].is_alphanumeric() {
-            for &(written, said, ends) in &ABBREVIATIONS {
-                for form in written {
-                    let form: Vec<char> = form.chars().collect();
-                    let Some(here) = chars.get(k..k + form.len()) else {
-                        continue;
-                    };
-                    let capital =
-                        here[0] != form[0] && here[0].to_lowercase().eq(form[0].to_lowercase());
-                    if here[1..] != form[1..] || !(here[0] == form[0] || capital) {
-                        continue;
-                    }
-                    let after = k + form.len();
-                    if chars.get(after).is_some_and(|c| c.is_alphanumeric()) {
-                        continue;
-                    }
-                    if capital {
-                        let mut letters = said.chars();
-                        out.extend(letters.next().into_iter().flat_map(char::to_uppercase));
-                        out.extend(letters);
-                    } else {
-                        out.push_str(said);
-                    }
-                    // A dot that also ends the sentence: the text ends, or a capital follows.
-                    let next = chars[after..].iter().find(|c| !c.is_whitespace());
-                    if ends && next.is_none_or(|c| c.is_uppercase()) {
-                        out.push('.');
-                    }
-                    k = after;
-                    continue 'scan;
+            for (form, said, ends) in &forms {
+                let Some(here) = chars.get(k..k + form.len()) else {
+                    continue;
+                };
+                // The first letter in either case (`Z. B.` at a sentence's start), the rest
+                // as written.
+                if !here[0].to_lowercase().eq(form[0].to_lowercase()) || here[1..] != form[1..] {
+                    continue;
                 }
+                let after = k + form.len();
+                if chars.get(after).is_some_and(|c| c.is_alphanumeric()) {
+                    continue;
+                }
+                if here[0] != form[0] {
+                    let mut letters = said.chars();
+                    out.extend(letters.next().into_iter().flat_map(char::to_uppercase));
+                    out.extend(letters);
+                } else {
+                    out.push_str(said);
+                }
+                // A dot that also ends the sentence: the text ends, or a capital follows.
+                let next = chars[after..].iter().find(|c| !c.is_whitespace());
+                if *ends && next.is_none_or(|c| c.is_uppercase()) {
+                    out.push('.');
+                }
+                k = after;
+                continue 'scan;
             }
         }
         out.push(chars[k]);
@@ -131,12 +136,7 @@ fn clock(chars: &[char], k: usize, end: usize) -> Option<(usize, String)> {
     if chars.get(end) != Some(&':') || end - k > 2 || digits_end(chars, end + 1) != end + 3 {
         return None;
     }
-    let hours: u32 = chars[k..end].iter().collect::<String>().parse().ok()?;
-    let minutes: u32 = chars[end + 1..end + 3]
-        .iter()
-        .collect::<String>()
-        .parse()
-        .ok()?;
+    let (hours, minutes) = (value(&chars[k..end])?, value(&chars[end + 1..end + 3])?);
     let mut next = end + 3;
     if hours > 24 || minutes > 59 || !ends_number(chars, next) {
         return None;
@@ -170,20 +170,11 @@ fn date(chars: &[char], k: usize, end: usize, before: &str) -> Option<(usize, St
     {
         return None;
     }
-    let day: u32 = chars[k..end].iter().collect::<String>().parse().ok()?;
-    let month: u32 = chars[end + 1..month_end]
-        .iter()
-        .collect::<String>()
-        .parse()
-        .ok()?;
+    let (day, month) = (value(&chars[k..end])?, value(&chars[end + 1..month_end])?);
     if !(1..=31).contains(&day) || !(1..=12).contains(&month) {
         return None;
     }
-    let ending = match before {
-        "der" | "die" | "das" | "jede" => "e",
-        _ if ORDINAL_CUES.contains(&before) => "en",
-        _ => "er",
-    };
+    let ending = ending(before, "er");
     let mut said = format!(
         "{}{ending} {}{ending}",
         ordinal_stem(day)?,
@@ -312,12 +303,24 @@ fn ordinal(chars: &[char], end: usize, digits: &str, before: &str) -> Option<(us
     // a plain number and a dot is a new sentence unless it is a month or a noun in order.
     let value: u32 = digits.parse().ok()?;
     let stem = ordinal_stem(value)?;
-    let ending = if matches!(before, "der" | "die" | "das" | "jede") {
-        "e"
-    } else {
-        "en"
-    };
+    let ending = ending(before, "en");
     Some((end + 1, format!("{stem}{ending}")))
+}
+
+/// An ordinal's ending after the word `before` it: `-e` after `der`, `die`, `das`, `jede`,
+/// `-en` after the other [`ORDINAL_CUES`], `uncued` after any other word (`-en` before a month
+/// or a noun in order, `-er` in a date read on its own).
+fn ending(before: &str, uncued: &'static str) -> &'static str {
+    match before {
+        "der" | "die" | "das" | "jede" => "e",
+        _ if ORDINAL_CUES.contains(&before) => "en",
+        _ => uncued,
+    }
+}
+
+/// The number the ASCII digits `digits` write.
+fn value(digits: &[char]) -> Option<u32> {
+    digits.iter().collect::<String>().parse().ok()
 }
 
 /// A year at `digits` (ending at `end`), or two joined by a dash (`1939–1945`), in hundreds,
