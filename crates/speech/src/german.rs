@@ -13,9 +13,9 @@
 //!   the numbers as counts ("neun Punkt elf Punkt …") and ends the sentence at an ordinal's
 //!   dot: a pause the speaker never made, in the rendition the recording is warped onto;
 //! - a **time** (`14:30 Uhr` "vierzehn Uhr dreißig", where eSpeak NG says "Uhr" twice);
-//! - **abbreviations** (`z. B.` "zum Beispiel", `d. h.`, `u. a.`, `usw.`, `bzw.`, `ca.`, `Nr.`,
-//!   `Dr.`, `Prof.`, `evtl.`, `ggf.`, `inkl.`, `vgl.`), which eSpeak NG spells ("zet be") and
-//!   ends a sentence at.
+//! - **abbreviations** (`z. B.` "zum Beispiel", `d. h.`, `usw.`, `ca.`, `Nr.`, `Dr.` …), which
+//!   eSpeak NG spells ("zet be") and ends a sentence at: German's table in
+//!   [`crate::abbreviations`], with the other languages'.
 //!
 //! A number is read as an ordinal only where German writes one: before a month, or after an
 //! article or preposition that needs one (`am`, `im`, `zum`, `der`, `ihren` …), or before a
@@ -38,7 +38,7 @@ use crate::script::{digits_end, ends_number, numbers_rewritten, word_before};
 /// dates, decades, years and ordinals.
 #[must_use]
 pub fn german_said(text: &str) -> String {
-    let text = abbreviations(text);
+    let text = crate::abbreviations::said("de", text);
     numbers_rewritten(&text, |chars, k, out| {
         let end = digits_end(chars, k);
         let digits: String = chars[k..end].iter().collect();
@@ -59,75 +59,6 @@ pub fn german_said(text: &str) -> String {
             }
         }
     })
-}
-
-/// Abbreviations as written (with and without their inner space) and as said; whether one
-/// may end a sentence (its dot then stays: `… Birnen usw. Dann`).
-const ABBREVIATIONS: [(&[&str], &str, bool); 13] = [
-    (&["z. B.", "z.B."], "zum Beispiel", false),
-    (&["d. h.", "d.h."], "das heißt", false),
-    (&["u. a.", "u.a."], "unter anderem", true),
-    (&["usw."], "und so weiter", true),
-    (&["bzw."], "beziehungsweise", false),
-    (&["ca."], "circa", false),
-    (&["Nr."], "Nummer", false),
-    (&["Dr."], "Doktor", false),
-    (&["Prof."], "Professor", false),
-    (&["evtl."], "eventuell", false),
-    (&["ggf."], "gegebenenfalls", false),
-    (&["inkl."], "inklusive", false),
-    (&["vgl."], "vergleiche", false),
-];
-
-/// `text` with its [`ABBREVIATIONS`] said (eSpeak NG spells `z. B.` "zet be" and ends a
-/// sentence at each dot; `ca.` "ka", `Nr.` "en er"): a capital at a sentence's start kept.
-fn abbreviations(text: &str) -> String {
-    let chars: Vec<char> = text.chars().collect();
-    let forms: Vec<(Vec<char>, &str, bool)> = ABBREVIATIONS
-        .iter()
-        .flat_map(|&(written, said, ends)| {
-            written
-                .iter()
-                .map(move |form| (form.chars().collect(), said, ends))
-        })
-        .collect();
-    let mut out = String::with_capacity(text.len() + 16);
-    let mut k = 0;
-    'scan: while k < chars.len() {
-        if k == 0 || !chars[k - 1].is_alphanumeric() {
-            for (form, said, ends) in &forms {
-                let Some(here) = chars.get(k..k + form.len()) else {
-                    continue;
-                };
-                // The first letter in either case (`Z. B.` at a sentence's start), the rest
-                // as written.
-                if !here[0].to_lowercase().eq(form[0].to_lowercase()) || here[1..] != form[1..] {
-                    continue;
-                }
-                let after = k + form.len();
-                if chars.get(after).is_some_and(|c| c.is_alphanumeric()) {
-                    continue;
-                }
-                if here[0] != form[0] {
-                    let mut letters = said.chars();
-                    out.extend(letters.next().into_iter().flat_map(char::to_uppercase));
-                    out.extend(letters);
-                } else {
-                    out.push_str(said);
-                }
-                // A dot that also ends the sentence: the text ends, or a capital follows.
-                let next = chars[after..].iter().find(|c| !c.is_whitespace());
-                if *ends && next.is_none_or(|c| c.is_uppercase()) {
-                    out.push('.');
-                }
-                k = after;
-                continue 'scan;
-            }
-        }
-        out.push(chars[k]);
-        k += 1;
-    }
-    out
 }
 
 /// A time (`14:30`, `8:05 Uhr`) as said, "vierzehn Uhr dreißig", with where the text reads on

@@ -28,6 +28,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod abbreviations;
 mod adapt;
 pub mod audio;
 pub mod face;
