@@ -446,9 +446,11 @@ fn german_years_and_ordinals_are_aligned_as_said() {
 /// them ("esse erre" for Portuguese `Sr.`, "pe ex" for `p. ej.`, "em" for `M.`, "dott", "de ha
 /// er", and the end of a sentence at each dot): ten such lines, two a language, lost 0.08–0.15
 /// agreement against the same lines written out and 10 of their 96 P/B/M closures (eSpeak NG's
-/// own voices and m3).
+/// own voices and m3). So are units after a number (`2 kg` "2 chilogrammi", `1 l` "un litro",
+/// `3 h` "3 Stunden", where eSpeak NG said "kappa gi", "uno elle", "ha"): six lines, one a
+/// language, German's too, lost 0.06–0.26.
 #[test]
-fn abbreviations_are_aligned_as_said() {
+fn abbreviations_and_units_are_aligned_as_said() {
     for (language, voice, typed, text) in [
         (
             "es",
@@ -479,6 +481,18 @@ fn abbreviations_are_aligned_as_said() {
             "nl+m3",
             "Dhr. Jansen komt morgen, bijv. met mevr. de Vries.",
             "De heer Jansen komt morgen, bijvoorbeeld met mevrouw de Vries.",
+        ),
+        (
+            "it",
+            "it",
+            "Ho comprato 2 kg di pane e 1 l di latte.",
+            "Ho comprato 2 chilogrammi di pane e un litro di latte.",
+        ),
+        (
+            "de",
+            "de+m3",
+            "Wir sind 12 km gelaufen, das dauerte 3 h.",
+            "Wir sind 12 Kilometer gelaufen, das dauerte 3 Stunden.",
         ),
     ] {
         typed_reads_as_written(
