@@ -37,6 +37,7 @@ pub mod german;
 mod holds;
 pub mod listen;
 pub mod mouth;
+pub mod ordinals;
 pub mod phones;
 pub mod pronounce;
 pub mod recognition;

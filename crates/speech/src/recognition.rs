@@ -506,15 +506,15 @@ fn recognise_line(
         let english = is_english(language);
         // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5
         // dollars", "Dr. Jones": "doctor Jones"; German "1985" "neunzehnhundert…", "am 3."
-        // "am dritten"; Spanish "p. ej." "por ejemplo"); eSpeak NG says the other languages'
-        // numbers as their speakers do.
+        // "am dritten"; Spanish "p. ej." "por ejemplo", French "XIXe" "dix-neuvième");
+        // eSpeak NG says the other languages' numbers as their speakers do.
         let as_said = |text: String| {
             if english {
                 crate::script::english_said(&text)
             } else if is_german(language) {
                 crate::german::german_said(&text)
             } else {
-                crate::abbreviations::said(language, &text)
+                crate::ordinals::said(language, &crate::abbreviations::said(language, &text))
             }
         };
         let (said, cues) = match transcript {
