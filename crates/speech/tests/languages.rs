@@ -538,6 +538,37 @@ fn ordinals_are_aligned_as_said() {
     ]);
 }
 
+/// eSpeak NG's Japanese reads no kanji: it says "Chinese letter", in English, for each, and a
+/// transcript in kanji was aligned to that (two lines 0.68–0.80 agreement, P/B/M 2/8, where the
+/// same lines in kana scored 0.99–1.00). The speech is recognised without it, and the user is
+/// told to write it in kana.
+#[test]
+fn a_japanese_transcript_in_kanji_is_heard_without_it() {
+    use faceanim_speech::Recognition;
+    let (said, sound) = espeak_padded(
+        "まいあさ、ははといっしょにぱんをたべます。",
+        "ja+m3",
+        Some(140),
+        0.5,
+    );
+    let reading = faceanim_speech::read(
+        &sound,
+        Some("毎朝、母と一緒にパンを食べます。"),
+        Some("ja"),
+        Recognition::Words,
+    )
+    .unwrap();
+    assert_ne!(reading.recognition, Recognition::Synthesis);
+    assert!(
+        reading.notes.iter().any(|n| n.contains("kanji")),
+        "{:?}",
+        reading.notes
+    );
+    let [hits, total, closed, bilabials] = judged(&reading.track.sample(100.0), &said);
+    assert!(hits * 10 >= total * 8, "{hits}/{total}");
+    assert!(closed * 4 >= bilabials * 3, "{closed}/{bilabials}");
+}
+
 /// eSpeak NG writes the vowel of German "wurde", "durch", "Sturm" as `??` (it has no IPA for
 /// it): read as a pause, the mouth rested in the middle of those words (two lines with them,
 /// eSpeak NG's de and m3, 0.80 agreement; now 0.98–0.99). It is rounded there.
