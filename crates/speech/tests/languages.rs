@@ -460,7 +460,9 @@ fn german_years_and_ordinals_are_aligned_as_said() {
 /// agreement against the same lines written out and 10 of their 96 P/B/M closures (eSpeak NG's
 /// own voices and m3). So are units after a number (`2 kg` "2 chilogrammi", `1 l` "un litro",
 /// `3 h` "3 Stunden", where eSpeak NG said "kappa gi", "uno elle", "ha"): six lines, one a
-/// language, German's too, lost 0.06–0.26.
+/// language, German's too, lost 0.06–0.26; and amounts with a currency sign (`€ 25` "25 euro",
+/// `R$ 30` "30 reais", where eSpeak NG said "euroteken 25", "real 30"): six lines lost up to
+/// 0.27.
 #[test]
 fn abbreviations_and_units_are_aligned_as_said() {
     each_typed_reads_as_written(&[
@@ -505,6 +507,18 @@ fn abbreviations_and_units_are_aligned_as_said() {
             "de+m3",
             "Wir sind 12 km gelaufen, das dauerte 3 h.",
             "Wir sind 12 Kilometer gelaufen, das dauerte 3 Stunden.",
+        ),
+        (
+            "nl",
+            "nl",
+            "Het kaartje kost € 25 en de koffie € 3.",
+            "Het kaartje kost 25 euro en de koffie 3 euro.",
+        ),
+        (
+            "pt",
+            "pt+m3",
+            "O bilhete custa R$ 30 e o café R$ 5.",
+            "O bilhete custa 30 reais e o café 5 reais.",
         ),
     ]);
 }
