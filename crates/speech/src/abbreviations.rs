@@ -206,6 +206,15 @@ pub fn said(language: &str, text: &str) -> String {
             {
                 continue;
             }
+            // A letter elided before an apostrophe is a word's (`En 2020 l'entreprise`, `nel
+            // 2020 l'azienda`, `3 m'ont vu`), not a unit.
+            if unit
+                && chars
+                    .get(after)
+                    .is_some_and(|&c| c == '\'' || c == '\u{2019}')
+            {
+                continue;
+            }
             // What comes next: the text ends, or a capital (a sentence or a name).
             let next = chars[after..].iter().find(|c| !c.is_whitespace());
             let capital_next = next.is_none_or(|c| c.is_uppercase());
@@ -468,6 +477,11 @@ mod tests {
             ("de", "Anzug, Abbau, Nrn, dr. und DR."),
             ("de", "Das A4 m und der km, Typ 5m3, 5 Mm, g 5 kmh"),
             ("es", "La m y 5 mu, 5 kilos, $ y €, $5."),
+            (
+                "fr",
+                "En 2020 l'entreprise, les 3 m'ont vu, 2 l\u{2019}ont dit",
+            ),
+            ("it", "Nel 2020 l'azienda e 5 l'anno"),
             ("de", "Preis in € oder €X, A$5"),
             ("es", "Los Srs. y la SRA. y sra. López"),
             ("fr", "Me voici, me Dupont, M.Dupont et m. Dupont"),
