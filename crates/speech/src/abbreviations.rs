@@ -141,7 +141,7 @@ fn tables() -> &'static [Abbreviation] {
 /// The abbreviations of `language` (an eSpeak NG voice name: `es`, `pt-br`, `fr-be`, `de+m3`),
 /// none for a language without a table.
 fn table(language: &str) -> impl Iterator<Item = &'static Abbreviation> {
-    let base = language.split(['-', '+', '_']).next().unwrap_or_default();
+    let base = crate::script::base_language(language);
     tables().iter().filter(move |a| a.language == base)
 }
 
@@ -176,10 +176,16 @@ pub fn said(language: &str, text: &str) -> String {
     let mut out = String::with_capacity(text.len() + 16);
     let mut k = 0;
     'scan: while k < chars.len() {
+        // The number a unit here would follow (`5 km`, `5km`), asked once a place.
+        let mut number_here = None;
         for (form, abbreviation) in &forms {
             let unit = abbreviation.at == Place::AfterNumber;
-            // A word's start; a unit's, after a number (`5 km`, `5km`).
-            let number = unit.then(|| number_before(&chars[..k])).flatten();
+            // A word's start; a unit's, after a number.
+            let number = if unit {
+                *number_here.get_or_insert_with(|| number_before(&chars[..k]))
+            } else {
+                None
+            };
             let starts = k == 0
                 || !chars[k - 1].is_alphanumeric()
                 || (number.is_some() && chars[k - 1].is_ascii_digit());
@@ -224,13 +230,13 @@ pub fn said(language: &str, text: &str) -> String {
             {
                 continue;
             }
-            match (number, abbreviation.one) {
+            // The number as written before the unit, with its spaces.
+            let written: Option<String> = number.map(|start| chars[start..k].iter().collect());
+            match (&written, abbreviation.one) {
                 // "1" and its unit said together, in place of both.
-                (Some(start), Some(one))
-                    if chars[start..k].iter().collect::<String>().trim_end() == "1"
-                        && out.ends_with(&chars[start..k].iter().collect::<String>()) =>
+                (Some(written), Some(one))
+                    if written.trim_end() == "1" && out.ends_with(written) =>
                 {
-                    let written: String = chars[start..k].iter().collect();
                     out.truncate(out.len() - written.len());
                     out.push_str(one);
                 }
@@ -270,12 +276,12 @@ const CURRENCIES: [&str; 5] = ["US$", "R$", "€", "$", "£"];
 /// tables then say it.
 fn currency_after_amount(text: &str, currencies: &[&str]) -> String {
     let chars: Vec<char> = text.chars().collect();
+    let signs: Vec<Vec<char>> = currencies.iter().map(|s| s.chars().collect()).collect();
     let mut out = String::with_capacity(text.len() + 4);
     let mut k = 0;
     'scan: while k < chars.len() {
         if k == 0 || !chars[k - 1].is_alphanumeric() {
-            for sign in currencies {
-                let sign: Vec<char> = sign.chars().collect();
+            for sign in &signs {
                 if chars.get(k..k + sign.len()) != Some(&sign[..]) {
                     continue;
                 }
@@ -283,20 +289,13 @@ fn currency_after_amount(text: &str, currencies: &[&str]) -> String {
                 if chars.get(start).is_some_and(|c| c.is_whitespace()) {
                     start += 1;
                 }
-                let mut end = start;
-                while chars.get(end).is_some_and(char::is_ascii_digit)
-                    || (end > start
-                        && chars.get(end).is_some_and(|c| matches!(c, ',' | '.'))
-                        && chars.get(end + 1).is_some_and(char::is_ascii_digit))
-                {
-                    end += 1;
-                }
+                let end = crate::script::amount_end(&chars, start);
                 if end == start || chars.get(end).is_some_and(|c| c.is_alphanumeric()) {
                     continue;
                 }
                 out.extend(&chars[start..end]);
                 out.push(' ');
-                out.extend(&sign);
+                out.extend(sign);
                 k = end;
                 continue 'scan;
             }

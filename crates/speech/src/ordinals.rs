@@ -29,7 +29,7 @@ use crate::script::{digits_end, numbers_rewritten};
 /// ([`self`]); in another language, `text`.
 #[must_use]
 pub fn said(language: &str, text: &str) -> String {
-    let base = language.split(['-', '+', '_']).next().unwrap_or_default();
+    let base = crate::script::base_language(language);
     let read: fn(&str, &str) -> Option<String> = match base {
         "fr" => french,
         "es" => spanish,

@@ -460,13 +460,7 @@ pub fn english_symbols(text: &str) -> String {
         let c = chars[k];
         if c.is_ascii_digit() {
             let start = k;
-            while k < chars.len()
-                && (chars[k].is_ascii_digit()
-                    || (matches!(chars[k], ',' | '.')
-                        && chars.get(k + 1).is_some_and(char::is_ascii_digit)))
-            {
-                k += 1;
-            }
+            k = amount_end(chars, k);
             let number: String = chars[start..k].iter().collect();
             let currency = start
                 .checked_sub(1)
@@ -717,6 +711,25 @@ fn rewritten(text: &str, mut step: impl FnMut(&[char], usize, &mut String) -> us
         k = step(&chars, k, &mut out).max(k + 1);
     }
     out
+}
+
+/// Where the amount that starts at `k` ends: its digits, with a `,` or `.` between two of them
+/// (`1,000`, `15.50`, `1.250,00`); `k` when no digit starts there.
+pub(crate) fn amount_end(chars: &[char], k: usize) -> usize {
+    let mut end = digits_end(chars, k);
+    while end > k
+        && chars.get(end).is_some_and(|c| matches!(c, ',' | '.'))
+        && chars.get(end + 1).is_some_and(char::is_ascii_digit)
+    {
+        end = digits_end(chars, end + 1);
+    }
+    end
+}
+
+/// The base of an eSpeak NG voice name, the language its readings follow: `pt` of `pt-br`,
+/// `de` of `de+m3`, `es` of `es_419`.
+pub(crate) fn base_language(language: &str) -> &str {
+    language.split(['-', '+', '_']).next().unwrap_or_default()
 }
 
 /// Where the digits that start at `k` end.
