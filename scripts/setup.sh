@@ -16,6 +16,7 @@
 #     exact phone timings the viseme accuracy test compares with;
 #   - eSpeak NG (Debian: the library lip sync in other languages links, and its program), which
 #     speaks a transcript in its language to align it by synthesis;
+#   - MeCab with IPADIC (Debian), which reads a Japanese transcript's kanji into kana;
 #   - PocketSphinx 5.1's source package (PyPI, into target/), which the tests compile the
 #     recogniser from as a machine without Debian's packages does.
 # Safe to run again: it installs only what is not there. `scripts/setup.sh libraries` installs
@@ -64,6 +65,7 @@ if [ "${1:-}" = libraries ]; then
     # No Debian packages here (macOS, Windows, another Linux).
     from_sources
     echo "setup: transcripts in languages other than English are aligned by eSpeak NG's library: install it with your system's packages (brew install espeak-ng; Windows: the espeak-ng installer) or those lines are aligned by the recogniser (English) or not at all" >&2
+    echo "setup: a Japanese transcript written in kanji is read by MeCab with IPADIC: install them with your system's packages (brew install mecab mecab-ipadic) or such lines are heard without their transcript" >&2
     exit 0
   fi
   want "${libraries[@]}"
@@ -73,12 +75,18 @@ if [ "${1:-}" = libraries ]; then
     dpkg -s libpocketsphinx-dev pocketsphinx-en-us >/dev/null 2>&1 || from_sources
   fi
   # The programs faceanim runs: ffmpeg for video and compressed sound, libheif's heif-convert
-  # for phones' HEIC photos. Apart from the libraries, so that one missing here never costs the
-  # build its recogniser; faceanim says how to install each where it is missing.
+  # for phones' HEIC photos, MeCab with IPADIC for Japanese written in kanji. Apart from the
+  # libraries, so that one missing here never costs the build its recogniser; faceanim says
+  # how to install each where it is missing.
   programs=()
   command -v ffmpeg >/dev/null 2>&1 || programs+=(ffmpeg)
   command -v heif-convert >/dev/null 2>&1 || command -v heif-dec >/dev/null 2>&1 || programs+=(libheif-examples)
-  apt_install "${programs[@]}" || echo "setup: apt-get could not install ${programs[*]}: video or HEIC photos will say how to install them" >&2
+  # MeCab with IPADIC reads a Japanese transcript's kanji into kana.
+  command -v mecab >/dev/null 2>&1 || programs+=(mecab)
+  packages=()
+  want mecab-ipadic-utf8
+  programs+=("${packages[@]}")
+  apt_install "${programs[@]}" || echo "setup: apt-get could not install ${programs[*]}: video, HEIC photos and Japanese in kanji will say how to install them" >&2
   exit 0
 fi
 
@@ -92,7 +100,7 @@ command -v exiftool >/dev/null 2>&1 || packages+=(libimage-exiftool-perl)
 # libheif's programs: faceanim reads phones' HEIC photos through heif-convert, and the tests make
 # them with heif-enc.
 command -v heif-enc >/dev/null 2>&1 || packages+=(libheif-examples)
-want "${libraries[@]}" pocketsphinx-testdata flite espeak-ng
+want "${libraries[@]}" pocketsphinx-testdata flite espeak-ng mecab mecab-ipadic-utf8
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 apt_install "${packages[@]}"
 

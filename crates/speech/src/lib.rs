@@ -35,6 +35,7 @@ pub mod face;
 pub mod features;
 pub mod german;
 mod holds;
+pub mod japanese;
 pub mod listen;
 pub mod mouth;
 pub mod ordinals;

@@ -26,16 +26,6 @@ fn is_language(language: &str, base: &str) -> bool {
         .is_some_and(|rest| rest.is_empty() || rest.starts_with(['-', '+']))
 }
 
-/// Whether `text` holds a Han character (a kanji): eSpeak NG's Japanese reads none, and says
-/// each as "Chinese letter", in English.
-fn has_kanji(text: &str) -> bool {
-    text.chars().any(|c| {
-        matches!(c,
-            '\u{3005}' | '\u{3400}'..='\u{4DBF}' | '\u{4E00}'..='\u{9FFF}' | '\u{F900}'..='\u{FAFF}'
-                | '\u{20000}'..='\u{2FA1F}')
-    })
-}
-
 /// The phones of `sound` in `language` (an eSpeak NG voice name: `en-us`, `es`, `ja`, …;
 /// [`ENGLISH`] when `None`).
 ///
@@ -45,8 +35,9 @@ fn has_kanji(text: &str) -> bool {
 /// synthesiser's own rendition sharply (a synthesiser's voice of eSpeak NG's kind); that line,
 /// a line the recogniser cannot align, or one in another language, is aligned by synthesis
 /// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
-/// note saying why — or when eSpeak NG cannot read it: a Japanese transcript in kanji (eSpeak
-/// NG says "Chinese letter" for each; in kana it is aligned). Speech the transcript does not say (a second or more of voice in one of
+/// note saying why — or when eSpeak NG cannot read it: a Japanese transcript in kanji is read
+/// into kana by MeCab ([`crate::japanese`]) and aligned; without MeCab it is heard without it
+/// (eSpeak NG says "Chinese letter" for each kanji). Speech the transcript does not say (a second or more of voice in one of
 /// its alignment's silences) is recognised without it, and a note says so; so does one when
 /// the recording holds twice the speech of its transcript spoken or more, or half. Without a
 /// transcript the sound is recognised by `blind`
@@ -494,16 +485,28 @@ fn recognise_line(
     let language = check_language(language.unwrap_or(ENGLISH))?;
     let language = language.as_str();
     let mut notes = Vec::new();
-    // A Japanese transcript in kanji would be aligned to eSpeak NG's "Chinese letter" for each
-    // (two such lines: 0.68–0.80 viseme agreement, P/B/M 2/8, in eSpeak NG's ja and m3); heard
-    // without it they score 0.80–0.93, 7/8.
+    // A Japanese transcript in kanji is read into kana by MeCab: eSpeak NG would say "Chinese
+    // letter" for each kanji (two such lines: 0.68–0.80 viseme agreement, P/B/M 2/8, in eSpeak
+    // NG's ja and m3). Where MeCab cannot read it, the speech is heard without it (0.80–0.93,
+    // 7/8).
+    let read;
     let transcript = match transcript {
-        Some(Transcript::Typed(text)) if is_language(language, "ja") && has_kanji(text) => {
-            notes.push(
-                "eSpeak NG reads no kanji (it says \"Chinese letter\" for each): the speech was recognised without its transcript; written in kana, the transcript is aligned"
-                    .to_owned(),
-            );
-            None
+        Some(Transcript::Typed(text))
+            if is_language(language, "ja") && crate::japanese::has_kanji(text) =>
+        {
+            match crate::japanese::kana(text) {
+                Ok(kana) => {
+                    notes.push("the transcript's kanji were read into kana by MeCab".to_owned());
+                    read = kana;
+                    Some(Transcript::Typed(&read))
+                }
+                Err(e) => {
+                    notes.push(format!(
+                        "eSpeak NG reads no kanji (it says \"Chinese letter\" for each) and {e}: the speech was recognised without its transcript; written in kana, the transcript is aligned"
+                    ));
+                    None
+                }
+            }
         }
         transcript => transcript,
     };
@@ -1202,8 +1205,6 @@ mod tests {
             is_language("de", "de") && is_language("de-at", "de") && is_language("de+m3", "de")
         );
         assert!(!is_language("den", "de") && !is_language("d", "de") && !is_language("en", "de"));
-        assert!(has_kanji("毎朝、母と") && has_kanji("人々") && has_kanji("𠮷"));
-        assert!(!has_kanji("まいあさ、パン、ｱｲ、한국어, 1985"));
     }
 
     #[test]
