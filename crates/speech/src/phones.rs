@@ -79,6 +79,9 @@ pub enum PhoneError {
     /// The transcript could not be spoken to align it by synthesis.
     #[error(transparent)]
     Synthesis(#[from] faceanim_espeak_sys::EspeakError),
+    /// A Japanese transcript's kanji could not be read.
+    #[error(transparent)]
+    Reading(#[from] crate::japanese::ReadingError),
     /// The language is not one eSpeak NG speaks (nor a voice of one).
     #[error(
         "eSpeak NG has no language or voice '{0}' (`espeak-ng --voices` lists those it speaks: en-us, es, ja, de, fr, …)"

@@ -487,18 +487,21 @@ fn recognise_line(
     let mut notes = Vec::new();
     // A Japanese transcript in kanji is read into kana by MeCab: eSpeak NG would say "Chinese
     // letter" for each kanji (two such lines: 0.68–0.80 viseme agreement, P/B/M 2/8, in eSpeak
-    // NG's ja and m3). Where MeCab cannot read it, the speech is heard without it (0.80–0.93,
-    // 7/8).
-    let read;
+    // NG's ja and m3). Without MeCab the speech is heard without it (0.80–0.93, 7/8).
+    let japanese = is_language(language, "ja");
+    let mut mecab = None;
     let transcript = match transcript {
         Some(Transcript::Typed(text))
-            if is_language(language, "ja") && crate::japanese::has_kanji(text) =>
+            if japanese
+                && crate::japanese::has_kanji(&crate::japanese::numbers_said(
+                    &crate::script::spoken(text).text,
+                )) =>
         {
-            match crate::japanese::kana(text) {
-                Ok(kana) => {
+            match crate::japanese::Mecab::find() {
+                Ok(found) => {
                     notes.push("the transcript's kanji were read into kana by MeCab".to_owned());
-                    read = kana;
-                    Some(Transcript::Typed(&read))
+                    mecab = Some(found);
+                    Some(Transcript::Typed(text))
                 }
                 Err(e) => {
                     notes.push(format!(
@@ -534,16 +537,19 @@ fn recognise_line(
         let english = is_english(language);
         // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5
         // dollars", "Dr. Jones": "doctor Jones"; German "1985" "neunzehnhundert…", "am 3."
-        // "am dritten"; Spanish "p. ej." "por ejemplo", French "XIXe" "dix-neuvième");
-        // eSpeak NG says the other languages' numbers as their speakers do.
-        let as_said = |text: String| {
-            if english {
+        // "am dritten"; Spanish "p. ej." "por ejemplo", French "XIXe" "dix-neuvième"; Japanese
+        // "3本" "san-bon", its kanji read by MeCab); eSpeak NG says the other languages'
+        // numbers as their speakers do.
+        let as_said = |text: String| -> Result<String, PhoneError> {
+            Ok(if english {
                 crate::script::english_said(&text)
             } else if is_language(language, "de") {
                 crate::german::german_said(&text)
+            } else if japanese {
+                crate::japanese::said(&text, mecab.as_ref())?
             } else {
                 crate::ordinals::said(language, &crate::abbreviations::said(language, &text))
-            }
+            })
         };
         let (said, cues) = match transcript {
             Transcript::Typed(text) => {
@@ -551,7 +557,7 @@ fn recognise_line(
                 // directions would be aligned as words nobody said.
                 let spoken = crate::script::spoken(text);
                 notes.extend(spoken.note());
-                (as_said(spoken.text), spoken.cues)
+                (as_said(spoken.text)?, spoken.cues)
             }
             Transcript::Said(text) => (text, Vec::new()),
         };
@@ -561,8 +567,8 @@ fn recognise_line(
         if !cues.is_empty() {
             let cued = within_cues(&cues, sound.seconds())
                 .into_iter()
-                .map(|(start, end, text)| (start, end, as_said(text)))
-                .collect::<Vec<_>>();
+                .map(|(start, end, text)| Ok((start, end, as_said(text)?)))
+                .collect::<Result<Vec<_>, PhoneError>>()?;
             let cues = cued.len();
             let aligned = cues_fit(&cued).and_then(|()| {
                 aligned_within(sound, cued, language, blind, voice).map_err(|e| e.to_string())
