@@ -115,18 +115,56 @@ impl Mecab {
     }
 }
 
-/// `text` (Japanese, as said aloud: [`crate::script::spoken`]) as eSpeak NG is to say it: its
+/// `text` (Japanese, as said aloud: [`crate::script::spoken`]) as eSpeak NG is to say it:
+/// without the short spans in parentheses it does not say ([`unsaid_parentheses`]), its
 /// numbers said with their counters ([`numbers_said`]), then, by `mecab` where it is given,
 /// its kanji read into kana.
 ///
 /// # Errors
 /// [`ReadingError`] when MeCab fails or leaves a word in kanji.
 pub fn said(text: &str, mecab: Option<&Mecab>) -> Result<String, ReadingError> {
-    let text = numbers_said(text);
+    let text = numbers_said(&unsaid_parentheses(text).0);
     match mecab {
         Some(mecab) if has_kanji(&text) => mecab.kana(&text),
         _ => Ok(text),
     }
+}
+
+/// The longest span in parentheses a Japanese transcript leaves unsaid, in characters.
+const UNSAID: usize = 10;
+
+/// `text` (Japanese) without the short spans in parentheses that are not said, with those
+/// spans: a direction or a speaker, as Japanese subtitles and interviews write them (`（笑）`,
+/// `（拍手）`, `（田中）`), or a word's reading after it (`東京（とうきょう）`, said once).
+/// Full-width parentheses are read as `(` and `)` ([`crate::script::spoken`] folds them); a
+/// span of more than ten characters, or one with a sentence's punctuation, is an aside, and
+/// said.
+#[must_use]
+pub fn unsaid_parentheses(text: &str) -> (String, Vec<String>) {
+    let width = |at: &str| at.chars().next().map_or(1, char::len_utf8);
+    let (mut out, mut left) = (String::with_capacity(text.len()), Vec::new());
+    let mut rest = text;
+    while let Some(open) = rest.find(['(', '（']) {
+        let after = open + width(&rest[open..]);
+        let Some(close) = rest[after..].find([')', '）']).map(|c| after + c) else {
+            break;
+        };
+        let end = close + width(&rest[close..]);
+        let span = &rest[after..close];
+        if span.trim().is_empty()
+            || span.chars().count() > UNSAID
+            || span.contains(['。', '、', '.', ',', '!', '?', '！', '？', '(', '（'])
+        {
+            out.push_str(&rest[..after]);
+            rest = &rest[after..];
+            continue;
+        }
+        out.push_str(&rest[..open]);
+        left.push(rest[open..end].to_owned());
+        rest = &rest[end..];
+    }
+    out.push_str(rest);
+    (out, left)
 }
 
 /// [`Mecab::kana`] by `program`, with the dictionary in `dictionary` (MeCab's own when `None`).
@@ -917,9 +955,10 @@ mod tests {
         /// and leaves text without digits or kanji numerals as it was.
         #[test]
         fn any_text_is_read_without_a_panic(
-            typed in "[0-9,.:%万億〇一二三四五六七八九十百千本人日月時分つ年円ヶかa-zあ ]{0,60}",
+            typed in "[0-9,.:%万億〇一二三四五六七八九十百千本人日月時分つ年円ヶかa-zあ ()（）、]{0,60}",
         ) {
             let _ = numbers_said(&typed);
+            let _ = unsaid_parentheses(&typed);
         }
 
         #[test]
@@ -942,6 +981,41 @@ mod tests {
         ] {
             let e = counter(bad).unwrap_err();
             assert!(e.contains(bad), "{e}");
+        }
+    }
+
+    #[test]
+    fn short_spans_in_parentheses_are_unsaid_and_asides_said() {
+        for (typed, said, left) in [
+            ("そうですね（笑）", "そうですね", vec!["（笑）"]),
+            ("(拍手) ありがとう", " ありがとう", vec!["(拍手)"]),
+            (
+                "東京（とうきょう）へ行く",
+                "東京へ行く",
+                vec!["（とうきょう）"],
+            ),
+            ("A(1)とB(2)", "AとB", vec!["(1)", "(2)"]),
+            (
+                "彼は（たぶん、疲れていたので）帰った",
+                "彼は（たぶん、疲れていたので）帰った",
+                vec![],
+            ),
+            (
+                "（これはとても長い説明の文章です）",
+                "（これはとても長い説明の文章です）",
+                vec![],
+            ),
+            ("()と( )と(閉じない", "()と( )と(閉じない", vec![]),
+            ("((笑))", "()", vec!["(笑)"]),
+        ] {
+            assert_eq!(
+                unsaid_parentheses(typed),
+                (
+                    said.to_owned(),
+                    left.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+                ),
+                "{typed}"
+            );
         }
     }
 

@@ -493,9 +493,8 @@ fn recognise_line(
     let transcript = match transcript {
         Some(Transcript::Typed(text))
             if japanese
-                && crate::japanese::has_kanji(&crate::japanese::numbers_said(
-                    &crate::script::spoken(text).text,
-                )) =>
+                && crate::japanese::said(&crate::script::spoken(text).text, None)
+                    .is_ok_and(|plain| crate::japanese::has_kanji(&plain)) =>
         {
             match crate::japanese::Mecab::find() {
                 Ok(found) => {
@@ -513,6 +512,17 @@ fn recognise_line(
         }
         transcript => transcript,
     };
+    if let Some(Transcript::Typed(text)) = &transcript
+        && japanese
+    {
+        let (_, unsaid) = crate::japanese::unsaid_parentheses(&crate::script::spoken(text).text);
+        if !unsaid.is_empty() {
+            notes.push(format!(
+                "left out of the transcript as not said (a direction, a speaker or a reading in parentheses): {}",
+                unsaid.join(", ")
+            ));
+        }
+    }
     let asked = blind;
     let blind = blind_route(language, blind);
     if blind != asked && transcript.is_none() {
