@@ -111,7 +111,15 @@ impl Mecab {
     /// [`ReadingError`] when MeCab fails, or a word stays in kanji (its dictionary is not
     /// IPADIC, or does not know the word).
     pub fn kana(&self, text: &str) -> Result<String, ReadingError> {
-        read_with(&self.program, self.dictionary.as_deref(), text)
+        Ok(self.kana_each(vec![text.to_owned()])?.concat())
+    }
+
+    /// [`Mecab::kana`] of each of `texts`, in one run of MeCab.
+    ///
+    /// # Errors
+    /// As [`Mecab::kana`].
+    pub fn kana_each(&self, texts: Vec<String>) -> Result<Vec<String>, ReadingError> {
+        read_with(&self.program, self.dictionary.as_deref(), texts)
     }
 }
 
@@ -123,10 +131,21 @@ impl Mecab {
 /// # Errors
 /// [`ReadingError`] when MeCab fails or leaves a word in kanji.
 pub fn said(text: &str, mecab: Option<&Mecab>) -> Result<String, ReadingError> {
-    let text = numbers_said(&unsaid_parentheses(text).0);
+    Ok(said_each(vec![text.to_owned()], mecab)?.concat())
+}
+
+/// [`said`] of each of `texts` (a subtitle's cues), with one run of MeCab for all.
+///
+/// # Errors
+/// As [`said`].
+pub fn said_each(texts: Vec<String>, mecab: Option<&Mecab>) -> Result<Vec<String>, ReadingError> {
+    let texts = texts
+        .iter()
+        .map(|text| numbers_said(&unsaid_parentheses(text).0))
+        .collect::<Vec<_>>();
     match mecab {
-        Some(mecab) if has_kanji(&text) => mecab.kana(&text),
-        _ => Ok(text),
+        Some(mecab) if texts.iter().any(|t| has_kanji(t)) => mecab.kana_each(texts),
+        _ => Ok(texts),
     }
 }
 
@@ -167,16 +186,20 @@ pub fn unsaid_parentheses(text: &str) -> (String, Vec<String>) {
     (out, left)
 }
 
-/// [`Mecab::kana`] by `program`, with the dictionary in `dictionary` (MeCab's own when `None`).
+/// [`Mecab::kana_each`] by `program`, with the dictionary in `dictionary` (MeCab's own when
+/// `None`).
 fn read_with(
     program: &Path,
     dictionary: Option<&Path>,
-    text: &str,
-) -> Result<String, ReadingError> {
-    let lines: Vec<&str> = text.split('\n').collect();
-    let kanji: Vec<&str> = lines.iter().copied().filter(|l| has_kanji(l)).collect();
+    texts: Vec<String>,
+) -> Result<Vec<String>, ReadingError> {
+    let kanji: Vec<&str> = texts
+        .iter()
+        .flat_map(|text| text.split('\n'))
+        .filter(|l| has_kanji(l))
+        .collect();
     if kanji.is_empty() {
-        return Ok(text.to_owned());
+        return Ok(texts);
     }
     let mut command = Command::new(program);
     if let Some(dictionary) = dictionary {
@@ -225,22 +248,29 @@ fn read_with(
         )
     })?;
     let mut sentences = answer.split("EOS\n");
-    let mut out = Vec::with_capacity(lines.len());
-    for line in lines {
+    let mut read = |line: &str| -> Result<String, ReadingError> {
         if !has_kanji(line) {
-            out.push(line.to_owned());
-            continue;
+            return Ok(line.to_owned());
         }
         let words = sentences.next().ok_or_else(|| {
             ReadingError::Failed("it answered fewer lines than it was given".into())
         })?;
         let said = line_said(line.trim_end_matches('\r'), words)?;
-        if let Some(unknown) = said.split_whitespace().find(|w| has_kanji(w)) {
-            return Err(ReadingError::Unknown(unknown.to_owned()));
+        match said.split_whitespace().find(|w| has_kanji(w)) {
+            Some(unknown) => Err(ReadingError::Unknown(unknown.to_owned())),
+            None => Ok(said),
         }
-        out.push(said);
-    }
-    Ok(out.join("\n"))
+    };
+    texts
+        .iter()
+        .map(|text| {
+            let lines = text
+                .split('\n')
+                .map(&mut read)
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok(lines.join("\n"))
+        })
+        .collect()
 }
 
 /// `line` said as MeCab's `words` (a word a line: form, tab, features) say, with the spaces
@@ -1023,12 +1053,12 @@ mod tests {
     fn kana_alone_needs_no_mecab_and_a_missing_one_is_named() {
         let missing = Path::new("/nonexistent/mecab");
         assert_eq!(
-            read_with(missing, None, "きょうは\nいい天気").unwrap_err(),
+            read_with(missing, None, vec!["きょうは\nいい天気".into()]).unwrap_err(),
             ReadingError::NoMecab
         );
         assert_eq!(
-            read_with(missing, None, "きょうは、ABC").unwrap(),
-            "きょうは、ABC"
+            read_with(missing, None, vec!["きょうは、ABC".into()]).unwrap(),
+            ["きょうは、ABC"]
         );
         assert!(has_kanji("毎朝、母と") && has_kanji("人々") && has_kanji("𠮷"));
         assert!(!has_kanji("まいあさ、パン、ｱｲ、한국어, 1985"));

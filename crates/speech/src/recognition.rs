@@ -489,12 +489,18 @@ fn recognise_line(
     // letter" for each kanji (two such lines: 0.68–0.80 viseme agreement, P/B/M 2/8, in eSpeak
     // NG's ja and m3). Without MeCab the speech is heard without it (0.80–0.93, 7/8).
     let japanese = is_language(language, "ja");
+    // What a typed Japanese transcript says aloud.
+    let spoken_japanese = match &transcript {
+        Some(Transcript::Typed(text)) if japanese => Some(crate::script::spoken(text).text),
+        _ => None,
+    };
     let mut mecab = None;
     let transcript = match transcript {
         Some(Transcript::Typed(text))
-            if japanese
-                && crate::japanese::said(&crate::script::spoken(text).text, None)
-                    .is_ok_and(|plain| crate::japanese::has_kanji(&plain)) =>
+            if spoken_japanese.as_deref().is_some_and(|spoken| {
+                crate::japanese::said(spoken, None)
+                    .is_ok_and(|plain| crate::japanese::has_kanji(&plain))
+            }) =>
         {
             match crate::japanese::Mecab::find() {
                 Ok(found) => {
@@ -512,10 +518,8 @@ fn recognise_line(
         }
         transcript => transcript,
     };
-    if let Some(Transcript::Typed(text)) = &transcript
-        && japanese
-    {
-        let (_, unsaid) = crate::japanese::unsaid_parentheses(&crate::script::spoken(text).text);
+    if let (Some(_), Some(spoken)) = (&transcript, &spoken_japanese) {
+        let (_, unsaid) = crate::japanese::unsaid_parentheses(spoken);
         if !unsaid.is_empty() {
             notes.push(format!(
                 "left out of the transcript as not said (a direction, a speaker or a reading in parentheses): {}",
@@ -575,10 +579,22 @@ fn recognise_line(
         let words = phones::transcript_words(text, sound.seconds())?;
         // A subtitle is aligned cue by cue, each within its own time.
         if !cues.is_empty() {
-            let cued = within_cues(&cues, sound.seconds())
-                .into_iter()
-                .map(|(start, end, text)| Ok((start, end, as_said(text)?)))
-                .collect::<Result<Vec<_>, PhoneError>>()?;
+            let cued = within_cues(&cues, sound.seconds());
+            let cued = if japanese {
+                // One run of MeCab reads every cue.
+                let (times, texts): (Vec<_>, Vec<_>) =
+                    cued.into_iter().map(|(s, e, text)| ((s, e), text)).unzip();
+                let said = crate::japanese::said_each(texts, mecab.as_ref())?;
+                times
+                    .into_iter()
+                    .zip(said)
+                    .map(|((s, e), text)| (s, e, text))
+                    .collect()
+            } else {
+                cued.into_iter()
+                    .map(|(start, end, text)| Ok((start, end, as_said(text)?)))
+                    .collect::<Result<Vec<_>, PhoneError>>()?
+            };
             let cues = cued.len();
             let aligned = cues_fit(&cued).and_then(|()| {
                 aligned_within(sound, cued, language, blind, voice).map_err(|e| e.to_string())
