@@ -36,6 +36,7 @@ pub mod features;
 pub mod german;
 mod holds;
 pub mod japanese;
+pub mod korean;
 pub mod listen;
 pub mod mouth;
 pub mod ordinals;
