@@ -80,18 +80,8 @@ pub fn said(language: &str, text: &str) -> String {
     if crate::script::base_language(language) != "ko" {
         return text.to_owned();
     }
-    let chars: Vec<char> = text.chars().collect();
-    let mut out = String::with_capacity(text.len() + 16);
-    let mut k = 0;
-    while k < chars.len() {
-        let starts = chars[k].is_ascii_digit()
-            && (k == 0 || !(chars[k - 1].is_ascii_alphanumeric() || ",.".contains(chars[k - 1])));
-        if !starts {
-            out.push(chars[k]);
-            k += 1;
-            continue;
-        }
-        let end = crate::script::digits_end(&chars, k);
+    crate::script::numbers_rewritten(text, |chars, k, out| {
+        let end = crate::script::digits_end(chars, k);
         let digits: String = chars[k..end].iter().collect();
         let n: u64 = digits.parse().unwrap_or(0);
         // A time, 3:30: "se si samsip bun".
@@ -110,12 +100,11 @@ pub fn said(language: &str, text: &str) -> String {
             if minutes != "00" {
                 out.push_str(&format!(" {}분", minutes.trim_start_matches('0')));
             }
-            k = end + 3;
-            continue;
+            return end + 3;
         }
         let part_of_a_number = chars.get(end).is_some_and(|c| ",.:".contains(*c))
             && chars.get(end + 1).is_some_and(char::is_ascii_digit);
-        match native_counter(&chars, end).filter(|&(_, most)| (1..=most).contains(&n)) {
+        match native_counter(chars, end).filter(|&(_, most)| (1..=most).contains(&n)) {
             Some((counter, _)) if !part_of_a_number => {
                 out.push_str(&native(n, counter));
                 out.push(' ');
@@ -125,9 +114,8 @@ pub fn said(language: &str, text: &str) -> String {
             }
             _ => out.push_str(&digits),
         }
-        k = end;
-    }
-    out
+        end
+    })
 }
 
 #[cfg(test)]

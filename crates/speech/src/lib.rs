@@ -31,6 +31,7 @@
 pub mod abbreviations;
 mod adapt;
 pub mod audio;
+pub mod chinese;
 pub mod face;
 pub mod features;
 pub mod german;

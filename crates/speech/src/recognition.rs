@@ -552,8 +552,9 @@ fn recognise_line(
         // Numbers, symbols, units and abbreviations said as words ("1985": "19 85", "$5": "5
         // dollars", "Dr. Jones": "doctor Jones"; German "1985" "neunzehnhundert…", "am 3."
         // "am dritten"; Spanish "p. ej." "por ejemplo", French "XIXe" "dix-neuvième"; Japanese
-        // "3本" "san-bon", its kanji read by MeCab; Korean "3시" "se si"); eSpeak NG says the
-        // other languages' numbers as their speakers do.
+        // "3本" "san-bon", its kanji read by MeCab; Korean "3시" "se si"; Mandarin "2个" "liǎng
+        // gè", "2024年" digit by digit); eSpeak NG says the other languages' numbers as their
+        // speakers do.
         let as_said = |text: String| -> Result<String, PhoneError> {
             Ok(if english {
                 crate::script::english_said(&text)
@@ -563,7 +564,8 @@ fn recognise_line(
                 crate::japanese::said(&text, mecab.as_ref())?
             } else {
                 let text = crate::abbreviations::said(language, &text);
-                crate::korean::said(language, &crate::ordinals::said(language, &text))
+                let text = crate::ordinals::said(language, &text);
+                crate::chinese::said(language, &crate::korean::said(language, &text))
             })
         };
         let (said, cues) = match transcript {

@@ -674,12 +674,17 @@ pub fn english_numbers(text: &str) -> String {
 }
 
 /// Whether a number of its own starts at `k`: a digit after no letter, digit or sign that
-/// would make it part of another word, number or amount (`A4`, `1.5`, `$5`, `#3`).
+/// would make it part of another word, number or amount (`A4`, `1.5`, `$5`, `#3`). Chinese,
+/// Japanese and Korean write a number against the word before it (`我有2本`, `친구5명`): their
+/// letters do not make it part of a word.
 fn starts_number(chars: &[char], k: usize) -> bool {
     chars[k].is_ascii_digit()
         && k.checked_sub(1).is_none_or(|p| {
             let before = chars[p];
-            !(before.is_alphanumeric() || "$€£¥.,:/#+-_–".contains(before))
+            let joined = matches!(before,
+                '\u{3040}'..='\u{30FF}' | '\u{3400}'..='\u{4DBF}' | '\u{4E00}'..='\u{9FFF}'
+                    | '\u{AC00}'..='\u{D7AF}' | '\u{F900}'..='\u{FAFF}');
+            !((before.is_alphanumeric() && !joined) || "$€£¥.,:/#+-_–".contains(before))
         })
 }
 
