@@ -8,8 +8,8 @@
 //!   "sān shí sì", the point unsaid);
 //! - a percentage: `50%` "bǎi fēn zhī wǔ shí" (eSpeak NG: "wǔ shí percent", in English);
 //! - a time: `3:30` "sān diǎn sān shí fēn" (eSpeak NG: "sān sān shí");
-//! - a telephone number digit by digit, 1 as "yāo": `13800138000`, `010` (eSpeak NG: "thirteen
-//!   billion…" in Chinese).
+//! - a telephone number digit by digit, 1 as "yāo": `13800138000`, `010-12345678`,
+//!   `400-820-8820` (eSpeak NG: "thirteen billion…" in Chinese).
 //!
 //! Three lines with such numbers, spoken as said and aligned from the transcript as typed,
 //! scored 0.75–0.92 viseme agreement in eSpeak NG's pinyin voice and m3, against 1.00 for the
@@ -60,10 +60,25 @@ pub fn said(language: &str, text: &str) -> String {
             let what: Vec<char> = what.chars().collect();
             chars.get(end..end + what.len()) == Some(&what[..])
         };
-        // A telephone number: a mobile's eleven digits from 1, or digits from 0.
-        if (digits.len() == 11 && digits[0] == '1') || (digits[0] == '0' && digits.len() > 1) {
-            out.push_str(&spelled(digits, '幺'));
-            return end;
+        // A telephone number: a mobile's eleven digits from 1, digits from 0, or three groups
+        // of digits and hyphens (400-820-8820), through its hyphens.
+        let mut groups = vec![(k, end)];
+        while let Some(&(_, last)) = groups.last()
+            && chars.get(last) == Some(&'-')
+            && chars.get(last + 1).is_some_and(char::is_ascii_digit)
+        {
+            groups.push((last + 1, crate::script::digits_end(chars, last + 1)));
+        }
+        let telephone = (digits.len() == 11 && digits[0] == '1')
+            || (digits[0] == '0' && digits.len() > 1)
+            || groups.len() >= 3;
+        if telephone {
+            let said: Vec<String> = groups
+                .iter()
+                .map(|&(start, end)| spelled(&chars[start..end], '幺'))
+                .collect();
+            out.push_str(&said.join("，"));
+            return groups.last().map_or(end, |&(_, end)| end);
         }
         // A year: four digits before 年 (2024年; 2年级 is a grade).
         if digits.len() == 4 && next == Some('年') && !followed("年级") {
@@ -140,12 +155,25 @@ mod tests {
             ("8:00", "8点"),
             ("13800138000", "幺三八零零幺三八零零零"),
             ("010", "零幺零"),
+            ("400-820-8820", "四零零，八二零，八八二零"),
+            ("010-12345678", "零幺零，幺二三四五六七八"),
         ] {
             assert_eq!(said("zh", written), said_as, "{written}");
             assert_eq!(said("cmn+f2", written), said_as, "{written}");
         }
         for kept in [
-            "第2个", "2月", "2号", "2年级", "12个", "22个", "200", "1,000元", "A2", "2", "25:99",
+            "第2个",
+            "2月",
+            "2号",
+            "2年级",
+            "12个",
+            "22个",
+            "200",
+            "1,000元",
+            "A2",
+            "2",
+            "25:99",
+            "2020-2024",
         ] {
             assert_eq!(said("zh", kept), kept);
         }
