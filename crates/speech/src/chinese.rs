@@ -16,6 +16,10 @@
 //! same lines written out; they now score as written out. Four fresh lines in f2 and f4,
 //! measured once: 0.77–0.95 → 0.95–1.00, as written out. Cantonese is left as eSpeak NG reads
 //! it.
+//!
+//! ```
+//! assert_eq!(faceanim_speech::chinese::said("zh", "2024年有2个"), "二零二四年有两个");
+//! ```
 
 /// The digits as Chinese characters (1 as in counting: 一).
 const DIGITS: [char; 10] = ['零', '一', '二', '三', '四', '五', '六', '七', '八', '九'];

@@ -16,9 +16,17 @@
 //!   "ワ", `へ` "エ", long vowels with `ー`), one it does not know (Latin letters, markup) as
 //!   typed. Lines without kanji are left as they are; the spaces between words are kept. Two
 //!   lines in kanji in ja and m3 scored 0.61–0.80 aligned to eSpeak NG's rendition of the
-//!   kanji, 0.80–0.93 recognised without their transcript (as they were until now, when MeCab
-//!   is missing); read by MeCab, 0.99–1.00. Six fresh lines in f2 and f4, measured once:
-//!   0.944–0.994, where typed in kana they score 0.955–1.000.
+//!   kanji, 0.80–0.93 recognised without their transcript (which is still done, with a note,
+//!   where MeCab is missing); read by MeCab, 0.99–1.00. Six fresh lines in f2 and f4, measured
+//!   once: 0.944–0.994, where typed in kana they score 0.955–1.000.
+//! - **What is not said** ([`unsaid_parentheses`]): short spans in parentheses, a direction or a
+//!   speaker (`（笑）`, `（拍手）`) or a word's reading after it (`東京（とうきょう）`).
+//!
+//! ```
+//! use faceanim_speech::japanese;
+//! assert_eq!(japanese::numbers_said("ペンを3本と猫を1匹"), "ペンをサンボンと猫をイッピキ");
+//! assert_eq!(japanese::unsaid_parentheses("そうですね（笑）").0, "そうですね");
+//! ```
 //!
 //! MeCab runs as its own program (GPL, LGPL or BSD at the user's choice; IPADIC's licence is
 //! its own, permissive): nothing of either is linked or shipped.
