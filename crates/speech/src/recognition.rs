@@ -36,8 +36,8 @@ fn is_language(language: &str, base: &str) -> bool {
 /// a line the recogniser cannot align, or one in another language, is aligned by synthesis
 /// ([`crate::synthesis`]); only when neither works is the sound recognised without it, with a
 /// note saying why — or when eSpeak NG cannot read it: a Japanese transcript in kanji is read
-/// into kana by MeCab ([`crate::japanese`]) and aligned; without MeCab it is heard without it
-/// (eSpeak NG says "Chinese letter" for each kanji). Speech the transcript does not say (a second or more of voice in one of
+/// into kana by MeCab ([`crate::japanese`]) and aligned; where MeCab is missing or cannot read
+/// it, the sound is heard without it (eSpeak NG says "Chinese letter" for each kanji). Speech the transcript does not say (a second or more of voice in one of
 /// its alignment's silences) is recognised without it, and a note says so; so does one when
 /// the recording holds twice the speech of its transcript spoken or more, or half. Without a
 /// transcript the sound is recognised by `blind`
@@ -502,7 +502,13 @@ fn recognise_line(
                     .is_ok_and(|plain| crate::japanese::has_kanji(&plain))
             }) =>
         {
-            match crate::japanese::Mecab::find() {
+            // Read once here, so that a MeCab that cannot read it (another dictionary, another
+            // encoding) sets the transcript aside, as a missing one does.
+            let found = crate::japanese::Mecab::find().and_then(|found| {
+                let spoken = spoken_japanese.as_deref().unwrap_or_default();
+                crate::japanese::said(spoken, Some(&found)).map(|_| found)
+            });
+            match found {
                 Ok(found) => {
                     notes.push("the transcript's kanji were read into kana by MeCab".to_owned());
                     mecab = Some(found);
