@@ -12,7 +12,7 @@
 //! Three lines with such numbers, spoken as said and aligned from the transcript as typed,
 //! scored 0.78–0.87 viseme agreement in eSpeak NG's ko and m3, against 0.99 for the same lines
 //! written out; they now score as written out. Four fresh lines in f2 and f4, measured once:
-//! 0.74–0.91, P/B/M 19 of 22 → 0.93–1.00, 22 of 22, as written out.
+//! 0.74–0.91, P/B/M 17 of 20 → 0.93–1.00, 20 of 20, as written out.
 //!
 //! ```
 //! assert_eq!(faceanim_speech::korean::said("ko", "3시에 5명이"), "세 시에 다섯 명이");
