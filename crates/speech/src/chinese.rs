@@ -56,7 +56,8 @@ pub fn said(language: &str, text: &str) -> String {
             })
             .collect()
     };
-    crate::script::numbers_rewritten(text, |chars, k, out| {
+    let text = crate::script::number_marks_folded(text);
+    crate::script::numbers_rewritten(&text, |chars, k, out| {
         let end = crate::script::digits_end(chars, k);
         let digits = &chars[k..end];
         let next = chars.get(end).copied();
@@ -159,6 +160,9 @@ mod tests {
             ("8:00", "8点"),
             ("13800138000", "幺三八零零幺三八零零零"),
             ("010", "零幺零"),
+            ("3．14", "3点一四"),
+            ("50％", "百分之50"),
+            ("3：30", "3点30分"),
             ("400-820-8820", "四零零，八二零，八八二零"),
             ("010-12345678", "零幺零，幺二三四五六七八"),
         ] {

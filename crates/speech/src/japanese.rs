@@ -686,7 +686,7 @@ fn kanji_value(written: &[char]) -> Option<u64> {
 /// `三日月`, `十分` "enough").
 #[must_use]
 pub fn numbers_said(text: &str) -> String {
-    let chars: Vec<char> = text.chars().collect();
+    let chars: Vec<char> = crate::script::number_marks_folded(text).chars().collect();
     let mut out = String::with_capacity(text.len() * 2);
     let mut k = 0;
     while k < chars.len() {

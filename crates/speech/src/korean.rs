@@ -84,7 +84,8 @@ pub fn said(language: &str, text: &str) -> String {
     if crate::script::base_language(language) != "ko" {
         return text.to_owned();
     }
-    crate::script::numbers_rewritten(text, |chars, k, out| {
+    let text = crate::script::number_marks_folded(text);
+    crate::script::numbers_rewritten(&text, |chars, k, out| {
         let end = crate::script::digits_end(chars, k);
         let digits: String = chars[k..end].iter().collect();
         let n: u64 = digits.parse().unwrap_or(0);
@@ -137,6 +138,7 @@ mod tests {
             ("1번째", "첫 번째"),
             ("2시간", "두 시간"),
             ("3:30", "세 시 30분"),
+            ("3：30", "세 시 30분"),
             ("7:00에", "일곱 시에"),
             ("99마리", "아흔아홉 마리"),
             ("6월", "유월"),

@@ -448,6 +448,37 @@ pub fn plain(text: &str) -> std::borrow::Cow<'_, str> {
     }
 }
 
+/// `text` with the full-width marks of a number written as ASCII ones, which [`plain`] keeps
+/// as typed (they are punctuation): `：` `．` `，` between two digits (`10：30`, `3．14`,
+/// `1，000`) and `％` after one (`50％`), as Chinese, Japanese and Korean input methods type
+/// them.
+#[must_use]
+pub fn number_marks_folded(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.contains(['：', '．', '，', '％']) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let chars: Vec<char> = text.chars().collect();
+    let digit = |k: Option<usize>| {
+        k.and_then(|k| chars.get(k))
+            .is_some_and(char::is_ascii_digit)
+    };
+    let folded = chars
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| {
+            let (before, after) = (digit(k.checked_sub(1)), digit(Some(k + 1)));
+            match c {
+                '：' if before && after => ':',
+                '．' if before && after => '.',
+                '，' if before && after => ',',
+                '％' if before => '%',
+                c => c,
+            }
+        })
+        .collect();
+    std::borrow::Cow::Owned(folded)
+}
+
 /// An English transcript's symbols as their words, the way a speaker says them: `$5.50` is
 /// "5 dollars 50", `$0.99` "99 cents", `1,000` "1000", `3.14` "3 point 1 4", `50%` "50
 /// percent", `20°C` "20 degrees Celsius", `&` "and", `@` "at", `+` "plus", `=` "equals", `#3`
