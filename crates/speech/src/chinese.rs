@@ -24,7 +24,7 @@
 /// The digits as Chinese characters (1 as in counting: 一).
 const DIGITS: [char; 10] = ['零', '一', '二', '三', '四', '五', '六', '七', '八', '九'];
 
-/// Measure words after which 2 is 两 "liǎng", longest first where one begins another.
+/// Measure words after which 2 is 两 "liǎng".
 const MEASURES: [&str; 54] = [
     "小时", "分钟", "公里", "公斤", "星期", "个", "本", "位", "张", "只", "条", "件", "次", "天",
     "岁", "块", "种", "杯", "瓶", "份", "辆", "台", "家", "名", "周", "斤", "点", "样", "双", "对",
