@@ -33,7 +33,7 @@ const MEASURES: [&str; 54] = [
 ];
 
 /// Whether `language` (an eSpeak NG voice name) is Mandarin.
-fn is_mandarin(language: &str) -> bool {
+pub(crate) fn is_mandarin(language: &str) -> bool {
     let base = language.split(['+', '-']).next().unwrap_or(language);
     ["cmn", "zh"].iter().any(|m| base.eq_ignore_ascii_case(m))
         && !language.to_ascii_lowercase().contains("yue")

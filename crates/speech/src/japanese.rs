@@ -67,9 +67,7 @@ pub enum ReadingError {
 /// Whether `c` is a Han character (a kanji) or the iteration mark `々`.
 #[must_use]
 pub fn is_kanji(c: char) -> bool {
-    matches!(c,
-        '\u{3005}' | '\u{3400}'..='\u{4DBF}' | '\u{4E00}'..='\u{9FFF}' | '\u{F900}'..='\u{FAFF}'
-            | '\u{20000}'..='\u{2FA1F}')
+    c == '\u{3005}' || crate::script::is_han(c)
 }
 
 /// Whether `text` holds a kanji ([`is_kanji`]).

@@ -762,6 +762,14 @@ pub(crate) fn amount_end(chars: &[char], k: usize) -> usize {
     end
 }
 
+/// Whether `c` is a Han character (Chinese hanzi, Japanese kanji): the CJK unified ideographs
+/// and their extensions, and the compatibility ideographs.
+pub(crate) fn is_han(c: char) -> bool {
+    matches!(c,
+        '\u{3400}'..='\u{4DBF}' | '\u{4E00}'..='\u{9FFF}' | '\u{F900}'..='\u{FAFF}'
+            | '\u{20000}'..='\u{2FA1F}')
+}
+
 /// The base of an eSpeak NG voice name, the language its readings follow: `pt` of `pt-br`,
 /// `de` of `de+m3`, `es` of `es_419`.
 pub(crate) fn base_language(language: &str) -> &str {

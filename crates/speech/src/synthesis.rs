@@ -638,11 +638,7 @@ fn voice_for<'a>(text: &str, language: &'a str) -> std::borrow::Cow<'a, str> {
     let (base, variant) = language
         .split_once('+')
         .map_or((language, None), |(b, v)| (b, Some(v)));
-    let mandarin = ["cmn", "zh", "zh-cmn"]
-        .iter()
-        .any(|name| base.eq_ignore_ascii_case(name));
-    let han = |c: char| matches!(c, '\u{3400}'..='\u{4DBF}' | '\u{4E00}'..='\u{9FFF}' | '\u{F900}'..='\u{FAFF}' | '\u{20000}'..='\u{2FA1F}');
-    if mandarin && text.chars().any(han) {
+    if crate::chinese::is_mandarin(base) && text.chars().any(crate::script::is_han) {
         let voice = match variant {
             Some(variant) => format!("cmn-latn-pinyin+{variant}"),
             None => "cmn-latn-pinyin".to_owned(),
