@@ -117,7 +117,7 @@ impl Clip {
     /// [`ClipError::Syntax`] for malformed JSON, [`ClipError::Invalid`] listing every bad value.
     pub fn from_json(bytes: &[u8]) -> Result<Clip, ClipError> {
         let clip: Clip =
-            serde_json::from_slice(bytes).map_err(|e| ClipError::Syntax(e.to_string()))?;
+            faceanim_rig::json::from_slice(bytes).map_err(|e| ClipError::Syntax(e.to_string()))?;
         clip.validate()?;
         Ok(clip)
     }

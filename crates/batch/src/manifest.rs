@@ -20,6 +20,7 @@ use std::ffi::OsString;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use faceanim_files::text::{Accept, decode};
 use serde_json::Value;
 
 use crate::BatchError;
@@ -336,6 +337,9 @@ pub struct Manifest {
     pub path: PathBuf,
     /// Its rows, in order.
     pub entries: Vec<Entry>,
+    /// The legacy code page a CSV manifest that is not Unicode was read in, guessed from its
+    /// bytes ([`faceanim_files::text`]): worth telling the user.
+    pub guessed_encoding: Option<&'static str>,
 }
 
 impl Manifest {
@@ -344,8 +348,8 @@ impl Manifest {
     /// unique); a bad row stays in [`Manifest::entries`] with its problem.
     ///
     /// # Errors
-    /// [`BatchError`] when the file cannot be read, is not UTF-8, has no rows, or (CSV) has no
-    /// usable header.
+    /// [`BatchError`] when the file cannot be read, is not text (JSON Lines: not UTF-8 or
+    /// UTF-16; CSV: nor a legacy code page), has no rows, or (CSV) has no usable header.
     pub fn read(path: &Path) -> Result<Manifest, BatchError> {
         let size = std::fs::metadata(path)
             .map_err(|source| BatchError::io(path, source))?
@@ -357,26 +361,23 @@ impl Manifest {
             ));
         }
         let bytes = std::fs::read(path).map_err(|source| BatchError::io(path, source))?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            BatchError::manifest(
-                path,
-                format!(
-                    "not UTF-8 text (byte {} is not)",
-                    e.utf8_error().valid_up_to()
-                ),
-            )
-        })?;
         // A manifest named without a folder: paths in it are the working folder's, as given.
         let base = path.parent().unwrap_or(Path::new("")).to_owned();
         let is_csv = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-        // Spreadsheets (Excel's "CSV UTF-8") start their files with a byte-order mark.
-        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-        let raw = if is_csv {
-            csv_rows(text).map_err(|problem| BatchError::manifest(path, problem))?
+        // Spreadsheets write CSV with a byte-order mark (Excel's "CSV UTF-8"), or in the
+        // system's code page (its "CSV": Shift_JIS on a Japanese Windows); JSON is Unicode.
+        let accept = if is_csv {
+            Accept::Legacy { language: None }
         } else {
-            jsonl_rows(text)
+            Accept::Unicode
+        };
+        let text = decode(&bytes, accept).map_err(|e| BatchError::manifest(path, e.to_string()))?;
+        let raw = if is_csv {
+            csv_rows(&text.text).map_err(|problem| BatchError::manifest(path, problem))?
+        } else {
+            jsonl_rows(&text.text)
         };
         if raw.is_empty() {
             return Err(BatchError::manifest(path, "has no rows".to_owned()));
@@ -384,6 +385,7 @@ impl Manifest {
         Ok(Manifest {
             path: path.to_owned(),
             entries: check_rows(raw, &base),
+            guessed_encoding: text.guessed.then_some(text.encoding),
         })
     }
 

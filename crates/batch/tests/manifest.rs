@@ -165,6 +165,70 @@ fn a_csv_manifest_reads_as_spreadsheets_write_it() {
     }
 }
 
+/// `text` in `encoding`, as GNU iconv writes it (not the library that reads it back).
+fn iconv(text: &str, encoding: &str) -> Vec<u8> {
+    use std::io::Write as _;
+    let mut child = std::process::Command::new("iconv")
+        .args(["-f", "UTF-8", "-t", encoding])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("iconv (glibc's, in every Debian)");
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(text.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    out.stdout
+}
+
+#[test]
+fn a_manifest_saved_in_a_code_page_or_utf16_reads_as_its_utf8_does() {
+    // A localisation sheet saved as "CSV" by Excel on a Japanese Windows (Shift_JIS), and the
+    // same as "Unicode" (UTF-16 with its byte-order mark).
+    let sheet = "id,kind,speech,text,language,outputs\r\n\
+        l1,lipsync,a.wav,今日は天気がいいですね。,ja,o/l1.json\r\n\
+        l2,lipsync,a.wav,ありがとうございました。,ja,o/l2.json\r\n";
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a.wav"), b"RIFF").unwrap();
+    let texts = |manifest: &Manifest| -> Vec<String> {
+        manifest
+            .rows()
+            .map(|r| {
+                r.field(faceanim_batch::manifest::Field::Text)
+                    .unwrap()
+                    .to_owned()
+            })
+            .collect()
+    };
+    let utf8 = dir.path().join("utf8.csv");
+    std::fs::write(&utf8, sheet).unwrap();
+    let want = texts(&Manifest::read(&utf8).unwrap());
+    assert_eq!(want.len(), 2);
+    for (encoding, guessed) in [("SHIFT_JIS", Some("Shift_JIS")), ("UTF-16", None)] {
+        let path = dir.path().join(format!("{encoding}.csv"));
+        std::fs::write(&path, iconv(sheet, encoding)).unwrap();
+        let manifest = Manifest::read(&path).unwrap_or_else(|e| panic!("{encoding}: {e}"));
+        assert_eq!(texts(&manifest), want, "{encoding}");
+        assert_eq!(manifest.guessed_encoding, guessed, "{encoding}");
+    }
+    // JSON Lines are Unicode by JSON's rule: UTF-16 reads, a code page is refused by name.
+    let line = r#"{"id": "l1", "kind": "lipsync", "speech": "a.wav", "text": "今日は", "outputs": "o/l1.json"}"#;
+    let jsonl = dir.path().join("lines.jsonl");
+    std::fs::write(&jsonl, iconv(line, "UTF-16")).unwrap();
+    let manifest = Manifest::read(&jsonl).unwrap();
+    assert_eq!(texts(&manifest), ["今日は"]);
+    std::fs::write(&jsonl, iconv(line, "SHIFT_JIS")).unwrap();
+    let error = Manifest::read(&jsonl).unwrap_err().to_string();
+    assert!(
+        error.contains("lines.jsonl") && error.contains("not UTF-8"),
+        "{error}"
+    );
+}
+
 proptest! {
     /// Whatever a cell holds (commas, quotes, line breaks, spaces inside), quoted as a
     /// spreadsheet quotes it, it reads back the same.

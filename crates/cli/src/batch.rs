@@ -104,6 +104,13 @@ pub fn run(args: &BatchArgs) -> anyhow::Result<ExitCode> {
         Err(error) if error.is_bad_input() => return refuse(&error),
         Err(error) => return Err(error.into()),
     };
+    if let Some(encoding) = manifest.guessed_encoding {
+        eprintln!(
+            "{}: not Unicode: read as {encoding}, the encoding its bytes suggest (save it as \
+             \"CSV UTF-8\" if its text comes out wrong)",
+            args.manifest.display()
+        );
+    }
     check_outputs(&mut manifest);
     let selection = if args.all {
         Selection::All

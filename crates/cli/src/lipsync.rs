@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 use clap::Args;
+use faceanim_files::text::{Accept, Text};
 use faceanim_speech::{Mouth, MouthTable, Sound};
 use faceanim_take::Take;
 
@@ -120,11 +121,17 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         args.fps
     );
     let table = match &args.viseme_table {
-        Some(path) => MouthTable::from_json(&read_text(path, "--viseme-table")?)
-            .map_err(|e| anyhow::anyhow!("--viseme-table {}: {e}", path.display()))?,
+        Some(path) => {
+            MouthTable::from_json(&read_text(path, "--viseme-table", Accept::Unicode)?.text)
+                .map_err(|e| anyhow::anyhow!("--viseme-table {}: {e}", path.display()))?
+        }
         None => MouthTable::default(),
     };
-    let transcript = args.text.as_deref().map(transcript).transpose()?;
+    let transcript = args
+        .text
+        .as_deref()
+        .map(|text| transcript(text, &args.language))
+        .transpose()?;
     // A character or adapter named by a path that is not there is refused before the speech
     // is read: the character loads beside the recognition, whose hour of speech would
     // otherwise be heard first.
@@ -157,6 +164,9 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         },
     };
     let mut lip_sync = heard.on(&mouth, args.fps);
+    if let Some(note) = transcript.as_ref().and_then(|t| t.note.clone()) {
+        lip_sync.notes.insert(0, note);
+    }
     let gestures = args.face.then(|| {
         let gestures = faceanim_speech::face::gestures(&sound, &lip_sync.phones);
         let moved =
@@ -247,7 +257,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
 /// name it) when there is one.
 fn read_speech(
     args: &LipsyncArgs,
-    transcript: Option<&(String, String)>,
+    transcript: Option<&Transcript>,
 ) -> anyhow::Result<(Sound, faceanim_speech::Reading)> {
     let blind = match args.recognise {
         Blind::Words => faceanim_speech::Recognition::Words,
@@ -257,7 +267,7 @@ fn read_speech(
     let language = faceanim_speech::recognition::check_language(&args.language)
         .map_err(|e| anyhow::anyhow!("--language {}: {e}", args.language))?;
     let sound = Sound::read(&args.speech)?;
-    if let Some((text, from)) = transcript {
+    if let Some(Transcript { text, from, .. }) = transcript {
         faceanim_speech::phones::transcript_words(text, sound.seconds())
             .map_err(|e| anyhow::anyhow!("--text {from}: {e}"))?;
     }
@@ -269,7 +279,7 @@ fn read_speech(
     });
     let heard = faceanim_speech::read_loaded(
         &sound,
-        transcript.map(|(text, _)| text.as_str()),
+        transcript.map(|t| t.text.as_str()),
         Some(&language),
         blind,
         loading,
@@ -281,14 +291,45 @@ fn read_speech(
 /// The largest transcript or viseme table read, in bytes: a line of dialogue is a few hundred.
 const MAX_TEXT_BYTES: u64 = 1 << 20;
 
-/// `--text`: the words themselves, or a file that holds them; with how to name it in a
-/// message (the file, or "(the words given)"). One word that names a file which is not there
-/// (a path, or a name ending in [`TRANSCRIPT_FILES`]) is an error.
-fn transcript(text: &str) -> anyhow::Result<(String, String)> {
+/// A transcript given with `--text`.
+struct Transcript {
+    /// Its words.
+    text: String,
+    /// How to name it in a message: the file, or "(the words given)".
+    from: String,
+    /// What the user should know of how it was read: the encoding guessed for a file that is
+    /// not Unicode.
+    note: Option<String>,
+}
+
+/// `--text`: the words themselves, or a file that holds them, in `language` (which a file in a
+/// legacy code page is read by: [`faceanim_files::text`]). One word that names a file which is
+/// not there (a path, or a name ending in [`TRANSCRIPT_FILES`]) is an error.
+fn transcript(text: &str, language: &str) -> anyhow::Result<Transcript> {
     let path = Path::new(text);
     if !text.contains(char::is_whitespace) {
         if path.is_file() {
-            return Ok((read_text(path, "--text")?, path.display().to_string()));
+            let read = read_text(
+                path,
+                "--text",
+                Accept::Legacy {
+                    language: Some(language),
+                },
+            )?;
+            let note = read.guessed.then(|| {
+                format!(
+                    "the transcript {} is not Unicode: it was read as {}, the encoding its \
+                     bytes and --language {language} suggest (save it as UTF-8 if its words \
+                     come out wrong)",
+                    path.display(),
+                    read.encoding
+                )
+            });
+            return Ok(Transcript {
+                text: read.text,
+                from: path.display().to_string(),
+                note,
+            });
         }
         // A file's name that names none (mistyped, or relative to another folder) would
         // otherwise be spoken as the words "script dot t x t".
@@ -303,31 +344,21 @@ fn transcript(text: &str) -> anyhow::Result<(String, String)> {
             );
         }
     }
-    Ok((text.to_owned(), "(the words given)".to_owned()))
+    Ok(Transcript {
+        text: text.to_owned(),
+        from: "(the words given)".to_owned(),
+        note: None,
+    })
 }
 
 /// Extensions of the files a transcript comes in: plain text, a subtitle, a label file.
-const TRANSCRIPT_FILES: [&str; 6] = ["txt", "text", "lab", "srt", "vtt", "md"];
+const TRANSCRIPT_FILES: [&str; 8] = ["txt", "text", "lab", "srt", "vtt", "ass", "ssa", "md"];
 
-/// The UTF-8 text of `path`, given as `option`: at most [`MAX_TEXT_BYTES`], read only after
-/// its size is known; errors name the option and the file.
-fn read_text(path: &Path, option: &str) -> anyhow::Result<String> {
-    let named = |what: String| anyhow::anyhow!("{option} {}: {what}", path.display());
-    let size = std::fs::metadata(path)
-        .map_err(|e| named(e.to_string()))?
-        .len();
-    if size > MAX_TEXT_BYTES {
-        return Err(named(format!(
-            "{size} bytes; a transcript or table is at most {MAX_TEXT_BYTES} bytes"
-        )));
-    }
-    let bytes = std::fs::read(path).map_err(|e| named(e.to_string()))?;
-    String::from_utf8(bytes).map_err(|e| {
-        named(format!(
-            "not UTF-8 text (byte {} is not)",
-            e.utf8_error().valid_up_to()
-        ))
-    })
+/// The text of `path`, given as `option`, in the encodings `accept` allows: at most
+/// [`MAX_TEXT_BYTES`], read only after its size is known; errors name the option and the file.
+fn read_text(path: &Path, option: &str, accept: Accept<'_>) -> anyhow::Result<Text> {
+    faceanim_files::read_text(path, MAX_TEXT_BYTES, accept)
+        .map_err(|e| anyhow::anyhow!("{option} {e}"))
 }
 
 /// `character`'s mouth read through its adapter at `path`: each viseme the built-in head makes

@@ -9,6 +9,10 @@
 //!   errors that name them;
 //! - a Spanish line spoken by the `espeak-ng` program, lip-synced from its transcript by
 //!   synthesis, with the face around the mouth (blinks, brows) on the built-in head;
+//! - a subtitle as SubRip and as an Advanced SubStation Alpha script (converted by ffmpeg)
+//!   lip-syncs as its words do;
+//! - transcripts saved in a legacy code page (Shift_JIS, windows-1251) or UTF-16 lip-sync as
+//!   in UTF-8;
 //! - a 44.1 kHz stereo 24-bit WAV (as ffmpeg writes one) lip-syncs where no ffmpeg is
 //!   installed, as it does through ffmpeg.
 #![allow(
@@ -326,6 +330,18 @@ fn visemes_of_synthetic_voices_match_their_phones_within_40_ms() {
         notes.contains("[calmly]") && notes.contains("a subtitle timecode"),
         "{notes}"
     );
+    // The same subtitle as an Advanced SubStation Alpha script, converted by ffmpeg (its
+    // header, styles, `Dialogue:` fields and `{\i1}` tags), is aligned the same.
+    let script = out.join("slt-0.ass");
+    ffmpeg(&["-i", subtitle.to_str().unwrap(), script.to_str().unwrap()]);
+    let (read, _) = run_lipsync(
+        &wav,
+        &["--text", script.to_str().unwrap()],
+        &out.join("slt-0-ass.json"),
+    );
+    assert_eq!(phones(&read), phones(&plain), "{read}");
+    let notes = read["notes"].to_string();
+    assert!(notes.contains("override tags"), "{notes}");
 }
 
 #[test]
@@ -504,6 +520,89 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language_and_voice(
     let (status, body) = upload("voice=robot");
     assert_eq!(status, 400, "{body}");
     assert!(body.contains("voice"), "{body}");
+}
+
+/// Transcripts as people's editors save them: a Japanese subtitle in Shift_JIS (as subtitle
+/// sites and Japanese Windows programs keep them), a Russian line in windows-1251, an English
+/// line as Notepad saves "Unicode" (UTF-16 with its byte-order mark), each written by GNU
+/// iconv, lip-sync exactly as the same transcript in UTF-8 does; a transcript in a code page
+/// says which one it was read in.
+#[test]
+fn transcripts_saved_in_a_code_page_or_utf16_lip_sync_as_in_utf8() {
+    let out = output_dir("lipsync-encodings");
+    let lines = [
+        (
+            "ja",
+            "きょうわ、てんきがいいですね。",
+            "1\r\n00:00:00,000 --> 00:00:04,000\r\n今日は、天気がいいですね。\r\n",
+            "srt",
+            "SHIFT_JIS",
+            Some("Shift_JIS"),
+        ),
+        (
+            "ru",
+            "Папа купил большую белую машину.",
+            "Папа купил большую белую машину.",
+            "txt",
+            "CP1251",
+            Some("windows-1251"),
+        ),
+        (
+            "en-us",
+            "Bob brought a big purple map.",
+            "Bob brought a big purple map.",
+            "txt",
+            "UTF-16",
+            None,
+        ),
+    ];
+    for (language, said, typed, kind, encoding, guessed) in lines {
+        let wav = out.join(format!("{language}.wav"));
+        espeak_ng(language, "150", said, &wav);
+        let run = |transcript: &Path| {
+            run_lipsync(
+                &wav,
+                &[
+                    "--text",
+                    transcript.to_str().unwrap(),
+                    "--language",
+                    language,
+                ],
+                &out.join(format!("{language}.csv")),
+            )
+            .0
+        };
+        let utf8 = out.join(format!("{language}.utf8.{kind}"));
+        std::fs::write(&utf8, typed).unwrap();
+        let saved = out.join(format!("{language}.{encoding}.{kind}"));
+        let iconv = Command::new("iconv")
+            .args(["-f", "UTF-8", "-t", encoding])
+            .arg(&utf8)
+            .output()
+            .expect("iconv (glibc's, in every Debian)");
+        assert!(iconv.status.success(), "{iconv:?}");
+        std::fs::write(&saved, &iconv.stdout).unwrap();
+        let (want, got) = (run(&utf8), run(&saved));
+        assert_eq!(got["phones"], want["phones"], "{language} in {encoding}");
+        assert!(
+            !want["phones"].as_array().unwrap().is_empty(),
+            "{language}: {want}"
+        );
+        let notes: Vec<&str> = got["notes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_str().unwrap())
+            .collect();
+        let said_how = notes.iter().find(|n| n.contains("not Unicode"));
+        match guessed {
+            Some(name) => assert!(
+                said_how.is_some_and(|n| n.contains(name)),
+                "{language} in {encoding}: {notes:?}"
+            ),
+            None => assert!(said_how.is_none(), "{language} in {encoding}: {notes:?}"),
+        }
+    }
 }
 
 /// `text` spoken into `wav` by the `espeak-ng` program with `voice` at `rate` words a minute.

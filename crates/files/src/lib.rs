@@ -2,10 +2,13 @@
 //!
 //! The pure crates parse bytes; this crate turns paths into bytes and back. It loads characters
 //! (`.glb`, `.gltf` with its external buffers and images, or a folder of OBJ files), loads
-//! clips, and writes every output atomically (a temporary file in the target folder, synced,
-//! then renamed), so a crash or a full disk never leaves a half-written file behind. Every
-//! error carries the path it concerns.
+//! clips and text files in the encodings people save them in ([`text`]), and writes every
+//! output atomically (a temporary file in the target folder, synced, then renamed), so a crash
+//! or a full disk never leaves a half-written file behind. Every error carries the path it
+//! concerns.
 #![deny(missing_docs)]
+
+pub mod text;
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -30,13 +33,15 @@ pub enum FileError {
         /// The OS error.
         source: std::io::Error,
     },
-    /// The file is larger than [`MAX_FILE_BYTES`].
-    #[error("{}: {size} bytes is larger than the {MAX_FILE_BYTES}-byte limit", path.display())]
+    /// The file is larger than its kind may be ([`MAX_FILE_BYTES`] for a character).
+    #[error("{}: {size} bytes is larger than the {limit}-byte limit", path.display())]
     TooLarge {
         /// The file.
         path: PathBuf,
         /// Its size.
         size: u64,
+        /// The most it may be.
+        limit: u64,
     },
     /// The path does not name something faceanim can read as a character.
     #[error("{}: {reason}", path.display())]
@@ -49,6 +54,14 @@ pub enum FileError {
     /// The importer rejected the contents (its message names the file).
     #[error(transparent)]
     Import(#[from] ImportError),
+    /// A text file is in no encoding it may be in.
+    #[error("{}: {source}", path.display())]
+    Text {
+        /// The file.
+        path: PathBuf,
+        /// Why it is not text.
+        source: text::TextError,
+    },
     /// A clip file is malformed.
     #[error("{}: {source}", path.display())]
     Clip {
@@ -64,15 +77,21 @@ pub enum FileError {
 /// # Errors
 /// [`FileError::Io`] or [`FileError::TooLarge`], with the path.
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FileError> {
+    read_at_most(path, MAX_FILE_BYTES)
+}
+
+/// The bytes of `path`, refused when it is larger than `limit` before they are read.
+fn read_at_most(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> {
     let io = |source| FileError::Io {
         path: path.to_owned(),
         source,
     };
     let size = std::fs::metadata(path).map_err(io)?.len();
-    if size > MAX_FILE_BYTES {
+    if size > limit {
         return Err(FileError::TooLarge {
             path: path.to_owned(),
             size,
+            limit,
         });
     }
     std::fs::read(path).map_err(io)
@@ -215,6 +234,23 @@ fn load_obj_folder(dir: &Path) -> Result<Imported, FileError> {
         },
         &shapes,
     )?)
+}
+
+/// Reads a text file of at most `max_bytes` (its size checked before it is read), decoded in
+/// the encodings `accept` allows ([`text::decode`]).
+///
+/// # Errors
+/// [`FileError::Io`], [`FileError::TooLarge`] or [`FileError::Text`], with the path.
+pub fn read_text(
+    path: &Path,
+    max_bytes: u64,
+    accept: text::Accept<'_>,
+) -> Result<text::Text, FileError> {
+    let bytes = read_at_most(path, max_bytes.min(MAX_FILE_BYTES))?;
+    text::decode(&bytes, accept).map_err(|source| FileError::Text {
+        path: path.to_owned(),
+        source,
+    })
 }
 
 /// Loads and validates a clip JSON file.

@@ -258,8 +258,8 @@ impl Project {
     /// [`ProjectError::Syntax`] for JSON that is not the format, [`ProjectError::Invalid`]
     /// listing every bad value with its path.
     pub fn from_json(bytes: &[u8]) -> Result<Project, ProjectError> {
-        let file: ProjectFile =
-            serde_json::from_slice(bytes).map_err(|e| ProjectError::Syntax(e.to_string()))?;
+        let file: ProjectFile = faceanim_rig::json::from_slice(bytes)
+            .map_err(|e| ProjectError::Syntax(e.to_string()))?;
         Project::from_file(file)
     }
 

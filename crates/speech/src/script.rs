@@ -3,7 +3,10 @@
 //!
 //! Transcripts come from scripts, subtitles and TTS prompts, and carry more than their words:
 //! - subtitles (SubRip `.srt`, WebVTT `.vtt`): a `WEBVTT` header, cue numbers, timecodes
-//!   (`00:00:01,000 --> 00:00:02,500`);
+//!   (`00:00:01,000 --> 00:00:02,500`); Advanced SubStation Alpha (`.ass`, `.ssa`, as
+//!   Aegisub, fansubs and ffmpeg write them): a script's header and styles, and each
+//!   `Dialogue:` event's fields around its text, override tags (`{\i1}`, `{\k20}`, `{\fad(…)}`)
+//!   and vector drawings (`{\p1}m 0 0 l …`), its line breaks (`\N`) read as breaks;
 //! - markup: SSML (`<break time="500ms"/>`, `<prosody …>`), subtitle styling (`<i>`,
 //!   `<v Roger>`, `{\an8}`);
 //! - directions in square brackets (`[laughs]`, `[music]`), as subtitles for the deaf and game
@@ -52,20 +55,26 @@ pub struct Cue {
 /// --> 01:04.000 align:start`), seconds; `None` for another line or an end before the start.
 fn timecode(line: &str) -> Option<(f32, f32)> {
     let (from, to) = line.split_once("-->")?;
-    let time = |t: &str| -> Option<f32> {
-        let t = t.split_whitespace().next()?.replace(',', ".");
-        let mut seconds = 0.0f64;
-        for part in t.split(':') {
-            let value: f64 = part
-                .parse()
-                .ok()
-                .filter(|v: &f64| v.is_finite() && *v >= 0.0)?;
-            seconds = seconds * 60.0 + value;
-        }
-        (t.contains(':')).then_some(seconds as f32)
-    };
-    let (start, end) = (time(from)?, time(to)?);
+    let (start, end) = (
+        subtitle_time(from.split_whitespace().next()?)?,
+        subtitle_time(to.split_whitespace().next()?)?,
+    );
     (end > start).then_some((start, end))
+}
+
+/// A subtitle's clock time (`00:01:02,500`, `01:02.500`, SubStation's `0:01:02.50`), seconds;
+/// `None` for anything else.
+fn subtitle_time(t: &str) -> Option<f32> {
+    let t = t.trim().replace(',', ".");
+    let mut seconds = 0.0f64;
+    for part in t.split(':') {
+        let value: f64 = part
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v >= 0.0)?;
+        seconds = seconds * 60.0 + value;
+    }
+    (t.contains(':')).then_some(seconds as f32)
 }
 
 impl Spoken {
@@ -92,6 +101,13 @@ const LONGEST_NAME: usize = 30;
 pub fn spoken(text: &str) -> Spoken {
     let text = plain(text);
     let lines: Vec<&str> = text.lines().collect();
+    if let Some(events) = substation(&lines) {
+        let mut left_out = events.left_out;
+        if events.styled {
+            left_out.insert(0, "the subtitle's override tags".to_owned());
+        }
+        return said_from(events.kept, events.times, left_out);
+    }
     let webvtt = lines
         .first()
         .is_some_and(|l| l.trim().starts_with("WEBVTT"));
@@ -124,11 +140,31 @@ pub fn spoken(text: &str) -> Spoken {
                 times.len() - 1
             });
         } else if !(block || cue_number || (k == 0 && webvtt)) {
-            kept.push((*line, cue));
+            kept.push(((*line).to_owned(), cue));
         }
     }
-    let mut left_out = Vec::new();
-    let mut out = String::with_capacity(text.len());
+    let all_read = timecodes == times.len();
+    let mut spoken = said_from(kept, times, Vec::new());
+    match timecodes {
+        0 => {}
+        1 => spoken.left_out.push("a subtitle timecode".to_owned()),
+        n => spoken.left_out.push(format!("{n} subtitle timecodes")),
+    }
+    if !all_read {
+        spoken.cues.clear();
+    }
+    spoken
+}
+
+/// What the `kept` lines of a transcript (each with the cue, an index into `times`, it belongs
+/// to) say aloud, with what was left out of them added to `left_out`; cue by cue only where
+/// every line with words is in a cue.
+fn said_from(
+    kept: Vec<(String, Option<usize>)>,
+    times: Vec<(f32, f32)>,
+    mut left_out: Vec<String>,
+) -> Spoken {
+    let mut out = String::with_capacity(kept.iter().map(|(line, _)| line.len() + 1).sum());
     let mut said: Vec<String> = vec![String::new(); times.len()];
     for (k, (line, cue)) in kept.iter().enumerate() {
         if k > 0 {
@@ -156,25 +192,159 @@ pub fn spoken(text: &str) -> Spoken {
         listed.truncate(LISTED);
         listed.push(format!("{more} more"));
     }
-    match timecodes {
-        0 => {}
-        1 => listed.push("a subtitle timecode".to_owned()),
-        n => listed.push(format!("{n} subtitle timecodes")),
-    }
     Spoken {
         text: out,
         left_out: listed,
         // Cue by cue only where every word is in a cue whose time was read.
-        cues: if timecodes == times.len()
-            && kept
-                .iter()
-                .all(|(line, cue)| cue.is_some() || line.trim().is_empty())
+        cues: if kept
+            .iter()
+            .all(|(line, cue)| cue.is_some() || line.trim().is_empty())
         {
             merged(times, said)
         } else {
             Vec::new()
         },
     }
+}
+
+/// An Advanced SubStation Alpha script's events, read for their words.
+struct Events {
+    /// Each line of each event's text, with its event (an index into `times`).
+    kept: Vec<(String, Option<usize>)>,
+    /// Each event's start and end, seconds.
+    times: Vec<(f32, f32)>,
+    /// Whether any text had override tags (left out, and said so once).
+    styled: bool,
+    /// Events that could not be read, described.
+    left_out: Vec<String>,
+}
+
+/// The SubStation Alpha fields of an event before its text, when the script has no `Format:`
+/// line of its own (v4.00+; v4.00 names the first `Marked`).
+const SUBSTATION_FIELDS: [&str; 10] = [
+    "Layer", "Start", "End", "Style", "Name", "MarginL", "MarginR", "MarginV", "Effect", "Text",
+];
+
+/// `lines` read as an Advanced SubStation Alpha (`.ass`) or SubStation Alpha (`.ssa`) script,
+/// `None` when they are not one (no `[Events]` section with a `Dialogue:` in it). Each
+/// `Dialogue:` event's text is split at its hard and soft line breaks (`\N`, `\n`), its hard
+/// spaces (`\h`) made spaces, its override blocks (`{…}`) taken out, and the vector drawing
+/// that `{\p1}` starts and `{\p0}` ends left out with them; an event whose times and text
+/// are those of another before it (a sign drawn twice, its border and its fill) is said once.
+/// `Comment:` events are not shown, and not said.
+fn substation(lines: &[&str]) -> Option<Events> {
+    let events = lines
+        .iter()
+        .position(|l| l.trim().eq_ignore_ascii_case("[events]"))?;
+    let section = lines[events + 1..]
+        .iter()
+        .take_while(|l| !l.trim_start().starts_with('['));
+    let mut fields: Vec<String> = SUBSTATION_FIELDS.iter().map(|f| (*f).to_owned()).collect();
+    let mut out = Events {
+        kept: Vec::new(),
+        times: Vec::new(),
+        styled: false,
+        left_out: Vec::new(),
+    };
+    let mut seen: Vec<((f32, f32), String)> = Vec::new();
+    let mut dialogue = false;
+    for line in section {
+        let Some((kind, rest)) = line.split_once(':') else {
+            continue;
+        };
+        match kind.trim() {
+            "Format" => {
+                fields = rest.split(',').map(|f| f.trim().to_owned()).collect();
+            }
+            "Dialogue" => {
+                dialogue = true;
+                let values: Vec<&str> = rest.trim_start().splitn(fields.len(), ',').collect();
+                let field = |name: &str| {
+                    fields
+                        .iter()
+                        .position(|f| f.eq_ignore_ascii_case(name))
+                        .and_then(|k| values.get(k))
+                };
+                let (Some(start), Some(end), Some(text)) =
+                    (field("Start"), field("End"), field("Text"))
+                else {
+                    out.left_out
+                        .push(format!("an event of {} fields", values.len()));
+                    continue;
+                };
+                let Some(shown) = subtitle_time(start)
+                    .zip(subtitle_time(end))
+                    .filter(|(start, end)| end > start)
+                else {
+                    out.left_out
+                        .push(format!("an event timed {start} to {end}"));
+                    continue;
+                };
+                let (text, styled) = substation_text(text);
+                out.styled |= styled;
+                if text.trim().is_empty() || seen.contains(&(shown, text.clone())) {
+                    continue;
+                }
+                seen.push((shown, text.clone()));
+                out.times.push(shown);
+                let cue = Some(out.times.len() - 1);
+                out.kept
+                    .extend(text.split('\n').map(|line| (line.to_owned(), cue)));
+            }
+            _ => {}
+        }
+    }
+    dialogue.then_some(out)
+}
+
+/// A SubStation event's text as shown: line breaks (`\N`, `\n`) as breaks, hard spaces (`\h`)
+/// as spaces, without its override blocks or what it draws; and whether it had any.
+fn substation_text(text: &str) -> (String, bool) {
+    let mut out = String::with_capacity(text.len());
+    let (mut styled, mut drawing) = (false, false);
+    let mut rest = text;
+    while !rest.is_empty() {
+        if let Some(block) = rest.strip_prefix('{')
+            && let Some(close) = block.find('}')
+        {
+            let tags = &block[..close];
+            styled = true;
+            // `\p1` (or any scale) draws until `\p0`; `\pos(…)` is a position.
+            for tag in tags.split('\\').skip(1) {
+                if let Some(scale) = tag.strip_prefix('p')
+                    && let Ok(scale) = scale.trim().parse::<u32>()
+                {
+                    drawing = scale > 0;
+                }
+            }
+            rest = &block[close + 1..];
+            continue;
+        }
+        let mut chars = rest.chars();
+        let Some(c) = chars.next() else { break };
+        let after = chars.as_str();
+        if c == '\\'
+            && let Some(next) = after.chars().next()
+        {
+            let replaced = match next {
+                'N' | 'n' => Some('\n'),
+                'h' => Some(' '),
+                _ => None,
+            };
+            if let Some(r) = replaced {
+                if !drawing {
+                    out.push(r);
+                }
+                rest = &after[next.len_utf8()..];
+                continue;
+            }
+        }
+        if !drawing {
+            out.push(c);
+        }
+        rest = after;
+    }
+    (out, styled)
 }
 
 /// Cues from their `times` and what each `said`, in order of their start: those that overlap
@@ -1312,6 +1482,51 @@ mod tests {
         let said = spoken(vtt);
         assert_eq!(said.text.trim(), "Never drink liquid nitrogen.");
         assert_eq!(said.left_out, ["<v Roger>", "a subtitle timecode"]);
+    }
+
+    #[test]
+    fn substation_alpha_scripts_are_read_for_their_dialogue() {
+        // As ffmpeg writes one from a SubRip file (`ffmpeg -i in.srt out.ass`).
+        let ass = "[Script Info]\n; Script generated by FFmpeg/Lavc\nScriptType: v4.00+\nPlayResX: 384\n\n[V4+ Styles]\nFormat: Name, Fontname, Fontsize, PrimaryColour, SecondaryColour, OutlineColour, BackColour, Bold, Italic, Underline, StrikeOut, ScaleX, ScaleY, Spacing, Angle, BorderStyle, Outline, Shadow, Alignment, MarginL, MarginR, MarginV, Encoding\nStyle: Default,Arial,16,&Hffffff,&Hffffff,&H0,&H0,0,0,0,0,100,100,0,0,1,1,0,2,10,10,10,0\n\n[Events]\nFormat: Layer, Start, End, Style, Name, MarginL, MarginR, MarginV, Effect, Text\nDialogue: 0,0:00:00.50,0:00:02.00,Default,,0,0,0,,{\\i1}Hello{\\i0} there,\\Nmy friend.\nDialogue: 0,0:00:02.50,0:00:04.00,Default,,0,0,0,,{\\an8}How are you?\n";
+        let said = spoken(ass);
+        assert_eq!(
+            said.text.split_whitespace().collect::<Vec<_>>(),
+            ["Hello", "there,", "my", "friend.", "How", "are", "you?"]
+        );
+        assert_eq!(said.cues.len(), 2);
+        assert_eq!(said.cues[0].shown, 0.5..2.0);
+        assert_eq!(said.cues[0].text, "Hello there,\nmy friend.");
+        assert_eq!(said.cues[1].shown, 2.5..4.0);
+        assert_eq!(said.left_out, ["the subtitle's override tags"]);
+        // As Aegisub and fansubs write them: a speaker's name field, karaoke timing, a hard
+        // space, a sign drawn twice (border and fill), a vector drawing, a comment, commas in
+        // the text, CRLF line ends, and a section after the events.
+        let ass = "[Script Info]\r\nTitle: Episode 1\r\n\r\n[Events]\r\nFormat: Layer, Start, End, Style, Name, MarginL, MarginR, MarginV, Effect, Text\r\nComment: 0,0:00:00.00,0:00:01.00,Default,,0,0,0,,Not said, a translator's note\r\nDialogue: 0,0:00:01.00,0:00:03.00,Default,Kenji,0,0,0,,Well, well,\\hwell.\r\nDialogue: 0,0:00:03.00,0:00:05.00,OP,,0,0,0,Karaoke,{\\k20}Ma{\\k30}ma {\\k25}mi{\\k40}a\r\nDialogue: 1,0:00:05.00,0:00:06.00,Sign,,0,0,0,,{\\pos(10,20)}Bakery\r\nDialogue: 0,0:00:05.00,0:00:06.00,Sign,,0,0,0,,{\\pos(10,20)\\bord3}Bakery\r\nDialogue: 0,0:00:06.00,0:00:07.00,Default,,0,0,0,,{\\p1}m 0 0 l 100 0 100 100{\\p0}Bye now.\r\n\r\n[Aegisub Project Garbage]\r\nDialogue: not an event\r\n";
+        let said = spoken(ass);
+        assert_eq!(
+            said.text.split_whitespace().collect::<Vec<_>>(),
+            [
+                "Well,", "well,", "well.", "Mama", "mia", "Bakery", "Bye", "now."
+            ]
+        );
+        assert_eq!(
+            said.cues
+                .iter()
+                .map(|c| c.shown.clone())
+                .collect::<Vec<_>>(),
+            [1.0..3.0, 3.0..5.0, 5.0..6.0, 6.0..7.0]
+        );
+        // SubStation Alpha v4 (`.ssa`): its first field is `Marked`; an event with a time it
+        // cannot read is named, and the rest kept.
+        let ssa = "[Script Info]\nScriptType: v4.00\n\n[Events]\nFormat: Marked, Start, End, Style, Name, MarginL, MarginR, MarginV, Effect, Text\nDialogue: Marked=0,0:00:01.00,0:00:02.00,Default,,0000,0000,0000,,Good morning.\nDialogue: Marked=0,soon,0:00:03.00,Default,,0000,0000,0000,,Later.\n";
+        let said = spoken(ssa);
+        assert_eq!(said.text, "Good morning.");
+        assert_eq!(said.left_out, ["an event timed soon to 0:00:03.00"]);
+        // Text that only mentions a section is no script.
+        assert_eq!(
+            spoken("Open [Events] and read.").text.trim(),
+            "Open   and read."
+        );
     }
 
     /// Asserts that `typed` says `words` aloud, and that its note lists what was left out.

@@ -71,7 +71,7 @@ fn parse_project(bytes: &[u8], what: &str) -> Result<ProjectFile, ApiError> {
         what: what.to_owned(),
         source,
     };
-    let file: ProjectFile = serde_json::from_slice(bytes).map_err(|e| {
+    let file: ProjectFile = faceanim_rig::json::from_slice(bytes).map_err(|e| {
         invalid(faceanim_sketch::project::ProjectError::Syntax(
             e.to_string(),
         ))
