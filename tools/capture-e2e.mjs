@@ -339,10 +339,21 @@ try {
   // 13. Speech: a recording opened as the take is lip-synced, and plays with its sound; the
   //     stroke stays on top; scrubbing sounds a slice at the frame.
   //     Whose voice it is goes with it when chosen (a man's: as the pitch would say).
+  //     What was said goes with it, pasted over two lines as a script or a subtitle is: the
+  //     field keeps its line breaks (a subtitle's cue times are lines of their own).
   await page.selectOption('#speech-voice', 'man');
+  const speechId = path.basename(speech, '.wav');
+  const transcribed = fs.readFileSync(path.join(path.dirname(speech), 'transcription'), 'utf8')
+    .split('\n').find((line) => line.includes(`(${speechId})`));
+  const words = transcribed.replace(/<\/?s>/g, '').replace(/\([^)]*\)\s*$/, '').trim().split(/\s+/);
+  const half = Math.ceil(words.length / 2);
+  const typed = `${words.slice(0, half).join(' ')}\n${words.slice(half).join(' ')}`;
+  await page.fill('#speech-text', typed);
   const sent = page.waitForRequest((r) => r.url().includes('api/capture/upload'));
   await page.setInputFiles('#capture-file', speech);
-  check(new URL((await sent).url()).searchParams.get('voice') === 'man', 'the chosen voice was not sent');
+  const query = new URL((await sent).url()).searchParams;
+  check(query.get('voice') === 'man', 'the chosen voice was not sent');
+  check(query.get('text') === typed, `the transcript was sent as ${JSON.stringify(query.get('text'))}`);
   await page.waitForFunction(() => { const t = window.studio.capture.view && window.studio.capture.view.take; return t && t.sound && window.studio.sound.source === t.sound; }, null, { timeout: 120000 });
   const spoken = (await captureState()).take;
   const jawColumn = (await captureState()).blendshapes.indexOf('jawOpen');

@@ -495,7 +495,8 @@ fn the_command_refuses_what_it_cannot_use_by_name() {
     assert!(started.elapsed().as_secs() < 20, "{stderr}");
     for (text, said) in [
         ("mama made my bed ".repeat(200).into_bytes(), "800 words"),
-        (vec![0xff, 0xfe, b'a'], "UTF-8"),
+        (vec![0xff, 0xfe, b'a'], "UTF-16LE"),
+        (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR".to_vec(), "not UTF-8"),
         (b"...".to_vec(), "no words"),
     ] {
         let (code, stderr) = with_text(&text);

@@ -522,6 +522,48 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language_and_voice(
     assert!(body.contains("voice"), "{body}");
 }
 
+/// A line saved as people's editors save it.
+struct Saved {
+    language: &'static str,
+    /// What is spoken, as eSpeak NG reads it best.
+    said: &'static str,
+    /// The transcript as typed.
+    typed: &'static str,
+    /// Its file's kind.
+    kind: &'static str,
+    /// The encoding it is saved in (GNU iconv's name).
+    encoding: &'static str,
+    /// The code page a note should name.
+    guessed: Option<&'static str>,
+}
+
+const SAVED: [Saved; 3] = [
+    Saved {
+        language: "ja",
+        said: "きょうわ、てんきがいいですね。",
+        typed: "1\r\n00:00:00,000 --> 00:00:04,000\r\n今日は、天気がいいですね。\r\n",
+        kind: "srt",
+        encoding: "SHIFT_JIS",
+        guessed: Some("Shift_JIS"),
+    },
+    Saved {
+        language: "ru",
+        said: "Папа купил большую белую машину.",
+        typed: "Папа купил большую белую машину.",
+        kind: "txt",
+        encoding: "CP1251",
+        guessed: Some("windows-1251"),
+    },
+    Saved {
+        language: "en-us",
+        said: "Bob brought a big purple map.",
+        typed: "Bob brought a big purple map.",
+        kind: "txt",
+        encoding: "UTF-16",
+        guessed: None,
+    },
+];
+
 /// Transcripts as people's editors save them: a Japanese subtitle in Shift_JIS (as subtitle
 /// sites and Japanese Windows programs keep them), a Russian line in windows-1251, an English
 /// line as Notepad saves "Unicode" (UTF-16 with its byte-order mark), each written by GNU
@@ -530,33 +572,15 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language_and_voice(
 #[test]
 fn transcripts_saved_in_a_code_page_or_utf16_lip_sync_as_in_utf8() {
     let out = output_dir("lipsync-encodings");
-    let lines = [
-        (
-            "ja",
-            "きょうわ、てんきがいいですね。",
-            "1\r\n00:00:00,000 --> 00:00:04,000\r\n今日は、天気がいいですね。\r\n",
-            "srt",
-            "SHIFT_JIS",
-            Some("Shift_JIS"),
-        ),
-        (
-            "ru",
-            "Папа купил большую белую машину.",
-            "Папа купил большую белую машину.",
-            "txt",
-            "CP1251",
-            Some("windows-1251"),
-        ),
-        (
-            "en-us",
-            "Bob brought a big purple map.",
-            "Bob brought a big purple map.",
-            "txt",
-            "UTF-16",
-            None,
-        ),
-    ];
-    for (language, said, typed, kind, encoding, guessed) in lines {
+    for Saved {
+        language,
+        said,
+        typed,
+        kind,
+        encoding,
+        guessed,
+    } in SAVED
+    {
         let wav = out.join(format!("{language}.wav"));
         espeak_ng(language, "150", said, &wav);
         let run = |transcript: &Path| {
@@ -635,17 +659,12 @@ fn a_studio_wav_lip_syncs_without_ffmpeg_as_it_does_with_it() {
     flite("slt", text, &line);
     // A DAW's export: 44.1 kHz, stereo, 24-bit.
     let studio = out.join("studio.wav");
-    ffmpeg(&[
-        "-i",
+    let (from, to, pcm24) = (
         line.to_str().unwrap(),
-        "-ar",
-        "44100",
-        "-ac",
-        "2",
-        "-acodec",
-        "pcm_s24le",
         studio.to_str().unwrap(),
-    ]);
+        "pcm_s24le",
+    );
+    ffmpeg(&["-i", from, "-ar", "44100", "-ac", "2", "-c:a", pcm24, to]);
     let with = out.join("with.json");
     faceanim_ok(&[
         "lipsync",

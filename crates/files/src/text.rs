@@ -121,10 +121,20 @@ pub fn decode(bytes: &[u8], accept: Accept<'_>) -> Result<Text, TextError> {
     detector.feed(bytes, true);
     let region = language.and_then(region_of);
     let guess = detector.guess(region.map(str::as_bytes), chardetng::Utf8Detection::Deny);
-    strict(bytes, guess, true).ok_or(TextError::Undecodable {
-        byte: not_utf8,
-        guess: guess.name(),
-    })
+    // A code page decodes almost any bytes: what holds control characters is no text (a
+    // picture, an archive, a program given by mistake).
+    strict(bytes, guess, true)
+        .filter(|text| !text.text.chars().any(is_binary))
+        .ok_or(TextError::Undecodable {
+            byte: not_utf8,
+            guess: guess.name(),
+        })
+}
+
+/// A control character no text file holds: C0 but tab, line feed, form feed and carriage
+/// return; delete; C1 (which windows-1252 gives its five unassigned bytes).
+fn is_binary(c: char) -> bool {
+    c.is_control() && !matches!(c, '\t' | '\n' | '\x0c' | '\r')
 }
 
 /// `bytes` as UTF-8, or the offset of the first byte that is not.
@@ -354,18 +364,36 @@ mod tests {
             decode(b"caf\xe9", Accept::Unicode),
             Err(TextError::NotUnicode { byte: 3 })
         );
+        // A picture given by mistake (a PNG's signature and header) is no text in any code page.
+        let png = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR";
+        assert!(matches!(
+            decode(
+                png,
+                Accept::Legacy {
+                    language: Some("de")
+                }
+            ),
+            Err(TextError::Undecodable { byte: 0, .. })
+        ));
     }
 
     #[test]
     fn regions_of_languages_as_users_name_them() {
-        assert_eq!(region_of("zh-Hant-TW"), Some("tw"));
-        assert_eq!(region_of("zh-HK"), Some("tw"));
-        assert_eq!(region_of("yue"), Some("tw"));
-        assert_eq!(region_of("sr-Latn"), Some("hr"));
-        assert_eq!(region_of("sr"), Some("rs"));
-        assert_eq!(region_of("pt_BR.UTF-8"), Some("pt"));
-        assert_eq!(region_of("EN"), None);
-        assert_eq!(region_of(""), None);
-        assert_eq!(region_of("xx-yy"), None);
+        let named = [
+            "zh-Hant-TW",
+            "zh-HK",
+            "yue",
+            "sr-Latn",
+            "sr",
+            "pt_BR.UTF-8",
+            "EN",
+            "",
+            "x-y",
+        ];
+        let (tw, hr, rs, pt) = (Some("tw"), Some("hr"), Some("rs"), Some("pt"));
+        assert_eq!(
+            named.map(region_of),
+            [tw, tw, tw, hr, rs, pt, None, None, None]
+        );
     }
 }

@@ -276,16 +276,15 @@ const CURRENCIES: [&str; 5] = ["US$", "R$", "€", "$", "£"];
 /// tables then say it.
 fn currency_after_amount(text: &str, currencies: &[&str]) -> String {
     let chars: Vec<char> = text.chars().collect();
-    let signs: Vec<Vec<char>> = currencies.iter().map(|s| s.chars().collect()).collect();
     let mut out = String::with_capacity(text.len() + 4);
     let mut k = 0;
     'scan: while k < chars.len() {
         if k == 0 || !chars[k - 1].is_alphanumeric() {
-            for sign in &signs {
-                if chars.get(k..k + sign.len()) != Some(&sign[..]) {
+            for sign in currencies {
+                let Some(length) = crate::script::written_at(&chars, k, sign) else {
                     continue;
-                }
-                let mut start = k + sign.len();
+                };
+                let mut start = k + length;
                 if chars.get(start).is_some_and(|c| c.is_whitespace()) {
                     start += 1;
                 }
@@ -295,7 +294,7 @@ fn currency_after_amount(text: &str, currencies: &[&str]) -> String {
                 }
                 out.extend(&chars[start..end]);
                 out.push(' ');
-                out.extend(sign);
+                out.push_str(sign);
                 k = end;
                 continue 'scan;
             }

@@ -61,10 +61,7 @@ pub fn said(language: &str, text: &str) -> String {
         let end = crate::script::digits_end(chars, k);
         let digits = &chars[k..end];
         let next = chars.get(end).copied();
-        let followed = |what: &str| {
-            let what: Vec<char> = what.chars().collect();
-            chars.get(end..end + what.len()) == Some(&what[..])
-        };
+        let followed = |what: &str| crate::script::written_at(chars, end, what).is_some();
         // A telephone number: a mobile's eleven digits from 1, digits from 0, or three groups
         // of digits and hyphens (400-820-8820), through its hyphens.
         let mut groups = vec![(k, end)];

@@ -867,11 +867,9 @@ fn counter_at(chars: &[char], at: usize) -> Option<(&'static Counter, usize)> {
         .flat_map(|c| {
             c.written
                 .iter()
-                .map(move |w| (c, w.chars().collect::<Vec<_>>()))
+                .filter_map(move |w| Some((c, crate::script::written_at(chars, at, w)?)))
         })
-        .filter(|(_, w)| chars.get(at..at + w.len()) == Some(&w[..]))
-        .max_by_key(|(_, w)| w.len())
-        .map(|(c, w)| (c, w.len()))
+        .max_by_key(|(_, length)| *length)
 }
 
 #[cfg(test)]

@@ -70,10 +70,9 @@ fn native(n: u64, counter: &str) -> String {
 /// The native counter written at `at` in `chars`, and the most it counts in native numbers.
 fn native_counter(chars: &[char], at: usize) -> Option<(&'static str, u64)> {
     NATIVE.iter().copied().find(|(counter, _)| {
-        let written: Vec<char> = counter.chars().collect();
-        let next = chars.get(at + written.len());
-        chars.get(at..at + written.len()) == Some(&written[..])
-            && !(*counter == "개" && matches!(next, Some('월' | '국')))
+        crate::script::written_at(chars, at, counter).is_some_and(|length| {
+            !(*counter == "개" && matches!(chars.get(at + length), Some('월' | '국')))
+        })
     })
 }
 

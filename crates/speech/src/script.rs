@@ -6,7 +6,8 @@
 //!   (`00:00:01,000 --> 00:00:02,500`); Advanced SubStation Alpha (`.ass`, `.ssa`, as
 //!   Aegisub, fansubs and ffmpeg write them): a script's header and styles, and each
 //!   `Dialogue:` event's fields around its text, override tags (`{\i1}`, `{\k20}`, `{\fad(…)}`)
-//!   and vector drawings (`{\p1}m 0 0 l …`), its line breaks (`\N`) read as breaks;
+//!   and vector drawings (`{\p1}m 0 0 l …`), its line breaks (`\N`) read as breaks, and
+//!   signs (on-screen text placed with `\pos` or `\move`), which nobody says;
 //! - markup: SSML (`<break time="500ms"/>`, `<prosody …>`), subtitle styling (`<i>`,
 //!   `<v Roger>`, `{\an8}`);
 //! - directions in square brackets (`[laughs]`, `[music]`), as subtitles for the deaf and game
@@ -230,8 +231,12 @@ const SUBSTATION_FIELDS: [&str; 10] = [
 /// `Dialogue:` event's text is split at its hard and soft line breaks (`\N`, `\n`), its hard
 /// spaces (`\h`) made spaces, its override blocks (`{…}`) taken out, and the vector drawing
 /// that `{\p1}` starts and `{\p0}` ends left out with them; an event whose times and text
-/// are those of another before it (a sign drawn twice, its border and its fill) is said once.
-/// `Comment:` events are not shown, and not said.
+/// are those of another before it (drawn twice, its border and its fill) is said once. Signs —
+/// events placed on the picture (`\pos`, `\move`, `\org`, `\clip`), as typesetters translate a
+/// shop's name or a letter; dialogue keeps to its style's place, at most moved to the top with
+/// `\an8` — are shown, not said: they are left out, and counted, since their words would
+/// otherwise be aligned onto whoever speaks meanwhile. `Comment:` events are not shown, and not
+/// said.
 fn substation(lines: &[&str]) -> Option<Events> {
     let events = lines
         .iter()
@@ -247,7 +252,7 @@ fn substation(lines: &[&str]) -> Option<Events> {
         left_out: Vec::new(),
     };
     let mut seen: Vec<((f32, f32), String)> = Vec::new();
-    let mut dialogue = false;
+    let (mut dialogue, mut signs) = (false, 0usize);
     for line in section {
         let Some((kind, rest)) = line.split_once(':') else {
             continue;
@@ -280,8 +285,16 @@ fn substation(lines: &[&str]) -> Option<Events> {
                         .push(format!("an event timed {start} to {end}"));
                     continue;
                 };
-                let (text, styled) = substation_text(text);
+                let Shown {
+                    text,
+                    styled,
+                    placed,
+                } = substation_text(text);
                 out.styled |= styled;
+                if placed {
+                    signs += 1;
+                    continue;
+                }
                 if text.trim().is_empty() || seen.contains(&(shown, text.clone())) {
                     continue;
                 }
@@ -294,28 +307,54 @@ fn substation(lines: &[&str]) -> Option<Events> {
             _ => {}
         }
     }
+    match signs {
+        0 => {}
+        1 => out
+            .left_out
+            .push("a sign (on-screen text placed with \\pos or \\move)".to_owned()),
+        n => out.left_out.push(format!(
+            "{n} signs (on-screen text placed with \\pos or \\move)"
+        )),
+    }
     dialogue.then_some(out)
 }
 
-/// A SubStation event's text as shown: line breaks (`\N`, `\n`) as breaks, hard spaces (`\h`)
-/// as spaces, without its override blocks or what it draws; and whether it had any.
-fn substation_text(text: &str) -> (String, bool) {
-    let mut out = String::with_capacity(text.len());
-    let (mut styled, mut drawing) = (false, false);
+/// A SubStation event's text as shown, and what its override tags said of it.
+struct Shown {
+    /// Its text: line breaks (`\N`, `\n`) as breaks, hard spaces (`\h`) as spaces, without
+    /// its override blocks or what it draws.
+    text: String,
+    /// It had override tags.
+    styled: bool,
+    /// It is placed on the picture (`\pos`, `\move`, `\org`, `\clip`): a sign, translated
+    /// on-screen text that nobody says.
+    placed: bool,
+}
+
+/// What a SubStation event's `text` shows ([`Shown`]).
+fn substation_text(text: &str) -> Shown {
+    let mut out = Shown {
+        text: String::with_capacity(text.len()),
+        styled: false,
+        placed: false,
+    };
+    let mut drawing = false;
     let mut rest = text;
     while !rest.is_empty() {
         if let Some(block) = rest.strip_prefix('{')
             && let Some(close) = block.find('}')
         {
-            let tags = &block[..close];
-            styled = true;
-            // `\p1` (or any scale) draws until `\p0`; `\pos(…)` is a position.
-            for tag in tags.split('\\').skip(1) {
+            out.styled = true;
+            for tag in block[..close].split('\\').skip(1) {
+                // `\p1` (or any scale) draws until `\p0`; `\pos(…)` is a position.
                 if let Some(scale) = tag.strip_prefix('p')
                     && let Ok(scale) = scale.trim().parse::<u32>()
                 {
                     drawing = scale > 0;
                 }
+                out.placed |= ["pos(", "move(", "org(", "clip(", "iclip("]
+                    .iter()
+                    .any(|placing| tag.trim_start().starts_with(placing));
             }
             rest = &block[close + 1..];
             continue;
@@ -333,18 +372,18 @@ fn substation_text(text: &str) -> (String, bool) {
             };
             if let Some(r) = replaced {
                 if !drawing {
-                    out.push(r);
+                    out.text.push(r);
                 }
                 rest = &after[next.len_utf8()..];
                 continue;
             }
         }
         if !drawing {
-            out.push(c);
+            out.text.push(c);
         }
         rest = after;
     }
-    (out, styled)
+    out
 }
 
 /// Cues from their `times` and what each `said`, in order of their start: those that overlap
@@ -946,6 +985,19 @@ pub(crate) fn base_language(language: &str) -> &str {
     language.split(['-', '+', '_']).next().unwrap_or_default()
 }
 
+/// How many characters `word` takes where it is written at `at` in `chars` (a counter after
+/// a number, a word after another); `None` where it is not written there.
+pub(crate) fn written_at(chars: &[char], at: usize, word: &str) -> Option<usize> {
+    let mut end = at;
+    for c in word.chars() {
+        if chars.get(end) != Some(&c) {
+            return None;
+        }
+        end += 1;
+    }
+    Some(end - at)
+}
+
 /// Where the digits that start at `k` end.
 pub(crate) fn digits_end(chars: &[char], k: usize) -> usize {
     let mut end = k;
@@ -1467,12 +1519,17 @@ mod tests {
         assert_eq!(spoken("I\u{2019}m here.").text, "I'm here.");
     }
 
+    /// The words a transcript says aloud.
+    fn words(said: &Spoken) -> Vec<&str> {
+        said.text.split_whitespace().collect()
+    }
+
     #[test]
     fn subtitles_are_read_for_their_words() {
         let srt = "1\n00:00:00,100 --> 00:00:01,000\nHello there,\n\n2\n00:00:01,000 --> 00:00:03,000\n<i>how are you today?</i> I am fine.\n";
         let said = spoken(srt);
         assert_eq!(
-            said.text.split_whitespace().collect::<Vec<_>>(),
+            words(&said),
             [
                 "Hello", "there,", "how", "are", "you", "today?", "I", "am", "fine."
             ]
@@ -1489,24 +1546,30 @@ mod tests {
         // As ffmpeg writes one from a SubRip file (`ffmpeg -i in.srt out.ass`).
         let ass = "[Script Info]\n; Script generated by FFmpeg/Lavc\nScriptType: v4.00+\nPlayResX: 384\n\n[V4+ Styles]\nFormat: Name, Fontname, Fontsize, PrimaryColour, SecondaryColour, OutlineColour, BackColour, Bold, Italic, Underline, StrikeOut, ScaleX, ScaleY, Spacing, Angle, BorderStyle, Outline, Shadow, Alignment, MarginL, MarginR, MarginV, Encoding\nStyle: Default,Arial,16,&Hffffff,&Hffffff,&H0,&H0,0,0,0,0,100,100,0,0,1,1,0,2,10,10,10,0\n\n[Events]\nFormat: Layer, Start, End, Style, Name, MarginL, MarginR, MarginV, Effect, Text\nDialogue: 0,0:00:00.50,0:00:02.00,Default,,0,0,0,,{\\i1}Hello{\\i0} there,\\Nmy friend.\nDialogue: 0,0:00:02.50,0:00:04.00,Default,,0,0,0,,{\\an8}How are you?\n";
         let said = spoken(ass);
-        assert_eq!(
-            said.text.split_whitespace().collect::<Vec<_>>(),
-            ["Hello", "there,", "my", "friend.", "How", "are", "you?"]
-        );
+        let expected = ["Hello", "there,", "my", "friend.", "How", "are", "you?"];
+        assert_eq!(words(&said), expected);
         assert_eq!(said.cues.len(), 2);
         assert_eq!(said.cues[0].shown, 0.5..2.0);
         assert_eq!(said.cues[0].text, "Hello there,\nmy friend.");
         assert_eq!(said.cues[1].shown, 2.5..4.0);
         assert_eq!(said.left_out, ["the subtitle's override tags"]);
         // As Aegisub and fansubs write them: a speaker's name field, karaoke timing, a hard
-        // space, a sign drawn twice (border and fill), a vector drawing, a comment, commas in
-        // the text, CRLF line ends, and a section after the events.
-        let ass = "[Script Info]\r\nTitle: Episode 1\r\n\r\n[Events]\r\nFormat: Layer, Start, End, Style, Name, MarginL, MarginR, MarginV, Effect, Text\r\nComment: 0,0:00:00.00,0:00:01.00,Default,,0,0,0,,Not said, a translator's note\r\nDialogue: 0,0:00:01.00,0:00:03.00,Default,Kenji,0,0,0,,Well, well,\\hwell.\r\nDialogue: 0,0:00:03.00,0:00:05.00,OP,,0,0,0,Karaoke,{\\k20}Ma{\\k30}ma {\\k25}mi{\\k40}a\r\nDialogue: 1,0:00:05.00,0:00:06.00,Sign,,0,0,0,,{\\pos(10,20)}Bakery\r\nDialogue: 0,0:00:05.00,0:00:06.00,Sign,,0,0,0,,{\\pos(10,20)\\bord3}Bakery\r\nDialogue: 0,0:00:06.00,0:00:07.00,Default,,0,0,0,,{\\p1}m 0 0 l 100 0 100 100{\\p0}Bye now.\r\n\r\n[Aegisub Project Garbage]\r\nDialogue: not an event\r\n";
+        // space, a line drawn twice (border and fill), a sign placed on the picture, a vector
+        // drawing, a comment, commas in the text, CRLF line ends, and a section after the
+        // events.
+        let ass = "[Script Info]\r\nTitle: Episode 1\r\n\r\n[Events]\r\nFormat: Layer, Start, End, Style, Name, MarginL, MarginR, MarginV, Effect, Text\r\nComment: 0,0:00:00.00,0:00:01.00,Default,,0,0,0,,Not said, a translator's note\r\nDialogue: 0,0:00:01.00,0:00:03.00,Default,Kenji,0,0,0,,Well, well,\\hwell.\r\nDialogue: 0,0:00:03.00,0:00:05.00,OP,,0,0,0,Karaoke,{\\k20}Ma{\\k30}ma {\\k25}mi{\\k40}a\r\nDialogue: 1,0:00:05.00,0:00:06.00,Default,,0,0,0,,{\\an8}Hello!\r\nDialogue: 0,0:00:05.00,0:00:06.00,Default,,0,0,0,,{\\an8\\bord3}Hello!\r\nDialogue: 0,0:00:04.00,0:00:06.00,Sign,,0,0,0,,{\\fad(200,0)\\pos(120,40)\\frz5}Bakery\r\nDialogue: 0,0:00:06.00,0:00:07.00,Default,,0,0,0,,{\\p1}m 0 0 l 100 0 100 100{\\p0}Bye now.\r\n\r\n[Aegisub Project Garbage]\r\nDialogue: not an event\r\n";
         let said = spoken(ass);
         assert_eq!(
-            said.text.split_whitespace().collect::<Vec<_>>(),
+            words(&said),
             [
-                "Well,", "well,", "well.", "Mama", "mia", "Bakery", "Bye", "now."
+                "Well,", "well,", "well.", "Mama", "mia", "Hello!", "Bye", "now."
+            ]
+        );
+        assert_eq!(
+            said.left_out,
+            [
+                "the subtitle's override tags",
+                "a sign (on-screen text placed with \\pos or \\move)"
             ]
         );
         assert_eq!(
@@ -1532,7 +1595,7 @@ mod tests {
     /// Asserts that `typed` says `words` aloud, and that its note lists what was left out.
     fn says(typed: &str, words: &[&str], note: &str) {
         let said = spoken(typed);
-        assert_eq!(said.text.split_whitespace().collect::<Vec<_>>(), words);
+        assert_eq!(self::words(&said), words);
         assert_eq!(
             said.note().unwrap(),
             format!("left out of the transcript as not spoken: {note}")
