@@ -18,7 +18,8 @@
 //!    by `chardetng` (Firefox's detector for legacy web pages) and told the language the text is
 //!    in, which is what tells a short line of Japanese kana in Shift_JIS from Russian in
 //!    windows-1251 ([`region_of`]). The file must decode without a malformed byte in the
-//!    encoding guessed; [`Text::guessed`] says that it was guessed, for a note to the user.
+//!    encoding guessed, and to no control character (a picture or a program is no text);
+//!    [`Text::guessed`] says that it was guessed, for a note to the user.
 //!
 //! ```
 //! use faceanim_files::text::{Accept, decode};
