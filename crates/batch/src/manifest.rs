@@ -1,5 +1,5 @@
-//! The manifest: one row per job, as JSON Lines or CSV, checked row by row before any work
-//! starts.
+//! The manifest: one row per job, as JSON Lines or a sheet (CSV), checked row by row before
+//! any work starts.
 //!
 //! A JSON Lines row is an object:
 //!
@@ -9,11 +9,13 @@
 //!  "outputs": ["out/hero_0001.glb", "out/hero_0001.json"], "options": {"face": true}}
 //! ```
 //!
-//! A CSV manifest has a header naming the same fields; `outputs` holds the outputs separated by
-//! `;`, and every column that is not a field is an option of the row's command (an empty cell
-//! gives none). Paths are relative to the manifest's folder. A row's problem is the row's: it
-//! is named with its line and field, and the other rows still run; only a manifest that cannot
-//! be read at all stops the batch.
+//! A sheet (CSV, or cells separated by `;` or tabs as spreadsheets save them where a comma is
+//! the decimal point, and as their "Unicode text") has a header naming the same fields;
+//! `outputs` holds the outputs separated by `;`, and every column that is not a field is an
+//! option of the row's command (an empty cell gives none; TRUE or FALSE, in any case or the
+//! spreadsheet's language, a switch). Paths are relative to the manifest's folder. A row's
+//! problem is the row's: it is named with its line and field, and the other rows still run;
+//! only a manifest that cannot be read at all stops the batch.
 
 use std::collections::{BTreeMap, HashMap};
 use std::ffi::OsString;
@@ -337,19 +339,23 @@ pub struct Manifest {
     pub path: PathBuf,
     /// Its rows, in order.
     pub entries: Vec<Entry>,
-    /// The legacy code page a CSV manifest that is not Unicode was read in, guessed from its
+    /// The legacy code page a sheet that is not Unicode was read in, guessed from its
     /// bytes ([`faceanim_files::text`]): worth telling the user.
     pub guessed_encoding: Option<&'static str>,
 }
 
 impl Manifest {
-    /// Reads and checks the manifest at `path`: CSV when its name ends in `.csv`, JSON Lines
-    /// otherwise. Every row is checked (fields, values, input files present, ids and outputs
-    /// unique); a bad row stays in [`Manifest::entries`] with its problem.
+    /// Reads and checks the manifest at `path`: a sheet when its name ends in `.csv`, `.tsv` or
+    /// `.tab` (cells separated by commas, `;` or tabs, as spreadsheets save them in every
+    /// language), JSON Lines when it ends in `.jsonl`, `.ndjson` or `.json`, and otherwise (a
+    /// spreadsheet's "Unicode text" `.txt`) JSON Lines when its first line is an object, a
+    /// sheet when not. Every row is checked (fields, values, input files present, ids and
+    /// outputs unique); a bad row stays in [`Manifest::entries`] with its problem.
     ///
     /// # Errors
     /// [`BatchError`] when the file cannot be read, is not text (JSON Lines: not UTF-8 or
-    /// UTF-16; CSV: nor a legacy code page), has no rows, or (CSV) has no usable header.
+    /// UTF-16; a sheet: nor a legacy code page), has no rows, or (a sheet) has no usable
+    /// header.
     pub fn read(path: &Path) -> Result<Manifest, BatchError> {
         let size = std::fs::metadata(path)
             .map_err(|source| BatchError::io(path, source))?
@@ -363,21 +369,31 @@ impl Manifest {
         let bytes = std::fs::read(path).map_err(|source| BatchError::io(path, source))?;
         // A manifest named without a folder: paths in it are the working folder's, as given.
         let base = path.parent().unwrap_or(Path::new("")).to_owned();
-        let is_csv = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-        // Spreadsheets write CSV with a byte-order mark (Excel's "CSV UTF-8"), or in the
-        // system's code page (its "CSV": Shift_JIS on a Japanese Windows); JSON is Unicode.
-        let accept = if is_csv {
-            Accept::Legacy { language: None }
-        } else {
+        let named = Layout::named(path);
+        // Spreadsheets write sheets with a byte-order mark (Excel's "CSV UTF-8"), in UTF-16
+        // (its "Unicode text"), or in the system's code page (its "CSV": Shift_JIS on a
+        // Japanese Windows); JSON is Unicode.
+        let accept = if named == Some(Layout::JsonLines) {
             Accept::Unicode
-        };
-        let text = decode(&bytes, accept).map_err(|e| BatchError::manifest(path, e.to_string()))?;
-        let raw = if is_csv {
-            csv_rows(&text.text).map_err(|problem| BatchError::manifest(path, problem))?
         } else {
-            jsonl_rows(&text.text)
+            Accept::Legacy { language: None }
+        };
+        let unreadable =
+            |e: faceanim_files::text::TextError| BatchError::manifest(path, e.to_string());
+        let text = decode(&bytes, accept).map_err(unreadable)?;
+        let layout = named.unwrap_or(if text.text.trim_start().starts_with('{') {
+            Layout::JsonLines
+        } else {
+            Layout::Sheet
+        });
+        if layout == Layout::JsonLines && text.guessed {
+            decode(&bytes, Accept::Unicode).map_err(unreadable)?;
+        }
+        let raw = match layout {
+            Layout::Sheet => {
+                sheet_rows(&text.text).map_err(|problem| BatchError::manifest(path, problem))?
+            }
+            Layout::JsonLines => jsonl_rows(&text.text),
         };
         if raw.is_empty() {
             return Err(BatchError::manifest(path, "has no rows".to_owned()));
@@ -409,11 +425,32 @@ impl Manifest {
     }
 }
 
+/// How a manifest's rows are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Layout {
+    /// One JSON object a line.
+    JsonLines,
+    /// A header and rows of cells: CSV, or cells separated by `;` or tabs.
+    Sheet,
+}
+
+impl Layout {
+    /// The layout the file's name says, if it says one.
+    fn named(path: &Path) -> Option<Layout> {
+        let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+        match extension.as_str() {
+            "csv" | "tsv" | "tab" => Some(Layout::Sheet),
+            "jsonl" | "ndjson" | "json" => Some(Layout::JsonLines),
+            _ => None,
+        }
+    }
+}
+
 /// A row before its check: its line and its values by name.
 struct RawRow {
     line: usize,
     values: Result<Vec<(String, Value)>, RowError>,
-    /// From a CSV manifest, whose columns that are not fields are options (a JSON row gives
+    /// From a sheet, whose columns that are not fields are options (a JSON row gives
     /// them in `options`, so a stray key of it is a mistake).
     csv: bool,
 }
@@ -446,23 +483,103 @@ fn jsonl_rows(text: &str) -> Vec<RawRow> {
         .collect()
 }
 
-/// The rows of a CSV manifest (RFC 4180: fields quoted with `"`, quotes doubled inside), each
-/// cell under its header's name; empty cells are left out.
-fn csv_rows(text: &str) -> Result<Vec<RawRow>, String> {
-    let records = csv_records(text)?;
+/// The words spreadsheets write for a TRUE and a FALSE cell, in the languages of their menus
+/// (Excel writes a sheet's switches in them: `WAHR` on a German Windows, `VRAI` on a French
+/// one), read without regard to case.
+const SWITCH_WORDS: [(&str, &str); 15] = [
+    ("true", "false"),
+    ("wahr", "falsch"),
+    ("vrai", "faux"),
+    ("verdadero", "falso"),
+    ("vero", "falso"),
+    ("verdadeiro", "falso"),
+    ("waar", "onwaar"),
+    ("sant", "falskt"),
+    ("sand", "falsk"),
+    ("sann", "usann"),
+    ("tosi", "epätosi"),
+    ("prawda", "fałsz"),
+    ("pravda", "nepravda"),
+    ("истина", "ложь"),
+    ("doğru", "yanlış"),
+];
+
+/// How a sheet's cells are separated, and the line its header is on.
+struct Separator {
+    cell: char,
+    header_line: usize,
+}
+
+impl Separator {
+    /// Excel's `sep=;` line when the sheet starts with one (it is not a row); else, of `,`, `;`
+    /// and tab, the one that cuts the header into the most names a manifest knows — `;` is
+    /// what spreadsheets write where a comma is the decimal point (Excel's "CSV" in Germany,
+    /// France, Spain, Russia, Brazil…), tab their "Unicode text" — and `,` when none does.
+    fn of(text: &str) -> (Separator, &str) {
+        // The first line without its end (`lines` takes a CR before the LF too).
+        let first = text.lines().next().unwrap_or("");
+        let mut given = first.chars();
+        if given
+            .by_ref()
+            .take(4)
+            .collect::<String>()
+            .eq_ignore_ascii_case("sep=")
+            && let (Some(cell), None) = (given.next(), given.next())
+        {
+            let rest = text.get(first.len()..).unwrap_or("");
+            let rest = rest.strip_prefix('\r').unwrap_or(rest);
+            let rest = rest.strip_prefix('\n').unwrap_or(rest);
+            return (
+                Separator {
+                    cell,
+                    header_line: 2,
+                },
+                rest,
+            );
+        }
+        let known = |name: &str| {
+            let name = name.trim().trim_matches('"').trim();
+            matches!(name, "id" | "kind" | "outputs" | "options")
+                || Field::from_name(name).is_some()
+        };
+        let names = |cell: char| first.split(cell).filter(|n| known(n)).count();
+        let cell = [',', ';', '\t']
+            .into_iter()
+            .fold((',', 0), |best, cell| {
+                let n = names(cell);
+                if n > best.1 { (cell, n) } else { best }
+            })
+            .0;
+        (
+            Separator {
+                cell,
+                header_line: 1,
+            },
+            text,
+        )
+    }
+}
+
+/// The rows of a sheet (CSV, RFC 4180, or cells separated by `;` or tabs: fields quoted with
+/// `"`, quotes doubled inside), each cell under its header's name; empty cells are left out,
+/// and so are rows with no cell filled and columns with no name and no cell filled (what
+/// spreadsheets write for the blank rows and columns of a sheet's used range).
+fn sheet_rows(text: &str) -> Result<Vec<RawRow>, String> {
+    let (separator, text) = Separator::of(text);
+    let records = sheet_records(text, &separator)?;
     let mut records = records.into_iter();
-    let Some((_, header)) = records.next() else {
+    let Some((header_line, header)) = records.next() else {
         return Ok(Vec::new());
     };
     let header: Vec<String> = header.into_iter().map(|h| h.trim().to_owned()).collect();
     let mut seen = HashMap::new();
     for (k, name) in header.iter().enumerate() {
         if name.is_empty() {
-            return Err(format!("line 1: column {} has no name", k + 1));
+            continue;
         }
         if let Some(first) = seen.insert(name.as_str(), k) {
             return Err(format!(
-                "line 1: column `{name}` is named twice (columns {} and {})",
+                "line {header_line}: column `{name}` is named twice (columns {} and {})",
                 first + 1,
                 k + 1
             ));
@@ -470,19 +587,27 @@ fn csv_rows(text: &str) -> Result<Vec<RawRow>, String> {
     }
     for needed in ["id", "kind", "outputs"] {
         if !seen.contains_key(needed) {
-            return Err(format!("line 1: the header has no `{needed}` column"));
+            return Err(format!(
+                "line {header_line}: the header has no `{needed}` column"
+            ));
         }
     }
+    // A row may end before columns that have no name (a header written with a separator
+    // after its last name).
+    let named = header
+        .iter()
+        .rposition(|h| !h.is_empty())
+        .map_or(0, |k| k + 1);
+    let decimal_comma = separator.cell == ';';
     Ok(records
-        .filter(|(_, cells)| !(cells.len() == 1 && cells[0].trim().is_empty()))
+        .filter(|(_, cells)| cells.iter().any(|c| !c.trim().is_empty()))
         .map(|(line, cells)| {
-            let values = if cells.len() == header.len() {
-                Ok(header
-                    .iter()
-                    .zip(cells)
-                    .filter(|(_, cell)| !cell.trim().is_empty())
-                    .map(|(name, cell)| (name.clone(), csv_value(name, cell.trim())))
-                    .collect())
+            let values = if (named..=header.len()).contains(&cells.len()) {
+                sheet_values(&header, cells, decimal_comma).map_err(|problem| RowError {
+                    line,
+                    field: None,
+                    problem,
+                })
             } else {
                 Err(RowError {
                     line,
@@ -499,31 +624,80 @@ fn csv_rows(text: &str) -> Result<Vec<RawRow>, String> {
         .collect())
 }
 
-/// A CSV cell as the value a JSON row would give: `outputs` split on `;`, `true`/`false`
-/// switches.
-fn csv_value(column: &str, cell: &str) -> Value {
-    match (column, cell) {
-        ("outputs", _) => Value::Array(
+/// A sheet row's values by name, as a JSON row would give them.
+fn sheet_values(
+    header: &[String],
+    cells: Vec<String>,
+    decimal_comma: bool,
+) -> Result<Vec<(String, Value)>, String> {
+    let mut values = Vec::new();
+    for (k, (name, cell)) in header.iter().zip(cells).enumerate() {
+        let cell = cell.trim();
+        if cell.is_empty() {
+            continue;
+        }
+        if name.is_empty() {
+            return Err(format!(
+                "column {} has no name in the header, but this row has `{cell}` in it",
+                k + 1
+            ));
+        }
+        values.push((name.clone(), sheet_value(name, cell, decimal_comma)));
+    }
+    Ok(values)
+}
+
+/// A sheet's cell as the value a JSON row would give: `outputs` split on `;`; in an option's
+/// column a spreadsheet's TRUE or FALSE (in its language) is a switch, and in a sheet separated
+/// by `;` a number with a decimal comma (`29,97`) is that number (`29.97`). A field's cell is
+/// its text as written.
+fn sheet_value(column: &str, cell: &str, decimal_comma: bool) -> Value {
+    if column == "outputs" {
+        return Value::Array(
             cell.split(';')
                 .map(str::trim)
                 .filter(|s| !s.is_empty())
                 .map(|s| Value::String(s.to_owned()))
                 .collect(),
-        ),
-        (_, "true") => Value::Bool(true),
-        (_, "false") => Value::Bool(false),
-        _ => Value::String(cell.to_owned()),
+        );
     }
+    if matches!(column, "id" | "kind") || Field::from_name(column).is_some() {
+        return Value::String(cell.to_owned());
+    }
+    let lower = cell.to_lowercase();
+    if let Some(on) = SWITCH_WORDS.iter().find_map(|(yes, no)| {
+        if lower == *yes {
+            Some(true)
+        } else if lower == *no {
+            Some(false)
+        } else {
+            None
+        }
+    }) {
+        return Value::Bool(on);
+    }
+    if decimal_comma && let Some(number) = with_decimal_point(cell) {
+        return Value::String(number);
+    }
+    Value::String(cell.to_owned())
 }
 
-/// The records of a CSV text, each with the line it starts on.
-fn csv_records(text: &str) -> Result<Vec<(usize, Vec<String>)>, String> {
+/// `29,97` as `29.97`: digits, one comma, digits, and a sign before them.
+fn with_decimal_point(cell: &str) -> Option<String> {
+    let digits = cell.strip_prefix(['-', '+']).unwrap_or(cell);
+    let (whole, fraction) = digits.split_once(',')?;
+    let all_digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    (all_digits(whole) && all_digits(fraction)).then(|| cell.replacen(',', ".", 1))
+}
+
+/// The records of a sheet's text, each with the line it starts on.
+fn sheet_records(text: &str, separator: &Separator) -> Result<Vec<(usize, Vec<String>)>, String> {
     let mut records = Vec::new();
     let mut cells = Vec::new();
     let mut cell = String::new();
     let mut quoted = false;
-    let mut line = 1;
-    let mut start = 1;
+    let mut line = separator.header_line;
+    let mut start = line;
     let mut chars = text.chars().peekable();
     while let Some(c) = chars.next() {
         match (quoted, c) {
@@ -542,7 +716,7 @@ fn csv_records(text: &str) -> Result<Vec<(usize, Vec<String>)>, String> {
                 cell.clear();
                 quoted = true;
             }
-            (false, ',') => cells.push(std::mem::take(&mut cell)),
+            (false, c) if c == separator.cell => cells.push(std::mem::take(&mut cell)),
             (false, '\r') if chars.peek() == Some(&'\n') => {}
             (false, '\n') => {
                 cells.push(std::mem::take(&mut cell));
@@ -737,7 +911,7 @@ fn check_row(
         }
         fields.insert(field.name(), text);
     }
-    // JSON rows put options under `options`; a CSV's extra columns are options, a JSON row's
+    // JSON rows put options under `options`; a sheet's extra columns are options, a JSON row's
     // extra keys are mistakes.
     let mut all_options = options;
     for (name, value) in extra {

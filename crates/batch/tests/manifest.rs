@@ -247,3 +247,92 @@ proptest! {
         }
     }
 }
+
+/// A sheet as spreadsheets save it in other languages, written by Python's `csv` module (not
+/// the reader's code) in Excel's dialects, reads as the plain CSV does: Excel's "CSV" on a
+/// German Windows (cells separated by `;`, windows-1252, `WAHR`/`FALSCH`, a decimal comma, a
+/// blank column and a blank row of the used range), its "Unicode text" (tabs, UTF-16, `.txt`),
+/// a sheet that names its separator on a `sep=;` line first, and a `.tsv`.
+#[test]
+fn a_sheet_saved_in_any_language_reads_as_the_plain_csv_does() {
+    let plain = "id,kind,speech,text,outputs,fps,face\n\
+        a,lipsync,a.wav,\"Guten Tag; schön, dass du da bist\",o/a.json;o/a.csv,29.97,true\n\
+        b,lipsync,a.wav,true,o/b.json,25,false\n";
+    let write = r#"
+import csv, sys
+header = ["id", "kind", "speech", "text", "outputs", "fps", "face"]
+rows = [["a", "lipsync", "a.wav", "Guten Tag; schön, dass du da bist", "o/a.json;o/a.csv", 29.97, True],
+        ["b", "lipsync", "a.wav", "true", "o/b.json", 25, False]]
+def sheet(name, encoding, words, decimal, blank=False, **dialect):
+    with open(name, "w", newline="", encoding=encoding) as f:
+        if dialect.pop("sep", False):
+            f.write("sep=" + dialect["delimiter"] + "\r\n")
+        out = csv.writer(f, **dialect)
+        cell = lambda v: words[v] if isinstance(v, bool) else str(v).replace(".", decimal) if isinstance(v, float) else v
+        out.writerow(header + [""] * blank)
+        for k, row in enumerate(rows):
+            out.writerow([cell(v) for v in row] + [""] * blank)
+            if blank and k == 0:
+                out.writerow([""] * (len(header) + 1))
+sheet("de.csv", "cp1252", {True: "WAHR", False: "FALSCH"}, ",", blank=True, delimiter=";")
+sheet("unicode.txt", "utf-16", {True: "TRUE", False: "FALSE"}, ".", dialect="excel-tab")
+sheet("fr.csv", "utf-8-sig", {True: "VRAI", False: "FAUX"}, ",", sep=True, delimiter=";")
+sheet("libre.tsv", "utf-8", {True: "true", False: "false"}, ".", delimiter="\t")
+"#;
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a.wav"), b"RIFF").unwrap();
+    let out = std::process::Command::new("python3")
+        .args(["-c", write])
+        .current_dir(dir.path())
+        .output()
+        .expect("python3");
+    assert!(out.status.success(), "{out:?}");
+    // Each row as it would run: its id, kind, fields, outputs and options, not its line.
+    let rows = |name: &str| {
+        let manifest = Manifest::read(&dir.path().join(name)).unwrap_or_else(|e| panic!("{e}"));
+        manifest
+            .entries
+            .into_iter()
+            .map(|e| {
+                let row = e.row.unwrap_or_else(|e| panic!("{name}: {e}"));
+                (row.id, row.kind, row.fields, row.outputs, row.options)
+            })
+            .collect::<Vec<_>>()
+    };
+    std::fs::write(dir.path().join("plain.csv"), plain).unwrap();
+    let want = rows("plain.csv");
+    assert_eq!(want.len(), 2);
+    assert_eq!(want[0].4["fps"], OptionValue::Value("29.97".to_owned()));
+    assert_eq!(want[1].4["face"], OptionValue::Flag(false));
+    assert_eq!(
+        want[1].2.get("text").map(String::as_str),
+        Some("true"),
+        "a field's cell is its text, even when it reads as a switch"
+    );
+    for name in ["de.csv", "unicode.txt", "fr.csv", "libre.tsv"] {
+        assert_eq!(rows(name), want, "{name}");
+    }
+    // Lines are the file's: the German sheet's second row is on line 4, after the blank one;
+    // a named separator's header is on line 2.
+    let de = Manifest::read(&dir.path().join("de.csv")).unwrap();
+    assert_eq!(de.entries[1].line, 4);
+    let fr = Manifest::read(&dir.path().join("fr.csv")).unwrap();
+    assert_eq!(fr.entries[0].line, 3);
+    // A cell under a column with no name is the row's problem, not lost.
+    let path = dir.path().join("stray.csv");
+    std::fs::write(
+        &path,
+        "id;kind;speech;outputs;\na;lipsync;a.wav;o/a.json;\nb;lipsync;a.wav;o/b.json;note\n",
+    )
+    .unwrap();
+    let stray = Manifest::read(&path).unwrap();
+    assert!(stray.entries[0].row.is_ok());
+    assert_eq!(
+        problem(&stray, 1),
+        (
+            3,
+            None,
+            "column 5 has no name in the header, but this row has `note` in it".to_owned()
+        )
+    );
+}

@@ -22,8 +22,8 @@ use faceanim_batch::select::Selection;
 /// `faceanim batch`'s arguments.
 #[derive(Debug, Args)]
 pub struct BatchArgs {
-    /// The manifest: JSON Lines, or CSV when its name ends in .csv; one row per job
-    /// (docs/batch.md). Paths in it are relative to its folder.
+    /// The manifest: JSON Lines, or a sheet (.csv, .tsv, a spreadsheet's "Unicode text" .txt;
+    /// cells separated by commas, semicolons or tabs); one row per job (docs/batch.md). Paths in it are relative to its folder.
     pub manifest: PathBuf,
     /// Run only the row at this index (0-based, among the rows): the worker contract. Without
     /// it, JOB_COMPLETION_INDEX, AWS_BATCH_JOB_ARRAY_INDEX or SLURM_ARRAY_TASK_ID name the row
