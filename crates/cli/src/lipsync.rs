@@ -185,28 +185,18 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     }
     let name = crate::input::stem(&args.speech, "speech");
     // With the face, the head moves too (nods on accents, a turn per phrase).
-    let take = match &gestures {
-        Some(gestures) => {
-            let step = 1.0 / f64::from(args.fps);
-            let frames = lip_sync
-                .frames
-                .iter()
-                .enumerate()
-                .map(|(k, weights)| faceanim_take::ReceivedFrame {
-                    time: k as f64 * step,
-                    weights: weights.clone(),
-                    head: Some(gestures.head_at(k as f32 / args.fps)),
-                })
-                .collect();
-            Take::from_received(
-                &character,
-                &name,
-                frames,
-                faceanim_take::Filtering::new(1, None)?,
-            )?
-        }
-        None => Take::from_weights(&character, &name, args.fps, &lip_sync.frames)?,
-    };
+    let heads: Option<Vec<[f32; 3]>> = gestures.as_ref().map(|gestures| {
+        (0..lip_sync.frames.len())
+            .map(|k| gestures.head_at(k as f32 / args.fps))
+            .collect()
+    });
+    let take = Take::from_weights(
+        &character,
+        &name,
+        args.fps,
+        &lip_sync.frames,
+        heads.as_deref(),
+    )?;
     let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
     for (path, format) in outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation, args.glb)?;

@@ -265,7 +265,7 @@ impl Rig {
 /// pose, the gaze and the jaw turn (the rest of the character on one bone at the origin), each
 /// with no rotation at rest and at its bone's place in character space, and each vertex's share
 /// of them summed from the file's own skinning (a vertex on a hair bone under the head follows
-/// the head). Its poses are the export's turns ([`Rig::channels`]) of the same bones, so the
+/// the head). Its poses are the export's turns (`Rig::channels`) of the same bones, so the
 /// view turns what the exported file turns.
 #[derive(Debug, Clone)]
 pub struct ViewRig {

@@ -36,20 +36,22 @@ const EYE_SIDEWAYS_DEGREES: f32 = 30.0;
 const EYE_VERTICAL_DEGREES: f32 = 25.0;
 
 /// `HH:MM:SS:FF.mmm` for frame `index` at `fps`: frames counted at the rounded rate, and the
-/// fraction of a frame in thousandths (0 for integer rates).
+/// fraction of a frame in thousandths (0 for integer rates). Counted in whole thousandths of a
+/// frame, so that a time a rounding error short of a frame is that frame (frame 335 at 240 fps
+/// is `00:00:01:95.000`, not `94.999`).
 fn timecode(index: usize, fps: f32) -> String {
     let seconds = index as f64 / f64::from(fps);
-    let whole = seconds.floor();
-    let rate = f64::from(fps).round().max(1.0);
-    let frame = (seconds - whole) * rate;
-    let total = whole as u64;
+    let rate = f64::from(fps).round().max(1.0) as u64;
+    let thousandths = (seconds * rate as f64 * 1000.0).round() as u64;
+    let frames = thousandths / 1000;
+    let total = frames / rate;
     format!(
         "{:02}:{:02}:{:02}:{:02}.{:03}",
         total / 3600,
         (total / 60) % 60,
         total % 60,
-        frame.floor() as u64,
-        ((frame - frame.floor()) * 1000.0).round().min(999.0) as u64
+        frames % rate,
+        thousandths % 1000
     )
 }
 
@@ -118,9 +120,10 @@ pub fn to_csv(clip: &Clip) -> String {
     out
 }
 
-/// The frame rates a Live Link Face timecode counts in, slowest first.
-const RATES: [f32; 7] = [24.0, 25.0, 30.0, 48.0, 50.0, 60.0, 120.0];
-/// The longest recording read: one hour at the fastest rate.
+/// The frame rates a Live Link Face timecode counts in, slowest first (240: what faceanim's
+/// lip sync writes at its fastest).
+const RATES: [f32; 8] = [24.0, 25.0, 30.0, 48.0, 50.0, 60.0, 120.0, 240.0];
+/// The longest recording read: one hour at 120 fps.
 const MAX_FRAMES: usize = 3600 * 120;
 
 /// Why a Live Link Face CSV could not be read: the line (1 is the header) and what is wrong.
@@ -258,7 +261,7 @@ pub fn from_csv(text: &str) -> Result<Clip, CsvError> {
         .ok_or_else(|| {
             at(
                 2,
-                format!("frame number {highest} in a timecode: faster than 120 fps"),
+                format!("frame number {highest} in a timecode: faster than 240 fps"),
             )
         })?;
     let count_of =
@@ -418,5 +421,9 @@ mod tests {
         assert_eq!(timecode(0, 29.97), "00:00:00:00.000");
         assert_eq!(timecode(3600 * 30, 30.0), "01:00:00:00.000");
         assert_eq!(timecode(1, 60.0), "00:00:00:01.000");
+        assert_eq!(timecode(335, 240.0), "00:00:01:95.000");
+        assert_eq!(timecode(59, 60.0), "00:00:00:59.000");
+        assert_eq!(timecode(30, 30_000.0 / 1001.0), "00:00:01:00.030");
+        assert_eq!(timecode(1, 29.97), "00:00:00:01.001");
     }
 }

@@ -137,7 +137,8 @@ impl Take {
     }
 
     /// A take of frames that arrived as `character`'s weights (named `source`), keeping their
-    /// arrival times; the frames are named `{source}_{n}`.
+    /// arrival times, at the rate [`recorded_fps`] estimates from them; the frames are named
+    /// `{source}_{n}`.
     ///
     /// # Errors
     /// [`TakeError::Mismatch`] when a frame has another number of weights than the character
@@ -149,19 +150,70 @@ impl Take {
         filtering: Filtering,
     ) -> Result<Take, TakeError> {
         let names: Vec<String> = character.blendshape_names();
-        if let Some(bad) = frames.iter().find(|f| f.weights.len() != names.len()) {
-            return Err(TakeError::Mismatch {
-                character: character.name().to_owned(),
-                reason: format!(
-                    "a frame has {} weights for {} blendshapes",
-                    bad.weights.len(),
-                    names.len()
-                ),
-            });
-        }
+        mismatch(character, &names, &frames)?;
         let first = frames.first().map_or(0.0, |f| f.time);
         let last = frames.last().map_or(0.0, |f| f.time);
         let fps = recorded_fps(first, last, frames.len());
+        Ok(Take::of_frames(
+            character, source, fps, names, frames, filtering,
+        ))
+    }
+
+    /// A take of `rows` of `character`'s weights made at a steady `fps` (a lip sync, a clip
+    /// opened), row `k` at `k / fps` seconds with the head's yaw, pitch and roll `heads[k]`
+    /// where given, named `source`, unfiltered. The rate is kept as given — 29.97 stays 29.97
+    /// and 240 stays 240, where [`Take::from_received`] estimates a rate from arrival times
+    /// and rounds it — so that the take lasts as long as what it was made from.
+    ///
+    /// # Errors
+    /// [`TakeError::Mismatch`] when a row has another number of weights than the character
+    /// has blendshapes; [`TakeError::Invalid`] when `fps` is not above 0 and at most
+    /// [`crate::session::MAX_FPS`].
+    pub fn from_weights(
+        character: &Character,
+        source: &str,
+        fps: f32,
+        rows: &[Vec<f32>],
+        heads: Option<&[[f32; 3]]>,
+    ) -> Result<Take, TakeError> {
+        if !(fps.is_finite() && fps > 0.0 && fps <= crate::session::MAX_FPS) {
+            return Err(TakeError::Invalid(vec![format!(
+                "fps: {fps} must be above 0 and at most {}",
+                crate::session::MAX_FPS
+            )]));
+        }
+        let names: Vec<String> = character.blendshape_names();
+        let step = 1.0 / f64::from(fps);
+        let frames: Vec<ReceivedFrame> = rows
+            .iter()
+            .enumerate()
+            .map(|(k, weights)| ReceivedFrame {
+                time: k as f64 * step,
+                weights: weights.clone(),
+                head: heads.and_then(|h| h.get(k).copied()),
+            })
+            .collect();
+        mismatch(character, &names, &frames)?;
+        Ok(Take::of_frames(
+            character,
+            source,
+            fps,
+            names,
+            frames,
+            Filtering::new(1, None)?,
+        ))
+    }
+
+    /// The take of `frames` at `fps`, each named `{source}_{n}`.
+    fn of_frames(
+        character: &Character,
+        source: &str,
+        fps: f32,
+        names: Vec<String>,
+        frames: Vec<ReceivedFrame>,
+        filtering: Filtering,
+    ) -> Take {
+        let first = frames.first().map_or(0.0, |f| f.time);
         let frames = frames
             .into_iter()
             .enumerate()
@@ -176,32 +228,7 @@ impl Take {
             })
             .collect();
         let session = session_of(character, source.to_owned(), names, fps, frames, filtering);
-        Ok(Take::new(session, EstimatorSource::Received))
-    }
-
-    /// A take of `rows` of `character`'s weights made at a steady `fps` (a lip sync, say),
-    /// named `source`, unfiltered: [`Take::from_received`] of frames `1 / fps` apart.
-    ///
-    /// # Errors
-    /// [`TakeError::Mismatch`] when a row has another number of weights than the character
-    /// has blendshapes.
-    pub fn from_weights(
-        character: &Character,
-        source: &str,
-        fps: f32,
-        rows: &[Vec<f32>],
-    ) -> Result<Take, TakeError> {
-        let step = 1.0 / f64::from(fps);
-        let frames = rows
-            .iter()
-            .enumerate()
-            .map(|(k, weights)| ReceivedFrame {
-                time: k as f64 * step,
-                weights: weights.clone(),
-                head: None,
-            })
-            .collect();
-        Take::from_received(character, source, frames, Filtering::new(1, None)?)
+        Take::new(session, EstimatorSource::Received)
     }
 
     /// Where the estimates came from.
@@ -269,6 +296,25 @@ impl Take {
 
 /// A new session of `character` (its blendshapes `names`) over `frames`, filtered by
 /// `filtering`.
+/// A frame with another number of weights than `names`, as the error.
+fn mismatch(
+    character: &Character,
+    names: &[String],
+    frames: &[ReceivedFrame],
+) -> Result<(), TakeError> {
+    match frames.iter().find(|f| f.weights.len() != names.len()) {
+        Some(bad) => Err(TakeError::Mismatch {
+            character: character.name().to_owned(),
+            reason: format!(
+                "a frame has {} weights for {} blendshapes",
+                bad.weights.len(),
+                names.len()
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
 fn session_of(
     character: &Character,
     source: String,
@@ -337,5 +383,44 @@ mod tests {
         assert!(take.redo() && take.redo());
         assert_eq!(take.session.weights()[0], vec![0.75, 0.5]);
         assert!(!take.redo());
+    }
+
+    #[test]
+    fn a_take_at_a_steady_rate_keeps_the_rate_and_a_recording_rounds_its_own() {
+        let character = faceanim_head::default_character();
+        let n = character.blendshape_names().len();
+        let rows = vec![vec![0.0; n]; 300];
+        // NTSC's rate and a high one: as made, so that 300 frames last as long as they did.
+        for fps in [30_000.0 / 1001.0, 240.0] {
+            let take = Take::from_weights(&character, "line", fps, &rows, None).unwrap();
+            assert_eq!(take.session.fps, fps);
+            assert_eq!(take.session.clip().fps, fps);
+            let last = take.session.frames.last().unwrap().time;
+            assert!(
+                (f64::from(last) - 299.0 / f64::from(fps)).abs() < 1e-4,
+                "{last}"
+            );
+        }
+        let heads = [[1.0, 2.0, 3.0]];
+        let take = Take::from_weights(&character, "line", 30.0, &rows[..2], Some(&heads)).unwrap();
+        assert_eq!(take.session.frames[0].head, Some([1.0, 2.0, 3.0]));
+        assert_eq!(take.session.frames[1].head, None);
+        for fps in [0.0, -1.0, f32::NAN, 5000.0] {
+            let error = Take::from_weights(&character, "line", fps, &rows, None).unwrap_err();
+            assert!(error.to_string().contains("fps"), "{error}");
+        }
+        // Frames that arrived about 1/60 s apart: their rate, rounded.
+        let arrived: Vec<ReceivedFrame> = (0..300)
+            .map(|k| ReceivedFrame {
+                time: 10.0 + f64::from(k) / 59.7,
+                weights: vec![0.0; n],
+                head: None,
+            })
+            .collect();
+        let take =
+            Take::from_received(&character, "vmc", arrived, Filtering::new(1, None).unwrap())
+                .unwrap();
+        assert_eq!(take.session.fps, 60.0);
+        assert_eq!(take.session.frames[0].time, 0.0);
     }
 }

@@ -384,20 +384,14 @@ impl CaptureDesk {
         let retarget = clip
             .retarget(character, shown)
             .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?;
-        let step = 1.0 / f64::from(clip.fps);
-        let frames: Vec<faceanim_take::ReceivedFrame> = retarget
-            .animation
-            .weights
-            .into_iter()
-            .enumerate()
-            .map(|(k, weights)| faceanim_take::ReceivedFrame {
-                time: k as f64 * step,
-                weights,
-                head: clip.head.as_ref().and_then(|h| h.get(k).copied()),
-            })
-            .collect();
-        let count = frames.len();
-        let take = Take::from_received(character, shown, frames, Filtering::new(1, None)?)?;
+        let count = retarget.animation.weights.len();
+        let take = Take::from_weights(
+            character,
+            shown,
+            clip.fps,
+            &retarget.animation.weights,
+            clip.head.as_deref(),
+        )?;
         tracing::info!("opened the clip {shown}: {count} frames");
         self.set_take(take, Previews::new());
         Ok(count)
@@ -417,7 +411,7 @@ impl CaptureDesk {
     ) -> Result<usize, ApiError> {
         self.busy()?;
         let count = lip_sync.frames.len();
-        let take = Take::from_weights(character, shown, lip_sync.fps, &lip_sync.frames)?;
+        let take = Take::from_weights(character, shown, lip_sync.fps, &lip_sync.frames, None)?;
         tracing::info!("lip sync of {shown}: {count} frames");
         if !lip_sync.notes.is_empty() {
             // What was done instead of what was asked (a transcript that could not be used).

@@ -99,8 +99,13 @@ impl CaptureDesk {
             &faceanim_speech::audio::wav_bytes(&samples, RATE as u32, 1),
         )
         .map_err(ApiError::Disk)?;
-        let take =
-            faceanim_take::Take::from_weights(character, "microphone.wav", RECORDED_FPS, &rows)?;
+        let take = faceanim_take::Take::from_weights(
+            character,
+            "microphone.wav",
+            RECORDED_FPS,
+            &rows,
+            None,
+        )?;
         let sound = Sound {
             path,
             mime: "audio/wav",
