@@ -331,6 +331,26 @@ mod tests {
             let head = back.head.as_ref().unwrap()[f];
             assert!((head[0] - f as f32 * 0.2).abs() < 1e-3 && (head[1] + 3.0).abs() < 1e-3);
         }
+        // Lip sync's fastest rate and NTSC's, over more than a second (a shorter recording
+        // shows too few frame numbers to tell its rate): as long, to a frame, at the rate its
+        // timecodes count in (NTSC's 30).
+        for (fps, counted) in [(240.0, 240.0), (30_000.0 / 1001.0, 30.0)] {
+            let fast = Clip {
+                fps,
+                frames: vec![vec![0.5, 0.25]; 900],
+                head: None,
+                ..clip.clone()
+            };
+            let back = from_csv(&to_csv(&fast)).unwrap();
+            assert_eq!(back.fps, counted);
+            let seconds = |c: &Clip| (c.frames.len() - 1) as f32 / c.fps;
+            assert!(
+                (seconds(&back) - seconds(&fast)).abs() <= 1.0 / counted,
+                "{fps}: {} s read back from {} s",
+                seconds(&back),
+                seconds(&fast)
+            );
+        }
     }
 
     #[test]
