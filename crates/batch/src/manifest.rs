@@ -234,10 +234,18 @@ impl Row {
         self.fields.get(field.name()).map(String::as_str)
     }
 
-    /// `path` (as written in the manifest) from the manifest's folder.
+    /// `path` (as written in the manifest) from the manifest's folder. A manifest written on
+    /// Windows separates folders with `\` (`audio\line_0001.wav`); where `\` is no separator,
+    /// such a path is read with `/` unless a file is named with the `\` itself, so that a sheet
+    /// made on Windows runs on Linux workers, inputs found and outputs written in their folders
+    /// (not beside the manifest under names holding `\`).
     #[must_use]
     pub fn resolve(&self, path: &str) -> PathBuf {
-        self.base.join(path)
+        let given = self.base.join(path);
+        if std::path::MAIN_SEPARATOR == '\\' || !path.contains('\\') || given.exists() {
+            return given;
+        }
+        self.base.join(path.replace('\\', "/"))
     }
 
     /// The files the row reads, each with the field that names it, from the manifest's folder.
@@ -977,7 +985,15 @@ fn check_row(
         if !path.exists() {
             return Err(fail(
                 field.name(),
-                format!("{}: no such file", path.display()),
+                format!(
+                    "{}: no such file{}",
+                    path.display(),
+                    if windows_absolute(row.field(field).unwrap_or("")) {
+                        " (a path on a Windows machine: give it relative to the manifest's folder)"
+                    } else {
+                        ""
+                    }
+                ),
             ));
         }
         // A user's file is never written over: no output may be one of the row's inputs.
@@ -996,6 +1012,17 @@ fn check_row(
         }
     }
     Ok(row)
+}
+
+/// Whether `path` is a Windows machine's own (`C:\…`, `C:/…`, `\\server\…`), which no other
+/// machine can open.
+fn windows_absolute(path: &str) -> bool {
+    let bytes = path.as_bytes();
+    let drive = bytes.len() > 2
+        && bytes[0].is_ascii_alphabetic()
+        && bytes[1] == b':'
+        && matches!(bytes[2], b'\\' | b'/');
+    drive || path.starts_with("\\\\")
 }
 
 fn field_names(kind: Kind) -> String {

@@ -336,3 +336,34 @@ sheet("libre.tsv", "utf-8", {True: "true", False: "false"}, ".", delimiter="\t")
         )
     );
 }
+
+/// A sheet made on Windows names its folders with `\`: on Linux workers its inputs are found and
+/// its outputs written in their folders, and a Windows machine's own path is named as such.
+#[cfg(unix)]
+#[test]
+fn a_manifest_written_on_windows_finds_its_folders_elsewhere() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("audio")).unwrap();
+    std::fs::write(dir.path().join("audio").join("a.wav"), b"RIFF").unwrap();
+    let path = dir.path().join("lines.csv");
+    std::fs::write(
+        &path,
+        "id,kind,speech,outputs\r\n\
+         a,lipsync,audio\\a.wav,out\\clips\\a.json\r\n\
+         b,lipsync,C:\\Users\\me\\audio\\b.wav,out\\b.json\r\n",
+    )
+    .unwrap();
+    let manifest = Manifest::read(&path).unwrap();
+    let a = manifest.entries[0].row.as_ref().unwrap();
+    assert_eq!(a.input_files()[0].1, dir.path().join("audio").join("a.wav"));
+    assert_eq!(
+        a.output_paths(),
+        [dir.path().join("out").join("clips").join("a.json")]
+    );
+    let (line, field, problem) = problem(&manifest, 1);
+    assert_eq!((line, field.as_deref()), (3, Some("speech")));
+    assert!(
+        problem.contains("no such file") && problem.contains("a path on a Windows machine"),
+        "{problem}"
+    );
+}

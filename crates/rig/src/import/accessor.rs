@@ -61,20 +61,11 @@ fn read_component(bytes: &[u8], t: DataType, normalized: bool) -> f32 {
     }
 }
 
-/// The byte slice `[offset, offset + element_size + stride·(count−1))` of a buffer view, checked.
-fn view_slice<'a>(
+/// The bytes of a buffer view, checked against its buffer.
+pub(crate) fn view_bytes<'a>(
     buffers: &'a Buffers<'_>,
     view: &gltf::buffer::View<'_>,
-    offset: usize,
-    count: usize,
-    element_size: usize,
-) -> Result<(&'a [u8], usize), String> {
-    let stride = view.stride().unwrap_or(element_size);
-    if stride < element_size {
-        return Err(format!(
-            "byteStride {stride} is smaller than one element ({element_size} bytes)"
-        ));
-    }
+) -> Result<&'a [u8], String> {
     let buffer = buffers
         .0
         .get(view.buffer().index())
@@ -91,7 +82,24 @@ fn view_slice<'a>(
             buffer.len()
         ));
     }
-    let view_bytes = &buffer[view.offset()..view_end];
+    Ok(&buffer[view.offset()..view_end])
+}
+
+/// The byte slice `[offset, offset + element_size + stride·(count−1))` of a buffer view, checked.
+fn view_slice<'a>(
+    buffers: &'a Buffers<'_>,
+    view: &gltf::buffer::View<'_>,
+    offset: usize,
+    count: usize,
+    element_size: usize,
+) -> Result<(&'a [u8], usize), String> {
+    let stride = view.stride().unwrap_or(element_size);
+    if stride < element_size {
+        return Err(format!(
+            "byteStride {stride} is smaller than one element ({element_size} bytes)"
+        ));
+    }
+    let view_bytes = view_bytes(buffers, view)?;
     if count == 0 {
         return Ok((&view_bytes[..0], stride));
     }

@@ -1157,21 +1157,10 @@ fn load_image(
     buffers: &Buffers<'_>,
 ) -> Result<Texture, String> {
     let (bytes, declared) = match image.source() {
-        gltf::image::Source::View { view, mime_type } => {
-            let buffer = buffers
-                .0
-                .get(view.buffer().index())
-                .ok_or("its buffer is missing")?;
-            let end = view
-                .offset()
-                .checked_add(view.length())
-                .filter(|&e| e <= buffer.len())
-                .ok_or("its buffer view runs past the buffer")?;
-            (
-                buffer[view.offset()..end].to_vec(),
-                Some(mime_type.to_owned()),
-            )
-        }
+        gltf::image::Source::View { view, mime_type } => (
+            super::accessor::view_bytes(buffers, &view)?.to_vec(),
+            Some(mime_type.to_owned()),
+        ),
         gltf::image::Source::Uri { uri, mime_type } => (
             super::uri::load_uri(uri, resources)?,
             mime_type.map(str::to_owned),
