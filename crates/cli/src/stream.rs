@@ -9,6 +9,9 @@ use anyhow::Context as _;
 use faceanim_anim::Clip;
 use faceanim_live::{Names, Performer};
 
+/// The fastest rate frames are sent at.
+const MAX_FPS: f32 = 120.0;
+
 /// Which names the stream uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum NameChoice {
@@ -41,7 +44,8 @@ pub struct StreamArgs {
     /// The marionette: HOST:PORT (VMC's default port is 39539).
     #[arg(long)]
     pub to: String,
-    /// Frames per second sent (default: the clip's own rate; at most 120).
+    /// Frames per second sent (default: the clip's own rate, or 120 for a faster clip; at
+    /// most 120).
     #[arg(long)]
     pub fps: Option<f32>,
     /// Start again at the end, until stopped.
@@ -79,11 +83,14 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
         "{}: the clip has no frames",
         args.input.display()
     );
-    let fps = args.fps.unwrap_or(clip.fps);
-    anyhow::ensure!(
-        fps.is_finite() && fps > 0.0 && fps <= 120.0,
-        "--fps must be above 0 and at most 120, got {fps}"
-    );
+    if let Some(fps) = args.fps {
+        anyhow::ensure!(
+            fps.is_finite() && fps > 0.0 && fps <= MAX_FPS,
+            "--fps must be above 0 and at most {MAX_FPS}, got {fps}"
+        );
+    }
+    // A clip made faster than receivers take frames (a lip sync at 240) is sent at the most.
+    let fps = args.fps.unwrap_or(clip.fps.min(MAX_FPS));
     let destination = destination(&args.to)?;
     let mut performer = Performer::new(destination, &clip.blendshapes, args.names.into())?;
 

@@ -272,6 +272,35 @@ fn nobody_listening_never_stalls_the_stream_and_bad_input_is_named() {
         &format!("127.0.0.1:{port}"),
     ]);
     assert!(started.elapsed().as_secs_f32() < 5.0);
+    // A clip faster than receivers take (lip sync writes up to 240 fps) is sent at 120, and a
+    // faster --fps is refused by name.
+    let fast = dir.join("fast.json");
+    std::fs::write(
+        &fast,
+        serde_json::json!({"fps": 240, "blendshapes": ["jawOpen"], "frames": vec![[0.5]; 48]})
+            .to_string(),
+    )
+    .unwrap();
+    let to = format!("127.0.0.1:{port}");
+    let run = faceanim(&["stream", fast.to_str().unwrap(), "--to", &to]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        run.status.success() && stderr.contains("25 frames at 120 fps"),
+        "{stderr}"
+    );
+    let run = faceanim(&[
+        "stream",
+        fast.to_str().unwrap(),
+        "--to",
+        &to,
+        "--fps",
+        "240",
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("at most 120"),
+        "{stderr}"
+    );
     let not_clip = dir.join("notes.json");
     std::fs::write(&not_clip, r#"{"title": "notes"}"#).unwrap();
     let run = faceanim(&[
