@@ -339,8 +339,10 @@ try {
   // 13. Speech: a recording opened as the take is lip-synced, and plays with its sound; the
   //     stroke stays on top; scrubbing sounds a slice at the frame.
   //     Whose voice it is goes with it when chosen (a man's: as the pitch would say).
-  //     What was said goes with it, pasted over two lines as a script or a subtitle is: the
-  //     field keeps its line breaks (a subtitle's cue times are lines of their own).
+  //     What was said goes with it, from a transcript file picked with the speech (saved over
+  //     two lines by Notepad as "Unicode": UTF-16 with its byte-order mark, which the server
+  //     reads): the field shows it and keeps its line breaks (a subtitle's cue times are lines
+  //     of their own), replacing what was typed there.
   await page.selectOption('#speech-voice', 'man');
   const speechId = path.basename(speech, '.wav');
   const transcribed = fs.readFileSync(path.join(path.dirname(speech), 'transcription'), 'utf8')
@@ -348,9 +350,11 @@ try {
   const words = transcribed.replace(/<\/?s>/g, '').replace(/\([^)]*\)\s*$/, '').trim().split(/\s+/);
   const half = Math.ceil(words.length / 2);
   const typed = `${words.slice(0, half).join(' ')}\n${words.slice(half).join(' ')}`;
-  await page.fill('#speech-text', typed);
+  await page.fill('#speech-text', 'words typed before the file was picked');
+  const transcriptFile = path.join(out, `${speechId}.txt`);
+  fs.writeFileSync(transcriptFile, Buffer.concat([Buffer.from([0xff, 0xfe]), Buffer.from(typed.replace('\n', '\r\n'), 'utf16le')]));
   const sent = page.waitForRequest((r) => r.url().includes('api/capture/upload'));
-  await page.setInputFiles('#capture-file', speech);
+  await page.setInputFiles('#capture-file', [speech, transcriptFile]);
   const query = new URL((await sent).url()).searchParams;
   check(query.get('voice') === 'man', 'the chosen voice was not sent');
   check(query.get('text') === typed, `the transcript was sent as ${JSON.stringify(query.get('text'))}`);

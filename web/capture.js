@@ -92,9 +92,11 @@ onView((v, previous) => {
   setExtent(take ? (take.ramp ? take.ramp.length : take.frames) - 1 : 0);
   setSound(take && take.sound ? take.sound : null, take ? take.fps : 30);
   $('still-row').hidden = !(take && take.still);
-  // Said once by the server: an autosaved take it could not open and set aside.
-  $('capture-notice').hidden = !v.notice;
-  $('capture-notice').textContent = v.notice || '';
+  // Said once by the server: an autosaved take it could not open and set aside; and the
+  // code page a picked transcript was read in, until the next input.
+  const notice = [v.notice, transcriptNote].filter(Boolean).join(' ');
+  $('capture-notice').hidden = !notice;
+  $('capture-notice').textContent = notice;
   if (take && take.still && document.activeElement !== $('still-frames')) input('still-frames').value = String(take.still);
   const sketch = store.state();
   if (newTake && sketch && Math.abs(sketch.fps - take.fps) > 1e-3) {
@@ -175,12 +177,45 @@ function layer(frame) {
 const ESTIMATED = { adapter: 'estimated by the adapter', by_name: 'estimated by ARKit name', retarget: 'read through the retarget map', session_file: 'opened from a session' };
 
 // ---------- input ----------
-/** Opens `files` as the take: one video, speech file or take file, or a sequence of photos. */
+/** What the server said of the last transcript file read (its guessed code page), or ''. */
+let transcriptNote = '';
+
+const header = (file) => ({ 'x-filename': encodeURIComponent(file.name) });
+
+/**
+ * Puts the words of a transcript file (plain text or a subtitle) in the speech field, read by
+ * the server in the encoding it was saved in (a Japanese subtitle in Shift_JIS, Notepad's
+ * UTF-16), which the page cannot tell apart itself.
+ */
+async function readTranscript(file) {
+  const language = input('speech-language').value.trim();
+  const query = language ? `?${new URLSearchParams({ language })}` : '';
+  const read = await api('POST', `api/capture/transcript${query}`, await file.arrayBuffer(), header(file));
+  input('speech-text').value = read.text;
+  transcriptNote = read.note || '';
+}
+
+/**
+ * Opens `files` as the take: one video, speech file or take file, or a sequence of photos. A
+ * transcript or subtitle picked with the speech (or alone, before it) fills the speech field.
+ */
 export async function openInput(files) {
   if (!files.length) return;
   showError('');
-  const header = (file) => ({ 'x-filename': encodeURIComponent(file.name) });
+  transcriptNote = '';
   try {
+    const transcripts = files.filter((f) => TRANSCRIPT.test(f.name));
+    if (transcripts.length > 1) throw new Error('pick one transcript or subtitle with the speech');
+    if (transcripts.length) {
+      await readTranscript(transcripts[0]);
+      files = files.filter((f) => f !== transcripts[0]);
+      if (!files.length) {
+        $('take-info').textContent = `The words of ${transcripts[0].name} are in the transcript field: now pick the speech they go with.`;
+        $('capture-notice').hidden = !transcriptNote;
+        $('capture-notice').textContent = transcriptNote;
+        return;
+      }
+    }
     if (files.length === 1) {
       let url = 'api/capture/upload';
       if (AUDIO.test(files[0].name)) {
@@ -200,7 +235,7 @@ export async function openInput(files) {
       return;
     }
     // Several photos are one sequence, in name order, like a folder of frames.
-    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, one speech file, one take (session, clip, GLB, VRM or Live Link CSV), or any number of PNG or JPEG photos');
+    if (files.some((f) => !/\.(png|jpe?g)$/i.test(f.name))) throw new Error('pick one video, one speech file (with its transcript or subtitle, if you have one), one take (session, clip, GLB, VRM or Live Link CSV), or any number of PNG or JPEG photos');
     const batch = Date.now().toString(36) + Math.random().toString(36).slice(2, 8);
     for (const [index, file] of files.entries()) {
       $('take-info').textContent = `Sending ${file.name} (${index + 1} of ${files.length})…`;
@@ -211,6 +246,8 @@ export async function openInput(files) {
 
 /** Speech the server lip-syncs (crates/studio: capture::audio_mime). */
 export const AUDIO = /\.(wav|mp3|ogg|oga|opus|flac|m4a|aac)$/i;
+/** Transcripts and subtitles the speech field takes (the command line's --text files). */
+export const TRANSCRIPT = /\.(txt|text|lab|srt|vtt|ass|ssa|md)$/i;
 
 input('capture-file').addEventListener('change', () => {
   const files = [...(input('capture-file').files || [])];

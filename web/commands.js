@@ -87,14 +87,15 @@ $('character-file').addEventListener('change', (e) => { const f = /** @type {HTM
 const viewport = $('viewport');
 viewport.addEventListener('dragover', (e) => { e.preventDefault(); viewport.classList.add('dragover'); });
 viewport.addEventListener('dragleave', () => viewport.classList.remove('dragover'));
-// A character opens as the character; speech (lip sync) and video open as the take.
+// A character opens as the character; speech (lip sync, with its transcript when dropped
+// with it), video and photos open as the take, as when picked.
 viewport.addEventListener('drop', (e) => {
   e.preventDefault();
   viewport.classList.remove('dragover');
-  const f = e.dataTransfer?.files?.[0];
-  if (!f) return;
-  if (/\.(glb|gltf|vrm)$/i.test(f.name)) uploadCharacter(f);
-  else { setMode('capture'); capture.openInput([f]); }
+  const files = [...(e.dataTransfer?.files || [])];
+  if (!files.length) return;
+  if (files.length === 1 && /\.(glb|gltf|vrm)$/i.test(files[0].name)) uploadCharacter(files[0]);
+  else { setMode('capture'); capture.openInput(files); }
 });
 $('help-button').onclick = () => { $('help').hidden = !$('help').hidden; };
 $('help-close').onclick = () => { $('help').hidden = true; };

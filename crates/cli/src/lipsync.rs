@@ -294,7 +294,8 @@ struct Transcript {
 
 /// `--text`: the words themselves, or a file that holds them, in `language` (which a file in a
 /// legacy code page is read by: [`faceanim_files::text`]). One word that names a file which is
-/// not there (a path, or a name ending in [`TRANSCRIPT_FILES`]) is an error.
+/// not there (a path, or a name ending in [`faceanim_speech::script::TRANSCRIPT_FILES`]) is an
+/// error.
 fn transcript(text: &str, language: &str) -> anyhow::Result<Transcript> {
     let path = Path::new(text);
     if !text.contains(char::is_whitespace) {
@@ -324,10 +325,9 @@ fn transcript(text: &str, language: &str) -> anyhow::Result<Transcript> {
         // A file's name that names none (mistyped, or relative to another folder) would
         // otherwise be spoken as the words "script dot t x t".
         let named_file = text.contains(['/', '\\'])
-            || path
-                .extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| TRANSCRIPT_FILES.contains(&e.to_ascii_lowercase().as_str()));
+            || path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                faceanim_speech::script::TRANSCRIPT_FILES.contains(&e.to_ascii_lowercase().as_str())
+            });
         if named_file {
             anyhow::bail!(
                 "--text {text}: no such file (give the words themselves, or a file that holds them)"
@@ -340,9 +340,6 @@ fn transcript(text: &str, language: &str) -> anyhow::Result<Transcript> {
         note: None,
     })
 }
-
-/// Extensions of the files a transcript comes in: plain text, a subtitle, a label file.
-const TRANSCRIPT_FILES: [&str; 8] = ["txt", "text", "lab", "srt", "vtt", "ass", "ssa", "md"];
 
 /// The text of `path`, given as `option`, in the encodings `accept` allows: at most
 /// [`MAX_TEXT_BYTES`], read only after its size is known; errors name the option and the file.

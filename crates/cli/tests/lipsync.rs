@@ -522,6 +522,63 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language_and_voice(
     let (status, body) = upload("voice=robot");
     assert_eq!(status, 400, "{body}");
     assert!(body.contains("voice"), "{body}");
+
+    // A transcript file picked with the speech is read as the command line reads --text, in
+    // the code page it was saved in (a Japanese subtitle in Shift_JIS, which the page cannot
+    // tell apart), cues and all; a picture is refused by name.
+    let cue = "1\r\n00:00:00,000 --> 00:00:02,000\r\n今日は天気がいいですね。\r\n";
+    let utf8 = out.join("cue.utf8.srt");
+    std::fs::write(&utf8, cue).unwrap();
+    let shift_jis = Command::new("iconv")
+        .args(["-f", "UTF-8", "-t", "SHIFT_JIS"])
+        .arg(&utf8)
+        .output()
+        .expect("iconv (glibc's, in every Debian)");
+    assert!(shift_jis.status.success(), "{shift_jis:?}");
+    let read = |name: &str, query: &str, bytes: &[u8]| {
+        let (status, body) = request(
+            studio.port,
+            "POST",
+            &format!("/api/capture/transcript{query}"),
+            &[("x-filename", name)],
+            bytes,
+        );
+        (
+            status,
+            serde_json::from_str::<Value>(&body).unwrap_or(Value::String(body)),
+        )
+    };
+    let (status, sjis) = read("cue.srt", "?language=ja", &shift_jis.stdout);
+    assert_eq!(status, 200, "{sjis}");
+    assert_eq!(sjis["text"], cue, "{sjis}");
+    assert_eq!(sjis["encoding"], "Shift_JIS");
+    let note = sjis["note"].as_str().unwrap_or_default();
+    assert!(
+        note.contains("cue.srt") && note.contains("Shift_JIS"),
+        "{sjis}"
+    );
+    let (status, plain) = read("cue.srt", "", cue.as_bytes());
+    assert_eq!((status, &plain["text"]), (200, &Value::from(cue)));
+    assert!(plain["note"].is_null(), "{plain}");
+    // A PNG's first bytes: its signature and header chunk.
+    let png = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x01\0\0\0\x01\x08\x06\0\0\0\x1f\x15\xc4\x89";
+    let (status, body) = read("photo.srt", "?language=ja", png);
+    assert_eq!(status, 400, "{body}");
+    assert!(body.to_string().contains("photo.srt"), "{body}");
+    // The page offers exactly the files lip sync reads as transcripts.
+    let page = std::fs::read_to_string(support::repo().join("web/capture.js")).unwrap();
+    let line = page
+        .lines()
+        .find(|l| l.starts_with("export const TRANSCRIPT = "))
+        .expect("the page's TRANSCRIPT pattern");
+    let list = line
+        .trim_start_matches("export const TRANSCRIPT = /\\.(")
+        .trim_end_matches(")$/i;");
+    let mut offered: Vec<&str> = list.split('|').collect();
+    offered.sort_unstable();
+    let mut read_by_lip_sync = faceanim_speech::script::TRANSCRIPT_FILES.to_vec();
+    read_by_lip_sync.sort_unstable();
+    assert_eq!(offered, read_by_lip_sync);
 }
 
 /// A line saved as people's editors save it.

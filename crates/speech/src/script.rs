@@ -97,6 +97,11 @@ const LISTED: usize = 6;
 /// The longest speaker's name taken as one before a colon, characters.
 const LONGEST_NAME: usize = 30;
 
+/// Extensions of the files a transcript comes in: plain text, a subtitle (SubRip, WebVTT,
+/// SubStation Alpha), a label file, Markdown. The studio's page offers the same
+/// (`web/capture.js`, `TRANSCRIPT`).
+pub const TRANSCRIPT_FILES: [&str; 8] = ["txt", "text", "lab", "srt", "vtt", "ass", "ssa", "md"];
+
 /// What `text` says aloud (see the module's docs).
 #[must_use]
 pub fn spoken(text: &str) -> Spoken {

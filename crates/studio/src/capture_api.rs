@@ -18,7 +18,7 @@ use serde::Deserialize;
 use crate::capture::{self, CaptureDesk, SharedDesk};
 use crate::error::{Answer, ApiError};
 use crate::http::{self, Unread, download, json_body, uploaded_name};
-use crate::views::CaptureView;
+use crate::views::{CaptureView, TranscriptView};
 use crate::{Studio, lock};
 
 /// `400` with `message`: a request that names a wrong field or file.
@@ -71,6 +71,7 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/live/stop", post(live_stop))
         .route("/api/capture/live/record", post(live_record))
         .route("/api/capture/live/calibrate", post(live_calibrate))
+        .route("/api/capture/transcript", post(transcript))
         .route("/api/capture/voice", put(voice))
         .route("/api/capture/visemes", get(visemes).put(put_visemes))
         .route("/api/capture/voice/calibrate", post(voice_calibrate))
@@ -194,6 +195,64 @@ struct Batch {
     text: Option<String>,
     language: Option<String>,
     voice: Option<String>,
+}
+
+/// The largest transcript read, in bytes (the command line's limit for `--text`).
+const MAX_TRANSCRIPT_BYTES: usize = 1 << 20;
+
+#[derive(Debug, Deserialize)]
+struct TranscriptQuery {
+    language: Option<String>,
+}
+
+/// A transcript file the user picked for the speech field (plain text or a subtitle), read
+/// as the command line reads `--text`: Unicode, or the legacy code page its bytes and the
+/// language suggest (a Japanese subtitle in Shift_JIS, Notepad's UTF-16), which the page
+/// could not tell apart itself.
+async fn transcript(
+    Query(query): Query<TranscriptQuery>,
+    headers: HeaderMap,
+    body: Bytes,
+) -> Answer<TranscriptView> {
+    let language = query.language.as_deref().map(str::trim);
+    transcript_of(
+        &uploaded_name(&headers, &body, "transcript")?,
+        &body,
+        language,
+    )
+    .map(axum::Json)
+}
+
+/// The view of transcript `bytes` from the file `name`, in `language` (ignored when empty or
+/// too long for one).
+fn transcript_of(
+    name: &str,
+    bytes: &[u8],
+    language: Option<&str>,
+) -> Result<TranscriptView, ApiError> {
+    if bytes.len() > MAX_TRANSCRIPT_BYTES {
+        return Err(bad(format!(
+            "{name}: {} bytes; a transcript is at most {MAX_TRANSCRIPT_BYTES} bytes",
+            bytes.len()
+        )));
+    }
+    let language = language.filter(|l| !l.is_empty() && l.len() <= 40);
+    let read =
+        faceanim_files::text::decode(bytes, faceanim_files::text::Accept::Legacy { language })
+            .map_err(|e| bad(format!("{name}: {e}")))?;
+    let note = read.guessed.then(|| {
+        format!(
+            "{name} is not Unicode: it was read as {}, the encoding its bytes{} suggest (save \
+             it as UTF-8 if its words come out wrong)",
+            read.encoding,
+            language.map_or_else(String::new, |l| format!(" and the language {l}"))
+        )
+    });
+    Ok(TranscriptView {
+        text: read.text,
+        encoding: read.encoding,
+        note,
+    })
 }
 
 async fn upload(

@@ -333,6 +333,20 @@ pub struct SavedView {
 
 // ---------- capture mode ----------
 
+/// `POST /api/capture/transcript`: a transcript file's words for the speech field, read in the
+/// encoding it was saved in.
+#[derive(Debug, Serialize)]
+pub struct TranscriptView {
+    /// The text, as the file holds it (a subtitle's cues and times included: lip sync reads
+    /// them).
+    pub text: String,
+    /// The encoding it was read in (`UTF-8`, `UTF-16LE`, `Shift_JIS`, …).
+    pub encoding: &'static str,
+    /// Said when the encoding was guessed from the bytes (a legacy code page): the guess may
+    /// be wrong, and the user should know which was taken.
+    pub note: Option<String>,
+}
+
 /// `GET /api/capture/state`: everything the page shows of capture mode.
 #[derive(Debug, Serialize)]
 pub struct CaptureView {
