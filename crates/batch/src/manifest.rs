@@ -825,7 +825,10 @@ fn check_row(
         field: Some(field.to_owned()),
         problem,
     };
-    let mut values: BTreeMap<String, Value> = values.into_iter().collect();
+    // A field given as null is not given: dataframe libraries (pandas' and Polars' JSON Lines)
+    // write an empty cell so.
+    let mut values: BTreeMap<String, Value> =
+        values.into_iter().filter(|(_, v)| !v.is_null()).collect();
     let id = match values.remove("id") {
         Some(Value::String(id)) if valid_id(&id) => id,
         Some(Value::String(id)) => {

@@ -367,3 +367,32 @@ fn a_manifest_written_on_windows_finds_its_folders_elsewhere() {
         "{problem}"
     );
 }
+
+/// JSON Lines as dataframe libraries write them (pandas' `to_json(orient="records",
+/// lines=True)`, Polars' `write_ndjson`): every column on every row, `null` where a cell is
+/// empty. A null field is one not given, as an empty CSV cell is.
+#[test]
+fn rows_with_null_fields_read_as_rows_without_them() {
+    let text = [
+        r#"{"id":"p1","kind":"lipsync","speech":"a.wav","text":"Hi there","transcript":null,"language":null,"outputs":"o/p1.json","options":{"fps":29.97,"face":true}}"#,
+        r#"{"id":"p2","kind":"lipsync","speech":"a.wav","text":null,"transcript":"words.txt","language":"en-us","outputs":"o/p2.json","options":{"fps":null,"face":false}}"#,
+        r#"{"id":"p3","kind":"lipsync","speech":null,"text":null,"transcript":null,"language":null,"outputs":"o/p3.json","options":null}"#,
+    ]
+    .join("\n");
+    let (_dir, manifest) = manifest("frame.jsonl", &text);
+    let p1 = manifest.entries[0].row.as_ref().unwrap();
+    assert_eq!(
+        p1.fields.keys().copied().collect::<Vec<_>>(),
+        ["speech", "text"]
+    );
+    assert_eq!(p1.options["fps"], OptionValue::Value("29.97".to_owned()));
+    let p2 = manifest.entries[1].row.as_ref().unwrap();
+    assert_eq!(
+        p2.fields.keys().copied().collect::<Vec<_>>(),
+        ["language", "speech", "transcript"]
+    );
+    // The required field, null, is missing.
+    let (line, field, problem) = problem(&manifest, 2);
+    assert_eq!((line, field.as_deref()), (3, Some("speech")));
+    assert!(problem.starts_with("missing"), "{problem}");
+}
