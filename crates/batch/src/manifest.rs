@@ -546,7 +546,8 @@ impl Separator {
             );
         }
         let known = |name: &str| {
-            let name = name.trim().trim_matches('"').trim();
+            let name = name.trim().trim_matches('"').trim().to_ascii_lowercase();
+            let name = name.as_str();
             matches!(name, "id" | "kind" | "outputs" | "options")
                 || Field::from_name(name).is_some()
         };
@@ -579,7 +580,12 @@ fn sheet_rows(text: &str) -> Result<Vec<RawRow>, String> {
     let Some((header_line, header)) = records.next() else {
         return Ok(Vec::new());
     };
-    let header: Vec<String> = header.into_iter().map(|h| h.trim().to_owned()).collect();
+    // Names as the fields' and options' are written, whatever case a spreadsheet's header
+    // gave them (`Speech`, `FPS`).
+    let header: Vec<String> = header
+        .into_iter()
+        .map(|h| h.trim().to_ascii_lowercase())
+        .collect();
     let mut seen = HashMap::new();
     for (k, name) in header.iter().enumerate() {
         if name.is_empty() {

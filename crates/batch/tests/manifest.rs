@@ -309,7 +309,21 @@ sheet("libre.tsv", "utf-8", {True: "true", False: "false"}, ".", delimiter="\t")
         Some("true"),
         "a field's cell is its text, even when it reads as a switch"
     );
-    for name in ["de.csv", "unicode.txt", "fr.csv", "libre.tsv"] {
+    // A header in a spreadsheet's capitals names the same columns.
+    std::fs::write(
+        dir.path().join("capitals.csv"),
+        "ID;Kind;Speech;Text;Outputs;FPS;Face\n\
+         a;lipsync;a.wav;\"Guten Tag; schön, dass du da bist\";\"o/a.json;o/a.csv\";29,97;TRUE\n\
+         b;lipsync;a.wav;true;o/b.json;25;FALSE\n",
+    )
+    .unwrap();
+    for name in [
+        "de.csv",
+        "unicode.txt",
+        "fr.csv",
+        "libre.tsv",
+        "capitals.csv",
+    ] {
         assert_eq!(rows(name), want, "{name}");
     }
     // Lines are the file's: the German sheet's second row is on line 4, after the blank one;
