@@ -545,12 +545,8 @@ impl Separator {
                 rest,
             );
         }
-        let known = |name: &str| {
-            let name = name.trim().trim_matches('"').trim().to_ascii_lowercase();
-            let name = name.as_str();
-            matches!(name, "id" | "kind" | "outputs" | "options")
-                || Field::from_name(name).is_some()
-        };
+        let known =
+            |name: &str| names_a_field(&name.trim().trim_matches('"').trim().to_ascii_lowercase());
         let names = |cell: char| first.split(cell).filter(|n| known(n)).count();
         let cell = [',', ';', '\t']
             .into_iter()
@@ -675,7 +671,7 @@ fn sheet_value(column: &str, cell: &str, decimal_comma: bool) -> Value {
                 .collect(),
         );
     }
-    if matches!(column, "id" | "kind") || Field::from_name(column).is_some() {
+    if names_a_field(column) {
         return Value::String(cell.to_owned());
     }
     let lower = cell.to_lowercase();
@@ -694,6 +690,12 @@ fn sheet_value(column: &str, cell: &str, decimal_comma: bool) -> Value {
         return Value::String(number);
     }
     Value::String(cell.to_owned())
+}
+
+/// Whether a column's name is a row's field (`id`, `kind`, `outputs`, `options` or a
+/// [`Field`]), not an option of its command.
+fn names_a_field(name: &str) -> bool {
+    matches!(name, "id" | "kind" | "outputs" | "options") || Field::from_name(name).is_some()
 }
 
 /// `29,97` as `29.97`: digits, one comma, digits, and a sign before them.

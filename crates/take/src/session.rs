@@ -844,11 +844,8 @@ impl Session {
         if self.version != 1 {
             bad(format!("version: {} is not supported (1 is)", self.version));
         }
-        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= MAX_FPS) {
-            bad(format!(
-                "fps: {} must be above 0 and at most {MAX_FPS}",
-                self.fps
-            ));
+        if let Some(problem) = fps_problem(self.fps) {
+            bad(problem);
         }
         if self.frames.len() > MAX_FRAMES {
             bad(format!(
@@ -963,6 +960,13 @@ impl Session {
 
 /// The highest frame rate a session may have.
 pub const MAX_FPS: f32 = 1000.0;
+
+/// What is wrong with a session's rate `fps`, if anything: it is above 0 and at most
+/// [`MAX_FPS`].
+pub(crate) fn fps_problem(fps: f32) -> Option<String> {
+    (!(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS))
+        .then(|| format!("fps: {fps} must be above 0 and at most {MAX_FPS}"))
+}
 /// The most frames a session may have: ten hours at 60 frames a second.
 pub const MAX_FRAMES: usize = 10 * 3600 * 60;
 /// The longest 0 → peak → 0 animation a photo becomes, in frames.

@@ -176,11 +176,8 @@ impl Take {
         rows: &[Vec<f32>],
         heads: Option<&[[f32; 3]]>,
     ) -> Result<Take, TakeError> {
-        if !(fps.is_finite() && fps > 0.0 && fps <= crate::session::MAX_FPS) {
-            return Err(TakeError::Invalid(vec![format!(
-                "fps: {fps} must be above 0 and at most {}",
-                crate::session::MAX_FPS
-            )]));
+        if let Some(problem) = crate::session::fps_problem(fps) {
+            return Err(TakeError::Invalid(vec![problem]));
         }
         let names: Vec<String> = character.blendshape_names();
         let step = 1.0 / f64::from(fps);
