@@ -104,17 +104,23 @@ impl FrameRecord {
                 scores: face.scores,
                 landmarks: face.landmarks,
             },
-            None => FrameRecord {
-                index,
-                time,
-                found: None,
-                presence: 0.0,
-                detection_score: 0.0,
-                scores: Vec::new(),
-                head: None,
-                head_position: None,
-                landmarks: Vec::new(),
-            },
+            None => FrameRecord::missing(index, time),
+        }
+    }
+
+    /// The record of frame `index` at `time` seconds in which no face was found.
+    #[must_use]
+    pub fn missing(index: usize, time: f32) -> FrameRecord {
+        FrameRecord {
+            index,
+            time,
+            found: None,
+            presence: 0.0,
+            detection_score: 0.0,
+            scores: Vec::new(),
+            head: None,
+            head_position: None,
+            landmarks: Vec::new(),
         }
     }
 }

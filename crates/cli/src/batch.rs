@@ -105,11 +105,9 @@ pub fn run(args: &BatchArgs) -> anyhow::Result<ExitCode> {
         Err(error) => return Err(error.into()),
     };
     if let Some(encoding) = manifest.guessed_encoding {
-        eprintln!(
-            "{}: not Unicode: read as {encoding}, the encoding its bytes suggest (save it as \
-             \"CSV UTF-8\" if its text comes out wrong)",
-            args.manifest.display()
-        );
+        let manifest = args.manifest.display().to_string();
+        let note = faceanim_files::text::guessed_note(&manifest, encoding, None, "\"CSV UTF-8\"");
+        eprintln!("{note}");
     }
     check_outputs(&mut manifest);
     let selection = if args.all {

@@ -11,15 +11,12 @@ use clap::Args;
 pub(crate) struct ExportArgs {
     /// The character: .glb, .gltf, or a folder of OBJ files.
     pub(crate) character: PathBuf,
-    /// Where to write the .glb.
-    #[arg(short, long)]
-    pub(crate) output: PathBuf,
+    #[command(flatten)]
+    pub(crate) out: crate::outputs::GlbOutput,
     /// A clip JSON (docs/formats.md) to add as a morph-weight animation; its
     /// blendshape names are matched to the character's (ARKit spellings understood).
     #[arg(long)]
     pub(crate) clip: Option<PathBuf>,
-    #[command(flatten)]
-    pub(crate) glb: crate::outputs::GlbArgs,
 }
 
 /// `faceanim export-default`'s arguments.
@@ -55,10 +52,10 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
             let exported = faceanim_export::export_with(
                 faceanim_export::Format::Glb,
                 &animation,
-                args.glb.compression(),
+                args.out.glb.compression(),
             )?;
             for note in &exported.notes {
-                eprintln!("{}: {note}", args.output.display());
+                eprintln!("{}: {note}", args.out.output.display());
             }
             exported.bytes
         }
@@ -66,14 +63,14 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
             &character,
             &[],
             &[],
-            args.glb.compression(),
+            args.out.glb.compression(),
         )?,
         None => faceanim_export::glb(&character, None)?,
     };
-    faceanim_files::write_output(&args.output, &glb)?;
+    faceanim_files::write_output(&args.out.output, &glb)?;
     eprintln!(
         "wrote {} ({} vertices, {} blendshapes{})",
-        args.output.display(),
+        args.out.output.display(),
         character.vertex_count(),
         character.blendshapes().len(),
         if args.clip.is_some() {

@@ -307,15 +307,10 @@ fn transcript(text: &str, language: &str) -> anyhow::Result<Transcript> {
                     language: Some(language),
                 },
             )?;
-            let note = read.guessed.then(|| {
-                format!(
-                    "the transcript {} is not Unicode: it was read as {}, the encoding its \
-                     bytes and --language {language} suggest (save it as UTF-8 if its words \
-                     come out wrong)",
-                    path.display(),
-                    read.encoding
-                )
-            });
+            let note = read.note(
+                &format!("the transcript {}", path.display()),
+                Some(&format!("--language {language}")),
+            );
             return Ok(Transcript {
                 text: read.text,
                 from: path.display().to_string(),

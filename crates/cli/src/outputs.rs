@@ -7,6 +7,16 @@ use faceanim_export::glb::Compression;
 use faceanim_export::{Animation, Format};
 use faceanim_take::Session;
 
+/// Where a command that writes one character (`export`, `sketch`) writes it, and how.
+#[derive(Debug, Clone, clap::Args)]
+pub struct GlbOutput {
+    /// Where to write the .glb.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub glb: GlbArgs,
+}
+
 /// How GLB outputs are written (every command that writes one flattens these).
 #[derive(Debug, Clone, Copy, Default, clap::Args)]
 pub struct GlbArgs {

@@ -11,14 +11,11 @@ pub(crate) struct SketchArgs {
     /// `[CHARACTER] STROKES`: the character (default: the built-in head) and the strokes file.
     #[arg(num_args = 1..=2, required = true, value_names = ["CHARACTER", "STROKES"])]
     pub(crate) inputs: Vec<PathBuf>,
-    /// Where to write the animated .glb.
-    #[arg(short, long)]
-    pub(crate) output: PathBuf,
+    #[command(flatten)]
+    pub(crate) out: crate::outputs::GlbOutput,
     /// Also write the baked clip (one row of weights per frame) here.
     #[arg(long)]
     pub(crate) clip: Option<PathBuf>,
-    #[command(flatten)]
-    pub(crate) glb: crate::outputs::GlbArgs,
 }
 
 /// `faceanim sketch`.
@@ -59,22 +56,22 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
         strokes: serde_json::from_slice(&bytes).ok(),
     };
     crate::outputs::write(
-        &args.output,
+        &args.out.output,
         faceanim_export::Format::Glb,
         &animation,
-        args.glb,
+        args.out.glb,
     )?;
     if let Some(path) = &args.clip {
         crate::outputs::write(
             path,
             faceanim_export::Format::ClipJson,
             &animation,
-            args.glb,
+            args.out.glb,
         )?;
     }
     eprintln!(
         "{}: {} actions, {} frames at {} fps, {} extra targets for arcs and exaggerations",
-        args.output.display(),
+        args.out.output.display(),
         sketch.actions().count(),
         animation.clip.frames.len(),
         sketch.fps(),

@@ -61,6 +61,39 @@ pub struct Text {
     pub guessed: bool,
 }
 
+impl Text {
+    /// What to tell the user of `what` (the file as they know it) when its encoding was
+    /// guessed ([`guessed_note`]; `also` names what besides its bytes chose it, such as the
+    /// language given), `None` when it was Unicode.
+    #[must_use]
+    pub fn note(&self, what: &str, also: Option<&str>) -> Option<String> {
+        self.guessed
+            .then(|| guessed_note(what, self.encoding, also, "UTF-8"))
+    }
+}
+
+/// The one wording of a file read in a guessed code page: `what` (the file as the user knows
+/// it) is not Unicode, it was read as `encoding`, which its bytes (and `also`: the language
+/// given) suggest — and what to do when the guess is wrong: save it as `unicode` (UTF-8, or
+/// the name a program gives it, such as Excel's "CSV UTF-8").
+///
+/// ```
+/// let note = faceanim_files::text::guessed_note("a.srt", "Shift_JIS", Some("--language ja"), "UTF-8");
+/// assert_eq!(
+///     note,
+///     "a.srt is not Unicode: it was read as Shift_JIS, the encoding its bytes and --language ja \
+///      suggest (save it as UTF-8 if its text comes out wrong)"
+/// );
+/// ```
+#[must_use]
+pub fn guessed_note(what: &str, encoding: &str, also: Option<&str>, unicode: &str) -> String {
+    let also = also.map_or_else(String::new, |a| format!(" and {a}"));
+    format!(
+        "{what} is not Unicode: it was read as {encoding}, the encoding its bytes{also} suggest \
+         (save it as {unicode} if its text comes out wrong)"
+    )
+}
+
 /// Why bytes are not text.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]

@@ -46,6 +46,15 @@ impl Both {
     }
 }
 
+/// Where the page downloads the take in each format.
+const EXPORTS: [(&str, Format); 5] = [
+    ("/api/capture/session.json", Format::Session),
+    ("/api/capture/export.glb", Format::Glb),
+    ("/api/capture/export.json", Format::ClipJson),
+    ("/api/capture/export.csv", Format::LiveLinkCsv),
+    ("/api/capture/export.byoc.csv", Format::SeedCsv),
+];
+
 pub fn router(both: Both) -> Router {
     let api = Router::new()
         .route("/api/capture/state", get(view))
@@ -81,27 +90,15 @@ pub fn router(both: Both) -> Router {
         .route("/api/capture/vmc", get(vmc_view))
         .route("/api/capture/vmc/record", post(vmc_record))
         .route("/api/capture/vmc/send", post(vmc_send))
-        .route("/api/capture/vmc/neutral", post(vmc_neutral))
-        .route(
-            "/api/capture/session.json",
-            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::Session)),
-        )
-        .route(
-            "/api/capture/export.glb",
-            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::Glb)),
-        )
-        .route(
-            "/api/capture/export.json",
-            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::ClipJson)),
-        )
-        .route(
-            "/api/capture/export.csv",
-            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::LiveLinkCsv)),
-        )
-        .route(
-            "/api/capture/export.byoc.csv",
-            get(|b: State<Both>, q: Query<Layers>| export(b, q, Format::SeedCsv)),
-        )
+        .route("/api/capture/vmc/neutral", post(vmc_neutral));
+    let api = EXPORTS
+        .into_iter()
+        .fold(api, |api, (path, format)| {
+            api.route(
+                path,
+                get(move |b: State<Both>, q: Query<Layers>| export(b, q, format)),
+            )
+        })
         .with_state(both.clone());
     let upload = http::body_limit(
         Router::new().route("/api/capture/upload", post(upload)),
@@ -240,14 +237,10 @@ fn transcript_of(
     let read =
         faceanim_files::text::decode(bytes, faceanim_files::text::Accept::Legacy { language })
             .map_err(|e| bad(format!("{name}: {e}")))?;
-    let note = read.guessed.then(|| {
-        format!(
-            "{name} is not Unicode: it was read as {}, the encoding its bytes{} suggest (save \
-             it as UTF-8 if its words come out wrong)",
-            read.encoding,
-            language.map_or_else(String::new, |l| format!(" and the language {l}"))
-        )
-    });
+    let note = read.note(
+        name,
+        language.map(|l| format!("the language {l}")).as_deref(),
+    );
     Ok(TranscriptView {
         text: read.text,
         encoding: read.encoding,
