@@ -281,7 +281,10 @@ try {
   await page.waitForFunction(() => { const l = window.studio.capture.live; return !l.running && l.open_frames === 0; }, null, { timeout: 30000 });
   state = await captureState();
   measurements.recorded_frames = state.take.frames;
-  check(state.take.frames >= 20, `the recorded take has only ${state.take.frames} frames`);
+  // The frames recorded, put on a steady rate by their times (the rate rounded to a whole
+  // number: a few frames more or fewer than were tracked).
+  measurements.recorded_fps = state.take.fps;
+  check(state.take.frames >= 15, `the recorded take has only ${state.take.frames} frames`);
   await page.waitForTimeout(300);
   await shot('09-recorded-take');
 

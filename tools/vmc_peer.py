@@ -7,11 +7,12 @@ Loopback only, bounded in count and time.
       binds 127.0.0.1 on a free port, prints "PORT <n>", then keeps every datagram until N
       bundles with /VMC/Ext/Blend/Apply arrived or S seconds passed; writes the decoded
       messages (address, arguments with their OSC types) and arrival times as JSON.
-  vmc_peer.py send --to PORT --frames N --fps F --out FILE [--garbage K]
+  vmc_peer.py send --to PORT --frames N --fps F --out FILE [--garbage K] [--lose A:B]
       sends N frames of ARKit weights (JawOpen, EyeBlinkLeft, MouthSmileLeft, in ARKit's
-      capitalised spelling) and a head turn to 127.0.0.1:PORT at F frames per second, writes
-      what it sent as JSON, then K garbage datagrams (random bytes, truncated bundles, huge
-      datagrams, unknown addresses, wrong argument types).
+      capitalised spelling) and a head turn to 127.0.0.1:PORT at F frames per second, but
+      frames A to B-1, which it keeps to itself as a Wi-Fi network loses datagrams; writes
+      every frame (its time as /VMC/Ext/T says it, the lost ones marked) as JSON, then K garbage datagrams (random bytes,
+      truncated bundles, huge datagrams, unknown addresses, wrong argument types).
 """
 import argparse
 import json
@@ -104,15 +105,19 @@ def send(args):
             time.sleep(wait)
         values = frame_values(k, args.frames)
         yaw = 30.0 * math.sin(2 * math.pi * k / max(1, args.frames))
+        now = time.monotonic() - start
+        if args.lose[0] <= k < args.lose[1]:
+            sent.append({"time": now, "values": values, "yaw": yaw, "lost": True})
+            continue
         bundle = osc_bundle_builder.OscBundleBuilder(osc_bundle_builder.IMMEDIATELY)
         bundle.add_content(message("/VMC/Ext/OK", 1))
-        bundle.add_content(message("/VMC/Ext/T", float(time.monotonic() - start)))
+        bundle.add_content(message("/VMC/Ext/T", float(now)))
         bundle.add_content(message("/VMC/Ext/Bone/Pos", "Head", 0.0, 0.0, 0.0, *head_quaternion(yaw)))
         for name, value in values.items():
             bundle.add_content(message("/VMC/Ext/Blend/Val", name, float(value)))
         bundle.add_content(message("/VMC/Ext/Blend/Apply"))
         sock.sendto(bundle.build().dgram, destination)
-        sent.append({"values": values, "yaw": yaw})
+        sent.append({"time": now, "values": values, "yaw": yaw})
     rng = random.Random(7)
     valid = message("/VMC/Ext/Blend/Val", "JawOpen", 0.5).dgram
     kinds = [
@@ -132,6 +137,15 @@ def send(args):
         json.dump({"frames": sent}, f)
 
 
+def frames_range(text):
+    """A:B as the pair (A, B) of frame numbers."""
+    try:
+        first, end = (int(part) for part in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not A:B (two frame numbers)")
+    return first, end
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -145,6 +159,7 @@ def main():
     s.add_argument("--fps", type=float, required=True)
     s.add_argument("--out", required=True)
     s.add_argument("--garbage", type=int, default=0)
+    s.add_argument("--lose", type=frames_range, default=(0, 0), metavar="A:B")
     args = parser.parse_args()
     # Bounded in count and time, whatever the caller asks.
     if args.command == "receive" and not (0 < args.count <= 100000 and 0 < args.timeout <= 120):

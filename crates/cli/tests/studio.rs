@@ -574,36 +574,67 @@ fn recorded(studio: &Studio, frames: usize) -> serde_json::Value {
     state
 }
 
-/// The take in `capture` holds what a test sender sent (`sent["frames"][k]["values"]`, in
-/// ARKit's capitalised names) on the ICT head, the head's yaw as `yaw` of what was sent.
+/// The recorded take of `capture` keeps the time of what was `sent` (every frame with its time
+/// on the sender's clock, those marked `"lost"` never arriving): it lasts as long, and each of
+/// its frames, at `k / fps` from the first, lies between the two sent frames around its time
+/// — a blend of them, or across a long loss the one before — in the weights and the head's
+/// yaw (`yaw` of a sent frame). `slack` widens "around" by seconds either side, for a take
+/// timed by arrival (the network's delays), not by the sender's clock.
 fn take_follows(
     capture: &serde_json::Value,
     sent: &serde_json::Value,
     yaw: impl Fn(&serde_json::Value) -> f64,
+    slack: f64,
 ) {
     let take = &capture["take"];
     let names = support::strings(&capture["blendshapes"]);
     let column = |name: &str| names.iter().position(|n| *n == name).unwrap();
-    for (k, frame) in sent["frames"].as_array().unwrap().iter().enumerate() {
-        let estimate = &take["estimates"][k];
+    let arrived: Vec<&serde_json::Value> = sent["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["lost"] != true)
+        .collect();
+    let time =
+        |f: &serde_json::Value| f["time"].as_f64().unwrap() - arrived[0]["time"].as_f64().unwrap();
+    let fps = take["fps"].as_f64().unwrap();
+    let frames = take["estimates"].as_array().unwrap();
+    let span = time(arrived[arrived.len() - 1]);
+    assert!(
+        (frames.len() as f64 - 1.0 - span * fps).abs() <= 1.0 + slack * fps,
+        "frames sent over {span} s, a take of {} at {fps} fps",
+        frames.len()
+    );
+    for (k, estimate) in frames.iter().enumerate() {
+        let t = k as f64 / fps;
+        let before = arrived.iter().rposition(|&f| time(f) <= t).unwrap_or(0);
+        let after = (before + 1).min(arrived.len() - 1);
+        let (from, to) = (time(arrived[before]) - slack, time(arrived[after]) + slack);
+        let around: Vec<&serde_json::Value> = arrived
+            .iter()
+            .copied()
+            .filter(|&f| (from..=to).contains(&time(f)))
+            .collect();
+        let within = |want: &dyn Fn(&serde_json::Value) -> f64, got: f64, tolerance: f64| {
+            let wants = || around.iter().map(|&f| want(f));
+            let (low, high) = (
+                wants().fold(f64::INFINITY, f64::min),
+                wants().fold(f64::NEG_INFINITY, f64::max),
+            );
+            assert!(
+                low - tolerance <= got && got <= high + tolerance,
+                "take frame {k} at {t:.3} s: {got}, sent {low} to {high} from {from:.3} to {to:.3} s"
+            );
+        };
         for (sent_name, own) in [
             ("JawOpen", "jawOpen"),
             ("EyeBlinkLeft", "eyeBlink_L"),
             ("MouthSmileLeft", "mouthSmile_L"),
         ] {
-            let want = frame["values"][sent_name].as_f64().unwrap();
             let got = estimate[column(own)].as_f64().unwrap();
-            assert!(
-                (want - got).abs() < 1e-6,
-                "frame {k} {own}: sent {want}, took {got}"
-            );
+            within(&|f| f["values"][sent_name].as_f64().unwrap(), got, 1e-5);
         }
-        let got = take["head"][k][0].as_f64().unwrap();
-        let want = yaw(frame);
-        assert!(
-            (got - want).abs() < 1e-2,
-            "frame {k}: yaw {got}, sent {want}"
-        );
+        within(&yaw, take["head"][k][0].as_f64().unwrap(), 1e-2);
     }
 }
 
@@ -623,32 +654,25 @@ fn a_phone_trackers_vmc_stream_becomes_a_take() {
     let vmc = live_view;
     assert_eq!(vmc(&studio)["listening"], listen.as_str());
     record_live(&studio, true);
-    let sent = support::vmc_send(port, 300, 60.0, 0, &dir.path().join("sent.json"));
-    recorded(&studio, 300);
+    // A sixth of a second lost on the way, as Wi-Fi loses datagrams: the frames after it keep
+    // their time (kept one after another, they would come ten frames early).
+    let sent = support::vmc_send(port, 300, 60.0, 0, 120..130, &dir.path().join("sent.json"));
+    recorded(&studio, 290);
     let state = record_live(&studio, false);
     let take = &state["take"];
-    assert_eq!(take["frames"], 300, "{}", state["vmc"]);
     assert_eq!(take["estimator"], "received");
-    take_follows(&state, &sent, |frame| frame["yaw"].as_f64().unwrap());
-    // Arrival times, kept: 299 intervals of about 1/60 s, rising.
+    take_follows(&state, &sent, |frame| frame["yaw"].as_f64().unwrap(), 0.0);
+    // A steady 60 fps from the first arrival.
     let (_, body) = request(studio.port, "GET", "/api/capture/session.json", &[], b"");
     let session: serde_json::Value = serde_json::from_str(&body).unwrap();
-    let times: Vec<f64> = session["frames"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|f| f["time"].as_f64().unwrap())
-        .collect();
-    assert!(
-        times.windows(2).all(|w| w[1] >= w[0]),
-        "arrival times go back"
-    );
-    assert!(
-        (times[299] - 299.0 / 60.0).abs() < 1.0,
-        "300 frames at 60 Hz arrived over {} s",
-        times[299]
-    );
     assert_eq!(session["fps"], 60.0);
+    for (k, frame) in session["frames"].as_array().unwrap().iter().enumerate() {
+        let time = frame["time"].as_f64().unwrap();
+        assert!(
+            (time - k as f64 / 60.0).abs() < 1e-4,
+            "frame {k} at {time} s"
+        );
+    }
     // It exports like any take.
     let (status, glb) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
     assert_eq!(status, 200, "{glb}");
@@ -659,8 +683,8 @@ fn a_phone_trackers_vmc_stream_becomes_a_take() {
 
     // A flood of garbage: counted, dropped, and the next good frame still arrives.
     let before = vmc(&studio);
-    support::vmc_send(port, 0, 60.0, 700, &dir.path().join("garbage.json"));
-    support::vmc_send(port, 1, 60.0, 0, &dir.path().join("one.json"));
+    support::vmc_send(port, 0, 60.0, 700, 0..0, &dir.path().join("garbage.json"));
+    support::vmc_send(port, 1, 60.0, 0, 0..0, &dir.path().join("one.json"));
     let mut after = vmc(&studio);
     for _ in 0..100 {
         if after["frames"].as_u64() > before["frames"].as_u64() {
@@ -1313,11 +1337,15 @@ fn a_live_link_face_phone_drives_the_studio_and_goes_out_over_vmc() {
         forwarded["p95_ms"].as_f64().unwrap()
     );
     let capture = record_live(&studio, false);
-    assert_eq!(capture["take"]["frames"], FRAMES);
     // The app's radians, in degrees.
-    take_follows(&capture, &sent, |frame| {
-        frame["values"]["HeadYaw"].as_f64().unwrap().to_degrees()
-    });
+    // pylivelinkface's frame numbers count milliseconds as frames (they go back every second):
+    // the take goes by arrival, which loopback delays a little.
+    take_follows(
+        &capture,
+        &sent,
+        |frame| frame["values"]["HeadYaw"].as_f64().unwrap().to_degrees(),
+        0.1,
+    );
     // The VTuber app had every frame, as it arrived.
     assert!(app.wait().unwrap().success());
     let received: serde_json::Value =

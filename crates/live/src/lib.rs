@@ -16,11 +16,13 @@
 //!   `/VMC/Ext/Blend/Apply`. Names are the character's own, ARKit's or VRM 0.x presets
 //!   ([`Names`]). Sending never blocks: a datagram the network refuses is counted and dropped.
 //! - [`Marionette`] listens on a UDP port on its own thread and turns what arrives into frames
-//!   of the character's weights with the head pose and the arrival time; malformed, truncated,
-//!   foreign, unknown and oversized datagrams are counted and dropped, never a panic. A phone's
-//!   frames can go straight on to a [`Performer`] ([`Marionette::forward_to`]), timed from
-//!   datagram in to VMC out; a lost face returns the character to neutral, and a calibrated
-//!   neutral ([`Marionette::calibrate`]) is taken away from every frame.
+//!   of the character's weights with the head pose and the arrival time (a recording goes by
+//!   the sender's own clock where it is sound: VMC's `/VMC/Ext/T`, a phone's frame times);
+//!   malformed, truncated, foreign, unknown and oversized datagrams are counted and dropped,
+//!   never a panic. A phone's frames can go straight on to a [`Performer`]
+//!   ([`Marionette::forward_to`]), timed from datagram in to VMC out; a lost face returns the
+//!   character to neutral, and a calibrated neutral ([`Marionette::calibrate`]) is taken away
+//!   from every frame.
 //!
 //! ```
 //! use faceanim_live::{Marionette, Names, Performer};
@@ -39,6 +41,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod clock;
 mod marionette;
 mod names;
 mod performer;

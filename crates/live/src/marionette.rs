@@ -116,7 +116,8 @@ pub struct Forwarding {
 /// last value sent), the head pose and when it arrived.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReceivedFrame {
-    /// Seconds from when the marionette started listening to the frame's arrival.
+    /// Seconds from when the marionette started listening to the frame's arrival; in a
+    /// recording ([`Marionette::stop_recording`]), on the sender's clock where it is sound.
     pub time: f64,
     /// The character's weights.
     pub weights: Vec<f32>,
@@ -188,11 +189,14 @@ struct State {
     /// The neck's rotation in this frame (Unity's), which the head's follows.
     neck: Option<[f32; 4]>,
     history: VecDeque<ReceivedFrame>,
-    recording: Option<Vec<ReceivedFrame>>,
+    /// The frames recorded, and when their senders say each was made.
+    recording: Option<(Vec<ReceivedFrame>, Vec<Option<f64>>)>,
     /// Units and neutral of a phone's frames.
     settings: SourceSettings,
     /// The last face a phone sent, as sent (for calibrating).
     raw: Option<Reading>,
+    /// The sender's time of the frame being made, when it said.
+    sent: Option<f64>,
     /// Where frames go on as they arrive, and the delays of the last ones (ms).
     forward: Option<Arc<Mutex<Performer>>>,
     delays: VecDeque<f64>,
@@ -279,6 +283,7 @@ impl Marionette {
             recording: None,
             settings: source.settings.clone(),
             raw: None,
+            sent: None,
             forward: None,
             delays: VecDeque::new(),
             forwarding: Forwarding::default(),
@@ -396,19 +401,27 @@ impl Marionette {
 
     /// Starts keeping every frame that arrives (a take being recorded).
     pub fn start_recording(&self) {
-        lock(&self.state).recording = Some(Vec::new());
+        lock(&self.state).recording = Some((Vec::new(), Vec::new()));
     }
 
     /// Frames recorded so far, while recording.
     #[must_use]
     pub fn recorded(&self) -> Option<usize> {
-        lock(&self.state).recording.as_ref().map(Vec::len)
+        lock(&self.state).recording.as_ref().map(|(f, _)| f.len())
     }
 
-    /// Stops recording and returns the frames kept, or `None` when it was not recording.
+    /// Stops recording and returns the frames kept, or `None` when it was not recording. They
+    /// are timed by the sender's own clock where it gave one for nine frames in ten and it is
+    /// sound (VMC's `/VMC/Ext/T`, Live Link Face's frame times, VTube Studio's timestamps: free
+    /// of the network's delays and bursts), else by their arrival.
     #[must_use]
     pub fn stop_recording(&self) -> Option<Vec<ReceivedFrame>> {
-        lock(&self.state).recording.take()
+        let (mut frames, sent) = lock(&self.state).recording.take()?;
+        let arrived: Vec<f64> = frames.iter().map(|f| f.time).collect();
+        for (frame, time) in frames.iter_mut().zip(crate::clock::clock(&arrived, &sent)) {
+            frame.time = time;
+        }
+        Some(frames)
     }
 
     /// Waits up to `timeout` for `count` frames to have arrived and returns the first `count`
@@ -574,6 +587,7 @@ fn apply_reading(state: &mut State, reading: Reading, time: f64) {
         let rest = neutral.as_ref().map_or([0.0; 3], |n| n.head);
         state.head = Some([head[0] - rest[0], head[1] - rest[1], head[2] - rest[2]]);
     }
+    state.sent = reading.time;
     state.raw = Some(reading);
     complete_frame(state, time);
 }
@@ -703,7 +717,19 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             }
             true
         }
-        "/VMC/Ext/OK" | "/VMC/Ext/T" | "/VMC/Ext/Root/Pos" | "/VMC/Ext/Blend/Apply/All" => true,
+        "/VMC/Ext/T" => {
+            // The sender's time of the frame this bundle makes.
+            state.sent = message
+                .args
+                .first()
+                .and_then(|t| match t {
+                    OscType::Double(t) => Some(*t),
+                    other => float(Some(other)).map(f64::from),
+                })
+                .filter(|t| t.is_finite());
+            true
+        }
+        "/VMC/Ext/OK" | "/VMC/Ext/Root/Pos" | "/VMC/Ext/Blend/Apply/All" => true,
         other if other.starts_with("/VMC/Ext/") => true,
         _ => {
             state.traffic.unknown += 1;
@@ -733,6 +759,7 @@ fn complete_frame(state: &mut State, time: f64) {
     // values at the same range (tests/phones.rs).
     let channel = |c: &str| faceanim_retarget::channel_index(c).map_or(0.0, |i| state.channels[i]);
     let phone = state.raw.is_some();
+    let sent = state.sent.take();
     let frame = ReceivedFrame {
         time,
         weights,
@@ -740,8 +767,9 @@ fn complete_frame(state: &mut State, time: f64) {
         eyes: phone.then(|| faceanim_rig::bones::gaze_from_arkit(channel)),
         jaw: phone.then(|| channel("jawOpen")),
     };
-    if let Some(recording) = state.recording.as_mut() {
-        recording.push(frame.clone());
+    if let Some((frames, times)) = state.recording.as_mut() {
+        frames.push(frame.clone());
+        times.push(sent);
     }
     if state.history.len() >= HISTORY {
         state.history.pop_front();

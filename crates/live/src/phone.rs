@@ -119,6 +119,10 @@ pub struct Reading {
     pub head: Option<[f32; 3]>,
     /// Each eye's yaw and pitch in degrees (left, right), when sent.
     pub eyes: Option<[[f32; 2]; 2]>,
+    /// When the phone says it took the frame, seconds on its own clock, when it says (Live
+    /// Link Face's frame and sub-frame at its rate, VTube Studio's timestamp); a take prefers
+    /// it to the arrival time, which the network shifts.
+    pub time: Option<f64>,
 }
 
 /// What one datagram said.
@@ -246,8 +250,19 @@ fn live_link_face(bytes: &[u8], head: AngleUnit, eyes: AngleUnit) -> Result<Pack
         .map(|(i, v)| (i, v.clamp(0.0, 1.0)))
         .collect();
     let angle = |unit: AngleUnit, i: usize| unit.degrees(values[i]);
+    let word = |at: usize| [rest[at], rest[at + 1], rest[at + 2], rest[at + 3]];
+    let frame = f64::from(i32::from_be_bytes(word(0)));
+    let sub_frame = f64::from(f32::from_be_bytes(word(4)));
+    let rate = (
+        f64::from(i32::from_be_bytes(word(8))),
+        f64::from(i32::from_be_bytes(word(12))),
+    );
+    // Frame (and the fraction of one) at numerator/denominator frames per second.
+    let time = (rate.0 > 0.0 && rate.1 > 0.0 && (0.0..1.0).contains(&sub_frame))
+        .then(|| (frame + sub_frame) * rate.1 / rate.0);
     Ok(Packet::Face(Reading {
         channels,
+        time,
         head: Some([angle(head, 52), angle(head, 53), angle(head, 54)]),
         eyes: Some([
             [angle(eyes, 55), angle(eyes, 56)],
@@ -344,8 +359,9 @@ fn ifacialmocap(bytes: &[u8], head: AngleUnit, eyes: AngleUnit) -> Result<Packet
     Ok(Packet::Face(reading))
 }
 
-/// VTube Studio's phone frames: `{"FaceFound": bool, "Rotation": {x,y,z}, "Position": …,
-/// "EyeLeft": {x,y,z}, "EyeRight": …, "BlendShapes": [{"k": name, "v": value}, …]}`.
+/// VTube Studio's phone frames: `{"Timestamp": ms, "FaceFound": bool, "Rotation": {x,y,z},
+/// "Position": …, "EyeLeft": {x,y,z}, "EyeRight": …, "BlendShapes": [{"k": name, "v": value},
+/// …]}`.
 fn vtube_studio(bytes: &[u8], head: AngleUnit, eyes: AngleUnit) -> Result<Packet, Refused> {
     const NAME: &str = "VTube Studio";
     #[derive(serde::Deserialize)]
@@ -368,6 +384,8 @@ fn vtube_studio(bytes: &[u8], head: AngleUnit, eyes: AngleUnit) -> Result<Packet
         eye_right: Option<Xyz>,
         #[serde(default)]
         blend_shapes: Vec<Shape>,
+        /// Milliseconds on the phone's clock.
+        timestamp: Option<f64>,
     }
     let frame: Frame = serde_json::from_slice(bytes).map_err(|e| {
         if e.is_syntax() || e.is_eof() {
@@ -386,7 +404,13 @@ fn vtube_studio(bytes: &[u8], head: AngleUnit, eyes: AngleUnit) -> Result<Packet
         return Ok(Packet::FaceLost);
     }
     let finite = |v: &Xyz| [v.x, v.y, v.z].iter().all(|a| a.is_finite());
-    let mut reading = Reading::default();
+    let mut reading = Reading {
+        time: frame
+            .timestamp
+            .filter(|t| t.is_finite())
+            .map(|t| t / 1000.0),
+        ..Reading::default()
+    };
     for shape in &frame.blend_shapes {
         if let Some(channel) = channel_of(&shape.k)
             && shape.v.is_finite()
@@ -476,6 +500,8 @@ mod tests {
         let [yaw, _, _] = reading.head.unwrap();
         assert!((yaw - 0.1f32.to_degrees()).abs() < 1e-4);
         assert!((reading.eyes.unwrap()[0][1] + 0.2).abs() < 1e-6);
+        // Frame 1234 and a half at 60 fps.
+        assert!((reading.time.unwrap() - 1234.5 / 60.0).abs() < 1e-9);
         // The header alone: the face is lost.
         let lost = live_link("0123456789abcdef0123456789abcdef0123", None);
         assert_eq!(
@@ -554,11 +580,12 @@ mod tests {
 
     #[test]
     fn vtube_studio_json_frames() {
-        let frame = br#"{"Timestamp":1,"Hotkey":-1,"FaceFound":true,"Rotation":{"x":-5,"y":12,"z":3},"Position":{"x":0,"y":0,"z":0},"EyeLeft":{"x":4,"y":-2,"z":0},"EyeRight":{"x":4,"y":-3,"z":0},"BlendShapes":[{"k":"JawOpen","v":0.3},{"k":"EyeBlinkRight","v":0.9},{"k":"Nonsense","v":1}]}"#;
+        let frame = br#"{"Timestamp":1764990000123,"Hotkey":-1,"FaceFound":true,"Rotation":{"x":-5,"y":12,"z":3},"Position":{"x":0,"y":0,"z":0},"EyeLeft":{"x":4,"y":-2,"z":0},"EyeRight":{"x":4,"y":-3,"z":0},"BlendShapes":[{"k":"JawOpen","v":0.3},{"k":"EyeBlinkRight","v":0.9},{"k":"Nonsense","v":1}]}"#;
         let r = face(Protocol::VTubeStudio, frame);
         assert_eq!(r.channels.len(), 2);
         assert_eq!(r.head, Some([12.0, -5.0, 3.0]));
         assert_eq!(r.eyes, Some([[-2.0, 4.0], [-3.0, 4.0]]));
+        assert!((r.time.unwrap() - 1_764_990_000.123).abs() < 1e-6);
         let lost = br#"{"FaceFound":false,"BlendShapes":[]}"#;
         assert_eq!(
             decode(

@@ -53,6 +53,57 @@ fn big_endian_floats(bytes: &[u8]) -> Vec<f32> {
         .collect()
 }
 
+/// The phone's own time of a Live Link Face datagram, seconds: its frame number and sub-frame
+/// at its rate, read here from the packet's layout (after the two length-prefixed names).
+fn timecode(datagram: &[u8]) -> f64 {
+    let mut at = 1;
+    for _ in 0..2 {
+        at += 4 + u32::from_be_bytes(datagram[at..at + 4].try_into().unwrap()) as usize;
+    }
+    let word = |k: usize| -> [u8; 4] { datagram[at + 4 * k..at + 4 * k + 4].try_into().unwrap() };
+    let frame = f64::from(i32::from_be_bytes(word(0)));
+    let sub_frame = f64::from(f32::from_be_bytes(word(1)));
+    let rate = f64::from(i32::from_be_bytes(word(2))) / f64::from(i32::from_be_bytes(word(3)));
+    (frame + sub_frame) / rate
+}
+
+/// The real recording delivered as Wi-Fi delivers it — paced by the phone's own timecode, but
+/// in bunches of four — is recorded on the phone's clock: each frame's time is its timecode
+/// (the recording's own gaps included), not when its bunch arrived.
+#[test]
+fn a_recording_goes_by_the_phones_own_timecode() {
+    let recording = llv_recording();
+    let sent: Vec<f64> = recording.iter().map(|d| timecode(d)).collect();
+    // The app's 60 fps, with frames of its own skipped: steps of one frame and more.
+    assert!(sent.windows(2).all(|w| w[1] - w[0] >= 1.0 / 60.0 - 1e-4));
+    let marionette = listening(Protocol::LiveLinkFace, None, &names(&["jawOpen"]));
+    marionette.start_recording();
+    let phone = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let start = std::time::Instant::now();
+    for (k, bunch) in recording.chunks(4).enumerate() {
+        let last = (k * 4 + bunch.len() - 1).min(sent.len() - 1);
+        let due = Duration::from_secs_f64(sent[last] - sent[0]);
+        std::thread::sleep(due.saturating_sub(start.elapsed()));
+        for datagram in bunch {
+            phone.send_to(datagram, marionette.address()).unwrap();
+            std::thread::sleep(Duration::from_micros(200));
+        }
+    }
+    let arrived = marionette.wait_for_frames(180, WAIT);
+    assert_eq!(arrived.len(), 180, "{:?}", marionette.traffic());
+    // Arrivals in bunches: within a bunch, well under a frame apart.
+    assert!(arrived[1].time - arrived[0].time < 0.01);
+    let frames = marionette.stop_recording().unwrap();
+    assert_eq!(frames.len(), 180, "{:?}", marionette.traffic());
+    for (k, (frame, &time)) in frames.iter().zip(&sent).enumerate() {
+        let (got, want) = (frame.time - frames[0].time, time - sent[0]);
+        assert!(
+            (got - want).abs() < 1e-6,
+            "frame {k}: {got} s, the phone's {want} s"
+        );
+    }
+}
+
 #[test]
 fn a_real_live_link_face_recording_drives_the_character_and_goes_out_over_vmc() {
     let recording = llv_recording();

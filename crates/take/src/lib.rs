@@ -10,6 +10,8 @@
 //! - [`session`]: one input's frames and estimates with the user's [`Edits`] (keyframes,
 //!   corrections, preference, smoothing), kept in a JSON file; the animation is derived.
 //! - [`take`]: a session being edited with undo and redo, and [`Take::from_capture`].
+//! - [`steady`]: frames recorded as they arrived (a phone, a webcam tracked live) put on a
+//!   steady rate by their times.
 //! - [`calibration`]: a live performer's neutral face (Calibrate, or a face held still); a
 //!   take's is made of each part of the face at its calmest frame, or is the frame the user
 //!   names ([`Session::set_neutral`]).
@@ -46,6 +48,7 @@ pub mod expression;
 mod fingerprint;
 pub mod layer;
 pub mod session;
+pub mod steady;
 pub mod take;
 
 pub use estimator::{ByName, Estimator, EstimatorSource, Retargeted};
@@ -56,7 +59,8 @@ pub use session::{
     Correction, EXPRESSIVE_NEUTRAL, Edits, Filtering, Neutral, NeutralCheck, NeutralChoice,
     Session, SessionFrame, peak_animation,
 };
-pub use take::{Footage, ReceivedFrame, Take, recorded_fps};
+pub use steady::Steady;
+pub use take::{Footage, ReceivedFrame, Take};
 
 /// Why a take or session refused a change, or a file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -6,6 +6,7 @@ use faceanim_rig::Character;
 use crate::estimator::{Estimator, EstimatorSource};
 use crate::expression::Expression;
 use crate::session::{Edits, Filtering, Session, SessionFrame, estimate_frames};
+use crate::steady::Steady;
 use crate::{Fingerprint, TakeError};
 
 /// How many edits of a take undo remembers.
@@ -27,6 +28,41 @@ pub struct Footage {
     pub still_frames: Option<usize>,
 }
 
+impl Footage {
+    /// Footage of frames recorded as they arrived (a webcam tracked live, `records` with their
+    /// times in seconds), on a steady rate ([`Steady`]): each frame is the record nearest its
+    /// time, renumbered and retimed, and named by `name` from its number. Also, per frame,
+    /// which record it is (for what was kept beside the records, such as previews).
+    #[must_use]
+    pub fn from_arrivals(
+        source: String,
+        records: &[FrameRecord],
+        name: impl Fn(usize) -> String,
+    ) -> (Footage, Vec<usize>) {
+        let times: Vec<f64> = records.iter().map(|r| f64::from(r.time)).collect();
+        let steady = Steady::of(&times);
+        let chosen: Vec<usize> = steady.slots.iter().map(|s| s.nearest()).collect();
+        let step = 1.0 / f64::from(steady.fps);
+        let records: Vec<FrameRecord> = chosen
+            .iter()
+            .enumerate()
+            .map(|(k, &r)| FrameRecord {
+                index: k,
+                time: (k as f64 * step) as f32,
+                ..records[r].clone()
+            })
+            .collect();
+        let footage = Footage {
+            source,
+            fps: steady.fps,
+            frame_names: (0..records.len()).map(name).collect(),
+            records,
+            still_frames: None,
+        };
+        (footage, chosen)
+    }
+}
+
 /// One frame that arrived as the character's own weights (a VMC stream): when, the weights in
 /// the character's order, and the head pose.
 #[derive(Debug, Clone, PartialEq)]
@@ -37,18 +73,6 @@ pub struct ReceivedFrame {
     pub weights: Vec<f32>,
     /// Head yaw, pitch, roll in degrees.
     pub head: Option<[f32; 3]>,
-}
-
-/// The rate of frames recorded as they arrived: frames per second over the recording, rounded,
-/// 1 to 120 (30 for a single frame).
-#[must_use]
-pub fn recorded_fps(first: f64, last: f64, frames: usize) -> f32 {
-    let duration = last - first;
-    if frames > 1 && duration > 0.0 {
-        (((frames - 1) as f64 / duration).round() as f32).clamp(1.0, 120.0)
-    } else {
-        30.0
-    }
 }
 
 /// A captured input being edited: its session, where the estimates came from, and the undo and
@@ -136,9 +160,9 @@ impl Take {
         Ok(Take::new(session, estimator.source()))
     }
 
-    /// A take of frames that arrived as `character`'s weights (named `source`), keeping their
-    /// arrival times, at the rate [`recorded_fps`] estimates from them; the frames are named
-    /// `{source}_{n}`.
+    /// A take of frames that arrived as `character`'s weights (named `source`), on a steady
+    /// rate by their times, each frame the blend of the two arrivals around its time, weights
+    /// and head pose alike ([`Steady`]), named `{source}_{n}`.
     ///
     /// # Errors
     /// [`TakeError::Mismatch`] when a frame has another number of weights than the character
@@ -151,19 +175,40 @@ impl Take {
     ) -> Result<Take, TakeError> {
         let names: Vec<String> = character.blendshape_names();
         mismatch(character, &names, &frames)?;
-        let first = frames.first().map_or(0.0, |f| f.time);
-        let last = frames.last().map_or(0.0, |f| f.time);
-        let fps = recorded_fps(first, last, frames.len());
+        let times: Vec<f64> = frames.iter().map(|f| f.time).collect();
+        let steady = Steady::of(&times);
+        let weights: Vec<&[f32]> = frames.iter().map(|f| f.weights.as_slice()).collect();
+        let step = 1.0 / f64::from(steady.fps);
+        let frames = steady
+            .blend(&weights)
+            .into_iter()
+            .zip(&steady.slots)
+            .enumerate()
+            .map(|(k, (weights, slot))| {
+                let head = match (frames[slot.before].head, frames[slot.after].head) {
+                    (Some(a), Some(b)) => {
+                        let t = slot.toward_after;
+                        Some(std::array::from_fn(|i| a[i] + (b[i] - a[i]) * t))
+                    }
+                    _ => frames[slot.nearest()].head,
+                };
+                ReceivedFrame {
+                    time: k as f64 * step,
+                    weights,
+                    head,
+                }
+            })
+            .collect();
         Ok(Take::of_frames(
-            character, source, fps, names, frames, filtering,
+            character, source, steady.fps, names, frames, filtering,
         ))
     }
 
     /// A take of `rows` of `character`'s weights made at a steady `fps` (a lip sync, a clip
     /// opened), row `k` at `k / fps` seconds with the head's yaw, pitch and roll `heads[k]`
     /// where given, named `source`, unfiltered. The rate is kept as given — 29.97 stays 29.97
-    /// and 240 stays 240, where [`Take::from_received`] estimates a rate from arrival times
-    /// and rounds it — so that the take lasts as long as what it was made from.
+    /// and 240 stays 240, where [`Take::from_received`] puts frames that arrived on a rate
+    /// it estimates and rounds — so that the take lasts as long as what it was made from.
     ///
     /// # Errors
     /// [`TakeError::Mismatch`] when a row has another number of weights than the character
@@ -383,6 +428,37 @@ mod tests {
     }
 
     #[test]
+    fn webcam_frames_tracked_as_fast_as_the_machine_allowed_keep_their_time() {
+        // Tracked at 20 fps for a second, then at 10 (the machine busy), then 20 again: the
+        // slow second's frames are each shown twice, at their own time.
+        let mut times: Vec<f32> = (0..20).map(|k| k as f32 / 20.0).collect();
+        times.extend((0..10).map(|k| 1.0 + k as f32 / 10.0));
+        times.extend((0..20).map(|k| 2.0 + k as f32 / 20.0));
+        let records: Vec<FrameRecord> = times
+            .iter()
+            .enumerate()
+            .map(|(index, &time)| FrameRecord::missing(index, time))
+            .collect();
+        let (footage, chosen) =
+            Footage::from_arrivals("webcam".into(), &records, |k| format!("w{k}.png"));
+        assert_eq!(footage.fps, 20.0);
+        assert_eq!(footage.records.len(), 60);
+        assert_eq!(chosen.len(), 60);
+        for (k, record) in footage.records.iter().enumerate() {
+            assert_eq!(record.index, k);
+            assert!((record.time - k as f32 / 20.0).abs() < 1e-5);
+            // The frame recorded nearest its time, never more than half a slow frame away.
+            let recorded = times[chosen[k]];
+            assert!(
+                (recorded - record.time).abs() <= 0.05 + 1e-5,
+                "{k}: {recorded}"
+            );
+        }
+        assert_eq!([chosen[20], chosen[22], chosen[24]], [20, 21, 22]);
+        assert_eq!(footage.frame_names[59], "w59.png");
+    }
+
+    #[test]
     fn a_take_at_a_steady_rate_keeps_the_rate_and_a_recording_rounds_its_own() {
         let character = faceanim_head::default_character();
         let n = character.blendshape_names().len();
@@ -406,18 +482,30 @@ mod tests {
             let error = Take::from_weights(&character, "line", fps, &rows, None).unwrap_err();
             assert!(error.to_string().contains("fps"), "{error}");
         }
-        // Frames that arrived about 1/60 s apart: their rate, rounded.
+        // Frames that arrived about 1/60 s apart, a tenth of a second of them lost: their
+        // rate, rounded, and each where it arrived.
         let arrived: Vec<ReceivedFrame> = (0..300)
+            .filter(|k| !(100..106).contains(k))
             .map(|k| ReceivedFrame {
                 time: 10.0 + f64::from(k) / 59.7,
-                weights: vec![0.0; n],
-                head: None,
+                weights: vec![k as f32 / 300.0; n],
+                head: (k % 2 == 0).then_some([k as f32, 0.0, 0.0]),
             })
             .collect();
         let take =
             Take::from_received(&character, "vmc", arrived, Filtering::new(1, None).unwrap())
                 .unwrap();
         assert_eq!(take.session.fps, 60.0);
-        assert_eq!(take.session.frames[0].time, 0.0);
+        assert_eq!(take.session.frames.len(), 302);
+        let frames = &take.session.frames;
+        assert_eq!(frames[0].time, 0.0);
+        assert!((frames[301].time - 301.0 / 60.0).abs() < 1e-5);
+        // 200 frames at 59.7 fps arrived at 3.35 s: the steady take's frame 200 is at 3.33 s.
+        let frame = &frames[200];
+        assert!((frame.estimate[0] * 300.0 - 200.0 * 59.7 / 60.0).abs() < 1.0);
+        // The head, where one of the two arrivals around a frame had none, is the nearer's.
+        assert_eq!(frames[0].head, Some([0.0, 0.0, 0.0]));
+        assert_eq!(frames[1].head, None);
+        assert_eq!(frames[2].head, Some([2.0, 0.0, 0.0]));
     }
 }

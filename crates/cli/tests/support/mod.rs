@@ -458,12 +458,14 @@ pub fn vmc_values(peer: &mut std::process::Child, report: &Path, name: &str) -> 
 }
 
 /// The independent VMC peer sending `frames` frames of known ARKit weights and head turns to
-/// 127.0.0.1:`port` at `fps`, then `garbage` bad datagrams; returns what it sent.
+/// 127.0.0.1:`port` at `fps` but those in `lose` (kept back, as a Wi-Fi network loses them),
+/// then `garbage` bad datagrams; returns every frame, the lost ones marked `"lost": true`.
 pub fn vmc_send(
     port: u16,
     frames: usize,
     fps: f32,
     garbage: usize,
+    lose: std::ops::Range<usize>,
     out: &Path,
 ) -> serde_json::Value {
     let run = Command::new("python3")
@@ -478,6 +480,8 @@ pub fn vmc_send(
             &fps.to_string(),
             "--garbage",
             &garbage.to_string(),
+            "--lose",
+            &format!("{}:{}", lose.start, lose.end),
             "--out",
         ])
         .arg(out)

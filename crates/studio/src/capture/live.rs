@@ -83,18 +83,14 @@ impl Live {
         if recording.records.iter().all(|r| r.found.is_none()) {
             return Err(ApiError::Live("no face was seen while recording"));
         }
-        // The webcam's own rate, rounded: frames were recorded as they arrived.
-        let duration = recording.records.last().map_or(0.0, |r| r.time);
-        let fps = faceanim_take::recorded_fps(0.0, f64::from(duration), n);
-        let names = (0..n).map(|i| format!("webcam_{:06}.png", i + 1)).collect();
-        let footage = Footage {
-            source: "webcam".into(),
-            fps,
-            records: recording.records,
-            frame_names: names,
-            still_frames: None,
-        };
-        Ok((footage, recording.previews))
+        // Frames were recorded as they arrived, as fast as they were tracked: each frame of
+        // the take is the one recorded nearest its time, so that the take keeps the
+        // performance's timing whatever the machine's load.
+        let (footage, chosen) = Footage::from_arrivals("webcam".into(), &recording.records, |k| {
+            format!("webcam_{:06}.png", k + 1)
+        });
+        let previews = recording.previews.chosen(&chosen)?;
+        Ok((footage, previews))
     }
 
     /// Smooths the frames from now on with `smoothing` (or not at all).

@@ -148,6 +148,32 @@ impl Previews {
         self.count == 0
     }
 
+    /// The previews of frames `chosen` (indices into these, repeated where a frame is), in
+    /// that order, linked rather than copied where the folder allows; frames without a preview
+    /// end them.
+    ///
+    /// # Errors
+    /// [`ApiError::Scratch`] naming the file.
+    pub fn chosen(&self, chosen: &[usize]) -> Result<Previews, ApiError> {
+        let mut previews = Previews::new();
+        let Some(from) = self.dir.as_ref() else {
+            return Ok(previews);
+        };
+        for &index in chosen.iter().take_while(|&&i| i < self.count) {
+            let source = from.path().join(format!("{index}.png"));
+            let dir = private_dir(&mut previews.dir, "faceanim-previews-", "previews")?;
+            let path = dir.join(format!("{}.png", previews.count));
+            std::fs::hard_link(&source, &path)
+                .or_else(|_| std::fs::copy(&source, &path).map(drop))
+                .map_err(|source| ApiError::Scratch {
+                    what: path.display().to_string(),
+                    source,
+                })?;
+            previews.count += 1;
+        }
+        Ok(previews)
+    }
+
     /// Frame `index`'s preview, if there is one.
     #[must_use]
     pub fn get(&self, index: usize) -> Option<Vec<u8>> {

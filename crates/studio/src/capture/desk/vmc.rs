@@ -66,8 +66,9 @@ impl CaptureDesk {
         Ok(())
     }
 
-    /// Stops recording and makes the frames the take (with their arrival times); returns their
-    /// count.
+    /// Stops recording and makes the frames the take, on a steady rate by their times (the
+    /// sender's where sound, else their arrival: [`faceanim_live::Marionette::stop_recording`],
+    /// [`Take::from_received`]); returns how many arrived.
     ///
     /// # Errors
     /// [`ApiError::Live`] when it was not recording or nothing arrived.
