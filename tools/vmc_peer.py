@@ -11,8 +11,9 @@ Loopback only, bounded in count and time.
       sends N frames of ARKit weights (JawOpen, EyeBlinkLeft, MouthSmileLeft, in ARKit's
       capitalised spelling) and a head turn to 127.0.0.1:PORT at F frames per second, but
       frames A to B-1, which it keeps to itself as a Wi-Fi network loses datagrams; writes
-      every frame (its time as /VMC/Ext/T says it, the lost ones marked) as JSON, then K garbage datagrams (random bytes,
-      truncated bundles, huge datagrams, unknown addresses, wrong argument types).
+      every frame (its time as /VMC/Ext/T says it, the lost ones marked) as JSON, then K
+      garbage datagrams (random bytes, truncated bundles, huge datagrams, unknown addresses,
+      wrong argument types).
 """
 import argparse
 import json

@@ -20,34 +20,29 @@ pub(crate) fn clock(arrived: &[f64], sent: &[Option<f64>]) -> Vec<f64> {
 /// offset between the two clocks and kept between its neighbours; `None` when more than one
 /// frame in ten had none, or the lengths differ.
 fn on_senders_clock(arrived: &[f64], sent: &[Option<f64>]) -> Option<Vec<f64>> {
-    let mut offsets: Vec<f64> = sent
+    let given: Vec<Option<f64>> = sent.iter().map(|s| s.filter(|t| t.is_finite())).collect();
+    let mut offsets: Vec<f64> = given
         .iter()
         .zip(arrived)
-        .filter_map(|(s, a)| s.filter(|s| s.is_finite()).map(|s| s - a))
+        .filter_map(|(s, a)| s.map(|s| s - a))
         .collect();
     if sent.len() != arrived.len() || offsets.is_empty() || offsets.len() * 10 < sent.len() * 9 {
         return None;
     }
     let middle = offsets.len() / 2;
     let (_, &mut offset, _) = offsets.select_nth_unstable_by(middle, f64::total_cmp);
-    let mut times = Vec::with_capacity(sent.len());
-    let mut next_given = None;
-    let mut later: Vec<Option<f64>> = vec![None; sent.len()];
-    for (k, s) in sent.iter().enumerate().rev() {
-        later[k] = next_given;
-        if let Some(s) = s.filter(|s| s.is_finite()) {
-            next_given = Some(s);
-        }
+    // For each frame, the next time the sender gave after it.
+    let mut later: Vec<Option<f64>> = vec![None; given.len()];
+    for k in (1..given.len()).rev() {
+        later[k - 1] = given[k].or(later[k]);
     }
-    for (k, (s, a)) in sent.iter().zip(arrived).enumerate() {
-        let time = match s.filter(|s| s.is_finite()) {
-            Some(s) => s,
-            None => {
-                let earliest = times.last().copied().unwrap_or(f64::NEG_INFINITY);
-                let latest = later[k].unwrap_or(f64::INFINITY).max(earliest);
-                (a + offset).clamp(earliest, latest)
-            }
-        };
+    let mut times: Vec<f64> = Vec::with_capacity(given.len());
+    for (k, (s, a)) in given.iter().zip(arrived).enumerate() {
+        let time = s.unwrap_or_else(|| {
+            let earliest = times.last().copied().unwrap_or(f64::NEG_INFINITY);
+            let latest = later[k].unwrap_or(f64::INFINITY).max(earliest);
+            (a + offset).clamp(earliest, latest)
+        });
         times.push(time);
     }
     Some(times)

@@ -34,8 +34,7 @@ pub const MAX_RECORDED_FPS: f32 = 120.0;
 /// The rate of frames recorded as they arrived, first at `first` and last at `last` seconds:
 /// frames per second over the recording, rounded, 1 to [`MAX_RECORDED_FPS`] (30 for a single
 /// frame).
-#[must_use]
-pub fn recorded_fps(first: f64, last: f64, frames: usize) -> f32 {
+fn recorded_fps(first: f64, last: f64, frames: usize) -> f32 {
     let duration = last - first;
     if frames > 1 && duration > 0.0 {
         (((frames - 1) as f64 / duration).round() as f32).clamp(1.0, MAX_RECORDED_FPS)
@@ -160,13 +159,10 @@ impl Steady {
             .collect()
     }
 
-    /// The steady frames of `items` (one per arrival): each the arrival nearer its time.
+    /// For each steady frame, the arrival nearer its time (for what cannot be blended).
     #[must_use]
-    pub fn nearest<T: Clone>(&self, items: &[T]) -> Vec<T> {
-        self.slots
-            .iter()
-            .map(|slot| items[slot.nearest()].clone())
-            .collect()
+    pub fn nearest(&self) -> Vec<usize> {
+        self.slots.iter().map(|slot| slot.nearest()).collect()
     }
 }
 
@@ -266,7 +262,7 @@ mod tests {
         assert_eq!(rows[2], vec![2.0]);
         assert_eq!(rows[21], vec![2.0]);
         assert_eq!(rows[22], vec![3.0]);
-        assert_eq!(steady.nearest(&['a', 'b', 'c', 'd', 'e'])[12], 'c');
+        assert_eq!(steady.nearest()[12], 2);
         // Arrivals in pairs (a network that bunches): the rate is the count's, not the pairs'.
         let bunched: Vec<f64> = (0..100)
             .map(|k| f64::from(k / 2) * (2.0 / 30.0) + f64::from(k % 2) * 0.001)

@@ -41,7 +41,7 @@ impl Footage {
     ) -> (Footage, Vec<usize>) {
         let times: Vec<f64> = records.iter().map(|r| f64::from(r.time)).collect();
         let steady = Steady::of(&times);
-        let chosen: Vec<usize> = steady.slots.iter().map(|s| s.nearest()).collect();
+        let chosen = steady.nearest();
         let step = 1.0 / f64::from(steady.fps);
         let records: Vec<FrameRecord> = chosen
             .iter()

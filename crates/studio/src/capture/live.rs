@@ -76,8 +76,7 @@ impl Live {
             .recording
             .take()
             .ok_or(ApiError::Live("not recording"))?;
-        let n = recording.records.len();
-        if n == 0 {
+        if recording.records.is_empty() {
             return Err(ApiError::Live("nothing was recorded (no frames arrived)"));
         }
         if recording.records.iter().all(|r| r.found.is_none()) {
