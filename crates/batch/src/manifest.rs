@@ -470,7 +470,13 @@ fn jsonl_rows(text: &str) -> Vec<RawRow> {
         .map(|(k, l)| {
             let line = k + 1;
             let values = match serde_json::from_str::<Value>(l) {
-                Ok(Value::Object(map)) => Ok(map.into_iter().collect()),
+                Ok(Value::Object(map)) => Ok(map
+                    .into_iter()
+                    .map(|(k, v)| match (k.as_str(), whole_number(&v)) {
+                        ("id", Some(id)) => (k, Value::String(id)),
+                        _ => (k, v),
+                    })
+                    .collect()),
                 Ok(_) => Err(RowError {
                     line,
                     field: None,
@@ -489,6 +495,24 @@ fn jsonl_rows(text: &str) -> Vec<RawRow> {
             }
         })
         .collect()
+}
+
+/// A JSON number that is a whole number, as its digits: dataframe libraries write an id column
+/// of numbers so (pandas' `to_json`, `1`; `1.0` when the column has an empty cell, which makes
+/// it a column of floats). `None` for anything else.
+fn whole_number(value: &Value) -> Option<String> {
+    let Value::Number(n) = value else {
+        return None;
+    };
+    if let Some(k) = n.as_i64() {
+        return Some(k.to_string());
+    }
+    if let Some(k) = n.as_u64() {
+        return Some(k.to_string());
+    }
+    // A float stands for a whole number exactly up to 2^53.
+    let f = n.as_f64()?;
+    (f.fract() == 0.0 && f.abs() <= 9_007_199_254_740_992.0).then(|| format!("{f:.0}"))
 }
 
 /// The words spreadsheets write for a TRUE and a FALSE cell, in the languages of their menus
@@ -608,8 +632,10 @@ fn sheet_rows(text: &str) -> Result<Vec<RawRow>, String> {
         .iter()
         .rposition(|h| !h.is_empty())
         .map_or(0, |k| k + 1);
-    let decimal_comma = separator.cell == ';';
+    let records: Vec<(usize, Vec<String>)> = records.collect();
+    let decimal_comma = decimal_comma(separator.cell, &header, &records);
     Ok(records
+        .into_iter()
         .filter(|(_, cells)| cells.iter().any(|c| !c.trim().is_empty()))
         .map(|(line, cells)| {
             let values = if (named..=header.len()).contains(&cells.len()) {
@@ -658,9 +684,9 @@ fn sheet_values(
 }
 
 /// A sheet's cell as the value a JSON row would give: `outputs` split on `;`; in an option's
-/// column a spreadsheet's TRUE or FALSE (in its language) is a switch, and in a sheet separated
-/// by `;` a number with a decimal comma (`29,97`) is that number (`29.97`). A field's cell is
-/// its text as written.
+/// column a spreadsheet's TRUE or FALSE (in its language) is a switch, and in a sheet that
+/// writes decimal commas ([`decimal_comma`]) a number with one (`29,97`) is that number
+/// (`29.97`). A field's cell is its text as written.
 fn sheet_value(column: &str, cell: &str, decimal_comma: bool) -> Value {
     if column == "outputs" {
         return Value::Array(
@@ -698,12 +724,45 @@ fn names_a_field(name: &str) -> bool {
     matches!(name, "id" | "kind" | "outputs" | "options") || Field::from_name(name).is_some()
 }
 
+/// Whether a sheet writes numbers with a decimal comma. A sheet separated by `;` does (it is
+/// what spreadsheets write where the comma is the decimal point). One separated by tabs (Excel's
+/// "Unicode text", in whatever language the spreadsheet runs) does when its option cells show
+/// it: a number with a comma and other than three digits after it (`29,97`; `1,500` could be a
+/// thousand and a half), and no number with a decimal point. A CSV's commas are its separators.
+fn decimal_comma(separator: char, header: &[String], records: &[(usize, Vec<String>)]) -> bool {
+    match separator {
+        ';' => true,
+        '\t' => {
+            let options = || {
+                records.iter().flat_map(|(_, cells)| {
+                    header
+                        .iter()
+                        .zip(cells)
+                        .filter(|(name, _)| !name.is_empty() && !names_a_field(name))
+                        .map(|(_, cell)| cell.trim())
+                })
+            };
+            let point = options().any(|cell| decimal_number(cell, '.').is_some());
+            let comma = options()
+                .any(|cell| decimal_number(cell, ',').is_some_and(|fraction| fraction.len() != 3));
+            comma && !point
+        }
+        _ => false,
+    }
+}
+
+/// The digits after the decimal mark of a number written with `mark` (digits, the mark,
+/// digits, and a sign before them).
+fn decimal_number(cell: &str, mark: char) -> Option<&str> {
+    let digits = cell.strip_prefix(['-', '+']).unwrap_or(cell);
+    let (whole, fraction) = digits.split_once(mark)?;
+    let all_digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    (all_digits(whole) && all_digits(fraction)).then_some(fraction)
+}
+
 /// `29,97` as `29.97`: digits, one comma, digits, and a sign before them.
 fn with_decimal_point(cell: &str) -> Option<String> {
-    let digits = cell.strip_prefix(['-', '+']).unwrap_or(cell);
-    let (whole, fraction) = digits.split_once(',')?;
-    let all_digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
-    (all_digits(whole) && all_digits(fraction)).then(|| cell.replacen(',', ".", 1))
+    decimal_number(cell, ',').map(|_| cell.replacen(',', ".", 1))
 }
 
 /// The records of a sheet's text, each with the line it starts on.
@@ -847,7 +906,12 @@ fn check_row(
                 ),
             ));
         }
-        Some(other) => return Err(fail("id", format!("a string, not {other}"))),
+        Some(other) => {
+            return Err(fail(
+                "id",
+                format!("a string or a whole number, not {other}"),
+            ));
+        }
         None => return Err(fail("id", "missing: every row has an id".to_owned())),
     };
     let kinds = || {

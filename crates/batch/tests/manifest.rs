@@ -276,6 +276,7 @@ def sheet(name, encoding, words, decimal, blank=False, **dialect):
                 out.writerow([""] * (len(header) + 1))
 sheet("de.csv", "cp1252", {True: "WAHR", False: "FALSCH"}, ",", blank=True, delimiter=";")
 sheet("unicode.txt", "utf-16", {True: "TRUE", False: "FALSE"}, ".", dialect="excel-tab")
+sheet("de-unicode.txt", "utf-16", {True: "WAHR", False: "FALSCH"}, ",", dialect="excel-tab")
 sheet("fr.csv", "utf-8-sig", {True: "VRAI", False: "FAUX"}, ",", sep=True, delimiter=";")
 sheet("libre.tsv", "utf-8", {True: "true", False: "false"}, ".", delimiter="\t")
 "#;
@@ -320,12 +321,30 @@ sheet("libre.tsv", "utf-8", {True: "true", False: "false"}, ".", delimiter="\t")
     for name in [
         "de.csv",
         "unicode.txt",
+        "de-unicode.txt",
         "fr.csv",
         "libre.tsv",
         "capitals.csv",
     ] {
         assert_eq!(rows(name), want, "{name}");
     }
+    // A tab-separated sheet's decimal mark is the one its numbers show: `1,500` alone could be
+    // a thousand and a half (and is left for the command to refuse), beside `29,97` it is 1.5,
+    // beside `29.97` it stays as written.
+    let tabs = |name: &str, fps: &str, other: &str| {
+        let text = format!(
+            "id\tkind\tspeech\toutputs\tfps\tsmoothing\na\tlipsync\ta.wav\to/{name}.json\t{fps}\t{other}\n"
+        );
+        std::fs::write(dir.path().join(format!("{name}.tsv")), text).unwrap();
+        match &rows(&format!("{name}.tsv"))[0].4["fps"] {
+            OptionValue::Value(v) => v.clone(),
+            other => panic!("{other:?}"),
+        }
+    };
+    assert_eq!(tabs("alone", "1,500", "2"), "1,500");
+    assert_eq!(tabs("comma", "1,500", "29,97"), "1.500");
+    assert_eq!(tabs("point", "1,500", "29.97"), "1,500");
+    assert_eq!(tabs("short", "29,97", "2"), "29.97");
     // Lines are the file's: the German sheet's second row is on line 4, after the blank one;
     // a named separator's header is on line 2.
     let de = Manifest::read(&dir.path().join("de.csv")).unwrap();
@@ -409,4 +428,35 @@ fn rows_with_null_fields_read_as_rows_without_them() {
     let (line, field, problem) = problem(&manifest, 2);
     assert_eq!((line, field.as_deref()), (3, Some("speech")));
     assert!(problem.starts_with("missing"), "{problem}");
+}
+
+/// An id column of numbers, as pandas writes one (`1`; `1.0` in a column with an empty cell,
+/// which makes it a column of floats), is the ids' digits; a fraction is no id.
+#[test]
+fn an_id_column_of_numbers_reads_as_its_digits() {
+    let (_dir, numbers) = manifest(
+        "numbers.jsonl",
+        "{\"id\":7,\"kind\":\"lipsync\",\"speech\":\"a.wav\",\"outputs\":\"o/7.json\"}\n\
+         {\"id\":8.0,\"kind\":\"lipsync\",\"speech\":\"a.wav\",\"outputs\":\"o/8.json\"}\n\
+         {\"id\":8,\"kind\":\"lipsync\",\"speech\":\"a.wav\",\"outputs\":\"o/8b.json\"}\n\
+         {\"id\":8.5,\"kind\":\"lipsync\",\"speech\":\"a.wav\",\"outputs\":\"o/9.json\"}\n",
+    );
+    assert_eq!(numbers.entries[0].row.as_ref().unwrap().id, "7");
+    assert_eq!(numbers.entries[1].id.as_deref(), Some("8"));
+    assert_eq!(
+        problem(&numbers, 2),
+        (
+            3,
+            Some("id".to_owned()),
+            "`8` is already the id of line 2".to_owned()
+        )
+    );
+    assert_eq!(
+        problem(&numbers, 3),
+        (
+            4,
+            Some("id".to_owned()),
+            "a string or a whole number, not 8.5".to_owned()
+        )
+    );
 }
