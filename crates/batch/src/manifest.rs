@@ -241,11 +241,7 @@ impl Row {
     /// (not beside the manifest under names holding `\`).
     #[must_use]
     pub fn resolve(&self, path: &str) -> PathBuf {
-        let given = self.base.join(path);
-        if std::path::MAIN_SEPARATOR == '\\' || !path.contains('\\') || given.exists() {
-            return given;
-        }
-        self.base.join(path.replace('\\', "/"))
+        resolve(&self.base, path)
     }
 
     /// The files the row reads, each with the field that names it, from the manifest's folder.
@@ -1034,7 +1030,7 @@ fn check_row(
     }
     if let Some(text) = fields.get("text")
         && !text.contains(char::is_whitespace)
-        && base.join(text).exists()
+        && resolve(base, text).exists()
     {
         // The command reads a file given to --text: one word that names a file would be read.
         return Err(fail(
@@ -1087,6 +1083,15 @@ fn check_row(
         }
     }
     Ok(row)
+}
+
+/// `path` from `base` ([`Row::resolve`]).
+fn resolve(base: &Path, path: &str) -> PathBuf {
+    let given = base.join(path);
+    if std::path::MAIN_SEPARATOR == '\\' || !path.contains('\\') || given.exists() {
+        return given;
+    }
+    base.join(path.replace('\\', "/"))
 }
 
 /// Whether `path` is a Windows machine's own (`C:\…`, `C:/…`, `\\server\…`), which no other

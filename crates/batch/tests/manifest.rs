@@ -378,12 +378,15 @@ fn a_manifest_written_on_windows_finds_its_folders_elsewhere() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir(dir.path().join("audio")).unwrap();
     std::fs::write(dir.path().join("audio").join("a.wav"), b"RIFF").unwrap();
+    std::fs::create_dir(dir.path().join("lines")).unwrap();
+    std::fs::write(dir.path().join("lines").join("a.txt"), b"Hello").unwrap();
     let path = dir.path().join("lines.csv");
     std::fs::write(
         &path,
-        "id,kind,speech,outputs\r\n\
-         a,lipsync,audio\\a.wav,out\\clips\\a.json\r\n\
-         b,lipsync,C:\\Users\\me\\audio\\b.wav,out\\b.json\r\n",
+        "id,kind,speech,text,outputs\r\n\
+         a,lipsync,audio\\a.wav,,out\\clips\\a.json\r\n\
+         b,lipsync,C:\\Users\\me\\audio\\b.wav,,out\\b.json\r\n\
+         c,lipsync,audio\\a.wav,lines\\a.txt,out\\c.json\r\n",
     )
     .unwrap();
     let manifest = Manifest::read(&path).unwrap();
@@ -393,11 +396,21 @@ fn a_manifest_written_on_windows_finds_its_folders_elsewhere() {
         a.output_paths(),
         [dir.path().join("out").join("clips").join("a.json")]
     );
-    let (line, field, problem) = problem(&manifest, 1);
+    let (line, field, why) = problem(&manifest, 1);
     assert_eq!((line, field.as_deref()), (3, Some("speech")));
     assert!(
-        problem.contains("no such file") && problem.contains("a path on a Windows machine"),
-        "{problem}"
+        why.contains("no such file") && why.contains("a path on a Windows machine"),
+        "{why}"
+    );
+    // A transcript's file named as the words is caught before any work, as it is written
+    // with `/`: not spoken as "lines a dot t x t", nor left for the row's command to refuse.
+    assert_eq!(
+        problem(&manifest, 2),
+        (
+            4,
+            Some("text".to_owned()),
+            "`lines\\a.txt` names a file: give it as `transcript`".to_owned()
+        )
     );
 }
 
