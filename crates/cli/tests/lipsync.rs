@@ -377,6 +377,22 @@ fn a_spanish_line_lip_syncs_from_its_transcript_with_blinks_and_brows() {
             "the lips stay open at {start:.2}..{end:.2} s: {keys:?}"
         );
     }
+    // A line too short and even for a blink or a raise says so, not that the head lacks the
+    // shapes (it has them: the line above blinks).
+    let short = out.join("paper.wav");
+    let line = "Bring me the blue paper, please.";
+    flite("slt", line, &short);
+    let (said, _) = run_lipsync(&short, &["--text", line, "--face"], &out.join("paper.glb"));
+    assert!(
+        said["gestures"]["blinks"].as_array().unwrap().is_empty()
+            && said["gestures"]["accents"].as_array().unwrap().is_empty(),
+        "{said}"
+    );
+    let notes = said["notes"].to_string();
+    assert!(
+        notes.contains("no blink or brow raise falls in this line") && !notes.contains("shapes"),
+        "{notes}"
+    );
     // The pause between the sentences blinks; the built-in head's lids move.
     let gestures = &summary["gestures"];
     assert!(

@@ -219,6 +219,18 @@ pub fn add(
     moved.into_iter().filter(|m| *m).count()
 }
 
+/// How many of `character`'s shapes the face's [`CHANNELS`] reach through its name table: 0
+/// for a rig with no blink or brow shapes it knows, whatever a line's gestures are.
+#[must_use]
+pub fn shapes_reached(character: &faceanim_rig::Character) -> usize {
+    character
+        .name_map()
+        .weights_from_channels(|c| if CHANNELS.contains(&c) { 1.0 } else { 0.0 })
+        .into_iter()
+        .filter(|w| *w > 0.0)
+        .count()
+}
+
 fn smooth(x: f32) -> f32 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
@@ -227,6 +239,12 @@ fn smooth(x: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_channels_reach_the_lids_and_brows_a_rig_has() {
+        let head = faceanim_head::default_character();
+        assert_eq!(shapes_reached(&head), 5);
+    }
 
     #[test]
     fn a_blink_closes_fast_and_opens_slowly() {
