@@ -409,6 +409,16 @@ try {
   //     measured on the page's own clock; Record makes a take with its sound.
   await page.click('#voice-live');
   await page.waitForFunction(() => window.studio.capture.voice.running && window.studio.capture.voice.chunks > 10, null, { timeout: 30000 });
+  // The language the speech field names is the microphone's too: its passage is the one read.
+  const typedLanguage = await page.inputValue('#speech-language');
+  await page.fill('#speech-language', 'es-MX');
+  await page.dispatchEvent('#speech-language', 'change');
+  await page.waitForFunction(() => { const v = window.studio.capture.voice.view; return v && v.language !== 'en-us'; }, null, { timeout: 10000 });
+  const offered = await page.evaluate(() => window.studio.capture.voice.view);
+  check(offered.language.startsWith('es') && (offered.passage || '').startsWith('Cuando el sol'), `the Spanish passage is not offered: ${offered.language}`);
+  await page.fill('#speech-language', typedLanguage);
+  await page.dispatchEvent('#speech-language', 'change');
+  await page.waitForFunction(() => window.studio.capture.voice.view.language === 'en-us', null, { timeout: 10000 });
   await page.click('#voice-calibrate');
   await page.waitForFunction(() => !document.getElementById('voice-passage').hidden, null, { timeout: 10000 });
   check((await page.textContent('#voice-passage')).startsWith('When the sunlight'), 'the passage to read is not shown');

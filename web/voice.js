@@ -1,8 +1,9 @@
 // Live microphone: the voice drives the mouth in real time. The microphone's samples go to
 // the server 20 ms at a time at 16 kHz — none dropped: chunks that wait for an answer go
 // together with the next — and the mouth that comes back goes on the character (the server
-// sends it out over VMC too). Calibrate shows a passage to read for 20 seconds; Record makes a
-// take with its sound. Measures voice-to-mouth latency.
+// sends it out over VMC too). Calibrate shows a passage to read for 20 seconds, in the language
+// the speech field names (or asks for free speech where the server has no passage in it);
+// Record makes a take with its sound. Measures voice-to-mouth latency.
 
 import { api } from './api.js';
 import { apply, post, showTakeFrame } from './take.js';
@@ -59,6 +60,9 @@ const ONSET_DB = 20, PAUSE_CHUNKS = 15, RISE_CHUNKS = 4, OPEN = 0.2, MISS_MS = 5
 /** The page time of the onset the mouth has not opened for yet. */
 let onset = /** @type {number|null} */ (null);
 
+/** The language the user speaks: the speech field's (capture.js owns it; read here only). */
+const spokenLanguage = () => /** @type {HTMLInputElement} */ ($('speech-language')).value.trim();
+
 async function startVoice() {
   showError('');
   try {
@@ -67,7 +71,7 @@ async function startVoice() {
     });
   } catch (e) { showError(`The microphone could not be opened: ${e.message || e}`); return; }
   const delay_ms = Number(/** @type {HTMLInputElement} */ ($('voice-delay')).value) || 0;
-  try { apply(await api('PUT', 'api/capture/voice', { on: true, delay_ms })); }
+  try { apply(await api('PUT', 'api/capture/voice', { on: true, delay_ms, language: spokenLanguage() })); }
   catch (e) { showError(String(e.message || e)); stopTracks(); return; }
   try {
     // At 16 kHz where the browser can open the microphone so; else at its own rate, which the
@@ -173,8 +177,8 @@ onRender(() => {
 });
 
 const CALIBRATION_TEXT = {
-  none: () => 'Voice: not calibrated (the mouth follows loudness until it has learned from your speech). Press Calibrate voice and read the passage.',
-  listening: (c) => `Calibrating: read the passage aloud… ${Math.max(0, 20 - c.seconds).toFixed(0)} s left`,
+  none: () => 'Voice: not calibrated (the mouth follows loudness until it has learned from your speech). Press Calibrate voice and read aloud what appears.',
+  listening: (c, v) => `Calibrating: ${v.passage ? 'read the passage aloud' : 'speak freely'}… ${Math.max(0, 20 - c.seconds).toFixed(0)} s left`,
   fitting: () => 'Calibrating: learning your voice…',
   calibrated: (c) => `Voice calibrated (${c.visemes} mouth shapes)${c.notes.length ? `: ${c.notes.join('; ')}` : ''}.`,
   failed: (c) => `Calibration failed: ${c.message}`,
@@ -186,11 +190,12 @@ function showVoice() {
   if (!voice.running || !v) return;
   const c = v.calibration;
   $('voice-passage').hidden = c.state !== 'listening';
-  $('voice-passage').textContent = v.passage;
+  $('voice-passage').textContent = v.passage
+    || `There is no passage to read in ${v.language}: talk for 20 seconds in your own words, at your usual pace; the sounds you make teach the mouth your voice.`;
   const delay = /** @type {HTMLInputElement} */ ($('voice-delay'));
   delay.max = String(v.max_delay_ms);
   const learned = v.learned ? ` Learned from ${v.learned} stretch${v.learned === 1 ? '' : 'es'} of speech.` : '';
-  $('voice-stats').textContent = `${CALIBRATION_TEXT[c.state](c)}${learned} ${voice.latency_ms.toFixed(0)} ms voice → screen${voice.onset_lag_ms === null ? '' : `, the mouth opens ${voice.onset_lag_ms.toFixed(0)} ms after the voice starts`} (server ${voice.server_ms.toFixed(1)} ms).`;
+  $('voice-stats').textContent = `${CALIBRATION_TEXT[c.state](c, v)}${learned} ${voice.latency_ms.toFixed(0)} ms voice → screen${voice.onset_lag_ms === null ? '' : `, the mouth opens ${voice.onset_lag_ms.toFixed(0)} ms after the voice starts`} (server ${voice.server_ms.toFixed(1)} ms).`;
   if (v.recording !== null && v.recording !== undefined) $('voice-record').textContent = `Stop (${v.recording.toFixed(0)} s)`;
 }
 
@@ -209,7 +214,14 @@ async function stopVoice() {
 }
 
 $('voice-live').onclick = () => (voice.running ? stopVoice() : startVoice());
+/** Tells the server the language now in the speech field (its passage, its recognition). */
+async function sendLanguage() {
+  try { showError(''); apply(await api('PUT', 'api/capture/voice', { on: true, language: spokenLanguage() })); return true; }
+  catch (e) { showError(String(e.message || e)); return false; }
+}
+$('speech-language').addEventListener('change', () => { if (voice.running) sendLanguage(); });
 $('voice-calibrate').onclick = async () => {
+  if (!(await sendLanguage())) return;
   if (await post('api/capture/voice/calibrate', {})) { voice.view = { ...voice.view, calibration: { state: 'listening', seconds: 0 } }; showVoice(); }
 };
 $('voice-delay').onchange = async () => {

@@ -1045,6 +1045,30 @@ fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
     assert!(speak(port, &silence, 3200)["weights"].is_array());
     let (status, body) = start(0);
     assert_eq!(body["voice"]["delay_ms"], 0, "{status} {body}");
+    // The language spoken: English unless said; another's passage to read, or none (speak
+    // freely) where the studio has none; a language eSpeak NG does not speak is named.
+    assert_eq!(body["voice"]["language"], "en-us", "{body}");
+    for (language, passage) in [
+        (
+            "es-MX",
+            Some(faceanim_speech::listen::passage("es").unwrap()),
+        ),
+        ("sw", None),
+        ("en-us", Some(faceanim_speech::listen::PASSAGE)),
+    ] {
+        let body = format!(r#"{{"on": true, "language": "{language}"}}"#);
+        let (status, body) = send(port, "PUT", "/api/capture/voice", &body);
+        assert_eq!(status, 200, "{body}");
+        assert_eq!(body["voice"]["passage"].as_str(), passage, "{body}");
+    }
+    let (status, body) = send(
+        port,
+        "PUT",
+        "/api/capture/voice",
+        r#"{"on": true, "language": "zzz"}"#,
+    );
+    assert_eq!(status, 400, "{body}");
+    assert!(body.to_string().contains("language"), "{body}");
     for (rate, bytes, named) in [("44100", 64, "x-sample-rate"), ("16000", 63, "chunk")] {
         let (status, body) = chunk(port, rate, &vec![0; bytes]);
         assert_eq!(status, 400, "{body}");

@@ -4,12 +4,18 @@
 //! small classifier over its MFCCs — one diagonal Gaussian per viseme — learned from the
 //! user's own voice:
 //!
-//! 1. **Calibration**: the user reads [`PASSAGE`] for [`CALIBRATION_SECONDS`]; the recogniser
-//!    aligns as much of the passage as was read to the recording ([`phones::align_start`]),
-//!    and every frame's viseme becomes a labelled example ([`VoiceModel::fit`]).
+//! 1. **Calibration**: the user reads a passage in their language ([`passage`]) for
+//!    [`CALIBRATION_SECONDS`], and every frame's viseme becomes a labelled example
+//!    ([`VoiceModel::fit`]). English ([`PASSAGE`]) is aligned by the recogniser as far as it was
+//!    read ([`phones::align_start`]); a passage in another language is aligned by synthesis
+//!    (eSpeak NG says it, the recording is warped onto that), and in a language faceanim has no
+//!    passage in, the user speaks freely and the phones heard label it.
 //! 2. **Refinement**: while the microphone is on, stretches of speech are recognised in the
-//!    background and their frames refine the classes ([`VoiceModel::refine`]); an uncalibrated
-//!    microphone learns this way from its first stretch.
+//!    background (English by its words, other languages by their phones) and their frames
+//!    refine the classes ([`VoiceModel::refine`]); an uncalibrated microphone learns this way
+//!    from its first stretch. A voice learned from a passage in a language other than English
+//!    keeps its classes (phones heard without words would only blur what the passage taught)
+//!    and follows only the speaker's mean.
 //! 3. Until there is a model, the mouth opens with the voice's loudness alone.
 //!
 //! [`Listener`] is the streaming part: [`Frontend`] features (pre-emphasis, 25 ms Hamming
@@ -62,6 +68,77 @@ thought the zoo would show us a huge brown owl, a few cheeky monkeys and one ver
 Judge each shape with your own eyes, then measure how far the king's wagon rolled. Bob and \
 Mary moved the heavy boxes up the narrow path.";
 
+/// The passages read to calibrate in languages other than English, by the base of eSpeak NG's
+/// name of the language (`pt` for `pt-br`): like [`PASSAGE`], every lip shape several times
+/// (closed, lip to teeth, open, spread, round, tongue and teeth) in everyday words, 12–16 s
+/// as eSpeak NG says them, so that a reader at an ordinary pace finishes within
+/// [`CALIBRATION_SECONDS`]. Written for faceanim; Japanese in kana, which eSpeak NG reads.
+/// Mandarin has none: eSpeak NG's rendition of a passage in characters taught the voice less
+/// than free speech's phones did (on its own voice, 0.56–0.77 against 0.91 lip-class agreement).
+pub const PASSAGES: [(&str, &str); 8] = [
+    (
+        "es",
+        "Cuando el sol brilla sobre la lluvia, aparece un arco iris. Pablo compró fresas, peras y \
+         un bote de mermelada. Mi abuela vive junto al mar, en una casa blanca con ventanas \
+         verdes. En el zoológico vimos un búho y unos monos muy juguetones.",
+    ),
+    (
+        "de",
+        "Wenn die Sonne auf den Regen scheint, bildet sich ein Regenbogen. Peter kaufte fünf \
+         frische Birnen und ein Glas Marmelade. Meine Oma wohnt am Meer in einem weißen Haus. Im \
+         Zoo sahen wir eine braune Eule und ein paar freche Affen.",
+    ),
+    (
+        "fr",
+        "Quand le soleil brille sous la pluie, un arc-en-ciel apparaît. Pierre a acheté cinq \
+         poires et un pot de confiture. Ma grand-mère habite au bord de la mer, dans une maison \
+         blanche aux volets verts. Au zoo, nous avons vu un hibou brun et des singes malins.",
+    ),
+    (
+        "it",
+        "Quando il sole splende sulla pioggia, appare un arcobaleno. Paolo ha comprato fragole, \
+         pere e un barattolo di marmellata. Mia nonna vive vicino al mare, in una casa bianca con \
+         le finestre verdi. Allo zoo abbiamo visto un gufo e alcune scimmie molto vivaci.",
+    ),
+    (
+        "pt",
+        "Quando o sol brilha sobre a chuva, aparece um arco-íris. O Paulo comprou morangos, peras \
+         e um pote de geleia. A minha avó mora perto do mar, numa casa branca com janelas verdes. \
+         No zoológico vimos uma coruja e uns macacos muito brincalhões.",
+    ),
+    (
+        "nl",
+        "Als de zon op de regen schijnt, verschijnt er een regenboog. Peter kocht vijf verse peren \
+         en een pot jam. Mijn oma woont aan zee in een wit huis met groene ramen. In de \
+         dierentuin zagen we een bruine uil en een paar brutale apen.",
+    ),
+    (
+        "ja",
+        "あめのあとに、そらにおおきなにじがでました。まいにち、ははとふたりでうみべをさんぽします。\
+         ぱんやさんで、ぶどうぱんとみるくをかいました。どうぶつえんで、ふくろうとさるをみました。",
+    ),
+    (
+        "ko",
+        "비가 그친 뒤에 하늘에 큰 무지개가 떴어요. 엄마와 바닷가를 천천히 걸었어요. 빵집에서 \
+         포도빵과 우유를 샀어요. 동물원에서 부엉이와 원숭이를 봤어요.",
+    ),
+];
+
+/// The passage to read in `language` (eSpeak NG's name of it, as
+/// [`crate::recognition::check_language`] gives): [`PASSAGE`] in English, one of
+/// [`PASSAGES`], or `None` where faceanim has none (the user then speaks freely).
+#[must_use]
+pub fn passage(language: &str) -> Option<&'static str> {
+    if crate::recognition::is_english(language) {
+        return Some(PASSAGE);
+    }
+    let base = crate::script::base_language(language);
+    PASSAGES
+        .iter()
+        .find(|(name, _)| *name == base)
+        .map(|(_, text)| *text)
+}
+
 /// Why calibration or refinement failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -110,6 +187,11 @@ pub struct VoiceModel {
     mean: [f32; CEPSTRA],
     /// Stretches it learned from (calibration and refinements).
     pub stretches: usize,
+    /// Learned from a passage aligned in a language other than English: [`refine`] keeps its
+    /// classes (the phones of live speech, heard without its words, would only blur them) and
+    /// follows the speaker's mean alone.
+    #[serde(default)]
+    pub kept: bool,
 }
 
 /// A class ready to score frames.
@@ -137,6 +219,7 @@ impl VoiceModel {
             classes: vec![Class::empty(); Viseme::ALL.len()],
             mean,
             stretches: 0,
+            kept: false,
         };
         model.learn(features, phones)?;
         Ok(model)
@@ -413,60 +496,119 @@ const BLEND_CAP: f32 = 1.35;
 /// How much the classifier's log-likelihoods are flattened.
 const TEMPERATURE: f32 = 4.0;
 
-/// A model of the voice in `samples`: the recording aligned to `passage` as far as it was
-/// read (at least [`MIN_PASSAGE_WORDS`] words of it), else recognised; each frame labelled by
-/// its phone.
+/// A model of the voice in `samples`, the user reading [`passage`] in `language` (any name
+/// [`crate::recognition::check_language`] reads; the recording is [`CALIBRATION_SECONDS`] or
+/// less), each frame labelled by its phone: in English the recording aligned to [`PASSAGE`] as
+/// far as it was read (at least [`MIN_PASSAGE_WORDS`] words of it), else recognised; in
+/// another language the passage aligned by synthesis, or, where the reading was cut off by the
+/// end of the recording or faceanim has no passage in the language, the phones heard.
 ///
 /// # Errors
-/// [`ListenError`] when no voice was heard, too few visemes, or the recogniser fails.
+/// [`ListenError`] when the language is not one eSpeak NG speaks, no voice was heard, too few
+/// visemes, or the recogniser fails.
 pub fn calibrate(
     samples: &[i16],
-    passage: &str,
+    language: &str,
 ) -> Result<(VoiceModel, Recognition, Vec<String>), ListenError> {
+    let language = crate::recognition::check_language(language).map_err(SpeechError::from)?;
     let sound = Sound {
         samples: samples.to_vec(),
     };
-    // The passage as far as it was read; recognised instead when too little of it was.
-    let (aligned, said) = phones::align_start(&sound, passage).map_err(SpeechError::from)?;
-    let (phones, recognition, notes) = if said >= MIN_PASSAGE_WORDS {
-        (aligned, Recognition::Transcript, Vec::new())
-    } else {
-        let (phones, recognition, _) =
-            crate::recognition::recognise(&sound, None, None, Recognition::Words)
-                .map_err(SpeechError::from)?;
-        let note = format!(
-            "only {said} words of the passage were heard in order: the voice was learned from the words recognised instead"
-        );
-        (phones, recognition, vec![note])
+    let heard = |transcript: Option<&str>| {
+        crate::recognition::recognise(&sound, transcript, Some(&language), Recognition::Words)
+            .map_err(SpeechError::from)
     };
+    let (phones, recognition, notes) = if crate::recognition::is_english(&language) {
+        // The passage as far as it was read; recognised instead when too little of it was.
+        let (aligned, said) = phones::align_start(&sound, PASSAGE).map_err(SpeechError::from)?;
+        if said >= MIN_PASSAGE_WORDS {
+            (aligned, Recognition::Transcript, Vec::new())
+        } else {
+            let (phones, recognition, _) = heard(None)?;
+            let note = format!(
+                "only {said} words of the passage were heard in order: the voice was learned from the words recognised instead"
+            );
+            (phones, recognition, vec![note])
+        }
+    } else {
+        match passage(&language) {
+            // Aligned whole: a passage read only in part would be squeezed into what was said.
+            Some(text) if !cut_off(&sound) => heard(Some(text))?,
+            Some(_) => {
+                let (phones, recognition, _) = heard(None)?;
+                let note = "the passage was still being read when calibration ended: the voice was learned from the phones heard".to_owned();
+                (phones, recognition, vec![note])
+            }
+            None => {
+                let (phones, recognition, _) = heard(None)?;
+                let note = format!(
+                    "faceanim has no passage in {language}: the voice was learned from the phones heard"
+                );
+                (phones, recognition, vec![note])
+            }
+        }
+    };
+    let kept = !crate::recognition::is_english(&language)
+        && matches!(
+            recognition,
+            Recognition::Synthesis | Recognition::Transcript
+        );
     // Twice: the speaker's mean from the whole recording first, so that its first seconds are
     // normalised as well as the rest.
     let mut first = Frontend::new(None);
     first.push(samples);
     let mut front = Frontend::new(Some(first.mean()));
     let features = front.push(samples);
-    let model = VoiceModel::fit(&features, &phones, front.mean())?;
+    let mut model = VoiceModel::fit(&features, &phones, front.mean())?;
+    model.kept = kept;
     Ok((model, recognition, notes))
 }
 
-/// `model` refined by a stretch of live speech (`samples`), recognised without a transcript;
-/// `mean` is the speaker's cepstral mean when the stretch began. Without a model, the stretch
-/// makes the first one.
+/// The last [`CUT_OFF_FRAMES`] of voice activity a recording ends in when its speaker was
+/// still reading: half of them or more voiced.
+const CUT_OFF_FRAMES: usize = 30;
+
+/// Whether `sound` ends while its speaker is still speaking (voice in half or more of its last
+/// [`CUT_OFF_FRAMES`] frames): a calibration that ended in the middle of the passage.
+fn cut_off(sound: &Sound) -> bool {
+    let voiced = sound.voice_activity();
+    voiced.len() >= CUT_OFF_FRAMES
+        && 2 * voiced[voiced.len() - CUT_OFF_FRAMES..]
+            .iter()
+            .filter(|v| **v)
+            .count()
+            >= CUT_OFF_FRAMES
+}
+
+/// `model` refined by a stretch of live speech (`samples`) in `language`, recognised without
+/// a transcript (English by its words, other languages by their phones); `mean` is the
+/// speaker's cepstral mean when the stretch began. Without a model, the stretch makes the
+/// first one. A model learned from a passage in another language than English
+/// ([`VoiceModel::kept`]) keeps its classes and takes only the speaker's mean.
 ///
 /// # Errors
-/// [`ListenError`] when no voice was heard in it, too few visemes, or the recogniser fails.
+/// [`ListenError`] when the language is not one eSpeak NG speaks, no voice was heard in the
+/// stretch, too few visemes, or the recogniser fails.
 pub fn refine(
     model: Option<&VoiceModel>,
     samples: &[i16],
     mean: [f32; CEPSTRA],
+    language: &str,
 ) -> Result<VoiceModel, ListenError> {
+    let mut front = Frontend::new(Some(mean));
+    let features = front.push(samples);
+    if let Some(model) = model.filter(|m| m.kept) {
+        let mut next = model.clone();
+        next.mean = front.mean();
+        return Ok(next);
+    }
+    let language = crate::recognition::check_language(language).map_err(SpeechError::from)?;
     let sound = Sound {
         samples: samples.to_vec(),
     };
-    let (phones, _, _) = crate::recognition::recognise(&sound, None, None, Recognition::Words)
-        .map_err(SpeechError::from)?;
-    let mut front = Frontend::new(Some(mean));
-    let features = front.push(samples);
+    let (phones, _, _) =
+        crate::recognition::recognise(&sound, None, Some(&language), Recognition::Words)
+            .map_err(SpeechError::from)?;
     match model {
         Some(model) => {
             let mut next = model.clone();

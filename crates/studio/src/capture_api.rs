@@ -870,11 +870,17 @@ async fn put_visemes(State(both): State<Both>, body: Bytes) -> Answer<VisemesVie
 struct VoiceSwitch {
     on: bool,
     delay_ms: Option<u32>,
+    /// The language spoken (any name `faceanim lipsync --language` takes).
+    language: Option<String>,
 }
 
 /// Turns the microphone on (with its delay) or off; while on, sets the delay.
 async fn voice(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
-    let VoiceSwitch { on, delay_ms } = json_body(&body, "voice")?;
+    let VoiceSwitch {
+        on,
+        delay_ms,
+        language,
+    } = json_body(&body, "voice")?;
     let character = both.studio().character.clone();
     {
         let mut desk = both.desk();
@@ -882,8 +888,13 @@ async fn voice(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
             (false, _) => desk.stop_voice(),
             (true, Some(running)) => {
                 desk.set_voice_delay(delay_ms.unwrap_or(running.delay_ms))?;
+                if let Some(language) = &language {
+                    desk.set_voice_language(language)?;
+                }
             }
-            (true, None) => desk.start_voice(&character, delay_ms.unwrap_or(0))?,
+            (true, None) => {
+                desk.start_voice(&character, delay_ms.unwrap_or(0), language.as_deref())?;
+            }
         }
     }
     Ok(state_of(&both))

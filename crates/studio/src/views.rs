@@ -773,8 +773,13 @@ pub struct VoiceView {
     pub max_delay_ms: u32,
     /// Calibration.
     pub calibration: Calibration,
-    /// The passage to read while calibrating.
-    pub passage: &'static str,
+    /// The language the microphone hears (eSpeak NG's name of it: `en-us`, `es`, `ja`, …): its
+    /// passage is read to calibrate, and its speech is learned from (English by its words,
+    /// other languages by their phones).
+    pub language: String,
+    /// The passage to read while calibrating, in [`VoiceView::language`]; `None` where faceanim
+    /// has none in it (the user speaks freely, and the phones heard teach the voice).
+    pub passage: Option<&'static str>,
     /// Stretches of speech the classifier has learned from (calibration and refinements).
     pub learned: usize,
     /// Whether frames are classed into visemes (else loudness alone opens the mouth).

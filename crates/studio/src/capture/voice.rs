@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use faceanim_speech::Mouth;
 use faceanim_speech::audio::{FRAME_RATE, SAMPLE_RATE};
-use faceanim_speech::listen::{self, CALIBRATION_SECONDS, Listener, PASSAGE, VoiceModel};
+use faceanim_speech::listen::{self, CALIBRATION_SECONDS, Listener, VoiceModel};
 use serde::Serialize;
 
 use crate::error::ApiError;
@@ -67,6 +67,8 @@ pub(super) struct Voice {
     model: Option<VoiceModel>,
     /// Counts calibrations: a refinement begun before one is not applied after it.
     generation: u64,
+    /// The language heard (eSpeak NG's name), checked.
+    language: String,
     delay: f32,
     due: VecDeque<Due>,
     received: usize,
@@ -101,16 +103,19 @@ impl Voice {
         mouth: Mouth,
         model: Option<VoiceModel>,
         delay_ms: u32,
+        language: Option<&str>,
         performer: Option<Arc<Mutex<faceanim_live::Performer>>>,
     ) -> Result<Voice, ApiError> {
         static SESSIONS: AtomicU64 = AtomicU64::new(1);
         check_delay(delay_ms)?;
+        let language = checked_language(language)?;
         Ok(Voice {
             session: SESSIONS.fetch_add(1, Ordering::Relaxed),
             listener: Listener::new(model.as_ref()),
             mouth,
             model,
             generation: 0,
+            language,
             delay: delay_ms as f32 / 1000.0,
             due: VecDeque::new(),
             received: 0,
@@ -144,6 +149,23 @@ impl Voice {
     pub(super) fn set_delay(&mut self, delay_ms: u32) -> Result<(), ApiError> {
         check_delay(delay_ms)?;
         self.delay = delay_ms as f32 / 1000.0;
+        Ok(())
+    }
+
+    /// Hears `language` from now on (its passage for the next calibration, its speech for the
+    /// next refinements).
+    ///
+    /// # Errors
+    /// [`ApiError::Invalid`] naming a language eSpeak NG does not speak.
+    pub(super) fn set_language(&mut self, language: &str) -> Result<(), ApiError> {
+        let language = checked_language(Some(language))?;
+        if language != self.language
+            && let Some(model) = self.model.as_mut()
+        {
+            // A voice kept from another language's passage learns again in this one.
+            model.kept = false;
+        }
+        self.language = language;
         Ok(())
     }
 
@@ -197,7 +219,8 @@ impl Voice {
             delay_ms: (self.delay * 1000.0).round() as u32,
             max_delay_ms: MAX_DELAY_MS,
             calibration: self.calibration.clone(),
-            passage: PASSAGE,
+            language: self.language.clone(),
+            passage: listen::passage(&self.language),
             learned: self.model.as_ref().map_or(0, |m| m.stretches),
             classifying: self.listener.classifies(),
             refine_error: self.refine_error.clone(),
@@ -318,8 +341,9 @@ impl VoiceHandle {
                 voice.calibration = Calibration::Fitting;
                 let heard = std::mem::take(&mut voice.calibration_samples);
                 let (shared, session) = (self.voice.clone(), voice.session);
+                let language = voice.language.clone();
                 std::thread::spawn(move || {
-                    let result = listen::calibrate(&heard, PASSAGE);
+                    let result = listen::calibrate(&heard, &language);
                     let mut slot = lock(&shared);
                     let Some(voice) = slot.as_mut().filter(|v| v.session == session) else {
                         return;
@@ -364,13 +388,14 @@ impl VoiceHandle {
         }
         voice.refining = true;
         let (shared, session) = (self.voice.clone(), voice.session);
-        let (model, mean, generation) = (
+        let (model, mean, generation, language) = (
             voice.model.clone(),
             voice.listener.speaker_mean(),
             voice.generation,
+            voice.language.clone(),
         );
         std::thread::spawn(move || {
-            let result = listen::refine(model.as_ref(), &sound.samples, mean);
+            let result = listen::refine(model.as_ref(), &sound.samples, mean, &language);
             let mut slot = lock(&shared);
             let Some(voice) = slot.as_mut().filter(|v| v.session == session) else {
                 return;
@@ -393,4 +418,15 @@ impl VoiceHandle {
             }
         });
     }
+}
+
+/// `language` as eSpeak NG names it (English, `en-us`, when not given): the microphone's
+/// passage and recognition follow it.
+///
+/// # Errors
+/// [`ApiError::Invalid`] naming a language eSpeak NG does not speak.
+fn checked_language(language: Option<&str>) -> Result<String, ApiError> {
+    let given = language.map(str::trim).filter(|l| !l.is_empty());
+    faceanim_speech::recognition::check_language(given.unwrap_or("en-us"))
+        .map_err(|e| ApiError::Invalid(format!("language: {e}")))
 }

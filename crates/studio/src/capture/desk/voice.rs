@@ -16,7 +16,12 @@ impl CaptureDesk {
     /// # Errors
     /// [`ApiError::Invalid`] when the character has no mouth to drive ([`CaptureDesk::mouth`]),
     /// or the delay is out of range.
-    pub fn start_voice(&mut self, character: &Character, delay_ms: u32) -> Result<(), ApiError> {
+    pub fn start_voice(
+        &mut self,
+        character: &Character,
+        delay_ms: u32,
+        language: Option<&str>,
+    ) -> Result<(), ApiError> {
         let mouth = self.mouth(character)?;
         let mut slot = lock(&self.voice);
         let model = slot
@@ -27,6 +32,7 @@ impl CaptureDesk {
             mouth,
             model,
             delay_ms,
+            language,
             self.vmc.performer.clone(),
         )?);
         Ok(())
@@ -57,6 +63,18 @@ impl CaptureDesk {
             .as_mut()
             .ok_or(ApiError::Live("start the microphone first"))?
             .set_delay(delay_ms)
+    }
+
+    /// Hears `language` from now on: its passage calibrates, its speech refines.
+    ///
+    /// # Errors
+    /// [`ApiError::Live`] when the microphone is off; [`ApiError::Invalid`] naming a language
+    /// eSpeak NG does not speak.
+    pub fn set_voice_language(&mut self, language: &str) -> Result<(), ApiError> {
+        lock(&self.voice)
+            .as_mut()
+            .ok_or(ApiError::Live("start the microphone first"))?
+            .set_language(language)
     }
 
     /// Treats what the microphone hears next (a calibration's length) as the passage read aloud.
