@@ -2,6 +2,7 @@
 //! cheekbones, nose, brow ridge, lips, chin, ears) and a neck cylinder, with the eye sockets
 //! carved out. Every primitive is symmetric about x = 0.
 
+use Place::{Middle, Mirrored};
 use glam::Vec3;
 
 /// Eye centre of the character's left eye (+X).
@@ -43,6 +44,34 @@ pub fn left(p: Vec3) -> Vec3 {
     Vec3::new(p.x.abs(), p.y, p.z)
 }
 
+/// Where an ellipsoid of [`BLOBS`] stands: on the middle of the face, or on its left (+X)
+/// and mirrored onto the right.
+#[derive(Debug, Clone, Copy)]
+enum Place {
+    Middle,
+    Mirrored,
+}
+
+/// The ellipsoids joined to the cranium, in order: where each stands, its centre, its radii
+/// and the width over which it blends in ([`smin`]).
+#[rustfmt::skip]
+const BLOBS: [(Place, [f32; 3], [f32; 3], f32); 10] = [
+    // Face and cheekbones.
+    (Middle, [0.0, -0.040, 0.022], [0.060, 0.075, 0.068], 0.030),
+    (Mirrored, [0.042, -0.008, 0.045], [0.028, 0.024, 0.030], 0.020),
+    // Nose: bridge, tip and wings.
+    (Middle, [0.0, -0.010, 0.080], [0.0095, 0.030, 0.016], 0.010),
+    (Middle, [0.0, -0.031, 0.094], [0.0115, 0.0105, 0.0115], 0.008),
+    (Mirrored, [0.0125, -0.0355, 0.086], [0.0080, 0.0070, 0.0085], 0.005),
+    // Brow ridge, lips, chin.
+    (Middle, [0.0, 0.032, 0.070], [0.058, 0.011, 0.020], 0.015),
+    (Middle, [0.0, -0.0535, 0.0830], [0.0235, 0.0065, 0.0110], 0.006),
+    (Middle, [0.0, -0.0660, 0.0810], [0.0215, 0.0075, 0.0110], 0.006),
+    (Middle, [0.0, -0.0920, 0.0680], [0.0220, 0.0170, 0.0170], 0.015),
+    // Ears.
+    (Mirrored, [0.075, 0.000, -0.012], [0.011, 0.027, 0.016], 0.008),
+];
+
 /// Signed distance to the head (negative inside).
 #[must_use]
 pub fn head(p: Vec3) -> f32 {
@@ -52,99 +81,17 @@ pub fn head(p: Vec3) -> f32 {
         Vec3::new(0.0, 0.025, -0.010),
         Vec3::new(0.074, 0.098, 0.095),
     );
-    d = smin(
-        d,
-        ellipsoid(
-            p,
-            Vec3::new(0.0, -0.040, 0.022),
-            Vec3::new(0.060, 0.075, 0.068),
-        ),
-        0.030,
-    );
-    d = smin(
-        d,
-        ellipsoid(
-            m,
-            Vec3::new(0.042, -0.008, 0.045),
-            Vec3::new(0.028, 0.024, 0.030),
-        ),
-        0.020,
-    );
-    // Nose: bridge, tip and wings.
-    d = smin(
-        d,
-        ellipsoid(
-            p,
-            Vec3::new(0.0, -0.010, 0.080),
-            Vec3::new(0.0095, 0.030, 0.016),
-        ),
-        0.010,
-    );
-    d = smin(
-        d,
-        ellipsoid(
-            p,
-            Vec3::new(0.0, -0.031, 0.094),
-            Vec3::new(0.0115, 0.0105, 0.0115),
-        ),
-        0.008,
-    );
-    d = smin(
-        d,
-        ellipsoid(
-            m,
-            Vec3::new(0.0125, -0.0355, 0.086),
-            Vec3::new(0.0080, 0.0070, 0.0085),
-        ),
-        0.005,
-    );
-    // Brow ridge, lips, chin.
-    d = smin(
-        d,
-        ellipsoid(
-            p,
-            Vec3::new(0.0, 0.032, 0.070),
-            Vec3::new(0.058, 0.011, 0.020),
-        ),
-        0.015,
-    );
-    d = smin(
-        d,
-        ellipsoid(
-            p,
-            Vec3::new(0.0, -0.0535, 0.0830),
-            Vec3::new(0.0235, 0.0065, 0.0110),
-        ),
-        0.006,
-    );
-    d = smin(
-        d,
-        ellipsoid(
-            p,
-            Vec3::new(0.0, -0.0660, 0.0810),
-            Vec3::new(0.0215, 0.0075, 0.0110),
-        ),
-        0.006,
-    );
-    d = smin(
-        d,
-        ellipsoid(
-            p,
-            Vec3::new(0.0, -0.0920, 0.0680),
-            Vec3::new(0.0220, 0.0170, 0.0170),
-        ),
-        0.015,
-    );
-    // Ears.
-    d = smin(
-        d,
-        ellipsoid(
-            m,
-            Vec3::new(0.075, 0.000, -0.012),
-            Vec3::new(0.011, 0.027, 0.016),
-        ),
-        0.008,
-    );
+    for &(place, centre, radii, blend) in &BLOBS {
+        let at = match place {
+            Middle => p,
+            Mirrored => m,
+        };
+        d = smin(
+            d,
+            ellipsoid(at, Vec3::from_array(centre), Vec3::from_array(radii)),
+            blend,
+        );
+    }
     // Neck: a capped vertical cylinder.
     let q = Vec3::new(p.x, 0.0, p.z + 0.012);
     let side = q.length() - 0.052;
