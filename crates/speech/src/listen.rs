@@ -187,11 +187,11 @@ pub struct VoiceModel {
     mean: [f32; CEPSTRA],
     /// Stretches it learned from (calibration and refinements).
     pub stretches: usize,
-    /// Learned from a passage aligned in a language other than English: [`refine`] keeps its
-    /// classes (the phones of live speech, heard without its words, would only blur them) and
-    /// follows the speaker's mean alone.
+    /// The language (eSpeak NG's name) of the passage it was learned from, when that is not
+    /// English: [`refine`] in that language keeps its classes (the phones of live speech, heard
+    /// without its words, would only blur them) and follows the speaker's mean alone.
     #[serde(default)]
-    pub kept: bool,
+    pub passage_language: Option<String>,
 }
 
 /// A class ready to score frames.
@@ -219,7 +219,7 @@ impl VoiceModel {
             classes: vec![Class::empty(); Viseme::ALL.len()],
             mean,
             stretches: 0,
-            kept: false,
+            passage_language: None,
         };
         model.learn(features, phones)?;
         Ok(model)
@@ -548,11 +548,12 @@ pub fn calibrate(
             }
         }
     };
-    let kept = !crate::recognition::is_english(&language)
+    let kept = (!crate::recognition::is_english(&language)
         && matches!(
             recognition,
             Recognition::Synthesis | Recognition::Transcript
-        );
+        ))
+    .then(|| language.clone());
     // Twice: the speaker's mean from the whole recording first, so that its first seconds are
     // normalised as well as the rest.
     let mut first = Frontend::new(None);
@@ -560,7 +561,7 @@ pub fn calibrate(
     let mut front = Frontend::new(Some(first.mean()));
     let features = front.push(samples);
     let mut model = VoiceModel::fit(&features, &phones, front.mean())?;
-    model.kept = kept;
+    model.passage_language = kept;
     Ok((model, recognition, notes))
 }
 
@@ -583,8 +584,8 @@ fn cut_off(sound: &Sound) -> bool {
 /// `model` refined by a stretch of live speech (`samples`) in `language`, recognised without
 /// a transcript (English by its words, other languages by their phones); `mean` is the
 /// speaker's cepstral mean when the stretch began. Without a model, the stretch makes the
-/// first one. A model learned from a passage in another language than English
-/// ([`VoiceModel::kept`]) keeps its classes and takes only the speaker's mean.
+/// first one. A model learned from a passage in `language`, when that is not English
+/// ([`VoiceModel::passage_language`]), keeps its classes and takes only the speaker's mean.
 ///
 /// # Errors
 /// [`ListenError`] when the language is not one eSpeak NG speaks, no voice was heard in the
@@ -595,14 +596,14 @@ pub fn refine(
     mean: [f32; CEPSTRA],
     language: &str,
 ) -> Result<VoiceModel, ListenError> {
+    let language = crate::recognition::check_language(language).map_err(SpeechError::from)?;
     let mut front = Frontend::new(Some(mean));
     let features = front.push(samples);
-    if let Some(model) = model.filter(|m| m.kept) {
+    if let Some(model) = model.filter(|m| m.passage_language.as_ref() == Some(&language)) {
         let mut next = model.clone();
         next.mean = front.mean();
         return Ok(next);
     }
-    let language = crate::recognition::check_language(language).map_err(SpeechError::from)?;
     let sound = Sound {
         samples: samples.to_vec(),
     };

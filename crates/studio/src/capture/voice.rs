@@ -158,14 +158,7 @@ impl Voice {
     /// # Errors
     /// [`ApiError::Invalid`] naming a language eSpeak NG does not speak.
     pub(super) fn set_language(&mut self, language: &str) -> Result<(), ApiError> {
-        let language = checked_language(Some(language))?;
-        if language != self.language
-            && let Some(model) = self.model.as_mut()
-        {
-            // A voice kept from another language's passage learns again in this one.
-            model.kept = false;
-        }
-        self.language = language;
+        self.language = checked_language(Some(language))?;
         Ok(())
     }
 
