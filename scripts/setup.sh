@@ -8,7 +8,8 @@
 #     (npm), the emulated Meta Quest 3 its VR test runs in;
 #   - gltfpack and @gltf-transform/cli (npm), which compress the tests' avatars as people's
 #     downloads are (meshopt, quantization, Draco), and meshoptimizer's own decoder (npm), with
-#     which three.js opens the meshopt-compressed exports;
+#     which three.js opens the meshopt-compressed exports, and three.js itself (npm `three`),
+#     whose GLTFExporter saves a test avatar again as web editors do;
 #   - python-osc (PyPI), the independent OSC implementation the VMC tests talk to, and
 #     pylivelinkface (PyPI), an independent Live Link Face sender for the phone tests;
 #   - CMU PocketSphinx (Debian: the library lip sync links, its US English models, and its
@@ -104,8 +105,8 @@ want "${libraries[@]}" pocketsphinx-testdata flite espeak-ng mecab mecab-ipadic-
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 apt_install "${packages[@]}"
 
-if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ ! -d tools/node_modules/iwer ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
-  echo "setup: installing the glTF-Validator, playwright-core, gltfpack and gltf-transform (npm ci in tools/)"
+if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ ! -d tools/node_modules/iwer ] || [ ! -d tools/node_modules/three ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
+  echo "setup: installing the glTF-Validator, playwright-core, gltfpack, gltf-transform and three.js's exporter (npm ci in tools/)"
   (cd tools && npm ci --no-audit --no-fund --loglevel=error)
 fi
 

@@ -1,7 +1,8 @@
 // A page of ours in headless Chromium with three.js (the copy the studio ships,
 // web/vendor/three) and one model, for the tools that render with three.js
-// (threejs-render.mjs, heldout-stills.mjs). Nothing is fetched from the network: the page, the
-// model, three.js and meshoptimizer's decoder (/meshopt_decoder.mjs) are answered from here.
+// (threejs-render.mjs, heldout-stills.mjs) or write with it (threejs-export.mjs). Nothing is
+// fetched from the network: the page, the model, three.js, its glTF exporter
+// (/GLTFExporter.js) and meshoptimizer's decoder (/meshopt_decoder.mjs) are answered from here.
 import { readFile } from 'node:fs/promises';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -31,6 +32,11 @@ export async function withThreePage({ html, model, width, height }, work) {
       // meshoptimizer's own decoder (npm `meshoptimizer`), for files with EXT_meshopt_compression.
       if (url.pathname === '/meshopt_decoder.mjs') {
         return route.fulfill({ body: await readFile(path.join(here, 'node_modules/meshoptimizer/meshopt_decoder.mjs')), contentType: 'text/javascript' });
+      }
+      // three.js's own glTF exporter (npm `three`, the vendored copy's version), for the
+      // files a web editor writes.
+      if (url.pathname === '/GLTFExporter.js') {
+        return route.fulfill({ body: await readFile(path.join(here, 'node_modules/three/examples/jsm/exporters/GLTFExporter.js')), contentType: 'text/javascript' });
       }
       if (url.pathname.startsWith('/three/')) {
         const local = path.join(three, url.pathname.slice('/three/'.length));

@@ -4,8 +4,9 @@
 //! face's 108 shape keys on all of its 12 primitives, two skins, a rig in centimetres under a
 //! 0.01 scale, `KHR_materials_*`), the same made a VRM 0.x and a VRM 1.0 by adding the
 //! extension's JSON as UniVRM lays it out, and compressed by gltfpack and by gltf-transform
-//! (meshopt, and Draco, which faceanim decodes natively), and made sparse by gltf-transform (its
-//! shape keys that leave a primitive still are accessors without data).
+//! (meshopt, and Draco, which faceanim decodes natively), made sparse by gltf-transform (its
+//! shape keys that leave a primitive still are accessors without data), and saved again by
+//! three.js's GLTFExporter, as web editors save it.
 //! Each imports, `faceanim info` lists its shapes with what drives them by name, capture by
 //! name moves it, strokes through the studio's API animate it, and the export is the user's
 //! file with the animation added: counts and names kept, the Khronos validator passes it,
@@ -269,6 +270,80 @@ fn exports_of_blender_avatars_keep_the_file_and_open_everywhere() {
     for out in [&outputs[0], &outputs[1], &outputs[4], &outputs[6]] {
         assert_avatar_drawn(&threejs_render(out, "2.4"), 19, 13, 5_000);
     }
+}
+
+/// The Blender avatar as a web editor saves it: loaded and written again by three.js's own
+/// GLTFLoader and GLTFExporter (`tools/threejs-export.mjs`: one mesh and one skin per
+/// primitive, shape names in each mesh's `extras.targetNames`). It imports with every shape
+/// and bone; its export with an animation is valid and keeps the file; and an animation
+/// faceanim wrote, saved again by three.js (its weight tracks now on each of the face's meshes),
+/// opens again as the same take.
+#[test]
+fn an_avatar_saved_by_threejs_imports_exports_and_opens_again() {
+    let dir = output_dir("made-by-others-threejs");
+    let plain = dir.join("blender.glb");
+    std::fs::write(&plain, blender_avatar()).unwrap();
+    let three = dir.join("blender-threejs.glb");
+    std::fs::write(&three, faceanim_testdata::threejs(blender_avatar())).unwrap();
+    let report = info(&three);
+    assert_eq!(
+        report["blendshapes"].as_array().unwrap().len(),
+        SHAPE_KEYS,
+        "{report}"
+    );
+    assert_eq!(report["file"]["meshes"], 19, "a mesh per primitive");
+    assert!(
+        shape(&report, "jawOpen")["max_displacement"]
+            .as_f64()
+            .unwrap()
+            > 0.01
+    );
+    assert_eq!(
+        report["undriven_channels"],
+        serde_json::json!(["tongueOut"])
+    );
+    for (bone, name) in [("head", "Head"), ("jaw", "Jaw"), ("left_eye", "LeftEye")] {
+        assert_eq!(report["file"]["bones"][bone], name, "{report}");
+    }
+    let clip = clip(&dir);
+    let animated = dir.join("blender-threejs-animated.glb");
+    export_with_clip(&three, &animated, &clip);
+    let validated = assert_valid_gltf(&animated);
+    assert_eq!(validated["info"]["animationCount"], 1);
+    assert_kept(
+        &faceanim_testdata::glb::json(&std::fs::read(&three).unwrap()),
+        &faceanim_testdata::glb::json(&std::fs::read(&animated).unwrap()),
+        &animated.display().to_string(),
+    );
+    // Ours, saved again by three.js, is the same take.
+    let ours = dir.join("blender-animated.glb");
+    export_with_clip(&plain, &ours, &clip);
+    let ours = std::fs::read(&ours).unwrap();
+    let written = faceanim_export::reopen::clip_of_file("blender-animated.glb", &ours).unwrap();
+    let resaved = faceanim_testdata::threejs(&ours);
+    let back = faceanim_export::reopen::clip_of_file("resaved.glb", &resaved).unwrap();
+    assert_eq!(back.clip.fps, written.clip.fps);
+    assert_eq!(back.clip.frames.len(), written.clip.frames.len());
+    let mut moving = 0;
+    for (c, name) in written.clip.blendshapes.iter().enumerate() {
+        if written.clip.frames.iter().all(|row| row[c] == 0.0) {
+            continue;
+        }
+        moving += 1;
+        let k = back
+            .clip
+            .column(name)
+            .unwrap_or_else(|| panic!("{name} was not read back"));
+        for (row, again) in written.clip.frames.iter().zip(&back.clip.frames) {
+            assert!(
+                (row[c] - again[k]).abs() < 1e-4,
+                "{name}: {} then {}",
+                row[c],
+                again[k]
+            );
+        }
+    }
+    assert!(moving >= 4, "{moving} shapes move");
 }
 
 /// By name, a photo of a smiling person moves the ARKit-named smile on the Blender avatar and

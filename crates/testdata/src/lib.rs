@@ -260,6 +260,15 @@ pub fn ktx2(input: &[u8], uastc: bool) -> Vec<u8> {
     })
 }
 
+/// `input` loaded and written again by three.js (its GLTFLoader and GLTFExporter, in
+/// headless Chromium: `tools/threejs-export.mjs`), as web-based editors save an avatar.
+#[must_use]
+pub fn threejs(input: &[u8]) -> Vec<u8> {
+    node_tool("threejs-export.mjs", "threejs", input, |src, out| {
+        vec![src.into(), out.into()]
+    })
+}
+
 /// Runs the node script at `tools/SCRIPT` (a tool's, under `node_modules`, or one of ours)
 /// with node on `input`, written to a
 /// temporary `in.glb`, with the arguments `args(in, out)`; returns what it wrote to `out.glb`.
