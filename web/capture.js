@@ -177,8 +177,10 @@ function layer(frame) {
 const ESTIMATED = { adapter: 'estimated by the adapter', by_name: 'estimated by ARKit name', retarget: 'read through the retarget map', session_file: 'opened from a session' };
 
 // ---------- input ----------
-/** What the server said of the last transcript file read (its guessed code page), or ''. */
+/** What the server said of the last transcript file read (its guessed code page), or '', and
+ * the words it said it of: the note stands while the field still holds them. */
 let transcriptNote = '';
+let transcriptNoted = '';
 
 const header = (file) => ({ 'x-filename': encodeURIComponent(file.name) });
 
@@ -193,6 +195,7 @@ async function readTranscript(file) {
   const read = await api('POST', `api/capture/transcript${query}`, await file.arrayBuffer(), header(file));
   input('speech-text').value = read.text;
   transcriptNote = read.note || '';
+  transcriptNoted = read.text;
 }
 
 /**
@@ -202,7 +205,9 @@ async function readTranscript(file) {
 export async function openInput(files) {
   if (!files.length) return;
   showError('');
-  transcriptNote = '';
+  // A transcript picked before its speech keeps its note while its words are in the field.
+  const speech = files.some((f) => AUDIO.test(f.name) || TRANSCRIPT.test(f.name));
+  if (!speech || input('speech-text').value !== transcriptNoted) transcriptNote = '';
   try {
     const transcripts = files.filter((f) => TRANSCRIPT.test(f.name));
     if (transcripts.length > 1) throw new Error('pick one transcript or subtitle with the speech');
