@@ -171,17 +171,20 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         let gestures = faceanim_speech::face::gestures(&sound, &lip_sync.phones);
         let moved =
             faceanim_speech::face::add(&mut lip_sync.frames, args.fps, &gestures, &character);
-        if faceanim_speech::face::shapes_reached(&character) == 0 {
-            lip_sync.notes.push(format!(
-                "--face: {} has no blink or brow shapes the name table knows",
-                character.name()
-            ));
-        } else if moved == 0 {
-            // A short, even line: nothing to blink or raise the brows on (not the rig's lack).
-            lip_sync.notes.push(format!(
-                "--face: no blink or brow raise falls in this line (a blink comes at a pause or after {} s without one, a raise on an accented syllable); the head still moves with it",
-                faceanim_speech::face::LONGEST_WITHOUT
-            ));
+        if moved == 0 {
+            lip_sync.notes.push(if faceanim_speech::face::shapes_reached(&character) == 0 {
+                format!(
+                    "--face: {} has no blink or brow shapes the name table knows",
+                    character.name()
+                )
+            } else {
+                // A short, even line: nothing to blink or raise the brows on (not the rig's
+                // lack).
+                format!(
+                    "--face: no blink or brow raise falls in this line (a blink comes at a pause or after {} s without one, a raise on an accented syllable); the head still moves with it",
+                    faceanim_speech::face::LONGEST_WITHOUT
+                )
+            });
         }
         gestures
     });

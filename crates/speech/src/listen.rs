@@ -548,12 +548,8 @@ pub fn calibrate(
             }
         }
     };
-    let kept = (!crate::recognition::is_english(&language)
-        && matches!(
-            recognition,
-            Recognition::Synthesis | Recognition::Transcript
-        ))
-    .then(|| language.clone());
+    // Only another language's passage is aligned by synthesis.
+    let kept = (recognition == Recognition::Synthesis).then(|| language.clone());
     // Twice: the speaker's mean from the whole recording first, so that its first seconds are
     // normalised as well as the rest.
     let mut first = Frontend::new(None);
