@@ -105,8 +105,8 @@ want "${libraries[@]}" pocketsphinx-testdata flite espeak-ng mecab mecab-ipadic-
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
 apt_install "${packages[@]}"
 
-if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ ! -d tools/node_modules/iwer ] || [ ! -d tools/node_modules/three ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
-  echo "setup: installing the glTF-Validator, playwright-core, gltfpack, gltf-transform and three.js's exporter (npm ci in tools/)"
+if [ ! -d tools/node_modules/gltf-validator ] || [ ! -d tools/node_modules/playwright-core ] || [ ! -d tools/node_modules/gltfpack ] || [ ! -d tools/node_modules/@gltf-transform/cli ] || [ ! -d tools/node_modules/iwer ] || [ ! -d tools/node_modules/three ] || [ ! -d tools/node_modules/@pixiv/three-vrm-animation ] || [ tools/package-lock.json -nt tools/node_modules/.package-lock.json ]; then
+  echo "setup: installing the glTF-Validator, playwright-core, gltfpack, gltf-transform, three.js's exporter and pixiv's three-vrm (npm ci in tools/)"
   (cd tools && npm ci --no-audit --no-fund --loglevel=error)
 fi
 

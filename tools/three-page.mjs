@@ -15,11 +15,12 @@ const three = path.join(here, '../web/vendor/three');
 export const IMPORT_MAP = '<script type="importmap">{ "imports": { "three": "/three/three.module.min.js", "three/addons/": "/three/addons/" } }</script>';
 
 /**
- * Opens `html` (served as http://three.test/, with `model` at /model.glb) in a `width`×`height`
+ * Opens `html` (served as http://three.test/, with `model` at /model.glb and each of `files`,
+ * `{ '/path': { body, contentType } }`, at its path) in a `width`×`height`
  * page, runs `work(page, errors)` and closes the browser; `errors` collects the page's uncaught
  * errors. Resolves to what `work` returns.
  */
-export async function withThreePage({ html, model, width, height }, work) {
+export async function withThreePage({ html, model, width, height, files = {} }, work) {
   const browser = await launch();
   try {
     const page = await browser.newPage({ viewport: { width, height } });
@@ -29,6 +30,10 @@ export async function withThreePage({ html, model, width, height }, work) {
       const url = new URL(route.request().url());
       if (url.pathname === '/') return route.fulfill({ body: html, contentType: 'text/html' });
       if (url.pathname === '/model.glb') return route.fulfill({ body: model, contentType: 'model/gltf-binary' });
+      if (Object.hasOwn(files, url.pathname)) {
+        const { body, contentType } = files[url.pathname];
+        return route.fulfill({ body, contentType });
+      }
       // meshoptimizer's own decoder (npm `meshoptimizer`), for files with EXT_meshopt_compression.
       if (url.pathname === '/meshopt_decoder.mjs') {
         return route.fulfill({ body: await readFile(path.join(here, 'node_modules/meshoptimizer/meshopt_decoder.mjs')), contentType: 'text/javascript' });

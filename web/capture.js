@@ -519,6 +519,11 @@ onShowTakeFrame(() => {
 // The take (or the live face) is the layer under the sketch.
 setLayer(layer);
 
+// A VRM avatar's take also downloads as a VRM Animation.
+store.onCharacter((character) => {
+  /** @type {HTMLElement} */ (document.getElementById('capture-export-vrma')).hidden = !character.vrm;
+});
+
 // "Sketch over the take": off, the page plays and the downloads hold the take alone.
 const sketchOverTake = /** @type {HTMLInputElement} */ (document.getElementById('sketch-over-take'));
 sketchOverTake.addEventListener('change', () => {

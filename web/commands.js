@@ -65,10 +65,11 @@ $('project-file').addEventListener('change', async (e) => {
 });
 
 // Each character read (the first, another opened, one given blendshapes): its name in the
-// toolbar, the camera on its head.
+// toolbar, the camera on its head, and the sketch's VRM Animation download where it is a VRM.
 store.onCharacter((character) => {
   $('character-name').textContent = character.name;
   frameCamera(character.head);
+  $('export-vrma').hidden = !character.vrm;
 });
 
 /** Opens another character (a .glb or self-contained .gltf); the project starts empty. */

@@ -17,7 +17,7 @@ const selectionListeners = [];
 
 /** The last state (`null` before the first). */
 export const state = () => current;
-/** The character (`name`, `vertices`, `blendshapes`, `bounds`, `head`, `diagonal`). */
+/** The character (`name`, `vertices`, `blendshapes`, `bounds`, `head`, `diagonal`, `generated`, `vrm`). */
 export const character = () => characterView;
 /** The selected action's stroke index, or null. */
 export const selection = () => selected;

@@ -30,6 +30,18 @@ pub(crate) struct ExportDefaultArgs {
 /// `faceanim export`.
 pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let character = crate::input::load(&args.character)?.character;
+    // A `.vrma` is the clip alone, as a VRM Animation; any other name the character's own file.
+    let format = match faceanim_export::Format::from_path(&args.out.output) {
+        Ok(faceanim_export::Format::Vrma) => {
+            anyhow::ensure!(
+                args.clip.is_some(),
+                "{}: a VRM Animation is an animation: give the clip with --clip",
+                args.out.output.display()
+            );
+            faceanim_export::Format::Vrma
+        }
+        _ => faceanim_export::Format::Glb,
+    };
     let glb = match &args.clip {
         Some(clip_path) => {
             let clip = faceanim_files::load_clip(clip_path)?;
@@ -49,11 +61,9 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
             }
             let animation = faceanim_export::Animation::from_clip(&character, &clip, &name)
                 .with_context(|| format!("applying {}", clip_path.display()))?;
-            let exported = faceanim_export::export_with(
-                faceanim_export::Format::Glb,
-                &animation,
-                args.out.glb.compression(),
-            )?;
+            let exported =
+                faceanim_export::export_with(format, &animation, args.out.glb.compression())
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", args.out.output.display()))?;
             for note in &exported.notes {
                 eprintln!("{}: {note}", args.out.output.display());
             }
@@ -68,6 +78,10 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
         None => faceanim_export::glb(&character, None)?,
     };
     faceanim_files::write_output(&args.out.output, &glb)?;
+    if format == faceanim_export::Format::Vrma {
+        eprintln!("wrote {}", args.out.output.display());
+        return Ok(());
+    }
     eprintln!(
         "wrote {} ({} vertices, {} blendshapes{})",
         args.out.output.display(),

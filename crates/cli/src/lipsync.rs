@@ -29,7 +29,8 @@ pub struct LipsyncArgs {
     #[arg(long, default_value = faceanim_speech::recognition::ENGLISH)]
     pub language: String,
     /// Outputs by extension, as `faceanim track` writes them (.glb/.vrm the character with
-    /// the animation, .json the clip, .csv Live Link Face, .session.json the take).
+    /// the animation, .vrma a VRM avatar's VRM Animation, .json the clip, .csv Live Link Face,
+    /// .session.json the take).
     #[arg(short, long = "output", value_name = "OUT")]
     pub outputs: Vec<PathBuf>,
     #[command(flatten)]

@@ -64,7 +64,9 @@ enum Command {
     /// Write a character as a binary glTF (.glb), optionally with an animation from a clip.
     ///
     /// Converts OBJ folders and .gltf files to a single .glb that Blender, Unity, Unreal and
-    /// three.js open directly. Example: faceanim export ict-obj/ -o ict.glb --clip take.json
+    /// three.js open directly. Example: faceanim export ict-obj/ -o ict.glb --clip take.json.
+    /// An output named .vrma is the clip alone as a VRM Animation, for a VRM avatar (VRM apps
+    /// play it on any VRM): faceanim export avatar.vrm --clip take.json -o take.vrma
     Export(export::ExportArgs),
     /// Replay a strokes file (docs/formats.md: samples, handle edits, settings) on a character
     /// and write the animation: a GLB whose extra morph targets carry arcs and exaggerations,

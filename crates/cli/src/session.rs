@@ -6,7 +6,6 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
-use faceanim_export::Format;
 use faceanim_take::{Session, TakeError};
 
 /// `faceanim session`'s arguments.
@@ -205,8 +204,9 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
             glb,
         } => {
             let formats = crate::outputs::formats_of(&output)?;
-            // The GLB needs the character; the clip and the CSVs come from the session alone.
-            let character = if character.is_some() || formats.contains(&Format::Glb) {
+            // The GLB and the VRM Animation need the character; the clip and the CSVs come
+            // from the session alone.
+            let character = if character.is_some() || formats.iter().any(|f| f.needs_character()) {
                 Some(crate::input::load_or_default(character.as_deref())?.character)
             } else {
                 None

@@ -33,8 +33,8 @@ pub struct TrackArgs {
     /// The character (default: the built-in head).
     #[arg(long)]
     pub character: Option<PathBuf>,
-    /// Where to write: .json (clip), .glb, .csv (Live Link Face), .byoc.csv (the seed's CSV)
-    /// or .session.json; repeatable.
+    /// Where to write: .json (clip), .glb, .vrma (a VRM avatar's VRM Animation), .csv (Live
+    /// Link Face), .byoc.csv (the seed's CSV) or .session.json; repeatable.
     #[arg(short, long = "output")]
     pub outputs: Vec<PathBuf>,
     #[command(flatten)]

@@ -25,7 +25,9 @@ use std::path::{Path, PathBuf};
 
 use faceanim_testdata::avatar::VrmKind;
 use faceanim_testdata::glb::assert_kept;
-use faceanim_testdata::producers::{BLENDER_AVATAR_EXPRESSIONS, blender_avatar, with_vrm};
+use faceanim_testdata::producers::{
+    BLENDER_AVATAR_EXPRESSIONS, blender_avatar, complete_vrm, with_vrm,
+};
 use faceanim_testdata::{gltf_transform, gltfpack};
 use serde_json::Value;
 use support::{
@@ -492,6 +494,252 @@ fn head_and_gaze_come_back_from_vrm_bones() {
         export_with_clip(&avatar, &out, &clip_path);
         let values: Vec<(&str, f32)> = looks.into_iter().zip(written).collect();
         assert_reopened(&name, &std::fs::read(&out).unwrap(), head, &values);
+    }
+}
+
+/// A clip exported as a VRM Animation (`.vrma`) for the Blender avatar made a VRM 1.0 and a VRM
+/// 0.x (with the arms and feet VRM requires), played by pixiv's three-vrm-animation on that
+/// avatar: each key's mouth and custom expression reach the face's morph targets as the clip
+/// moves them (a raw target, `Fcl_MTH_A`, through the expression binding it, `aa`; the ARKit
+/// blink shape through `blinkLeft`), the head turns as the clip's head pose, and the gaze is
+/// the clip's eyeLook values' gaze. A shape no expression binds is named in a note. The VRM
+/// 1.0 file opens again in the studio as the same take.
+#[test]
+fn a_vrm_animation_plays_on_the_avatar_in_three_vrm() {
+    let dir = output_dir("made-by-others-vrma");
+    let names: Vec<&str> = "Fcl_MTH_A ih surprised eyeBlinkLeft eyeLookOutLeft eyeLookInRight \
+                            eyeLookUpLeft eyeLookUpRight mouthSmileLeft"
+        .split_whitespace()
+        .collect();
+    let frames: Vec<[f32; 9]> = (0..45)
+        .map(|k| {
+            let t = k as f32 / 30.0;
+            let side = (t * 3.0).sin().max(0.0) * 0.7;
+            [
+                (t * 4.0).sin().max(0.0),
+                (-(t * 4.0).sin()).max(0.0) * 0.8,
+                if k > 30 { 0.6 } else { 0.0 },
+                if (10..16).contains(&k) { 1.0 } else { 0.0 },
+                side,
+                side,
+                0.3,
+                0.3,
+                0.4,
+            ]
+        })
+        .collect();
+    let heads: Vec<[f32; 3]> = (0..45)
+        .map(|k| {
+            let t = k as f32 / 30.0;
+            [
+                25.0 * (t * 2.0).sin(),
+                12.0 * (t * 3.0).sin(),
+                6.0 * t.sin(),
+            ]
+        })
+        .collect();
+    let clip_path = dir.join("take.json");
+    std::fs::write(
+        &clip_path,
+        serde_json::json!({ "fps": 30, "blendshapes": names, "frames": frames, "head": heads })
+            .to_string(),
+    )
+    .unwrap();
+    for kind in [VrmKind::V1, VrmKind::V0] {
+        let avatar = dir.join(format!("avatar-{kind:?}.vrm"));
+        std::fs::write(&avatar, complete_vrm(&with_vrm(blender_avatar(), kind))).unwrap();
+        let out = dir.join(format!("take-{kind:?}.vrma"));
+        let said = support::export_with_clip_and(&avatar, &out, &clip_path, &[]);
+        // The avatar's own eyeBlink_L is in no expression: it closes the lids through
+        // blinkLeft. Its smile shape has no expression to go through.
+        let carried = said
+            .lines()
+            .find(|l| l.contains("carries 4 VRM expressions ("))
+            .unwrap_or_else(|| panic!("{said}"));
+        for part in [
+            "aa",
+            "blinkLeft",
+            "ih",
+            "surprised",
+            "the head's turn (chest, neck, head)",
+            "the gaze (lookAt)",
+        ] {
+            assert!(carried.contains(part), "{carried}");
+        }
+        assert!(
+            said.contains("eyeBlink_L, in no VRM expression, closes the lids through blinkLeft"),
+            "{said}"
+        );
+        assert!(said.contains("1 shape the animation moves is in no VRM expression, which is all a VRM Animation moves: mouthSmile_L"), "{said}");
+        assert_valid_gltf(&out);
+        let played = support::vrma_played(&avatar, &out);
+        // three-vrm says nothing of the animation (it warns of a T-pose it violates, a track
+        // it ignores); of the avatar's VRM 0.x lookAt curves it may.
+        for warning in played["warnings"].as_array().unwrap() {
+            assert!(
+                !warning.as_str().unwrap().contains("Animation"),
+                "{kind:?}: {warning}"
+            );
+        }
+        assert_eq!(played["times"].as_array().unwrap().len(), frames.len());
+        // Every primitive of the face holding a target shows it as the clip moves it.
+        let influences = |target: &str| -> Vec<Vec<f64>> {
+            played["morphs"]
+                .as_object()
+                .unwrap()
+                .values()
+                .filter_map(|m| m.get(target))
+                .map(|v| {
+                    v.as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|x| x.as_f64().unwrap())
+                        .collect()
+                })
+                .collect()
+        };
+        for (target, column) in [
+            ("Fcl_MTH_A", 0),
+            ("Fcl_MTH_I", 1),
+            ("Fcl_ALL_Surprised", 2),
+            ("Fcl_EYE_Close_L", 3),
+        ] {
+            let shown = influences(target);
+            assert!(!shown.is_empty(), "{kind:?}: no mesh shows {target}");
+            for primitive in shown {
+                for (k, (got, row)) in primitive.iter().zip(&frames).enumerate() {
+                    assert!(
+                        (got - f64::from(row[column])).abs() < 2e-3,
+                        "{kind:?} {target} at key {k}: {got} for {}",
+                        row[column]
+                    );
+                }
+            }
+        }
+        // The head's turn, in the file's space: a VRM 0.x faces −Z, so the turn is seen half a
+        // turn about Y.
+        let half = if kind == VrmKind::V0 {
+            glam::Quat::from_rotation_y(std::f32::consts::PI)
+        } else {
+            glam::Quat::IDENTITY
+        };
+        for (k, (q, angles)) in played["head"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(&heads)
+            .enumerate()
+        {
+            let got = glam::Quat::from_slice(&support::f32s(q));
+            let want = half
+                * glam::Quat::from_array(faceanim_anim::head_rotation(*angles))
+                * half.inverse();
+            let off = degrees_between(got, want);
+            assert!(off < 0.5, "{kind:?} head at key {k}: {off}° off");
+        }
+        if kind == VrmKind::V1 {
+            assert_opens_again_in_the_studio(&avatar, &out, &frames, &heads);
+            // Without a head pose the humanoid still stands at its height (three-vrm warns
+            // of a VRM Animation whose hips rest on the floor), and turns nothing.
+            let still = dir.join("still.json");
+            std::fs::write(
+                &still,
+                serde_json::json!({ "fps": 30, "blendshapes": names, "frames": frames })
+                    .to_string(),
+            )
+            .unwrap();
+            let out = dir.join("still.vrma");
+            support::export_with_clip_and(&avatar, &out, &still, &[]);
+            let played = support::vrma_played(&avatar, &out);
+            assert_eq!(
+                played["warnings"],
+                serde_json::json!([]),
+                "{}",
+                played["warnings"]
+            );
+            assert_eq!(played["humanBones"], serde_json::json!([]));
+        }
+        for (k, (look, row)) in played["lookAt"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(&frames)
+            .enumerate()
+        {
+            let value = |channel: &str| {
+                names
+                    .iter()
+                    .position(|n| *n == channel)
+                    .map_or(0.0, |c| row[c])
+            };
+            let [[ly, lp], [ry, rp]] = faceanim_rig::bones::gaze_from_arkit(value);
+            let want = [0.5 * (ly + ry), 0.5 * (lp + rp)];
+            for (axis, want) in want.into_iter().enumerate() {
+                let got = look[axis].as_f64().unwrap() as f32;
+                assert!(
+                    (got - want).abs() < 0.05,
+                    "{kind:?} gaze at key {k}: {look} for {want:?}"
+                );
+            }
+        }
+    }
+}
+
+/// `animation` (a `.vrma` of `frames` of `Fcl_MTH_A`, `ih`, `surprised`, eyeBlinkLeft and the
+/// gaze, and `heads`) opened in the studio's Capture tab on `avatar` is a take of the same
+/// expressions (`aa` for `Fcl_MTH_A`, which it binds), head pose and eyeLook values.
+fn assert_opens_again_in_the_studio(
+    avatar: &Path,
+    animation: &Path,
+    frames: &[[f32; 9]],
+    heads: &[[f32; 3]],
+) {
+    let dir = animation.with_extension("studio");
+    std::fs::create_dir_all(&dir).unwrap();
+    let _ = std::fs::remove_file(dir.join("project.json"));
+    let studio = start_on(Some(avatar), &dir.join("project.json"), &[]);
+    support::open_and_settle(studio.port, animation);
+    let (status, clip) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
+    assert_eq!(status, 200, "{clip}");
+    let clip: Value = serde_json::from_str(&clip).unwrap();
+    assert_eq!(
+        clip["frames"].as_array().unwrap().len(),
+        frames.len(),
+        "{clip}"
+    );
+    for (name, column) in [("aa", 0), ("ih", 1), ("surprised", 2)] {
+        for (k, (got, row)) in support::column(&clip, name).iter().zip(frames).enumerate() {
+            assert!(
+                (got - f64::from(row[column])).abs() < 2e-3,
+                "{name} at frame {k}: {got} for {}",
+                row[column]
+            );
+        }
+    }
+    for (k, (got, want)) in clip["head"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(heads)
+        .enumerate()
+    {
+        for axis in 0..3 {
+            let got = got[axis].as_f64().unwrap() as f32;
+            assert!(
+                (got - want[axis]).abs() < 0.1,
+                "head at frame {k}: {got} for {want:?}"
+            );
+        }
+    }
+    // Both eyes look left (out of the left, into the right) and up, as the clip's did.
+    for (shape, column) in [("eyeLookOut_L", 4), ("eyeLookIn_R", 5), ("eyeLookUp_L", 6)] {
+        for (k, (got, row)) in support::column(&clip, shape).iter().zip(frames).enumerate() {
+            assert!(
+                (got - f64::from(row[column])).abs() < 0.02,
+                "{shape} at frame {k}: {got} for {}",
+                row[column]
+            );
+        }
     }
 }
 

@@ -245,15 +245,7 @@ fn a_full_body_avatar_of_another_topology_follows_people_on_its_own_geometry() {
         let measured: Vec<[f64; 6]> = frames
             .iter()
             .step_by(every)
-            .map(|row| {
-                let w: Vec<f32> = row
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|v| v.as_f64().unwrap() as f32)
-                    .collect();
-                signals.of(&character, &w)
-            })
+            .map(|row| signals.of(&character, &support::f32s(row)))
             .collect();
         let moving = reference["moving"].as_object().unwrap();
         for (s, (what, channels)) in SIGNALS.iter().enumerate() {

@@ -322,15 +322,6 @@ fn capture_mode_refuses_bad_input_with_a_reason() {
     assert!(body.contains("keyframe_every"), "{body}");
 }
 
-/// Opens `path` in capture mode, waits for it to be read and returns the capture state.
-fn open_and_settle(port: u16, path: &std::path::Path) -> serde_json::Value {
-    let open = serde_json::json!({ "path": path }).to_string();
-    let json = [("Content-Type", "application/json")];
-    let (status, body) = request(port, "POST", "/api/capture/open", &json, open.as_bytes());
-    assert_eq!(status, 200, "{body}");
-    support::settled(port, 60)
-}
-
 #[test]
 fn a_take_and_its_corrections_survive_closing_the_studio() {
     let dir = tempfile::tempdir().unwrap();
@@ -352,7 +343,7 @@ fn a_take_and_its_corrections_survive_closing_the_studio() {
         &[],
         &[("TMPDIR", temp.as_os_str())],
     );
-    let state = open_and_settle(studio.port, &video);
+    let state = support::open_and_settle(studio.port, &video);
     assert_eq!(state["take"]["frames"], 12, "{}", state["job"]);
     // Swept before the studio answered anything.
     assert!(!left.exists(), "a killed studio's scratch folder was kept");
@@ -830,7 +821,7 @@ fn a_photos_ramp_is_shown_and_set_before_export() {
     let studio = start(&dir.path().join("photo.faceanim.json"));
     let json = [("Content-Type", "application/json")];
     let photo = faceanim_testdata::shared("images/ict-face-jawopen.png");
-    let state = open_and_settle(studio.port, &photo);
+    let state = support::open_and_settle(studio.port, &photo);
     assert_eq!(state["take"]["frames"], 1, "{}", state["job"]);
     assert_eq!(state["take"]["still"], 30);
     assert_eq!(state["take"]["ramp"].as_array().unwrap().len(), 30);
@@ -1163,7 +1154,7 @@ fn the_neutral_face_of_a_take_and_of_the_live_webcam() {
     let project = dir.path().join("neutral.faceanim.json");
     let json = [("Content-Type", "application/json")];
     let studio = start(&project);
-    let state = open_and_settle(studio.port, &video);
+    let state = support::open_and_settle(studio.port, &video);
     let neutral = &state["take"]["neutral"];
     assert_eq!(neutral["chosen"], "automatic", "{neutral}");
     assert!(neutral["frame"].as_u64().unwrap() >= 7, "{neutral}");
@@ -1520,15 +1511,7 @@ fn an_ifacialmocap_phone_is_asked_and_drives_the_studio() {
     );
     // The view's bones (rest, head, neck, upper spine, eyes, jaw): spine, neck and head share the
     // 29° turn as the export shares it, and the jaw opens with jawOpen.
-    let bone = |k: usize| {
-        let q: Vec<f32> = state["bones"][k]
-            .as_array()
-            .unwrap_or_else(|| panic!("no bones: {state}"))
-            .iter()
-            .map(|v| v.as_f64().unwrap() as f32)
-            .collect();
-        glam::Quat::from_slice(&q)
-    };
+    let bone = |k: usize| glam::Quat::from_slice(&support::f32s(&state["bones"][k]));
     let [head, neck, spine, jaw] = [1, 2, 3, 6].map(bone);
     let whole = spine * neck * head;
     let asked = glam::Quat::from_rotation_y(29f32.to_radians());

@@ -48,10 +48,10 @@ const UNSIGNED_INT: u32 = 5125;
 
 /// The binary chunk and the buffer views and accessors that describe it.
 #[derive(Default)]
-struct Bin {
-    bytes: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+pub(crate) struct Bin {
+    pub(crate) bytes: Vec<u8>,
+    pub(crate) views: Vec<Value>,
+    pub(crate) accessors: Vec<Value>,
 }
 
 impl Bin {
@@ -74,7 +74,7 @@ impl Bin {
         self.accessors.len() - 1
     }
 
-    fn floats(
+    pub(crate) fn floats(
         &mut self,
         values: &[f32],
         kind: &str,
@@ -99,7 +99,7 @@ impl Bin {
 
     /// An animation's key times (checked non-empty and increasing), with the min and max an
     /// animation sampler's input needs.
-    fn key_times(&mut self, times: &[f32]) -> usize {
+    pub(crate) fn key_times(&mut self, times: &[f32]) -> usize {
         let (first, last) = (times[0], times[times.len() - 1]);
         self.floats(times, "SCALAR", None, Some((vec![first], vec![last])))
     }
@@ -483,7 +483,7 @@ fn materials_json(character: &Character, bin: &mut Bin) -> (Vec<Value>, Vec<Valu
 }
 
 /// f32s written as the f64 of the same value, so min/max compare exactly with the data.
-fn exact(values: &[f32]) -> Value {
+pub(crate) fn exact(values: &[f32]) -> Value {
     json!(values.iter().map(|&v| f64::from(v)).collect::<Vec<f64>>())
 }
 
@@ -495,7 +495,7 @@ fn u32_bytes(values: &[u32]) -> Vec<u8> {
     values.iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
-fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, GlbError> {
+pub(crate) fn glb(root: &Value, mut bin: Vec<u8>) -> Result<Vec<u8>, GlbError> {
     let mut json = serde_json::to_vec(root).map_err(|_| GlbError::TooLarge)?;
     while json.len() % 4 != 0 {
         json.push(b' ');

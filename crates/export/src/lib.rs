@@ -43,6 +43,7 @@ pub mod glb;
 pub mod livelink;
 mod meshopt;
 pub mod reopen;
+mod vrma;
 
 use std::path::Path;
 
@@ -65,20 +66,25 @@ pub enum Format {
     SeedCsv,
     /// The session file, which `faceanim session` and the studio edit (needs a session).
     Session,
+    /// VRM Animation (`.vrma`): the animation alone, on a VRM avatar's expressions, humanoid
+    /// head and gaze, for any VRM app to play on any VRM (needs a VRM character).
+    Vrma,
 }
 
 impl Format {
     /// Every format, in the order the studio offers them.
-    pub const ALL: [Format; 5] = [
+    pub const ALL: [Format; 6] = [
         Format::Glb,
         Format::ClipJson,
         Format::LiveLinkCsv,
         Format::SeedCsv,
         Format::Session,
+        Format::Vrma,
     ];
 
     /// The format a file name asks for, by its ending: `.byoc.csv` the seed's CSV,
-    /// `.session.json` a session, `.json` a clip, `.glb` the character, `.csv` Live Link Face;
+    /// `.session.json` a session, `.json` a clip, `.glb` the character, `.csv` Live Link Face,
+    /// `.vrma` a VRM Animation;
     /// `-` (standard output) the clip.
     ///
     /// # Errors
@@ -113,6 +119,7 @@ impl Format {
             Format::LiveLinkCsv => "csv",
             Format::SeedCsv => "byoc.csv",
             Format::Session => "session.json",
+            Format::Vrma => "vrma",
         }
     }
 
@@ -131,7 +138,7 @@ impl Format {
     pub fn mime(self) -> &'static str {
         match self {
             Format::ClipJson | Format::Session => "application/json",
-            Format::Glb => "model/gltf-binary",
+            Format::Glb | Format::Vrma => "model/gltf-binary",
             Format::LiveLinkCsv | Format::SeedCsv => "text/csv",
         }
     }
@@ -140,6 +147,12 @@ impl Format {
     #[must_use]
     pub fn needs_session(self) -> bool {
         matches!(self, Format::SeedCsv | Format::Session)
+    }
+
+    /// Whether the format needs the character (the GLB and the VRM Animation).
+    #[must_use]
+    pub fn needs_character(self) -> bool {
+        matches!(self, Format::Glb | Format::Vrma)
     }
 
     /// What the format is called in messages.
@@ -151,6 +164,7 @@ impl Format {
             Format::LiveLinkCsv => "the Live Link Face CSV",
             Format::SeedCsv => "the seed's CSV",
             Format::Session => "the session file",
+            Format::Vrma => "the VRM Animation",
         }
     }
 }
@@ -277,7 +291,7 @@ pub struct Exported {
 pub enum ExportError {
     /// A file name whose ending names no format.
     #[error(
-        "{0}: the name must end in .json (clip), .glb (character with the animation), .csv (Live Link Face), .byoc.csv (the seed's CSV) or .session.json (the session)"
+        "{0}: the name must end in .json (clip), .glb (character with the animation), .csv (Live Link Face), .byoc.csv (the seed's CSV), .session.json (the session) or .vrma (VRM Animation)"
     )]
     UnknownExtension(String),
     /// The format needs a take's session and the animation has none.
@@ -295,9 +309,19 @@ pub enum ExportError {
         /// How many blendshapes the take has.
         blendshapes: usize,
     },
-    /// The GLB needs the character and the animation has none.
-    #[error("the GLB needs the character: give it with --character")]
-    NeedsCharacter,
+    /// The format needs the character and the animation has none.
+    #[error("{} needs the character: give it with --character", .0.describe())]
+    NeedsCharacter(Format),
+    /// A VRM Animation was asked for a character that is no VRM.
+    #[error(
+        "{0} is no VRM avatar: a VRM Animation (.vrma) moves a VRM's expressions and humanoid bones; give a .vrm character, or write .glb"
+    )]
+    NotVrm(String),
+    /// Nothing a VRM Animation carries moves.
+    #[error(
+        "nothing in the animation moves {0}'s VRM expressions, head or gaze: there is no VRM Animation to write"
+    )]
+    NothingToCarry(String),
     /// The clip cannot be put on the character.
     #[error(transparent)]
     Clip(#[from] faceanim_anim::ClipError),
@@ -331,8 +355,10 @@ pub fn export_with(
         Format::Glb => {
             // Gaze and jaw for the bones, from the capture's own ARKit values when there are
             // any, else from the frames by their names' ARKit meaning.
-            let keys = bones::BoneKeys::of_take(&animation.clip, animation.arkit.as_ref());
-            let character = animation.character.ok_or(ExportError::NeedsCharacter)?;
+            let keys = animation.bone_keys();
+            let character = animation
+                .character
+                .ok_or(ExportError::NeedsCharacter(format))?;
             let bytes = match character.source() {
                 Some(source) => {
                     if source.meshopt() && compression == glb::Compression::AsRead {
@@ -362,6 +388,7 @@ pub fn export_with(
         }
         Format::SeedCsv => session(format, animation)?.to_seed_csv().into_bytes(),
         Format::Session => session(format, animation)?.to_json().into_bytes(),
+        Format::Vrma => vrma::vrma(animation, &mut notes)?,
     };
     Ok(Exported { bytes, notes })
 }
@@ -402,6 +429,16 @@ pub fn view_glb(
         animation.map(std::slice::from_ref).unwrap_or_default(),
         bones::ViewRig::of(character).as_ref(),
     )?)
+}
+
+impl Animation<'_> {
+    /// What the eyes and the jaw do ([`Animation::bones`]; where not given, from the capture's
+    /// own ARKit values, else from the frames by their names' ARKit meaning).
+    pub(crate) fn bone_keys(&self) -> bones::BoneKeys {
+        self.bones
+            .clone()
+            .unwrap_or_else(|| bones::BoneKeys::of_take(&self.clip, self.arkit.as_ref()))
+    }
 }
 
 fn session<'a>(format: Format, animation: &Animation<'a>) -> Result<&'a Session, ExportError> {
@@ -489,7 +526,7 @@ mod tests {
     }
 
     #[test]
-    fn a_clip_leaves_in_every_format_that_needs_no_session() {
+    fn a_clip_leaves_in_every_format_that_needs_no_session_or_a_vrm() {
         let character = faceanim_head::default_character();
         let clip = Clip {
             fps: 24.0,
@@ -506,6 +543,12 @@ mod tests {
             let result = export(format, &animation);
             if format.needs_session() {
                 assert_eq!(result, Err(ExportError::NeedsSession(format)));
+            } else if format == Format::Vrma {
+                // The built-in head is no VRM: a VRM Animation moves a VRM's expressions.
+                assert!(
+                    matches!(&result, Err(ExportError::NotVrm(name)) if name == character.name()),
+                    "{result:?}"
+                );
             } else {
                 let exported = result.unwrap_or_else(|e| panic!("{format:?}: {e}"));
                 assert!(!exported.bytes.is_empty() && exported.notes.is_empty());

@@ -1,7 +1,7 @@
 //! What faceanim writes opens again: a GLB or VRM with a morph-weight animation (an export, or
-//! a file animated in another tool) and a Live Link Face CSV read back as a [`Clip`] by name,
-//! ready to be a take on any character whose blendshapes answer to those names. (Clip JSON and
-//! session files are read by their own crates.)
+//! a file animated in another tool), a VRM Animation (`.vrma`) and a Live Link Face CSV read
+//! back as a [`Clip`] by name, ready to be a take on any character whose blendshapes answer to
+//! those names. (Clip JSON and session files are read by their own crates.)
 //!
 //! ```
 //! use faceanim_export::{Animation, Format, export, reopen};
@@ -24,7 +24,7 @@
 //! ```
 
 use faceanim_anim::Clip;
-use faceanim_rig::import::{ImportError, NoExternalResources, import_gltf};
+use faceanim_rig::import::{ImportError, NoExternalResources, VrmaTake, import_gltf, import_vrma};
 
 /// A file read back as a clip.
 #[derive(Debug, Clone, PartialEq)]
@@ -43,7 +43,7 @@ pub struct Reopened {
 pub enum ReopenError {
     /// An ending that is no take's.
     #[error(
-        "{0}: a take opens from .glb, .vrm or .gltf (its animation), .csv (Live Link Face) or .json (a clip or a session)"
+        "{0}: a take opens from .glb, .vrm or .gltf (its animation), .vrma (VRM Animation), .csv (Live Link Face) or .json (a clip or a session)"
     )]
     UnknownExtension(String),
     /// The glTF could not be read.
@@ -67,7 +67,7 @@ pub enum ReopenError {
 /// Whether a file named `name` is one [`clip_of_file`] reads.
 #[must_use]
 pub fn reads(name: &str) -> bool {
-    extension(name).is_some_and(|e| ["glb", "vrm", "gltf", "csv"].contains(&e.as_str()))
+    extension(name).is_some_and(|e| ["glb", "vrm", "gltf", "csv", "vrma"].contains(&e.as_str()))
 }
 
 fn extension(name: &str) -> Option<String> {
@@ -139,8 +139,8 @@ pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
 }
 
 /// Reads `bytes` (the file `name`) as a clip: a glTF's morph-weight animation (the last one
-/// faceanim wrote, else its first) played at its keys' rate on its own blendshapes' names, or
-/// a Live Link Face CSV.
+/// faceanim wrote, else its first) played at its keys' rate on its own blendshapes' names, a
+/// VRM Animation on its expressions' names, or a Live Link Face CSV.
 ///
 /// # Errors
 /// A [`ReopenError`] naming the file.
@@ -151,6 +151,7 @@ pub fn clip_of_file(name: &str, bytes: &[u8]) -> Result<Reopened, ReopenError> {
             animation_of(&imported.character)
                 .ok_or_else(|| ReopenError::NoAnimation(name.to_owned()))
         }
+        Some("vrma") => Ok(vrma_clip(import_vrma(bytes, name)?)),
         Some("csv") => {
             let text = String::from_utf8_lossy(bytes);
             let clip = crate::livelink::from_csv(&text).map_err(|source| ReopenError::Csv {
@@ -170,5 +171,50 @@ pub fn clip_of_file(name: &str, bytes: &[u8]) -> Result<Reopened, ReopenError> {
             })
         }
         _ => Err(ReopenError::UnknownExtension(name.to_owned())),
+    }
+}
+
+/// A VRM Animation as a clip: its expressions by name (a VRM avatar's expressions are
+/// blendshapes of the character by those names), the gaze as ARKit's eyeLook values, the head
+/// pose.
+fn vrma_clip(take: VrmaTake) -> Reopened {
+    let VrmaTake {
+        name,
+        fps,
+        mut expressions,
+        mut frames,
+        head,
+        gaze,
+    } = take;
+    if let Some(gaze) = &gaze {
+        let looks = |k: usize| {
+            let [yaw, pitch] = gaze[k.min(gaze.len().saturating_sub(1))];
+            faceanim_rig::bones::arkit_from_gaze([[yaw, pitch]; 2])
+        };
+        expressions.extend(looks(0).iter().map(|(n, _)| (*n).to_owned()));
+        for (k, row) in frames.iter_mut().enumerate() {
+            row.extend(looks(k).iter().map(|(_, v)| *v));
+        }
+    }
+    let seconds = frames.len().saturating_sub(1) as f32 / fps;
+    Reopened {
+        what: format!(
+            "VRM Animation '{}' ({seconds:.2} s at {fps} fps)",
+            faceanim_rig::excerpt(&name)
+        ),
+        name,
+        clip: Clip {
+            fps,
+            blendshapes: expressions,
+            frames,
+            head: head.map(|turns| {
+                turns
+                    .into_iter()
+                    .map(|q| faceanim_anim::head_angles(q).unwrap_or([0.0; 3]))
+                    .collect()
+            }),
+            head_position: None,
+            presence: None,
+        },
     }
 }

@@ -470,20 +470,34 @@ fn index(v: &Value) -> Option<usize> {
 
 /// A VRM humanoid bone's node (1.0, then 0.x).
 fn vrm_bone(doc: &Value, bone: &str) -> Option<usize> {
-    if let Some(n) = doc
-        .pointer(&format!(
-            "/extensions/VRMC_vrm/humanoid/humanBones/{bone}/node"
-        ))
-        .and_then(index)
+    vrm_humanoid(doc)
+        .into_iter()
+        .find(|(name, _)| name == bone)
+        .map(|(_, node)| node)
+}
+
+/// A VRM's humanoid bones (`hips`, `head`, `leftEye`, …) and their nodes: VRM 1.0's
+/// `humanoid.humanBones` map, else VRM 0.x's list; empty for a file that is no VRM.
+#[must_use]
+pub fn vrm_humanoid(doc: &Value) -> Vec<(String, usize)> {
+    if let Some(bones) = doc
+        .pointer("/extensions/VRMC_vrm/humanoid/humanBones")
+        .and_then(Value::as_object)
     {
-        return Some(n);
+        return bones
+            .iter()
+            .filter_map(|(name, bone)| Some((name.clone(), index(bone.get("node")?)?)))
+            .collect();
     }
     doc.pointer("/extensions/VRM/humanoid/humanBones")
-        .and_then(Value::as_array)?
-        .iter()
-        .find(|b| b.get("bone").and_then(Value::as_str) == Some(bone))
-        .and_then(|b| b.get("node"))
-        .and_then(index)
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+        .filter_map(|bone| {
+            let name = bone.get("bone").and_then(Value::as_str)?;
+            Some((name.to_owned(), index(bone.get("node")?)?))
+        })
+        .collect()
 }
 
 /// A skin joint whose name ends in "head", lowest index first.

@@ -34,7 +34,7 @@ pub const STROKES_KEY: &str = "strokes";
 /// The rate an animation plays at when its keys keep no steady one.
 pub const DEFAULT_FPS: f32 = 30.0;
 /// The longest animation played back: one hour.
-const MAX_SECONDS: f32 = 3600.0;
+pub(crate) const MAX_SECONDS: f32 = 3600.0;
 
 /// How a sampler goes from key to key (glTF's `interpolation`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -146,12 +146,33 @@ impl WeightsTrack {
 
     /// The most common step between keys, seconds.
     fn step(&self) -> Option<f32> {
-        let mut steps: Vec<f32> = self.times.windows(2).map(|w| w[1] - w[0]).collect();
-        if steps.is_empty() {
-            return None;
-        }
-        steps.sort_unstable_by(f32::total_cmp);
-        Some(steps[steps.len() / 2])
+        median_step(&self.times)
+    }
+}
+
+/// The middle step between keys `times`, `None` for fewer than two.
+pub(crate) fn median_step(times: &[f32]) -> Option<f32> {
+    let mut steps: Vec<f32> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        return None;
+    }
+    steps.sort_unstable_by(f32::total_cmp);
+    Some(steps[steps.len() / 2])
+}
+
+/// The rate keys a `step` apart were written at: a whole number of frames a second from 24 to
+/// 240 (one key per frame), else [`DEFAULT_FPS`] (keys set by hand, further apart, are played
+/// between).
+pub(crate) fn rate_of(step: Option<f32>) -> f32 {
+    let Some(step) = step else {
+        return DEFAULT_FPS;
+    };
+    let rate = 1.0 / step;
+    let whole = rate.round();
+    if (24.0..=240.0).contains(&whole) && (rate - whole).abs() < 0.01 * whole {
+        whole
+    } else {
+        DEFAULT_FPS
     }
 }
 
@@ -324,21 +345,12 @@ impl FileAnimation {
     /// per frame), else [`DEFAULT_FPS`] (keys set by hand, further apart, are played between).
     #[must_use]
     pub fn fps(&self) -> f32 {
-        let Some(step) = self
-            .tracks
-            .iter()
-            .max_by_key(|t| t.times.len())
-            .and_then(WeightsTrack::step)
-        else {
-            return DEFAULT_FPS;
-        };
-        let rate = 1.0 / step;
-        let whole = rate.round();
-        if (24.0..=240.0).contains(&whole) && (rate - whole).abs() < 0.01 * whole {
-            whole
-        } else {
-            DEFAULT_FPS
-        }
+        rate_of(
+            self.tracks
+                .iter()
+                .max_by_key(|t| t.times.len())
+                .and_then(WeightsTrack::step),
+        )
     }
 
     /// Its first key's time, seconds (Blender writes frame 1 at 1/fps).

@@ -61,6 +61,19 @@ impl std::fmt::Debug for GltfSource {
     }
 }
 
+/// A VRM expression of the user's file ([`GltfSource::vrm_expressions`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VrmExpression {
+    /// Its name: a preset's in VRM 1.0's spelling (`aa`, `blinkLeft`, `happy`; VRM 0.x's `a`,
+    /// `blink_l`, `joy` are read so), a custom one's as the file names it.
+    pub name: String,
+    /// Whether it is named as one of VRM 1.0's presets (in either version: a VRM 0.x custom
+    /// `surprised` is VRM 1.0's preset; a custom expression may not take a preset's name).
+    pub preset: bool,
+    /// The morph targets it binds, each with its weight (0–1).
+    pub binds: Vec<Binding>,
+}
+
 /// Which of a file's blendshapes `faceanim generate-shapes` made, and from which template: kept
 /// in the file itself, as `asset.extras.faceanim.generated` (`{"shapes": [...], "template":
 /// "..."}`), so that every tool that reads the file back can say so.
@@ -156,6 +169,31 @@ impl GltfSource {
     #[must_use]
     pub fn gaze(&self) -> crate::bones::Gaze {
         crate::bones::gaze(&self.document)
+    }
+
+    /// The VRM's expressions (presets named in VRM 1.0's spelling in either version), each with
+    /// the morph targets it binds; empty for a file that is no VRM. Those that bind no morph
+    /// target (material or bone ones) are kept, with no bindings.
+    #[must_use]
+    pub fn vrm_expressions(&self) -> Vec<VrmExpression> {
+        crate::import::vrm::read(&self.document, &mut Vec::new())
+            .map(|vrm| vrm.expressions)
+            .unwrap_or_default()
+            .into_iter()
+            .map(|e| VrmExpression {
+                name: e.name,
+                preset: e.preset,
+                binds: e
+                    .binds
+                    .iter()
+                    .map(|b| Binding {
+                        mesh: b.mesh as u32,
+                        target: b.target as u32,
+                        weight: b.weight,
+                    })
+                    .collect(),
+            })
+            .collect()
     }
 
     /// Whether the file is a VRM (0.x or 1.0).

@@ -70,6 +70,10 @@ pub fn router(both: Both, port: u16) -> Router {
             .route(
                 "/api/export.csv",
                 get(|s: State<Shared>| export(s, Format::LiveLinkCsv)),
+            )
+            .route(
+                "/api/export.vrma",
+                get(|s: State<Shared>| export(s, Format::Vrma)),
             ),
         JSON_LIMIT,
     )

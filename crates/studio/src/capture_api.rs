@@ -47,12 +47,13 @@ impl Both {
 }
 
 /// Where the page downloads the take in each format.
-const EXPORTS: [(&str, Format); 5] = [
+const EXPORTS: [(&str, Format); 6] = [
     ("/api/capture/session.json", Format::Session),
     ("/api/capture/export.glb", Format::Glb),
     ("/api/capture/export.json", Format::ClipJson),
     ("/api/capture/export.csv", Format::LiveLinkCsv),
     ("/api/capture/export.byoc.csv", Format::SeedCsv),
+    ("/api/capture/export.vrma", Format::Vrma),
 ];
 
 pub fn router(both: Both) -> Router {

@@ -121,6 +121,11 @@ impl ApiError {
                 | faceanim_fit::FitError::AlreadyHas { .. },
             ) => StatusCode::UNPROCESSABLE_ENTITY,
             ApiError::Busy(_) => StatusCode::CONFLICT,
+            // A VRM Animation asked of a character that is no VRM, or of nothing it carries.
+            ApiError::Export(
+                faceanim_export::ExportError::NotVrm(_)
+                | faceanim_export::ExportError::NothingToCarry(_),
+            ) => StatusCode::BAD_REQUEST,
             ApiError::Disk(_)
             | ApiError::Scratch { .. }
             | ApiError::Bake(_)

@@ -237,6 +237,8 @@ pub struct CharacterView {
     /// The shapes `faceanim generate-shapes` made, as its file records them, and the template.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub generated: Option<GeneratedShapesView>,
+    /// Whether it is a VRM avatar (0.x or 1.0): its animation also leaves as a VRM Animation.
+    pub vrm: bool,
 }
 
 /// Shapes a character's file records as generated.
@@ -279,6 +281,9 @@ impl CharacterView {
                     count: g.shapes.len(),
                     template: g.template,
                 }),
+            vrm: character
+                .source()
+                .is_some_and(faceanim_rig::source::GltfSource::is_vrm),
         }
     }
 }

@@ -277,7 +277,9 @@ pub fn with_vrm(glb: &[u8], kind: VrmKind) -> Vec<u8> {
             for (name, v0, key) in BLENDER_AVATAR_EXPRESSIONS {
                 let expression = json!({ "morphTargetBinds": [{ "node": face_node, "index": target(key), "weight": 1.0 }],
                                          "isBinary": false });
-                if *v0 == "unknown" {
+                // VRM 0.x has no `surprised` preset; VRM 1.0 has, and a custom expression may
+                // not take a preset's name.
+                if *v0 == "unknown" && !VRM1_PRESETS.contains(name) {
                     custom.insert((*name).to_owned(), expression);
                 } else {
                     preset.insert((*name).to_owned(), expression);
@@ -292,6 +294,99 @@ pub fn with_vrm(glb: &[u8], kind: VrmKind) -> Vec<u8> {
             });
             push_used(&mut root, "VRMC_vrm");
         }
+    }
+    crate::glb::assemble(&root, &bin)
+}
+
+/// VRM 1.0's preset expressions the Blender avatar's expressions use.
+const VRM1_PRESETS: [&str; 13] = [
+    "aa",
+    "ih",
+    "ou",
+    "ee",
+    "oh",
+    "blink",
+    "blinkLeft",
+    "blinkRight",
+    "happy",
+    "angry",
+    "sad",
+    "relaxed",
+    "surprised",
+];
+
+/// `vrm` (from [`with_vrm`]) completed as VRM players need it: the humanoid bones VRM requires
+/// and the avatar lacks (its arms, lower legs and feet: the Blender avatar has none) added as
+/// bare nodes under their parent bones and named in the humanoid, so that a player that checks
+/// the humanoid, as three-vrm does, loads it; and a VRM 1.0's `lookAt` (bone, the
+/// specification's default range maps), which UniVRM always writes. The nodes move nothing.
+///
+/// # Panics
+/// When `vrm` has no VRM humanoid.
+#[must_use]
+#[expect(
+    clippy::expect_used,
+    reason = "test support: the avatar was made a VRM by with_vrm"
+)]
+pub fn complete_vrm(vrm: &[u8]) -> Vec<u8> {
+    let (mut root, bin) = crate::glb::parts(vrm);
+    // Each required bone, its parent bone and its offset from it (metres, the parent's space).
+    let required: [(&str, &str, [f64; 3]); 10] = [
+        ("leftUpperArm", "chest", [0.2, 0.1, 0.0]),
+        ("leftLowerArm", "leftUpperArm", [0.0, 0.25, 0.0]),
+        ("leftHand", "leftLowerArm", [0.0, 0.25, 0.0]),
+        ("rightUpperArm", "chest", [-0.2, 0.1, 0.0]),
+        ("rightLowerArm", "rightUpperArm", [0.0, 0.25, 0.0]),
+        ("rightHand", "rightLowerArm", [0.0, 0.25, 0.0]),
+        ("leftLowerLeg", "leftUpperLeg", [0.0, 0.4, 0.0]),
+        ("leftFoot", "leftLowerLeg", [0.0, 0.4, 0.0]),
+        ("rightLowerLeg", "rightUpperLeg", [0.0, 0.4, 0.0]),
+        ("rightFoot", "rightLowerLeg", [0.0, 0.4, 0.0]),
+    ];
+    let v1 = root.pointer("/extensions/VRMC_vrm").is_some();
+    let node_of = |root: &Value, bone: &str| -> usize {
+        let found = if v1 {
+            root.pointer(&format!(
+                "/extensions/VRMC_vrm/humanoid/humanBones/{bone}/node"
+            ))
+            .and_then(Value::as_u64)
+        } else {
+            root.pointer("/extensions/VRM/humanoid/humanBones")
+                .and_then(Value::as_array)
+                .and_then(|b| b.iter().find(|b| b["bone"] == bone))
+                .and_then(|b| b["node"].as_u64())
+        };
+        found.expect("the parent bone is in the humanoid") as usize
+    };
+    for (bone, parent, offset) in required {
+        let parent = node_of(&root, parent);
+        let nodes = root["nodes"].as_array_mut().expect("the file has nodes");
+        nodes.push(json!({ "name": bone, "translation": offset }));
+        let node = nodes.len() - 1;
+        if !nodes[parent]["children"].is_array() {
+            nodes[parent]["children"] = json!([]);
+        }
+        nodes[parent]["children"]
+            .as_array_mut()
+            .expect("children")
+            .push(json!(node));
+        if v1 {
+            root["extensions"]["VRMC_vrm"]["humanoid"]["humanBones"][bone] =
+                json!({ "node": node });
+        } else {
+            root["extensions"]["VRM"]["humanoid"]["humanBones"]
+                .as_array_mut()
+                .expect("a VRM 0.x humanoid")
+                .push(json!({ "bone": bone, "node": node, "useDefaultValues": true }));
+        }
+    }
+    if v1 {
+        let range = json!({ "inputMaxValue": 90.0, "outputScale": 10.0 });
+        root["extensions"]["VRMC_vrm"]["lookAt"] = json!({
+            "offsetFromHeadBone": [0.0, 0.06, 0.0], "type": "bone",
+            "rangeMapHorizontalInner": range, "rangeMapHorizontalOuter": range,
+            "rangeMapVerticalDown": range, "rangeMapVerticalUp": range
+        });
     }
     crate::glb::assemble(&root, &bin)
 }

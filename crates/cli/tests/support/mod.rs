@@ -188,6 +188,16 @@ pub fn faceanim_ok(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
+/// A JSON array of numbers as `f32`s (a quaternion, a frame's weights).
+pub fn f32s(value: &serde_json::Value) -> Vec<f32> {
+    value
+        .as_array()
+        .unwrap_or_else(|| panic!("not an array: {value}"))
+        .iter()
+        .map(|v| v.as_f64().unwrap() as f32)
+        .collect()
+}
+
 /// The values of channel `name` in every frame of clip JSON `clip`.
 pub fn column(clip: &serde_json::Value, name: &str) -> Vec<f64> {
     let names = clip["blendshapes"].as_array().unwrap();
@@ -222,8 +232,9 @@ pub fn export_with_clip(character: &Path, out: &Path, clip: &Path) {
     export_with_clip_and(character, out, clip, &[]);
 }
 
-/// [`export_with_clip`] with `more` arguments (`--uncompressed`).
-pub fn export_with_clip_and(character: &Path, out: &Path, clip: &Path, more: &[&str]) {
+/// [`export_with_clip`] with `more` arguments (`--uncompressed`); returns what it said (its
+/// notes, on standard error).
+pub fn export_with_clip_and(character: &Path, out: &Path, clip: &Path, more: &[&str]) -> String {
     let mut args = vec![
         "export",
         character.to_str().unwrap(),
@@ -233,7 +244,8 @@ pub fn export_with_clip_and(character: &Path, out: &Path, clip: &Path, more: &[&
         clip.to_str().unwrap(),
     ];
     args.extend_from_slice(more);
-    faceanim_ok(&args);
+    let out = succeeded(&format!("faceanim {args:?}"), faceanim(&args));
+    String::from_utf8(out.stderr).unwrap()
 }
 
 /// `faceanim track INPUT --character CHARACTER [MORE…] -o OUT`, which must succeed; returns the
@@ -268,6 +280,29 @@ pub fn threejs_render(file: &Path, time: &str) -> serde_json::Value {
     let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     assert!(report.get("pageErrors").is_none(), "{report}");
     report
+}
+
+/// Opens `path` in the studio's capture mode, waits for it to be read and returns the capture
+/// state.
+pub fn open_and_settle(port: u16, path: &Path) -> serde_json::Value {
+    let open = serde_json::json!({ "path": path }).to_string();
+    let json = [("Content-Type", "application/json")];
+    let (status, body) = request(port, "POST", "/api/capture/open", &json, open.as_bytes());
+    assert_eq!(status, 200, "{body}");
+    settled(port, 60)
+}
+
+/// Plays VRM Animation `animation` on VRM `avatar` with pixiv's three-vrm and
+/// three-vrm-animation (`tools/vrma-play.mjs`) and returns what the avatar does at each key.
+pub fn vrma_played(avatar: &Path, animation: &Path) -> serde_json::Value {
+    let run = Command::new("node")
+        .arg(repo().join("tools/vrma-play.mjs"))
+        .arg(avatar)
+        .arg(animation)
+        .output()
+        .expect("node is needed for this test");
+    let run = succeeded("vrma-play.mjs", run);
+    serde_json::from_slice(&run.stdout).unwrap()
 }
 
 /// Checks a [`threejs_render`] report of a full-body avatar: at least `skinned` skinned meshes,

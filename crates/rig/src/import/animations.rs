@@ -106,7 +106,7 @@ pub(super) fn read(
 }
 
 /// A sampler's key times and its values (`dimensions` each).
-fn keys(
+pub(super) fn keys(
     buffers: &Buffers<'_>,
     sampler: &gltf::animation::Sampler<'_>,
     dimensions: Dimensions,
@@ -119,7 +119,7 @@ fn keys(
 }
 
 /// How `sampler` goes from key to key.
-fn interpolation(sampler: &gltf::animation::Sampler<'_>) -> Interpolation {
+pub(super) fn interpolation(sampler: &gltf::animation::Sampler<'_>) -> Interpolation {
     match sampler.interpolation() {
         GltfInterpolation::Step => Interpolation::Step,
         GltfInterpolation::Linear => Interpolation::Linear,

@@ -117,6 +117,7 @@ pub(crate) fn prepare<'a>(
     resolve_texture_sources(&mut value);
     let uv_transforms = uv_transforms(&value);
     let vrm = super::vrm::read(&value, &mut warnings);
+    unread_channels_dropped(&mut value, &mut warnings);
     // What is handled here must not reach the `gltf` crate's extension check.
     drop_extensions(&mut value, |name| UNDERSTOOD.contains(&name));
     // A value of the wrong type is named by its path (`meshes[0].primitives[1].indices`).
@@ -225,6 +226,51 @@ fn keep(
         name == "EXT_meshopt_compression" || name == "KHR_meshopt_compression"
     });
     (doc, bin)
+}
+
+/// The animation target paths glTF 2.0 defines.
+const PATHS: [&str; 4] = ["translation", "rotation", "scale", "weights"];
+
+/// Leaves out of what is read (the file kept to write back keeps them) the animation channels
+/// the `gltf` crate cannot read, each with a warning naming it: a target path glTF 2.0 does not
+/// define (`pointer`, by which `KHR_animation_pointer` animates materials and lights, as
+/// Blender 4 exports them; a misspelt one) or a target node the file does not have. That crate
+/// checks neither and answers such a channel's path or node by panicking.
+fn unread_channels_dropped(value: &mut Value, warnings: &mut Vec<String>) {
+    let nodes = value
+        .get("nodes")
+        .and_then(Value::as_array)
+        .map_or(0, Vec::len);
+    let Some(animations) = value.get_mut("animations").and_then(Value::as_array_mut) else {
+        return;
+    };
+    for (a, animation) in animations.iter_mut().enumerate() {
+        let Some(channels) = animation.get_mut("channels").and_then(Value::as_array_mut) else {
+            continue;
+        };
+        let mut c = 0;
+        channels.retain(|channel| {
+            let at = c;
+            c += 1;
+            let path = channel.pointer("/target/path").and_then(Value::as_str);
+            let node = channel.pointer("/target/node").and_then(Value::as_u64);
+            let why = match (path, node) {
+                (Some(p), _) if !PATHS.contains(&p) => {
+                    Some(format!("it animates '{p}', which faceanim does not read"))
+                }
+                (Some(_), Some(n)) if n >= nodes as u64 => Some(format!(
+                    "it animates node {n}, which the file does not have"
+                )),
+                (Some(_), None) => Some("it names no node".to_owned()),
+                // A path that is no string: the gltf crate's own check names it.
+                _ => None,
+            };
+            if let Some(why) = &why {
+                warnings.push(format!("animations[{a}].channels[{at}]: {why}; left out"));
+            }
+            why.is_none()
+        });
+    }
 }
 
 /// Takes the extensions `drop` says from `extensionsRequired` and `extensionsUsed`, removing a

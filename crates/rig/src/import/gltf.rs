@@ -135,7 +135,7 @@ fn check_embedded_images(root: &gltf::json::Root) -> Result<(), ImportErrorKind>
 }
 
 /// Splits a GLB into its JSON and BIN chunks, or returns glTF JSON as it is.
-fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKind> {
+pub(super) fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ImportErrorKind> {
     if bytes.len() >= 4 && &bytes[..4] == GLB_MAGIC {
         let word = |at: usize| -> Result<u32, ImportErrorKind> {
             bytes
@@ -1069,15 +1069,21 @@ fn check_finite(values: &[f32], components: usize, what: &str) -> Result<(), Imp
     }
 }
 
-/// World matrix of every node (parents first), rejecting cycles and non-finite transforms.
-fn world_matrices(doc: &gltf::Document) -> Result<Vec<Mat4>, ImportErrorKind> {
-    let count = doc.nodes().len();
-    let mut parent = vec![None; count];
+/// Each node's parent, from the nodes' children.
+pub(super) fn node_parents(doc: &gltf::Document) -> Vec<Option<usize>> {
+    let mut parent = vec![None; doc.nodes().len()];
     for node in doc.nodes() {
         for child in node.children() {
             parent[child.index()] = Some(node.index());
         }
     }
+    parent
+}
+
+/// World matrix of every node (parents first), rejecting cycles and non-finite transforms.
+pub(super) fn world_matrices(doc: &gltf::Document) -> Result<Vec<Mat4>, ImportErrorKind> {
+    let count = doc.nodes().len();
+    let parent = node_parents(doc);
     let local: Vec<Mat4> = doc
         .nodes()
         .map(|n| Mat4::from_cols_array_2d(&n.transform().matrix()))

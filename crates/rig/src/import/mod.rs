@@ -15,10 +15,12 @@ mod gltf;
 mod obj;
 mod types;
 mod uri;
-mod vrm;
+pub(crate) mod vrm;
+mod vrma;
 
 pub use self::gltf::import_gltf;
 pub use self::obj::{ObjSource, import_obj_set};
+pub use self::vrma::{VrmaTake, import_vrma};
 
 pub use self::types::{
     ImportError, ImportErrorKind, Imported, MAX_BLENDSHAPES, MAX_TRIANGLES, MAX_VERTICES,

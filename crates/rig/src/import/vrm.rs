@@ -36,7 +36,20 @@ pub(crate) struct Bind {
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Expression {
     pub name: String,
+    /// Named as one of VRM 1.0's presets (a custom expression may not be).
+    pub preset: bool,
     pub binds: Vec<Bind>,
+}
+
+impl Expression {
+    /// `name` binding `binds`, a preset where VRM 1.0 names one so.
+    fn new(name: String, binds: Vec<Bind>) -> Expression {
+        Expression {
+            preset: is_preset(&name),
+            name,
+            binds,
+        }
+    }
 }
 
 /// What faceanim reads of a VRM file.
@@ -68,6 +81,11 @@ const V0_PRESETS: &[(&str, &str)] = &[
     ("neutral", "neutral"),
 ];
 
+/// Whether `name` is one of VRM 1.0's preset expressions (which a custom one may not be named).
+fn is_preset(name: &str) -> bool {
+    V0_PRESETS.iter().any(|(_, v1)| *v1 == name)
+}
+
 /// Reads the VRM extension of a glTF JSON, if there is one.
 pub(crate) fn read(value: &Value, warnings: &mut Vec<String>) -> Option<Vrm> {
     let extensions = value.get("extensions");
@@ -94,13 +112,14 @@ fn mesh_target_count(value: &Value, mesh: usize) -> Option<usize> {
 /// the raw morph targets still import.
 fn checked_bind(
     value: &Value,
+    bind: &Value,
     mesh: Option<usize>,
-    target: Option<usize>,
-    weight: Option<f64>,
     scale: f64,
     at: &str,
     warnings: &mut Vec<String>,
 ) -> Option<Bind> {
+    let target = as_index(bind.get("index"));
+    let weight = bind.get("weight").and_then(Value::as_f64);
     let (Some(mesh), Some(target)) = (mesh, target) else {
         warnings.push(format!(
             "{at}: a binding without its mesh and index was skipped"
@@ -120,6 +139,16 @@ fn checked_bind(
         target,
         weight,
     })
+}
+
+/// The items of the array `key` of `value` (none where it is missing or no array), numbered.
+fn items<'a>(value: &'a Value, key: &str) -> impl Iterator<Item = (usize, &'a Value)> {
+    value
+        .get(key)
+        .and_then(Value::as_array)
+        .map_or(&[][..], Vec::as_slice)
+        .iter()
+        .enumerate()
 }
 
 fn as_index(v: Option<&Value>) -> Option<usize> {
@@ -145,25 +174,20 @@ fn read_v0(value: &Value, vrm: &Value, warnings: &mut Vec<String>) -> Vrm {
             .map(|(_, v1)| (*v1).to_owned())
             .or_else(|| group.get("name").and_then(Value::as_str).map(str::to_owned))
             .unwrap_or_else(|| format!("expression_{g}"));
-        let binds: Vec<Bind> = group
-            .get("binds")
-            .and_then(Value::as_array)
-            .map_or(&[][..], Vec::as_slice)
-            .iter()
-            .enumerate()
+        let binds: Vec<Bind> = items(group, "binds")
             .filter_map(|(b, bind)| {
+                let at = format!("{at}.binds[{b}]");
                 checked_bind(
                     value,
+                    bind,
                     as_index(bind.get("mesh")),
-                    as_index(bind.get("index")),
-                    bind.get("weight").and_then(Value::as_f64),
                     100.0,
-                    &format!("{at}.binds[{b}]"),
+                    &at,
                     warnings,
                 )
             })
             .collect();
-        expressions.push(Expression { name, binds });
+        expressions.push(Expression::new(name, binds));
     }
     Vrm {
         version: Version::V0,
@@ -182,12 +206,7 @@ fn read_v1(value: &Value, vrm: &Value, warnings: &mut Vec<String>) -> Vrm {
         };
         for (name, expression) in map {
             let at = format!("extensions.VRMC_vrm.expressions.{kind}.{name}");
-            let binds = expression
-                .get("morphTargetBinds")
-                .and_then(Value::as_array)
-                .map_or(&[][..], Vec::as_slice)
-                .iter()
-                .enumerate()
+            let binds = items(expression, "morphTargetBinds")
                 .filter_map(|(b, bind)| {
                     let node = as_index(bind.get("node"));
                     let mesh =
@@ -199,21 +218,11 @@ fn read_v1(value: &Value, vrm: &Value, warnings: &mut Vec<String>) -> Vrm {
                         ));
                         return None;
                     }
-                    checked_bind(
-                        value,
-                        mesh,
-                        as_index(bind.get("index")),
-                        bind.get("weight").and_then(Value::as_f64),
-                        1.0,
-                        &format!("{at}.morphTargetBinds[{b}]"),
-                        warnings,
-                    )
+                    let at = format!("{at}.morphTargetBinds[{b}]");
+                    checked_bind(value, bind, mesh, 1.0, &at, warnings)
                 })
                 .collect();
-            expressions.push(Expression {
-                name: name.clone(),
-                binds,
-            });
+            expressions.push(Expression::new(name.clone(), binds));
         }
     }
     Vrm {

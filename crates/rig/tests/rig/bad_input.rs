@@ -69,6 +69,54 @@ fn truncated() {
     );
 }
 
+/// Channels the glTF crate cannot read — a material animated through `KHR_animation_pointer`
+/// (path `pointer`, as Blender 4 exports it), a misspelt path, a node the file does not have —
+/// are left out with a warning each: the head and its other channels still read (the glTF
+/// crate panicked on such a channel).
+#[test]
+fn animation_channels_of_unknown_paths_are_left_out_with_a_warning() {
+    let bytes = tiny(|root, b| {
+        let times = b.raw(
+            &[0.0f32, 1.0].map(f32::to_le_bytes).concat(),
+            5126,
+            2,
+            "SCALAR",
+        );
+        b.accessors[times]["min"] = json!([0.0]);
+        b.accessors[times]["max"] = json!([1.0]);
+        let weights = b.raw(
+            &[0.0f32; 6].map(f32::to_le_bytes).concat(),
+            5126,
+            6,
+            "SCALAR",
+        );
+        let colour = b.raw(&[1.0f32; 8].map(f32::to_le_bytes).concat(), 5126, 2, "VEC4");
+        root["extensionsUsed"] = json!(["KHR_animation_pointer"]);
+        root["animations"] = json!([{ "name": "take", "samplers": [
+            { "input": times, "output": weights },
+            { "input": times, "output": colour }
+        ], "channels": [
+            { "sampler": 1, "target": { "path": "pointer", "extensions": { "KHR_animation_pointer":
+                { "pointer": "/materials/0/pbrMetallicRoughness/baseColorFactor" } } } },
+            { "sampler": 0, "target": { "node": 0, "path": "weightz" } },
+            { "sampler": 0, "target": { "node": 9, "path": "weights" } },
+            { "sampler": 0, "target": { "node": 0, "path": "weights" } }
+        ] }]);
+    });
+    let imported = import_gltf(&bytes, "pointer.glb", &NoExternalResources).unwrap();
+    let said = imported.warnings.join("\n");
+    for expected in [
+        "animations[0].channels[0]: it animates 'pointer'",
+        "animations[0].channels[1]: it animates 'weightz'",
+        "animations[0].channels[2]: it animates node 9, which the file does not have",
+    ] {
+        assert!(said.contains(expected), "{said}");
+    }
+    assert_eq!(imported.character.blendshapes().len(), 3);
+    let source = imported.character.source().unwrap();
+    assert_eq!(source.animations().len(), 1, "{said}");
+}
+
 #[test]
 fn a_head_without_morph_targets_imports_and_says_how_to_get_them() {
     // A scan or an avatar exported without shape keys is a character to make shapes for

@@ -20,3 +20,4 @@ mod gltf_layouts;
 mod ict;
 mod real_symmetry;
 mod source_export;
+mod vrma;
