@@ -335,9 +335,17 @@ fn run_row(entry: &Entry, row: &Row, planner: &Planner, policy: Policy) -> Outco
         for path in &staged {
             let _ = std::fs::remove_file(path);
         }
+        // The command wrote to the staged names; the user knows the outputs by theirs.
+        let told =
+            staged
+                .iter()
+                .zip(row.output_paths())
+                .fold(chain(&error), |told, (staged, output)| {
+                    told.replace(&staged.display().to_string(), &output.display().to_string())
+                });
         return match status_of(&error) {
-            Status::BadInput => bad(chain(&error)),
-            status => Outcome::new(status, None, Some(chain(&error))),
+            Status::BadInput => bad(told),
+            status => Outcome::new(status, None, Some(told)),
         };
     }
     match planner.commit(row, &staged) {

@@ -10,7 +10,8 @@ use faceanim_take::Session;
 /// Where a command that writes one character (`export`, `sketch`) writes it, and how.
 #[derive(Debug, Clone, clap::Args)]
 pub struct GlbOutput {
-    /// Where to write the .glb.
+    /// Where to write the .glb (`export`: a name ending in .vrma writes the clip as a VRM
+    /// Animation instead).
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]

@@ -619,3 +619,43 @@ fn on_a_ray_cluster_every_row_is_done_once_though_a_worker_is_killed() {
         "{summary}"
     );
 }
+
+/// A row whose output cannot be made for its character (a VRM Animation of the built-in head,
+/// which is no VRM) is bad input named by the output the user wrote, not the hidden name it is
+/// staged under; a VRM avatar's row writes one.
+#[test]
+fn a_row_that_fails_names_its_own_output() {
+    let dir = support::output_dir("batch-named-output");
+    let _ = std::fs::remove_dir_all(dir.join("out"));
+    let wav = dir.join("line.wav");
+    support::flite("slt", "Bring me the blue paper.", &wav);
+    let avatar = dir.join("hero.vrm");
+    std::fs::write(
+        &avatar,
+        faceanim_testdata::producers::with_vrm(
+            faceanim_testdata::producers::blender_avatar(),
+            faceanim_testdata::avatar::VrmKind::V1,
+        ),
+    )
+    .unwrap();
+    let manifest = [
+        r#"{"id": "head", "kind": "lipsync", "speech": "line.wav", "text": "Bring me the blue paper.", "outputs": "out/head.vrma"}"#,
+        r#"{"id": "hero", "kind": "lipsync", "speech": "line.wav", "text": "Bring me the blue paper.", "character": "hero.vrm", "outputs": "out/hero.vrma"}"#,
+    ]
+    .join("\n");
+    std::fs::write(dir.join("rows.jsonl"), manifest).unwrap();
+    let out = batch(&dir, &["rows.jsonl", "--progress", "json"], &[]);
+    assert_exit(&out, EXIT_BAD_INPUT, "the run");
+    let events = row_events(&out);
+    assert_eq!(events["hero"][0]["status"], "done", "{:?}", events["hero"]);
+    let error = events["head"][0]["error"].as_str().unwrap();
+    assert!(
+        error.starts_with("out/head.vrma: ") && error.contains("is no VRM avatar"),
+        "{error}"
+    );
+    assert!(
+        !error.contains(faceanim_batch::record::STAGED_PREFIX),
+        "{error}"
+    );
+    assert!(dir.join("out/hero.vrma").is_file());
+}
