@@ -366,7 +366,10 @@ fn skin_json(rig: &crate::bones::ViewRig, bin: &mut Bin) -> (Vec<Value>, Value) 
     (nodes, skin)
 }
 
-fn check_animation(animation: &MorphAnimation, shape_count: usize) -> Result<(), GlbError> {
+pub(crate) fn check_animation(
+    animation: &MorphAnimation,
+    shape_count: usize,
+) -> Result<(), GlbError> {
     let bad = |problem: String| GlbError::BadAnimation {
         name: animation.name.clone(),
         problem,

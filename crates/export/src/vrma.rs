@@ -41,7 +41,8 @@ const SETTLED: f32 = 1e-6;
 ///
 /// # Errors
 /// [`ExportError::NeedsCharacter`] without a character, [`ExportError::NotVrm`] for one that is
-/// no VRM, [`ExportError::NothingToCarry`] when nothing the format carries moves.
+/// no VRM, [`ExportError::Glb`] for keys that do not fit one another (none, weights or turns
+/// of another count), [`ExportError::NothingToCarry`] when nothing the format carries moves.
 pub(crate) fn vrma(
     animation: &Animation<'_>,
     notes: &mut Vec<String>,
@@ -54,6 +55,8 @@ pub(crate) fn vrma(
         .filter(|s| s.is_vrm())
         .ok_or_else(|| ExportError::NotVrm(character.name().to_owned()))?;
     let morph = &animation.animation;
+    // Keys, weights and turns that fit one another (the GLB's rule), whatever made them.
+    crate::glb::check_animation(morph, morph.weights.first().map_or(0, Vec::len))?;
     let times = &morph.times;
     let mut file = File::default();
 

@@ -341,3 +341,53 @@ fn a_sketchs_gaze_and_jaw_turn_the_views_joints_as_the_export_turns_the_bones() 
     }
     assert_eq!(compared, 3, "the two eyes and the jaw");
 }
+
+/// A VRM Animation of keys that do not fit one another (none at all, weights of another count,
+/// a turn too few), as a library caller might hand one over, is refused as the GLB refuses it,
+/// never a panic.
+#[test]
+fn a_vrm_animation_of_keys_that_do_not_fit_is_refused() {
+    use faceanim_testdata::avatar::{ICT_EXPRESSIONS, VrmKind, full_body_glb};
+    let bytes = full_body_glb(faceanim_testdata::ict(), VrmKind::V1, ICT_EXPRESSIONS);
+    let character = import_gltf(&bytes, "avatar.vrm", &NoExternalResources)
+        .unwrap()
+        .character;
+    let shapes = character.blendshapes().len();
+    let broken = [
+        (vec![], vec![], None),
+        (vec![0.0, 0.1], vec![vec![0.0; shapes]], None),
+        (
+            vec![0.0, 0.1],
+            vec![vec![0.0; shapes]; 2],
+            Some(vec![[0.0, 0.0, 0.0, 1.0]]),
+        ),
+    ];
+    for (times, weights, rotations) in broken {
+        let animation = faceanim_export::Animation {
+            character: Some(&character),
+            animation: MorphAnimation {
+                name: "broken".into(),
+                times,
+                weights,
+                rotations,
+            },
+            clip: Clip {
+                fps: 30.0,
+                blendshapes: character.blendshape_names(),
+                frames: Vec::new(),
+                head: None,
+                head_position: None,
+                presence: None,
+            },
+            arkit: None,
+            session: None,
+            bones: None,
+            strokes: None,
+        };
+        let result = faceanim_export::export(faceanim_export::Format::Vrma, &animation);
+        assert!(
+            matches!(result, Err(faceanim_export::ExportError::Glb(_))),
+            "{result:?}"
+        );
+    }
+}
