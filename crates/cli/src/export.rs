@@ -29,19 +29,15 @@ pub(crate) struct ExportDefaultArgs {
 
 /// `faceanim export`.
 pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
+    // A `.glb` (`.vrm`) is the character's own file; any other ending the clip alone.
+    let format = crate::outputs::character_format(&args.out.output)?;
+    anyhow::ensure!(
+        format == faceanim_export::Format::Glb || args.clip.is_some(),
+        "{}: {} is an animation: give the clip with --clip",
+        args.out.output.display(),
+        format.describe()
+    );
     let character = crate::input::load(&args.character)?.character;
-    // A `.vrma` is the clip alone, as a VRM Animation; any other name the character's own file.
-    let format = match faceanim_export::Format::from_path(&args.out.output) {
-        Ok(faceanim_export::Format::Vrma) => {
-            anyhow::ensure!(
-                args.clip.is_some(),
-                "{}: a VRM Animation is an animation: give the clip with --clip",
-                args.out.output.display()
-            );
-            faceanim_export::Format::Vrma
-        }
-        _ => faceanim_export::Format::Glb,
-    };
     let glb = match &args.clip {
         Some(clip_path) => {
             let clip = faceanim_files::load_clip(clip_path)?;
@@ -78,7 +74,7 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
         None => faceanim_export::glb(&character, None)?,
     };
     faceanim_files::write_output(&args.out.output, &glb)?;
-    if format == faceanim_export::Format::Vrma {
+    if format != faceanim_export::Format::Glb {
         eprintln!("wrote {}", args.out.output.display());
         return Ok(());
     }
@@ -98,6 +94,11 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
 
 /// `faceanim export-default`.
 pub(crate) fn run_default(args: &ExportDefaultArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        crate::outputs::character_format(&args.output)? == faceanim_export::Format::Glb,
+        "{}: export-default writes the built-in head as a .glb",
+        args.output.display()
+    );
     let character = faceanim_head::default_character();
     faceanim_files::write_output(&args.output, &faceanim_export::glb(&character, None)?)?;
     eprintln!(

@@ -10,8 +10,9 @@ use faceanim_take::Session;
 /// Where a command that writes one character (`export`, `sketch`) writes it, and how.
 #[derive(Debug, Clone, clap::Args)]
 pub struct GlbOutput {
-    /// Where to write the .glb (`export`: a name ending in .vrma writes the clip as a VRM
-    /// Animation instead).
+    /// Where to write: .glb (or .vrm) the character with the animation; any other ending the
+    /// animation alone in that format — .vrma a VRM avatar's VRM Animation, .json the clip,
+    /// .csv Live Link Face.
     #[arg(short, long)]
     pub output: PathBuf,
     #[command(flatten)]
@@ -51,6 +52,27 @@ pub fn formats_of(paths: &[PathBuf]) -> anyhow::Result<Vec<Format>> {
             Ok(format)
         })
         .collect()
+}
+
+/// What a command that writes a character (`export`, `sketch`) writes to `path`, by its ending:
+/// the character's own file as a binary glTF for `.glb` and `.vrm` (a VRM avatar keeps its
+/// ending), or the animation alone in any other format [`Format::from_path`] knows. Checked
+/// before any work is done: a `.gltf` (faceanim writes binary glTF only), an ending no format
+/// has, or a folder that is not there is an error naming the file.
+pub fn character_format(path: &Path) -> anyhow::Result<Format> {
+    let lower = path.to_string_lossy().to_ascii_lowercase();
+    let format = if lower.ends_with(".vrm") {
+        Format::Glb
+    } else if lower.ends_with(".gltf") {
+        anyhow::bail!(
+            "{}: faceanim writes the character as binary glTF: name it .glb (or .vrm for a VRM avatar)",
+            path.display()
+        )
+    } else {
+        Format::from_path(path)?
+    };
+    faceanim_files::check_output(path)?;
+    Ok(format)
 }
 
 /// Writes `animation` to `path` in `format` (a GLB as `glb` says).

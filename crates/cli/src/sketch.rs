@@ -1,5 +1,5 @@
-//! `faceanim sketch`: a strokes file replayed on a character, written as an animated GLB and
-//! optionally its baked clip.
+//! `faceanim sketch`: a strokes file replayed on a character, written as an animated GLB (or
+//! the animation alone in another format, by the output's ending) and optionally its baked clip.
 
 use std::path::PathBuf;
 
@@ -25,6 +25,10 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
         [character, strokes] => (Some(character.as_path()), strokes),
         _ => anyhow::bail!("give [CHARACTER] STROKES"),
     };
+    let format = crate::outputs::character_format(&args.out.output)?;
+    if let Some(clip) = &args.clip {
+        faceanim_files::check_output(clip)?;
+    }
     let character = crate::input::load_or_default(character)?.character;
     let bytes = faceanim_files::read_bytes(strokes)?;
     let project = faceanim_sketch::Project::from_json(&bytes)
@@ -55,12 +59,14 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
         // The strokes go with the sketch, so the file opens again as them.
         strokes: serde_json::from_slice(&bytes).ok(),
     };
-    crate::outputs::write(
-        &args.out.output,
-        faceanim_export::Format::Glb,
-        &animation,
-        args.out.glb,
-    )?;
+    if format == faceanim_export::Format::Glb {
+        crate::outputs::write(&args.out.output, format, &animation, args.out.glb)?;
+    } else {
+        // The animation alone, as the studio's downloads write it: the sketch's weights on the
+        // character's own shapes.
+        let alone = faceanim_export::Animation::from_clip(&character, &animation.clip, &name)?;
+        crate::outputs::write(&args.out.output, format, &alone, args.out.glb)?;
+    }
     if let Some(path) = &args.clip {
         crate::outputs::write(
             path,
@@ -69,13 +75,25 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
             args.out.glb,
         )?;
     }
+    // Arcs and exaggerations are extra targets, which only the GLB carries.
+    let extra = if format == faceanim_export::Format::Glb {
+        format!(", {extra} extra targets for arcs and exaggerations")
+    } else {
+        if extra > 0 {
+            eprintln!(
+                "warning: {}: {} carries the blendshapes' weights alone: the arcs and exaggerations ({extra} extra targets) are only in a .glb",
+                args.out.output.display(),
+                format.describe()
+            );
+        }
+        String::new()
+    };
     eprintln!(
-        "{}: {} actions, {} frames at {} fps, {} extra targets for arcs and exaggerations",
+        "{}: {} actions, {} frames at {} fps{extra}",
         args.out.output.display(),
         sketch.actions().count(),
         animation.clip.frames.len(),
         sketch.fps(),
-        extra
     );
     Ok(())
 }

@@ -47,10 +47,9 @@ fn eval_json(a: &std::path::Path, b: &std::path::Path) -> Value {
     .unwrap()
 }
 
-#[test]
-fn sketch_writes_a_valid_animated_glb_and_a_clip() {
-    let dir = output_dir("sketch-cli");
-    let ict_path = shared("characters/ict-face.glb");
+/// A strokes file for the ICT head in `dir`: a smile (mirrored), a jaw, and a stroke two metres
+/// from the face.
+fn smile_and_jaw(dir: &std::path::Path) -> std::path::PathBuf {
     let ict = faceanim_testdata::ict();
     let strokes = json!({
         "version": 1, "fps": 30,
@@ -63,6 +62,14 @@ fn sketch_writes_a_valid_animated_glb_and_a_clip() {
     });
     let strokes_path = dir.join("take.strokes.json");
     std::fs::write(&strokes_path, serde_json::to_vec_pretty(&strokes).unwrap()).unwrap();
+    strokes_path
+}
+
+#[test]
+fn sketch_writes_a_valid_animated_glb_and_a_clip() {
+    let dir = output_dir("sketch-cli");
+    let ict_path = shared("characters/ict-face.glb");
+    let strokes_path = smile_and_jaw(&dir);
     let glb = dir.join("take.glb");
     let clip = dir.join("take.json");
     let out = faceanim(&[
@@ -120,6 +127,99 @@ fn sketch_writes_a_valid_animated_glb_and_a_clip() {
         "DTW absorbs a pure delay: {shifted}"
     );
     assert!(shifted["jitter_a"].as_f64().unwrap() < same["jitter_a"].as_f64().unwrap());
+}
+
+#[test]
+fn a_sketch_goes_out_in_the_format_its_name_asks_for() {
+    let dir = output_dir("sketch-formats");
+    let ict_path = shared("characters/ict-face.glb");
+    let strokes = smile_and_jaw(&dir);
+    let sketch = |out: &std::path::Path| {
+        faceanim(&[
+            "sketch",
+            ict_path.to_str().unwrap(),
+            strokes.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+    };
+    // The clip: what `--clip` writes beside the GLB.
+    let (glb, beside, alone) = (
+        dir.join("take.glb"),
+        dir.join("beside.json"),
+        dir.join("alone.json"),
+    );
+    faceanim_ok(&[
+        "sketch",
+        ict_path.to_str().unwrap(),
+        strokes.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+        "--clip",
+        beside.to_str().unwrap(),
+    ]);
+    let out = sketch(&alone);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let read = |p: &std::path::Path| -> Value {
+        serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+    };
+    assert_eq!(read(&alone)["frames"], read(&beside)["frames"]);
+    assert_eq!(read(&alone)["blendshapes"], read(&beside)["blendshapes"]);
+    assert!(
+        !stderr.contains("extra targets for"),
+        "a clip has no extra targets: {stderr}"
+    );
+
+    // Live Link Face: the smile's curve rises on both sides (symmetry), the jaw's too.
+    let csv = dir.join("take.csv");
+    let out = sketch(&csv);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // The bowed strokes' arcs are extra targets, which only a GLB carries: said, not dropped.
+    assert!(stderr.contains("are only in a .glb"), "{stderr}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<f32>> = lines
+        .map(|l| l.split(',').skip(2).map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 25, "{text}");
+    for curve in ["MouthSmileLeft", "MouthSmileRight", "JawOpen"] {
+        let at = header.iter().position(|h| *h == curve).unwrap() - 2;
+        let peak = rows.iter().map(|r| r[at]).fold(0.0, f32::max);
+        assert!(peak > 0.5, "{curve} peaks at {peak}");
+        assert!(rows[0][at] < 0.05, "{curve} starts at {}", rows[0][at]);
+    }
+
+    // What cannot be written is refused before anything is, naming the file.
+    for (name, expected) in [
+        ("take.vrma", "is no VRM avatar"),
+        ("take.gltf", "name it .glb"),
+        ("take.txt", "the name must end in"),
+        ("take.byoc.csv", "needs a capture's session"),
+    ] {
+        let path = dir.join(name);
+        let out = sketch(&path);
+        assert_eq!(out.status.code(), Some(1), "{name}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains(name) && stderr.contains(expected),
+            "{name}: {stderr}"
+        );
+        assert!(!path.exists(), "{name} was written");
+    }
+    let out = faceanim(&[
+        "export-default",
+        "-o",
+        dir.join("head.json").to_str().unwrap(),
+    ]);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("writes the built-in head as a .glb"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!dir.join("head.json").exists());
 }
 
 #[test]
