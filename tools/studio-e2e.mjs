@@ -204,6 +204,32 @@ try {
   check(JSON.stringify(after) === JSON.stringify(before), 'the reopened project bakes a different clip');
   await shot('06-reopened');
 
+  // 5b. The page's downloads: a link saves the file under the server's name and says so; a
+  //     refused one (a VRM Animation of a head that is no VRM: the link is hidden, clicked
+  //     anyway) shows the server's reason in the banner and saves nothing.
+  const [csv] = await Promise.all([page.waitForEvent('download'), page.click('#export-csv')]);
+  check(csv.suggestedFilename().endsWith('.csv'), `the CSV downloads as ${csv.suggestedFilename()}`);
+  const csvPath = path.join(out, 'download.csv');
+  await csv.saveAs(csvPath);
+  check(fs.readFileSync(csvPath, 'utf8').startsWith('Timecode,'), 'the downloaded CSV is not Live Link Face');
+  await page.waitForFunction(() => document.querySelector('#status').textContent.startsWith('Downloaded '));
+  let downloads = 0;
+  const counted = () => { downloads += 1; };
+  page.on('download', counted);
+  const errorsBefore = consoleErrors.length;
+  await page.evaluate(() => document.getElementById('export-vrma').click());
+  await page.waitForFunction(() => !document.getElementById('error').hidden);
+  const refusal = await page.textContent('#error');
+  // The browser logs the refusal's 400 itself; any other error stays to fail the run.
+  const logged = consoleErrors.splice(errorsBefore);
+  consoleErrors.push(...logged.filter((e) => !e.includes('status of 400')));
+  check(refusal.includes('is no VRM avatar'), `the refused download says: ${refusal}`);
+  page.off('download', counted);
+  check(downloads === 0, 'a refused download saved a file');
+  // The next download that works clears the banner.
+  await Promise.all([page.waitForEvent('download'), page.click('#export-json')]);
+  await page.waitForFunction(() => document.getElementById('error').hidden);
+
   // 6. Playback of a 10-action animation: frames per second of the viewport (software GL here),
   // with draw calls and morph targets. Nine more strokes, each from a blendshape's most-moved
   // vertex to its target, drawn over half a second, one after the other.

@@ -22,6 +22,7 @@
 //   xr.js        immersive sketching in a headset (WebXR): pens, the seed's states, navigation
 //   xrpanel.js   the VR world's panels: the timeline and the settings
 //   slow-hint.js tells a slow display about the `?fast` viewport
+//   downloads.js saves the API's files, or shows why there is none, with the exporter's notes
 // The server owns the project and the engines; the page draws what the API describes. This
 // file starts the page and publishes `window.studio`, the read-only hook scripts and tests use
 // (crates/studio/API.md).
@@ -29,6 +30,7 @@
 import { capture } from './capture.js';
 import { sound } from './sound.js';
 import './commands.js';
+import './downloads.js';
 import './generate.js';
 import { setMode } from './mode.js';
 import { characterMeshes, characterRoot, currentFrame, isPlaying, isReady } from './playback.js';

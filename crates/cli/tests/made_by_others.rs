@@ -699,6 +699,26 @@ fn assert_opens_again_in_the_studio(
     let _ = std::fs::remove_file(dir.join("project.json"));
     let studio = start_on(Some(avatar), &dir.join("project.json"), &[]);
     support::open_and_settle(studio.port, animation);
+    // Downloaded again, the take is a VRM Animation named after it, with the exporter's notes
+    // (what it carries) for the page to show.
+    let (head, again) = support::get_with_head(studio.port, "/api/capture/export.vrma");
+    assert!(again.starts_with(b"glTF"), "{head}");
+    let notes = head
+        .lines()
+        .find_map(|l| l.strip_prefix("x-faceanim-notes: "))
+        .unwrap_or_else(|| panic!("no notes: {head}"));
+    let notes: Vec<String> = serde_json::from_str(notes).unwrap();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("carries") && n.contains("aa")),
+        "{notes:?}"
+    );
+    let stem = animation.file_stem().unwrap().to_str().unwrap();
+    assert!(
+        head.contains(&format!("filename*=UTF-8''{stem}.vrma")),
+        "{head}"
+    );
     let (status, clip) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
     assert_eq!(status, 200, "{clip}");
     let clip: Value = serde_json::from_str(&clip).unwrap();

@@ -12,8 +12,6 @@
 
 mod support;
 
-use std::io::{Read as _, Write as _};
-use std::net::TcpStream;
 use std::process::Command;
 
 use support::{Studio, assert_valid_gltf, output_dir, repo, request, start_on};
@@ -668,7 +666,7 @@ fn a_phone_trackers_vmc_stream_becomes_a_take() {
     let (status, glb) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
     assert_eq!(status, 200, "{glb}");
     let glb_path = dir.path().join("vmc.glb");
-    let (_, glb) = get_bytes(studio.port, "/api/capture/export.glb");
+    let (_, glb) = support::get_with_head(studio.port, "/api/capture/export.glb");
     std::fs::write(&glb_path, glb).unwrap();
     assert_valid_gltf(&glb_path);
 
@@ -1007,7 +1005,7 @@ fn a_full_body_avatar_in_the_studio_api() {
             "{name}: {action}"
         );
     }
-    let (_, download) = get_bytes(port, "/api/export.glb");
+    let (_, download) = support::get_with_head(port, "/api/export.glb");
     let nodes_in = |glb: &[u8]| {
         faceanim_testdata::glb::json(glb)["nodes"]
             .as_array()
@@ -1019,7 +1017,7 @@ fn a_full_body_avatar_in_the_studio_api() {
         nodes_in(&bytes),
         "the download is the user's file"
     );
-    let (_, view) = get_bytes(port, "/api/view.glb");
+    let (_, view) = support::get_with_head(port, "/api/view.glb");
     let view = faceanim_testdata::glb::json(&view);
     assert_eq!(
         view["meshes"].as_array().unwrap().len(),
@@ -1035,22 +1033,6 @@ fn a_full_body_avatar_in_the_studio_api() {
         joints.contains(&"faceanim_head") && joints.iter().all(|n| n.starts_with("faceanim_")),
         "{joints:?}"
     );
-}
-
-/// A `GET`'s head (status line and headers) and its body as bytes (a GLB is not text), failing
-/// on any status but 200.
-fn get_bytes(port: u16, path: &str) -> (String, Vec<u8>) {
-    let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
-    let head =
-        format!("GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n");
-    stream.write_all(head.as_bytes()).unwrap();
-    let mut response = Vec::new();
-    stream.read_to_end(&mut response).unwrap();
-    let split = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
-    let head = String::from_utf8_lossy(&response[..split]).into_owned();
-    assert!(head.starts_with("HTTP/1.1 200"), "{path}: {head}");
-    // The studio answers with a Content-Length body (no chunking).
-    (head, response[split + 4..].to_vec())
 }
 
 /// The seed's own setting: an emulated Meta Quest 3 (npm iwer) in headless Chromium enters VR
@@ -1134,7 +1116,7 @@ fn a_vrm_avatars_download_is_a_vrm() {
     )
     .unwrap();
     let studio = start_on(Some(&avatar), &dir.path().join("vrm.faceanim.json"), &[]);
-    let (head, body) = get_bytes(studio.port, "/api/export.glb");
+    let (head, body) = support::get_with_head(studio.port, "/api/export.glb");
     let headers = head.to_ascii_lowercase();
     assert!(headers.contains(".vrm\"\r\n"), "{headers}");
     let json = faceanim_testdata::glb::json(&body);

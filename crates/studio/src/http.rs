@@ -4,6 +4,7 @@
 //! The route modules ([`crate::api`], [`crate::capture_api`]) import from here, never from
 //! each other.
 
+use std::fmt::Write as _;
 use std::panic::AssertUnwindSafe;
 
 use axum::extract::Request;
@@ -115,7 +116,11 @@ fn clean_name(name: &str) -> String {
     }
 }
 
-/// A download of `exported`, named `name.extension`.
+/// The header that carries an export's notes (what the file carries, what it left out) to the
+/// page, as a JSON array of strings in ASCII.
+pub const NOTES_HEADER: &str = "x-faceanim-notes";
+
+/// A download of `exported`, named `name.extension`, its notes in [`NOTES_HEADER`].
 pub(crate) fn download(
     format: Format,
     extension: &str,
@@ -125,20 +130,62 @@ pub(crate) fn download(
     for note in &exported.notes {
         tracing::info!("{name}.{extension}: {note}");
     }
-    let disposition = format!(
-        "attachment; filename=\"{}.{extension}\"",
-        name.replace('"', "")
-    );
     let mut headers = HeaderMap::new();
     headers.insert(
         header::CONTENT_TYPE,
         HeaderValue::from_static(format.mime()),
     );
-    if let Ok(value) = HeaderValue::from_str(&disposition) {
+    if let Ok(value) = HeaderValue::from_str(&disposition(&format!("{name}.{extension}"))) {
         headers.insert(header::CONTENT_DISPOSITION, value);
+    }
+    if let Ok(value) = HeaderValue::from_str(&ascii_json(&exported.notes)) {
+        headers.insert(NOTES_HEADER, value);
     }
     headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
     (headers, exported.bytes).into_response()
+}
+
+/// `Content-Disposition` for a file named `file`: the name in ASCII (what is not, `_`) for
+/// every client, and exactly, percent-encoded UTF-8 (RFC 6266's `filename*`), for those that
+/// read it — every browser — so a character named in Japanese downloads under its own name.
+fn disposition(file: &str) -> String {
+    let ascii: String = file
+        .chars()
+        .map(|c| {
+            if c.is_ascii_graphic() && c != '"' && c != '\\' || c == ' ' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let mut exact = String::new();
+    for byte in file.bytes() {
+        if byte.is_ascii_alphanumeric() || b"!#$&+-.^_`|~".contains(&byte) {
+            exact.push(char::from(byte));
+        } else {
+            let _ = write!(exact, "%{byte:02X}");
+        }
+    }
+    format!("attachment; filename=\"{ascii}\"; filename*=UTF-8''{exact}")
+}
+
+/// `strings` as a JSON array in ASCII: what is not, escaped as JSON's `\\uXXXX`, so that it
+/// fits in a header.
+fn ascii_json(strings: &[String]) -> String {
+    let json = serde_json::to_string(strings).unwrap_or_else(|_| "[]".to_owned());
+    let mut out = String::with_capacity(json.len());
+    let mut units = [0u16; 2];
+    for c in json.chars() {
+        if (' '..='~').contains(&c) {
+            out.push(c);
+        } else {
+            for unit in c.encode_utf16(&mut units) {
+                let _ = write!(out, "\\u{unit:04x}");
+            }
+        }
+    }
+    out
 }
 
 /// `router` with its bodies limited to `max` bytes. A request that declares a longer body
@@ -280,6 +327,30 @@ pub(crate) fn error_answer(status: StatusCode, message: String) -> Response {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn download_names_and_notes_fit_in_headers_and_come_back_exactly() {
+        assert_eq!(
+            disposition("take.vrma"),
+            "attachment; filename=\"take.vrma\"; filename*=UTF-8''take.vrma"
+        );
+        // Japanese, a quote, a space and a percent: ASCII for old clients, exact for browsers.
+        let named = disposition("アバ\"タ 100%.vrm");
+        assert!(HeaderValue::from_str(&named).is_ok(), "{named}");
+        assert_eq!(
+            named,
+            "attachment; filename=\"____ 100%.vrm\"; filename*=UTF-8''%E3%82%A2%E3%83%90%22%E3%82%BF%20100%25.vrm"
+        );
+        let notes = vec![
+            "1 shape … in no VRM expression: \"mouthSmile_L\"".to_owned(),
+            "😀\n".to_owned(),
+        ];
+        let header = ascii_json(&notes);
+        assert!(HeaderValue::from_str(&header).is_ok(), "{header}");
+        assert!(header.is_ascii());
+        let back: Vec<String> = serde_json::from_str(&header).unwrap_or_default();
+        assert_eq!(back, notes);
+    }
 
     #[test]
     fn upload_names_are_decoded_cut_and_cleaned() {

@@ -634,6 +634,22 @@ pub fn request(
     (status, String::from_utf8_lossy(&body).into_owned())
 }
 
+/// A `GET`'s head (status line and headers) and its body as bytes (a GLB is not text), failing
+/// on any status but 200.
+pub fn get_with_head(port: u16, path: &str) -> (String, Vec<u8>) {
+    let mut stream = TcpStream::connect(("127.0.0.1", port)).unwrap();
+    let head =
+        format!("GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n");
+    stream.write_all(head.as_bytes()).unwrap();
+    let mut response = Vec::new();
+    stream.read_to_end(&mut response).unwrap();
+    let split = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let head = String::from_utf8_lossy(&response[..split]).into_owned();
+    assert!(head.starts_with("HTTP/1.1 200"), "{path}: {head}");
+    // The studio answers with a Content-Length body (no chunking).
+    (head, response[split + 4..].to_vec())
+}
+
 /// One raw HTTP/1.1 request; returns the status code and the body's bytes (a GLB download).
 pub fn request_bytes(
     port: u16,
