@@ -350,6 +350,15 @@ mod tests {
         assert!(header.is_ascii());
         let back: Vec<String> = serde_json::from_str(&header).unwrap_or_default();
         assert_eq!(back, notes);
+        // The page reads the notes from the header the server writes them in.
+        let page = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../web/downloads.js"),
+        )
+        .unwrap_or_default();
+        assert!(
+            page.contains(&format!("const NOTES_HEADER = '{NOTES_HEADER}';")),
+            "web/downloads.js reads another header than {NOTES_HEADER}"
+        );
     }
 
     #[test]
