@@ -28,13 +28,8 @@ pub struct LipsyncArgs {
     /// languages by their phones.
     #[arg(long, default_value = faceanim_speech::recognition::ENGLISH)]
     pub language: String,
-    /// Outputs by extension, as `faceanim track` writes them (.glb/.vrm the character with
-    /// the animation, .vrma a VRM avatar's VRM Animation, .json the clip, .csv Live Link Face,
-    /// .session.json the take).
-    #[arg(short, long = "output", value_name = "OUT")]
-    pub outputs: Vec<PathBuf>,
     #[command(flatten)]
-    pub glb: crate::outputs::GlbArgs,
+    pub out: crate::outputs::Outputs,
     /// Also write the clip (JSON) here.
     #[arg(long)]
     pub clip: Option<PathBuf>,
@@ -109,11 +104,11 @@ struct Summary<'a> {
 }
 
 pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
-    let mut outputs = args.outputs.clone();
+    let mut outputs = args.out.outputs.clone();
     outputs.extend(args.clip.iter().cloned());
     anyhow::ensure!(
         !outputs.is_empty(),
-        "give at least one -o OUTPUT (.glb, .vrm, .json, .csv, .session.json) or --clip"
+        "give at least one -o OUTPUT (.glb, .vrm, .vrma, .json, .csv, .session.json) or --clip"
     );
     let formats = crate::outputs::formats_of(&outputs)?;
     anyhow::ensure!(
@@ -209,7 +204,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     )?;
     let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
     for (path, format) in outputs.iter().zip(formats) {
-        crate::outputs::write(path, format, &animation, args.glb)?;
+        crate::outputs::write(path, format, &animation, args.out.glb)?;
     }
     eprintln!(
         "{:.2} s of sound in {:.2} s ({:.2}× real time): {} phones ({}), {} visemes on {} of {} shapes ({})",

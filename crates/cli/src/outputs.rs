@@ -60,19 +60,31 @@ pub fn formats_of(paths: &[PathBuf]) -> anyhow::Result<Vec<Format>> {
 /// before any work is done: a `.gltf` (faceanim writes binary glTF only), an ending no format
 /// has, or a folder that is not there is an error naming the file.
 pub fn character_format(path: &Path) -> anyhow::Result<Format> {
-    let lower = path.to_string_lossy().to_ascii_lowercase();
-    let format = if lower.ends_with(".vrm") {
-        Format::Glb
-    } else if lower.ends_with(".gltf") {
-        anyhow::bail!(
-            "{}: faceanim writes the character as binary glTF: name it .glb (or .vrm for a VRM avatar)",
-            path.display()
-        )
-    } else {
-        Format::from_path(path)?
-    };
+    anyhow::ensure!(
+        !path
+            .to_string_lossy()
+            .to_ascii_lowercase()
+            .ends_with(".gltf"),
+        "{}: faceanim writes the character as binary glTF: name it .glb (or .vrm for a VRM avatar)",
+        path.display()
+    );
+    let format = Format::from_path(path)?;
     faceanim_files::check_output(path)?;
     Ok(format)
+}
+
+/// Where a command that writes an animation (`track`, `lipsync`) writes it: any number of
+/// files, each in the format its name asks for.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Outputs {
+    /// Where to write, by ending (repeat -o for several): .json the clip, .glb (.vrm for a VRM
+    /// avatar) the character with the animation, .vrma a VRM avatar's VRM Animation, .csv Live
+    /// Link Face, .byoc.csv the seed's CSV, .session.json the take; - the clip on standard
+    /// output.
+    #[arg(short, long = "output", value_name = "OUT")]
+    pub outputs: Vec<PathBuf>,
+    #[command(flatten)]
+    pub glb: GlbArgs,
 }
 
 /// Writes `animation` to `path` in `format` (a GLB as `glb` says).
@@ -82,6 +94,23 @@ pub fn write(
     animation: &Animation<'_>,
     glb: GlbArgs,
 ) -> anyhow::Result<()> {
+    let not_vrm = animation.character.filter(|c| {
+        !c.source()
+            .is_some_and(faceanim_rig::source::GltfSource::is_vrm)
+    });
+    if let Some(character) = not_vrm
+        && format == Format::Glb
+        && path
+            .to_string_lossy()
+            .to_ascii_lowercase()
+            .ends_with(".vrm")
+    {
+        eprintln!(
+            "warning: {}: {} is no VRM avatar, so this is a plain glTF named .vrm, which VRM apps refuse; name it .glb",
+            path.display(),
+            character.name()
+        );
+    }
     let exported = faceanim_export::export_with(format, animation, glb.compression())
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     for note in &exported.notes {

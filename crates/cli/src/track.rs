@@ -33,12 +33,8 @@ pub struct TrackArgs {
     /// The character (default: the built-in head).
     #[arg(long)]
     pub character: Option<PathBuf>,
-    /// Where to write: .json (clip), .glb, .vrma (a VRM avatar's VRM Animation), .csv (Live
-    /// Link Face), .byoc.csv (the seed's CSV) or .session.json; repeatable.
-    #[arg(short, long = "output")]
-    pub outputs: Vec<PathBuf>,
     #[command(flatten)]
-    pub glb: crate::outputs::GlbArgs,
+    pub out: crate::outputs::Outputs,
     /// Also keep every frame's landmarks, scores and pose here (JSON).
     #[arg(long)]
     pub raw: Option<PathBuf>,
@@ -117,10 +113,10 @@ impl TrackArgs {
 
 pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     anyhow::ensure!(
-        !args.outputs.is_empty() || args.raw.is_some() || args.session.is_some(),
-        "give at least one -o OUTPUT (.json, .glb, .csv, .byoc.csv), --session or --raw"
+        !args.out.outputs.is_empty() || args.raw.is_some() || args.session.is_some(),
+        "give at least one -o OUTPUT (.json, .glb, .vrm, .vrma, .csv, .byoc.csv, .session.json), --session or --raw"
     );
-    let formats = crate::outputs::formats_of(&args.outputs)?;
+    let formats = crate::outputs::formats_of(&args.out.outputs)?;
     for path in args.raw.iter().chain(&args.session) {
         faceanim_files::check_output(path)?;
     }
@@ -221,8 +217,8 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         session,
         &crate::input::stem(&args.input, "capture"),
     )?;
-    for (path, format) in args.outputs.iter().zip(formats) {
-        crate::outputs::write(path, format, &animation, args.glb)?;
+    for (path, format) in args.out.outputs.iter().zip(formats) {
+        crate::outputs::write(path, format, &animation, args.out.glb)?;
     }
 
     let timing = Timing {

@@ -209,6 +209,13 @@ fn a_sketch_goes_out_in_the_format_its_name_asks_for() {
         );
         assert!(!path.exists(), "{name} was written");
     }
+    // A head that is no VRM written under a VRM's name is written, with a warning.
+    let vrm = dir.join("take.vrm");
+    let out = sketch(&vrm);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("is no VRM avatar"), "{stderr}");
+    assert_valid_gltf(&vrm);
     let out = faceanim(&[
         "export-default",
         "-o",

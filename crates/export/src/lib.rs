@@ -83,7 +83,8 @@ impl Format {
     ];
 
     /// The format a file name asks for, by its ending: `.byoc.csv` the seed's CSV,
-    /// `.session.json` a session, `.json` a clip, `.glb` the character, `.csv` Live Link Face,
+    /// `.session.json` a session, `.json` a clip, `.glb` the character (`.vrm` too: a VRM
+    /// avatar's file is a GLB), `.csv` Live Link Face,
     /// `.vrma` a VRM Animation;
     /// `-` (standard output) the clip.
     ///
@@ -99,7 +100,7 @@ impl Format {
         let mut endings: Vec<(Format, &str)> = Format::ALL
             .iter()
             .map(|&f| (f, f.extension()))
-            .chain([(Format::ClipJson, "json")])
+            .chain([(Format::ClipJson, "json"), (Format::Glb, "vrm")])
             .collect();
         endings.sort_by_key(|(_, e)| std::cmp::Reverse(e.len()));
         endings
@@ -291,7 +292,7 @@ pub struct Exported {
 pub enum ExportError {
     /// A file name whose ending names no format.
     #[error(
-        "{0}: the name must end in .json (clip), .glb (character with the animation), .csv (Live Link Face), .byoc.csv (the seed's CSV), .session.json (the session) or .vrma (VRM Animation)"
+        "{0}: the name must end in .json (clip), .glb or .vrm (character with the animation), .csv (Live Link Face), .byoc.csv (the seed's CSV), .session.json (the session) or .vrma (VRM Animation)"
     )]
     UnknownExtension(String),
     /// The format needs a take's session and the animation has none.
@@ -484,6 +485,9 @@ mod tests {
         assert_eq!(of("take.clip.json"), Ok(Format::ClipJson));
         assert_eq!(of("take.session.json"), Ok(Format::Session));
         assert_eq!(of("TAKE.GLB"), Ok(Format::Glb));
+        // A VRM avatar's file is a GLB; its animation alone is a VRM Animation.
+        assert_eq!(of("avatar.vrm"), Ok(Format::Glb));
+        assert_eq!(of("take.vrma"), Ok(Format::Vrma));
         assert_eq!(of("take.csv"), Ok(Format::LiveLinkCsv));
         assert_eq!(of("take.byoc.csv"), Ok(Format::SeedCsv));
         let error = of("take.fbx").map(|_| ()).unwrap_err().to_string();
