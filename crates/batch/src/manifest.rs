@@ -361,16 +361,20 @@ impl Manifest {
     /// UTF-16; a sheet: nor a legacy code page), has no rows, or (a sheet) has no usable
     /// header.
     pub fn read(path: &Path) -> Result<Manifest, BatchError> {
-        let size = std::fs::metadata(path)
-            .map_err(|source| BatchError::io(path, source))?
-            .len();
-        if size > MAX_MANIFEST_BYTES {
-            return Err(BatchError::manifest(
-                path,
-                format!("{size} bytes; a manifest is at most {MAX_MANIFEST_BYTES} bytes"),
-            ));
-        }
-        let bytes = std::fs::read(path).map_err(|source| BatchError::io(path, source))?;
+        let bytes =
+            faceanim_files::read_at_most(path, MAX_MANIFEST_BYTES).map_err(|e| match e {
+                faceanim_files::FileError::Io { source, .. } => BatchError::io(path, source),
+                faceanim_files::FileError::TooLarge {
+                    size: Some(size), ..
+                } => BatchError::manifest(
+                    path,
+                    format!("{size} bytes; a manifest is at most {MAX_MANIFEST_BYTES} bytes"),
+                ),
+                _ => BatchError::manifest(
+                    path,
+                    format!("more than a manifest's {MAX_MANIFEST_BYTES} bytes"),
+                ),
+            })?;
         // A manifest named without a folder: paths in it are the working folder's, as given.
         let base = path.parent().unwrap_or(Path::new("")).to_owned();
         let named = Layout::named(path);

@@ -56,7 +56,8 @@ pub fn formats_of(paths: &[PathBuf]) -> anyhow::Result<Vec<Format>> {
 
 /// What a command that writes a character (`export`, `sketch`) writes to `path`, by its ending:
 /// the character's own file as a binary glTF for `.glb` and `.vrm` (a VRM avatar keeps its
-/// ending), or the animation alone in any other format [`Format::from_path`] knows. Checked
+/// ending) and a name with no ending, or the animation alone in any other format
+/// [`Format::from_path`] knows. Checked
 /// before any work is done: a `.gltf` (faceanim writes binary glTF only), an ending no format
 /// has, or a folder that is not there is an error naming the file.
 pub fn character_format(path: &Path) -> anyhow::Result<Format> {
@@ -68,7 +69,13 @@ pub fn character_format(path: &Path) -> anyhow::Result<Format> {
         "{}: faceanim writes the character as binary glTF: name it .glb (or .vrm for a VRM avatar)",
         path.display()
     );
-    let format = Format::from_path(path)?;
+    // A name with no ending at all (`/dev/null`) is the character's file, as it always was;
+    // `-` is the clip on standard output.
+    let format = if path.extension().is_none() && !faceanim_files::is_stdout(path) {
+        Format::Glb
+    } else {
+        Format::from_path(path)?
+    };
     faceanim_files::check_output(path)?;
     Ok(format)
 }

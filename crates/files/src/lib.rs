@@ -34,12 +34,12 @@ pub enum FileError {
         source: std::io::Error,
     },
     /// The file is larger than its kind may be ([`MAX_FILE_BYTES`] for a character).
-    #[error("{}: {size} bytes is larger than the {limit}-byte limit", path.display())]
+    #[error("{}: {} larger than the {limit}-byte limit", path.display(), size.map_or_else(|| "what it gives is".to_owned(), |s| format!("{s} bytes is")))]
     TooLarge {
         /// The file.
         path: PathBuf,
-        /// Its size.
-        size: u64,
+        /// Its size; `None` for what has none (a device, a pipe) and gave more than the limit.
+        size: Option<u64>,
         /// The most it may be.
         limit: u64,
     },
@@ -80,21 +80,36 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FileError> {
     read_at_most(path, MAX_FILE_BYTES)
 }
 
-/// The bytes of `path`, refused when it is larger than `limit` before they are read.
-fn read_at_most(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> {
+/// The bytes of `path`, refused when it is larger than `limit`: a file by its size before it
+/// is read, and what has no size (a device such as `/dev/zero`, a pipe) once it gives more.
+///
+/// # Errors
+/// [`FileError::Io`] or [`FileError::TooLarge`], with the path.
+pub fn read_at_most(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> {
     let io = |source| FileError::Io {
         path: path.to_owned(),
         source,
     };
-    let size = std::fs::metadata(path).map_err(io)?.len();
+    let file = std::fs::File::open(path).map_err(io)?;
+    let size = file.metadata().map_err(io)?.len();
+    let too_large = |size| FileError::TooLarge {
+        path: path.to_owned(),
+        size,
+        limit,
+    };
     if size > limit {
-        return Err(FileError::TooLarge {
-            path: path.to_owned(),
-            size,
-            limit,
-        });
+        return Err(too_large(Some(size)));
     }
-    std::fs::read(path).map_err(io)
+    let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(file, limit.saturating_add(1)),
+        &mut bytes,
+    )
+    .map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(None));
+    }
+    Ok(bytes)
 }
 
 /// Loads a character from a `.glb`/`.gltf` file or a folder of OBJ files.
@@ -485,6 +500,28 @@ fn new_file_permissions() -> Option<std::fs::Permissions> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn reading_stops_at_the_limit_also_where_there_is_no_size() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let path = dir.path().join("big.json");
+        std::fs::write(&path, [b' '; 100]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(read_at_most(&path, 100).map(|b| b.len()).ok(), Some(100));
+        let e = read_at_most(&path, 99).err().map(|e| e.to_string());
+        assert!(
+            e.as_deref()
+                .is_some_and(|e| e.contains("100 bytes is larger than the 99-byte limit")),
+            "{e:?}"
+        );
+        // A device that never ends (what a mistyped path or a shell's `<(…)` can name).
+        if cfg!(unix) {
+            let e = read_at_most(Path::new("/dev/zero"), 1 << 20);
+            assert!(
+                matches!(e, Err(FileError::TooLarge { size: None, limit, .. }) if limit == 1 << 20),
+                "{e:?}"
+            );
+        }
+    }
 
     #[test]
     fn atomic_write_replaces_whole_files() {
