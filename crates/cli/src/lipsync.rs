@@ -152,6 +152,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     let (sound, heard) = heard?;
     let mouth = match &args.adapter {
         Some(path) => mouth_by_adapter(&character, &table, path)?,
+        None if character.blendshapes().is_empty() => shapeless_mouth(&character)?,
         None => match Mouth::of(&character, &table) {
             Ok(mouth) => mouth,
             Err(no_mouth) => {
@@ -159,6 +160,15 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
             }
         },
     };
+    // The take's ARKit values, whatever the character's shapes: Live Link Face's curves for a
+    // character without ARKit names, and the jaw bone's opening.
+    let arkit_mouth = Mouth::arkit(&table);
+    let arkit_rows: Vec<Vec<f32>> = heard
+        .track
+        .sample(args.fps)
+        .iter()
+        .map(|v| arkit_mouth.weights(v))
+        .collect();
     let mut lip_sync = heard.on(&mouth, args.fps);
     if let Some(note) = transcript.as_ref().and_then(|t| t.note.clone()) {
         lip_sync.notes.insert(0, note);
@@ -202,7 +212,25 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         &lip_sync.frames,
         heads.as_deref(),
     )?;
-    let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
+    let mut animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
+    // The channels the visemes move (the eyes' are not keyed at rest).
+    let moving: Vec<usize> = (0..faceanim_rig::names::ARKIT_52.len())
+        .filter(|&c| arkit_rows.iter().any(|row| row[c] > 0.0))
+        .collect();
+    animation.arkit = Some(faceanim_anim::Clip {
+        fps: args.fps,
+        blendshapes: moving
+            .iter()
+            .map(|&c| faceanim_rig::names::ARKIT_52[c].to_owned())
+            .collect(),
+        frames: arkit_rows
+            .iter()
+            .map(|row| moving.iter().map(|&c| row[c]).collect())
+            .collect(),
+        head: heads.clone(),
+        head_position: None,
+        presence: None,
+    });
     for (path, format) in outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation, args.out.glb)?;
     }
@@ -226,6 +254,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
             faceanim_speech::Route::Arkit => "its ARKit mouth shapes",
             faceanim_speech::Route::Adapter => "its shapes as its adapter reads each viseme",
             faceanim_speech::Route::Retarget => "its shapes as its retarget map places each viseme",
+            faceanim_speech::Route::JawBone => "none: it has none, and its jaw bone opens",
         }
     );
     if args.json {
@@ -352,6 +381,19 @@ fn read_text(path: &Path, option: &str, accept: Accept<'_>) -> anyhow::Result<Te
 /// (by `table`), rendered from the front and read by the adapter.
 /// The mouth of a rig whose names say nothing of one, through its retarget map (the one
 /// beside it, or made and saved there now); `None` when the map moves no shape of it.
+/// The mouth of a character with no blendshapes: its jaw bone, where it has one.
+fn shapeless_mouth(character: &faceanim_rig::Character) -> anyhow::Result<Mouth> {
+    let jaw = character
+        .source()
+        .and_then(|s| s.bones().get(faceanim_rig::bones::Bone::Jaw));
+    anyhow::ensure!(
+        jaw.is_some(),
+        "{} has no blendshapes and no jaw bone to lip-sync: make ARKit's 52 shapes on it with `faceanim generate-shapes`, then lip-sync what it writes",
+        character.name()
+    );
+    Ok(Mouth::jaw_bone())
+}
+
 fn mouth_by_map(
     character: &faceanim_rig::Character,
     character_path: Option<&Path>,

@@ -129,7 +129,8 @@ pub fn write(
 }
 
 /// A take's session as an export of `character` (needed for a GLB only): its clip, the head
-/// turn on the root, the capture's ARKit weights for Live Link Face, and the session itself.
+/// turn on the root, the capture's ARKit weights for Live Link Face and the bones, and the
+/// session itself.
 pub fn take_animation<'a>(
     character: Option<&'a faceanim_rig::Character>,
     session: &'a Session,

@@ -902,3 +902,128 @@ fn head_eyes_and_jaw_go_on_the_blender_avatars_bones() {
         ],
     );
 }
+
+/// The Live Link Face CSV at `path`: its header and rows (the values after the timecode and
+/// the count).
+fn live_link_csv(path: &Path) -> (Vec<String>, Vec<Vec<f32>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .skip(2)
+        .map(str::to_owned)
+        .collect();
+    let rows = lines
+        .map(|l| l.split(',').skip(2).map(|v| v.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// Lip sync reaches what a character has. Blender's own export of its avatar without shape
+/// keys has a jaw bone: the line opens it (Blender reads the jaw turned as far as the line's
+/// jawOpen says, about the left-right axis, and shut before the line starts). The avatar made a
+/// VRM, whose lip sync goes through its vowels while its ARKit-named shapes stay at rest, gives
+/// Live Link Face the line's ARKit curves, not zeros. A head with neither shapes nor a jaw bone
+/// is sent to generate-shapes.
+#[test]
+fn lip_sync_opens_a_jaw_bone_and_live_link_face_hears_any_avatar() {
+    let dir = output_dir("made-by-others-lipsync-bones");
+    let speech = dir.join("line.wav");
+    support::flite(
+        "slt",
+        "Bob and Mary moved the heavy boxes up the narrow path.",
+        &speech,
+    );
+    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
+    let (glb, csv) = (dir.join("bare.glb"), dir.join("bare.csv"));
+    let summary: Value = serde_json::from_str(&faceanim_ok(&[
+        "lipsync",
+        speech.to_str().unwrap(),
+        "--character",
+        bare.to_str().unwrap(),
+        "-o",
+        glb.to_str().unwrap(),
+        "-o",
+        csv.to_str().unwrap(),
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(summary["route"], "jaw_bone", "{summary}");
+    assert_valid_gltf(&glb);
+    let (header, rows) = live_link_csv(&csv);
+    let jaw_column = header.iter().position(|h| h == "JawOpen").unwrap();
+    let (widest, jaw) = rows
+        .iter()
+        .map(|r| r[jaw_column])
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    assert!(jaw > 0.3, "the line opens the jaw at most {jaw}");
+    assert!(rows[0][jaw_column] < 0.02, "{:?}", rows[0]);
+    let fps = summary["fps"].as_f64().unwrap() as f32;
+    for (seconds, open) in [(0.0, 0.0), (widest as f32 / fps, jaw)] {
+        let turns = blender_bone_turns(&glb, seconds, &["Jaw"]);
+        let (axis, angle) = turns[0].1.to_axis_angle();
+        let want = open * faceanim_export::bones::DEFAULT_JAW_DEGREES;
+        let opened = angle.to_degrees();
+        assert!(
+            (opened - want).abs() < 1.0,
+            "at {seconds} s Blender reads the jaw {opened}° open for jawOpen {open}"
+        );
+        assert!(
+            open == 0.0 || axis.x.abs() > 0.99,
+            "the jaw turned about {axis}"
+        );
+    }
+
+    // The VRM: its vowels move, its ARKit-named shapes do not; Live Link Face hears the line.
+    let avatar = dir.join("avatar.vrm");
+    std::fs::write(
+        &avatar,
+        complete_vrm(&with_vrm(blender_avatar(), VrmKind::V1)),
+    )
+    .unwrap();
+    let csv = dir.join("avatar.csv");
+    let out = support::faceanim(&[
+        "lipsync",
+        speech.to_str().unwrap(),
+        "--character",
+        avatar.to_str().unwrap(),
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{said}");
+    assert!(
+        said.contains("ARKit-named blendshapes stay at rest in this take"),
+        "{said}"
+    );
+    let (header, rows) = live_link_csv(&csv);
+    for curve in ["JawOpen", "MouthPressLeft"] {
+        let at = header.iter().position(|h| h == curve).unwrap();
+        let peak = rows.iter().map(|r| r[at]).fold(0.0, f32::max);
+        assert!(peak > 0.3, "{curve} peaks at {peak}");
+    }
+
+    // A head with neither: told what makes it shapes.
+    let mut parts = faceanim_testdata::ict().to_parts();
+    parts.blendshapes.clear();
+    parts.normal_deltas = None;
+    let head = dir.join("head.glb");
+    let character = faceanim_rig::Character::new(parts).unwrap();
+    std::fs::write(&head, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
+    let out = support::faceanim(&[
+        "lipsync",
+        speech.to_str().unwrap(),
+        "--character",
+        head.to_str().unwrap(),
+        "-o",
+        dir.join("head.json").to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{said}");
+    assert!(said.contains("faceanim generate-shapes"), "{said}");
+    assert!(!dir.join("head.json").exists());
+}

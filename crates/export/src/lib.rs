@@ -182,8 +182,8 @@ pub struct Animation<'a> {
     pub animation: MorphAnimation,
     /// The same frames as the character's own weights by name (with the head pose).
     pub clip: Clip,
-    /// The capture's own ARKit weights, when a capture made the animation: Live Link Face's
-    /// curves for a character without ARKit names.
+    /// The take's own ARKit weights, when a capture or lip sync made the animation: Live Link
+    /// Face's curves for a character without ARKit names, and the eyes' and jaw's bones.
     pub arkit: Option<Clip>,
     /// The take's session, when the animation is a take's.
     pub session: Option<&'a Session>,
@@ -385,7 +385,7 @@ pub fn export_with(
             }
         }
         Format::LiveLinkCsv => {
-            livelink::to_csv(live_link_curves(animation, &mut notes)).into_bytes()
+            livelink::to_csv(&live_link_curves(animation, &mut notes)).into_bytes()
         }
         Format::SeedCsv => session(format, animation)?.to_seed_csv().into_bytes(),
         Format::Session => session(format, animation)?.to_json().into_bytes(),
@@ -446,32 +446,92 @@ fn session<'a>(format: Format, animation: &Animation<'a>) -> Result<&'a Session,
     animation.session.ok_or(ExportError::NeedsSession(format))
 }
 
-/// Live Link Face speaks ARKit (see the crate docs).
-fn live_link_curves<'a>(animation: &'a Animation<'_>, notes: &mut Vec<String>) -> &'a Clip {
+/// Live Link Face speaks ARKit (see the crate docs): each curve from the character's own
+/// shape for that channel where it has one (the take as it is, corrections and all), else
+/// from the ARKit weights the take was made of (a capture's scores, lip sync's visemes).
+fn live_link_curves<'a>(
+    animation: &'a Animation<'_>,
+    notes: &mut Vec<String>,
+) -> std::borrow::Cow<'a, Clip> {
     let name = match (animation.character, animation.session) {
         (Some(character), _) => character.name().to_owned(),
         (None, Some(session)) => session.character.clone(),
         (None, None) => "the character".to_owned(),
     };
-    let has_arkit = animation.clip.blendshapes.iter().any(|n| {
-        faceanim_rig::names::drive(n)
-            .is_some_and(|d| !matches!(d, faceanim_rig::names::Drive::Expression(_)))
-    });
-    match (&animation.arkit, has_arkit) {
-        (_, true) => &animation.clip,
-        (Some(capture), false) => {
-            notes.push(format!(
-                "note: {name} has no ARKit-named blendshapes; Live Link Face gets the capture's ARKit weights"
-            ));
-            capture
-        }
-        (None, false) => {
+    // The channels the character's own shapes carry: an ARKit-named shape the take moves (one
+    // it leaves at rest while the take moves the face through others — a VRoid avatar's ARKit
+    // shapes beside the vowels lip sync moves — says nothing of the face).
+    let own: Vec<&str> = animation
+        .clip
+        .blendshapes
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| {
+            faceanim_rig::names::drive(n)
+                .is_some_and(|d| !matches!(d, faceanim_rig::names::Drive::Expression(_)))
+        })
+        .filter(|(k, _)| {
+            animation.arkit.is_none()
+                || animation
+                    .clip
+                    .frames
+                    .iter()
+                    .any(|row| row.get(*k).is_some_and(|w| *w != 0.0))
+        })
+        .filter_map(|(_, n)| faceanim_rig::names::arkit_name(n))
+        .collect();
+    let Some(made_of) = animation
+        .arkit
+        .as_ref()
+        .filter(|a| a.frames.len() == animation.clip.frames.len())
+    else {
+        if own.is_empty() {
             notes.push(format!(
                 "warning: Live Link Face speaks ARKit and {name} has no ARKit-named blendshapes; the curves are zero"
             ));
-            &animation.clip
         }
+        return std::borrow::Cow::Borrowed(&animation.clip);
+    };
+    if own.is_empty() {
+        let named = animation
+            .clip
+            .blendshapes
+            .iter()
+            .any(|n| faceanim_rig::names::arkit_name(n).is_some());
+        notes.push(if named {
+            format!(
+                "note: {name}'s ARKit-named blendshapes stay at rest in this take; Live Link Face gets the ARKit weights the take was made of"
+            )
+        } else {
+            format!(
+                "note: {name} has no ARKit-named blendshapes; Live Link Face gets the ARKit weights the take was made of"
+            )
+        });
+        return std::borrow::Cow::Borrowed(made_of);
     }
+    // The take's ARKit columns for the channels the character has no shape for.
+    let filled: Vec<usize> = made_of
+        .blendshapes
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| faceanim_rig::names::arkit_name(n).is_some_and(|c| !own.contains(&c)))
+        .map(|(k, _)| k)
+        .collect();
+    if filled.is_empty() {
+        return std::borrow::Cow::Borrowed(&animation.clip);
+    }
+    notes.push(format!(
+        "note: {} Live Link Face curve(s) {name} has no ARKit-named shape for come from the ARKit weights the take was made of",
+        filled.len()
+    ));
+    let mut merged = animation.clip.clone();
+    merged
+        .blendshapes
+        .extend(filled.iter().map(|&k| made_of.blendshapes[k].clone()));
+    for (row, from) in merged.frames.iter_mut().zip(&made_of.frames) {
+        row.extend(filled.iter().map(|&k| from.get(k).copied().unwrap_or(0.0)));
+    }
+    std::borrow::Cow::Owned(merged)
 }
 
 #[cfg(test)]
@@ -495,6 +555,75 @@ mod tests {
             error.starts_with("take.fbx: the name must end in .json"),
             "{error}"
         );
+    }
+
+    #[test]
+    fn live_link_face_takes_each_curve_from_the_shape_that_carries_it() {
+        let clip = |names: &[&str], frames: Vec<Vec<f32>>| Clip {
+            fps: 30.0,
+            blendshapes: names.iter().map(|&n| n.to_owned()).collect(),
+            frames,
+            head: None,
+            head_position: None,
+            presence: None,
+        };
+        // The character's own blink moves (a correction made it 0.9); its smile shape stays
+        // at rest while its vowel opens the mouth; the take was made of a blink, a smile and
+        // an open jaw.
+        let own = clip(
+            &["eyeBlink_L", "mouthSmile_L", "Fcl_MTH_A"],
+            vec![vec![0.9, 0.0, 0.5]; 3],
+        );
+        let made_of = clip(
+            &["eyeBlinkLeft", "mouthSmileLeft", "jawOpen"],
+            vec![vec![0.6, 0.3, 0.7]; 3],
+        );
+        let curves = |arkit: Option<Clip>| {
+            let animation = Animation {
+                character: None,
+                animation: MorphAnimation {
+                    name: "take".into(),
+                    times: vec![0.0, 1.0 / 30.0, 2.0 / 30.0],
+                    weights: own.frames.clone(),
+                    rotations: None,
+                },
+                clip: own.clone(),
+                arkit,
+                session: None,
+                bones: None,
+                strokes: None,
+            };
+            let exported =
+                export(Format::LiveLinkCsv, &animation).unwrap_or_else(|e| panic!("{e}"));
+            let text = String::from_utf8(exported.bytes).unwrap_or_default();
+            let back = livelink::from_csv(&text).unwrap_or_else(|e| panic!("{e}"));
+            let value = |name: &str| {
+                back.blendshapes
+                    .iter()
+                    .position(|n| n == name)
+                    .map_or(0.0, |c| back.frames[1][c])
+            };
+            (
+                [
+                    value("eyeBlinkLeft"),
+                    value("mouthSmileLeft"),
+                    value("jawOpen"),
+                ],
+                exported.notes,
+            )
+        };
+        let near = |a: [f32; 3], b: [f32; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5);
+        let (values, notes) = curves(Some(made_of));
+        assert!(near(values, [0.9, 0.3, 0.7]), "{values:?} {notes:?}");
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.contains("2 Live Link Face curve(s)")),
+            "{notes:?}"
+        );
+        // Without what the take was made of, the character's own shapes are all there is.
+        let (values, _) = curves(None);
+        assert!(near(values, [0.9, 0.0, 0.0]), "{values:?}");
     }
 
     #[test]

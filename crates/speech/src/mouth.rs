@@ -32,6 +32,9 @@ pub enum Route {
     /// Its own shapes, as its retarget map puts each viseme's ARKit channels on them
     /// ([`Mouth::through_map`]): for a rig whose names say nothing of a mouth, by geometry.
     Retarget,
+    /// None of its shapes (it has none): its jaw bone, turned by each viseme's `jawOpen`
+    /// ([`Mouth::jaw_bone`], with the take's ARKit values from [`Mouth::arkit`]).
+    JawBone,
 }
 
 /// Why a character's mouth cannot be driven.
@@ -385,6 +388,44 @@ impl Mouth {
             route: Route::Retarget,
             shapes: map.blendshapes.len(),
             per_viseme,
+        }
+    }
+
+    /// Each viseme (Oculus order) as ARKit's 52 channels ([`faceanim_rig::names::ARKIT_52`]
+    /// order) by `table`: what a take's ARKit values are, whatever the character's shapes — Live
+    /// Link Face's curves, and the jaw bone's `jawOpen`.
+    #[must_use]
+    pub fn arkit(table: &MouthTable) -> Mouth {
+        let per_viseme = Viseme::ALL
+            .iter()
+            .map(|v| {
+                let Some(channels) = table.visemes.get(v.name()).filter(|_| *v != Viseme::Sil)
+                else {
+                    return Vec::new();
+                };
+                faceanim_rig::names::ARKIT_52
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, c)| channels.get(*c).map(|w| (i, *w)))
+                    .filter(|(_, w)| *w > 0.0)
+                    .collect()
+            })
+            .collect();
+        Mouth {
+            route: Route::Arkit,
+            shapes: faceanim_rig::names::ARKIT_52.len(),
+            per_viseme,
+        }
+    }
+
+    /// The mouth of a character with no shapes but a jaw bone ([`Route::JawBone`]): it moves
+    /// none of its (no) shapes; the take's ARKit values ([`Mouth::arkit`]) turn the bone.
+    #[must_use]
+    pub fn jaw_bone() -> Mouth {
+        Mouth {
+            route: Route::JawBone,
+            shapes: 0,
+            per_viseme: vec![Vec::new(); Viseme::ALL.len()],
         }
     }
 
