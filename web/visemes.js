@@ -17,6 +17,7 @@ const ROUTE_TEXT = {
   arkit: 'This character lip-syncs through its ARKit mouth shapes, by this table.',
   adapter: 'This character has no mouth names: its adapter reads the built-in head making each viseme by this table.',
   retarget: 'This character has no mouth names: its retarget map puts each viseme of this table on its own shapes.',
+  jaw_bone: 'This character has no blendshapes: its jaw bone opens by each viseme\'s jawOpen in this table.',
 };
 
 function show(/** @type {any} */ view) {

@@ -152,23 +152,15 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     let (sound, heard) = heard?;
     let mouth = match &args.adapter {
         Some(path) => mouth_by_adapter(&character, &table, path)?,
-        None if character.blendshapes().is_empty() => shapeless_mouth(&character)?,
         None => match Mouth::of(&character, &table) {
             Ok(mouth) => mouth,
-            Err(no_mouth) => {
+            // Shapes without mouth names: geometry may tell which make a mouth.
+            Err(no_mouth @ faceanim_speech::MouthError::NoMouth(_)) => {
                 mouth_by_map(&character, args.character.as_deref(), &table)?.ok_or(no_mouth)?
             }
+            Err(other) => return Err(other.into()),
         },
     };
-    // The take's ARKit values, whatever the character's shapes: Live Link Face's curves for a
-    // character without ARKit names, and the jaw bone's opening.
-    let arkit_mouth = Mouth::arkit(&table);
-    let arkit_rows: Vec<Vec<f32>> = heard
-        .track
-        .sample(args.fps)
-        .iter()
-        .map(|v| arkit_mouth.weights(v))
-        .collect();
     let mut lip_sync = heard.on(&mouth, args.fps);
     if let Some(note) = transcript.as_ref().and_then(|t| t.note.clone()) {
         lip_sync.notes.insert(0, note);
@@ -211,26 +203,11 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         args.fps,
         &lip_sync.frames,
         heads.as_deref(),
-    )?;
-    let mut animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
-    // The channels the visemes move (the eyes' are not keyed at rest).
-    let moving: Vec<usize> = (0..faceanim_rig::names::ARKIT_52.len())
-        .filter(|&c| arkit_rows.iter().any(|row| row[c] > 0.0))
-        .collect();
-    animation.arkit = Some(faceanim_anim::Clip {
-        fps: args.fps,
-        blendshapes: moving
-            .iter()
-            .map(|&c| faceanim_rig::names::ARKIT_52[c].to_owned())
-            .collect(),
-        frames: arkit_rows
-            .iter()
-            .map(|row| moving.iter().map(|&c| row[c]).collect())
-            .collect(),
-        head: heads.clone(),
-        head_position: None,
-        presence: None,
-    });
+    )?
+    // What it is made of, whatever the character's shapes: Live Link Face's curves where its
+    // own shapes do not carry them, and a jaw bone's opening.
+    .made_of_arkit(lip_sync.arkit(&table))?;
+    let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
     for (path, format) in outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation, args.out.glb)?;
     }
@@ -381,19 +358,6 @@ fn read_text(path: &Path, option: &str, accept: Accept<'_>) -> anyhow::Result<Te
 /// (by `table`), rendered from the front and read by the adapter.
 /// The mouth of a rig whose names say nothing of one, through its retarget map (the one
 /// beside it, or made and saved there now); `None` when the map moves no shape of it.
-/// The mouth of a character with no blendshapes: its jaw bone, where it has one.
-fn shapeless_mouth(character: &faceanim_rig::Character) -> anyhow::Result<Mouth> {
-    let jaw = character
-        .source()
-        .and_then(|s| s.bones().get(faceanim_rig::bones::Bone::Jaw));
-    anyhow::ensure!(
-        jaw.is_some(),
-        "{} has no blendshapes and no jaw bone to lip-sync: make ARKit's 52 shapes on it with `faceanim generate-shapes`, then lip-sync what it writes",
-        character.name()
-    );
-    Ok(Mouth::jaw_bone())
-}
-
 fn mouth_by_map(
     character: &faceanim_rig::Character,
     character_path: Option<&Path>,

@@ -595,6 +595,27 @@ fn the_studio_aligns_dropped_speech_to_its_transcript_in_its_language_and_voice(
     let mut read_by_lip_sync = faceanim_speech::script::TRANSCRIPT_FILES.to_vec();
     read_by_lip_sync.sort_unstable();
     assert_eq!(offered, read_by_lip_sync);
+    // The page says how lip sync reaches the character for every route it can take.
+    let page = std::fs::read_to_string(support::repo().join("web/visemes.js")).unwrap();
+    use faceanim_speech::Route;
+    for route in [
+        Route::Visemes,
+        Route::Arkit,
+        Route::Adapter,
+        Route::Retarget,
+        Route::JawBone,
+    ] {
+        // A route added to the enum must be added above (and to the page).
+        match route {
+            Route::Visemes | Route::Arkit | Route::Adapter | Route::Retarget | Route::JawBone => {}
+        }
+        let name = serde_json::to_value(route).unwrap();
+        let name = name.as_str().unwrap();
+        assert!(
+            page.contains(&format!("\n  {name}: '")),
+            "web/visemes.js says nothing of the route {name}"
+        );
+    }
 }
 
 /// A line saved as people's editors save it.

@@ -93,6 +93,29 @@ pub struct LipSync {
     pub notes: Vec<String>,
 }
 
+impl LipSync {
+    /// Each frame as ARKit's 52 channels ([`faceanim_rig::names::ARKIT_52`] order), its
+    /// visemes by `table` ([`Mouth::arkit`]): what the take is made of, whatever the
+    /// character's shapes (Live Link Face's curves, a jaw bone's opening).
+    #[must_use]
+    pub fn arkit(&self, table: &MouthTable) -> Vec<Vec<f32>> {
+        let mouth = Mouth::arkit(table);
+        let mut rows: Vec<Vec<f32>> = self
+            .track
+            .sample(self.fps)
+            .iter()
+            .map(|v| mouth.weights(v))
+            .collect();
+        rows.resize(self.frames.len(), vec![0.0; mouth_channels()]);
+        rows
+    }
+}
+
+/// How many channels [`LipSync::arkit`] gives a frame.
+fn mouth_channels() -> usize {
+    faceanim_rig::names::ARKIT_52.len()
+}
+
 /// Lip sync of `sound` on `character` at `fps`, aligned to `transcript` when given, else
 /// recognised by `blind` ([`Recognition::Words`] or [`Recognition::PhoneLoop`]).
 ///

@@ -9,6 +9,8 @@
 //!   may replace: `faceanim lipsync --viseme-table FILE`), through the one name table
 //!   ([`NameMap`](faceanim_rig::name_map::NameMap)) capture uses ([`Route::Arkit`]).
 //! - A rig with neither has no mouth to drive by name ([`MouthError::NoMouth`]).
+//! - A body with no blendshapes at all opens its jaw bone ([`Route::JawBone`]), or has nothing
+//!   to lip-sync ([`MouthError::NoShapes`]).
 
 use std::collections::BTreeMap;
 
@@ -46,6 +48,11 @@ pub enum MouthError {
         "{0} has neither viseme shapes (viseme_aa, aa/ih/ou/ee/oh, Fcl_MTH_A…) nor ARKit mouth shapes (jawOpen, mouthFunnel…) to lip-sync; make its retarget map (faceanim retarget, or Make map in the studio) and lip sync reaches its shapes by geometry"
     )]
     NoMouth(String),
+    /// No blendshapes at all, and no jaw bone.
+    #[error(
+        "{0} has no blendshapes and no jaw bone to lip-sync: make ARKit's 52 shapes on it with `faceanim generate-shapes` (Generate blendshapes in the studio), then lip-sync that"
+    )]
+    NoShapes(String),
     /// A viseme table is malformed.
     #[error("viseme table: {0}")]
     Table(String),
@@ -271,9 +278,19 @@ impl Mouth {
     /// The mouth of `character`, with `table` for ARKit rigs.
     ///
     /// # Errors
-    /// [`MouthError::NoMouth`] when it has neither visemes nor ARKit mouth shapes.
+    /// [`MouthError::NoMouth`] when it has neither visemes nor ARKit mouth shapes;
+    /// [`MouthError::NoShapes`] when it has no shapes at all and no jaw bone.
     pub fn of(character: &Character, table: &MouthTable) -> Result<Mouth, MouthError> {
         let shapes = character.blendshapes().len();
+        if shapes == 0 {
+            let jaw = character
+                .source()
+                .and_then(|s| s.bones().get(faceanim_rig::bones::Bone::Jaw));
+            return match jaw {
+                Some(_) => Ok(Mouth::jaw_bone()),
+                None => Err(MouthError::NoShapes(character.name().to_owned())),
+            };
+        }
         let parts = character.expression_parts();
         // Per viseme, the shape that is it: one with its own targets before a VRM expression
         // bound to others (VRM's aa bound to Fcl_MTH_A moves the same vertices).

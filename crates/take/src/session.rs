@@ -36,6 +36,11 @@ pub struct SessionFrame {
     pub expression: Option<Expression>,
     /// The estimate, one weight per blendshape (bridged from neighbours without a face).
     pub estimate: Vec<f32>,
+    /// ARKit's 52 channels ([`faceanim_rig::names::ARKIT_52`] order) as the frame was made of
+    /// them where no camera read the face: a lip sync's visemes by its viseme table. What Live
+    /// Link Face and a jaw bone get where the character's own shapes do not carry a channel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub arkit: Option<Vec<f32>>,
 }
 
 impl SessionFrame {
@@ -56,6 +61,7 @@ impl SessionFrame {
             head_position: record.head_position,
             expression,
             estimate,
+            arkit: None,
         }
     }
 }
@@ -704,14 +710,15 @@ impl Session {
 
     /// What capture read as ARKit weights (MediaPipe's scores but `_neutral`, bridged over
     /// frames without a face) under the session's smoothing and keyframes, as a clip with the
-    /// session's head pose: what Live Link Face gets for a character without ARKit names. `None`
-    /// when no frame kept its expression.
+    /// session's head pose: what Live Link Face gets for a character without ARKit names. Where
+    /// no frame kept its expression, what the frames were made of ([`SessionFrame::arkit`]: a
+    /// lip sync's); `None` when neither.
     #[must_use]
     pub fn arkit_clip(&self) -> Option<Clip> {
         let names = &faceanim_track::BLENDSHAPE_NAMES[1..];
         let known: Vec<bool> = self.frames.iter().map(|f| f.expression.is_some()).collect();
         if !known.contains(&true) {
-            return None;
+            return self.made_of_clip();
         }
         let mut rows: Vec<Vec<f32>> = self
             .frames
@@ -727,6 +734,42 @@ impl Session {
         let mut rows = self.smoothed(rows);
         faceanim_anim::filter::fill_gaps_rows(&mut rows, &self.keyframe_mask());
         Some(self.clip_of(names.iter().map(|&n| n.to_owned()).collect(), rows))
+    }
+
+    /// The frames' [`SessionFrame::arkit`] as a clip of the channels they move (eyes at rest
+    /// are not keyed), under the session's smoothing; `None` when no frame has them.
+    fn made_of_clip(&self) -> Option<Clip> {
+        if self.frames.iter().all(|f| f.arkit.is_none()) {
+            return None;
+        }
+        let names = &faceanim_rig::names::ARKIT_52;
+        let moving: Vec<usize> = (0..names.len())
+            .filter(|&c| {
+                self.frames.iter().any(|f| {
+                    f.arkit
+                        .as_ref()
+                        .is_some_and(|a| a.get(c).is_some_and(|w| *w > 0.0))
+                })
+            })
+            .collect();
+        let rows = self
+            .frames
+            .iter()
+            .map(|f| {
+                moving
+                    .iter()
+                    .map(|&c| {
+                        f.arkit
+                            .as_ref()
+                            .and_then(|a| a.get(c))
+                            .copied()
+                            .unwrap_or(0.0)
+                    })
+                    .collect()
+            })
+            .collect();
+        let rows = self.smoothed(rows);
+        Some(self.clip_of(moving.iter().map(|&c| names[c].to_owned()).collect(), rows))
     }
 
     /// A clip of `rows` (one per frame, in `names`' order) with the session's rate, head pose
@@ -1029,6 +1072,17 @@ fn frame_problems(frame: &SessionFrame, path: &str, width: usize, bad: &mut impl
             }
         }
     }
+    if let Some(arkit) = &frame.arkit {
+        let wanted = faceanim_rig::names::ARKIT_52.len();
+        if arkit.len() != wanted {
+            bad(format!(
+                "{path}.arkit: {} values, not {wanted}",
+                arkit.len()
+            ));
+        } else if let Some(k) = arkit.iter().position(|w| !(0.0..=1.0).contains(w)) {
+            bad(format!("{path}.arkit[{k}]: {} is not in 0..1", arkit[k]));
+        }
+    }
     if frame.estimate.len() != width {
         bad(format!(
             "{path}.estimate: {} weights for {width} blendshapes",
@@ -1112,6 +1166,7 @@ pub(crate) fn test_session(frames: usize, estimate: impl Fn(usize) -> Vec<f32>) 
             head_position: None,
             expression: None,
             estimate: estimate(i),
+            arkit: None,
         })
         .collect();
     Session::new(

@@ -267,10 +267,43 @@ impl Take {
                 head_position: None,
                 expression: None,
                 estimate: f.weights,
+                arkit: None,
             })
             .collect();
         let session = session_of(character, source.to_owned(), names, fps, frames, filtering);
         Take::new(session, EstimatorSource::Received)
+    }
+
+    /// The take with what each frame was made of as ARKit's 52 channels
+    /// ([`SessionFrame::arkit`]: a lip sync's visemes by its viseme table), one row per frame.
+    ///
+    /// # Errors
+    /// [`TakeError::Invalid`] when there is another number of rows than frames, or a row is
+    /// not 52 values in 0..1.
+    pub fn made_of_arkit(mut self, rows: Vec<Vec<f32>>) -> Result<Take, TakeError> {
+        let frames = &mut self.session.frames;
+        let wanted = faceanim_rig::names::ARKIT_52.len();
+        if rows.len() != frames.len() {
+            return Err(TakeError::Invalid(vec![format!(
+                "{} rows of ARKit values for {} frames",
+                rows.len(),
+                frames.len()
+            )]));
+        }
+        if let Some((k, row)) = rows
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.len() != wanted || r.iter().any(|w| !(0.0..=1.0).contains(w)))
+        {
+            return Err(TakeError::Invalid(vec![format!(
+                "frames[{k}].arkit: {} values, each in 0..1, not {row:?}",
+                wanted
+            )]));
+        }
+        for (frame, row) in frames.iter_mut().zip(rows) {
+            frame.arkit = Some(row);
+        }
+        Ok(self)
     }
 
     /// Where the estimates came from.
@@ -456,6 +489,54 @@ mod tests {
         }
         assert_eq!([chosen[20], chosen[22], chosen[24]], [20, 21, 22]);
         assert_eq!(footage.frame_names[59], "w59.png");
+    }
+
+    #[test]
+    fn a_take_keeps_what_it_was_made_of_through_its_file() {
+        let character = faceanim_head::default_character();
+        let n = character.blendshape_names().len();
+        let jaw = faceanim_rig::names::ARKIT_52
+            .iter()
+            .position(|c| *c == "jawOpen")
+            .unwrap();
+        let mut made_of = vec![vec![0.0; 52]; 4];
+        made_of[2][jaw] = 0.6;
+        let take = Take::from_weights(&character, "line", 30.0, &vec![vec![0.0; n]; 4], None)
+            .unwrap()
+            .made_of_arkit(made_of.clone())
+            .unwrap();
+        // Only the channels that move; saved and read again, the same.
+        for session in [
+            take.session.clone(),
+            Session::from_json(take.session.to_json().as_bytes()).unwrap(),
+        ] {
+            let clip = session.arkit_clip().unwrap();
+            assert_eq!(clip.blendshapes, ["jawOpen"]);
+            let column: Vec<f32> = clip.frames.iter().map(|r| r[0]).collect();
+            assert_eq!(column, [0.0, 0.0, 0.6, 0.0]);
+        }
+        // Rows that do not fit the frames, or values that are no weights, are refused.
+        let fresh = || Take::from_weights(&character, "line", 30.0, &vec![vec![0.0; n]; 4], None);
+        let e = fresh()
+            .unwrap()
+            .made_of_arkit(made_of[..3].to_vec())
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("3 rows of ARKit values for 4 frames"),
+            "{e}"
+        );
+        made_of[1][0] = 1.5;
+        let e = fresh().unwrap().made_of_arkit(made_of).unwrap_err();
+        assert!(e.to_string().contains("frames[1].arkit"), "{e}");
+        // A session file's values are checked as its estimates are.
+        let mut file: serde_json::Value = serde_json::from_str(&take.session.to_json()).unwrap();
+        file["frames"][0]["arkit"] = serde_json::json!([0.5]);
+        let e = Session::from_json(file.to_string().as_bytes()).unwrap_err();
+        assert!(
+            e.to_string().contains("frames[0].arkit: 1 values, not 52"),
+            "{e}"
+        );
     }
 
     #[test]

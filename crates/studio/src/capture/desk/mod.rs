@@ -411,7 +411,9 @@ impl CaptureDesk {
     ) -> Result<usize, ApiError> {
         self.busy()?;
         let count = lip_sync.frames.len();
-        let take = Take::from_weights(character, shown, lip_sync.fps, &lip_sync.frames, None)?;
+        // What it is made of goes with it (Live Link Face's curves, a jaw bone's opening).
+        let take = Take::from_weights(character, shown, lip_sync.fps, &lip_sync.frames, None)?
+            .made_of_arkit(lip_sync.arkit(&self.visemes))?;
         tracing::info!("lip sync of {shown}: {count} frames");
         if !lip_sync.notes.is_empty() {
             // What was done instead of what was asked (a transcript that could not be used).
