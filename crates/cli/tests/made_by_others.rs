@@ -936,20 +936,25 @@ fn lip_sync_opens_a_jaw_bone_and_live_link_face_hears_any_avatar() {
         "Bob and Mary moved the heavy boxes up the narrow path.",
         &speech,
     );
+    // `faceanim lipsync` of the line on `character`, writing `outputs`.
+    let lipsync = |character: &Path, outputs: &[&Path], more: &[&str]| {
+        let mut args = vec!["lipsync", speech.to_str().unwrap(), "--character"];
+        args.push(character.to_str().unwrap());
+        for out in outputs {
+            args.extend(["-o", out.to_str().unwrap()]);
+        }
+        args.extend(more);
+        support::faceanim(&args)
+    };
     let bare = faceanim_testdata::producers::blender_bare_avatar_path();
     let (glb, csv) = (dir.join("bare.glb"), dir.join("bare.csv"));
-    let summary: Value = serde_json::from_str(&faceanim_ok(&[
-        "lipsync",
-        speech.to_str().unwrap(),
-        "--character",
-        bare.to_str().unwrap(),
-        "-o",
-        glb.to_str().unwrap(),
-        "-o",
-        csv.to_str().unwrap(),
-        "--json",
-    ]))
-    .unwrap();
+    let out = lipsync(&bare, &[&glb, &csv], &["--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(summary["route"], "jaw_bone", "{summary}");
     assert_valid_gltf(&glb);
     let (header, rows) = live_link_csv(&csv);
@@ -986,14 +991,7 @@ fn lip_sync_opens_a_jaw_bone_and_live_link_face_hears_any_avatar() {
     )
     .unwrap();
     let csv = dir.join("avatar.csv");
-    let out = support::faceanim(&[
-        "lipsync",
-        speech.to_str().unwrap(),
-        "--character",
-        avatar.to_str().unwrap(),
-        "-o",
-        csv.to_str().unwrap(),
-    ]);
+    let out = lipsync(&avatar, &[&csv], &[]);
     let said = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{said}");
     assert!(
@@ -1014,14 +1012,7 @@ fn lip_sync_opens_a_jaw_bone_and_live_link_face_hears_any_avatar() {
     let head = dir.join("head.glb");
     let character = faceanim_rig::Character::new(parts).unwrap();
     std::fs::write(&head, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
-    let out = support::faceanim(&[
-        "lipsync",
-        speech.to_str().unwrap(),
-        "--character",
-        head.to_str().unwrap(),
-        "-o",
-        dir.join("head.json").to_str().unwrap(),
-    ]);
+    let out = lipsync(&head, &[&dir.join("head.json")], &[]);
     let said = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{said}");
     assert!(said.contains("faceanim generate-shapes"), "{said}");

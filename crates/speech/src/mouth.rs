@@ -218,6 +218,18 @@ impl Default for MouthTable {
 }
 
 impl MouthTable {
+    /// Viseme `v` as ARKit's 52 channels ([`faceanim_rig::names::ARKIT_52`] order); `None`
+    /// for silence and a viseme the table leaves out.
+    fn arkit_of(&self, v: Viseme) -> Option<Vec<f32>> {
+        let channels = self.visemes.get(v.name()).filter(|_| v != Viseme::Sil)?;
+        Some(
+            faceanim_rig::names::ARKIT_52
+                .iter()
+                .map(|c| channels.get(*c).copied().unwrap_or(0.0))
+                .collect(),
+        )
+    }
+
     /// A table from JSON: `{"aa": {"jawOpen": 0.7}, "PP": {"mouthClose": 0.5}}`; visemes left
     /// out keep the default's.
     ///
@@ -386,14 +398,9 @@ impl Mouth {
         let per_viseme = Viseme::ALL
             .iter()
             .map(|v| {
-                let Some(channels) = table.visemes.get(v.name()).filter(|_| *v != Viseme::Sil)
-                else {
+                let Some(values) = table.arkit_of(*v) else {
                     return Vec::new();
                 };
-                let values: Vec<f32> = faceanim_rig::names::ARKIT_52
-                    .iter()
-                    .map(|c| channels.get(*c).copied().unwrap_or(0.0))
-                    .collect();
                 map.weights(&values)
                     .into_iter()
                     .enumerate()
@@ -416,16 +423,13 @@ impl Mouth {
         let per_viseme = Viseme::ALL
             .iter()
             .map(|v| {
-                let Some(channels) = table.visemes.get(v.name()).filter(|_| *v != Viseme::Sil)
-                else {
-                    return Vec::new();
-                };
-                faceanim_rig::names::ARKIT_52
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(i, c)| channels.get(*c).map(|w| (i, *w)))
-                    .filter(|(_, w)| *w > 0.0)
-                    .collect()
+                table.arkit_of(*v).map_or_else(Vec::new, |values| {
+                    values
+                        .into_iter()
+                        .enumerate()
+                        .filter(|(_, w)| *w > 0.0)
+                        .collect()
+                })
             })
             .collect();
         Mouth {
