@@ -57,9 +57,9 @@ pub fn formats_of(paths: &[PathBuf]) -> anyhow::Result<Vec<Format>> {
 /// What a command that writes a character (`export`, `sketch`) writes to `path`, by its ending:
 /// the character's own file as a binary glTF for `.glb` and `.vrm` (a VRM avatar keeps its
 /// ending) and a name with no ending, or the animation alone in any other format
-/// [`Format::from_path`] knows. Checked
-/// before any work is done: a `.gltf` (faceanim writes binary glTF only), an ending no format
-/// has, or a folder that is not there is an error naming the file.
+/// [`Format::from_path`] knows. Checked before any work is done: a `.gltf` (faceanim writes
+/// binary glTF only), an ending no format has, or a folder that is not there is an error naming
+/// the file.
 pub fn character_format(path: &Path) -> anyhow::Result<Format> {
     anyhow::ensure!(
         !path

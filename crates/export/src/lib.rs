@@ -524,12 +524,29 @@ fn live_link_curves<'a>(
         "note: {} Live Link Face curve(s) {name} has no ARKit-named shape for come from the ARKit weights the take was made of",
         filled.len()
     ));
+    // The character's columns but those (at rest) of the channels filled, then the filled.
+    let replaced: Vec<&str> = filled
+        .iter()
+        .filter_map(|&k| faceanim_rig::names::arkit_name(&made_of.blendshapes[k]))
+        .collect();
+    let kept: Vec<usize> = (0..animation.clip.blendshapes.len())
+        .filter(|&k| {
+            faceanim_rig::names::arkit_name(&animation.clip.blendshapes[k])
+                .is_none_or(|c| !replaced.contains(&c))
+        })
+        .collect();
     let mut merged = animation.clip.clone();
-    merged
-        .blendshapes
-        .extend(filled.iter().map(|&k| made_of.blendshapes[k].clone()));
+    merged.blendshapes = kept
+        .iter()
+        .map(|&k| animation.clip.blendshapes[k].clone())
+        .chain(filled.iter().map(|&k| made_of.blendshapes[k].clone()))
+        .collect();
     for (row, from) in merged.frames.iter_mut().zip(&made_of.frames) {
-        row.extend(filled.iter().map(|&k| from.get(k).copied().unwrap_or(0.0)));
+        *row = kept
+            .iter()
+            .map(|&k| row.get(k).copied().unwrap_or(0.0))
+            .chain(filled.iter().map(|&k| from.get(k).copied().unwrap_or(0.0)))
+            .collect();
     }
     std::borrow::Cow::Owned(merged)
 }
