@@ -106,14 +106,12 @@ impl LipSync {
             .iter()
             .map(|v| mouth.weights(v))
             .collect();
-        rows.resize(self.frames.len(), vec![0.0; mouth_channels()]);
+        rows.resize(
+            self.frames.len(),
+            vec![0.0; faceanim_rig::names::ARKIT_52.len()],
+        );
         rows
     }
-}
-
-/// How many channels [`LipSync::arkit`] gives a frame.
-fn mouth_channels() -> usize {
-    faceanim_rig::names::ARKIT_52.len()
 }
 
 /// Lip sync of `sound` on `character` at `fps`, aligned to `transcript` when given, else

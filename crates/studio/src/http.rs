@@ -170,7 +170,7 @@ fn disposition(file: &str) -> String {
     format!("attachment; filename=\"{ascii}\"; filename*=UTF-8''{exact}")
 }
 
-/// `strings` as a JSON array in ASCII: what is not, escaped as JSON's `\\uXXXX`, so that it
+/// `strings` as a JSON array in ASCII: what is not, escaped as JSON's `\uXXXX`, so that it
 /// fits in a header.
 fn ascii_json(strings: &[String]) -> String {
     let json = serde_json::to_string(strings).unwrap_or_else(|_| "[]".to_owned());
