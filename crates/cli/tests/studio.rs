@@ -1118,7 +1118,11 @@ fn a_vrm_avatars_download_is_a_vrm() {
     let studio = start_on(Some(&avatar), &dir.path().join("vrm.faceanim.json"), &[]);
     let (head, body) = support::get_with_head(studio.port, "/api/export.glb");
     let headers = head.to_ascii_lowercase();
-    assert!(headers.contains(".vrm\"\r\n"), "{headers}");
+    assert!(
+        headers.contains("filename=\"vrm.faceanim.vrm\"")
+            && headers.contains("filename*=utf-8''vrm.faceanim.vrm"),
+        "{headers}"
+    );
     let json = faceanim_testdata::glb::json(&body);
     assert!(json["extensions"]["VRMC_vrm"].is_object(), "still a VRM");
 }
