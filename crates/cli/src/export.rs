@@ -48,7 +48,13 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 .filter(|n| character.find_blendshape(n).is_none())
                 .map(String::as_str)
                 .collect();
-            if !unmatched.is_empty() {
+            if character.blendshapes().is_empty() {
+                tracing::warn!(
+                    "{}: {} has no blendshapes: its bones take the clip's head pose, eyeLook and jawOpen; nothing takes its other channels",
+                    clip_path.display(),
+                    character.name()
+                );
+            } else if !unmatched.is_empty() {
                 tracing::warn!(
                     "{}: no blendshape for {}",
                     clip_path.display(),

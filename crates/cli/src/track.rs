@@ -143,11 +143,13 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     let models = FaceModels::load().context("loading the face models")?;
     let estimator = estimator(&args, &character, &models)?;
     if !formats.is_empty() || args.session.is_some() {
-        anyhow::ensure!(
-            estimator.driven() > 0,
-            "no shape of {} answers to MediaPipe's channels, by name or by geometry: set the map's rows (faceanim retarget --set) or train an adapter (faceanim adapt)",
-            character.name()
-        );
+        match Take::check_moves(&character, estimator.as_ref()) {
+            Err(faceanim_take::TakeError::NoArkitNames { .. }) => anyhow::bail!(
+                "no shape of {} answers to MediaPipe's channels, by name or by geometry: set the map's rows (faceanim retarget --set) or train an adapter (faceanim adapt)",
+                character.name()
+            ),
+            other => other?,
+        }
     }
 
     let workers = Workers::start(&models, threads - 1).context("starting the face models")?;
@@ -308,6 +310,10 @@ fn summary(
         "adapter_ms_per_frame": 1000.0 * timing.estimate_seconds / frames.max(1) as f64,
         "character": character.name(),
         "blendshapes_driven": estimator.driven(),
+        "bones": character
+            .source()
+            .map(|s| s.bones().found().map(|(b, _)| b.name()).collect::<Vec<_>>())
+            .unwrap_or_default(),
         "blendshapes": character.blendshapes().len(),
         "filter": format!("{:?}", args.filter),
         "keyframes": session.keyframes().len(),

@@ -150,8 +150,10 @@ fn a_bare_avatar_gets_the_52_shapes_and_keeps_everything() {
     }
 }
 
+/// The studio on a body with no shapes: a capture moves its bones (its jaw opens with the
+/// face's), and Generate blendshapes gives it the 52.
 #[test]
-fn the_studio_generates_shapes_for_a_character_without_any() {
+fn the_studio_captures_onto_and_generates_shapes_for_a_character_without_any() {
     let out = output_dir("generate-shapes-studio");
     let (bare, before) = bare_avatar(&out);
     let studio = start_on(Some(&bare), &out.join("bare.faceanim.json"), &[]);
@@ -161,6 +163,42 @@ fn the_studio_generates_shapes_for_a_character_without_any() {
     let shown = character(studio.port);
     assert_eq!(shown["blendshapes"].as_array().unwrap().len(), 0);
     assert!(shown.get("generated").is_none());
+
+    // A face opening its mouth, captured: the take turns the view's jaw bone (the skeleton's
+    // last joint) as the jaw opens; it was refused ("no ARKit-named blendshapes").
+    let video = out.join("jaw.mp4");
+    let jaw: Vec<f32> = (0..12).map(|i| i as f32 / 11.0).collect();
+    support::encode_h264(&video, 256, 24, &support::ict_jaw_frames(&jaw, 256));
+    let state = support::open_and_settle(studio.port, &video);
+    let take = &state["take"];
+    assert_eq!(take["frames"], 12, "{}", state["job"]);
+    let bones = take["bones"].as_array().unwrap();
+    assert_eq!(bones.len(), 12, "{take}");
+    let jaw_turn = |frame: &Value| {
+        let joints = frame.as_array().unwrap();
+        let q = glam::Quat::from_slice(&support::f32s(joints.last().unwrap()));
+        q.angle_between(glam::Quat::IDENTITY).to_degrees()
+    };
+    let (shut, open) = (jaw_turn(&bones[0]), jaw_turn(&bones[11]));
+    assert!(
+        open > shut + 3.0,
+        "the jaw turned {shut}° shut and {open}° open"
+    );
+    // A clip JSON of ARKit names opens as a take of the same bones (it was refused: "none of
+    // the clip's blendshapes exist").
+    let (status, body) = support::upload(
+        studio.port,
+        "jaw.json",
+        br#"{"fps": 30, "blendshapes": ["jawOpen"], "frames": [[0.0], [1.0]]}"#,
+    );
+    assert_eq!(status, 200, "{body}");
+    let state: Value = serde_json::from_str(&body).unwrap();
+    let bones = state["take"]["bones"].as_array().unwrap();
+    let (shut, open) = (jaw_turn(&bones[0]), jaw_turn(&bones[1]));
+    assert!(
+        shut < 0.01 && open > 10.0,
+        "the jaw turned {shut}° and {open}°"
+    );
 
     let (status, body) = request(
         studio.port,

@@ -438,23 +438,45 @@ fn strokes_through_the_studio_api_animate_the_blender_avatar() {
 /// What Blender reads back of `file`'s bones at `seconds`: each named bone's turn from rest
 /// in glTF's frame (Y up), as a quaternion (`tools/blender_bones.py`, Blender's own importer).
 fn blender_bone_turns(file: &Path, seconds: f32, bones: &[&str]) -> Vec<(String, glam::Quat)> {
-    let seconds = seconds.to_string();
-    let mut arguments = vec![file.as_os_str(), seconds.as_ref()];
+    blender_bone_turns_at(file, &[seconds], bones)
+        .pop()
+        .unwrap()
+}
+
+/// [`blender_bone_turns`] at each of `times` (seconds), from one Blender run.
+fn blender_bone_turns_at(
+    file: &Path,
+    times: &[f32],
+    bones: &[&str],
+) -> Vec<Vec<(String, glam::Quat)>> {
+    let times = times
+        .iter()
+        .map(f32::to_string)
+        .collect::<Vec<_>>()
+        .join(",");
+    let mut arguments = vec![file.as_os_str(), times.as_ref()];
     arguments.extend(bones.iter().map(std::ffi::OsStr::new));
     let report = support::blender_script("blender_bones.py", &arguments, "FACEANIM_BONES ");
     // Blender holds glTF's +Y as +Z: a turn in Blender's world is C·q·C⁻¹ with C = Rx(90°).
     let c = glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
-    bones
+    report["at"]
+        .as_array()
+        .unwrap()
         .iter()
-        .map(|bone| {
-            let q = &report["bones"][*bone];
-            let q = glam::Quat::from_xyzw(
-                q[1].as_f64().unwrap() as f32,
-                q[2].as_f64().unwrap() as f32,
-                q[3].as_f64().unwrap() as f32,
-                q[0].as_f64().unwrap() as f32,
-            );
-            ((*bone).to_owned(), c.inverse() * q * c)
+        .map(|at| {
+            bones
+                .iter()
+                .map(|bone| {
+                    let q = &at[*bone];
+                    let q = glam::Quat::from_xyzw(
+                        q[1].as_f64().unwrap() as f32,
+                        q[2].as_f64().unwrap() as f32,
+                        q[3].as_f64().unwrap() as f32,
+                        q[0].as_f64().unwrap() as f32,
+                    );
+                    ((*bone).to_owned(), c.inverse() * q * c)
+                })
+                .collect()
         })
         .collect()
 }
@@ -919,6 +941,129 @@ fn live_link_csv(path: &Path) -> (Vec<String>, Vec<Vec<f32>>) {
         .map(|l| l.split(',').skip(2).map(|v| v.parse().unwrap()).collect())
         .collect();
     (header, rows)
+}
+
+/// A real person captured onto a body whose face has no blendshapes (the Blender avatar
+/// exported without shape keys, as Mixamo and Ready Player Me bodies come without morph
+/// targets): `track` turns its head, eyes and jaw bones by the take's head pose, gaze and
+/// jawOpen — MediaPipe's own readings of the person — and Blender plays them so at every
+/// sampled frame; the clip JSON it writes turns them the same when exported again. The capture
+/// was refused ("no shape … answers to MediaPipe's channels"), and any clip put on the body.
+#[test]
+fn a_capture_turns_the_head_eyes_and_jaw_of_a_body_with_no_shapes() {
+    let dir = output_dir("made-by-others-capture-bones");
+    // Eight seconds of a person talking and turning his head (yaw −8° to 22°), cut by ffmpeg.
+    let video = dir.join("talking.mp4");
+    let footage = faceanim_testdata::producers::footage(faceanim_testdata::producers::CAP13);
+    let cut = std::process::Command::new("ffmpeg")
+        .args(["-y", "-v", "error", "-ss", "16", "-i"])
+        .arg(&footage)
+        .args(["-t", "8", "-an"])
+        .arg(&video)
+        .output()
+        .expect("ffmpeg");
+    support::succeeded("ffmpeg", cut);
+    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
+    let (glb, session) = (dir.join("bare.glb"), dir.join("bare.session.json"));
+    let clip = dir.join("bare.json");
+    let [glb_path, clip_path, session_path] = [&glb, &clip, &session].map(|p| p.to_str().unwrap());
+    let outputs = ["-o", glb_path, "-o", clip_path, "--session", session_path];
+    let more = [&["--filter", "none"][..], &outputs].concat();
+    let summary = support::track_summary(&video, &bare, &more);
+    assert_eq!(summary["blendshapes"], 0, "{summary}");
+    let bones = faceanim_rig::bones::Bone::ALL.map(faceanim_rig::bones::Bone::name);
+    assert_eq!(summary["bones"], serde_json::json!(bones), "{summary}");
+    assert_valid_gltf(&glb);
+    let session = faceanim_take::Session::from_json(&std::fs::read(&session).unwrap()).unwrap();
+    let heads = session.clip().head.unwrap();
+    let arkit = session.arkit_clip().unwrap();
+    let channel = |name: &str| arkit.column(name).unwrap();
+    let jaw_open = channel("jawOpen");
+    let fps = arkit.fps;
+    let sampled: Vec<usize> = (0..arkit.frames.len()).step_by(8).collect();
+    let times: Vec<f32> = sampled.iter().map(|&f| f as f32 / fps).collect();
+    let played = blender_bone_turns_at(&glb, &times, &["Head", "LeftEye", "RightEye", "Jaw"]);
+    let (mut yaws, mut opens) = (Vec::new(), Vec::new());
+    for (&f, turns) in sampled.iter().zip(&played) {
+        let turn = |bone: &str| turns.iter().find(|(b, _)| b == bone).unwrap().1;
+        let row = &arkit.frames[f];
+        // The head ends where the take's head pose says.
+        let q = glam::Quat::from_array(faceanim_anim::head_rotation(heads[f]));
+        let off = degrees_between(turn("Head"), q);
+        assert!(
+            off < 0.5,
+            "frame {f}: the head is {off}° from the take's pose"
+        );
+        // Each eye looks where MediaPipe's eyeLook scores say, as the head turned.
+        let value = |name: &str| arkit.column(name).map_or(0.0, |c| row[c]);
+        let gaze = faceanim_rig::bones::gaze_from_arkit(value);
+        for (eye, [yaw, pitch]) in ["LeftEye", "RightEye"].into_iter().zip(gaze) {
+            let look = glam::Quat::from_array(faceanim_anim::head_rotation([yaw, pitch, 0.0]));
+            let off = degrees_between(turn(eye), q * look);
+            assert!(
+                off < 0.5,
+                "frame {f}: {eye} is {off}° from the gaze {yaw}°, {pitch}°"
+            );
+        }
+        // The jaw opens about the character's left-right axis by jawOpen.
+        let (axis, angle) = (q.inverse() * turn("Jaw")).to_axis_angle();
+        let want = row[jaw_open] * faceanim_export::bones::DEFAULT_JAW_DEGREES;
+        let opened = angle.to_degrees();
+        assert!(
+            (opened - want).abs() < 1.0,
+            "frame {f}: Blender reads the jaw {opened}° open for jawOpen {}",
+            row[jaw_open]
+        );
+        assert!(
+            opened < 0.1 || axis.x.abs() > 0.99,
+            "the jaw turned about {axis}"
+        );
+        yaws.push(heads[f][0]);
+        opens.push(row[jaw_open]);
+    }
+    // The person moves: the bones are not held at rest.
+    let span = |v: &[f32]| {
+        v.iter().copied().fold(f32::MIN, f32::max) - v.iter().copied().fold(f32::MAX, f32::min)
+    };
+    assert!(span(&yaws) > 10.0, "the head's yaw spans {}°", span(&yaws));
+    assert!(span(&opens) > 0.15, "jawOpen spans {}", span(&opens));
+
+    // The clip JSON holds what the bones follow: put on the body again, it turns them the same.
+    let again = dir.join("again.glb");
+    export_with_clip(&bare, &again, &clip);
+    let replayed = blender_bone_turns_at(&again, &times, &["Head", "LeftEye", "RightEye", "Jaw"]);
+    for ((&f, first), second) in sampled.iter().zip(&played).zip(&replayed) {
+        for ((bone, a), (_, b)) in first.iter().zip(second) {
+            let off = degrees_between(*a, *b);
+            assert!(off < 0.1, "frame {f}: {bone} replayed {off}° away");
+        }
+    }
+    // A clip that turns none of its bones is refused, naming what would give it shapes.
+    let smile = dir.join("smile.json");
+    std::fs::write(
+        &smile,
+        r#"{"fps": 30, "blendshapes": ["mouthSmileLeft"], "frames": [[1.0]]}"#,
+    )
+    .unwrap();
+    let refused = support::faceanim(&[
+        "export",
+        bare.to_str().unwrap(),
+        "--clip",
+        smile.to_str().unwrap(),
+        "-o",
+        dir.join("smile.glb").to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success() && said.contains("generate-shapes"),
+        "{said}"
+    );
+    eprintln!(
+        "{} frames played: head yaw spans {:.1}°, jawOpen {:.2}",
+        sampled.len(),
+        span(&yaws),
+        span(&opens)
+    );
 }
 
 /// Lip sync reaches what a character has. Blender's own export of its avatar without shape

@@ -12,7 +12,7 @@
 
 mod support;
 
-use support::{assert_valid_gltf, faceanim, faceanim_ok, output_dir};
+use support::{assert_valid_gltf, faceanim, output_dir};
 
 fn ict() -> String {
     faceanim_testdata::shared("characters/ict-face.glb")
@@ -48,23 +48,11 @@ fn a_video_animates_an_arkit_named_character_in_three_formats() {
         dir.join("jaw.csv"),
         dir.join("jaw.raw.json"),
     );
-    let summary = faceanim_ok(&[
-        "track",
-        video.to_str().unwrap(),
-        "--character",
-        &ict(),
-        "-o",
-        json.to_str().unwrap(),
-        "-o",
-        glb.to_str().unwrap(),
-        "-o",
-        csv.to_str().unwrap(),
-        "--raw",
-        raw.to_str().unwrap(),
-        "--filter",
-        "none",
-    ]);
-    let summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    let [json_path, glb_path, csv_path, raw_path] =
+        [&json, &glb, &csv, &raw].map(|p| p.to_str().unwrap());
+    let outputs = ["-o", json_path, "-o", glb_path, "-o", csv_path];
+    let more = [&outputs[..], &["--raw", raw_path, "--filter", "none"]].concat();
+    let summary = support::track_summary(&video, std::path::Path::new(&ict()), &more);
     assert_eq!(summary["frames"], 10);
     assert_eq!(summary["faces_found"], 10);
     assert!(

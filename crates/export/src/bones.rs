@@ -69,6 +69,25 @@ impl BoneKeys {
     }
 }
 
+/// Whether a body with no blendshapes takes something of `clip` on its bones: a head pose on
+/// its head bone, gaze on its eye bones or `jawOpen` on its jaw bone (`false` for a character
+/// with blendshapes, which takes a clip by their names).
+#[must_use]
+pub fn takes_clip(character: &Character, clip: &Clip) -> bool {
+    let Some(source) = character.source() else {
+        return false;
+    };
+    if !character.blendshapes().is_empty() {
+        return false;
+    }
+    let found = source.bones();
+    let has = |bone: Bone| found.get(bone).is_some();
+    let keys = BoneKeys::from_clip(clip);
+    (clip.head.is_some() && has(Bone::Head))
+        || (keys.gaze.is_some() && (has(Bone::LeftEye) || has(Bone::RightEye)))
+        || (keys.jaw.is_some() && has(Bone::Jaw))
+}
+
 /// A bone made ready to turn: its node written as TRS (an animated node may not have a
 /// matrix), with the rotations that place it.
 fn prepare_joint(source: &Source, nodes: &mut [Value], node: usize) -> Option<Joint> {

@@ -197,27 +197,57 @@ pub struct Animation<'a> {
 
 impl<'a> Animation<'a> {
     /// `clip` put on `character` by name (ARKit spellings match), as an animation named `name`.
+    /// A body with no blendshapes at all takes the clip on its bones (head pose, gaze,
+    /// `jawOpen`; see [`bones`]), and Live Link Face the clip's own ARKit values.
     ///
     /// # Errors
-    /// [`ExportError::Clip`] when no name of the clip is one of the character's.
+    /// [`ExportError::Clip`] when no name of the clip is one of the character's;
+    /// [`ExportError::NothingForBones`] when the character has no blendshapes and nothing of the
+    /// clip turns its bones.
     pub fn from_clip(
         character: &'a Character,
         clip: &Clip,
         name: &str,
     ) -> Result<Animation<'a>, ExportError> {
-        let retarget = clip.retarget(character, name)?;
+        let retarget = match clip.retarget(character, name) {
+            Err(faceanim_anim::ClipError::NothingInCommon { .. })
+                if bones::takes_clip(character, clip) =>
+            {
+                faceanim_anim::Retarget {
+                    animation: MorphAnimation {
+                        name: name.to_owned(),
+                        times: (0..clip.frames.len())
+                            .map(|f| f as f32 / clip.fps)
+                            .collect(),
+                        weights: vec![Vec::new(); clip.frames.len()],
+                        rotations: clip.head.as_ref().map(|head| {
+                            head.iter()
+                                .map(|&h| faceanim_anim::head_rotation(h))
+                                .collect()
+                        }),
+                    },
+                    unmatched: clip.blendshapes.clone(),
+                }
+            }
+            Err(faceanim_anim::ClipError::NothingInCommon { .. })
+                if character.blendshapes().is_empty() =>
+            {
+                return Err(ExportError::NothingForBones(character.name().to_owned()));
+            }
+            other => other?,
+        };
         let names: Vec<String> = character.blendshape_names();
         Ok(Animation {
             // The clip's own gaze and jaw: a character without eyeLook shapes still has eyes.
             bones: Some(bones::BoneKeys::from_clip(clip)),
             character: Some(character),
+            arkit: names.is_empty().then(|| clip.clone()),
             clip: Clip {
                 blendshapes: names,
                 frames: retarget.animation.weights.clone(),
                 ..clip.clone()
             },
             animation: retarget.animation,
-            arkit: None,
             session: None,
             strokes: None,
         })
@@ -323,6 +353,11 @@ pub enum ExportError {
         "nothing in the animation moves {0}'s VRM expressions, head or gaze: there is no VRM Animation to write"
     )]
     NothingToCarry(String),
+    /// A clip for a body with no blendshapes that turns none of its bones.
+    #[error(
+        "{0} has no blendshapes, and nothing of the clip turns its bones (a head pose on its head, eyeLook on its eyes, jawOpen on its jaw): make ARKit's 52 shapes on it with `faceanim generate-shapes`"
+    )]
+    NothingForBones(String),
     /// The clip cannot be put on the character.
     #[error(transparent)]
     Clip(#[from] faceanim_anim::ClipError),
@@ -352,7 +387,7 @@ pub fn export_with(
 ) -> Result<Exported, ExportError> {
     let mut notes = Vec::new();
     let bytes = match format {
-        Format::ClipJson => animation.clip.to_json().into_bytes(),
+        Format::ClipJson => clip_json(animation, &mut notes),
         Format::Glb => {
             // Gaze and jaw for the bones, from the capture's own ARKit values when there are
             // any, else from the frames by their names' ARKit meaning.
@@ -439,6 +474,33 @@ impl Animation<'_> {
         self.bones
             .clone()
             .unwrap_or_else(|| bones::BoneKeys::of_take(&self.clip, self.arkit.as_ref()))
+    }
+}
+
+/// The clip JSON: the character's own weights by name; for a body with no blendshapes, whose
+/// bones follow the take's ARKit values, those values (with the head pose), so that the clip
+/// put on it again (`export --clip`) turns the same bones.
+fn clip_json(animation: &Animation<'_>, notes: &mut Vec<String>) -> Vec<u8> {
+    match &animation.arkit {
+        Some(arkit)
+            if animation.clip.blendshapes.is_empty()
+                && arkit.frames.len() == animation.clip.frames.len() =>
+        {
+            notes.push(
+                "the character has no blendshapes: the clip holds the ARKit values its eye and \
+                 jaw bones follow, with the head pose"
+                    .to_owned(),
+            );
+            Clip {
+                head: animation.clip.head.clone(),
+                head_position: animation.clip.head_position.clone(),
+                presence: animation.clip.presence.clone(),
+                ..arkit.clone()
+            }
+            .to_json()
+            .into_bytes()
+        }
+        _ => animation.clip.to_json().into_bytes(),
     }
 }
 

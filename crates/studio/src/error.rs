@@ -121,10 +121,12 @@ impl ApiError {
                 | faceanim_fit::FitError::AlreadyHas { .. },
             ) => StatusCode::UNPROCESSABLE_ENTITY,
             ApiError::Busy(_) => StatusCode::CONFLICT,
-            // A VRM Animation asked of a character that is no VRM, or of nothing it carries.
+            // A VRM Animation asked of a character that is no VRM, or of nothing it carries; a
+            // clip that moves nothing of a body with no blendshapes.
             ApiError::Export(
                 faceanim_export::ExportError::NotVrm(_)
-                | faceanim_export::ExportError::NothingToCarry(_),
+                | faceanim_export::ExportError::NothingToCarry(_)
+                | faceanim_export::ExportError::NothingForBones(_),
             ) => StatusCode::BAD_REQUEST,
             ApiError::Disk(_)
             | ApiError::Scratch { .. }

@@ -119,6 +119,15 @@ pub enum TakeError {
         /// The character's name.
         character: String,
     },
+    /// A capture onto a character with no blendshapes and no head, eye or jaw bone moves
+    /// nothing of it.
+    #[error(
+        "{character} has no blendshapes, and no head, eye or jaw bone, for a capture to move: make ARKit's 52 shapes on it with `faceanim generate-shapes` (Generate blendshapes in the studio), then capture onto that"
+    )]
+    NothingToMove {
+        /// The character's name.
+        character: String,
+    },
     /// An estimator or session of another character's blendshapes.
     #[error(
         "this estimate cannot drive {character}: {reason}; train an adapter for it with `faceanim adapt`"

@@ -104,24 +104,51 @@ impl Take {
         Take::new(session, EstimatorSource::SessionFile)
     }
 
+    /// Whether a capture estimated by `estimator` moves anything of `character`: some of its
+    /// shapes, or — on a body with no blendshapes at all (a Mixamo or Ready Player Me body
+    /// exported without its morph targets) — its head, eye or jaw bones, which the take's head
+    /// pose, gaze and jawOpen turn. Checked by [`Take::from_capture`]; callers check it before
+    /// minutes of video.
+    ///
+    /// # Errors
+    /// [`TakeError::NoArkitNames`] when the estimator moves none of the character's shapes (a
+    /// by-name mapping onto a rig without ARKit names); [`TakeError::NothingToMove`] when the
+    /// character has neither shapes nor face bones.
+    pub fn check_moves(character: &Character, estimator: &dyn Estimator) -> Result<(), TakeError> {
+        if estimator.driven() > 0 {
+            return Ok(());
+        }
+        let character_name = || character.name().to_owned();
+        if !character.blendshapes().is_empty() {
+            return Err(TakeError::NoArkitNames {
+                character: character_name(),
+            });
+        }
+        let bones = character
+            .source()
+            .map(faceanim_rig::source::GltfSource::bones);
+        if bones.is_some_and(|b| b.found().next().is_some()) {
+            Ok(())
+        } else {
+            Err(TakeError::NothingToMove {
+                character: character_name(),
+            })
+        }
+    }
+
     /// Estimates every frame of `footage` for `character` with `estimator` (frames without a
     /// face are bridged from their neighbours) and starts a take with `filtering`.
     ///
     /// # Errors
-    /// [`TakeError::NoArkitNames`] when the estimator can move none of the character's shapes
-    /// (a by-name mapping onto a rig without ARKit names), or [`TakeError::Mismatch`] when the
-    /// estimator is for another character's blendshapes.
+    /// As [`Take::check_moves`], or [`TakeError::Mismatch`] when the estimator is for another
+    /// character's blendshapes.
     pub fn from_capture(
         character: &Character,
         estimator: &dyn Estimator,
         footage: Footage,
         filtering: Filtering,
     ) -> Result<Take, TakeError> {
-        if estimator.driven() == 0 {
-            return Err(TakeError::NoArkitNames {
-                character: character.name().to_owned(),
-            });
-        }
+        Take::check_moves(character, estimator)?;
         let names: Vec<String> = character.blendshape_names();
         if estimator.blendshapes() != names.as_slice() {
             return Err(TakeError::Mismatch {
@@ -431,6 +458,24 @@ mod tests {
             crate::session::test_session(2, |_| vec![0.25, 0.5]),
             EstimatorSource::ByName,
         )
+    }
+
+    #[test]
+    fn a_capture_needs_a_shape_it_drives_or_a_body_with_face_bones() {
+        // A mesh with no shapes, made in code: no file, so no bones either.
+        let bare = Character::new(faceanim_rig::CharacterParts {
+            name: "bare".into(),
+            positions: vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
+            triangles: vec![[0, 1, 2]],
+            ..faceanim_rig::CharacterParts::default()
+        })
+        .unwrap();
+        let refused = Take::check_moves(&bare, &crate::ByName::new(&bare)).unwrap_err();
+        assert!(matches!(refused, TakeError::NothingToMove { .. }));
+        assert!(refused.to_string().contains("generate-shapes"), "{refused}");
+        // The built-in head is driven by its ARKit names.
+        let head = faceanim_head::default_character();
+        assert!(Take::check_moves(&head, &crate::ByName::new(&head)).is_ok());
     }
 
     #[test]

@@ -248,20 +248,26 @@ pub fn export_with_clip_and(character: &Path, out: &Path, clip: &Path, more: &[&
     String::from_utf8(out.stderr).unwrap()
 }
 
-/// `faceanim track INPUT --character CHARACTER [MORE…] -o OUT`, which must succeed; returns the
-/// clip it wrote, as JSON.
-pub fn track_clip(input: &Path, character: &Path, more: &[&str], out: &Path) -> serde_json::Value {
+/// `faceanim track INPUT --character CHARACTER [MORE…]`, which must succeed; returns the
+/// summary it printed.
+pub fn track_summary(input: &Path, character: &Path, more: &[&str]) -> serde_json::Value {
     let run = Command::new(env!("CARGO_BIN_EXE_faceanim"))
         .arg("track")
         .arg(input)
         .arg("--character")
         .arg(character)
         .args(more)
-        .arg("-o")
-        .arg(out)
         .output()
         .unwrap();
-    succeeded("faceanim track", run);
+    serde_json::from_slice(&succeeded("faceanim track", run).stdout).unwrap()
+}
+
+/// `faceanim track INPUT --character CHARACTER [MORE…] -o OUT`, which must succeed; returns the
+/// clip it wrote, as JSON.
+pub fn track_clip(input: &Path, character: &Path, more: &[&str], out: &Path) -> serde_json::Value {
+    let mut more = more.to_vec();
+    more.extend(["-o", out.to_str().unwrap()]);
+    track_summary(input, character, &more);
     serde_json::from_slice(&std::fs::read(out).unwrap()).unwrap()
 }
 

@@ -116,6 +116,31 @@ fn map_path(adapter_path: &std::path::Path, character: &Character) -> PathBuf {
     faceanim_adapt::bridge::default_map_path(adapter_path.parent(), character.name())
 }
 
+/// `clip`'s rows as ARKit's 52 channels in their order: each column by its name's ARKit
+/// meaning in any spelling, clamped to 0..1; channels it lacks at 0.
+fn arkit_rows(clip: &faceanim_anim::Clip) -> Vec<Vec<f32>> {
+    let channels = &faceanim_rig::names::ARKIT_52;
+    let slots: Vec<Option<usize>> = clip
+        .blendshapes
+        .iter()
+        .map(|n| {
+            faceanim_rig::names::arkit_name(n).and_then(|a| channels.iter().position(|c| *c == a))
+        })
+        .collect();
+    clip.frames
+        .iter()
+        .map(|row| {
+            let mut arkit = vec![0.0; channels.len()];
+            for (value, slot) in row.iter().zip(&slots) {
+                if let Some(k) = slot {
+                    arkit[*k] = value.clamp(0.0, 1.0);
+                }
+            }
+            arkit
+        })
+        .collect()
+}
+
 /// Per frame of `session`, the view's bones as its export turns them: the head pose shared
 /// between spine, neck and head, gaze and jaw from the capture's own ARKit values (else from the
 /// frames by their names' ARKit meaning).
@@ -370,20 +395,37 @@ impl CaptureDesk {
     }
 
     /// Makes `clip` the take: its columns put on `character` by name (ARKit spellings match),
-    /// its head pose kept, one frame per row at its rate, unfiltered. Returns its frame count.
+    /// its head pose kept, one frame per row at its rate, unfiltered. On a body with no
+    /// blendshapes whose bones take the clip's head pose, gaze or jawOpen, the take is of no
+    /// shapes, made of the clip's ARKit values (which turn the bones). Returns its frame count.
     ///
     /// # Errors
-    /// [`ApiError::Invalid`] naming `shown` when no column is one of the character's, or the
-    /// take's error.
+    /// [`ApiError::Invalid`] naming `shown` when no column is one of the character's (and none
+    /// turns a bone of a body with no shapes), or the take's error.
     fn open_clip(
         &mut self,
         character: &Character,
         clip: &faceanim_anim::Clip,
         shown: &str,
     ) -> Result<usize, ApiError> {
-        let retarget = clip
-            .retarget(character, shown)
-            .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?;
+        let refused = |e: &dyn std::fmt::Display| {
+            ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown)))
+        };
+        if faceanim_export::bones::takes_clip(character, clip) {
+            let count = clip.frames.len();
+            let take = Take::from_weights(
+                character,
+                shown,
+                clip.fps,
+                &vec![Vec::new(); count],
+                clip.head.as_deref(),
+            )?
+            .made_of_arkit(arkit_rows(clip))?;
+            tracing::info!("opened the clip {shown} on the bones: {count} frames");
+            self.set_take(take, Previews::new());
+            return Ok(count);
+        }
+        let retarget = clip.retarget(character, shown).map_err(|e| refused(&e))?;
         let count = retarget.animation.weights.len();
         let take = Take::from_weights(
             character,
