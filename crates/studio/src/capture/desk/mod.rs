@@ -408,9 +408,6 @@ impl CaptureDesk {
         clip: &faceanim_anim::Clip,
         shown: &str,
     ) -> Result<usize, ApiError> {
-        let refused = |e: &dyn std::fmt::Display| {
-            ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown)))
-        };
         if faceanim_export::bones::takes_clip(character, clip) {
             let count = clip.frames.len();
             let take = Take::from_weights(
@@ -425,7 +422,9 @@ impl CaptureDesk {
             self.set_take(take, Previews::new());
             return Ok(count);
         }
-        let retarget = clip.retarget(character, shown).map_err(|e| refused(&e))?;
+        let retarget = clip
+            .retarget(character, shown)
+            .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?;
         let count = retarget.animation.weights.len();
         let take = Take::from_weights(
             character,
