@@ -1228,6 +1228,18 @@ fn start_with_live_link_face(
     settings: &std::path::Path,
     more: &[&std::ffi::OsStr],
 ) -> Studio {
+    let ict = faceanim_testdata::shared("characters/ict-face.glb");
+    start_on_live_link_face(&ict, project, port, settings, more)
+}
+
+/// [`start_with_live_link_face`] on `character`.
+fn start_on_live_link_face(
+    character: &std::path::Path,
+    project: &std::path::Path,
+    port: u16,
+    settings: &std::path::Path,
+    more: &[&std::ffi::OsStr],
+) -> Studio {
     let port = port.to_string();
     let mut arguments: Vec<&std::ffi::OsStr> = vec![
         "--phone".as_ref(),
@@ -1238,7 +1250,24 @@ fn start_with_live_link_face(
         settings.as_os_str(),
     ];
     arguments.extend_from_slice(more);
-    start_with(project, &arguments)
+    start_on(Some(character), project, &arguments)
+}
+
+/// `frames` of Live Link Face at 60 fps sent to `port` by PyPI's pylivelinkface
+/// (`tools/livelinkface_send.py`); what was sent, with each frame's time (kept in `dir`).
+fn send_live_link_face(port: u16, frames: usize, dir: &std::path::Path) -> serde_json::Value {
+    let sent_path = dir.join("sent.json");
+    support::succeeded(
+        "livelinkface_send.py",
+        Command::new("python3")
+            .arg(repo().join("tools/livelinkface_send.py"))
+            .args(["--to", &port.to_string(), "--frames", &frames.to_string()])
+            .args(["--fps", "60", "--out"])
+            .arg(&sent_path)
+            .output()
+            .expect("python3 with pylivelinkface (scripts/setup.sh installs it)"),
+    );
+    serde_json::from_slice(&std::fs::read(&sent_path).unwrap()).unwrap()
 }
 
 /// A phone tracker in its own protocol: PyPI's pylivelinkface (not faceanim's packet code)
@@ -1284,19 +1313,7 @@ fn a_live_link_face_phone_drives_the_studio_and_goes_out_over_vmc() {
     assert_eq!(status, 400, "{body}");
     assert!(body.contains("no face has arrived"), "{body}");
     record_live(&studio, true);
-    let sent_path = dir.path().join("sent.json");
-    support::succeeded(
-        "livelinkface_send.py",
-        Command::new("python3")
-            .arg(repo().join("tools/livelinkface_send.py"))
-            .args(["--to", &port.to_string(), "--frames", &FRAMES.to_string()])
-            .args(["--fps", "60", "--out"])
-            .arg(&sent_path)
-            .output()
-            .expect("python3 with pylivelinkface (scripts/setup.sh installs it)"),
-    );
-    let sent: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(&sent_path).unwrap()).unwrap();
+    let sent = send_live_link_face(port, FRAMES, dir.path());
     let state = recorded(&studio, FRAMES);
     assert_eq!(state["packets"], FRAMES, "{state}");
     assert_eq!(state["frames"], FRAMES, "{state}");
@@ -1389,6 +1406,59 @@ fn a_live_link_face_phone_drives_the_studio_and_goes_out_over_vmc() {
         .unwrap()
         .to_degrees();
     assert!((neutral_yaw - last_yaw).abs() < 1e-3);
+}
+
+/// A Live Link Face phone (pylivelinkface) recorded onto a body with no blendshapes (the
+/// Blender avatar exported without shape keys): the take keeps the phone's ARKit values, so the
+/// body's jaw bone opens as far as the phone's JawOpen says at every frame of the take and its
+/// Clip JSON holds them. The recording kept only the head before: the jaw stayed shut.
+#[test]
+fn a_phone_recorded_onto_a_body_with_no_shapes_opens_its_jaw() {
+    const FRAMES: usize = 120;
+    let dir = tempfile::tempdir().unwrap();
+    let port = support::free_udp_port();
+    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
+    let project = dir.path().join("bare.faceanim.json");
+    let settings = dir.path().join("phone.json");
+    let studio = start_on_live_link_face(&bare, &project, port, &settings, &[]);
+    record_live(&studio, true);
+    let sent = send_live_link_face(port, FRAMES, dir.path());
+    assert_eq!(recorded(&studio, FRAMES)["recording"], FRAMES);
+    let capture = record_live(&studio, false);
+    let take = &capture["take"];
+    let fps = take["fps"].as_f64().unwrap();
+    let bones = take["bones"].as_array().unwrap();
+    // Each take frame's jaw (the view skeleton's last joint, turned from the head) against the
+    // JawOpen sent around its time (a tenth of a second either side: the take goes by arrival).
+    let sent = sent["frames"].as_array().unwrap();
+    let sent_at =
+        |f: &serde_json::Value| f["time"].as_f64().unwrap() - sent[0]["time"].as_f64().unwrap();
+    let degrees = f64::from(faceanim_export::bones::DEFAULT_JAW_DEGREES);
+    let mut widest: f64 = 0.0;
+    for (k, joints) in bones.iter().enumerate() {
+        let joints = joints.as_array().unwrap();
+        let jaw = glam::Quat::from_slice(&support::f32s(joints.last().unwrap()));
+        let opened = f64::from(jaw.angle_between(glam::Quat::IDENTITY).to_degrees());
+        let t = k as f64 / fps;
+        let around = sent
+            .iter()
+            .filter(|f| (sent_at(f) - t).abs() <= 0.1)
+            .map(|f| f["values"]["JawOpen"].as_f64().unwrap() * degrees);
+        let (low, high) = around.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        });
+        assert!(
+            low - 0.05 <= opened && opened <= high + 0.05,
+            "take frame {k} at {t:.3} s: the jaw {opened:.2}° open, the phone said {low:.2}° to {high:.2}°"
+        );
+        widest = widest.max(opened);
+    }
+    assert!(widest > 0.9 * degrees, "the jaw opened at most {widest}°");
+    // The take's Clip JSON holds the phone's ARKit values, which its bones follow.
+    let (_, clip) = support::get_with_head(studio.port, "/api/capture/export.json");
+    let clip: serde_json::Value = serde_json::from_slice(&clip).unwrap();
+    let names = support::strings(&clip["blendshapes"]);
+    assert!(names.iter().any(|n| n == "jawOpen"), "{names:?}");
 }
 
 /// The Capture tab's phone panel in a real browser (`tools/phone-panel-e2e.mjs`): it says what

@@ -127,6 +127,9 @@ pub struct ReceivedFrame {
     pub eyes: Option<[[f32; 2]; 2]>,
     /// `jawOpen`, from a phone.
     pub jaw: Option<f32>,
+    /// A phone's ARKit values, ARKit's 52 channels in [`faceanim_rig::names::ARKIT_52`]'s
+    /// order, each clamped to 0..1 (what the eyes and the jaw above are read from).
+    pub arkit: Option<Vec<f32>>,
 }
 
 /// What arrived so far.
@@ -766,6 +769,7 @@ fn complete_frame(state: &mut State, time: f64) {
         head: state.head,
         eyes: phone.then(|| faceanim_rig::bones::gaze_from_arkit(channel)),
         jaw: phone.then(|| channel("jawOpen")),
+        arkit: phone.then(|| state.channels.iter().map(|w| w.clamp(0.0, 1.0)).collect()),
     };
     if let Some((frames, times)) = state.recording.as_mut() {
         frames.push(frame.clone());

@@ -63,8 +63,8 @@ impl Footage {
     }
 }
 
-/// One frame that arrived as the character's own weights (a VMC stream): when, the weights in
-/// the character's order, and the head pose.
+/// One frame that arrived as the character's own weights (a VMC stream, a phone tracker): when,
+/// the weights in the character's order, the head pose, and what a phone sent them from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReceivedFrame {
     /// Seconds, on any clock; a take counts from its first frame.
@@ -73,6 +73,11 @@ pub struct ReceivedFrame {
     pub weights: Vec<f32>,
     /// Head yaw, pitch, roll in degrees.
     pub head: Option<[f32; 3]>,
+    /// A phone tracker's ARKit values, ARKit's 52 channels in
+    /// [`faceanim_rig::names::ARKIT_52`]'s order, each 0..1: kept as what the frame was made of
+    /// ([`SessionFrame::arkit`]), so that the eyes' and jaw's bones and Live Link Face follow
+    /// the phone where the character has no shape for a channel (or no shapes at all).
+    pub arkit: Option<Vec<f32>>,
 }
 
 /// A captured input being edited: its session, where the estimates came from, and the undo and
@@ -202,6 +207,18 @@ impl Take {
     ) -> Result<Take, TakeError> {
         let names: Vec<String> = character.blendshape_names();
         mismatch(character, &names, &frames)?;
+        let wanted = faceanim_rig::names::ARKIT_52.len();
+        if let Some((k, row)) = frames.iter().enumerate().find_map(|(k, f)| {
+            f.arkit
+                .as_ref()
+                .map(|a| (k, a))
+                .filter(|(_, a)| a.len() != wanted)
+        }) {
+            return Err(TakeError::Invalid(vec![format!(
+                "frames[{k}].arkit: {} values, not {wanted}",
+                row.len()
+            )]));
+        }
         let times: Vec<f64> = frames.iter().map(|f| f.time).collect();
         let steady = Steady::of(&times);
         let weights: Vec<&[f32]> = frames.iter().map(|f| f.weights.as_slice()).collect();
@@ -219,10 +236,21 @@ impl Take {
                     }
                     _ => frames[slot.nearest()].head,
                 };
+                let arkit = match (&frames[slot.before].arkit, &frames[slot.after].arkit) {
+                    (Some(a), Some(b)) => Some(
+                        a.iter()
+                            .zip(b)
+                            .map(|(a, b)| a + (b - a) * slot.toward_after)
+                            .collect(),
+                    ),
+                    _ => frames[slot.nearest()].arkit.clone(),
+                }
+                .map(|row: Vec<f32>| row.into_iter().map(|w| w.clamp(0.0, 1.0)).collect());
                 ReceivedFrame {
                     time: k as f64 * step,
                     weights,
                     head,
+                    arkit,
                 }
             })
             .collect();
@@ -260,6 +288,7 @@ impl Take {
                 time: k as f64 * step,
                 weights: weights.clone(),
                 head: heads.and_then(|h| h.get(k).copied()),
+                arkit: None,
             })
             .collect();
         mismatch(character, &names, &frames)?;
@@ -294,7 +323,7 @@ impl Take {
                 head_position: None,
                 expression: None,
                 estimate: f.weights,
-                arkit: None,
+                arkit: f.arkit,
             })
             .collect();
         let session = session_of(character, source.to_owned(), names, fps, frames, filtering);
@@ -460,6 +489,55 @@ mod tests {
         )
     }
 
+    /// The built-in head, its blendshape count, and where jawOpen is among ARKit's 52.
+    fn head_and_jaw() -> (Character, usize, usize) {
+        let character = faceanim_head::default_character();
+        let n = character.blendshape_names().len();
+        let jaw = faceanim_rig::names::ARKIT_52
+            .iter()
+            .position(|c| *c == "jawOpen")
+            .unwrap();
+        (character, n, jaw)
+    }
+
+    #[test]
+    fn a_phones_arkit_values_go_into_the_take_as_what_it_was_made_of() {
+        let (character, n, jaw) = head_and_jaw();
+        let phone = |k: usize| {
+            let mut arkit = vec![0.0; faceanim_rig::names::ARKIT_52.len()];
+            arkit[jaw] = k as f32 / 100.0;
+            ReceivedFrame {
+                time: k as f64 / 30.0,
+                weights: vec![0.0; n],
+                head: None,
+                arkit: Some(arkit),
+            }
+        };
+        let take = Take::from_received(
+            &character,
+            "phone",
+            (0..=100).map(phone).collect(),
+            Filtering::new(1, None).unwrap(),
+        )
+        .unwrap();
+        let made_of = take.session.arkit_clip().unwrap();
+        let column = made_of.column("jawOpen").unwrap();
+        assert!(
+            (made_of.frames[50][column] - 0.5).abs() < 1e-3,
+            "{made_of:?}"
+        );
+        // What it was made of survives the session file.
+        let back = Session::from_json(take.session.to_json().as_bytes()).unwrap();
+        assert_eq!(back.frames[50].arkit, take.session.frames[50].arkit);
+        // A row that is not ARKit's 52 is refused by its frame.
+        let mut bad: Vec<ReceivedFrame> = (0..3).map(phone).collect();
+        bad[1].arkit = Some(vec![0.5; 3]);
+        let refused =
+            Take::from_received(&character, "phone", bad, Filtering::new(1, None).unwrap())
+                .unwrap_err();
+        assert!(refused.to_string().contains("frames[1].arkit"), "{refused}");
+    }
+
     #[test]
     fn a_capture_needs_a_shape_it_drives_or_a_body_with_face_bones() {
         // A mesh with no shapes, made in code: no file, so no bones either.
@@ -538,12 +616,7 @@ mod tests {
 
     #[test]
     fn a_take_keeps_what_it_was_made_of_through_its_file() {
-        let character = faceanim_head::default_character();
-        let n = character.blendshape_names().len();
-        let jaw = faceanim_rig::names::ARKIT_52
-            .iter()
-            .position(|c| *c == "jawOpen")
-            .unwrap();
+        let (character, n, jaw) = head_and_jaw();
         let mut made_of = vec![vec![0.0; 52]; 4];
         made_of[2][jaw] = 0.6;
         let take = Take::from_weights(&character, "line", 30.0, &vec![vec![0.0; n]; 4], None)
@@ -616,6 +689,7 @@ mod tests {
                 time: 10.0 + f64::from(k) / 59.7,
                 weights: vec![k as f32 / 300.0; n],
                 head: (k % 2 == 0).then_some([k as f32, 0.0, 0.0]),
+                arkit: None,
             })
             .collect();
         let take =

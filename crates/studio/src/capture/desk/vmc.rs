@@ -87,6 +87,7 @@ impl CaptureDesk {
                 time: f.time,
                 weights: f.weights,
                 head: f.head,
+                arkit: f.arkit,
             })
             .collect();
         let take = Take::from_received(character, "vmc", frames, self.filtering)?;
