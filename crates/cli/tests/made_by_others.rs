@@ -1038,6 +1038,35 @@ fn a_capture_turns_the_head_eyes_and_jaw_of_a_body_with_no_shapes() {
             assert!(off < 0.1, "frame {f}: {bone} replayed {off}° away");
         }
     }
+    // The file opens again as a take (the studio's Capture tab, `faceanim studio bare.glb`): the
+    // head pose, gaze and jawOpen its bones were turned by.
+    let reopened =
+        faceanim_export::reopen::clip_of_file("bare.glb", &std::fs::read(&glb).unwrap()).unwrap();
+    let back = &reopened.clip;
+    assert_eq!(back.frames.len(), arkit.frames.len(), "{}", reopened.what);
+    let back_head = back.head.as_ref().unwrap();
+    for &f in &sampled {
+        let value = |clip: &faceanim_anim::Clip, name: &str| {
+            clip.column(name).map_or(0.0, |c| clip.frames[f][c])
+        };
+        let off = degrees_between(
+            glam::Quat::from_array(faceanim_anim::head_rotation(back_head[f])),
+            glam::Quat::from_array(faceanim_anim::head_rotation(heads[f])),
+        );
+        assert!(off < 0.1, "frame {f}: the head reopened {off}° away");
+        let jaw = (value(back, "jawOpen") - value(&arkit, "jawOpen").clamp(0.0, 1.0)).abs();
+        assert!(jaw < 0.01, "frame {f}: jawOpen reopened {jaw} away");
+        let gaze = |clip: &faceanim_anim::Clip| {
+            faceanim_rig::bones::gaze_from_arkit(|name| value(clip, name))
+        };
+        let (was, now) = (gaze(&arkit), gaze(back));
+        for (a, b) in was.iter().flatten().zip(now.iter().flatten()) {
+            assert!(
+                (a - b).abs() < 0.1,
+                "frame {f}: gaze {was:?} reopened {now:?}"
+            );
+        }
+    }
     // A clip that turns none of its bones is refused, naming what would give it shapes.
     let smile = dir.join("smile.json");
     std::fs::write(

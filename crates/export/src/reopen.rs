@@ -84,48 +84,40 @@ fn extension(name: &str) -> Option<String> {
 
 /// The morph-weight animation `character`'s own file holds (the last one faceanim wrote, else
 /// its first) as a clip of the character's blendshapes by name, with the head pose and the
-/// gaze its bones turn; `None` for a file without one (or a character made in code).
+/// gaze its bones turn; `None` for a file without one (or a character made in code). A body
+/// with no blendshapes, whose animation faceanim wrote on its bones, opens as the ARKit values
+/// its eyes and jaw were turned by (eyeLook, and jawOpen at [`DEFAULT_JAW_DEGREES`]), with
+/// the head pose: the clip its export takes.
+///
+/// [`DEFAULT_JAW_DEGREES`]: crate::bones::DEFAULT_JAW_DEGREES
 #[must_use]
 pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
     let faceanim_rig::turns::Take {
         animation,
         fps,
         gaze,
+        jaw,
     } = character.source()?.take()?;
     let seconds = animation.times.last().copied().unwrap_or(0.0);
-    let blendshapes = character.blendshape_names();
-    let mut frames = animation.weights;
-    // Eyes turned by bone give the eyeLook shapes their values back (the export holds those
-    // shapes still where the bones turn the eyes, not to turn them twice).
-    if let Some(gaze) = gaze {
-        let columns: Vec<(usize, &str)> = blendshapes
-            .iter()
-            .enumerate()
-            .filter_map(|(c, n)| Some((c, faceanim_rig::names::arkit_name(n)?)))
-            .filter(|(_, a)| faceanim_rig::names::is_gaze(a))
-            .collect();
-        for (row, eyes) in frames.iter_mut().zip(gaze) {
-            let looks = faceanim_rig::bones::arkit_from_gaze(eyes);
-            for &(c, channel) in &columns {
-                if let (Some(slot), Some((_, v))) =
-                    (row.get_mut(c), looks.iter().find(|(n, _)| *n == channel))
-                {
-                    *slot = slot.max(*v);
-                }
-            }
-        }
-    }
     let head = animation.rotations.map(|turns| {
         turns
             .into_iter()
             .map(|q| faceanim_anim::head_angles(q).unwrap_or([0.0; 3]))
             .collect()
     });
+    let what = format!(
+        "animation '{}' ({seconds:.2} s at {fps} fps)",
+        faceanim_rig::excerpt(&animation.name)
+    );
+    let (blendshapes, frames) = if character.blendshapes().is_empty() {
+        turned_channels(animation.times.len(), gaze, jaw)
+    } else {
+        let blendshapes = character.blendshape_names();
+        let frames = with_gaze(&blendshapes, animation.weights, gaze);
+        (blendshapes, frames)
+    };
     Some(Reopened {
-        what: format!(
-            "animation '{}' ({seconds:.2} s at {fps} fps)",
-            faceanim_rig::excerpt(&animation.name)
-        ),
+        what,
         name: animation.name,
         clip: Clip {
             fps,
@@ -136,6 +128,66 @@ pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
             presence: None,
         },
     })
+}
+
+/// `frames` of `blendshapes` with the eyes' `gaze` (turned by bone) given back to the eyeLook
+/// shapes (the export holds those shapes still where the bones turn the eyes, not to turn them
+/// twice).
+fn with_gaze(
+    blendshapes: &[String],
+    mut frames: Vec<Vec<f32>>,
+    gaze: Option<Vec<[[f32; 2]; 2]>>,
+) -> Vec<Vec<f32>> {
+    let Some(gaze) = gaze else {
+        return frames;
+    };
+    let columns: Vec<(usize, &str)> = blendshapes
+        .iter()
+        .enumerate()
+        .filter_map(|(c, n)| Some((c, faceanim_rig::names::arkit_name(n)?)))
+        .filter(|(_, a)| faceanim_rig::names::is_gaze(a))
+        .collect();
+    for (row, eyes) in frames.iter_mut().zip(gaze) {
+        let looks = faceanim_rig::bones::arkit_from_gaze(eyes);
+        for &(c, channel) in &columns {
+            if let (Some(slot), Some((_, v))) =
+                (row.get_mut(c), looks.iter().find(|(n, _)| *n == channel))
+            {
+                *slot = slot.max(*v);
+            }
+        }
+    }
+    frames
+}
+
+/// The ARKit channels turned bones were turned by, over `frames` frames: each eye's gaze as
+/// its eyeLook values, the jaw's opening as jawOpen (at [`crate::bones::DEFAULT_JAW_DEGREES`]
+/// for 1, as the export opens a jaw with no jaw-open shape beside it).
+fn turned_channels(
+    frames: usize,
+    gaze: Option<Vec<[[f32; 2]; 2]>>,
+    jaw: Option<Vec<f32>>,
+) -> (Vec<String>, Vec<Vec<f32>>) {
+    let mut names: Vec<String> = Vec::new();
+    let mut rows: Vec<Vec<f32>> = vec![Vec::new(); frames];
+    if let Some(gaze) = gaze {
+        let looks = |k: usize| {
+            let eyes = gaze.get(k).or(gaze.last()).copied().unwrap_or_default();
+            faceanim_rig::bones::arkit_from_gaze(eyes)
+        };
+        names.extend(looks(0).iter().map(|(n, _)| (*n).to_owned()));
+        for (k, row) in rows.iter_mut().enumerate() {
+            row.extend(looks(k).iter().map(|(_, v)| *v));
+        }
+    }
+    if let Some(jaw) = jaw {
+        names.push("jawOpen".to_owned());
+        for (k, row) in rows.iter_mut().enumerate() {
+            let degrees = jaw.get(k).or(jaw.last()).copied().unwrap_or(0.0);
+            row.push((degrees / crate::bones::DEFAULT_JAW_DEGREES).clamp(0.0, 1.0));
+        }
+    }
+    (names, rows)
 }
 
 /// Reads `bytes` (the file `name`) as a clip: a glTF's morph-weight animation (the last one

@@ -143,11 +143,6 @@ impl WeightsTrack {
             }
         }
     }
-
-    /// The most common step between keys, seconds.
-    fn step(&self) -> Option<f32> {
-        median_step(&self.times)
-    }
 }
 
 /// The middle step between keys `times`, `None` for fewer than two.
@@ -322,7 +317,8 @@ impl RotationTrack {
     }
 }
 
-/// One of the file's animations that moves morph targets.
+/// One of the file's animations that moves morph targets, or that faceanim wrote turning bones
+/// alone (a body with no blendshapes).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FileAnimation {
     /// Its name in the file (or `animation N`).
@@ -345,20 +341,25 @@ impl FileAnimation {
     /// per frame), else [`DEFAULT_FPS`] (keys set by hand, further apart, are played between).
     #[must_use]
     pub fn fps(&self) -> f32 {
-        rate_of(
-            self.tracks
-                .iter()
-                .max_by_key(|t| t.times.len())
-                .and_then(WeightsTrack::step),
-        )
+        let longest = self.key_times().into_iter().max_by_key(|t| t.len());
+        rate_of(longest.and_then(median_step))
+    }
+
+    /// The key times it is played by: its weights', or its turns' where it has no weights.
+    fn key_times(&self) -> Vec<&[f32]> {
+        if self.tracks.is_empty() {
+            self.turns.iter().map(|t| t.times.as_slice()).collect()
+        } else {
+            self.tracks.iter().map(|t| t.times.as_slice()).collect()
+        }
     }
 
     /// Its first key's time, seconds (Blender writes frame 1 at 1/fps).
     #[must_use]
     pub fn start(&self) -> f32 {
-        self.tracks
+        self.key_times()
             .iter()
-            .map(|t| t.times[0])
+            .filter_map(|t| t.first().copied())
             .fold(f32::INFINITY, f32::min)
             .min(self.seconds())
     }
@@ -366,9 +367,9 @@ impl FileAnimation {
     /// Its last key's time, seconds.
     #[must_use]
     pub fn seconds(&self) -> f32 {
-        self.tracks
+        self.key_times()
             .iter()
-            .map(WeightsTrack::end)
+            .filter_map(|t| t.last().copied())
             .fold(0.0, f32::max)
     }
 

@@ -3,8 +3,8 @@
 //! (`faceanim_export::bones`). A head pose is the turns of the upper spine, the neck and the
 //! head (or of the scene's root, for a character without a head bone) in character space, one
 //! after the other; each eye's gaze is its bone's turn, read through a VRM's lookAt range maps
-//! where it has them. Files keyed in other tools read the same way: whatever turns those bones
-//! is the head pose and the gaze.
+//! where it has them; the jaw's opening is the angle of its bone's turn. Files keyed in other
+//! tools read the same way: whatever turns those bones is the head pose, the gaze and the jaw.
 
 use glam::{EulerRot, Quat};
 
@@ -22,6 +22,9 @@ pub struct Take {
     /// Each eye's gaze `[yaw, pitch]` in degrees per frame (left eye, right eye), where it
     /// turns the eye bones.
     pub gaze: Option<Vec<[[f32; 2]; 2]>>,
+    /// How far the jaw bone is open per frame, in degrees (its turn beyond the head's), where
+    /// it turns the jaw bone.
+    pub jaw: Option<Vec<f32>>,
 }
 
 impl GltfSource {
@@ -37,6 +40,7 @@ impl GltfSource {
         played.rotations = head(self, animation, start, &played.times);
         Some(Take {
             gaze: gaze(self, animation, start, &played.times),
+            jaw: jaw(self, animation, start, &played.times),
             animation: played,
             fps: animation.fps(),
         })
@@ -170,6 +174,24 @@ pub fn gaze(
         times
             .iter()
             .map(|&t| [eye(&left, start + t, true), eye(&right, start + t, false)])
+            .collect(),
+    )
+}
+
+/// How far the jaw bone is open, in degrees (the angle of its turn beyond the head's), at each
+/// of `times`, where `animation` turns it.
+#[must_use]
+pub fn jaw(
+    source: &GltfSource,
+    animation: &FileAnimation,
+    start: f32,
+    times: &[f32],
+) -> Option<Vec<f32>> {
+    let jaw = Turned::find(source, animation, source.bones().get(Bone::Jaw))?;
+    Some(
+        times
+            .iter()
+            .map(|&t| jaw.at(start + t).angle_between(Quat::IDENTITY).to_degrees())
             .collect(),
     )
 }

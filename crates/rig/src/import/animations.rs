@@ -61,7 +61,19 @@ pub(super) fn read(
                 Err(why) => warnings.push(unread(c, why, "weights")),
             }
         }
-        if tracks.is_empty() {
+        let ours = animation
+            .extras()
+            .as_ref()
+            .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
+            .and_then(|mut extras| {
+                extras
+                    .get_mut(crate::file_animation::EXTRAS_KEY)
+                    .map(serde_json::Value::take)
+            });
+        // An animation of bones alone is read where faceanim wrote it (a body with no
+        // blendshapes, turned by its head, eyes and jaw); another tool's (a walk, an idle) is
+        // no take of the face.
+        if tracks.is_empty() && ours.is_none() {
             continue;
         }
         let mut turns: Vec<RotationTrack> = Vec::new();
@@ -80,15 +92,9 @@ pub(super) fn read(
                 Err(why) => warnings.push(unread(c, why, "rotations")),
             }
         }
-        let ours = animation
-            .extras()
-            .as_ref()
-            .and_then(|raw| serde_json::from_str::<serde_json::Value>(raw.get()).ok())
-            .and_then(|mut extras| {
-                extras
-                    .get_mut(crate::file_animation::EXTRAS_KEY)
-                    .map(serde_json::Value::take)
-            });
+        if tracks.is_empty() && turns.is_empty() {
+            continue;
+        }
         let strokes = ours
             .as_ref()
             .and_then(|o| o.get(crate::file_animation::STROKES_KEY))
