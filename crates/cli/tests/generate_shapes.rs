@@ -63,6 +63,13 @@ fn a_bare_avatar_gets_the_52_shapes_and_keeps_everything() {
     let out = output_dir("generate-shapes");
     let (bare, before) = bare_avatar(&out);
     assert_eq!(info(&bare)["blendshapes"].as_array().unwrap().len(), 0);
+    // Reading it says what moves it already, and what gives its face shapes.
+    let read = faceanim(&["info", bare.to_str().unwrap()]);
+    let said = String::from_utf8_lossy(&read.stderr);
+    assert!(
+        said.contains("turn its head, eye and jaw bones") && said.contains("generate-shapes"),
+        "{said}"
+    );
 
     let rigged = out.join("rigged.glb");
     generate(&bare, &rigged);

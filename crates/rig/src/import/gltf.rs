@@ -947,11 +947,17 @@ impl Builder {
         }
         let mut warnings = self.warnings;
         if !self.saw_targets {
-            warnings.push(
-                "no morph targets (blendshapes): make ARKit's 52 on this head with \
+            // A body with face bones is still captured, lip-synced and sent by them.
+            let bones = if self.bones.found().next().is_some() {
+                "capture and phones turn its head, eye and jaw bones, lip sync its jaw; for \
+                 the face itself "
+            } else {
+                ""
+            };
+            warnings.push(format!(
+                "no morph targets (blendshapes): {bones}make ARKit's 52 on this head with \
                  `faceanim generate-shapes` (or export it with its shape keys)"
-                    .to_owned(),
-            );
+            ));
         }
         // Parts are recorded per primitive; their triangle ranges are contiguous by construction.
         let size = crate::bounds::Aabb::around(&self.positions).diagonal();
