@@ -1072,16 +1072,8 @@ fn frame_problems(frame: &SessionFrame, path: &str, width: usize, bad: &mut impl
             }
         }
     }
-    if let Some(arkit) = &frame.arkit {
-        let wanted = faceanim_rig::names::ARKIT_52.len();
-        if arkit.len() != wanted {
-            bad(format!(
-                "{path}.arkit: {} values, not {wanted}",
-                arkit.len()
-            ));
-        } else if let Some(k) = arkit.iter().position(|w| !(0.0..=1.0).contains(w)) {
-            bad(format!("{path}.arkit[{k}]: {} is not in 0..1", arkit[k]));
-        }
+    if let Some(problem) = frame.arkit.as_deref().and_then(|a| arkit_problem(path, a)) {
+        bad(problem);
     }
     if frame.estimate.len() != width {
         bad(format!(
@@ -1098,6 +1090,20 @@ fn frame_problems(frame: &SessionFrame, path: &str, width: usize, bad: &mut impl
             frame.estimate[k]
         ));
     }
+}
+
+/// What is wrong with `arkit`, the ARKit values frame `path` was made of
+/// ([`SessionFrame::arkit`]): not ARKit's 52, or a value outside 0..1.
+pub(crate) fn arkit_problem(path: &str, arkit: &[f32]) -> Option<String> {
+    let wanted = faceanim_rig::names::ARKIT_52.len();
+    if arkit.len() != wanted {
+        return Some(format!(
+            "{path}.arkit: {} values, not {wanted}",
+            arkit.len()
+        ));
+    }
+    let k = arkit.iter().position(|w| !(0.0..=1.0).contains(w))?;
+    Some(format!("{path}.arkit[{k}]: {} is not in 0..1", arkit[k]))
 }
 
 /// Per frame, the estimator's weights for its expression relative to `neutral`; frames without

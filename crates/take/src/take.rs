@@ -338,7 +338,6 @@ impl Take {
     /// not 52 values in 0..1.
     pub fn made_of_arkit(mut self, rows: Vec<Vec<f32>>) -> Result<Take, TakeError> {
         let frames = &mut self.session.frames;
-        let wanted = faceanim_rig::names::ARKIT_52.len();
         if rows.len() != frames.len() {
             return Err(TakeError::Invalid(vec![format!(
                 "{} rows of ARKit values for {} frames",
@@ -346,15 +345,12 @@ impl Take {
                 frames.len()
             )]));
         }
-        if let Some((k, row)) = rows
+        if let Some(problem) = rows
             .iter()
             .enumerate()
-            .find(|(_, r)| r.len() != wanted || r.iter().any(|w| !(0.0..=1.0).contains(w)))
+            .find_map(|(k, row)| crate::session::arkit_problem(&format!("frames[{k}]"), row))
         {
-            return Err(TakeError::Invalid(vec![format!(
-                "frames[{k}].arkit: {} values, each in 0..1, not {row:?}",
-                wanted
-            )]));
+            return Err(TakeError::Invalid(vec![problem]));
         }
         for (frame, row) in frames.iter_mut().zip(rows) {
             frame.arkit = Some(row);
