@@ -1424,12 +1424,42 @@ fn a_phone_recorded_onto_a_body_with_no_shapes_opens_its_jaw() {
     record_live(&studio, true);
     let sent = send_live_link_face(port, FRAMES, dir.path());
     assert_eq!(recorded(&studio, FRAMES)["recording"], FRAMES);
-    let capture = record_live(&studio, false);
+    jaw_follows_what_was_sent(&studio, &sent);
+}
+
+/// A VMC tracker naming ARKit's channels ("perfect sync", python-osc standing in) recorded
+/// onto the same body: as a phone's, its JawOpen opens the take's jaw bone at every frame and
+/// its Clip JSON holds the values. The marionette kept ARKit values from phones alone before:
+/// the jaw stayed shut.
+#[test]
+fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw() {
+    const FRAMES: usize = 120;
+    let dir = tempfile::tempdir().unwrap();
+    let port = support::free_udp_port();
+    let listen = format!("127.0.0.1:{port}");
+    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
+    let project = dir.path().join("bare.faceanim.json");
+    let studio = start_on(
+        Some(&bare),
+        &project,
+        &["--vmc-listen".as_ref(), listen.as_ref()],
+    );
+    record_live(&studio, true);
+    let sent = support::vmc_send(port, FRAMES, 60.0, 0, 0..0, &dir.path().join("sent.json"));
+    // Loopback may drop a datagram: what arrived is recorded.
+    assert!(recorded(&studio, FRAMES)["recording"].as_u64() > Some(100));
+    jaw_follows_what_was_sent(&studio, &sent);
+}
+
+/// Stops `studio`'s recording and checks that each take frame's jaw (the view skeleton's last
+/// joint, turned from the head) opened as far as the `JawOpen` `sent` around its time (a tenth
+/// of a second either side: the take goes by arrival), widest over 90 % of the jaw's range, and
+/// that the take's Clip JSON holds jawOpen.
+fn jaw_follows_what_was_sent(studio: &Studio, sent: &serde_json::Value) {
+    let capture = record_live(studio, false);
     let take = &capture["take"];
     let fps = take["fps"].as_f64().unwrap();
     let bones = take["bones"].as_array().unwrap();
-    // Each take frame's jaw (the view skeleton's last joint, turned from the head) against the
-    // JawOpen sent around its time (a tenth of a second either side: the take goes by arrival).
     let sent = sent["frames"].as_array().unwrap();
     let sent_at =
         |f: &serde_json::Value| f["time"].as_f64().unwrap() - sent[0]["time"].as_f64().unwrap();
@@ -1449,12 +1479,12 @@ fn a_phone_recorded_onto_a_body_with_no_shapes_opens_its_jaw() {
         });
         assert!(
             low - 0.05 <= opened && opened <= high + 0.05,
-            "take frame {k} at {t:.3} s: the jaw {opened:.2}° open, the phone said {low:.2}° to {high:.2}°"
+            "take frame {k} at {t:.3} s: the jaw {opened:.2}° open, the sender said {low:.2}° to {high:.2}°"
         );
         widest = widest.max(opened);
     }
     assert!(widest > 0.9 * degrees, "the jaw opened at most {widest}°");
-    // The take's Clip JSON holds the phone's ARKit values, which its bones follow.
+    // The take's Clip JSON holds the sender's ARKit values, which its bones follow.
     let (_, clip) = support::get_with_head(studio.port, "/api/capture/export.json");
     let clip: serde_json::Value = serde_json::from_slice(&clip).unwrap();
     let names = support::strings(&clip["blendshapes"]);

@@ -19,7 +19,9 @@
 //!   of the character's weights with the head pose and the arrival time (a recording goes by
 //!   the sender's own clock where it is sound: VMC's `/VMC/Ext/T`, a phone's frame times);
 //!   malformed, truncated, foreign, unknown and oversized datagrams are counted and dropped,
-//!   never a panic. A phone's frames can go straight on to a [`Performer`]
+//!   never a panic. A sender of ARKit values (a phone, a VMC tracker naming ARKit's channels)
+//!   gives each frame those values too, with the gaze and jaw read from them, for eye and jaw
+//!   bones (a body with no blendshapes follows by them). A phone's frames can go straight on to a [`Performer`]
 //!   ([`Marionette::forward_to`]), timed from datagram in to VMC out; a lost face returns the
 //!   character to neutral, and a calibrated neutral ([`Marionette::calibrate`]) is taken away
 //!   from every frame.

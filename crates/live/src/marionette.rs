@@ -123,12 +123,15 @@ pub struct ReceivedFrame {
     pub weights: Vec<f32>,
     /// Head yaw, pitch, roll in degrees, once a head pose arrived.
     pub head: Option<[f32; 3]>,
-    /// Each eye's gaze `[yaw, pitch]` in degrees (left, right), from a phone's eyeLook values.
+    /// Each eye's gaze `[yaw, pitch]` in degrees (left, right), from the eyeLook values of a
+    /// sender of ARKit values.
     pub eyes: Option<[[f32; 2]; 2]>,
-    /// `jawOpen`, from a phone.
+    /// `jawOpen`, from a sender of ARKit values.
     pub jaw: Option<f32>,
-    /// A phone's ARKit values, ARKit's 52 channels in [`faceanim_rig::names::ARKIT_52`]'s
-    /// order, each clamped to 0..1 (what the eyes and the jaw above are read from).
+    /// The ARKit values of a phone, or of a VMC sender that names ARKit's channels (a
+    /// "perfect sync" tracker), ARKit's 52 channels in [`faceanim_rig::names::ARKIT_52`]'s
+    /// order, each clamped to 0..1, a channel not sent at its last value (what the eyes and the
+    /// jaw above are read from).
     pub arkit: Option<Vec<f32>>,
 }
 
@@ -181,9 +184,12 @@ struct State {
     /// The character's retarget map: ARKit values it has no shape named for reach its shapes
     /// through it.
     map: Option<Arc<faceanim_retarget::RetargetMap>>,
-    /// ARKit's 52 channel values as they arrived (for the map).
+    /// ARKit's 52 channel values as they arrived (for the map, and the frames' `arkit`).
     channels: Vec<f32>,
-    /// Whether any ARKit value arrived since listening started (then a map makes the frame).
+    /// Whether any ARKit value arrived since listening started (then frames carry them).
+    heard_arkit: bool,
+    /// Whether an ARKit value arrived under a name that is none of the character's own (then
+    /// a map makes the frame).
     through_map: bool,
     /// The shapes set by their own names, which the map leaves as sent.
     direct: Vec<bool>,
@@ -277,6 +283,7 @@ impl Marionette {
                 .collect(),
             map: None,
             channels: vec![0.0; faceanim_rig::names::ARKIT_52.len()],
+            heard_arkit: false,
             through_map: false,
             direct: vec![false; blendshapes.len()],
             current: vec![0.0; blendshapes.len()],
@@ -576,6 +583,7 @@ fn apply_reading(state: &mut State, reading: Reading, time: f64) {
     for &(channel, value) in &reading.channels {
         let value = neutral.as_ref().map_or(value, |n| n.value(channel, value));
         state.channels[channel] = value;
+        state.heard_arkit = true;
         state.through_map = true;
         let name = faceanim_rig::names::ARKIT_52[channel];
         if let Some(shapes) = state.arkit.get(name) {
@@ -656,17 +664,21 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
                 return false;
             };
             let value = value.clamp(0.0, 1.0);
+            // Kept with or without a map, so that a map given mid-stream starts from every
+            // channel's last value (a sender sends only what changed), and for the frames'
+            // eyes, jaw and ARKit values (a body with no shapes follows them by its bones).
+            let channel =
+                faceanim_rig::names::arkit_name(name).and_then(faceanim_retarget::channel_index);
+            if let Some(c) = channel {
+                state.channels[c] = value;
+                state.heard_arkit = true;
+            }
             if let Some(&i) = state.own.get(name.as_str()) {
                 state.current[i] = value;
                 state.direct[i] = true;
                 return true;
             }
-            // Kept with or without a map, so that a map given mid-stream starts from every
-            // channel's last value (a sender sends only what changed).
-            if let Some(c) =
-                faceanim_rig::names::arkit_name(name).and_then(faceanim_retarget::channel_index)
-            {
-                state.channels[c] = value;
+            if channel.is_some() {
                 state.through_map = true;
                 if state.map.is_some() {
                     return true;
@@ -757,19 +769,19 @@ fn complete_frame(state: &mut State, time: f64) {
         }
         _ => state.current.clone(),
     };
-    // The eyes from the phone's eyeLook values, as exports turn eye bones: the apps' own eye
-    // angles differ in sign and unit from one app to the next, and Live Link Face's are those
-    // values at the same range (tests/phones.rs).
+    // The eyes from the sender's eyeLook values, as exports turn eye bones: the phone apps'
+    // own eye angles differ in sign and unit from one app to the next, and Live Link Face's are
+    // those values at the same range (tests/phones.rs); VMC's eye bones are left for them.
     let channel = |c: &str| faceanim_retarget::channel_index(c).map_or(0.0, |i| state.channels[i]);
-    let phone = state.raw.is_some();
+    let arkit = state.heard_arkit;
     let sent = state.sent.take();
     let frame = ReceivedFrame {
         time,
         weights,
         head: state.head,
-        eyes: phone.then(|| faceanim_rig::bones::gaze_from_arkit(channel)),
-        jaw: phone.then(|| channel("jawOpen")),
-        arkit: phone.then(|| state.channels.iter().map(|w| w.clamp(0.0, 1.0)).collect()),
+        eyes: arkit.then(|| faceanim_rig::bones::gaze_from_arkit(channel)),
+        jaw: arkit.then(|| channel("jawOpen")),
+        arkit: arkit.then(|| state.channels.iter().map(|w| w.clamp(0.0, 1.0)).collect()),
     };
     if let Some((frames, times)) = state.recording.as_mut() {
         frames.push(frame.clone());
@@ -817,5 +829,37 @@ mod tests {
         // A map of other shapes is ignored.
         let other = faceanim_retarget::RetargetMap::by_name("x", &theirs[..1], &[]);
         marionette.set_map(Some(Arc::new(other)));
+    }
+
+    /// A VMC tracker sending ARKit's names ("perfect sync") gives its frames the eyes, the jaw
+    /// and the ARKit values a phone's frames carry, whether the character has shapes of those
+    /// names or none at all (a body moved by its bones); one sending VRM's presets does not.
+    #[test]
+    fn a_vmc_sender_of_arkit_names_gives_eyes_jaw_and_arkit_values() {
+        let theirs: Vec<String> = ["jawOpen", "eyeLookOutLeft", "eyeLookInRight", "A"]
+            .map(String::from)
+            .to_vec();
+        let jaw = faceanim_retarget::channel_index("jawOpen").unwrap();
+        for ours in [vec![], vec!["jawOpen".to_owned()]] {
+            let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &ours).unwrap();
+            let mut performer =
+                Performer::new(marionette.address(), &theirs[..3], Names::Arkit).unwrap();
+            performer.send(&[0.6, 0.5, 0.5], None, 0.0);
+            let frames = marionette.wait_for_frames(1, Duration::from_secs(5));
+            let frame = &frames[0];
+            assert_eq!(frame.jaw, Some(0.6), "{ours:?}");
+            let arkit = frame.arkit.as_ref().expect("ARKit values");
+            assert_eq!((arkit.len(), arkit[jaw]), (52, 0.6), "{ours:?}");
+            // Both eyes look to the character's left, by half their range.
+            let [left, right] = frame.eyes.expect("eyes");
+            let half = faceanim_rig::bones::EYE_RANGE[0] / 2.0;
+            assert_eq!((left[0], right[0]), (half, half), "{ours:?}");
+            assert_eq!(frame.weights, vec![0.6; ours.len()]);
+        }
+        let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &[]).unwrap();
+        let mut performer = Performer::new(marionette.address(), &theirs[3..], Names::Own).unwrap();
+        performer.send(&[1.0], None, 0.0);
+        let frames = marionette.wait_for_frames(1, Duration::from_secs(5));
+        assert_eq!((frames[0].jaw, &frames[0].arkit), (None, &None));
     }
 }
