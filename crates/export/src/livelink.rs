@@ -79,11 +79,7 @@ pub fn to_csv(clip: &Clip) -> String {
     out.push('\n');
     let index_of = |arkit: &str| ARKIT_52.iter().position(|n| *n == arkit);
     for (f, row) in clip.frames.iter().enumerate() {
-        let values: Vec<f32> = map
-            .channel_values(row)
-            .into_iter()
-            .map(|v| v.unwrap_or(0.0))
-            .collect();
+        let values = map.arkit_row(row);
         let get = |arkit: &str| index_of(arkit).map_or(0.0, |i| values[i]);
         let head = clip
             .head

@@ -256,6 +256,16 @@ impl NameMap {
             .collect()
     }
 
+    /// [`NameMap::channel_values`] as a row of ARKit's 52 values in their order, a channel no
+    /// driven shape carries at 0 (a clip's row as a phone would have sent it).
+    #[must_use]
+    pub fn arkit_row(&self, weights: &[f32]) -> Vec<f32> {
+        self.channel_values(weights)
+            .into_iter()
+            .map(|v| v.unwrap_or(0.0))
+            .collect()
+    }
+
     /// ARKit channels that drive none of the blendshapes.
     #[must_use]
     pub fn undriven_channels(&self) -> Vec<Channel> {
@@ -375,6 +385,16 @@ mod tests {
         assert_eq!(get("mouthSmileLeft"), Some(0.5));
         assert_eq!(get("jawOpen"), Some(0.9));
         assert_eq!(get("cheekPuff"), None);
+        // As a row of ARKit's 52: the same values in ARKIT_52's order, 0 where none.
+        let row = m.arkit_row(&[0.2, 0.6, 0.5, 0.9]);
+        let at = |name: &str| {
+            row[crate::names::ARKIT_52
+                .iter()
+                .position(|n| *n == name)
+                .unwrap()]
+        };
+        assert_eq!((row.len(), at("jawOpen"), at("cheekPuff")), (52, 0.9, 0.0));
+        assert!((at("browInnerUp") - 0.4).abs() < 1e-6);
         assert!(
             m.undriven_channels()
                 .iter()

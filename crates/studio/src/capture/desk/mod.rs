@@ -116,25 +116,17 @@ fn map_path(adapter_path: &std::path::Path, character: &Character) -> PathBuf {
     faceanim_adapt::bridge::default_map_path(adapter_path.parent(), character.name())
 }
 
-/// `clip`'s rows as ARKit's 52 channels in their order: each column by its name's ARKit
-/// meaning in any spelling, clamped to 0..1; channels it lacks at 0.
+/// `clip`'s rows as ARKit's 52 channels in their order, read through the name table as the
+/// Live Link Face writer reads them (any spelling, split halves averaged), clamped to 0..1;
+/// channels it lacks at 0.
 fn arkit_rows(clip: &faceanim_anim::Clip) -> Vec<Vec<f32>> {
-    let channels = &faceanim_rig::names::ARKIT_52;
-    let slots: Vec<Option<usize>> = clip
-        .blendshapes
-        .iter()
-        .map(|n| {
-            faceanim_rig::names::arkit_name(n).and_then(|a| channels.iter().position(|c| *c == a))
-        })
-        .collect();
+    let map = faceanim_rig::name_map::NameMap::from_names(&clip.blendshapes, &[]);
     clip.frames
         .iter()
         .map(|row| {
-            let mut arkit = vec![0.0; channels.len()];
-            for (value, slot) in row.iter().zip(&slots) {
-                if let Some(k) = slot {
-                    arkit[*k] = value.clamp(0.0, 1.0);
-                }
+            let mut arkit = map.arkit_row(row);
+            for v in &mut arkit {
+                *v = v.clamp(0.0, 1.0);
             }
             arkit
         })
