@@ -9,7 +9,8 @@ Loopback only, bounded in count and time.
       messages (address, arguments with their OSC types) and arrival times as JSON.
   vmc_peer.py send --to PORT --frames N --fps F --out FILE [--garbage K] [--lose A:B]
       sends N frames of ARKit weights (JawOpen, EyeBlinkLeft, MouthSmileLeft, in ARKit's
-      capitalised spelling) and a head turn to 127.0.0.1:PORT at F frames per second, but
+      capitalised spelling), a head turn and the gaze (as the LeftEye and RightEye bones, as
+      trackers send it) to 127.0.0.1:PORT at F frames per second, but
       frames A to B-1, which it keeps to itself as a Wi-Fi network loses datagrams; writes
       every frame (its time as /VMC/Ext/T says it, the lost ones marked) as JSON, then K
       garbage datagrams (random bytes, truncated bundles, huge datagrams, unknown addresses,
@@ -87,11 +88,23 @@ def frame_values(k, n):
     }
 
 
-def head_quaternion(yaw_degrees):
-    """A head turned by `yaw_degrees` (to the subject's own left when positive) as VMC sends it:
-    Unity's left-handed frame, the mirror of glTF's X axis, so y flips sign."""
-    half = math.radians(yaw_degrees) / 2
-    return [0.0, -math.sin(half), 0.0, math.cos(half)]
+def head_quaternion(yaw_degrees, pitch_degrees=0.0):
+    """A head (or an eye) turned by `yaw_degrees` (to the subject's own left when positive),
+    then tipped by `pitch_degrees` (up when positive), as VMC sends it: Unity's left-handed
+    frame, the mirror of glTF's X axis, so the turn about Y flips sign; Unity's X points to the
+    subject's right, so tipping up turns about X the negative way."""
+    yaw = math.radians(yaw_degrees) / 2
+    pitch = math.radians(pitch_degrees) / 2
+    # (0, -sin yaw, 0, cos yaw) * (-sin pitch, 0, 0, cos pitch), as x, y, z, w
+    sy, cy, sp, cp = math.sin(yaw), math.cos(yaw), math.sin(pitch), math.cos(pitch)
+    return [-cy * sp, -sy * cp, -sy * sp, cy * cp]
+
+
+def gaze(k, n):
+    """Both eyes' yaw and pitch in degrees at frame k of n: two sweeps left and right, one up
+    and down."""
+    u = k / max(1, n - 1)
+    return [round(20.0 * math.sin(4 * math.pi * u), 3), round(10.0 * math.cos(2 * math.pi * u), 3)]
 
 
 def send(args):
@@ -106,19 +119,22 @@ def send(args):
             time.sleep(wait)
         values = frame_values(k, args.frames)
         yaw = 30.0 * math.sin(2 * math.pi * k / max(1, args.frames))
+        eyes = gaze(k, args.frames)
         now = time.monotonic() - start
         if args.lose[0] <= k < args.lose[1]:
-            sent.append({"time": now, "values": values, "yaw": yaw, "lost": True})
+            sent.append({"time": now, "values": values, "yaw": yaw, "eyes": eyes, "lost": True})
             continue
         bundle = osc_bundle_builder.OscBundleBuilder(osc_bundle_builder.IMMEDIATELY)
         bundle.add_content(message("/VMC/Ext/OK", 1))
         bundle.add_content(message("/VMC/Ext/T", float(now)))
         bundle.add_content(message("/VMC/Ext/Bone/Pos", "Head", 0.0, 0.0, 0.0, *head_quaternion(yaw)))
+        for bone in ("LeftEye", "RightEye"):
+            bundle.add_content(message("/VMC/Ext/Bone/Pos", bone, 0.0, 0.0, 0.0, *head_quaternion(*eyes)))
         for name, value in values.items():
             bundle.add_content(message("/VMC/Ext/Blend/Val", name, float(value)))
         bundle.add_content(message("/VMC/Ext/Blend/Apply"))
         sock.sendto(bundle.build().dgram, destination)
-        sent.append({"time": now, "values": values, "yaw": yaw})
+        sent.append({"time": now, "values": values, "yaw": yaw, "eyes": eyes})
     rng = random.Random(7)
     valid = message("/VMC/Ext/Blend/Val", "JawOpen", 0.5).dgram
     kinds = [

@@ -7,7 +7,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context as _;
 use faceanim_anim::Clip;
-use faceanim_live::{Names, Performer};
+use faceanim_export::bones::BoneKeys;
+use faceanim_live::{Names, Performer, Pose};
 
 /// The fastest rate frames are sent at.
 const MAX_FPS: f32 = 120.0;
@@ -58,10 +59,19 @@ pub struct StreamArgs {
 
 pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     let bytes = faceanim_files::read_bytes(&args.input)?;
-    let clip = match Clip::from_json(&bytes) {
-        Ok(clip) => clip,
+    // A session's gaze and jaw from what it was made of (MediaPipe's scores, a phone's values),
+    // as its export turns eye and jaw bones.
+    let (clip, keys) = match Clip::from_json(&bytes) {
+        Ok(clip) => {
+            let keys = BoneKeys::from_clip(&clip);
+            (clip, keys)
+        }
         Err(clip_error) => faceanim_take::Session::from_json(&bytes)
-            .map(|session| session.clip())
+            .map(|session| {
+                let clip = session.clip();
+                let keys = BoneKeys::of_take(&clip, session.arkit_clip().as_ref());
+                (clip, keys)
+            })
             .map_err(|session_error| {
                 anyhow::anyhow!(
                     "{}: neither a clip ({clip_error}) nor a session ({session_error})",
@@ -116,9 +126,9 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
         if let Some(wait) = due.checked_duration_since(Instant::now()) {
             std::thread::sleep(wait);
         }
-        let (weights, head) = sample(&clip, f as f32 / fps);
+        let (weights, pose) = sample(&clip, &keys, f as f32 / fps);
         let before = Instant::now();
-        performer.send(&weights, head, started.elapsed().as_secs_f32());
+        performer.send_pose(&weights, pose, started.elapsed().as_secs_f32());
         let took = before.elapsed();
         sending += took;
         slowest = slowest.max(took);
@@ -165,8 +175,9 @@ pub fn listen_address(text: &str) -> anyhow::Result<SocketAddr> {
         .with_context(|| format!("--vmc-listen {text}: give a PORT or ADDR:PORT"))
 }
 
-/// The clip's weights and head at `time` seconds, between its frames linearly.
-fn sample(clip: &Clip, time: f32) -> (Vec<f32>, Option<[f32; 3]>) {
+/// The clip's weights and its head, gaze and jaw (`keys`, one per frame) at `time` seconds,
+/// between its frames linearly.
+fn sample(clip: &Clip, keys: &BoneKeys, time: f32) -> (Vec<f32>, Pose) {
     let last = clip.frames.len() - 1;
     let position = (time * clip.fps).clamp(0.0, last as f32);
     let a = position.floor() as usize;
@@ -182,5 +193,15 @@ fn sample(clip: &Clip, time: f32) -> (Vec<f32>, Option<[f32; 3]>) {
         let (x, y) = (h.get(a)?, h.get(b)?);
         Some([lerp(x[0], y[0]), lerp(x[1], y[1]), lerp(x[2], y[2])])
     });
-    (weights, head)
+    let eyes = keys.gaze.as_ref().and_then(|g| {
+        let (x, y) = (g.get(a)?, g.get(b)?);
+        Some(std::array::from_fn(|e| {
+            std::array::from_fn(|i| lerp(x[e][i], y[e][i]))
+        }))
+    });
+    let jaw = keys
+        .jaw
+        .as_ref()
+        .and_then(|j| Some(lerp(*j.get(a)?, *j.get(b)?)));
+    (weights, Pose { head, eyes, jaw })
 }

@@ -1429,10 +1429,11 @@ fn a_phone_recorded_onto_a_body_with_no_shapes_opens_its_jaw() {
 
 /// A VMC tracker naming ARKit's channels ("perfect sync", python-osc standing in) recorded
 /// onto the same body: as a phone's, its JawOpen opens the take's jaw bone at every frame and
-/// its Clip JSON holds the values. The marionette kept ARKit values from phones alone before:
-/// the jaw stayed shut.
+/// its Clip JSON holds the values; the gaze it sends as eye bones (Unity's convention, written
+/// by the peer itself) is the take's eyeLook values. The marionette kept ARKit values from
+/// phones alone and read no eye bones before: the jaw stayed shut and the eyes still.
 #[test]
-fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw() {
+fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw_and_turns_its_eyes() {
     const FRAMES: usize = 120;
     let dir = tempfile::tempdir().unwrap();
     let port = support::free_udp_port();
@@ -1449,6 +1450,42 @@ fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw() {
     // Loopback may drop a datagram: what arrived is recorded.
     assert!(recorded(&studio, FRAMES)["recording"].as_u64() > Some(100));
     jaw_follows_what_was_sent(&studio, &sent);
+    // Each frame of the take's Clip JSON looks where the eye bones sent around its time did.
+    let (_, clip) = support::get_with_head(studio.port, "/api/capture/export.json");
+    let clip: serde_json::Value = serde_json::from_slice(&clip).unwrap();
+    let names = support::strings(&clip["blendshapes"]);
+    let column = |name: &str| {
+        let found = names.iter().position(|n| n == name);
+        found.unwrap_or_else(|| panic!("no {name} in the take's Clip JSON: {names:?}"))
+    };
+    let fps = clip["fps"].as_f64().unwrap();
+    let range = faceanim_rig::bones::EYE_RANGE.map(f64::from);
+    let sent = sent["frames"].as_array().unwrap();
+    let start = sent[0]["time"].as_f64().unwrap();
+    let mut widest: f64 = 0.0;
+    for (k, row) in clip["frames"].as_array().unwrap().iter().enumerate() {
+        let value = |name: &str| row[column(name)].as_f64().unwrap();
+        let looked = [
+            (value("eyeLookOutLeft") - value("eyeLookInLeft")) * range[0],
+            (value("eyeLookUpLeft") - value("eyeLookDownLeft")) * range[1],
+        ];
+        let t = k as f64 / fps;
+        for (axis, got) in looked.into_iter().enumerate() {
+            let around: Vec<f64> = sent
+                .iter()
+                .filter(|f| (f["time"].as_f64().unwrap() - start - t).abs() <= 0.1)
+                .map(|f| f["eyes"][axis].as_f64().unwrap())
+                .collect();
+            let low = around.iter().copied().fold(f64::INFINITY, f64::min);
+            let high = around.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            assert!(
+                low - 0.05 <= got && got <= high + 0.05,
+                "take frame {k} at {t:.3} s: the left eye at {got:.2}° on axis {axis}, the bones said {low:.2}° to {high:.2}°"
+            );
+        }
+        widest = widest.max(looked[0].abs());
+    }
+    assert!(widest > 19.0, "the eyes turned at most {widest}°");
 }
 
 /// Stops `studio`'s recording and checks that each take frame's jaw (the view skeleton's last

@@ -1,7 +1,8 @@
 //! `faceanim stream`: a clip sent over VMC (OSC over UDP) as an independent implementation,
 //! PyPI's python-osc (`tools/vmc_peer.py`), decodes it: addresses, argument types, every
-//! blendshape value at its frame, the head turn in Unity's convention, one Apply per frame, at
-//! the requested rate, and a 60 Hz stream held for 30 seconds without loss. Loopback only.
+//! blendshape value at its frame, the head turn, the gaze and the jaw as bones in Unity's
+//! convention, one Apply per frame, at the requested rate, and a 60 Hz stream held for 30
+//! seconds without loss. Loopback only.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -66,10 +67,13 @@ fn a_streamed_clip_decodes_exactly_at_its_rate() {
         .map(|k| if k % 8 < 4 { 0.0 } else { 1.0 })
         .collect();
     let yaw: Vec<f32> = (0..frames).map(|k| 2.5 * k as f32 - 20.0).collect();
+    let look: Vec<f32> = (0..frames)
+        .map(|k| (k as f32 / 4.0).sin().max(0.0))
+        .collect();
     let clip = serde_json::json!({
         "fps": 30,
-        "blendshapes": ["jawOpen", "eyeBlink_L"],
-        "frames": (0..frames).map(|k| [jaw[k], blink[k]]).collect::<Vec<_>>(),
+        "blendshapes": ["jawOpen", "eyeBlink_L", "eyeLookOutLeft"],
+        "frames": (0..frames).map(|k| [jaw[k], blink[k], look[k]]).collect::<Vec<_>>(),
         "head": yaw.iter().map(|y| [*y, 0.0, 0.0]).collect::<Vec<_>>(),
     });
     let clip_path = dir.join("turn.json");
@@ -127,6 +131,32 @@ fn a_streamed_clip_decodes_exactly_at_its_rate() {
             assert_eq!(pose[0], ("s".to_owned(), Value::from(bone)));
             assert!(pose[1..].iter().all(|(t, _)| t == "f") && pose.len() == 8);
             let q: Vec<f64> = pose[4..].iter().map(|(_, v)| v.as_f64().unwrap()).collect();
+            for (a, b) in q.iter().zip(expected) {
+                assert!(
+                    (a - b).abs() < 1e-5,
+                    "frame {k}: {bone} {q:?}, expected {expected:?}"
+                );
+            }
+        }
+        // The gaze and the jaw as bones, in the same convention: the left eye turned towards
+        // the subject's left by eyeLookOutLeft × 35° (the right eye still), the jaw tipped
+        // down (a positive turn about Unity's X, which points to the subject's right) by
+        // jawOpen × 20°.
+        let half_look = f64::from(look[k]) * 35f64.to_radians() / 2.0;
+        let half_jaw = f64::from(jaw[k]) * 20f64.to_radians() / 2.0;
+        for (bone, expected) in [
+            ("LeftEye", [0.0, -half_look.sin(), 0.0, half_look.cos()]),
+            ("RightEye", [0.0, 0.0, 0.0, 1.0]),
+            ("Jaw", [half_jaw.sin(), 0.0, 0.0, half_jaw.cos()]),
+        ] {
+            let message = messages
+                .iter()
+                .find(|m| m["address"] == "/VMC/Ext/Bone/Pos" && m["args"][0][1] == bone)
+                .unwrap_or_else(|| panic!("frame {k}: no {bone} bone"));
+            let q: Vec<f64> = args_of(message)[4..]
+                .iter()
+                .map(|(_, v)| v.as_f64().unwrap())
+                .collect();
             for (a, b) in q.iter().zip(expected) {
                 assert!(
                     (a - b).abs() < 1e-5,

@@ -123,15 +123,15 @@ pub struct ReceivedFrame {
     pub weights: Vec<f32>,
     /// Head yaw, pitch, roll in degrees, once a head pose arrived.
     pub head: Option<[f32; 3]>,
-    /// Each eye's gaze `[yaw, pitch]` in degrees (left, right), from the eyeLook values of a
-    /// sender of ARKit values.
+    /// Each eye's gaze `[yaw, pitch]` in degrees (left, right), from the eyeLook values of
+    /// [`ReceivedFrame::arkit`].
     pub eyes: Option<[[f32; 2]; 2]>,
-    /// `jawOpen`, from a sender of ARKit values.
+    /// `jawOpen`, of [`ReceivedFrame::arkit`].
     pub jaw: Option<f32>,
     /// The ARKit values of a phone, or of a VMC sender that names ARKit's channels (a
-    /// "perfect sync" tracker), ARKit's 52 channels in [`faceanim_rig::names::ARKIT_52`]'s
-    /// order, each clamped to 0..1, a channel not sent at its last value (what the eyes and the
-    /// jaw above are read from).
+    /// "perfect sync" tracker) or sends eye or jaw bones (their eyeLook and jawOpen values),
+    /// ARKit's 52 channels in [`faceanim_rig::names::ARKIT_52`]'s order, each clamped to 0..1,
+    /// a channel not sent at its last value (what the eyes and the jaw above are read from).
     pub arkit: Option<Vec<f32>>,
 }
 
@@ -188,6 +188,12 @@ struct State {
     channels: Vec<f32>,
     /// Whether any ARKit value arrived since listening started (then frames carry them).
     heard_arkit: bool,
+    /// Which ARKit channels arrived by name (VMC's eye and jaw bones stand for the others).
+    named: Vec<bool>,
+    /// The gaze `[yaw, pitch]` of VMC's `LeftEye` and `RightEye` bones, once sent.
+    eye_bones: [Option<[f32; 2]>; 2],
+    /// How open VMC's `Jaw` bone is (0..1 at [`crate::JAW_DEGREES`]), once sent.
+    jaw_bone: Option<f32>,
     /// Whether an ARKit value arrived under a name that is none of the character's own (then
     /// a map makes the frame).
     through_map: bool,
@@ -284,6 +290,9 @@ impl Marionette {
             map: None,
             channels: vec![0.0; faceanim_rig::names::ARKIT_52.len()],
             heard_arkit: false,
+            named: vec![false; ARKIT_COUNT],
+            eye_bones: [None; 2],
+            jaw_bone: None,
             through_map: false,
             direct: vec![false; blendshapes.len()],
             current: vec![0.0; blendshapes.len()],
@@ -584,6 +593,7 @@ fn apply_reading(state: &mut State, reading: Reading, time: f64) {
         let value = neutral.as_ref().map_or(value, |n| n.value(channel, value));
         state.channels[channel] = value;
         state.heard_arkit = true;
+        state.named[channel] = true;
         state.through_map = true;
         let name = faceanim_rig::names::ARKIT_52[channel];
         if let Some(shapes) = state.arkit.get(name) {
@@ -672,6 +682,7 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             if let Some(c) = channel {
                 state.channels[c] = value;
                 state.heard_arkit = true;
+                state.named[c] = true;
             }
             if let Some(&i) = state.own.get(name.as_str()) {
                 state.current[i] = value;
@@ -728,6 +739,17 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
                     };
                     state.head = head_angles(turn);
                 }
+                // The gaze and the jaw as faceanim's performer sends them (trackers that send
+                // VRM's presets send the gaze so): each bone's turn from its rest.
+                "LeftEye" | "RightEye" => {
+                    let side = usize::from(bone == "RightEye");
+                    state.eye_bones[side] =
+                        head_angles(rotation).map(|[yaw, pitch, _]| [yaw, pitch]);
+                }
+                "Jaw" => {
+                    state.jaw_bone = head_angles(rotation)
+                        .map(|[_, pitch, _]| (-pitch / crate::JAW_DEGREES).clamp(0.0, 1.0));
+                }
                 _ => {}
             }
             true
@@ -753,6 +775,31 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
     }
 }
 
+/// The ARKit values of the frame being made, once any arrived: each channel's last value,
+/// clamped to 0..1; VMC's eye and jaw bones give the eyeLook and jawOpen values the sender does
+/// not name.
+fn arkit_row(state: &State) -> Option<Vec<f32>> {
+    let [left, right] = state.eye_bones;
+    let gaze = left
+        .or(right)
+        .map(|one| [left.unwrap_or(one), right.unwrap_or(one)]);
+    if !state.heard_arkit && gaze.is_none() && state.jaw_bone.is_none() {
+        return None;
+    }
+    let mut row: Vec<f32> = state.channels.iter().map(|w| w.clamp(0.0, 1.0)).collect();
+    let from_bones = gaze
+        .map(faceanim_rig::bones::arkit_from_gaze)
+        .into_iter()
+        .flatten()
+        .chain(state.jaw_bone.map(|open| ("jawOpen", open)));
+    for (name, value) in from_bones {
+        if let Some(c) = faceanim_retarget::channel_index(name).filter(|&c| !state.named[c]) {
+            row[c] = value;
+        }
+    }
+    Some(row)
+}
+
 /// The weights and head of what arrived so far become a frame (kept, and recorded while
 /// recording).
 fn complete_frame(state: &mut State, time: f64) {
@@ -771,17 +818,20 @@ fn complete_frame(state: &mut State, time: f64) {
     };
     // The eyes from the sender's eyeLook values, as exports turn eye bones: the phone apps'
     // own eye angles differ in sign and unit from one app to the next, and Live Link Face's are
-    // those values at the same range (tests/phones.rs); VMC's eye bones are left for them.
-    let channel = |c: &str| faceanim_retarget::channel_index(c).map_or(0.0, |i| state.channels[i]);
-    let arkit = state.heard_arkit;
+    // those values at the same range (tests/phones.rs).
+    let arkit = arkit_row(state);
+    let channel =
+        |row: &[f32], c: &str| faceanim_retarget::channel_index(c).map_or(0.0, |i| row[i]);
     let sent = state.sent.take();
     let frame = ReceivedFrame {
         time,
         weights,
         head: state.head,
-        eyes: arkit.then(|| faceanim_rig::bones::gaze_from_arkit(channel)),
-        jaw: arkit.then(|| channel("jawOpen")),
-        arkit: arkit.then(|| state.channels.iter().map(|w| w.clamp(0.0, 1.0)).collect()),
+        eyes: arkit
+            .as_ref()
+            .map(|row| faceanim_rig::bones::gaze_from_arkit(|c| channel(row, c))),
+        jaw: arkit.as_ref().map(|row| channel(row, "jawOpen")),
+        arkit,
     };
     if let Some((frames, times)) = state.recording.as_mut() {
         frames.push(frame.clone());
@@ -861,5 +911,46 @@ mod tests {
         performer.send(&[1.0], None, 0.0);
         let frames = marionette.wait_for_frames(1, Duration::from_secs(5));
         assert_eq!((frames[0].jaw, &frames[0].arkit), (None, &None));
+    }
+
+    /// A VMC sender's eye and jaw bones (as faceanim's performer and trackers sending VRM's
+    /// presets send the gaze) give the frame's gaze, jaw and the eyeLook and jawOpen values it
+    /// does not name; a named value wins over its bone.
+    #[test]
+    fn vmc_eye_and_jaw_bones_are_read_where_values_are_not_named() {
+        let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &[]).unwrap();
+        let theirs: Vec<String> = ["Blink"].map(String::from).to_vec();
+        let mut performer = Performer::new(marionette.address(), &theirs, Names::Own).unwrap();
+        let eyes = [[10.0, -5.0], [12.0, -5.0]];
+        let pose = crate::Pose {
+            head: None,
+            eyes: Some(eyes),
+            jaw: Some(0.4),
+        };
+        performer.send_pose(&[1.0], pose, 0.0);
+        let frame = marionette
+            .wait_for_frames(1, Duration::from_secs(5))
+            .remove(0);
+        let got = frame.eyes.expect("eyes");
+        for (sent, got) in eyes.iter().flatten().zip(got.iter().flatten()) {
+            assert!((sent - got).abs() < 1e-3, "{eyes:?} sent, {got:?} read");
+        }
+        assert!((frame.jaw.unwrap() - 0.4).abs() < 1e-4, "{:?}", frame.jaw);
+        let arkit = frame.arkit.expect("ARKit values");
+        let at = |name: &str| arkit[faceanim_retarget::channel_index(name).unwrap()];
+        assert!((at("eyeLookOutLeft") - 10.0 / faceanim_rig::bones::EYE_RANGE[0]).abs() < 1e-4);
+        assert!((at("jawOpen") - 0.4).abs() < 1e-4);
+        // ARKit names and bones together (faceanim's performer sends both): the names win.
+        let arkit_names: Vec<String> = ["jawOpen"].map(String::from).to_vec();
+        let mut both = Performer::new(marionette.address(), &arkit_names, Names::Arkit).unwrap();
+        let pose = crate::Pose {
+            jaw: Some(1.0),
+            ..pose
+        };
+        both.send_pose(&[0.25], pose, 1.0);
+        let frame = marionette
+            .wait_for_frames(2, Duration::from_secs(5))
+            .remove(1);
+        assert_eq!(frame.jaw, Some(0.25));
     }
 }

@@ -498,7 +498,8 @@ pub fn vmc_values(peer: &mut std::process::Child, report: &Path, name: &str) -> 
         .collect()
 }
 
-/// The independent VMC peer sending `frames` frames of known ARKit weights and head turns to
+/// The independent VMC peer sending `frames` frames of known ARKit weights, head turns and
+/// gaze (`"eyes"`: yaw and pitch of both eye bones) to
 /// 127.0.0.1:`port` at `fps` but those in `lose` (kept back, as a Wi-Fi network loses them),
 /// then `garbage` bad datagrams; returns every frame, the lost ones marked `"lost": true`.
 pub fn vmc_send(
