@@ -482,7 +482,7 @@ onFrame((frame) => {
   const take = currentView()?.take;
   if (!currentView()) return;
   const f = take ? Math.min(Math.round(frame), take.frames - 1) : -1;
-  if (!live.running && !vmc.running) turnHead(take ? take.head[f] : null, take && take.bones ? take.bones[Math.min(Math.round(frame), take.bones.length - 1)] : null);
+  if (!live.running && !vmc.running && !voice.running) turnHead(take ? take.head[f] : null, take && take.bones ? take.bones[Math.min(Math.round(frame), take.bones.length - 1)] : null);
   if (take && !live.running && !vmc.running && f !== shownFrame) {
     shownFrame = f;
     if (f < take.previews) frameImage.src = `api/capture/frame/${f}.png?take=${take.id}`;

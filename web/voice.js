@@ -11,6 +11,7 @@ import { pushMedian } from './medians.js';
 import { applyLayer, pause } from './playback.js';
 import { onRender } from './scene.js';
 import { showError } from './status.js';
+import { turnHead } from './head-turn.js';
 
 const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
 const RATE = 16000;
@@ -152,6 +153,8 @@ async function sendPending() {
       voice.weights = result.weights;
       shown = { newest: arrived, sent, received: performance.now(), open: result.open };
       applyLayer();
+      // A character with a skeleton opens its jaw bone too (a body with no shapes only so).
+      if (result.bones) turnHead(null, result.bones);
     }
     showVoice();
   } catch (e) {

@@ -1171,6 +1171,86 @@ fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
     );
 }
 
+/// The studio's live microphone on a body with no blendshapes (the Blender avatar exported
+/// without shape keys): a real person's reading opens the view's jaw bone as it is heard, the
+/// jaw goes out over VMC as the `Jaw` bone (python-osc decodes it), and the recording is a take
+/// whose jaw bone opens and whose Clip JSON holds the line's jawOpen. The microphone kept the
+/// character's weights alone before: the body's jaw stayed shut live and in the take.
+#[test]
+fn the_microphone_opens_the_jaw_bone_of_a_body_with_no_shapes() {
+    let out = output_dir("lipsync-microphone-bare");
+    let report = out.join("vmc.json");
+    let (mut peer, vmc_port) = vmc_receiver(200, 60.0, &report);
+    let to = format!("127.0.0.1:{vmc_port}");
+    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
+    let studio = start_on(
+        Some(&bare),
+        &out.join("project.json"),
+        &["--vmc-send".as_ref(), to.as_ref()],
+    );
+    let port = studio.port;
+    let (status, body) = send(port, "PUT", "/api/capture/voice", r#"{"on": true}"#);
+    assert_eq!(status, 200, "{body}");
+    let (status, body) = send(port, "POST", "/api/capture/voice/record", r#"{"on": true}"#);
+    assert_eq!(status, 200, "{body}");
+    // The jaw is the view's last joint: its turn from rest, in degrees, per answer.
+    let opened = |bones: &Value| {
+        let jaw = bones.as_array().unwrap().last().unwrap();
+        let q = glam::Quat::from_slice(&support::f32s(jaw));
+        f64::from(q.angle_between(glam::Quat::IDENTITY).to_degrees())
+    };
+    let (wav, _) = &librivox()[0];
+    let person = samples(wav).0;
+    let mut widest: f64 = 0.0;
+    for part in person.chunks(320) {
+        let bytes: Vec<u8> = part.iter().flat_map(|s| s.to_le_bytes()).collect();
+        let (status, body) = chunk(port, "16000", &bytes);
+        assert_eq!(status, 200, "{body}");
+        let answer: Value = serde_json::from_str(&body).unwrap();
+        if answer["weights"].is_array() {
+            widest = widest.max(opened(&answer["bones"]));
+        }
+    }
+    assert!(widest > 5.0, "the view's jaw opened at most {widest}°");
+    let (status, state) = send(
+        port,
+        "POST",
+        "/api/capture/voice/record",
+        r#"{"on": false}"#,
+    );
+    assert_eq!(status, 200, "{state}");
+    let take = &state["take"];
+    let frames = take["bones"].as_array().unwrap();
+    let take_widest = frames.iter().map(opened).fold(0.0, f64::max);
+    let rests = frames.iter().filter(|b| opened(b) < 0.5).count();
+    assert!(
+        take_widest > 5.0 && rests > 0,
+        "the take's jaw opened at most {take_widest}°, rested in {rests} of {} frames",
+        frames.len()
+    );
+    let (status, clip) = request_bytes(port, "GET", "/api/capture/export.json", &[], b"");
+    assert_eq!(status, 200);
+    let clip: Value = serde_json::from_slice(&clip).unwrap();
+    let names = strings(&clip["blendshapes"]);
+    assert!(names.iter().any(|n| n == "jawOpen"), "{names:?}");
+    drop(studio);
+    // Out over VMC: the Jaw bone turned down (about Unity's X) while the person spoke.
+    assert!(peer.wait().unwrap().success());
+    let received: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let turns: Vec<f64> = received["datagrams"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|d| d["messages"].as_array().unwrap().iter())
+        .filter(|m| m["address"] == "/VMC/Ext/Bone/Pos" && m["args"][0][1] == "Jaw")
+        .map(|m| 2.0 * m["args"][4][1].as_f64().unwrap().asin().to_degrees())
+        .collect();
+    assert!(
+        turns.iter().any(|t| *t > 2.0),
+        "the Jaw bone never went out open: {turns:?}"
+    );
+}
+
 /// A rig whose shape names say nothing of a mouth (ICT's head with every shape renamed
 /// `shape_N`, in reverse order): lip sync reaches its mouth through its retarget map (made
 /// and kept beside it), and through its adapter when one is given (each viseme the built-in

@@ -57,18 +57,19 @@ pub struct Performer {
 impl Performer {
     /// A performer sending the face of a character whose blendshapes are `blendshapes` (the
     /// weights given to [`Performer::send`] follow their order) under `names` to
-    /// `destination`.
+    /// `destination`. A character with no blendshapes at all (a body moved by its bones) sends
+    /// its head, gaze and jaw as bones alone.
     ///
     /// # Errors
     /// [`LiveError::Socket`] when no UDP socket can be opened, [`LiveError::NoNames`] when the
-    /// character has none of the names asked for.
+    /// character has blendshapes but none of the names asked for.
     pub fn new(
         destination: SocketAddr,
         blendshapes: &[String],
         names: Names,
     ) -> Result<Performer, LiveError> {
         let table = names.table(blendshapes);
-        if table.is_empty() {
+        if table.is_empty() && !blendshapes.is_empty() {
             return Err(LiveError::NoNames {
                 what: names.describe(),
             });
@@ -267,5 +268,26 @@ mod tests {
                 "{bone}: {q:?}, expected {want:?}"
             );
         }
+    }
+
+    /// A body with no blendshapes sends its bones alone; a character with shapes but none of
+    /// the names asked for is refused, naming them.
+    #[test]
+    fn a_body_with_no_shapes_sends_bones_and_names_that_cover_nothing_are_refused() {
+        let to: SocketAddr = "127.0.0.1:9".parse().unwrap();
+        let mut bare = Performer::new(to, &[], Names::Arkit).unwrap();
+        let pose = Pose {
+            jaw: Some(1.0),
+            ..Pose::default()
+        };
+        let bundle = bare.bundle(&[], pose, 0.0);
+        let jaw = bundle.content.iter().any(|p| {
+            matches!(p, OscPacket::Message(m) if m.addr == "/VMC/Ext/Bone/Pos"
+                && m.args.first() == Some(&OscType::String("Jaw".to_owned())))
+        });
+        assert!(jaw);
+        let shaped = ["Fcl_MTH_A".to_owned()];
+        let refused = Performer::new(to, &shaped, Names::Arkit).unwrap_err();
+        assert!(refused.to_string().contains("ARKit"), "{refused}");
     }
 }

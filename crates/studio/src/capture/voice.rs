@@ -13,9 +13,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use faceanim_speech::Mouth;
 use faceanim_speech::audio::{FRAME_RATE, SAMPLE_RATE};
 use faceanim_speech::listen::{self, CALIBRATION_SECONDS, Listener, VoiceModel};
+use faceanim_speech::{Mouth, MouthTable};
 use serde::Serialize;
 
 use crate::error::ApiError;
@@ -42,6 +42,9 @@ pub struct VoiceResult {
     pub weights: Option<Vec<f32>>,
     /// How open the mouth is, 0..1, in that frame.
     pub open: f32,
+    /// The view's skeleton turned by the line's jawOpen in that frame (a character whose file
+    /// has a head bone: a body with no blendshapes opens its mouth by its jaw bone).
+    pub bones: Option<Vec<[f32; 4]>>,
     /// The loudness of the newest frame heard, dB relative to full scale (a chunk too short
     /// to complete a frame answers the one before it: never a made-up silence).
     pub level_db: f32,
@@ -52,10 +55,30 @@ pub struct VoiceResult {
 }
 
 /// A frame waiting for its time (the delay).
+#[derive(Clone)]
 struct Due {
     at: f32,
     weights: Vec<f32>,
     open: f32,
+    /// The line's jawOpen (its ARKit values'), for jaw bones.
+    jaw: f32,
+}
+
+/// A recording under way: the sound, and per 10 ms frame the character's weights and the
+/// line's ARKit values, as heard.
+#[derive(Default)]
+struct Recording {
+    sound: Vec<i16>,
+    weights: Vec<Vec<f32>>,
+    arkit: Vec<Vec<f32>>,
+}
+
+/// A recording ended: its sound, and the character's weights and the line's ARKit values at
+/// [`RECORDED_FPS`].
+pub(super) struct Recorded {
+    pub sound: Vec<i16>,
+    pub weights: Vec<Vec<f32>>,
+    pub arkit: Vec<Vec<f32>>,
 }
 
 /// The live microphone.
@@ -64,6 +87,9 @@ pub(super) struct Voice {
     session: u64,
     listener: Listener,
     mouth: Mouth,
+    /// The visemes as ARKit's 52 values by the table (what a take keeps beside the weights:
+    /// jaw bones and Live Link Face read them).
+    arkit: Mouth,
     model: Option<VoiceModel>,
     /// Counts calibrations: a refinement begun before one is not applied after it.
     generation: u64,
@@ -79,9 +105,9 @@ pub(super) struct Voice {
     since_refine: usize,
     refining: bool,
     refine_error: Option<String>,
-    /// Recording: the sound and the character's weights of each 10 ms frame, as heard.
-    recording: Option<(Vec<i16>, Vec<Vec<f32>>)>,
-    last: Option<(Vec<f32>, f32)>,
+    recording: Option<Recording>,
+    /// The frame shown last.
+    last: Option<Due>,
     /// The newest heard frame's loudness, dB.
     level_db: f32,
     performer: Option<Arc<Mutex<faceanim_live::Performer>>>,
@@ -97,10 +123,11 @@ impl std::fmt::Debug for Voice {
 }
 
 impl Voice {
-    /// A microphone session driving `mouth`, held back by `delay_ms` (checked), reading with
-    /// `model` (a voice learned earlier) when there is one.
+    /// A microphone session driving `mouth` (made by `table`), held back by `delay_ms`
+    /// (checked), reading with `model` (a voice learned earlier) when there is one.
     pub(super) fn start(
         mouth: Mouth,
+        table: &MouthTable,
         model: Option<VoiceModel>,
         delay_ms: u32,
         language: Option<&str>,
@@ -113,6 +140,7 @@ impl Voice {
             session: SESSIONS.fetch_add(1, Ordering::Relaxed),
             listener: Listener::new(model.as_ref()),
             mouth,
+            arkit: Mouth::arkit(table),
             model,
             generation: 0,
             language,
@@ -180,30 +208,36 @@ impl Voice {
 
     /// Starts recording what is heard.
     pub(super) fn start_recording(&mut self) {
-        self.recording = Some((Vec::new(), Vec::new()));
+        self.recording = Some(Recording::default());
     }
 
-    /// Ends the recording: its sound, and the character's weights at [`RECORDED_FPS`].
+    /// Ends the recording.
     ///
     /// # Errors
     /// [`ApiError::Live`] when not recording, or nothing was heard.
-    pub(super) fn stop_recording(&mut self) -> Result<(Vec<i16>, Vec<Vec<f32>>), ApiError> {
-        let (samples, frames) = self
+    pub(super) fn stop_recording(&mut self) -> Result<Recorded, ApiError> {
+        let recording = self
             .recording
             .take()
             .ok_or(ApiError::Live("not recording"))?;
-        if frames.is_empty() {
+        if recording.weights.is_empty() {
             return Err(ApiError::Live("nothing was recorded (no sound arrived)"));
         }
         // Frames came every 10 ms: the take samples them at its own rate.
         let per_frame = FRAME_RATE as f32 / RECORDED_FPS;
-        let count = ((frames.len() as f32 / per_frame).ceil() as usize).max(1);
-        let rows = (0..count)
-            .map(|i| {
-                frames[((i as f32 * per_frame).round() as usize).min(frames.len() - 1)].clone()
-            })
-            .collect();
-        Ok((samples, rows))
+        let count = ((recording.weights.len() as f32 / per_frame).ceil() as usize).max(1);
+        let sampled = |frames: &[Vec<f32>]| -> Vec<Vec<f32>> {
+            (0..count)
+                .map(|i| {
+                    frames[((i as f32 * per_frame).round() as usize).min(frames.len() - 1)].clone()
+                })
+                .collect()
+        };
+        Ok(Recorded {
+            weights: sampled(&recording.weights),
+            arkit: sampled(&recording.arkit),
+            sound: recording.sound,
+        })
     }
 
     pub(super) fn view(&self) -> VoiceView {
@@ -220,12 +254,14 @@ impl Voice {
             recording: self
                 .recording
                 .as_ref()
-                .map(|(s, _)| s.len() as f32 / RATE as f32),
+                .map(|r| r.sound.len() as f32 / RATE as f32),
         }
     }
 
-    pub(super) fn set_mouth(&mut self, mouth: Mouth) {
+    /// Drives `mouth`, made by `table`, from now on.
+    pub(super) fn set_mouth(&mut self, mouth: Mouth, table: &MouthTable) {
         self.mouth = mouth;
+        self.arkit = Mouth::arkit(table);
     }
 
     fn set_model(&mut self, model: VoiceModel) {
@@ -250,12 +286,16 @@ fn check_delay(delay_ms: u32) -> Result<(), ApiError> {
 /// What a chunk needs, taken from the desk so hearing it does not block the desk.
 pub struct VoiceHandle {
     voice: SharedVoice,
+    skeleton: Option<Arc<faceanim_export::bones::ViewRig>>,
 }
 
 impl VoiceHandle {
-    /// A handle on `voice`.
-    pub(super) fn new(voice: SharedVoice) -> VoiceHandle {
-        VoiceHandle { voice }
+    /// A handle on `voice`, turning the view's `skeleton` where the character has one.
+    pub(super) fn new(
+        voice: SharedVoice,
+        skeleton: Option<Arc<faceanim_export::bones::ViewRig>>,
+    ) -> VoiceHandle {
+        VoiceHandle { voice, skeleton }
     }
 
     /// Hears one chunk of the microphone (16 kHz mono samples) and returns the mouth now.
@@ -268,6 +308,7 @@ impl VoiceHandle {
                 live: false,
                 weights: None,
                 open: 0.0,
+                bones: None,
                 level_db: -100.0,
                 server_ms: 0.0,
                 voice: None,
@@ -277,24 +318,28 @@ impl VoiceHandle {
         let now = voice.received as f32 / RATE as f32;
         // A recording keeps the sound and each frame's mouth as heard (not delayed: the take
         // plays them together), up to an hour.
-        let recording = voice
+        let mut recording = voice
             .recording
             .as_mut()
-            .filter(|(sound, _)| sound.len() < MAX_RECORDING_SECONDS * RATE);
-        let mut recorded = recording.map(|(sound, frames)| {
-            sound.extend_from_slice(samples);
-            frames
-        });
+            .filter(|r| r.sound.len() < MAX_RECORDING_SECONDS * RATE);
+        if let Some(r) = recording.as_mut() {
+            r.sound.extend_from_slice(samples);
+        }
         for heard in voice.listener.push(samples) {
             voice.level_db = heard.level_db;
             let weights = voice.mouth.weights(&heard.visemes);
-            if let Some(frames) = recorded.as_mut() {
-                frames.push(weights.clone());
+            let arkit = voice.arkit.weights(&heard.visemes);
+            let jaw =
+                faceanim_rig::names::Channel::named("jawOpen").map_or(0.0, |c| arkit[c.index()]);
+            if let Some(r) = recording.as_mut() {
+                r.weights.push(weights.clone());
+                r.arkit.push(arkit);
             }
             voice.due.push_back(Due {
                 at: heard.time + voice.delay,
                 weights,
                 open: heard.open,
+                jaw,
             });
         }
         // The newest frame whose time has come (the delay holds frames back).
@@ -302,21 +347,27 @@ impl VoiceHandle {
         while voice.due.front().is_some_and(|d| d.at <= now) {
             shown = voice.due.pop_front();
         }
-        if let Some(d) = &shown {
+        if let Some(d) = shown {
             if let Some(performer) = &voice.performer {
-                lock(performer).send(&d.weights, None, now);
+                let pose = faceanim_live::Pose {
+                    jaw: Some(d.jaw),
+                    ..faceanim_live::Pose::default()
+                };
+                lock(performer).send_pose(&d.weights, pose, now);
             }
-            voice.last = Some((d.weights.clone(), d.open));
+            voice.last = Some(d);
         }
         self.listen(voice, samples);
-        let (weights, open) = voice
-            .last
-            .clone()
-            .map_or((None, 0.0), |(w, o)| (Some(w), o));
+        let last = voice.last.as_ref();
         VoiceResult {
             live: true,
-            weights,
-            open,
+            weights: last.map(|d| d.weights.clone()),
+            open: last.map_or(0.0, |d| d.open),
+            bones: self
+                .skeleton
+                .as_ref()
+                .zip(last)
+                .map(|(s, d)| s.pose(None, None, Some(d.jaw))),
             level_db: voice.level_db,
             server_ms: started.elapsed().as_secs_f64() * 1000.0,
             voice: Some(voice.view()),

@@ -685,7 +685,7 @@ impl CaptureDesk {
         if lock(&self.voice).is_some() {
             let mouth = self.mouth(character)?;
             if let Some(voice) = lock(&self.voice).as_mut() {
-                voice.set_mouth(mouth);
+                voice.set_mouth(mouth, &self.visemes);
             }
         }
         Ok(())

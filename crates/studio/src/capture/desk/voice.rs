@@ -30,6 +30,7 @@ impl CaptureDesk {
             .or_else(|| self.voice_model.clone());
         *slot = Some(Voice::start(
             mouth,
+            &self.visemes,
             model,
             delay_ms,
             language,
@@ -99,7 +100,7 @@ impl CaptureDesk {
             // Before the recording is taken: a busy desk keeps it for the next try.
             self.busy()?;
         }
-        let (samples, rows) = {
+        let recorded = {
             let mut slot = lock(&self.voice);
             let voice = slot
                 .as_mut()
@@ -114,16 +115,19 @@ impl CaptureDesk {
         let path = dir.join(format!("microphone-{}.wav", std::process::id()));
         faceanim_files::write_atomic(
             &path,
-            &faceanim_speech::audio::wav_bytes(&samples, RATE as u32, 1),
+            &faceanim_speech::audio::wav_bytes(&recorded.sound, RATE as u32, 1),
         )
         .map_err(ApiError::Disk)?;
+        // What it is made of goes with it (Live Link Face's curves, a jaw bone's opening), as
+        // a lip sync's does.
         let take = faceanim_take::Take::from_weights(
             character,
             "microphone.wav",
             RECORDED_FPS,
-            &rows,
+            &recorded.weights,
             None,
-        )?;
+        )?
+        .made_of_arkit(recorded.arkit)?;
         let sound = Sound {
             path,
             mime: "audio/wav",
@@ -137,6 +141,6 @@ impl CaptureDesk {
     /// The live microphone, to hear chunks without holding the desk.
     #[must_use]
     pub fn voice_handle(&self) -> VoiceHandle {
-        VoiceHandle::new(self.voice.clone())
+        VoiceHandle::new(self.voice.clone(), self.skeleton.clone())
     }
 }
