@@ -1016,6 +1016,31 @@ fn send(port: u16, method: &str, path: &str, body: &str) -> (u16, Value) {
     )
 }
 
+/// A studio on `character` (the built-in head for `None`), its project in `out`, sending VMC
+/// to an independent peer (`vmc_receiver`) that keeps `frames` frames, for `seconds` at most:
+/// the studio, the peer and its report.
+fn studio_sending_vmc(
+    character: Option<&Path>,
+    out: &Path,
+    frames: usize,
+    seconds: f32,
+) -> (support::Studio, std::process::Child, PathBuf) {
+    let report = out.join("vmc.json");
+    let (peer, vmc_port) = vmc_receiver(frames, seconds, &report);
+    let to = format!("127.0.0.1:{vmc_port}");
+    let send = ["--vmc-send".as_ref(), to.as_ref()];
+    let studio = start_on(character, &out.join("project.json"), &send);
+    (studio, peer, report)
+}
+
+/// Starts (`on`) or ends the studio's microphone recording; the state after.
+fn record_microphone(port: u16, on: bool) -> Value {
+    let body = format!(r#"{{"on": {on}}}"#);
+    let (status, state) = send(port, "POST", "/api/capture/voice/record", &body);
+    assert_eq!(status, 200, "{state}");
+    state
+}
+
 /// Sends `samples` to the studio's microphone, `size` samples a request; the last answer.
 fn speak(port: u16, samples: &[i16], size: usize) -> Value {
     let mut last = Value::Null;
@@ -1036,14 +1061,7 @@ fn speak(port: u16, samples: &[i16], size: usize) -> Value {
 #[test]
 fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
     let out = output_dir("lipsync-microphone");
-    let report = out.join("vmc.json");
-    let (mut peer, vmc_port) = vmc_receiver(30, 120.0, &report);
-    let to = format!("127.0.0.1:{vmc_port}");
-    let studio = start_on(
-        None,
-        &out.join("project.json"),
-        &["--vmc-send".as_ref(), to.as_ref()],
-    );
+    let (studio, mut peer, report) = studio_sending_vmc(None, &out, 30, 120.0);
     let port = studio.port;
     let start = |delay: u32| {
         let body = format!(r#"{{"on": true, "delay_ms": {delay}}}"#);
@@ -1126,8 +1144,7 @@ fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
     assert_eq!(calibrated["notes"], serde_json::json!([]), "{calibrated}");
 
     // A real person, recorded.
-    let (status, body) = send(port, "POST", "/api/capture/voice/record", r#"{"on": true}"#);
-    assert_eq!(status, 200, "{body}");
+    record_microphone(port, true);
     let mut person = Vec::new();
     for (wav, _) in librivox() {
         person.extend(samples(&wav).0);
@@ -1137,13 +1154,7 @@ fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
         answer["voice"]["recording"].as_f64().unwrap() > 20.0,
         "{answer}"
     );
-    let (status, state) = send(
-        port,
-        "POST",
-        "/api/capture/voice/record",
-        r#"{"on": false}"#,
-    );
-    assert_eq!(status, 200, "{state}");
+    let state = record_microphone(port, false);
     let take = &state["take"];
     let seconds = person.len() as f64 / 16_000.0;
     let frames = take["frames"].as_u64().unwrap() as f64;
@@ -1179,20 +1190,12 @@ fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
 #[test]
 fn the_microphone_opens_the_jaw_bone_of_a_body_with_no_shapes() {
     let out = output_dir("lipsync-microphone-bare");
-    let report = out.join("vmc.json");
-    let (mut peer, vmc_port) = vmc_receiver(200, 60.0, &report);
-    let to = format!("127.0.0.1:{vmc_port}");
     let bare = faceanim_testdata::producers::blender_bare_avatar_path();
-    let studio = start_on(
-        Some(&bare),
-        &out.join("project.json"),
-        &["--vmc-send".as_ref(), to.as_ref()],
-    );
+    let (studio, mut peer, report) = studio_sending_vmc(Some(&bare), &out, 200, 60.0);
     let port = studio.port;
     let (status, body) = send(port, "PUT", "/api/capture/voice", r#"{"on": true}"#);
     assert_eq!(status, 200, "{body}");
-    let (status, body) = send(port, "POST", "/api/capture/voice/record", r#"{"on": true}"#);
-    assert_eq!(status, 200, "{body}");
+    record_microphone(port, true);
     // The jaw is the view's last joint: its turn from rest, in degrees, per answer.
     let opened = |bones: &Value| {
         let jaw = bones.as_array().unwrap().last().unwrap();
@@ -1212,13 +1215,17 @@ fn the_microphone_opens_the_jaw_bone_of_a_body_with_no_shapes() {
         }
     }
     assert!(widest > 5.0, "the view's jaw opened at most {widest}°");
-    let (status, state) = send(
-        port,
-        "POST",
-        "/api/capture/voice/record",
-        r#"{"on": false}"#,
+    // Out over VMC (the peer has its frames): the Jaw bone turned down (about Unity's X)
+    // while the person spoke.
+    let turns: Vec<f64> = support::vmc_numbers(&mut peer, &report, "/VMC/Ext/Bone/Pos", "Jaw")
+        .iter()
+        .map(|pose| 2.0 * pose[3].asin().to_degrees())
+        .collect();
+    assert!(
+        turns.iter().any(|t| *t > 2.0),
+        "the Jaw bone never went out open: {turns:?}"
     );
-    assert_eq!(status, 200, "{state}");
+    let state = record_microphone(port, false);
     let take = &state["take"];
     let frames = take["bones"].as_array().unwrap();
     let take_widest = frames.iter().map(opened).fold(0.0, f64::max);
@@ -1233,22 +1240,6 @@ fn the_microphone_opens_the_jaw_bone_of_a_body_with_no_shapes() {
     let clip: Value = serde_json::from_slice(&clip).unwrap();
     let names = strings(&clip["blendshapes"]);
     assert!(names.iter().any(|n| n == "jawOpen"), "{names:?}");
-    drop(studio);
-    // Out over VMC: the Jaw bone turned down (about Unity's X) while the person spoke.
-    assert!(peer.wait().unwrap().success());
-    let received: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
-    let turns: Vec<f64> = received["datagrams"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .flat_map(|d| d["messages"].as_array().unwrap().iter())
-        .filter(|m| m["address"] == "/VMC/Ext/Bone/Pos" && m["args"][0][1] == "Jaw")
-        .map(|m| 2.0 * m["args"][4][1].as_f64().unwrap().asin().to_degrees())
-        .collect();
-    assert!(
-        turns.iter().any(|t| *t > 2.0),
-        "the Jaw bone never went out open: {turns:?}"
-    );
 }
 
 /// A rig whose shape names say nothing of a mouth (ICT's head with every shape renamed

@@ -485,6 +485,21 @@ pub fn flite(voice: &str, text: &str, wav: &Path) -> String {
 /// Waits for the VMC peer of [`vmc_receiver`] to finish; every value it received for the
 /// blendshape `name`, in order.
 pub fn vmc_values(peer: &mut std::process::Child, report: &Path, name: &str) -> Vec<f64> {
+    vmc_numbers(peer, report, "/VMC/Ext/Blend/Val", name)
+        .into_iter()
+        .map(|args| args[0])
+        .collect()
+}
+
+/// Waits for the VMC peer of [`vmc_receiver`] to finish; the numbers after the name of every
+/// message it received at `address` naming `name` (a blendshape's value, a bone's position
+/// and rotation), in order.
+pub fn vmc_numbers(
+    peer: &mut std::process::Child,
+    report: &Path,
+    address: &str,
+    name: &str,
+) -> Vec<Vec<f64>> {
     assert!(peer.wait().unwrap().success());
     let received: serde_json::Value =
         serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap();
@@ -493,8 +508,11 @@ pub fn vmc_values(peer: &mut std::process::Child, report: &Path, name: &str) -> 
         .unwrap()
         .iter()
         .flat_map(|d| d["messages"].as_array().unwrap().iter())
-        .filter(|m| m["address"] == "/VMC/Ext/Blend/Val" && m["args"][0][1] == name)
-        .map(|m| m["args"][1][1].as_f64().unwrap())
+        .filter(|m| m["address"] == address && m["args"][0][1] == name)
+        .map(|m| {
+            let args = m["args"].as_array().unwrap();
+            args[1..].iter().map(|a| a[1].as_f64().unwrap()).collect()
+        })
         .collect()
 }
 

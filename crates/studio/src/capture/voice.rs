@@ -216,10 +216,9 @@ impl Voice {
     /// # Errors
     /// [`ApiError::Live`] when not recording, or nothing was heard.
     pub(super) fn stop_recording(&mut self) -> Result<Recorded, ApiError> {
-        let recording = self
-            .recording
-            .take()
-            .ok_or(ApiError::Live("not recording"))?;
+        let Some(recording) = self.recording.take() else {
+            return Err(ApiError::Live("not recording"));
+        };
         if recording.weights.is_empty() {
             return Err(ApiError::Live("nothing was recorded (no sound arrived)"));
         }

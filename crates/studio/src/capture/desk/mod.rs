@@ -331,13 +331,10 @@ impl CaptureDesk {
                 names.len()
             )));
         }
-        let frames = session.frames.len();
         // Played once before it is kept: a take that cannot be shown is never autosaved.
         let take = playable(session)
             .map_err(|why| ApiError::Invalid(format!("{}: {why}", faceanim_rig::excerpt(shown))))?;
-        tracing::info!("opened the session {shown}: {frames} frames");
-        self.set_take(take, Previews::new());
-        Ok(frames)
+        Ok(self.open_file_take(take, &format!("the session {shown}")))
     }
 
     /// Makes a file read back by [`faceanim_export::reopen::clip_of_file`] (a GLB, VRM or glTF
@@ -400,34 +397,24 @@ impl CaptureDesk {
         clip: &faceanim_anim::Clip,
         shown: &str,
     ) -> Result<usize, ApiError> {
-        if faceanim_export::bones::takes_clip(character, clip) {
-            let count = clip.frames.len();
-            let take = Take::from_weights(
-                character,
-                shown,
-                clip.fps,
-                &vec![Vec::new(); count],
-                clip.head.as_deref(),
-            )?
-            .made_of_arkit(arkit_rows(clip))?;
-            tracing::info!("opened the clip {shown} on the bones: {count} frames");
-            self.set_take(take, Previews::new());
-            return Ok(count);
+        let count = clip.frames.len();
+        // A body with no blendshapes takes the clip on its bones: the take is made of the
+        // clip's ARKit values, which they follow.
+        let on_bones = faceanim_export::bones::takes_clip(character, clip);
+        let rows = if on_bones {
+            vec![Vec::new(); count]
+        } else {
+            clip.retarget(character, shown)
+                .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?
+                .animation
+                .weights
+        };
+        let mut take = Take::from_weights(character, shown, clip.fps, &rows, clip.head.as_deref())?;
+        if on_bones {
+            take = take.made_of_arkit(arkit_rows(clip))?;
         }
-        let retarget = clip
-            .retarget(character, shown)
-            .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?;
-        let count = retarget.animation.weights.len();
-        let take = Take::from_weights(
-            character,
-            shown,
-            clip.fps,
-            &retarget.animation.weights,
-            clip.head.as_deref(),
-        )?;
-        tracing::info!("opened the clip {shown}: {count} frames");
-        self.set_take(take, Previews::new());
-        Ok(count)
+        let way = if on_bones { " on the bones" } else { "" };
+        Ok(self.open_file_take(take, &format!("the clip {shown}{way}")))
     }
 
     /// Makes `lip_sync` (of the speech `shown`, kept as `sound`) the take: its frames the
@@ -544,6 +531,15 @@ impl CaptureDesk {
         if let Err(e) = result {
             tracing::warn!("autosaving the take failed: {e}");
         }
+    }
+
+    /// Makes `take`, opened from a file (`what`), the one being edited, with no previews (a
+    /// file keeps no pictures); its frame count.
+    fn open_file_take(&mut self, take: Take, what: &str) -> usize {
+        let frames = take.session.frames.len();
+        tracing::info!("opened {what}: {frames} frames");
+        self.set_take(take, Previews::new());
+        frames
     }
 
     /// Makes `take` the one being edited (and autosaves it).
