@@ -958,6 +958,17 @@ fn the_page_plays_its_animation_out_over_vmc() {
         jaw_values.iter().any(|&w| w > 0.05),
         "the played jawOpen never went out: {jaw_values:?}"
     );
+    // And as the Jaw bone, turned down (about Unity's X) by jawOpen × 20°, as the webcam's goes.
+    let jaw_bone = support::vmc_numbers(&mut peer, &report, "/VMC/Ext/Bone/Pos", "Jaw");
+    let opened: Vec<f64> = jaw_bone
+        .iter()
+        .map(|pose| 2.0 * pose[3].asin().to_degrees())
+        .collect();
+    let widest = jaw_values.iter().copied().fold(0.0, f64::max);
+    assert!(
+        opened.iter().any(|d| (d - widest * 20.0).abs() < 0.01),
+        "no Jaw bone went out at {widest} × 20°: {opened:?}"
+    );
 }
 
 /// A full-body avatar in the studio (the ICT head on a skinned, textured body, built in code):

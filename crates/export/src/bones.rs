@@ -38,6 +38,25 @@ impl BoneKeys {
         BoneKeys::from_clip(arkit.unwrap_or(clip))
     }
 
+    /// The gaze and the jaw of one row of weights named `names` (a frame the studio's page
+    /// plays), read as [`BoneKeys::from_clip`] reads a clip's rows.
+    #[must_use]
+    pub fn of_row(names: &[String], row: &[f32]) -> (Option<[[f32; 2]; 2]>, Option<f32>) {
+        let clip = Clip {
+            fps: 1.0,
+            blendshapes: names.to_vec(),
+            frames: vec![row.to_vec()],
+            head: None,
+            head_position: None,
+            presence: None,
+        };
+        let keys = BoneKeys::from_clip(&clip);
+        (
+            keys.gaze.and_then(|g| g.first().copied()),
+            keys.jaw.and_then(|j| j.first().copied()),
+        )
+    }
+
     /// The keys of `clip`, whose columns are read by their ARKit meaning in any spelling.
     #[must_use]
     pub fn from_clip(clip: &Clip) -> BoneKeys {

@@ -724,10 +724,10 @@ struct VmcSent {
 
 async fn vmc_send(State(both): State<Both>, body: Bytes) -> Answer<VmcSent> {
     let frame: VmcFrame = json_body(&body, "frame")?;
-    let blendshapes = both.studio().character.blendshapes().len();
+    let names = both.studio().character.blendshape_names();
     let sent = both
         .desk()
-        .send_vmc_frame(&frame.weights, frame.head, blendshapes)?;
+        .send_vmc_frame(&frame.weights, frame.head, &names)?;
     Ok(axum::Json(VmcSent { sent }))
 }
 

@@ -142,7 +142,8 @@ impl Vmc {
         })
     }
 
-    /// Sends one frame of the character's face; false when the network refused it.
+    /// Sends one frame of the face of a character whose blendshapes are `names`, its gaze and jaw
+    /// as bones too; false when the network refused it.
     ///
     /// # Errors
     /// [`ApiError::Live`] when the studio does not send VMC, [`ApiError::Invalid`] for weights
@@ -151,8 +152,9 @@ impl Vmc {
         &self,
         weights: &[f32],
         head: Option<[f32; 3]>,
-        blendshapes: usize,
+        names: &[String],
     ) -> Result<bool, ApiError> {
+        let blendshapes = names.len();
         let performer = self.performer.as_ref().ok_or(ApiError::Live(
             "the studio does not send VMC: start it with --vmc-send HOST:PORT",
         ))?;
@@ -167,9 +169,13 @@ impl Vmc {
                 "head: three finite angles in degrees".into(),
             ));
         }
+        // The gaze and the jaw by the shapes' ARKit meaning go out as bones too, as the webcam's
+        // do (VRM's presets carry no gaze).
+        let (eyes, jaw) = faceanim_export::bones::BoneKeys::of_row(names, weights);
+        let pose = faceanim_live::Pose { head, eyes, jaw };
         let mut performer = lock(performer);
         let time = self.started.elapsed().as_secs_f32();
-        Ok(performer.send(weights, head, time))
+        Ok(performer.send_pose(weights, pose, time))
     }
 
     /// The marionette, when listening.

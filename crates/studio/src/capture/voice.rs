@@ -55,7 +55,6 @@ pub struct VoiceResult {
 }
 
 /// A frame waiting for its time (the delay).
-#[derive(Clone)]
 struct Due {
     at: f32,
     weights: Vec<f32>,
@@ -211,7 +210,7 @@ impl Voice {
         self.recording = Some(Recording::default());
     }
 
-    /// Ends the recording.
+    /// Ends the recording: what was heard at the take's rate.
     ///
     /// # Errors
     /// [`ApiError::Live`] when not recording, or nothing was heard.

@@ -29,8 +29,9 @@ impl CaptureDesk {
         self.vmc.view(self.skeleton.as_deref())
     }
 
-    /// Sends one frame of the character's face (what the page shows while playing a take or
-    /// the sketch) to the marionette; false when the network refused it.
+    /// Sends one frame of the face of a character whose blendshapes are `names` (what the
+    /// page shows while playing a take or the sketch) to the marionette; false when the network
+    /// refused it.
     ///
     /// # Errors
     /// [`ApiError::Live`] when the studio does not send VMC, [`ApiError::Invalid`] for weights
@@ -39,9 +40,9 @@ impl CaptureDesk {
         &self,
         weights: &[f32],
         head: Option<[f32; 3]>,
-        blendshapes: usize,
+        names: &[String],
     ) -> Result<bool, ApiError> {
-        self.vmc.send(weights, head, blendshapes)
+        self.vmc.send(weights, head, names)
     }
 
     /// Takes the phone's face as it is now for its neutral, from now on and in later runs.
