@@ -1,9 +1,11 @@
 # Writes a glTF's meshes again with Blender's own exporters and without shape keys: a head as a
 # scanner or sculpting tool hands it over. OUT ending in .obj: one OBJ, no materials; else a GLB
-# with its skins. With `subdivide`, every mesh is subdivided once (Catmull-Clark, applied): a
-# denser head, about four times the vertices, for timing `faceanim generate-shapes`.
+# with its skins (and its animations, as Blender keys them). With `subdivide`, every mesh is
+# subdivided once (Catmull-Clark, applied): a denser head, about four times the vertices, for
+# timing `faceanim generate-shapes`.
 #
 #   blender -b --factory-startup --python tools/blender_bare.py -- IN.glb OUT.{obj,glb} [subdivide]
+import json
 import os
 import sys
 
@@ -30,4 +32,4 @@ if out.lower().endswith(".obj"):
     bpy.ops.export_scene.obj(filepath=out, use_materials=False)
 else:
     bpy.ops.export_scene.gltf(filepath=out, export_format="GLB", export_skins=True)
-print("FACEANIM_BARE", out)
+print("FACEANIM_BARE", json.dumps({"out": out}))

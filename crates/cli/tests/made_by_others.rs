@@ -1039,32 +1039,52 @@ fn a_capture_turns_the_head_eyes_and_jaw_of_a_body_with_no_shapes() {
         }
     }
     // The file opens again as a take (the studio's Capture tab, `faceanim studio bare.glb`): the
-    // head pose, gaze and jawOpen its bones were turned by.
-    let reopened =
-        faceanim_export::reopen::clip_of_file("bare.glb", &std::fs::read(&glb).unwrap()).unwrap();
-    let back = &reopened.clip;
-    assert_eq!(back.frames.len(), arkit.frames.len(), "{}", reopened.what);
-    let back_head = back.head.as_ref().unwrap();
-    for &f in &sampled {
-        let value = |clip: &faceanim_anim::Clip, name: &str| {
-            clip.column(name).map_or(0.0, |c| clip.frames[f][c])
-        };
-        let off = degrees_between(
-            glam::Quat::from_array(faceanim_anim::head_rotation(back_head[f])),
-            glam::Quat::from_array(faceanim_anim::head_rotation(heads[f])),
-        );
-        assert!(off < 0.1, "frame {f}: the head reopened {off}° away");
-        let jaw = (value(back, "jawOpen") - value(&arkit, "jawOpen").clamp(0.0, 1.0)).abs();
-        assert!(jaw < 0.01, "frame {f}: jawOpen reopened {jaw} away");
-        let gaze = |clip: &faceanim_anim::Clip| {
-            faceanim_rig::bones::gaze_from_arkit(|name| value(clip, name))
-        };
-        let (was, now) = (gaze(&arkit), gaze(back));
-        for (a, b) in was.iter().flatten().zip(now.iter().flatten()) {
-            assert!(
-                (a - b).abs() < 0.1,
-                "frame {f}: gaze {was:?} reopened {now:?}"
+    // head pose, gaze and jawOpen its bones were turned by. So does the file written again by
+    // Blender's own exporter (as after polishing it there), which loses faceanim's marks,
+    // keys the face at Blender's 24 fps and writes every other bone's rest as keys too.
+    let polished = dir.join("bare-blender.glb");
+    support::blender_script(
+        "blender_bare.py",
+        &[glb.as_os_str(), polished.as_os_str()],
+        "FACEANIM_BARE ",
+    );
+    // The take's value at `t` seconds, between its frames.
+    let at = |series: &dyn Fn(usize) -> f32, t: f32| {
+        let x = (t * fps).clamp(0.0, (arkit.frames.len() - 1) as f32);
+        let (a, u) = (x.floor() as usize, x.fract());
+        let b = (a + 1).min(arkit.frames.len() - 1);
+        series(a) + (series(b) - series(a)) * u
+    };
+    for file in [&glb, &polished] {
+        let name = file.file_name().unwrap().to_string_lossy();
+        let reopened =
+            faceanim_export::reopen::clip_of_file(&name, &std::fs::read(file).unwrap()).unwrap();
+        let back = &reopened.clip;
+        let seconds = back.duration_seconds() - arkit.duration_seconds();
+        assert!(seconds.abs() < 0.05, "{name}: {}", reopened.what);
+        let back_head = back.head.as_ref().unwrap();
+        for k in (0..back.frames.len()).step_by(8) {
+            let t = k as f32 / back.fps;
+            let value = |clip: &faceanim_anim::Clip, f: usize, name: &str| {
+                clip.column(name).map_or(0.0, |c| clip.frames[f][c])
+            };
+            let then = |name: &str| at(&|f| value(&arkit, f, name), t);
+            let head: [f32; 3] = std::array::from_fn(|i| at(&|f| heads[f][i], t));
+            let off = degrees_between(
+                glam::Quat::from_array(faceanim_anim::head_rotation(back_head[k])),
+                glam::Quat::from_array(faceanim_anim::head_rotation(head)),
             );
+            assert!(off < 0.1, "{name} at {t} s: the head reopened {off}° away");
+            let jaw = (value(back, k, "jawOpen") - then("jawOpen").clamp(0.0, 1.0)).abs();
+            assert!(jaw < 0.01, "{name} at {t} s: jawOpen reopened {jaw} away");
+            let was = faceanim_rig::bones::gaze_from_arkit(then);
+            let now = faceanim_rig::bones::gaze_from_arkit(|c| value(back, k, c));
+            for (a, b) in was.iter().flatten().zip(now.iter().flatten()) {
+                assert!(
+                    (a - b).abs() < 0.1,
+                    "{name} at {t} s: gaze {was:?} reopened {now:?}"
+                );
+            }
         }
     }
     // A clip that turns none of its bones is refused, naming what would give it shapes.
@@ -1092,6 +1112,53 @@ fn a_capture_turns_the_head_eyes_and_jaw_of_a_body_with_no_shapes() {
         sampled.len(),
         span(&yaws),
         span(&opens)
+    );
+}
+
+/// A face keyed on its bones by hand in Blender (`tools/blender_keyed_bones.py`: the jaw of
+/// the body with no shape keys opened 12° and shut again over a second, Bezier curves, written
+/// by Blender's exporter with every other bone's rest as keys) opens as a take whose jawOpen is
+/// the jaw's angle over its 20° range at every frame Blender evaluates; a walk keyed the same
+/// way (the hips moving, a leg swinging, the head turning) is no take of the face. Before, any
+/// animation of bones alone that faceanim had not written was passed over.
+#[test]
+fn a_face_keyed_on_its_bones_in_blender_opens_as_a_take_and_a_walk_does_not() {
+    let dir = output_dir("made-by-others-keyed-bones");
+    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
+    let keyed = |kind: &str| {
+        let out = dir.join(format!("{kind}.glb"));
+        let arguments = [bare.as_os_str(), out.as_os_str(), kind.as_ref()];
+        let report = support::blender_script(
+            "blender_keyed_bones.py",
+            &arguments,
+            "FACEANIM_KEYED_BONES ",
+        );
+        let opened = faceanim_export::reopen::clip_of_file(
+            &format!("{kind}.glb"),
+            &std::fs::read(&out).unwrap(),
+        );
+        (report, opened)
+    };
+    let (report, opened) = keyed("jaw");
+    let opened = opened.unwrap();
+    let clip = &opened.clip;
+    assert_eq!(clip.fps, 24.0, "{}", opened.what);
+    let jaw = clip.column("jawOpen").expect("jawOpen");
+    let degrees = f64::from(faceanim_export::bones::DEFAULT_JAW_DEGREES);
+    let played = support::f32s(&report["jaw"]);
+    assert_eq!(clip.frames.len(), played.len(), "{}", opened.what);
+    for (k, (row, &angle)) in clip.frames.iter().zip(&played).enumerate() {
+        let (read, angle) = (f64::from(row[jaw]) * degrees, f64::from(angle));
+        assert!(
+            (read - angle).abs() < 0.05,
+            "frame {k}: the jaw opened {read:.3}°, Blender turned it {angle:.3}°"
+        );
+    }
+    let (_, walk) = keyed("walk");
+    let refused = walk.map(|w| w.what).unwrap_err().to_string();
+    assert!(
+        refused.contains("walk.glb: it has no animation"),
+        "{refused}"
     );
 }
 

@@ -49,9 +49,9 @@ pub enum ReopenError {
     /// The glTF could not be read.
     #[error(transparent)]
     Import(#[from] ImportError),
-    /// The glTF holds no animation that moves morph targets.
+    /// The glTF holds no animation that moves morph targets, or the face's bones alone.
     #[error(
-        "{0}: it has no animation of morph targets to open as a take (its blendshapes are the character's: open it with `faceanim studio` to animate it)"
+        "{0}: it has no animation of morph targets, or of the face's bones alone, to open as a take (its blendshapes are the character's: open it with `faceanim studio` to animate it)"
     )]
     NoAnimation(String),
     /// The CSV is not a Live Link Face recording.

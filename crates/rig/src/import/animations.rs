@@ -1,17 +1,25 @@
-//! The file's morph-weight animations (with the bones they turn), read as they are stored (see
-//! [`crate::file_animation`]). A channel that cannot be read is left out with a warning: the
-//! character still opens.
+//! The file's morph-weight animations (with the bones they turn), and those of the face's
+//! bones alone, read as they are stored (see [`crate::file_animation`]). A channel that cannot
+//! be read is left out with a warning: the character still opens.
 
 use gltf::accessor::Dimensions;
 use gltf::animation::{Interpolation as GltfInterpolation, Property};
 
 use super::accessor::{Buffers, read_floats};
+use crate::bones::FaceBones;
 use crate::file_animation::{FileAnimation, Interpolation, RotationTrack, WeightsTrack};
 
-/// Every animation of `doc` that moves morph targets, with its `weights` channels.
+/// How far a key may stray from the first (a quaternion's or a position's component) and the
+/// channel still hold still: exporters write every bone's rest as keys.
+const STILL: f32 = 1e-4;
+
+/// Every animation of `doc` that moves morph targets, with its `weights` channels and its
+/// rotations; and every one that moves nothing but the turns of the face's `bones` (a head,
+/// eyes or jaw keyed in another tool), with those.
 pub(super) fn read(
     doc: &gltf::Document,
     buffers: &Buffers<'_>,
+    bones: &FaceBones,
     warnings: &mut Vec<String>,
 ) -> Vec<FileAnimation> {
     let mut out = Vec::new();
@@ -27,17 +35,22 @@ pub(super) fn read(
                 crate::excerpt(&name)
             )
         };
-        // Rotation channels are read only for an animation that moves morph targets (a body's
-        // own animations are no take).
+        // Rotation channels are read for an animation that moves morph targets, or that turns
+        // the face's bones alone (a body's own animations are no take).
         let mut rotations = Vec::new();
+        let mut placements = Vec::new();
         for (c, channel) in animation.channels().enumerate() {
             let target = channel.target();
-            if target.property() == Property::Rotation {
-                rotations.push((c, channel));
-                continue;
-            }
-            if target.property() != Property::MorphTargetWeights {
-                continue;
+            match target.property() {
+                Property::Rotation => {
+                    rotations.push((c, channel));
+                    continue;
+                }
+                Property::Translation | Property::Scale => {
+                    placements.push(channel);
+                    continue;
+                }
+                Property::MorphTargetWeights => {}
             }
             let Some(mesh) = target.node().mesh() else {
                 continue;
@@ -71,26 +84,40 @@ pub(super) fn read(
                     .map(serde_json::Value::take)
             });
         // An animation of bones alone is read where faceanim wrote it (a body with no
-        // blendshapes, turned by its head, eyes and jaw); another tool's (a walk, an idle) is
-        // no take of the face.
-        if tracks.is_empty() && ours.is_none() {
+        // blendshapes, turned by its head, eyes and jaw), or where all it moves is the turns of
+        // the face's bones (a jaw and eyes keyed in Blender, whose exporter also writes every
+        // other bone's rest); one that moves more (a walk, an idle) is no take of the face.
+        let face_only = tracks.is_empty() && ours.is_none();
+        if face_only && placements.iter().any(|channel| moves(buffers, channel, 3)) {
             continue;
         }
+        let face: Vec<usize> = bones.found().map(|(_, node)| node).collect();
         let mut turns: Vec<RotationTrack> = Vec::new();
+        let mut body_moves = false;
         for (c, channel) in rotations {
             let sampler = channel.sampler();
-            let node = channel.target().node().index() as u32;
+            let node = channel.target().node().index();
+            if face_only && !face.contains(&node) {
+                body_moves |= moves(buffers, &channel, 4);
+                continue;
+            }
+            if face_only && !moves(buffers, &channel, 4) {
+                continue;
+            }
             let read = keys(buffers, &sampler, Dimensions::Vec4).and_then(|(times, values)| {
                 let quats = values
                     .chunks_exact(4)
                     .map(|q| [q[0], q[1], q[2], q[3]])
                     .collect();
-                RotationTrack::new(node, times, quats, interpolation(&sampler))
+                RotationTrack::new(node as u32, times, quats, interpolation(&sampler))
             });
             match read {
                 Ok(track) => turns.push(track),
                 Err(why) => warnings.push(unread(c, why, "rotations")),
             }
+        }
+        if body_moves {
+            continue;
         }
         if tracks.is_empty() && turns.is_empty() {
             continue;
@@ -109,6 +136,31 @@ pub(super) fn read(
         });
     }
     out
+}
+
+/// Whether `channel`'s values (`width` numbers each: 3 for a position or scale, 4 for a
+/// rotation) stray from its first key's by more than [`STILL`]; a channel that cannot be read
+/// counts as moving (its animation is then no take of the face alone).
+fn moves(buffers: &Buffers<'_>, channel: &gltf::animation::Channel<'_>, width: usize) -> bool {
+    let dimensions = if width == 3 {
+        Dimensions::Vec3
+    } else {
+        Dimensions::Vec4
+    };
+    let Ok((_, values)) = keys(buffers, &channel.sampler(), dimensions) else {
+        return true;
+    };
+    // A cubic spline's keys are in-tangent, value, out-tangent: its values are the middles.
+    let step = if interpolation(&channel.sampler()) == Interpolation::CubicSpline {
+        3
+    } else {
+        1
+    };
+    let mut keys = values.chunks_exact(width).skip(step / 3).step_by(step);
+    let Some(first) = keys.next() else {
+        return false;
+    };
+    keys.any(|key| key.iter().zip(first).any(|(a, b)| (a - b).abs() > STILL))
 }
 
 /// A sampler's key times and its values (`dimensions` each).

@@ -86,7 +86,8 @@ fn import(
         builder.root_transform = Mat4::from_rotation_y(std::f32::consts::PI);
     }
     builder.read_scene(&document, &buffers, resources)?;
-    builder.animations = super::animations::read(&document, &buffers, &mut builder.warnings);
+    builder.animations =
+        super::animations::read(&document, &buffers, &builder.bones, &mut builder.warnings);
     if let Some(vrm) = &prepared.vrm {
         builder.add_expressions(vrm)?;
     }
