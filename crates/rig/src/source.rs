@@ -94,8 +94,9 @@ impl GltfSource {
     }
 
     /// The file's animations that move morph targets (a take or sketch exported before, or the
-    /// file's own), and those faceanim wrote on bones alone (a body with no blendshapes), in
-    /// the file's order.
+    /// file's own), those faceanim wrote on bones alone (a body with no blendshapes), and those
+    /// that move nothing but the turns of the face's bones (keyed in another tool), in the
+    /// file's order.
     #[must_use]
     pub fn animations(&self) -> &[crate::file_animation::FileAnimation] {
         &self.animations

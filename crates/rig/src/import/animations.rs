@@ -92,16 +92,19 @@ pub(super) fn read(
             continue;
         }
         let face: Vec<usize> = bones.found().map(|(_, node)| node).collect();
+        if face_only
+            && rotations.iter().any(|(_, channel)| {
+                !face.contains(&channel.target().node().index()) && moves(buffers, channel, 4)
+            })
+        {
+            continue;
+        }
         let mut turns: Vec<RotationTrack> = Vec::new();
-        let mut body_moves = false;
         for (c, channel) in rotations {
             let sampler = channel.sampler();
             let node = channel.target().node().index();
-            if face_only && !face.contains(&node) {
-                body_moves |= moves(buffers, &channel, 4);
-                continue;
-            }
-            if face_only && !moves(buffers, &channel, 4) {
+            // Of the face alone, the face's bones that move (the rest of the body holds still).
+            if face_only && !(face.contains(&node) && moves(buffers, &channel, 4)) {
                 continue;
             }
             let read = keys(buffers, &sampler, Dimensions::Vec4).and_then(|(times, values)| {
@@ -115,9 +118,6 @@ pub(super) fn read(
                 Ok(track) => turns.push(track),
                 Err(why) => warnings.push(unread(c, why, "rotations")),
             }
-        }
-        if body_moves {
-            continue;
         }
         if tracks.is_empty() && turns.is_empty() {
             continue;
