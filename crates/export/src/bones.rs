@@ -42,15 +42,7 @@ impl BoneKeys {
     /// plays), read as [`BoneKeys::from_clip`] reads a clip's rows.
     #[must_use]
     pub fn of_row(names: &[String], row: &[f32]) -> (Option<[[f32; 2]; 2]>, Option<f32>) {
-        let clip = Clip {
-            fps: 1.0,
-            blendshapes: names.to_vec(),
-            frames: vec![row.to_vec()],
-            head: None,
-            head_position: None,
-            presence: None,
-        };
-        let keys = BoneKeys::from_clip(&clip);
+        let keys = BoneKeys::of_rows(names, &[row]);
         (
             keys.gaze.and_then(|g| g.first().copied()),
             keys.jaw.and_then(|j| j.first().copied()),
@@ -60,9 +52,14 @@ impl BoneKeys {
     /// The keys of `clip`, whose columns are read by their ARKit meaning in any spelling.
     #[must_use]
     pub fn from_clip(clip: &Clip) -> BoneKeys {
+        BoneKeys::of_rows(&clip.blendshapes, &clip.frames)
+    }
+
+    /// The keys of `rows` of weights named `names`, read by their ARKit meaning in any
+    /// spelling.
+    fn of_rows<R: AsRef<[f32]>>(names: &[String], rows: &[R]) -> BoneKeys {
         // Each column's ARKit meaning, read once (a take has thousands of frames).
-        let meaning: Vec<Option<&str>> = clip
-            .blendshapes
+        let meaning: Vec<Option<&str>> = names
             .iter()
             .map(|n| faceanim_rig::names::arkit_name(n))
             .collect();
@@ -73,15 +70,13 @@ impl BoneKeys {
             .iter()
             .any(|m| m.is_some_and(faceanim_rig::names::is_gaze));
         let gaze = looks.then(|| {
-            clip.frames
-                .iter()
-                .map(|row| faceanim_rig::bones::gaze_from_arkit(|c| value(row, column(c))))
+            rows.iter()
+                .map(|row| faceanim_rig::bones::gaze_from_arkit(|c| value(row.as_ref(), column(c))))
                 .collect()
         });
         let jaw = column("jawOpen").map(|c| {
-            clip.frames
-                .iter()
-                .map(|row| value(row, Some(c)).clamp(0.0, 1.0))
+            rows.iter()
+                .map(|row| value(row.as_ref(), Some(c)).clamp(0.0, 1.0))
                 .collect()
         });
         BoneKeys { gaze, jaw }

@@ -117,22 +117,55 @@ pub struct Forwarding {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReceivedFrame {
     /// Seconds from when the marionette started listening to the frame's arrival; in a
-    /// recording ([`Marionette::stop_recording`]), on the sender's clock where it is sound.
+    /// recording ([`Marionette::stop_recording`]), on the sender's clock where it is sound
+    /// (a take made of frames counts from its first, on any clock).
     pub time: f64,
     /// The character's weights.
     pub weights: Vec<f32>,
     /// Head yaw, pitch, roll in degrees, once a head pose arrived.
     pub head: Option<[f32; 3]>,
-    /// Each eye's gaze `[yaw, pitch]` in degrees (left, right), from the eyeLook values of
-    /// [`ReceivedFrame::arkit`].
-    pub eyes: Option<[[f32; 2]; 2]>,
-    /// `jawOpen`, of [`ReceivedFrame::arkit`].
-    pub jaw: Option<f32>,
     /// The ARKit values of a phone, or of a VMC sender that names ARKit's channels (a
     /// "perfect sync" tracker) or sends eye or jaw bones (their eyeLook and jawOpen values),
     /// ARKit's 52 channels in [`faceanim_rig::names::ARKIT_52`]'s order, each clamped to 0..1,
-    /// a channel not sent at its last value (what the eyes and the jaw above are read from).
+    /// a channel not sent at its last value (what [`ReceivedFrame::eyes`] and
+    /// [`ReceivedFrame::jaw`] are read from).
     pub arkit: Option<Vec<f32>>,
+}
+
+impl ReceivedFrame {
+    /// Each eye's gaze `[yaw, pitch]` in degrees (left, right), from the eyeLook values of
+    /// [`ReceivedFrame::arkit`], as exports turn eye bones: the phone apps' own eye angles
+    /// differ in sign and unit from one app to the next, and Live Link Face's are those values
+    /// at the same range (tests/phones.rs).
+    #[must_use]
+    pub fn eyes(&self) -> Option<[[f32; 2]; 2]> {
+        let arkit = self.arkit.as_deref()?;
+        Some(faceanim_rig::bones::gaze_from_arkit(|c| channel(arkit, c)))
+    }
+
+    /// `jawOpen`, of [`ReceivedFrame::arkit`].
+    #[must_use]
+    pub fn jaw(&self) -> Option<f32> {
+        Some(channel(self.arkit.as_deref()?, "jawOpen"))
+    }
+
+    /// The head, gaze and jaw, as a performer sends them on.
+    #[must_use]
+    pub fn pose(&self) -> crate::Pose {
+        crate::Pose {
+            head: self.head,
+            eyes: self.eyes(),
+            jaw: self.jaw(),
+        }
+    }
+}
+
+/// ARKit channel `name`'s value in a row of ARKit's 52 (0 for a name that is none of them).
+fn channel(arkit: &[f32], name: &str) -> f32 {
+    faceanim_retarget::channel_index(name)
+        .and_then(|i| arkit.get(i))
+        .copied()
+        .unwrap_or(0.0)
 }
 
 /// What arrived so far.
@@ -621,12 +654,8 @@ fn forward(state: &mut State, arrived: Instant) {
     let Some(frame) = state.history.back() else {
         return;
     };
-    let pose = crate::Pose {
-        head: frame.head,
-        eyes: frame.eyes,
-        jaw: frame.jaw,
-    };
-    let sent = lock_performer(&performer).send_pose(&frame.weights, pose, frame.time as f32);
+    let sent =
+        lock_performer(&performer).send_pose(&frame.weights, frame.pose(), frame.time as f32);
     if sent {
         state.forwarding.frames += 1;
         if state.delays.len() >= DELAYS {
@@ -816,22 +845,12 @@ fn complete_frame(state: &mut State, time: f64) {
         }
         _ => state.current.clone(),
     };
-    // The eyes from the sender's eyeLook values, as exports turn eye bones: the phone apps'
-    // own eye angles differ in sign and unit from one app to the next, and Live Link Face's are
-    // those values at the same range (tests/phones.rs).
-    let arkit = arkit_row(state);
-    let channel =
-        |row: &[f32], c: &str| faceanim_retarget::channel_index(c).map_or(0.0, |i| row[i]);
     let sent = state.sent.take();
     let frame = ReceivedFrame {
         time,
         weights,
         head: state.head,
-        eyes: arkit
-            .as_ref()
-            .map(|row| faceanim_rig::bones::gaze_from_arkit(|c| channel(row, c))),
-        jaw: arkit.as_ref().map(|row| channel(row, "jawOpen")),
-        arkit,
+        arkit: arkit_row(state),
     };
     if let Some((frames, times)) = state.recording.as_mut() {
         frames.push(frame.clone());
@@ -897,11 +916,11 @@ mod tests {
             performer.send(&[0.6, 0.5, 0.5], None, 0.0);
             let frames = marionette.wait_for_frames(1, Duration::from_secs(5));
             let frame = &frames[0];
-            assert_eq!(frame.jaw, Some(0.6), "{ours:?}");
+            assert_eq!(frame.jaw(), Some(0.6), "{ours:?}");
             let arkit = frame.arkit.as_ref().expect("ARKit values");
             assert_eq!((arkit.len(), arkit[jaw]), (52, 0.6), "{ours:?}");
             // Both eyes look to the character's left, by half their range.
-            let [left, right] = frame.eyes.expect("eyes");
+            let [left, right] = frame.eyes().expect("eyes");
             let half = faceanim_rig::bones::EYE_RANGE[0] / 2.0;
             assert_eq!((left[0], right[0]), (half, half), "{ours:?}");
             assert_eq!(frame.weights, vec![0.6; ours.len()]);
@@ -910,7 +929,7 @@ mod tests {
         let mut performer = Performer::new(marionette.address(), &theirs[3..], Names::Own).unwrap();
         performer.send(&[1.0], None, 0.0);
         let frames = marionette.wait_for_frames(1, Duration::from_secs(5));
-        assert_eq!((frames[0].jaw, &frames[0].arkit), (None, &None));
+        assert_eq!((frames[0].jaw(), &frames[0].arkit), (None, &None));
     }
 
     /// A VMC sender's eye and jaw bones (as faceanim's performer and trackers sending VRM's
@@ -931,11 +950,15 @@ mod tests {
         let frame = marionette
             .wait_for_frames(1, Duration::from_secs(5))
             .remove(0);
-        let got = frame.eyes.expect("eyes");
+        let got = frame.eyes().expect("eyes");
         for (sent, got) in eyes.iter().flatten().zip(got.iter().flatten()) {
             assert!((sent - got).abs() < 1e-3, "{eyes:?} sent, {got:?} read");
         }
-        assert!((frame.jaw.unwrap() - 0.4).abs() < 1e-4, "{:?}", frame.jaw);
+        assert!(
+            (frame.jaw().unwrap() - 0.4).abs() < 1e-4,
+            "{:?}",
+            frame.jaw()
+        );
         let arkit = frame.arkit.expect("ARKit values");
         let at = |name: &str| arkit[faceanim_retarget::channel_index(name).unwrap()];
         assert!((at("eyeLookOutLeft") - 10.0 / faceanim_rig::bones::EYE_RANGE[0]).abs() < 1e-4);
@@ -951,6 +974,6 @@ mod tests {
         let frame = marionette
             .wait_for_frames(2, Duration::from_secs(5))
             .remove(1);
-        assert_eq!(frame.jaw, Some(0.25));
+        assert_eq!(frame.jaw(), Some(0.25));
     }
 }

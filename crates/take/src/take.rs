@@ -63,22 +63,12 @@ impl Footage {
     }
 }
 
-/// One frame that arrived as the character's own weights (a VMC stream, a phone tracker): when,
-/// the weights in the character's order, the head pose, and what a phone sent them from.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ReceivedFrame {
-    /// Seconds, on any clock; a take counts from its first frame.
-    pub time: f64,
-    /// The character's weights.
-    pub weights: Vec<f32>,
-    /// Head yaw, pitch, roll in degrees.
-    pub head: Option<[f32; 3]>,
-    /// A phone tracker's ARKit values, ARKit's 52 channels in
-    /// [`faceanim_rig::names::ARKIT_52`]'s order, each 0..1: kept as what the frame was made of
-    /// ([`SessionFrame::arkit`]), so that the eyes' and jaw's bones and Live Link Face follow
-    /// the phone where the character has no shape for a channel (or no shapes at all).
-    pub arkit: Option<Vec<f32>>,
-}
+/// One frame that arrived as the character's own weights (a VMC stream, a phone tracker), as
+/// the live link records it: when, the weights in the character's order, the head pose, and
+/// the ARKit values a sender sent them from — kept as what the take was made of
+/// ([`SessionFrame::arkit`]), so that the eyes' and jaw's bones and Live Link Face follow the
+/// sender where the character has no shape for a channel (or no shapes at all).
+pub use faceanim_live::ReceivedFrame;
 
 /// A captured input being edited: its session, where the estimates came from, and the undo and
 /// redo stacks of the user's [`Edits`].

@@ -136,7 +136,7 @@ impl Vmc {
             weights: latest.as_ref().map(|f| f.weights.clone()),
             bones: skeleton
                 .zip(latest.as_ref())
-                .map(|(s, f)| s.pose(f.head, f.eyes, f.jaw)),
+                .map(|(s, f)| s.pose(f.head, f.eyes(), f.jaw())),
             head: latest.and_then(|f| f.head),
             sending,
         })

@@ -2,7 +2,7 @@
 
 use faceanim_live::Marionette;
 use faceanim_rig::Character;
-use faceanim_take::{ReceivedFrame, Take};
+use faceanim_take::Take;
 
 use super::CaptureDesk;
 use crate::capture::open_take::Previews;
@@ -82,15 +82,6 @@ impl CaptureDesk {
             return Err(ApiError::Live("nothing arrived over VMC while recording"));
         }
         let count = frames.len();
-        let frames = frames
-            .into_iter()
-            .map(|f| ReceivedFrame {
-                time: f.time,
-                weights: f.weights,
-                head: f.head,
-                arkit: f.arkit,
-            })
-            .collect();
         let take = Take::from_received(character, "vmc", frames, self.filtering)?;
         self.set_take(take, Previews::new());
         Ok(count)
