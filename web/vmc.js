@@ -106,15 +106,20 @@ let sending = false;
 /** Whether the studio sends VMC (`--vmc-send`), asked once: the Sketch tab plays to it too. */
 let sendsVmc = false;
 api('GET', 'api/capture/vmc').then((state) => { sendsVmc = !!(state && state.sending); }).catch(() => {});
+// A take's frame sends its own head, gaze and jaw (a body with no shapes has nothing else);
+// the studio reads the gaze and jaw from the shown weights where the take has none.
 onFrame((frame) => {
   const character = store.character();
   const mesh = characterMeshes()[0];
-  if (sending || !sendsVmc || !isPlaying() || !character || !mesh || !mesh.morphTargetInfluences) return;
+  const shapes = character ? character.blendshapes.length : 0;
+  if (sending || !sendsVmc || !isPlaying() || !character || !mesh || (shapes && !mesh.morphTargetInfluences)) return;
   const view = currentView();
   const take = view && view.take;
-  const head = take && take.head.length ? take.head[Math.min(Math.round(frame), take.frames - 1)] : null;
+  const f = take ? Math.min(Math.round(frame), take.frames - 1) : 0;
+  const at = (keys) => (take && keys && keys.length ? keys[Math.min(f, keys.length - 1)] : null);
+  const weights = shapes ? Array.from(mesh.morphTargetInfluences.slice(0, shapes)) : [];
   sending = true;
-  api('POST', 'api/capture/vmc/send', { weights: Array.from(mesh.morphTargetInfluences.slice(0, character.blendshapes.length)), head })
+  api('POST', 'api/capture/vmc/send', { weights, head: at(take && take.head), eyes: at(take && take.gaze), jaw: at(take && take.jaw) })
     .catch(showFailure)
     .finally(() => { sending = false; });
 });

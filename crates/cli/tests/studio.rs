@@ -770,6 +770,15 @@ fn the_live_webcam_face_goes_out_over_vmc() {
         br#"{"weights": [0.5]}"#,
     );
     assert!(status == 400 && body.contains("weights"), "{status} {body}");
+    let frame = serde_json::json!({ "weights": weights, "jaw": 1.5 }).to_string();
+    let (status, body) = request(
+        studio.port,
+        "POST",
+        "/api/capture/vmc/send",
+        &json,
+        frame.as_bytes(),
+    );
+    assert!(status == 400 && body.contains("jaw"), "{status} {body}");
     assert!(peer.wait().unwrap().success());
     let received: serde_json::Value =
         serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
@@ -1497,6 +1506,79 @@ fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw_and_turns_its
         widest = widest.max(looked[0].abs());
     }
     assert!(widest > 19.0, "the eyes turned at most {widest}°");
+    played_out_over_vmc(studio, &bare, &project);
+}
+
+/// The take `studio` recorded on `bare` (no shapes), reopened from its autosave by a studio
+/// that sends VMC, played by the page in a real browser: every frame goes out with the take's
+/// gaze and jaw as `LeftEye`, `RightEye` and `Jaw` bones. The page sent nothing before for a
+/// character without morph targets, and the weights it sent carried no gaze for one whose
+/// shapes have none.
+fn played_out_over_vmc(studio: Studio, bare: &std::path::Path, project: &std::path::Path) {
+    const PLAYED: usize = 20;
+    drop(studio);
+    let report = project.with_file_name("played.json");
+    let (mut peer, port) = support::vmc_receiver(PLAYED, 90.0, &report);
+    let to = format!("127.0.0.1:{port}");
+    let studio = start_on(Some(bare), project, &["--vmc-send".as_ref(), to.as_ref()]);
+    let (_, state) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    let state: serde_json::Value = serde_json::from_str(&state).unwrap();
+    let take = &state["take"];
+    let frames = take["frames"].as_u64().unwrap_or(0) as usize;
+    assert!(frames > 100, "the take did not reopen: {state}");
+    let gaze: Vec<[f64; 2]> = take["gaze"]
+        .as_array()
+        .unwrap_or_else(|| panic!("the take has no gaze: {take}"))
+        .iter()
+        .map(|f| [f[0][0].as_f64().unwrap(), f[0][1].as_f64().unwrap()])
+        .collect();
+    let jaw: Vec<f64> = support::f32s(&take["jaw"])
+        .into_iter()
+        .map(f64::from)
+        .collect();
+    assert_eq!((gaze.len(), jaw.len()), (frames, frames));
+    let measured = browser_script(
+        "vmc-play-e2e.mjs",
+        &studio,
+        "",
+        &output_dir("vmc-play-bare"),
+        &["take".into(), PLAYED.to_string().into()],
+    );
+    assert!(
+        measured["frames_sent"].as_u64() >= Some(PLAYED as u64),
+        "{measured}"
+    );
+    // Each bone as VMC sends it (Unity's frame): an eye turned by yaw then pitch is
+    // (-cos y·sin p, -sin y·cos p, -sin y·sin p, cos y·cos p) of the half angles.
+    let left = support::vmc_numbers(&mut peer, &report, "/VMC/Ext/Bone/Pos", "LeftEye");
+    let jaws = support::vmc_numbers(&mut peer, &report, "/VMC/Ext/Bone/Pos", "Jaw");
+    assert!(
+        left.len() >= PLAYED && jaws.len() >= PLAYED,
+        "{} LeftEye and {} Jaw bones went out for {PLAYED} frames",
+        left.len(),
+        jaws.len()
+    );
+    let degrees = |half: f64| 2.0 * half.to_degrees();
+    let mut widest: f64 = 0.0;
+    for pose in &left {
+        let (x, y, w) = (pose[3], pose[4], pose[6]);
+        let looked = [degrees((-y).atan2(w)), degrees((-x).atan2(w))];
+        assert!(
+            gaze.iter()
+                .any(|g| (g[0] - looked[0]).abs() < 0.01 && (g[1] - looked[1]).abs() < 0.01),
+            "a LeftEye bone at {looked:?}° is no frame's gaze of the take"
+        );
+        widest = widest.max(looked[1].abs());
+    }
+    assert!(widest > 5.0, "the eyes went out turned at most {widest}°");
+    let opened = f64::from(faceanim_export::bones::DEFAULT_JAW_DEGREES);
+    for pose in &jaws {
+        let turned = degrees(pose[3].asin());
+        assert!(
+            jaw.iter().any(|j| (j * opened - turned).abs() < 0.01),
+            "a Jaw bone turned {turned}° is no frame's jawOpen × {opened}° of the take"
+        );
+    }
 }
 
 /// Stops `studio`'s recording and checks that each take frame's jaw (the view skeleton's last

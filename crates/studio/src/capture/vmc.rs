@@ -142,16 +142,18 @@ impl Vmc {
         })
     }
 
-    /// Sends one frame of the face of a character whose blendshapes are `names`, its gaze and jaw
-    /// as bones too; false when the network refused it.
+    /// Sends one frame of the face of a character whose blendshapes are `names`, with the
+    /// head, gaze and jaw of `pose`; the gaze and jaw it lacks from the weights' ARKit meaning.
+    /// False when the network refused it.
     ///
     /// # Errors
     /// [`ApiError::Live`] when the studio does not send VMC, [`ApiError::Invalid`] for weights
-    /// that are not one finite number per blendshape.
+    /// that are not one finite number per blendshape, angles that are not finite or a jaw
+    /// outside 0..1.
     pub(super) fn send(
         &self,
         weights: &[f32],
-        head: Option<[f32; 3]>,
+        pose: faceanim_live::Pose,
         names: &[String],
     ) -> Result<bool, ApiError> {
         let blendshapes = names.len();
@@ -164,15 +166,30 @@ impl Vmc {
                 weights.len()
             )));
         }
-        if head.is_some_and(|h| h.iter().any(|a| !a.is_finite())) {
+        if pose.head.is_some_and(|h| h.iter().any(|a| !a.is_finite())) {
             return Err(ApiError::Invalid(
                 "head: three finite angles in degrees".into(),
             ));
         }
+        if pose
+            .eyes
+            .is_some_and(|e| e.as_flattened().iter().any(|a| !a.is_finite()))
+        {
+            return Err(ApiError::Invalid(
+                "eyes: two [yaw, pitch] pairs of finite angles in degrees".into(),
+            ));
+        }
+        if pose.jaw.is_some_and(|j| !(0.0..=1.0).contains(&j)) {
+            return Err(ApiError::Invalid("jaw: jawOpen from 0 to 1".into()));
+        }
         // The gaze and the jaw by the shapes' ARKit meaning go out as bones too, as the webcam's
-        // do (VRM's presets carry no gaze).
+        // do (VRM's presets carry no gaze), where the pose (a take's) does not give them.
         let (eyes, jaw) = faceanim_export::bones::BoneKeys::of_row(names, weights);
-        let pose = faceanim_live::Pose { head, eyes, jaw };
+        let pose = faceanim_live::Pose {
+            head: pose.head,
+            eyes: pose.eyes.or(eyes),
+            jaw: pose.jaw.or(jaw),
+        };
         let mut performer = lock(performer);
         let time = self.started.elapsed().as_secs_f32();
         Ok(performer.send_pose(weights, pose, time))

@@ -133,17 +133,18 @@ fn arkit_rows(clip: &faceanim_anim::Clip) -> Vec<Vec<f32>> {
         .collect()
 }
 
-/// Per frame of `session`, the view's bones as its export turns them: the head pose shared
-/// between spine, neck and head, gaze and jaw from the capture's own ARKit values (else from the
-/// frames by their names' ARKit meaning).
-fn take_bones(skeleton: &faceanim_export::bones::ViewRig, session: &Session) -> Vec<Vec<[f32; 4]>> {
-    let clip = session.clip();
-    let keys = faceanim_export::bones::BoneKeys::of_take(&clip, session.arkit_clip().as_ref());
+/// Per frame of a take's `clip`, the view's bones as its export turns them: the head pose
+/// shared between spine, neck and head, gaze and jaw by `keys`.
+fn take_bones(
+    skeleton: &faceanim_export::bones::ViewRig,
+    clip: &faceanim_anim::Clip,
+    keys: &faceanim_export::bones::BoneKeys,
+) -> Vec<Vec<[f32; 4]>> {
     let head: Vec<Option<[f32; 3]>> = match &clip.head {
         Some(head) => head.iter().copied().map(Some).collect(),
         None => vec![None; clip.frames.len()],
     };
-    skeleton.poses(clip.fps, &head, &keys)
+    skeleton.poses(clip.fps, &head, keys)
 }
 
 /// A shared capture desk.
@@ -857,10 +858,18 @@ impl CaptureDesk {
                     .sound
                     .as_ref()
                     .map(|_| format!("api/capture/sound?take={}", open.id()));
+                // Gaze and jaw from the capture's own ARKit values, else from the frames by
+                // their names' ARKit meaning: what the bones turn by and VMC sends.
+                let session = &open.take.session;
+                let clip = session.clip();
+                let keys =
+                    faceanim_export::bones::BoneKeys::of_take(&clip, session.arkit_clip().as_ref());
                 view.bones = self
                     .skeleton
                     .as_deref()
-                    .map(|skeleton| take_bones(skeleton, &open.take.session));
+                    .map(|skeleton| take_bones(skeleton, &clip, &keys));
+                view.gaze = keys.gaze;
+                view.jaw = keys.jaw;
                 view
             }),
         }

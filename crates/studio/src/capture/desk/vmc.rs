@@ -30,19 +30,20 @@ impl CaptureDesk {
     }
 
     /// Sends one frame of the face of a character whose blendshapes are `names` (what the
-    /// page shows while playing a take or the sketch) to the marionette; false when the network
-    /// refused it.
+    /// page shows while playing a take or the sketch) to the marionette, with the head, gaze and
+    /// jaw of `pose` (a take's; the gaze and jaw the pose lacks from `weights`); false when the
+    /// network refused it.
     ///
     /// # Errors
     /// [`ApiError::Live`] when the studio does not send VMC, [`ApiError::Invalid`] for weights
-    /// that are not one finite number per blendshape.
+    /// that are not one finite number per blendshape, or a pose out of range.
     pub fn send_vmc_frame(
         &self,
         weights: &[f32],
-        head: Option<[f32; 3]>,
+        pose: faceanim_live::Pose,
         names: &[String],
     ) -> Result<bool, ApiError> {
-        self.vmc.send(weights, head, names)
+        self.vmc.send(weights, pose, names)
     }
 
     /// Takes the phone's face as it is now for its neutral, from now on and in later runs.
