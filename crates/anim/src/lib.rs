@@ -111,6 +111,25 @@ impl Clip {
         self.blendshapes.iter().position(|n| n == name)
     }
 
+    /// The rows as ARKit's 52 channels in
+    /// [`ARKIT_52`](faceanim_rig::names::ARKIT_52) order, read through the name table as the
+    /// Live Link Face writer reads them (any spelling, split halves averaged), clamped to 0..1;
+    /// channels the clip lacks at 0.
+    #[must_use]
+    pub fn arkit_rows(&self) -> Vec<Vec<f32>> {
+        let map = faceanim_rig::name_map::NameMap::from_names(&self.blendshapes, &[]);
+        self.frames
+            .iter()
+            .map(|row| {
+                let mut arkit = map.arkit_row(row);
+                for v in &mut arkit {
+                    *v = v.clamp(0.0, 1.0);
+                }
+                arkit
+            })
+            .collect()
+    }
+
     /// Parses and validates clip JSON.
     ///
     /// # Errors

@@ -60,17 +60,19 @@ pub struct StreamArgs {
 pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     let bytes = faceanim_files::read_bytes(&args.input)?;
     // A session's gaze and jaw from what it was made of (MediaPipe's scores, a phone's values),
-    // as its export turns eye and jaw bones.
-    let (clip, keys) = match Clip::from_json(&bytes) {
+    // as its export turns eye and jaw bones; and those values, for the ARKit channels (or VRM
+    // presets) the character's shapes cannot make.
+    let (clip, keys, arkit) = match Clip::from_json(&bytes) {
         Ok(clip) => {
             let keys = BoneKeys::from_clip(&clip);
-            (clip, keys)
+            (clip, keys, None)
         }
         Err(clip_error) => faceanim_take::Session::from_json(&bytes)
             .map(|session| {
                 let clip = session.clip();
-                let keys = BoneKeys::of_take(&clip, session.arkit_clip().as_ref());
-                (clip, keys)
+                let arkit = session.arkit_clip();
+                let keys = BoneKeys::of_take(&clip, arkit.as_ref());
+                (clip, keys, arkit.map(|a| a.arkit_rows()))
             })
             .map_err(|session_error| {
                 anyhow::anyhow!(
@@ -102,7 +104,10 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     // A clip made faster than receivers take frames (a lip sync at 240) is sent at the most.
     let fps = args.fps.unwrap_or(clip.fps.min(MAX_FPS));
     let destination = destination(&args.to)?;
-    let mut performer = Performer::new(destination, &clip.blendshapes, args.names.into())?;
+    let mut performer = match arkit {
+        Some(_) => Performer::with_arkit(destination, &clip.blendshapes, args.names.into())?,
+        None => Performer::new(destination, &clip.blendshapes, args.names.into())?,
+    };
 
     let duration = (clip.frames.len() - 1) as f32 / clip.fps.max(1e-3);
     let frames = (duration * fps).round() as usize + 1;
@@ -126,9 +131,17 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
         if let Some(wait) = due.checked_duration_since(Instant::now()) {
             std::thread::sleep(wait);
         }
-        let (weights, pose) = sample(&clip, &keys, f as f32 / fps);
+        let at = f as f32 / fps;
+        let (weights, pose) = sample(&clip, &keys, at);
         let before = Instant::now();
-        performer.send_pose(&weights, pose, started.elapsed().as_secs_f32());
+        let time = started.elapsed().as_secs_f32();
+        match &arkit {
+            Some(rows) => {
+                let values = between(rows, clip.fps, at);
+                performer.send_with_arkit(&weights, &values, pose, time)
+            }
+            None => performer.send_pose(&weights, pose, time),
+        };
         let took = before.elapsed();
         sending += took;
         slowest = slowest.max(took);
@@ -175,20 +188,31 @@ pub fn listen_address(text: &str) -> anyhow::Result<SocketAddr> {
         .with_context(|| format!("--vmc-listen {text}: give a PORT or ADDR:PORT"))
 }
 
+/// The frames `a` and `b` around `time` seconds in `count` frames at `fps`, and how far
+/// between them it lies.
+fn around(count: usize, fps: f32, time: f32) -> (usize, usize, f32) {
+    let last = count.saturating_sub(1);
+    let position = (time * fps).clamp(0.0, last as f32);
+    let a = position.floor() as usize;
+    (a, (a + 1).min(last), position - a as f32)
+}
+
+/// `rows` (one per frame at `fps`) at `time` seconds, between frames linearly.
+fn between(rows: &[Vec<f32>], fps: f32, time: f32) -> Vec<f32> {
+    let (a, b, u) = around(rows.len(), fps, time);
+    rows[a]
+        .iter()
+        .zip(&rows[b])
+        .map(|(&x, &y)| x + (y - x) * u)
+        .collect()
+}
+
 /// The clip's weights and its head, gaze and jaw (`keys`, one per frame) at `time` seconds,
 /// between its frames linearly.
 fn sample(clip: &Clip, keys: &BoneKeys, time: f32) -> (Vec<f32>, Pose) {
-    let last = clip.frames.len() - 1;
-    let position = (time * clip.fps).clamp(0.0, last as f32);
-    let a = position.floor() as usize;
-    let b = (a + 1).min(last);
-    let u = position - a as f32;
+    let (a, b, u) = around(clip.frames.len(), clip.fps, time);
     let lerp = |x: f32, y: f32| x + (y - x) * u;
-    let weights = clip.frames[a]
-        .iter()
-        .zip(&clip.frames[b])
-        .map(|(&x, &y)| lerp(x, y))
-        .collect();
+    let weights = between(&clip.frames, clip.fps, time);
     let head = clip.head.as_ref().and_then(|h| {
         let (x, y) = (h.get(a)?, h.get(b)?);
         Some([lerp(x[0], y[0]), lerp(x[1], y[1]), lerp(x[2], y[2])])

@@ -1024,11 +1024,17 @@ fn studio_sending_vmc(
     out: &Path,
     frames: usize,
     seconds: f32,
+    names: &str,
 ) -> (support::Studio, std::process::Child, PathBuf) {
     let report = out.join("vmc.json");
     let (peer, vmc_port) = vmc_receiver(frames, seconds, &report);
     let to = format!("127.0.0.1:{vmc_port}");
-    let send = ["--vmc-send".as_ref(), to.as_ref()];
+    let send = [
+        "--vmc-send".as_ref(),
+        to.as_ref(),
+        "--vmc-names".as_ref(),
+        names.as_ref(),
+    ];
     let studio = start_on(character, &out.join("project.json"), &send);
     (studio, peer, report)
 }
@@ -1061,7 +1067,7 @@ fn speak(port: u16, samples: &[i16], size: usize) -> Value {
 #[test]
 fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
     let out = output_dir("lipsync-microphone");
-    let (studio, mut peer, report) = studio_sending_vmc(None, &out, 30, 120.0);
+    let (studio, mut peer, report) = studio_sending_vmc(None, &out, 30, 120.0, "own");
     let port = studio.port;
     let start = |delay: u32| {
         let body = format!(r#"{{"on": true, "delay_ms": {delay}}}"#);
@@ -1184,14 +1190,15 @@ fn the_studio_microphone_learns_a_voice_drives_vmc_and_records_a_take() {
 
 /// The studio's live microphone on a body with no blendshapes (the Blender avatar exported
 /// without shape keys): a real person's reading opens the view's jaw bone as it is heard, the
-/// jaw goes out over VMC as the `Jaw` bone (python-osc decodes it), and the recording is a take
+/// jaw goes out over VMC as the `Jaw` bone (python-osc decodes it) and, in ARKit's names, as
+/// the line's own JawOpen (the body has no shape to make it), and the recording is a take
 /// whose jaw bone opens and whose Clip JSON holds the line's jawOpen. The microphone kept the
 /// character's weights alone before: the body's jaw stayed shut live and in the take.
 #[test]
 fn the_microphone_opens_the_jaw_bone_of_a_body_with_no_shapes() {
     let out = output_dir("lipsync-microphone-bare");
     let bare = faceanim_testdata::producers::blender_bare_avatar_path();
-    let (studio, mut peer, report) = studio_sending_vmc(Some(&bare), &out, 200, 60.0);
+    let (studio, mut peer, report) = studio_sending_vmc(Some(&bare), &out, 200, 60.0, "arkit");
     let port = studio.port;
     let (status, body) = send(port, "PUT", "/api/capture/voice", r#"{"on": true}"#);
     assert_eq!(status, 200, "{body}");
@@ -1224,6 +1231,38 @@ fn the_microphone_opens_the_jaw_bone_of_a_body_with_no_shapes() {
     assert!(
         turns.iter().any(|t| *t > 2.0),
         "the Jaw bone never went out open: {turns:?}"
+    );
+    // In ARKit's names (`--vmc-names arkit`) the body with no shapes sends the line's own
+    // values: each frame's JawOpen is its Jaw bone's turn.
+    let received: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let find = |messages: &[Value], address: &str, name: &str| {
+        messages
+            .iter()
+            .find(|m| m["address"] == address && m["args"][0][1] == name)
+            .map(|m| m["args"].clone())
+    };
+    let mut opened_by_name: Vec<f64> = Vec::new();
+    for datagram in received["datagrams"].as_array().unwrap() {
+        let Some(messages) = datagram["messages"].as_array() else {
+            continue;
+        };
+        let value = find(messages, "/VMC/Ext/Blend/Val", "JawOpen");
+        let bone = find(messages, "/VMC/Ext/Bone/Pos", "Jaw");
+        if let (Some(value), Some(bone)) = (value, bone) {
+            let value = value[1][1].as_f64().unwrap();
+            let turned = 2.0 * bone[4][1].as_f64().unwrap().asin().to_degrees();
+            assert!(
+                (value * 20.0 - turned).abs() < 0.01,
+                "JawOpen {value} went out with the Jaw bone turned {turned}°"
+            );
+            opened_by_name.push(value);
+        }
+    }
+    let widest_by_name = opened_by_name.iter().copied().fold(0.0, f64::max);
+    assert!(
+        widest_by_name > 0.1,
+        "JawOpen went out in {} frames, at most {widest_by_name}",
+        opened_by_name.len()
     );
     let state = record_microphone(port, false);
     let take = &state["take"];

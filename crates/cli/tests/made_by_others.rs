@@ -954,15 +954,7 @@ fn a_capture_turns_the_head_eyes_and_jaw_of_a_body_with_no_shapes() {
     let dir = output_dir("made-by-others-capture-bones");
     // Eight seconds of a person talking and turning his head (yaw −8° to 22°), cut by ffmpeg.
     let video = dir.join("talking.mp4");
-    let footage = faceanim_testdata::producers::footage(faceanim_testdata::producers::CAP13);
-    let cut = std::process::Command::new("ffmpeg")
-        .args(["-y", "-v", "error", "-ss", "16", "-i"])
-        .arg(&footage)
-        .args(["-t", "8", "-an"])
-        .arg(&video)
-        .output()
-        .expect("ffmpeg");
-    support::succeeded("ffmpeg", cut);
+    support::cut_footage(faceanim_testdata::producers::CAP13, 16, 8, &video);
     let bare = faceanim_testdata::producers::blender_bare_avatar_path();
     let (glb, session) = (dir.join("bare.glb"), dir.join("bare.session.json"));
     let clip = dir.join("bare.json");

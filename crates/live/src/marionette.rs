@@ -654,8 +654,13 @@ fn forward(state: &mut State, arrived: Instant) {
     let Some(frame) = state.history.back() else {
         return;
     };
-    let sent =
-        lock_performer(&performer).send_pose(&frame.weights, frame.pose(), frame.time as f32);
+    let mut performer = lock_performer(&performer);
+    let time = frame.time as f32;
+    let sent = match &frame.arkit {
+        Some(arkit) => performer.send_with_arkit(&frame.weights, arkit, frame.pose(), time),
+        None => performer.send_pose(&frame.weights, frame.pose(), time),
+    };
+    drop(performer);
     if sent {
         state.forwarding.frames += 1;
         if state.delays.len() >= DELAYS {

@@ -51,6 +51,10 @@ pub struct Performer {
     destination: SocketAddr,
     table: Vec<(String, Source)>,
     last: Vec<Option<f32>>,
+    /// Under ARKit names or VRM presets, the values the character's shapes cannot make, made
+    /// from a frame's ARKit values where it has them ([`Performer::with_arkit`]).
+    from_arkit: Vec<(String, Source)>,
+    last_from_arkit: Vec<Option<f32>>,
     stats: SendStats,
 }
 
@@ -68,12 +72,46 @@ impl Performer {
         blendshapes: &[String],
         names: Names,
     ) -> Result<Performer, LiveError> {
-        let table = names.table(blendshapes);
-        if table.is_empty() && !blendshapes.is_empty() {
+        if !blendshapes.is_empty() && names.table(blendshapes).is_empty() {
             return Err(LiveError::NoNames {
                 what: names.describe(),
             });
         }
+        let mut performer = Performer::with_arkit(destination, blendshapes, names)?;
+        performer.from_arkit.clear();
+        performer.last_from_arkit.clear();
+        Ok(performer)
+    }
+
+    /// A performer for faces whose ARKit values are known too (a webcam's, a phone's, a
+    /// spoken line's: [`Performer::send_with_arkit`]), for any character: under ARKit names
+    /// or VRM presets, what the character's own shapes make goes out as [`Performer::new`]
+    /// sends it, and the channels (or presets) they cannot make go out from the ARKit values,
+    /// so that a rig whose names say nothing still drives a perfect-sync avatar. Frames sent
+    /// without ARKit values (a sketch) send what the shapes make alone.
+    ///
+    /// # Errors
+    /// [`LiveError::Socket`] when no UDP socket can be opened.
+    pub fn with_arkit(
+        destination: SocketAddr,
+        blendshapes: &[String],
+        names: Names,
+    ) -> Result<Performer, LiveError> {
+        let table = names.table(blendshapes);
+        let from_arkit = match names {
+            Names::Own => Vec::new(),
+            Names::Arkit | Names::VrmPresets => {
+                let arkit: Vec<String> = faceanim_rig::names::ARKIT_52
+                    .iter()
+                    .map(|&n| n.to_owned())
+                    .collect();
+                names
+                    .table(&arkit)
+                    .into_iter()
+                    .filter(|(name, _)| table.iter().all(|(own, _)| own != name))
+                    .collect()
+            }
+        };
         let local: SocketAddr = if destination.is_ipv4() {
             ([0, 0, 0, 0], 0).into()
         } else {
@@ -91,8 +129,17 @@ impl Performer {
             destination,
             last: vec![None; table.len()],
             table,
+            last_from_arkit: vec![None; from_arkit.len()],
+            from_arkit,
             stats: SendStats::default(),
         })
+    }
+
+    /// Whether frames without ARKit values send anything by name: the character's shapes make
+    /// some of the names asked for.
+    #[must_use]
+    pub fn sends_weights(&self) -> bool {
+        !self.table.is_empty()
     }
 
     /// Where it sends.
@@ -107,9 +154,17 @@ impl Performer {
         &self.stats
     }
 
-    /// The bundle for one frame: `weights` (the character's, in its order), the `pose` of head
-    /// and eyes, and the performer's clock `time` in seconds.
-    pub fn bundle(&mut self, weights: &[f32], pose: Pose, time: f32) -> OscBundle {
+    /// The bundle for one frame: `weights` (the character's, in its order), the frame's ARKit
+    /// values where known (`arkit`, ARKit's 52 in [`ARKIT_52`](faceanim_rig::names::ARKIT_52)
+    /// order; see [`Performer::with_arkit`]), the `pose` of head and eyes, and the performer's
+    /// clock `time` in seconds.
+    pub fn bundle(
+        &mut self,
+        weights: &[f32],
+        arkit: Option<&[f32]>,
+        pose: Pose,
+        time: f32,
+    ) -> OscBundle {
         let Pose { head, eyes, jaw } = pose;
         let refresh = self.stats.frames.is_multiple_of(REFRESH_EVERY);
         self.stats.frames += 1;
@@ -160,8 +215,18 @@ impl Performer {
             content.push(message("/VMC/Ext/Bone/Pos", pose("Jaw", turn)));
         }
 
-        for ((name, source), last) in self.table.iter().zip(&mut self.last) {
-            let value = source.value(weights).clamp(0.0, 1.0);
+        let own = self.table.iter().zip(&mut self.last).map(|t| (t, weights));
+        let from_arkit = arkit
+            .map(|values| {
+                self.from_arkit
+                    .iter()
+                    .zip(&mut self.last_from_arkit)
+                    .map(move |t| (t, values))
+            })
+            .into_iter()
+            .flatten();
+        for (((name, source), last), values) in own.chain(from_arkit) {
+            let value = source.value(values).clamp(0.0, 1.0);
             let moved = last.is_none_or(|l| (l - value).abs() > MOVED);
             if moved || refresh {
                 content.push(message(
@@ -194,7 +259,30 @@ impl Performer {
     /// [`Performer::send`] with the eyes' gaze and the jaw too, as the `LeftEye`, `RightEye`
     /// and `Jaw` bones.
     pub fn send_pose(&mut self, weights: &[f32], pose: Pose, time: f32) -> bool {
-        let bundle = self.bundle(weights, pose, time);
+        self.send_bundle(weights, None, pose, time)
+    }
+
+    /// [`Performer::send_pose`] for a face whose ARKit values are known too (`arkit`: ARKit's
+    /// 52 in [`ARKIT_52`](faceanim_rig::names::ARKIT_52) order), which make what the
+    /// character's shapes cannot (see [`Performer::with_arkit`]).
+    pub fn send_with_arkit(
+        &mut self,
+        weights: &[f32],
+        arkit: &[f32],
+        pose: Pose,
+        time: f32,
+    ) -> bool {
+        self.send_bundle(weights, Some(arkit), pose, time)
+    }
+
+    fn send_bundle(
+        &mut self,
+        weights: &[f32],
+        arkit: Option<&[f32]>,
+        pose: Pose,
+        time: f32,
+    ) -> bool {
+        let bundle = self.bundle(weights, arkit, pose, time);
         let sent = rosc::encoder::encode(&OscPacket::Bundle(bundle))
             .map_err(|e| e.to_string())
             .and_then(|bytes| {
@@ -231,7 +319,7 @@ mod tests {
             eyes: Some([[30.0, 0.0], [0.0, 10.0]]),
             jaw: Some(0.5),
         };
-        let bundle = performer.bundle(&[0.5], pose, 0.0);
+        let bundle = performer.bundle(&[0.5], None, pose, 0.0);
         let bones: Vec<(String, [f32; 4])> = bundle
             .content
             .iter()
@@ -280,7 +368,7 @@ mod tests {
             jaw: Some(1.0),
             ..Pose::default()
         };
-        let bundle = bare.bundle(&[], pose, 0.0);
+        let bundle = bare.bundle(&[], None, pose, 0.0);
         let jaw = bundle.content.iter().any(|p| {
             matches!(p, OscPacket::Message(m) if m.addr == "/VMC/Ext/Bone/Pos"
                 && m.args.first() == Some(&OscType::String("Jaw".to_owned())))
@@ -289,5 +377,69 @@ mod tests {
         let shaped = ["Fcl_MTH_A".to_owned()];
         let refused = Performer::new(to, &shaped, Names::Arkit).unwrap_err();
         assert!(refused.to_string().contains("ARKit"), "{refused}");
+    }
+
+    /// The values of `bundle`'s `/VMC/Ext/Blend/Val` messages by name.
+    fn values(bundle: &OscBundle) -> std::collections::BTreeMap<String, f32> {
+        bundle
+            .content
+            .iter()
+            .filter_map(|p| match p {
+                OscPacket::Message(m) if m.addr == "/VMC/Ext/Blend/Val" => match &m.args[..] {
+                    [OscType::String(name), OscType::Float(v)] => Some((name.clone(), *v)),
+                    _ => None,
+                },
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Given a face's ARKit values, what the character's shapes cannot make goes out from them:
+    /// under ARKit names every other channel, under VRM presets every other preset; what the
+    /// shapes make still comes from the weights, and a frame without ARKit values sends that
+    /// alone. Under its own names nothing changes.
+    #[test]
+    #[allow(clippy::float_cmp, reason = "values sent are copied, not computed")]
+    fn a_face_known_in_arkit_sends_what_the_shapes_cannot_make() {
+        let to: SocketAddr = "127.0.0.1:9".parse().unwrap();
+        let shapes = ["jawOpen".to_owned(), "Fcl_MTH_A".to_owned()];
+        let mut arkit = [0.0f32; 52];
+        let channel = |n: &str| faceanim_rig::names::Channel::named(n).unwrap().index();
+        arkit[channel("jawOpen")] = 0.9;
+        arkit[channel("eyeBlinkLeft")] = 0.8;
+        arkit[channel("eyeBlinkRight")] = 0.6;
+        arkit[channel("mouthSmileLeft")] = 0.4;
+        let weights = [0.25, 1.0];
+
+        let mut performer = Performer::with_arkit(to, &shapes, Names::Arkit).unwrap();
+        let sent = values(&performer.bundle(&weights, Some(&arkit), Pose::default(), 0.0));
+        assert_eq!(sent.len(), 52, "{sent:?}");
+        assert_eq!(
+            sent["JawOpen"], 0.25,
+            "the character's own jawOpen, not the capture's"
+        );
+        assert_eq!(sent["EyeBlinkLeft"], 0.8);
+        assert_eq!(sent["MouthSmileLeft"], 0.4);
+        assert_eq!(sent["BrowInnerUp"], 0.0);
+        // (Values that did not move are not sent again: the jaw moves.)
+        let alone = values(&performer.bundle(&[0.3, 1.0], None, Pose::default(), 0.0));
+        assert_eq!(alone.keys().collect::<Vec<_>>(), ["JawOpen"]);
+
+        let mut presets = Performer::with_arkit(to, &shapes, Names::VrmPresets).unwrap();
+        let sent = values(&presets.bundle(&weights, Some(&arkit), Pose::default(), 0.0));
+        assert_eq!(sent.len(), crate::VRM_PRESETS.len(), "{sent:?}");
+        assert_eq!(sent["A"], 0.25);
+        assert_eq!(sent["Blink"], 0.6, "the smaller lid: a wink is not a blink");
+        assert!((sent["Joy"] - 0.2).abs() < 1e-6, "{}", sent["Joy"]);
+
+        let mut own = Performer::with_arkit(to, &shapes, Names::Own).unwrap();
+        let sent = values(&own.bundle(&weights, Some(&arkit), Pose::default(), 0.0));
+        assert_eq!(sent.keys().collect::<Vec<_>>(), ["Fcl_MTH_A", "jawOpen"]);
+        // A rig none of whose names means anything is not refused: captured faces drive it.
+        let nameless = ["shape_1".to_owned()];
+        let mut any = Performer::with_arkit(to, &nameless, Names::Arkit).unwrap();
+        assert!(!any.sends_weights());
+        let sent = values(&any.bundle(&[1.0], Some(&arkit), Pose::default(), 0.0));
+        assert_eq!(sent["JawOpen"], 0.9);
     }
 }

@@ -262,6 +262,23 @@ pub fn track_summary(input: &Path, character: &Path, more: &[&str]) -> serde_jso
     serde_json::from_slice(&succeeded("faceanim track", run).stdout).unwrap()
 }
 
+/// `seconds` of real `footage` from `start` seconds in, cut by ffmpeg into `out` (no sound).
+pub fn cut_footage(
+    footage: faceanim_testdata::producers::Footage,
+    start: u32,
+    seconds: u32,
+    out: &Path,
+) {
+    let cut = Command::new("ffmpeg")
+        .args(["-y", "-v", "error", "-ss", &start.to_string(), "-i"])
+        .arg(faceanim_testdata::producers::footage(footage))
+        .args(["-t", &seconds.to_string(), "-an"])
+        .arg(out)
+        .output()
+        .expect("ffmpeg");
+    succeeded("ffmpeg", cut);
+}
+
 /// `faceanim track INPUT --character CHARACTER [MORE…] -o OUT`, which must succeed; returns the
 /// clip it wrote, as JSON.
 pub fn track_clip(input: &Path, character: &Path, more: &[&str], out: &Path) -> serde_json::Value {

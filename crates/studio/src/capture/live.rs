@@ -216,9 +216,17 @@ impl LiveHandle {
         };
         let eyes = found.then(|| faceanim_rig::bones::gaze_from_arkit(score));
         let jaw = found.then(|| score("jawOpen"));
-        // Out at once: the frame's weights go to the marionette before anything else is done.
+        // Out at once: the frame's weights, and MediaPipe's ARKit scores for what the
+        // character's shapes cannot make, go to the marionette before anything else is done.
         if let Some(performer) = &live.performer {
-            lock(performer).send_pose(&weights, faceanim_live::Pose { head, eyes, jaw }, time);
+            let pose = faceanim_live::Pose { head, eyes, jaw };
+            let mut performer = lock(performer);
+            if found {
+                let arkit = faceanim_rig::names::ARKIT_52.map(score);
+                performer.send_with_arkit(&weights, &arkit, pose, time);
+            } else {
+                performer.send_pose(&weights, pose, time);
+            }
         }
         let bones = self.skeleton.as_ref().map(|s| s.pose(head, eyes, jaw));
         let recorded = match live.recording.as_mut() {

@@ -90,7 +90,16 @@ impl Vmc {
                 .collect();
         }
         if let Some((destination, names)) = config.send {
-            let performer = Performer::new(destination, blendshapes, names)?;
+            // The studio's faces (webcam, phone, microphone) are known in ARKit: what the
+            // character's shapes cannot make under the names asked for goes out from them.
+            let performer = Performer::with_arkit(destination, blendshapes, names)?;
+            if !blendshapes.is_empty() && !performer.sends_weights() {
+                tracing::warn!(
+                    "the character has no {}: captured faces go out by their ARKit values, a \
+                     sketch played sends its head alone",
+                    names.describe()
+                );
+            }
             vmc.performer = Some(Arc::new(Mutex::new(performer)));
         }
         // A phone's face goes out as it arrives, as the webcam's does (a VMC performer's is

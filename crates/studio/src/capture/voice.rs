@@ -59,8 +59,15 @@ struct Due {
     at: f32,
     weights: Vec<f32>,
     open: f32,
-    /// The line's jawOpen (its ARKit values'), for jaw bones.
-    jaw: f32,
+    /// The line's ARKit values, for receivers of ARKit names (and jawOpen for jaw bones).
+    arkit: Vec<f32>,
+}
+
+impl Due {
+    /// The line's jawOpen, which turns jaw bones.
+    fn jaw(&self) -> f32 {
+        faceanim_rig::names::Channel::named("jawOpen").map_or(0.0, |c| self.arkit[c.index()])
+    }
 }
 
 /// A recording under way: the sound, and per 10 ms frame the character's weights and the
@@ -327,17 +334,15 @@ impl VoiceHandle {
             voice.level_db = heard.level_db;
             let weights = voice.mouth.weights(&heard.visemes);
             let arkit = voice.arkit.weights(&heard.visemes);
-            let jaw =
-                faceanim_rig::names::Channel::named("jawOpen").map_or(0.0, |c| arkit[c.index()]);
             if let Some(r) = recording.as_mut() {
                 r.weights.push(weights.clone());
-                r.arkit.push(arkit);
+                r.arkit.push(arkit.clone());
             }
             voice.due.push_back(Due {
                 at: heard.time + voice.delay,
                 weights,
                 open: heard.open,
-                jaw,
+                arkit,
             });
         }
         // The newest frame whose time has come (the delay holds frames back).
@@ -348,10 +353,10 @@ impl VoiceHandle {
         if let Some(d) = shown {
             if let Some(performer) = &voice.performer {
                 let pose = faceanim_live::Pose {
-                    jaw: Some(d.jaw),
+                    jaw: Some(d.jaw()),
                     ..faceanim_live::Pose::default()
                 };
-                lock(performer).send_pose(&d.weights, pose, now);
+                lock(performer).send_with_arkit(&d.weights, &d.arkit, pose, now);
             }
             voice.last = Some(d);
         }
@@ -365,7 +370,7 @@ impl VoiceHandle {
                 .skeleton
                 .as_ref()
                 .zip(last)
-                .map(|(s, d)| s.pose(None, None, Some(d.jaw))),
+                .map(|(s, d)| s.pose(None, None, Some(d.jaw()))),
             level_db: voice.level_db,
             server_ms: started.elapsed().as_secs_f64() * 1000.0,
             voice: Some(voice.view()),

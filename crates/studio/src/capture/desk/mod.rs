@@ -116,23 +116,6 @@ fn map_path(adapter_path: &std::path::Path, character: &Character) -> PathBuf {
     faceanim_adapt::bridge::default_map_path(adapter_path.parent(), character.name())
 }
 
-/// `clip`'s rows as ARKit's 52 channels in their order, read through the name table as the
-/// Live Link Face writer reads them (any spelling, split halves averaged), clamped to 0..1;
-/// channels it lacks at 0.
-fn arkit_rows(clip: &faceanim_anim::Clip) -> Vec<Vec<f32>> {
-    let map = faceanim_rig::name_map::NameMap::from_names(&clip.blendshapes, &[]);
-    clip.frames
-        .iter()
-        .map(|row| {
-            let mut arkit = map.arkit_row(row);
-            for v in &mut arkit {
-                *v = v.clamp(0.0, 1.0);
-            }
-            arkit
-        })
-        .collect()
-}
-
 /// Per frame of a take's `clip`, the view's bones as its export turns them: the head pose
 /// shared between spine, neck and head, gaze and jaw by `keys`.
 fn take_bones(
@@ -412,7 +395,7 @@ impl CaptureDesk {
         };
         let mut take = Take::from_weights(character, shown, clip.fps, &rows, clip.head.as_deref())?;
         if on_bones {
-            take = take.made_of_arkit(arkit_rows(clip))?;
+            take = take.made_of_arkit(clip.arkit_rows())?;
         }
         let way = if on_bones { " on the bones" } else { "" };
         Ok(self.open_file_take(take, &format!("the clip {shown}{way}")))
