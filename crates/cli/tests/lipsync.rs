@@ -943,10 +943,8 @@ fn the_studio_lip_syncs_dropped_speech_and_layers_a_stroke_on_it() {
         sketch["actions"][0]["sides"][0]["target"], "browOuterUpLeft",
         "{sketch}"
     );
-    let (status, glb) = request_bytes(studio.port, "GET", "/api/capture/export.glb", &[], b"");
-    assert_eq!(status, 200);
-    let (status, clip) = request_bytes(studio.port, "GET", "/api/capture/export.json", &[], b"");
-    assert_eq!(status, 200);
+    let (_, glb) = support::get_with_head(studio.port, "/api/capture/export.glb");
+    let (_, clip) = support::get_with_head(studio.port, "/api/capture/export.json");
     drop(studio);
     // Closed and opened again, the take plays with its sound: kept beside the project, not in
     // a temporary folder.

@@ -295,10 +295,8 @@ fn a_sketched_glb_opens_again_as_its_strokes_and_exports_the_same() {
                 .to_owned(),
         );
     }
-    let (status, glb) = request_bytes(studio.port, "GET", "/api/export.glb", &[], b"");
-    assert_eq!(status, 200);
-    let (status, baked) = request_bytes(studio.port, "GET", "/api/export.json", &[], b"");
-    assert_eq!(status, 200);
+    let (_, glb) = support::get_with_head(studio.port, "/api/export.glb");
+    let (_, baked) = support::get_with_head(studio.port, "/api/export.json");
     drop(studio);
     let sketched = out.join("sketched.glb");
     std::fs::write(&sketched, &glb).unwrap();
