@@ -106,8 +106,8 @@ let sending = false;
 /** Whether the studio sends VMC (`--vmc-send`), asked once: the Sketch tab plays to it too. */
 let sendsVmc = false;
 api('GET', 'api/capture/vmc').then((state) => { sendsVmc = !!(state && state.sending); }).catch(() => {});
-// A take's frame sends its own head, gaze and jaw (a body with no shapes has nothing else);
-// the studio reads the gaze and jaw from the shown weights where the take has none.
+// A take's frame goes with its id and number: the studio adds the take's own gaze, jaw and
+// ARKit values (a body with no shapes has nothing else to send).
 onFrame((frame) => {
   const character = store.character();
   const mesh = characterMeshes()[0];
@@ -116,10 +116,10 @@ onFrame((frame) => {
   const view = currentView();
   const take = view && view.take;
   const f = take ? Math.min(Math.round(frame), take.frames - 1) : 0;
-  const at = (keys) => (take && keys && keys.length ? keys[Math.min(f, keys.length - 1)] : null);
+  const head = take && take.head.length ? take.head[Math.min(f, take.head.length - 1)] : null;
   const weights = shapes ? Array.from(mesh.morphTargetInfluences.slice(0, shapes)) : [];
   sending = true;
-  api('POST', 'api/capture/vmc/send', { weights, head: at(take && take.head), eyes: at(take && take.gaze), jaw: at(take && take.jaw) })
+  api('POST', 'api/capture/vmc/send', { weights, head, take: take ? { id: take.id, frame: f } : null })
     .catch(showFailure)
     .finally(() => { sending = false; });
 });

@@ -104,6 +104,15 @@ pub struct Retarget {
     pub unmatched: Vec<String>,
 }
 
+/// `row` as ARKit's 52 through `map`, clamped to 0..1.
+fn arkit_of(map: &faceanim_rig::name_map::NameMap, row: &[f32]) -> Vec<f32> {
+    let mut arkit = map.arkit_row(row);
+    for v in &mut arkit {
+        *v = v.clamp(0.0, 1.0);
+    }
+    arkit
+}
+
 impl Clip {
     /// The column of the blendshape named exactly `name`, if the clip has one.
     #[must_use]
@@ -118,16 +127,15 @@ impl Clip {
     #[must_use]
     pub fn arkit_rows(&self) -> Vec<Vec<f32>> {
         let map = faceanim_rig::name_map::NameMap::from_names(&self.blendshapes, &[]);
-        self.frames
-            .iter()
-            .map(|row| {
-                let mut arkit = map.arkit_row(row);
-                for v in &mut arkit {
-                    *v = v.clamp(0.0, 1.0);
-                }
-                arkit
-            })
-            .collect()
+        self.frames.iter().map(|row| arkit_of(&map, row)).collect()
+    }
+
+    /// Frame `frame` as [`Clip::arkit_rows`] reads each; `None` past the last frame.
+    #[must_use]
+    pub fn arkit_row(&self, frame: usize) -> Option<Vec<f32>> {
+        let row = self.frames.get(frame)?;
+        let map = faceanim_rig::name_map::NameMap::from_names(&self.blendshapes, &[]);
+        Some(arkit_of(&map, row))
     }
 
     /// Parses and validates clip JSON.

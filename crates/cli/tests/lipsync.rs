@@ -1232,29 +1232,13 @@ fn the_microphone_opens_the_jaw_bone_of_a_body_with_no_shapes() {
     );
     // In ARKit's names (`--vmc-names arkit`) the body with no shapes sends the line's own
     // values: each frame's JawOpen is its Jaw bone's turn.
-    let received: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
-    let find = |messages: &[Value], address: &str, name: &str| {
-        messages
-            .iter()
-            .find(|m| m["address"] == address && m["args"][0][1] == name)
-            .map(|m| m["args"].clone())
-    };
     let mut opened_by_name: Vec<f64> = Vec::new();
-    for datagram in received["datagrams"].as_array().unwrap() {
-        let Some(messages) = datagram["messages"].as_array() else {
-            continue;
-        };
-        let value = find(messages, "/VMC/Ext/Blend/Val", "JawOpen");
-        let bone = find(messages, "/VMC/Ext/Bone/Pos", "Jaw");
-        if let (Some(value), Some(bone)) = (value, bone) {
-            let value = value[1][1].as_f64().unwrap();
-            let turned = 2.0 * bone[4][1].as_f64().unwrap().asin().to_degrees();
-            assert!(
-                (value * 20.0 - turned).abs() < 0.01,
-                "JawOpen {value} went out with the Jaw bone turned {turned}°"
-            );
-            opened_by_name.push(value);
-        }
+    for (value, turned) in support::vmc_jaw_pairs(&report) {
+        assert!(
+            (value * 20.0 - turned).abs() < 0.01,
+            "JawOpen {value} went out with the Jaw bone turned {turned}°"
+        );
+        opened_by_name.push(value);
     }
     let widest_by_name = opened_by_name.iter().copied().fold(0.0, f64::max);
     assert!(

@@ -715,9 +715,7 @@ struct VmcFrame {
     #[serde(default)]
     head: Option<[f32; 3]>,
     #[serde(default)]
-    eyes: Option<[[f32; 2]; 2]>,
-    #[serde(default)]
-    jaw: Option<f32>,
+    take: Option<crate::capture::TakeFrame>,
 }
 
 /// What the send of one frame came to.
@@ -729,12 +727,9 @@ struct VmcSent {
 async fn vmc_send(State(both): State<Both>, body: Bytes) -> Answer<VmcSent> {
     let frame: VmcFrame = json_body(&body, "frame")?;
     let names = both.studio().character.blendshape_names();
-    let pose = faceanim_live::Pose {
-        head: frame.head,
-        eyes: frame.eyes,
-        jaw: frame.jaw,
-    };
-    let sent = both.desk().send_vmc_frame(&frame.weights, pose, &names)?;
+    let sent = both
+        .desk()
+        .send_vmc_frame(&frame.weights, frame.head, frame.take, &names)?;
     Ok(axum::Json(VmcSent { sent }))
 }
 

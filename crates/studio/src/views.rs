@@ -684,13 +684,6 @@ pub struct TakeView {
     /// `[x, y, z, w]`: the head pose shared between spine, neck and head, the gaze on the
     /// eyes, `jawOpen` on the jaw, as the export turns the file's bones.
     pub bones: Option<Vec<Vec<[f32; 4]>>>,
-    /// Per frame, the gaze the take turns eye bones by and sends over VMC: each eye's
-    /// `[yaw, pitch]` in degrees (left eye, right eye), from the capture's own ARKit values (else
-    /// from the frames by their names' ARKit meaning); `null` when the take has no gaze.
-    pub gaze: Option<Vec<[[f32; 2]; 2]>>,
-    /// Per frame, the take's `jawOpen` (0..1) that turns a jaw bone, read as [`TakeView::gaze`]
-    /// is; `null` when the take has none.
-    pub jaw: Option<Vec<f32>>,
 }
 
 impl TakeView {
@@ -742,8 +735,6 @@ impl TakeView {
             neutral_check,
             sound: None,
             bones: None,
-            gaze: None,
-            jaw: None,
         }
     }
 }

@@ -533,6 +533,32 @@ pub fn vmc_numbers(
         .collect()
 }
 
+/// From the report of the VMC peer of [`vmc_receiver`] (once it ended), every frame that
+/// carried both a `JawOpen` value and a `Jaw` bone: the value, and the bone's turn in degrees.
+pub fn vmc_jaw_pairs(report: &Path) -> Vec<(f64, f64)> {
+    let received: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap();
+    let find = |messages: &[serde_json::Value], address: &str, name: &str| {
+        messages
+            .iter()
+            .find(|m| m["address"] == address && m["args"][0][1] == name)
+            .map(|m| m["args"].clone())
+    };
+    let mut pairs = Vec::new();
+    for datagram in received["datagrams"].as_array().unwrap() {
+        let Some(messages) = datagram["messages"].as_array() else {
+            continue;
+        };
+        let value = find(messages, "/VMC/Ext/Blend/Val", "JawOpen");
+        let bone = find(messages, "/VMC/Ext/Bone/Pos", "Jaw");
+        if let (Some(value), Some(bone)) = (value, bone) {
+            let turned = 2.0 * bone[4][1].as_f64().unwrap().asin().to_degrees();
+            pairs.push((value[1][1].as_f64().unwrap(), turned));
+        }
+    }
+    pairs
+}
+
 /// The independent VMC peer sending `frames` frames of known ARKit weights, head turns and
 /// gaze (`"eyes"`: yaw and pitch of both eye bones) to
 /// 127.0.0.1:`port` at `fps` but those in `lose` (kept back, as a Wi-Fi network loses them),

@@ -25,5 +25,5 @@ pub use desk::retarget::start_map;
 pub use desk::{CaptureDesk, SharedDesk};
 pub use live::{LiveHandle, LiveResult};
 pub use open_take::{OpenTake, Previews, Sound, audio_mime};
-pub use vmc::{Listen, VmcConfig};
+pub use vmc::{Listen, TakeFrame, VmcConfig};
 pub use voice::{RATE as VOICE_RATE, VoiceHandle, VoiceResult};

@@ -33,6 +33,54 @@ pub struct VmcConfig {
 }
 
 /// The desk's VMC links.
+/// A frame of the open take the page shows while it plays: the take's id and the frame.
+#[derive(Debug, Clone, Copy, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TakeFrame {
+    /// The take ([`crate::views::TakeView::id`]).
+    pub id: u64,
+    /// The frame.
+    pub frame: usize,
+}
+
+/// What a take plays at one frame besides its weights: its gaze and jaw, as its export turns
+/// bones, and its ARKit values where it was made of them.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Played {
+    eyes: Option<[[f32; 2]; 2]>,
+    jaw: Option<f32>,
+    arkit: Option<Vec<f32>>,
+}
+
+impl Played {
+    /// Frame `frame` of `session`: from the capture's own ARKit values, else from the frames
+    /// by their names' ARKit meaning ([`faceanim_export::bones::BoneKeys::of_take`]'s rule);
+    /// `None` past its last frame.
+    pub(super) fn of(session: &faceanim_take::Session, frame: usize) -> Option<Played> {
+        Some(match session.arkit_clip() {
+            Some(arkit) => {
+                let row = arkit.frames.get(frame)?;
+                let (eyes, jaw) = faceanim_export::bones::BoneKeys::of_row(&arkit.blendshapes, row);
+                Played {
+                    eyes,
+                    jaw,
+                    arkit: arkit.arkit_row(frame),
+                }
+            }
+            None => {
+                let clip = session.clip();
+                let row = clip.frames.get(frame)?;
+                let (eyes, jaw) = faceanim_export::bones::BoneKeys::of_row(&clip.blendshapes, row);
+                Played {
+                    eyes,
+                    jaw,
+                    arkit: None,
+                }
+            }
+        })
+    }
+}
+
 #[derive(Debug)]
 pub(super) struct Vmc {
     config: VmcConfig,
@@ -152,17 +200,17 @@ impl Vmc {
     }
 
     /// Sends one frame of the face of a character whose blendshapes are `names`, with the
-    /// head, gaze and jaw of `pose`; the gaze and jaw it lacks from the weights' ARKit meaning.
-    /// False when the network refused it.
+    /// `head` pose, and the gaze, jaw and ARKit values of the take frame `played` where given
+    /// (else the gaze and jaw of the weights' ARKit meaning). False when the network refused it.
     ///
     /// # Errors
     /// [`ApiError::Live`] when the studio does not send VMC, [`ApiError::Invalid`] for weights
-    /// that are not one finite number per blendshape, angles that are not finite or a jaw
-    /// outside 0..1.
+    /// that are not one finite number per blendshape, or a head pose that is not finite.
     pub(super) fn send(
         &self,
         weights: &[f32],
-        pose: faceanim_live::Pose,
+        head: Option<[f32; 3]>,
+        played: Option<Played>,
         names: &[String],
     ) -> Result<bool, ApiError> {
         let blendshapes = names.len();
@@ -175,33 +223,27 @@ impl Vmc {
                 weights.len()
             )));
         }
-        if pose.head.is_some_and(|h| h.iter().any(|a| !a.is_finite())) {
+        if head.is_some_and(|h| h.iter().any(|a| !a.is_finite())) {
             return Err(ApiError::Invalid(
                 "head: three finite angles in degrees".into(),
             ));
         }
-        if pose
-            .eyes
-            .is_some_and(|e| e.as_flattened().iter().any(|a| !a.is_finite()))
-        {
-            return Err(ApiError::Invalid(
-                "eyes: two [yaw, pitch] pairs of finite angles in degrees".into(),
-            ));
-        }
-        if pose.jaw.is_some_and(|j| !(0.0..=1.0).contains(&j)) {
-            return Err(ApiError::Invalid("jaw: jawOpen from 0 to 1".into()));
-        }
-        // The gaze and the jaw by the shapes' ARKit meaning go out as bones too, as the webcam's
-        // do (VRM's presets carry no gaze), where the pose (a take's) does not give them.
-        let (eyes, jaw) = faceanim_export::bones::BoneKeys::of_row(names, weights);
-        let pose = faceanim_live::Pose {
-            head: pose.head,
-            eyes: pose.eyes.or(eyes),
-            jaw: pose.jaw.or(jaw),
+        // The gaze and the jaw go out as bones too, as the webcam's do (VRM's presets carry no
+        // gaze): the take's own where it plays, else by the shapes' ARKit meaning.
+        let (eyes, jaw, arkit) = match played {
+            Some(p) => (p.eyes, p.jaw, p.arkit),
+            None => {
+                let (eyes, jaw) = faceanim_export::bones::BoneKeys::of_row(names, weights);
+                (eyes, jaw, None)
+            }
         };
+        let pose = faceanim_live::Pose { head, eyes, jaw };
         let mut performer = lock(performer);
         let time = self.started.elapsed().as_secs_f32();
-        Ok(performer.send_pose(weights, pose, time))
+        Ok(match arkit {
+            Some(arkit) => performer.send_with_arkit(weights, &arkit, pose, time),
+            None => performer.send_pose(weights, pose, time),
+        })
     }
 
     /// The marionette, when listening.

@@ -116,18 +116,17 @@ fn map_path(adapter_path: &std::path::Path, character: &Character) -> PathBuf {
     faceanim_adapt::bridge::default_map_path(adapter_path.parent(), character.name())
 }
 
-/// Per frame of a take's `clip`, the view's bones as its export turns them: the head pose
-/// shared between spine, neck and head, gaze and jaw by `keys`.
-fn take_bones(
-    skeleton: &faceanim_export::bones::ViewRig,
-    clip: &faceanim_anim::Clip,
-    keys: &faceanim_export::bones::BoneKeys,
-) -> Vec<Vec<[f32; 4]>> {
+/// Per frame of `session`, the view's bones as its export turns them: the head pose shared
+/// between spine, neck and head, gaze and jaw from the capture's own ARKit values (else from the
+/// frames by their names' ARKit meaning).
+fn take_bones(skeleton: &faceanim_export::bones::ViewRig, session: &Session) -> Vec<Vec<[f32; 4]>> {
+    let clip = session.clip();
+    let keys = faceanim_export::bones::BoneKeys::of_take(&clip, session.arkit_clip().as_ref());
     let head: Vec<Option<[f32; 3]>> = match &clip.head {
         Some(head) => head.iter().copied().map(Some).collect(),
         None => vec![None; clip.frames.len()],
     };
-    skeleton.poses(clip.fps, &head, keys)
+    skeleton.poses(clip.fps, &head, &keys)
 }
 
 /// A shared capture desk.
@@ -841,18 +840,10 @@ impl CaptureDesk {
                     .sound
                     .as_ref()
                     .map(|_| format!("api/capture/sound?take={}", open.id()));
-                // Gaze and jaw from the capture's own ARKit values, else from the frames by
-                // their names' ARKit meaning: what the bones turn by and VMC sends.
-                let session = &open.take.session;
-                let clip = session.clip();
-                let keys =
-                    faceanim_export::bones::BoneKeys::of_take(&clip, session.arkit_clip().as_ref());
                 view.bones = self
                     .skeleton
                     .as_deref()
-                    .map(|skeleton| take_bones(skeleton, &clip, &keys));
-                view.gaze = keys.gaze;
-                view.jaw = keys.jaw;
+                    .map(|skeleton| take_bones(skeleton, &open.take.session));
                 view
             }),
         }

@@ -29,21 +29,28 @@ impl CaptureDesk {
         self.vmc.view(self.skeleton.as_deref())
     }
 
-    /// Sends one frame of the face of a character whose blendshapes are `names` (what the
-    /// page shows while playing a take or the sketch) to the marionette, with the head, gaze and
-    /// jaw of `pose` (a take's; the gaze and jaw the pose lacks from `weights`); false when the
-    /// network refused it.
+    /// Sends one frame the page plays (the `weights` of a character whose blendshapes are
+    /// `names`, and the `head` pose) to the marionette; false when the network refused it.
+    /// `take` (the open take's id and the frame shown) adds that take's own gaze, jaw and ARKit
+    /// values at the frame, as its export turns bones (and, under ARKit names or VRM presets,
+    /// for what the character's shapes cannot make); without it, or for a take no longer open,
+    /// the gaze and jaw come from the weights.
     ///
     /// # Errors
     /// [`ApiError::Live`] when the studio does not send VMC, [`ApiError::Invalid`] for weights
-    /// that are not one finite number per blendshape, or a pose out of range.
+    /// that are not one finite number per blendshape, or a head pose that is not finite.
     pub fn send_vmc_frame(
         &self,
         weights: &[f32],
-        pose: faceanim_live::Pose,
+        head: Option<[f32; 3]>,
+        take: Option<crate::capture::TakeFrame>,
         names: &[String],
     ) -> Result<bool, ApiError> {
-        self.vmc.send(weights, pose, names)
+        let played = take.and_then(|shown| {
+            let open = self.take.as_ref().filter(|open| open.id() == shown.id)?;
+            crate::capture::vmc::Played::of(&open.take.session, shown.frame)
+        });
+        self.vmc.send(weights, head, played, names)
     }
 
     /// Takes the phone's face as it is now for its neutral, from now on and in later runs.
