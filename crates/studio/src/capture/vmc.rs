@@ -32,7 +32,6 @@ pub struct VmcConfig {
     pub send: Option<(SocketAddr, Names)>,
 }
 
-/// The desk's VMC links.
 /// A frame of the open take the page shows while it plays: the take's id and the frame.
 #[derive(Debug, Clone, Copy, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -81,6 +80,7 @@ impl Played {
     }
 }
 
+/// The desk's VMC links.
 #[derive(Debug)]
 pub(super) struct Vmc {
     config: VmcConfig,
