@@ -52,7 +52,7 @@ pub mod phone;
 pub use marionette::{
     Forwarding, Marionette, Neutral, ReceivedFrame, Source, SourceSettings, Traffic,
 };
-pub use names::{Names, VRM_PRESETS};
+pub use names::{Names, VRM_PRESETS, VRM_VOWELS};
 pub use performer::{JAW_DEGREES, Performer, Pose, SendStats};
 
 /// The VMC protocol's default port (the marionette's).

@@ -11,7 +11,8 @@ pub enum Names {
     /// (`EyeBlinkLeft`), for the character's ARKit-named shapes.
     Arkit,
     /// VRM 0.x's preset expressions ([`VRM_PRESETS`]), each made from the character's
-    /// ARKit-named shapes, for apps that only know those.
+    /// ARKit-named shapes — the vowels from its shapes named for them where it has those
+    /// ([`VRM_VOWELS`]) — for apps that only know those.
     VrmPresets,
 }
 
@@ -30,6 +31,17 @@ pub const VRM_PRESETS: [(&str, &[&str]); 12] = [
     ("Angry", &["browDownLeft", "browDownRight"]),
     ("Sorrow", &["mouthFrownLeft", "mouthFrownRight"]),
     ("Fun", &["cheekSquintLeft", "cheekSquintRight"]),
+];
+
+/// VRM's five vowel presets and the viseme each is: a character whose shapes are named for the
+/// viseme (VRoid's `Fcl_MTH_A`, a VRM's own `aa` expression, Ready Player Me's `viseme_aa`)
+/// sends the preset from them rather than from [`VRM_PRESETS`]' ARKit channels.
+pub const VRM_VOWELS: [(&str, faceanim_rig::names::Viseme); 5] = [
+    ("A", faceanim_rig::names::Viseme::Aa),
+    ("I", faceanim_rig::names::Viseme::Ih),
+    ("U", faceanim_rig::names::Viseme::Ou),
+    ("E", faceanim_rig::names::Viseme::E),
+    ("O", faceanim_rig::names::Viseme::Oh),
 ];
 
 /// How one sent value is made from the character's weights: a weighted sum of blendshapes
@@ -65,7 +77,9 @@ impl Names {
         match self {
             Names::Own => "blendshapes",
             Names::Arkit => "blendshapes named for ARKit channels",
-            Names::VrmPresets => "blendshapes named for ARKit channels to make VRM presets from",
+            Names::VrmPresets => {
+                "blendshapes named for ARKit channels or VRM's vowels to make VRM presets from"
+            }
         }
     }
 
@@ -91,6 +105,12 @@ impl Names {
             Names::VrmPresets => VRM_PRESETS
                 .iter()
                 .filter_map(|&(preset, shapes)| {
+                    // A vowel from the shapes that are its viseme, where there are any.
+                    let vowel = VRM_VOWELS.iter().find(|(v, _)| *v == preset);
+                    if let Some(terms) = vowel.and_then(|&(_, viseme)| viseme_terms(names, viseme))
+                    {
+                        return Some((preset.to_owned(), Source::Sum(terms)));
+                    }
                     let found: Vec<Vec<(usize, f32)>> =
                         shapes.iter().filter_map(|s| terms(s)).collect();
                     if found.len() != shapes.len() {
@@ -153,6 +173,29 @@ fn channel_terms(names: &[String]) -> Vec<Option<Vec<(usize, f32)>>> {
         .collect()
 }
 
+/// The character's shapes that are `viseme` by name (and drive it: a VRM expression that
+/// gives way to the targets it binds does not), each at weight 1; `None` when it has none.
+fn viseme_terms(
+    names: &[String],
+    viseme: faceanim_rig::names::Viseme,
+) -> Option<Vec<(usize, f32)>> {
+    use faceanim_rig::name_map::Use;
+    use faceanim_rig::names::{Drive, Expression};
+    let map = faceanim_rig::name_map::NameMap::from_names(names, &[]);
+    let terms: Vec<(usize, f32)> = map
+        .entries()
+        .iter()
+        .enumerate()
+        .filter(|(_, entry)| {
+            entry.is_some_and(|e| {
+                e.used == Use::Driven && e.drive == Drive::Expression(Expression::Viseme(viseme))
+            })
+        })
+        .map(|(i, _)| (i, 1.0))
+        .collect();
+    (!terms.is_empty()).then_some(terms)
+}
+
 /// `eyeBlinkLeft` → `EyeBlinkLeft`.
 fn capitalised(name: &str) -> String {
     let mut chars = name.chars();
@@ -182,6 +225,42 @@ mod tests {
         assert_eq!(value("MouthSmileLeft"), Some(0.5));
         assert_eq!(value("JawOpen"), Some(0.9));
         assert_eq!(value("CheekPuff"), None);
+    }
+
+    /// VRoid's vowels are VRM's vowel presets, sent from the shapes themselves (not from
+    /// ARKit channels VRoid does not have); its blinks from its merged and one-sided lids.
+    #[test]
+    fn vowels_come_from_the_shapes_named_for_them() {
+        let names: Vec<String> = [
+            "Fcl_MTH_A",
+            "Fcl_MTH_I",
+            "Fcl_MTH_U",
+            "Fcl_MTH_E",
+            "Fcl_MTH_O",
+            "Fcl_EYE_Close_L",
+            "Fcl_EYE_Close_R",
+            "viseme_aa",
+        ]
+        .map(String::from)
+        .to_vec();
+        let table = Names::VrmPresets.table(&names);
+        let weights = [0.25, 0.5, 0.125, 0.75, 1.0, 1.0, 0.5, 0.5];
+        let value = |name: &str| {
+            table
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, s)| s.value(&weights))
+        };
+        // Two shapes named for aa: the first drives it, as capture and lip sync drive it (the
+        // name table's rule: nothing moves twice).
+        assert_eq!(value("A"), Some(0.25));
+        assert_eq!(value("I"), Some(0.5));
+        assert_eq!(value("U"), Some(0.125));
+        assert_eq!(value("E"), Some(0.75));
+        assert_eq!(value("O"), Some(1.0));
+        assert_eq!(value("Blink"), Some(0.5));
+        assert_eq!(value("Blink_L"), Some(1.0));
+        assert_eq!(value("Joy"), None);
     }
 
     #[test]
