@@ -8,9 +8,12 @@ Loopback only, bounded in count and time.
       bundles with /VMC/Ext/Blend/Apply arrived or S seconds passed; writes the decoded
       messages (address, arguments with their OSC types) and arrival times as JSON.
   vmc_peer.py send --to PORT --frames N --fps F --out FILE [--garbage K] [--lose A:B]
+                   [--names arkit|vrm]
       sends N frames of ARKit weights (JawOpen, EyeBlinkLeft, MouthSmileLeft, in ARKit's
-      capitalised spelling), a head turn and the gaze (as the LeftEye and RightEye bones, as
-      trackers send it) to 127.0.0.1:PORT at F frames per second, but
+      capitalised spelling; with --names vrm the same curves as the VRM 0.x presets A, Blink
+      and Joy, as VSeeFace and VMagicMirror send without perfect sync), a head turn and the
+      gaze (as the LeftEye and RightEye bones, as trackers send it) to 127.0.0.1:PORT at F
+      frames per second, but
       frames A to B-1, which it keeps to itself as a Wi-Fi network loses datagrams; writes
       every frame (its time as /VMC/Ext/T says it, the lost ones marked) as JSON, then K
       garbage datagrams (random bytes, truncated bundles, huge datagrams, unknown addresses,
@@ -88,6 +91,10 @@ def frame_values(k, n):
     }
 
 
+# The VRM 0.x preset each of frame_values' curves is sent as under --names vrm.
+VRM_PRESET = {"JawOpen": "A", "EyeBlinkLeft": "Blink", "MouthSmileLeft": "Joy"}
+
+
 def head_quaternion(yaw_degrees, pitch_degrees=0.0):
     """A head (or an eye) turned by `yaw_degrees` (to the subject's own left when positive),
     then tipped by `pitch_degrees` (up when positive), as VMC sends it: Unity's left-handed
@@ -118,6 +125,8 @@ def send(args):
         if wait > 0:
             time.sleep(wait)
         values = frame_values(k, args.frames)
+        if args.names == "vrm":
+            values = {VRM_PRESET[name]: value for name, value in values.items()}
         yaw = 30.0 * math.sin(2 * math.pi * k / max(1, args.frames))
         eyes = gaze(k, args.frames)
         now = time.monotonic() - start
@@ -177,6 +186,7 @@ def main():
     s.add_argument("--out", required=True)
     s.add_argument("--garbage", type=int, default=0)
     s.add_argument("--lose", type=frames_range, default=(0, 0), metavar="A:B")
+    s.add_argument("--names", choices=("arkit", "vrm"), default="arkit")
     args = parser.parse_args()
     # Bounded in count and time, whatever the caller asks.
     if args.command == "receive" and not (0 < args.count <= 100000 and 0 < args.timeout <= 120):

@@ -1444,21 +1444,8 @@ fn a_phone_recorded_onto_a_body_with_no_shapes_opens_its_jaw() {
 /// phones alone and read no eye bones before: the jaw stayed shut and the eyes still.
 #[test]
 fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw_and_turns_its_eyes() {
-    const FRAMES: usize = 120;
     let dir = tempfile::tempdir().unwrap();
-    let port = support::free_udp_port();
-    let listen = format!("127.0.0.1:{port}");
-    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
-    let project = dir.path().join("bare.faceanim.json");
-    let studio = start_on(
-        Some(&bare),
-        &project,
-        &["--vmc-listen".as_ref(), listen.as_ref()],
-    );
-    record_live(&studio, true);
-    let sent = support::vmc_send(port, FRAMES, 60.0, 0, 0..0, &dir.path().join("sent.json"));
-    // Loopback may drop a datagram: what arrived is recorded.
-    assert!(recorded(&studio, FRAMES)["recording"].as_u64() > Some(100));
+    let (studio, sent) = bare_body_recording(dir.path(), support::vmc_send_arkit);
     jaw_follows_what_was_sent(&studio, &sent);
     // Each frame of the take's Clip JSON looks where the eye bones sent around its time did.
     let (_, clip) = support::get_with_head(studio.port, "/api/capture/export.json");
@@ -1496,7 +1483,31 @@ fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw_and_turns_its
         widest = widest.max(looked[0].abs());
     }
     assert!(widest > 19.0, "the eyes turned at most {widest}°");
-    played_out_over_vmc(studio, &bare, &project);
+    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
+    played_out_over_vmc(studio, &bare, &dir.path().join("bare.faceanim.json"));
+}
+
+/// The frames of a VMC tracker (python-osc: `send` to a port, a frame count, a rate and where
+/// it writes what it sent) recorded at 60 Hz onto the Blender-exported body with no shape keys,
+/// by a studio with its project in `dir`: the studio, still recording, and what was sent.
+fn bare_body_recording(
+    dir: &std::path::Path,
+    send: fn(u16, usize, f32, &std::path::Path) -> serde_json::Value,
+) -> (Studio, serde_json::Value) {
+    const FRAMES: usize = 120;
+    let port = support::free_udp_port();
+    let listen = format!("127.0.0.1:{port}");
+    let bare = faceanim_testdata::producers::blender_bare_avatar_path();
+    let studio = start_on(
+        Some(&bare),
+        &dir.join("bare.faceanim.json"),
+        &["--vmc-listen".as_ref(), listen.as_ref()],
+    );
+    record_live(&studio, true);
+    let sent = send(port, FRAMES, 60.0, &dir.join("sent.json"));
+    // Loopback may drop a datagram: what arrived is recorded.
+    assert!(recorded(&studio, FRAMES)["recording"].as_u64() > Some(100));
+    (studio, sent)
 }
 
 /// The take `studio` recorded on `bare` (no shapes), reopened from its autosave by a studio
@@ -1597,11 +1608,27 @@ fn played_out_over_vmc(studio: Studio, bare: &std::path::Path, project: &std::pa
     }
 }
 
+/// What VSeeFace and VMagicMirror send without perfect sync, VRM's presets (python-osc
+/// standing in: `A`, `Blink`, `Joy`), recorded onto the body with no shapes: `A` opens the
+/// take's jaw bone at every frame, as `JawOpen` does. Presets drove nothing on a character
+/// without shapes of those names before.
+#[test]
+fn a_vmc_tracker_sending_vrm_presets_opens_the_jaw_of_a_body_with_no_shapes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (studio, sent) = bare_body_recording(dir.path(), support::vmc_send_vrm_presets);
+    jaw_follows(&studio, &sent, "A");
+}
+
 /// Stops `studio`'s recording and checks that each take frame's jaw (the view skeleton's last
 /// joint, turned from the head) opened as far as the `JawOpen` `sent` around its time (a tenth
 /// of a second either side: the take goes by arrival), widest over 90 % of the jaw's range, and
 /// that the take's Clip JSON holds jawOpen.
 fn jaw_follows_what_was_sent(studio: &Studio, sent: &serde_json::Value) {
+    jaw_follows(studio, sent, "JawOpen");
+}
+
+/// [`jaw_follows_what_was_sent`], the jaw sent under the name `sent_as`.
+fn jaw_follows(studio: &Studio, sent: &serde_json::Value, sent_as: &str) {
     let capture = record_live(studio, false);
     let take = &capture["take"];
     let fps = take["fps"].as_f64().unwrap();
@@ -1619,7 +1646,7 @@ fn jaw_follows_what_was_sent(studio: &Studio, sent: &serde_json::Value) {
         let around = sent
             .iter()
             .filter(|f| (sent_at(f) - t).abs() <= 0.1)
-            .map(|f| f["values"]["JawOpen"].as_f64().unwrap() * degrees);
+            .map(|f| f["values"][sent_as].as_f64().unwrap() * degrees);
         let (low, high) = around.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
             (l.min(v), h.max(v))
         });

@@ -9,6 +9,8 @@ use std::time::{Duration, Instant};
 
 use rosc::{OscMessage, OscPacket, OscType};
 
+use faceanim_rig::names::{Drive, Expression, Viseme};
+
 use crate::phone::{self, AngleUnit, Packet, Protocol, Reading};
 use crate::{LiveError, Performer, head_angles};
 
@@ -212,6 +214,8 @@ struct State {
     lookup: HashMap<String, Vec<usize>>,
     /// The character's shapes each ARKit channel drives by name (for other spellings).
     arkit: HashMap<&'static str, Vec<usize>>,
+    /// The character's shapes that are each viseme by name (VRM's vowels drive them).
+    visemes: HashMap<Viseme, Vec<usize>>,
     /// The character's own names.
     own: HashMap<String, usize>,
     /// The character's retarget map: ARKit values it has no shape named for reach its shapes
@@ -296,9 +300,14 @@ impl Marionette {
         // An ARKit channel drives every shape the name table gives it (both halves of ICT's
         // browInnerUp_L/_R, a merged mouthSmile).
         let mut arkit: HashMap<&'static str, Vec<usize>> = HashMap::new();
+        // And a viseme (VRoid's `Fcl_MTH_A`) the shapes that are it, for VRM's vowels.
+        let mut visemes: HashMap<Viseme, Vec<usize>> = HashMap::new();
         let map = faceanim_rig::name_map::NameMap::from_names(blendshapes, &[]);
         for (i, drive) in map.driven_drives() {
-            if matches!(drive, faceanim_rig::names::Drive::Expression(_)) {
+            if let Drive::Expression(expression) = drive {
+                if let Expression::Viseme(viseme) = expression {
+                    visemes.entry(viseme).or_default().push(i);
+                }
                 continue;
             }
             for c in drive.channels() {
@@ -315,6 +324,7 @@ impl Marionette {
             last_arrival: None,
             lookup: HashMap::new(),
             arkit,
+            visemes,
             own: blendshapes
                 .iter()
                 .enumerate()
@@ -718,28 +728,55 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
                 state.heard_arkit = true;
                 state.named[c] = true;
             }
+            // A name for several channels (VRM's presets, as VSeeFace and VMagicMirror send
+            // them: `Blink`, `Joy`, `A`) gives each the value, where the sender does not name
+            // the channel itself.
+            let stands_for = match channel {
+                Some(_) => Vec::new(),
+                None => crate::names::stands_for(name),
+            };
+            for c in stands_for
+                .iter()
+                .filter_map(|c| faceanim_retarget::channel_index(c.name()))
+            {
+                if !state.named[c] {
+                    state.channels[c] = value;
+                }
+                state.heard_arkit = true;
+            }
             if let Some(&i) = state.own.get(name.as_str()) {
                 state.current[i] = value;
                 state.direct[i] = true;
                 return true;
             }
-            if channel.is_some() {
+            if channel.is_some() || !stands_for.is_empty() {
                 state.through_map = true;
                 if state.map.is_some() {
                     return true;
                 }
             }
-            let arkit = &state.arkit;
-            let shapes = state
+            let (arkit, visemes) = (&state.arkit, &state.visemes);
+            let mut shapes = state
                 .lookup
                 .entry(name.clone())
-                .or_insert_with(|| {
-                    faceanim_rig::names::arkit_name(name)
-                        .and_then(|a| arkit.get(a).cloned())
-                        .unwrap_or_default()
-                })
+                .or_insert_with(|| shapes_named(name, arkit, visemes))
                 .clone();
+            let mut matched = !shapes.is_empty();
             if shapes.is_empty() {
+                // A preset's channels set their shapes, where the sender does not name them.
+                for c in &stands_for {
+                    let Some(theirs) = state.arkit.get(c.name()) else {
+                        continue;
+                    };
+                    matched = true;
+                    let named =
+                        faceanim_retarget::channel_index(c.name()).is_some_and(|i| state.named[i]);
+                    if !named {
+                        shapes.extend(theirs);
+                    }
+                }
+            }
+            if !matched {
                 state.traffic.unmatched += 1;
             }
             for i in shapes {
@@ -834,6 +871,25 @@ fn arkit_row(state: &State) -> Option<Vec<f32>> {
     Some(row)
 }
 
+/// The character's shapes a received name that is none of its own sets by itself: those its
+/// ARKit channel drives, or for a vowel (`A`) the shapes that are its viseme. (A name for
+/// several channels sets theirs, see [`crate::names::stands_for`].)
+fn shapes_named(
+    name: &str,
+    arkit: &HashMap<&'static str, Vec<usize>>,
+    visemes: &HashMap<Viseme, Vec<usize>>,
+) -> Vec<usize> {
+    if let Some(channel) = faceanim_rig::names::arkit_name(name) {
+        return arkit.get(channel).cloned().unwrap_or_default();
+    }
+    match faceanim_rig::names::drive(name) {
+        Some(Drive::Expression(Expression::Viseme(viseme))) => {
+            visemes.get(&viseme).cloned().unwrap_or_default()
+        }
+        _ => Vec::new(),
+    }
+}
+
 /// The weights and head of what arrived so far become a frame (kept, and recorded while
 /// recording).
 fn complete_frame(state: &mut State, time: f64) {
@@ -907,7 +963,8 @@ mod tests {
 
     /// A VMC tracker sending ARKit's names ("perfect sync") gives its frames the eyes, the jaw
     /// and the ARKit values a phone's frames carry, whether the character has shapes of those
-    /// names or none at all (a body moved by its bones); one sending VRM's presets does not.
+    /// names or none at all (a body moved by its bones); one sending VRM's presets gives them
+    /// by the channels each preset stands for (`A` opens the jaw).
     #[test]
     fn a_vmc_sender_of_arkit_names_gives_eyes_jaw_and_arkit_values() {
         let theirs: Vec<String> = ["jawOpen", "eyeLookOutLeft", "eyeLookInRight", "A"]
@@ -932,9 +989,66 @@ mod tests {
         }
         let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &[]).unwrap();
         let mut performer = Performer::new(marionette.address(), &theirs[3..], Names::Own).unwrap();
-        performer.send(&[1.0], None, 0.0);
+        performer.send(&[0.75], None, 0.0);
         let frames = marionette.wait_for_frames(1, Duration::from_secs(5));
-        assert_eq!((frames[0].jaw(), &frames[0].arkit), (None, &None));
+        assert_eq!(frames[0].jaw(), Some(0.75));
+    }
+
+    /// What VSeeFace and VMagicMirror send without perfect sync, VRM's presets, drives any
+    /// character: an ARKit-named one by the channels each preset stands for (`Blink` both lids,
+    /// `Joy` both corners, `A` the jaw), a VRoid one by its own shapes (`A` its `Fcl_MTH_A`,
+    /// `Blink` its lids), and a value the sender also names in ARKit wins.
+    #[test]
+    #[allow(clippy::float_cmp, reason = "values are copied through, not computed")]
+    fn vrm_presets_from_a_sender_drive_any_character() {
+        let presets: Vec<String> = ["A", "Blink", "Joy", "Blink_L"].map(String::from).to_vec();
+        let sent = [0.5, 1.0, 0.25, 0.75];
+        for (ours, want) in [
+            (
+                vec![
+                    "jawOpen",
+                    "eyeBlinkLeft",
+                    "eyeBlinkRight",
+                    "mouthSmile_L",
+                    "mouthSmile_R",
+                ],
+                vec![0.5, 0.75, 1.0, 0.25, 0.25],
+            ),
+            (
+                // Its both-lids shape gives way to the one-sided ones (nothing moves twice).
+                vec![
+                    "Fcl_MTH_A",
+                    "Fcl_EYE_Close",
+                    "Fcl_EYE_Close_L",
+                    "Fcl_EYE_Close_R",
+                    "Fcl_MTH_Joy",
+                    "Fcl_MTH_O",
+                ],
+                vec![0.5, 0.0, 0.75, 1.0, 0.25, 0.0],
+            ),
+        ] {
+            let ours: Vec<String> = ours.into_iter().map(String::from).collect();
+            let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &ours).unwrap();
+            let mut performer = Performer::new(marionette.address(), &presets, Names::Own).unwrap();
+            performer.send(&sent, None, 0.0);
+            let frame = marionette
+                .wait_for_frames(1, Duration::from_secs(5))
+                .remove(0);
+            assert_eq!(frame.weights, want, "{ours:?}");
+            let arkit = frame.arkit.expect("ARKit values");
+            let at = |name: &str| arkit[faceanim_retarget::channel_index(name).unwrap()];
+            // Blink_L names eyeBlinkLeft itself: it wins over Blink's.
+            assert_eq!(
+                [
+                    at("jawOpen"),
+                    at("eyeBlinkLeft"),
+                    at("eyeBlinkRight"),
+                    at("mouthSmileRight")
+                ],
+                [0.5, 0.75, 1.0, 0.25],
+                "{ours:?}"
+            );
+        }
     }
 
     /// A VMC sender's eye and jaw bones (as faceanim's performer and trackers sending VRM's

@@ -44,6 +44,24 @@ pub const VRM_VOWELS: [(&str, faceanim_rig::names::Viseme); 5] = [
     ("O", faceanim_rig::names::Viseme::Oh),
 ];
 
+/// The ARKit channels a received name stands for when it is not one channel itself: both of a
+/// merged pair (VRM's `Blink`, `Joy`, `Angry`, `Sorrow`, VRoid's `Fcl_EYE_Close`), or for one
+/// of VRM's vowels (`A`, `aa`) the channels a performer sends it from ([`VRM_PRESETS`]); none
+/// otherwise. What VSeeFace, VMagicMirror and trackers without perfect sync send.
+pub(crate) fn stands_for(name: &str) -> Vec<faceanim_rig::names::Channel> {
+    use faceanim_rig::names::{Channel, Drive, Expression};
+    match faceanim_rig::names::drive(name) {
+        Some(Drive::Merge(a, b)) => vec![a, b],
+        Some(Drive::Expression(Expression::Viseme(viseme))) => VRM_VOWELS
+            .iter()
+            .find(|(_, v)| *v == viseme)
+            .and_then(|(vowel, _)| VRM_PRESETS.iter().find(|(preset, _)| preset == vowel))
+            .map(|(_, channels)| channels.iter().filter_map(|c| Channel::named(c)).collect())
+            .unwrap_or_default(),
+        _ => Vec::new(),
+    }
+}
+
 /// How one sent value is made from the character's weights: a weighted sum of blendshapes
 /// (one shape; the halves of a split channel; the mean of a preset's channels), or the
 /// smallest of several such sums (`Blink`, so that a wink is not a blink).

@@ -571,6 +571,29 @@ pub fn vmc_send(
     lose: std::ops::Range<usize>,
     out: &Path,
 ) -> serde_json::Value {
+    let lose = format!("{}:{}", lose.start, lose.end);
+    let garbage = garbage.to_string();
+    peer_send(
+        port,
+        frames,
+        fps,
+        &["--garbage", &garbage, "--lose", &lose],
+        out,
+    )
+}
+
+/// [`vmc_send`] of every frame, none lost, no garbage.
+pub fn vmc_send_arkit(port: u16, frames: usize, fps: f32, out: &Path) -> serde_json::Value {
+    vmc_send(port, frames, fps, 0, 0..0, out)
+}
+
+/// [`vmc_send`]'s curves sent as VRM 0.x's presets (`A`, `Blink`, `Joy`), as VSeeFace and
+/// VMagicMirror send without perfect sync; every frame, its values under those names.
+pub fn vmc_send_vrm_presets(port: u16, frames: usize, fps: f32, out: &Path) -> serde_json::Value {
+    peer_send(port, frames, fps, &["--names", "vrm"], out)
+}
+
+fn peer_send(port: u16, frames: usize, fps: f32, more: &[&str], out: &Path) -> serde_json::Value {
     let run = Command::new("python3")
         .arg(repo().join("tools/vmc_peer.py"))
         .args([
@@ -581,12 +604,9 @@ pub fn vmc_send(
             &frames.to_string(),
             "--fps",
             &fps.to_string(),
-            "--garbage",
-            &garbage.to_string(),
-            "--lose",
-            &format!("{}:{}", lose.start, lose.end),
-            "--out",
         ])
+        .args(more)
+        .arg("--out")
         .arg(out)
         .output()
         .expect("python3 with python-osc (scripts/setup.sh installs it)");
