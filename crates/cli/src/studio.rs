@@ -29,11 +29,13 @@ pub(crate) struct StudioArgs {
     /// it live and records takes from it. Without a value: 39539, VMC's default.
     #[arg(long, num_args = 0..=1, default_missing_value = "39539", value_name = "[ADDR:]PORT")]
     pub(crate) vmc_listen: Option<String>,
-    /// Send the live face (webcam or phone) over VMC to a marionette (VSeeFace, Warudo, VNyan, Unity,
-    /// Unreal) at HOST:PORT.
+    /// Send the live face (webcam, phone or microphone) and what the page plays over VMC to a
+    /// marionette (VSeeFace, Warudo, VNyan, Unity, Unreal) at HOST:PORT.
     #[arg(long, value_name = "HOST:PORT")]
     pub(crate) vmc_send: Option<String>,
-    /// The names --vmc-send uses.
+    /// The names --vmc-send uses: the character's own, ARKit's 52 (perfect sync) or VRM 0.x's
+    /// presets; under arkit and vrm what the character's shapes cannot make goes out from the
+    /// captured face's own ARKit values.
     #[arg(long, value_enum, default_value_t = crate::stream::NameChoice::Own)]
     pub(crate) vmc_names: crate::stream::NameChoice,
     #[command(flatten)]
