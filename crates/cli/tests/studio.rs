@@ -1458,7 +1458,6 @@ fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw_and_turns_its
     let fps = clip["fps"].as_f64().unwrap();
     let range = faceanim_rig::bones::EYE_RANGE.map(f64::from);
     let sent = sent["frames"].as_array().unwrap();
-    let start = sent[0]["time"].as_f64().unwrap();
     let mut widest: f64 = 0.0;
     for (k, row) in clip["frames"].as_array().unwrap().iter().enumerate() {
         let value = |name: &str| row[column(name)].as_f64().unwrap();
@@ -1468,13 +1467,7 @@ fn a_vmc_tracker_recorded_onto_a_body_with_no_shapes_opens_its_jaw_and_turns_its
         ];
         let t = k as f64 / fps;
         for (axis, got) in looked.into_iter().enumerate() {
-            let around: Vec<f64> = sent
-                .iter()
-                .filter(|f| (f["time"].as_f64().unwrap() - start - t).abs() <= 0.1)
-                .map(|f| f["eyes"][axis].as_f64().unwrap())
-                .collect();
-            let low = around.iter().copied().fold(f64::INFINITY, f64::min);
-            let high = around.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let (low, high) = sent_around(sent, t, |f| f["eyes"][axis].as_f64().unwrap());
             assert!(
                 low - 0.05 <= got && got <= high + 0.05,
                 "take frame {k} at {t:.3} s: the left eye at {got:.2}° on axis {axis}, the bones said {low:.2}° to {high:.2}°"
@@ -1634,8 +1627,6 @@ fn jaw_follows(studio: &Studio, sent: &serde_json::Value, sent_as: &str) {
     let fps = take["fps"].as_f64().unwrap();
     let bones = take["bones"].as_array().unwrap();
     let sent = sent["frames"].as_array().unwrap();
-    let sent_at =
-        |f: &serde_json::Value| f["time"].as_f64().unwrap() - sent[0]["time"].as_f64().unwrap();
     let degrees = f64::from(faceanim_export::bones::DEFAULT_JAW_DEGREES);
     let mut widest: f64 = 0.0;
     for (k, joints) in bones.iter().enumerate() {
@@ -1643,12 +1634,8 @@ fn jaw_follows(studio: &Studio, sent: &serde_json::Value, sent_as: &str) {
         let jaw = glam::Quat::from_slice(&support::f32s(joints.last().unwrap()));
         let opened = f64::from(jaw.angle_between(glam::Quat::IDENTITY).to_degrees());
         let t = k as f64 / fps;
-        let around = sent
-            .iter()
-            .filter(|f| (sent_at(f) - t).abs() <= 0.1)
-            .map(|f| f["values"][sent_as].as_f64().unwrap() * degrees);
-        let (low, high) = around.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-            (l.min(v), h.max(v))
+        let (low, high) = sent_around(sent, t, |f| {
+            f["values"][sent_as].as_f64().unwrap() * degrees
         });
         assert!(
             low - 0.05 <= opened && opened <= high + 0.05,
@@ -1662,6 +1649,28 @@ fn jaw_follows(studio: &Studio, sent: &serde_json::Value, sent_as: &str) {
     let clip: serde_json::Value = serde_json::from_slice(&clip).unwrap();
     let names = support::strings(&clip["blendshapes"]);
     assert!(names.iter().any(|n| n == "jawOpen"), "{names:?}");
+}
+
+/// The lowest and highest `value` of the `sent` frames around `t` seconds after the first:
+/// those within a tenth of a second either side (the take goes by arrival where the sender's
+/// clock is not sound), and the last sent before `t` and the first after it, which a take frame
+/// blends however far apart a stalled sender put them.
+fn sent_around(
+    sent: &[serde_json::Value],
+    t: f64,
+    value: impl Fn(&serde_json::Value) -> f64,
+) -> (f64, f64) {
+    let start = sent[0]["time"].as_f64().unwrap();
+    let at = |f: &serde_json::Value| f["time"].as_f64().unwrap() - start;
+    let before = sent.iter().rev().find(|f| at(f) <= t);
+    let after = sent.iter().find(|f| at(f) >= t);
+    let near = sent.iter().filter(|f| (at(f) - t).abs() <= 0.1);
+    near.chain(before)
+        .chain(after)
+        .map(value)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(low, high), v| {
+            (low.min(v), high.max(v))
+        })
 }
 
 /// The Capture tab's phone panel in a real browser (`tools/phone-panel-e2e.mjs`): it says what
