@@ -20,6 +20,8 @@ const MAX_DATAGRAM: usize = 32 * 1024;
 const MAX_DEPTH: usize = 8;
 /// ARKit's channels.
 const ARKIT_COUNT: usize = faceanim_rig::names::ARKIT_52.len();
+/// Names whose meaning is kept (a sender of ever new names cannot grow the table further).
+const MAX_NAMES: usize = 4096;
 /// Frames kept for [`Marionette::wait_for_frames`].
 const HISTORY: usize = 1024;
 /// How often the receiving thread looks at its stop flag.
@@ -209,9 +211,9 @@ struct State {
     traffic: Traffic,
     arrivals: VecDeque<Instant>,
     last_arrival: Option<Instant>,
-    /// A name that is none of the character's own → the shapes it sets by its ARKit meaning
-    /// (none: unmatched), as names arrive.
-    lookup: HashMap<String, Vec<usize>>,
+    /// Each name received → what it means for the character, as names arrive (at most
+    /// [`MAX_NAMES`]).
+    lookup: HashMap<String, Meaning>,
     /// The character's shapes each ARKit channel drives by name (for other spellings).
     arkit: HashMap<&'static str, Vec<usize>>,
     /// The character's shapes that are each viseme by name (VRM's vowels drive them).
@@ -227,6 +229,8 @@ struct State {
     heard_arkit: bool,
     /// Which ARKit channels arrived by name (VMC's eye and jaw bones stand for the others).
     named: Vec<bool>,
+    /// Which ARKit channels a vowel's own shapes show (a map leaves them).
+    shown: Vec<bool>,
     /// The gaze `[yaw, pitch]` of VMC's `LeftEye` and `RightEye` bones, once sent.
     eye_bones: [Option<[f32; 2]>; 2],
     /// How open VMC's `Jaw` bone is (0..1 at [`crate::JAW_DEGREES`]), once sent.
@@ -334,6 +338,7 @@ impl Marionette {
             channels: vec![0.0; faceanim_rig::names::ARKIT_52.len()],
             heard_arkit: false,
             named: vec![false; ARKIT_COUNT],
+            shown: vec![false; ARKIT_COUNT],
             eye_bones: [None; 2],
             jaw_bone: None,
             through_map: false,
@@ -718,12 +723,24 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
                 return false;
             };
             let value = value.clamp(0.0, 1.0);
+            // What the name means for this character, worked out once per name (a sender
+            // sends each name 30–60 times a second).
+            if !state.lookup.contains_key(name.as_str()) && state.lookup.len() < MAX_NAMES {
+                let meaning = Meaning::of(name, &state.own, &state.arkit, &state.visemes);
+                state.lookup.insert(name.clone(), meaning);
+            }
+            let uncached;
+            let meaning = match state.lookup.get(name.as_str()) {
+                Some(meaning) => meaning,
+                None => {
+                    uncached = Meaning::of(name, &state.own, &state.arkit, &state.visemes);
+                    &uncached
+                }
+            };
             // Kept with or without a map, so that a map given mid-stream starts from every
             // channel's last value (a sender sends only what changed), and for the frames'
             // eyes, jaw and ARKit values (a body with no shapes follows them by its bones).
-            let channel =
-                faceanim_rig::names::arkit_name(name).and_then(faceanim_retarget::channel_index);
-            if let Some(c) = channel {
+            if let Some(c) = meaning.channel {
                 state.channels[c] = value;
                 state.heard_arkit = true;
                 state.named[c] = true;
@@ -731,56 +748,52 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             // A name for several channels (VRM's presets, as VSeeFace and VMagicMirror send
             // them: `Blink`, `Joy`, `A`) gives each the value, where the sender does not name
             // the channel itself.
-            let stands_for = match channel {
-                Some(_) => Vec::new(),
-                None => crate::names::stands_for(name),
-            };
-            for c in stands_for
-                .iter()
-                .filter_map(|c| faceanim_retarget::channel_index(c.name()))
-            {
+            for &(c, _) in &meaning.stands_for {
                 if !state.named[c] {
                     state.channels[c] = value;
                 }
                 state.heard_arkit = true;
             }
-            if let Some(&i) = state.own.get(name.as_str()) {
+            if let Some(i) = meaning.own {
                 state.current[i] = value;
                 state.direct[i] = true;
                 return true;
             }
-            if channel.is_some() || !stands_for.is_empty() {
+            if meaning.viseme {
+                // A vowel sets the shapes that are it as sent, map or not; the channels it
+                // stands for are shown by them, so a map does not open the mouth again.
+                for &i in &meaning.shapes {
+                    state.current[i] = value;
+                    state.direct[i] = true;
+                }
+                for &(c, _) in &meaning.stands_for {
+                    state.shown[c] = true;
+                }
+                return true;
+            }
+            if meaning.channel.is_some() || !meaning.stands_for.is_empty() {
                 state.through_map = true;
                 if state.map.is_some() {
                     return true;
                 }
             }
-            let (arkit, visemes) = (&state.arkit, &state.visemes);
-            let mut shapes = state
-                .lookup
-                .entry(name.clone())
-                .or_insert_with(|| shapes_named(name, arkit, visemes))
-                .clone();
-            let mut matched = !shapes.is_empty();
-            if shapes.is_empty() {
-                // A preset's channels set their shapes, where the sender does not name them.
-                for c in &stands_for {
-                    let Some(theirs) = state.arkit.get(c.name()) else {
-                        continue;
-                    };
-                    matched = true;
-                    let named =
-                        faceanim_retarget::channel_index(c.name()).is_some_and(|i| state.named[i]);
-                    if !named {
-                        shapes.extend(theirs);
+            for &i in &meaning.shapes {
+                state.current[i] = value;
+            }
+            // A preset's channels set their shapes, where the sender does not name them.
+            let mut matched = !meaning.shapes.is_empty();
+            if meaning.shapes.is_empty() {
+                for (c, shapes) in &meaning.stands_for {
+                    matched |= !shapes.is_empty();
+                    if !state.named[*c] {
+                        for &i in shapes {
+                            state.current[i] = value;
+                        }
                     }
                 }
             }
             if !matched {
                 state.traffic.unmatched += 1;
-            }
-            for i in shapes {
-                state.current[i] = value;
             }
             true
         }
@@ -871,22 +884,60 @@ fn arkit_row(state: &State) -> Option<Vec<f32>> {
     Some(row)
 }
 
-/// The character's shapes a received name that is none of its own sets by itself: those its
-/// ARKit channel drives, or for a vowel (`A`) the shapes that are its viseme. (A name for
-/// several channels sets theirs, see [`crate::names::stands_for`].)
-fn shapes_named(
-    name: &str,
-    arkit: &HashMap<&'static str, Vec<usize>>,
-    visemes: &HashMap<Viseme, Vec<usize>>,
-) -> Vec<usize> {
-    if let Some(channel) = faceanim_rig::names::arkit_name(name) {
-        return arkit.get(channel).cloned().unwrap_or_default();
-    }
-    match faceanim_rig::names::drive(name) {
-        Some(Drive::Expression(Expression::Viseme(viseme))) => {
-            visemes.get(&viseme).cloned().unwrap_or_default()
+/// What a received name means for the character, worked out once per name.
+#[derive(Debug, Clone, Default)]
+struct Meaning {
+    /// The ARKit channel the name is, in any spelling.
+    channel: Option<usize>,
+    /// When it is no channel, the channels it stands for ([`crate::names::stands_for`]: both of
+    /// a pair, a vowel's), each with the shapes that channel drives by name.
+    stands_for: Vec<(usize, Vec<usize>)>,
+    /// The character's own shape of that very name.
+    own: Option<usize>,
+    /// The shapes the name sets by itself: those its ARKit channel drives, or for a vowel
+    /// (`A`) the shapes that are its viseme.
+    shapes: Vec<usize>,
+    /// Whether `shapes` are a vowel's viseme shapes.
+    viseme: bool,
+}
+
+impl Meaning {
+    fn of(
+        name: &str,
+        own: &HashMap<String, usize>,
+        arkit: &HashMap<&'static str, Vec<usize>>,
+        visemes: &HashMap<Viseme, Vec<usize>>,
+    ) -> Meaning {
+        let driven = |channel: &str| arkit.get(channel).cloned().unwrap_or_default();
+        let arkit_name = faceanim_rig::names::arkit_name(name);
+        let stands_for = match arkit_name {
+            Some(_) => Vec::new(),
+            None => crate::names::stands_for(name)
+                .into_iter()
+                .filter_map(|c| {
+                    let index = faceanim_retarget::channel_index(c.name())?;
+                    Some((index, driven(c.name())))
+                })
+                .collect(),
+        };
+        let viseme_shapes = match arkit_name {
+            Some(_) => None,
+            None => match faceanim_rig::names::drive(name) {
+                Some(Drive::Expression(Expression::Viseme(viseme))) => visemes.get(&viseme),
+                _ => None,
+            },
+        };
+        Meaning {
+            channel: arkit_name.and_then(faceanim_retarget::channel_index),
+            stands_for,
+            own: own.get(name).copied(),
+            shapes: match (arkit_name, viseme_shapes) {
+                (Some(channel), _) => driven(channel),
+                (None, Some(shapes)) => shapes.clone(),
+                (None, None) => Vec::new(),
+            },
+            viseme: viseme_shapes.is_some_and(|shapes| !shapes.is_empty()),
         }
-        _ => Vec::new(),
     }
 }
 
@@ -896,7 +947,16 @@ fn complete_frame(state: &mut State, time: f64) {
     state.traffic.frames += 1;
     let weights = match &state.map {
         Some(map) if state.through_map => {
-            let mut weights = map.weights(&state.channels);
+            // A channel a vowel's shapes show, and the sender does not name, is left out.
+            let left_out = |c: usize| state.shown[c] && !state.named[c];
+            let mut weights = if (0..ARKIT_COUNT).any(left_out) {
+                let channels: Vec<f32> = (state.channels.iter().enumerate())
+                    .map(|(c, &v)| if left_out(c) { 0.0 } else { v })
+                    .collect();
+                map.weights(&channels)
+            } else {
+                map.weights(&state.channels)
+            };
             for (i, w) in weights.iter_mut().enumerate() {
                 if state.direct[i] {
                     *w = state.current[i];
@@ -1049,6 +1109,43 @@ mod tests {
                 "{ours:?}"
             );
         }
+    }
+
+    /// A vowel sent to a character with shapes that are it sets them as sent even through a
+    /// map, and the map does not open the mouth again from the channels the vowel stands for;
+    /// the other presets still reach their shapes through it.
+    #[test]
+    #[allow(clippy::float_cmp, reason = "values are copied through, not computed")]
+    fn a_vowel_sets_the_shapes_that_are_it_even_through_a_map() {
+        let ours: Vec<String> = ["Fcl_MTH_A", "Fcl_MTH_O", "Fcl_EYE_Close"]
+            .map(String::from)
+            .to_vec();
+        let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &ours).unwrap();
+        let mut map = faceanim_retarget::RetargetMap::by_name("vroid", &ours, &[]);
+        map.set_row(
+            "jawOpen",
+            [("Fcl_MTH_A".to_owned(), 0.8), ("Fcl_MTH_O".to_owned(), 0.3)].into(),
+        )
+        .unwrap();
+        marionette.set_map(Some(Arc::new(map)));
+        let presets: Vec<String> = ["A", "Blink"].map(String::from).to_vec();
+        let mut performer = Performer::new(marionette.address(), &presets, Names::Own).unwrap();
+        performer.send(&[0.5, 1.0], None, 0.0);
+        let frame = marionette
+            .wait_for_frames(1, Duration::from_secs(5))
+            .remove(0);
+        assert_eq!(frame.weights[..2], [0.5, 0.0], "{:?}", frame.weights);
+        assert!(frame.weights[2] > 0.99, "{:?}", frame.weights);
+        // The frame's ARKit values still carry the vowel's channels (a body's jaw follows).
+        assert_eq!(frame.jaw(), Some(0.5));
+        // Named by the sender, the channel goes through the map again.
+        let arkit: Vec<String> = ["jawOpen"].map(String::from).to_vec();
+        let mut named = Performer::new(marionette.address(), &arkit, Names::Arkit).unwrap();
+        named.send(&[1.0], None, 1.0);
+        let frame = marionette
+            .wait_for_frames(2, Duration::from_secs(5))
+            .remove(1);
+        assert_eq!(frame.weights[1], 0.3, "{:?}", frame.weights);
     }
 
     /// A VMC sender's eye and jaw bones (as faceanim's performer and trackers sending VRM's
