@@ -22,6 +22,9 @@ const MAX_DEPTH: usize = 8;
 const ARKIT_COUNT: usize = faceanim_rig::names::ARKIT_52.len();
 /// Names whose meaning is kept (a sender of ever new names cannot grow the table further).
 const MAX_NAMES: usize = 4096;
+/// How long (seconds) a channel the sender named stays its own: longer than a sender of only
+/// what changed goes without sending it again (faceanim's performer: 30 frames).
+const NAMED_FOR: f64 = 3.0;
 /// Frames kept for [`Marionette::wait_for_frames`].
 const HISTORY: usize = 1024;
 /// How often the receiving thread looks at its stop flag.
@@ -227,8 +230,9 @@ struct State {
     channels: Vec<f32>,
     /// Whether any ARKit value arrived since listening started (then frames carry them).
     heard_arkit: bool,
-    /// Which ARKit channels arrived by name (VMC's eye and jaw bones stand for the others).
-    named: Vec<bool>,
+    /// When each ARKit channel last arrived by name (seconds since listening started; VMC's
+    /// eye and jaw bones and VRM's presets stand for the others, see [`State::named`]).
+    named_at: Vec<f64>,
     /// Which ARKit channels a vowel's own shapes show (a map leaves them).
     shown: Vec<bool>,
     /// The gaze `[yaw, pitch]` of VMC's `LeftEye` and `RightEye` bones, once sent.
@@ -267,6 +271,15 @@ pub struct Marionette {
     state: Arc<Mutex<State>>,
     stop: Arc<AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl State {
+    /// Whether the sender names ARKit channel `c` itself: it did within the last
+    /// [`NAMED_FOR`] (a sender that stops, a tracker switched from perfect sync to VRM's
+    /// presets, gives the channel back to what stands for it).
+    fn named(&self, c: usize, now: f64) -> bool {
+        now - self.named_at[c] < NAMED_FOR
+    }
 }
 
 fn lock(state: &Mutex<State>) -> MutexGuard<'_, State> {
@@ -337,7 +350,7 @@ impl Marionette {
             map: None,
             channels: vec![0.0; faceanim_rig::names::ARKIT_52.len()],
             heard_arkit: false,
-            named: vec![false; ARKIT_COUNT],
+            named_at: vec![f64::NEG_INFINITY; ARKIT_COUNT],
             shown: vec![false; ARKIT_COUNT],
             eye_bones: [None; 2],
             jaw_bone: None,
@@ -641,7 +654,7 @@ fn apply_reading(state: &mut State, reading: Reading, time: f64) {
         let value = neutral.as_ref().map_or(value, |n| n.value(channel, value));
         state.channels[channel] = value;
         state.heard_arkit = true;
-        state.named[channel] = true;
+        state.named_at[channel] = time;
         state.through_map = true;
         let name = faceanim_rig::names::ARKIT_52[channel];
         if let Some(shapes) = state.arkit.get(name) {
@@ -743,13 +756,13 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             if let Some(c) = meaning.channel {
                 state.channels[c] = value;
                 state.heard_arkit = true;
-                state.named[c] = true;
+                state.named_at[c] = time;
             }
             // A name for several channels (VRM's presets, as VSeeFace and VMagicMirror send
             // them: `Blink`, `Joy`, `A`) gives each the value, where the sender does not name
             // the channel itself.
             for &(c, _) in &meaning.stands_for {
-                if !state.named[c] {
+                if !state.named(c, time) {
                     state.channels[c] = value;
                 }
                 state.heard_arkit = true;
@@ -785,7 +798,7 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             if meaning.shapes.is_empty() {
                 for (c, shapes) in &meaning.stands_for {
                     matched |= !shapes.is_empty();
-                    if !state.named[*c] {
+                    if !state.named(*c, time) {
                         for &i in shapes {
                             state.current[i] = value;
                         }
@@ -862,7 +875,7 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
 /// The ARKit values of the frame being made, once any arrived: each channel's last value,
 /// clamped to 0..1; VMC's eye and jaw bones give the eyeLook and jawOpen values the sender does
 /// not name.
-fn arkit_row(state: &State) -> Option<Vec<f32>> {
+fn arkit_row(state: &State, time: f64) -> Option<Vec<f32>> {
     let [left, right] = state.eye_bones;
     let gaze = left
         .or(right)
@@ -877,7 +890,7 @@ fn arkit_row(state: &State) -> Option<Vec<f32>> {
         .flatten()
         .chain(state.jaw_bone.map(|open| ("jawOpen", open)));
     for (name, value) in from_bones {
-        if let Some(c) = faceanim_retarget::channel_index(name).filter(|&c| !state.named[c]) {
+        if let Some(c) = faceanim_retarget::channel_index(name).filter(|&c| !state.named(c, time)) {
             row[c] = value;
         }
     }
@@ -948,7 +961,7 @@ fn complete_frame(state: &mut State, time: f64) {
     let weights = match &state.map {
         Some(map) if state.through_map => {
             // A channel a vowel's shapes show, and the sender does not name, is left out.
-            let left_out = |c: usize| state.shown[c] && !state.named[c];
+            let left_out = |c: usize| state.shown[c] && !state.named(c, time);
             let mut weights = if (0..ARKIT_COUNT).any(left_out) {
                 let channels: Vec<f32> = (state.channels.iter().enumerate())
                     .map(|(c, &v)| if left_out(c) { 0.0 } else { v })
@@ -971,7 +984,7 @@ fn complete_frame(state: &mut State, time: f64) {
         time,
         weights,
         head: state.head,
-        arkit: arkit_row(state),
+        arkit: arkit_row(state, time),
     };
     if let Some((frames, times)) = state.recording.as_mut() {
         frames.push(frame.clone());
@@ -1146,6 +1159,35 @@ mod tests {
             .wait_for_frames(2, Duration::from_secs(5))
             .remove(1);
         assert_eq!(frame.weights[1], 0.3, "{:?}", frame.weights);
+    }
+
+    /// A channel the sender named stays its own while it keeps naming it; once it has not for
+    /// a while (a tracker switched from perfect sync to VRM's presets), a preset sets it again.
+    #[test]
+    #[allow(clippy::float_cmp, reason = "values are copied through, not computed")]
+    fn a_channel_the_sender_stopped_naming_goes_back_to_the_presets() {
+        let ours: Vec<String> = ["eyeBlinkLeft", "eyeBlinkRight"].map(String::from).to_vec();
+        let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &ours).unwrap();
+        let mut state = lock(&marionette.state);
+        let mut frame = |sent: &[(&str, f32)], time: f64| {
+            for &(name, value) in sent {
+                let message = OscMessage {
+                    addr: "/VMC/Ext/Blend/Val".to_owned(),
+                    args: vec![OscType::String(name.to_owned()), OscType::Float(value)],
+                };
+                assert!(apply_message(&mut state, &message, time));
+            }
+            let apply = OscMessage {
+                addr: "/VMC/Ext/Blend/Apply".to_owned(),
+                args: Vec::new(),
+            };
+            assert!(apply_message(&mut state, &apply, time));
+            state.history.back().unwrap().weights.clone()
+        };
+        assert_eq!(frame(&[("EyeBlinkLeft", 0.2)], 0.0), [0.2, 0.0]);
+        assert_eq!(frame(&[("Blink", 1.0)], 1.0), [0.2, 1.0]);
+        // Not named for longer than NAMED_FOR (3 s).
+        assert_eq!(frame(&[("Blink", 0.8)], 4.5), [0.8, 0.8]);
     }
 
     /// A VMC sender's eye and jaw bones (as faceanim's performer and trackers sending VRM's
