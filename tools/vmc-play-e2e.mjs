@@ -33,9 +33,11 @@ try {
   }
   await page.click('#play');
   const sent = await page.evaluate(() => fetch('api/capture/vmc').then((r) => r.json()));
+  // What the transport bar says while frames go out.
+  const shown = await page.evaluate(() => { const e = document.getElementById('vmc-out'); return e.hidden ? null : e.textContent; });
   await page.screenshot({ path: path.join(out, 'playing-out.png') });
   if (errors.length) fail(`page errors: ${errors.join('; ')}`);
-  console.log(JSON.stringify({ frames_sent: sent.sending.frames, dropped: sent.sending.dropped }));
+  console.log(JSON.stringify({ frames_sent: sent.sending.frames, dropped: sent.sending.dropped, shown }));
 } finally {
   await browser.close();
 }

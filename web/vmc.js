@@ -105,7 +105,22 @@ $('vmc-record').onclick = async () => {
 let sending = false;
 /** Whether the studio sends VMC (`--vmc-send`), asked once: the Sketch tab plays to it too. */
 let sendsVmc = false;
-api('GET', 'api/capture/vmc').then((state) => { sendsVmc = !!(state && state.sending); }).catch(() => {});
+/** Where frames go out, and how many this page sent and the network refused. */
+const out = { to: '', sent: 0, refused: 0 };
+
+/** The transport bar's word on VMC out, so that whoever plays sees that it goes out. */
+function showOut() {
+  const label = $('vmc-out');
+  label.hidden = !out.to;
+  const counts = out.sent || out.refused ? `: ${out.sent} frames sent${out.refused ? `, ${out.refused} refused` : ''}` : '';
+  label.textContent = `VMC out → ${out.to}${counts}`;
+}
+
+api('GET', 'api/capture/vmc').then((state) => {
+  sendsVmc = !!(state && state.sending);
+  if (sendsVmc) Object.assign(out, { to: state.sending.to });
+  showOut();
+}).catch(() => {});
 // A take's frame goes with its id and number: the studio adds the take's own gaze, jaw and
 // ARKit values (a body with no shapes has nothing else to send).
 onFrame((frame) => {
@@ -120,6 +135,11 @@ onFrame((frame) => {
   const weights = shapes ? Array.from(mesh.morphTargetInfluences.slice(0, shapes)) : [];
   sending = true;
   api('POST', 'api/capture/vmc/send', { weights, head, take: take ? { id: take.id, frame: f } : null })
+    .then((answer) => {
+      if (answer && answer.sent) out.sent += 1;
+      else if (answer) out.refused += 1;
+      showOut();
+    })
     .catch(showFailure)
     .finally(() => { sending = false; });
 });

@@ -945,12 +945,18 @@ fn the_page_plays_its_animation_out_over_vmc() {
         stroke.as_bytes(),
     );
     assert_eq!(status, 200, "{body}");
-    browser_script(
+    let measured = browser_script(
         "vmc-play-e2e.mjs",
         &studio,
         "",
         &output_dir("vmc-play"),
         &[],
+    );
+    // The transport bar says where the frames go, and how many went.
+    let shown = measured["shown"].as_str().unwrap_or_default();
+    assert!(
+        shown.starts_with(&format!("VMC out → {to}: ")) && shown.ends_with(" frames sent"),
+        "{measured}"
     );
     let jaw_values = support::vmc_values(&mut peer, &report, "jawOpen");
     assert!(
