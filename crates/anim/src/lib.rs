@@ -17,6 +17,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod by_name;
 pub mod filter;
 pub mod keyframes;
 pub mod metrics;
@@ -99,8 +100,8 @@ pub enum ClipError {
 pub struct Retarget {
     /// The animation, one weight per character blendshape per frame.
     pub animation: MorphAnimation,
-    /// Clip columns that match no blendshape of the character, or answer to one that another
-    /// column fills (of its exact name, else the first): their weights are dropped.
+    /// Clip columns that reach no blendshape of the character (no meaning it has a shape for,
+    /// or only shapes other columns set by their exact names): their weights are dropped.
     pub unmatched: Vec<String>,
 }
 
@@ -229,35 +230,66 @@ impl Clip {
         self.frames.len().saturating_sub(1) as f32 / self.fps
     }
 
-    /// Maps the clip onto `character`'s blendshapes by name (exact, else the same ARKit shape
-    /// under another spelling; where several columns answer to one blendshape, the exact name
-    /// wins, else the first column), one key per frame. Character blendshapes the clip does not
-    /// mention stay at 0. A head rotation, if the clip has one, turns the character's root.
+    /// The columns that move (are not 0 throughout) and reach no blendshape of `character` in
+    /// [`Clip::retarget_through`] `map`: what would be lost, to warn of before exporting.
+    #[must_use]
+    pub fn unmatched(
+        &self,
+        character: &Character,
+        map: Option<&faceanim_retarget::RetargetMap>,
+    ) -> Vec<String> {
+        let routes = by_name::Routes::new(&self.blendshapes, character, map);
+        (self.blendshapes.iter().enumerate())
+            .filter(|(k, _)| !routes.reaches(*k) && self.moves(*k))
+            .map(|(_, n)| n.clone())
+            .collect()
+    }
+
+    /// Whether column `k` is other than 0 in some frame.
+    #[must_use]
+    pub fn moves(&self, k: usize) -> bool {
+        self.frames
+            .iter()
+            .any(|row| row.get(k).is_some_and(|&w| w != 0.0))
+    }
+
+    fn unreached(&self, routes: &by_name::Routes) -> Vec<String> {
+        (self.blendshapes.iter().enumerate())
+            .filter(|(k, _)| !routes.reaches(*k))
+            .map(|(_, n)| n.clone())
+            .collect()
+    }
+
+    /// Maps the clip onto `character`'s blendshapes by name, one key per frame: a column of a
+    /// blendshape's exact name sets it as written; the others reach the character by the name
+    /// table, as capture by name does — an ARKit channel in any spelling, VRM's and VRoid's
+    /// names for pairs (`happy`, `blink`, `Fcl_EYE_Close`) and vowels (`aa`, `A`), split halves
+    /// (`browInnerUp_L`) — in 0..1 (see the `by_name` module). Character blendshapes the clip
+    /// does not reach stay at 0. A head rotation, if the clip has one, turns the character's
+    /// root.
     ///
     /// # Errors
-    /// [`ClipError::NothingInCommon`] when no name matches.
+    /// [`ClipError::NothingInCommon`] when no column reaches a blendshape.
     pub fn retarget(&self, character: &Character, name: &str) -> Result<Retarget, ClipError> {
-        let mut columns: Vec<Option<usize>> = self
-            .blendshapes
-            .iter()
-            .map(|n| character.find_blendshape(n).map(|id| id.index()))
-            .collect();
-        // Several columns may answer to one blendshape (a file's `eyeBlink_L` and its VRoid
-        // `Fcl_EYE_Close_L` both to `eyeBlinkLeft`): the one of its exact name fills it, else
-        // the first; the others are dropped, not left to overwrite it with whatever they hold.
-        let blendshapes = character.blendshapes();
-        for k in 0..columns.len() {
-            let Some(c) = columns[k] else { continue };
-            let exact = |j: usize| blendshapes[c].name() == self.blendshapes[j];
-            let chosen = (0..columns.len())
-                .filter(|&j| columns[j] == Some(c))
-                .find(|&j| exact(j))
-                .or_else(|| columns.iter().position(|&other| other == Some(c)));
-            if chosen != Some(k) {
-                columns[k] = None;
-            }
-        }
-        if columns.iter().all(Option::is_none) && !self.blendshapes.is_empty() {
+        self.retarget_through(character, name, None)
+    }
+
+    /// [`Clip::retarget`], with the ARKit channels the columns carry reaching the character's
+    /// shapes through its retarget `map` where given (by name where the names say it, by
+    /// geometry where they do not: an ARKit clip on a rig whose names say nothing). A map made
+    /// for other shapes is not used.
+    ///
+    /// # Errors
+    /// [`ClipError::NothingInCommon`] when no column reaches a blendshape.
+    pub fn retarget_through(
+        &self,
+        character: &Character,
+        name: &str,
+        map: Option<&faceanim_retarget::RetargetMap>,
+    ) -> Result<Retarget, ClipError> {
+        let routes = by_name::Routes::new(&self.blendshapes, character, map);
+        let unmatched = self.unreached(&routes);
+        if unmatched.len() == self.blendshapes.len() && !self.blendshapes.is_empty() {
             return Err(ClipError::NothingInCommon {
                 character: character.name().to_owned(),
                 clip: self
@@ -269,27 +301,7 @@ impl Clip {
                     .join(", "),
             });
         }
-        let unmatched = self
-            .blendshapes
-            .iter()
-            .zip(&columns)
-            .filter(|(_, c)| c.is_none())
-            .map(|(n, _)| n.clone())
-            .collect();
-        let count = character.blendshapes().len();
-        let weights = self
-            .frames
-            .iter()
-            .map(|row| {
-                let mut w = vec![0.0; count];
-                for (value, column) in row.iter().zip(&columns) {
-                    if let Some(c) = column {
-                        w[*c] = *value;
-                    }
-                }
-                w
-            })
-            .collect();
+        let weights = self.frames.iter().map(|row| routes.weights(row)).collect();
         let times = (0..self.frames.len())
             .map(|f| f as f32 / self.fps)
             .collect();
@@ -344,40 +356,146 @@ mod tests {
         );
     }
 
-    #[test]
-    fn columns_answering_to_one_blendshape_do_not_overwrite_it() {
+    /// A character of one triangle with blendshapes called `names`.
+    fn character_of(names: &[&str]) -> Character {
         use faceanim_rig::{Blendshape, CharacterParts};
         use glam::Vec3;
         let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
-        let blink =
-            Blendshape::from_dense("eyeBlinkLeft", &[Vec3::ZERO, Vec3::ZERO, Vec3::Y], 1e-6);
-        let character = Character::new(CharacterParts {
+        let blendshapes = names
+            .iter()
+            .map(|&n| Blendshape::from_dense(n, &[Vec3::ZERO, Vec3::ZERO, Vec3::Y], 1e-6))
+            .collect();
+        Character::new(CharacterParts {
             name: "tri".into(),
             positions,
             triangles: vec![[0, 1, 2]],
-            blendshapes: vec![blink],
+            blendshapes,
             ..CharacterParts::default()
         })
-        .unwrap();
-        let clip = |names: [&str; 2]| Clip {
+        .unwrap()
+    }
+
+    /// A clip of one frame: `columns` (name, value).
+    fn clip_of(columns: &[(&str, f32)]) -> Clip {
+        Clip {
             fps: 30.0,
-            blendshapes: names.iter().map(|n| (*n).to_owned()).collect(),
-            frames: vec![vec![0.25, 0.75]],
+            blendshapes: columns.iter().map(|(n, _)| (*n).to_owned()).collect(),
+            frames: vec![columns.iter().map(|(_, v)| *v).collect()],
             head: None,
             head_position: None,
             presence: None,
-        };
+        }
+    }
+
+    #[test]
+    fn columns_answering_to_one_blendshape_do_not_overwrite_it() {
+        let character = character_of(&["eyeBlinkLeft"]);
         // The exact name fills it, wherever it stands.
-        let exact = clip(["eyeBlink_L", "eyeBlinkLeft"])
+        let exact = clip_of(&[("eyeBlink_L", 0.25), ("eyeBlinkLeft", 0.75)])
             .retarget(&character, "t")
             .unwrap();
         assert_eq!(exact.animation.weights[0], [0.75]);
         assert_eq!(exact.unmatched, ["eyeBlink_L"]);
-        // Two spellings, neither exact: the first.
-        let first = clip(["eyeBlink_L", "EyeBlinkLeft"])
-            .retarget(&character, "t")
+        // Two spellings, neither exact: ARKit's own, as capture by name reads them.
+        for columns in [
+            [("eyeBlink_L", 0.25), ("EyeBlinkLeft", 0.75)],
+            [("EyeBlinkLeft", 0.75), ("eyeBlink_L", 0.25)],
+        ] {
+            let first = clip_of(&columns).retarget(&character, "t").unwrap();
+            assert_eq!(first.animation.weights[0], [0.75]);
+        }
+    }
+
+    /// A clip in one rig's names goes onto another's as capture by name would: VRM's pairs and
+    /// vowels, split halves, merged shapes; what reaches nothing is named.
+    #[test]
+    fn columns_reach_a_rig_by_the_name_tables_meaning() {
+        let weights = |names: &[&str], columns: &[(&str, f32)]| {
+            let retarget = clip_of(columns)
+                .retarget(&character_of(names), "t")
+                .unwrap();
+            (retarget.animation.weights[0].clone(), retarget.unmatched)
+        };
+        // A VRM Animation's expressions on an ARKit head: happy both corners, aa the jaw (the
+        // channel it is made of, where no column carries it), relaxed nothing.
+        let arkit = ["mouthSmileLeft", "mouthSmileRight", "jawOpen"];
+        assert_eq!(
+            weights(
+                &arkit,
+                &[
+                    ("happy", 0.5),
+                    ("aa", 0.25),
+                    ("relaxed", 1.0),
+                    ("surprised", 1.0)
+                ]
+            ),
+            (
+                vec![0.5, 0.5, 0.25],
+                vec!["relaxed".to_owned(), "surprised".to_owned()]
+            )
+        );
+        assert_eq!(
+            weights(&arkit, &[("aa", 0.25), ("JawOpen", 0.75)]).0,
+            [0.0, 0.0, 0.75]
+        );
+        // The same on a VRoid face: the vowel its own shape, the smiles its merged one.
+        let vroid = ["Fcl_MTH_A", "Fcl_MTH_Joy"];
+        assert_eq!(
+            weights(
+                &vroid,
+                &[
+                    ("aa", 0.25),
+                    ("mouthSmileLeft", 0.5),
+                    ("mouthSmileRight", 1.0)
+                ]
+            )
+            .0,
+            [0.25, 0.75]
+        );
+        // ICT's halves onto ARKit's one channel, and ARKit's one channel onto ICT's halves.
+        assert_eq!(
+            weights(
+                &["browInnerUp"],
+                &[("browInnerUp_L", 0.5), ("browInnerUp_R", 1.0)]
+            )
+            .0,
+            [0.75]
+        );
+        assert_eq!(
+            weights(&["browInnerUp_L", "browInnerUp_R"], &[("BrowInnerUp", 0.5)]).0,
+            [0.5, 0.5]
+        );
+        // Nothing in common is an error.
+        let none = clip_of(&[("relaxed", 1.0)]).retarget(&character_of(&arkit), "t");
+        assert!(matches!(none, Err(ClipError::NothingInCommon { .. })));
+    }
+
+    /// An ARKit clip on a rig whose names say nothing reaches it through its retarget map.
+    #[test]
+    fn arkit_columns_reach_a_rig_whose_names_say_nothing_through_its_map() {
+        let character = character_of(&["shape_1", "shape_2"]);
+        let clip = clip_of(&[("JawOpen", 0.5), ("EyeBlinkLeft", 1.0)]);
+        assert!(matches!(
+            clip.retarget(&character, "t"),
+            Err(ClipError::NothingInCommon { .. })
+        ));
+        let names = character.blendshape_names();
+        let mut map = faceanim_retarget::RetargetMap::by_name("tri", &names, &[]);
+        map.set_row("jawOpen", [("shape_2".to_owned(), 0.8)].into())
             .unwrap();
-        assert_eq!(first.animation.weights[0], [0.25]);
+        let through = clip.retarget_through(&character, "t", Some(&map)).unwrap();
+        assert_eq!(through.animation.weights[0], [0.0, 0.4]);
+        assert_eq!(through.unmatched, ["EyeBlinkLeft"]);
+        assert_eq!(clip.unmatched(&character, Some(&map)), ["EyeBlinkLeft"]);
+        // A column at 0 throughout loses nothing: it is not warned of.
+        let still = clip_of(&[("JawOpen", 0.5), ("EyeBlinkLeft", 0.0)]);
+        assert!(still.unmatched(&character, Some(&map)).is_empty());
+        // A map of other shapes is not used.
+        let other = faceanim_retarget::RetargetMap::by_name("x", &names[..1], &[]);
+        assert!(
+            clip.retarget_through(&character, "t", Some(&other))
+                .is_err()
+        );
     }
 
     #[test]

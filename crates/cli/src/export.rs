@@ -14,9 +14,16 @@ pub(crate) struct ExportArgs {
     #[command(flatten)]
     pub(crate) out: crate::outputs::GlbOutput,
     /// A clip JSON (docs/formats.md) to add as a morph-weight animation; its
-    /// blendshape names are matched to the character's (ARKit spellings understood).
+    /// blendshape names are matched to the character's (ARKit spellings, VRM's presets
+    /// understood), and its ARKit channels reach a rig whose names say nothing through its
+    /// retarget map.
     #[arg(long)]
     pub(crate) clip: Option<PathBuf>,
+    /// The character's retarget map for the clip's ARKit channels (default:
+    /// NAME.retarget.json beside the character, when there is one; `faceanim retarget`
+    /// makes it).
+    #[arg(long, value_name = "MAP", requires = "clip")]
+    pub(crate) retarget: Option<PathBuf>,
 }
 
 /// `faceanim export-default`'s arguments.
@@ -42,27 +49,43 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
         Some(clip_path) => {
             let clip = faceanim_files::load_clip(clip_path)?;
             let name = crate::input::stem(clip_path, "clip");
-            let unmatched: Vec<&str> = clip
-                .blendshapes
-                .iter()
-                .filter(|n| character.find_blendshape(n).is_none())
-                .map(String::as_str)
-                .collect();
+            let map = crate::retarget::for_clip(
+                &character,
+                Some(&args.character),
+                args.retarget.as_deref(),
+            )?;
+            let unmatched = clip.unmatched(&character, map.as_ref());
             if character.blendshapes().is_empty() {
                 tracing::warn!(
                     "{}: {} has no blendshapes: its bones take the clip's head pose, eyeLook and jawOpen; nothing takes its other channels",
                     clip_path.display(),
                     character.name()
                 );
-            } else if !unmatched.is_empty() {
+            } else if !unmatched.is_empty() && unmatched.len() < clip.blendshapes.len() {
+                // (A clip of which nothing reaches the character is the error below.)
                 tracing::warn!(
                     "{}: no blendshape for {}",
                     clip_path.display(),
                     unmatched.join(", ")
                 );
             }
-            let animation = faceanim_export::Animation::from_clip(&character, &clip, &name)
-                .with_context(|| format!("applying {}", clip_path.display()))?;
+            let animation = faceanim_export::Animation::from_clip_through(
+                &character,
+                &clip,
+                &name,
+                map.as_ref(),
+            )
+            .with_context(|| {
+                let hint = if map.is_none() && faceanim_adapt::bridge::needs_map(&character) {
+                    format!(
+                        " (its ARKit channels reach a rig whose names say nothing through its retarget map: faceanim retarget {})",
+                        args.character.display()
+                    )
+                } else {
+                    String::new()
+                };
+                format!("applying {}{hint}", clip_path.display())
+            })?;
             let exported =
                 faceanim_export::export_with(format, &animation, args.out.glb.compression())
                     .map_err(|e| anyhow::anyhow!("{}: {e}", args.out.output.display()))?;

@@ -314,6 +314,26 @@ fn make(
     Ok(map)
 }
 
+/// The map a clip goes through onto `character` (loaded from `character_path`): the one at
+/// `given` (which must fit it), else the one beside the character when there is one that
+/// fits; never made here (a clip by name needs none; `faceanim retarget` makes one).
+///
+/// # Errors
+/// The file cannot be read, is not a map, or `given` is another character's.
+pub fn for_clip(
+    character: &Character,
+    character_path: Option<&Path>,
+    given: Option<&Path>,
+) -> anyhow::Result<Option<RetargetMap>> {
+    let names = character.blendshape_names();
+    if let Some(path) = given {
+        return read(path, &names)?.map(Some).ok_or_else(|| {
+            anyhow::anyhow!("{}: not a map of {}", path.display(), character.name())
+        });
+    }
+    read(&default_path(character_path, character), &names)
+}
+
 /// The map a capture command uses for `character` (loaded from `character_path`): the one
 /// at `given` or beside the character when it fits; made (and saved beside the character)
 /// when the rig's names leave channels MediaPipe reads without a shape; `None` for a rig its

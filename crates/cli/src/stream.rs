@@ -42,6 +42,11 @@ pub struct StreamArgs {
     /// Put the clip on this character first (its names are then the ones sent).
     #[arg(long)]
     pub character: Option<PathBuf>,
+    /// The character's retarget map, through which the clip's ARKit channels reach a rig
+    /// whose names say nothing (default: NAME.retarget.json beside the character, when there
+    /// is one).
+    #[arg(long, value_name = "MAP", requires = "character")]
+    pub retarget: Option<PathBuf>,
     /// The marionette: HOST:PORT (VMC's default port is 39539).
     #[arg(long)]
     pub to: String,
@@ -84,7 +89,8 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     let clip = match &args.character {
         Some(path) => {
             let character = crate::input::load(path)?.character;
-            faceanim_export::Animation::from_clip(&character, &clip, "stream")
+            let map = crate::retarget::for_clip(&character, Some(path), args.retarget.as_deref())?;
+            faceanim_export::Animation::from_clip_through(&character, &clip, "stream", map.as_ref())
                 .with_context(|| format!("putting {} on {}", args.input.display(), path.display()))?
                 .clip
         }

@@ -661,6 +661,7 @@ fn a_vrm_animation_plays_on_the_avatar_in_three_vrm() {
         }
         if kind == VrmKind::V1 {
             assert_opens_again_in_the_studio(&avatar, &out, &frames, &heads);
+            assert_opens_on_an_arkit_head(&out, &frames);
             // Without a head pose the humanoid still stands at its height (three-vrm warns
             // of a VRM Animation whose hips rest on the floor), and turns nothing.
             let still = dir.join("still.json");
@@ -778,6 +779,42 @@ fn assert_opens_again_in_the_studio(
         for (k, (got, row)) in support::column(&clip, shape).iter().zip(frames).enumerate() {
             assert!(
                 (got - f64::from(row[column])).abs() < 0.02,
+                "{shape} at frame {k}: {got} for {}",
+                row[column]
+            );
+        }
+    }
+}
+
+/// `animation` (as [`assert_opens_again_in_the_studio`]) opened in the studio on the built-in
+/// head, which has ARKit's shapes and no VRM expressions, reaches them by what each expression
+/// is: `aa` the jaw, `ih` both stretches, `blinkLeft` the left lid; `surprised`, which none of
+/// them is, is named in the notice.
+fn assert_opens_on_an_arkit_head(animation: &Path, frames: &[[f32; 9]]) {
+    let dir = animation.with_extension("arkit-studio");
+    std::fs::create_dir_all(&dir).unwrap();
+    let _ = std::fs::remove_file(dir.join("project.json"));
+    let studio = start_on(None, &dir.join("project.json"), &[]);
+    let state = support::open_and_settle(studio.port, animation);
+    let notice = state["notice"].as_str().unwrap_or_default();
+    assert!(
+        notice.contains("answers to surprised") && !notice.contains("aa"),
+        "{state}"
+    );
+    let (status, clip) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
+    assert_eq!(status, 200, "{clip}");
+    let clip: Value = serde_json::from_str(&clip).unwrap();
+    for (shape, column) in [
+        ("jawOpen", 0),
+        ("mouthStretchLeft", 1),
+        ("mouthStretchRight", 1),
+        ("eyeBlinkLeft", 3),
+    ] {
+        let got = support::column(&clip, shape);
+        assert_eq!(got.len(), frames.len(), "{shape}");
+        for (k, (got, row)) in got.iter().zip(frames).enumerate() {
+            assert!(
+                (got - f64::from(row[column])).abs() < 2e-3,
                 "{shape} at frame {k}: {got} for {}",
                 row[column]
             );

@@ -486,6 +486,34 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
         info["retarget"]
     );
 
+    // An ARKit clip in Live Link Face's spelling goes onto the rig through the map beside it:
+    // the user's jawOpen row, at half.
+    let jaw: Vec<f64> = (0..10).map(|k| f64::from(k) / 9.0).collect();
+    let arkit = faceanim_anim::Clip {
+        fps: 30.0,
+        blendshapes: vec!["JawOpen".into(), "TongueOut".into()],
+        frames: jaw.iter().map(|&j| vec![j as f32, 0.0]).collect(),
+        head: None,
+        head_position: None,
+        presence: None,
+    };
+    let halved = |clip: &Value, what: &str| {
+        let got = support::column(clip, &shape);
+        assert_eq!(got.len(), jaw.len(), "{what}");
+        for (k, (got, opened)) in got.iter().zip(&jaw).enumerate() {
+            assert!(
+                (got - 0.5 * opened).abs() < 1e-5,
+                "{what} frame {k}: {got} for {opened}"
+            );
+        }
+    };
+    let clip_path = out.join("arkit.json");
+    std::fs::write(&clip_path, arkit.to_json()).unwrap();
+    let exported = out.join("arkit-on-avatar.json");
+    support::export_with_clip(&glb, &exported, &clip_path);
+    let clip: Value = serde_json::from_slice(&std::fs::read(&exported).unwrap()).unwrap();
+    halved(&clip, "faceanim export --clip");
+
     // Opened again, and remade: the user's row stays.
     let studio = support::start_on(Some(&glb), &project, &[]);
     let state = support::settled(studio.port, 300);
@@ -493,6 +521,17 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
         row(state["retarget"]["rows"].as_array().unwrap(), "jawOpen")["from"],
         "user"
     );
+    // A Live Link Face recording opens as a take through the map too; its TongueOut, at 0
+    // throughout, loses nothing and is not named.
+    let csv = faceanim_export::livelink::to_csv(&arkit);
+    let (status, body) = support::upload(studio.port, "take.csv", csv.as_bytes());
+    assert_eq!(status, 200, "{body}");
+    let state = support::settled(studio.port, 60);
+    let notice = state["notice"].as_str().unwrap_or_default();
+    assert!(!notice.contains("tongueOut"), "{notice}");
+    let (status, body) = support::request(studio.port, "GET", "/api/capture/export.json", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    halved(&serde_json::from_str(&body).unwrap(), "the studio's take");
     let (status, body) = support::request(studio.port, "POST", "/api/capture/retarget", &[], b"");
     assert_eq!(status, 400, "a map is there: {body}");
     let (status, body) = support::request(

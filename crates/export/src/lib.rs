@@ -209,7 +209,21 @@ impl<'a> Animation<'a> {
         clip: &Clip,
         name: &str,
     ) -> Result<Animation<'a>, ExportError> {
-        let retarget = match clip.retarget(character, name) {
+        Animation::from_clip_through(character, clip, name, None)
+    }
+
+    /// [`Animation::from_clip`], the clip's ARKit channels reaching the character through its
+    /// retarget `map` where given ([`Clip::retarget_through`]).
+    ///
+    /// # Errors
+    /// As [`Animation::from_clip`].
+    pub fn from_clip_through(
+        character: &'a Character,
+        clip: &Clip,
+        name: &str,
+        map: Option<&faceanim_retarget::RetargetMap>,
+    ) -> Result<Animation<'a>, ExportError> {
+        let retarget = match clip.retarget_through(character, name, map) {
             Err(faceanim_anim::ClipError::NothingInCommon { .. })
                 if bones::takes_clip(character, clip) =>
             {

@@ -62,20 +62,15 @@ enum Region {
 
 impl Region {
     fn of_channel(name: &str) -> Region {
-        if faceanim_rig::names::is_gaze(name) {
-            Region::Gaze
-        } else if name.starts_with("eye") {
-            Region::Lids
-        } else if name.starts_with("brow") {
-            Region::Brows
-        } else if name.starts_with("cheek") {
-            Region::Cheeks
-        } else if name.starts_with("nose") {
-            Region::Nose
-        } else if name.starts_with("jaw") {
-            Region::Jaw
-        } else {
-            Region::Mouth
+        use faceanim_rig::names::Region as Face;
+        match faceanim_rig::names::region(name) {
+            Face::Gaze => Region::Gaze,
+            Face::Lids => Region::Lids,
+            Face::Brows => Region::Brows,
+            Face::Cheeks => Region::Cheeks,
+            Face::Nose => Region::Nose,
+            Face::Jaw => Region::Jaw,
+            Face::Mouth | Face::Tongue => Region::Mouth,
         }
     }
 }

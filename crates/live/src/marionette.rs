@@ -902,7 +902,7 @@ fn arkit_row(state: &State, time: f64) -> Option<Vec<f32>> {
 struct Meaning {
     /// The ARKit channel the name is, in any spelling.
     channel: Option<usize>,
-    /// When it is no channel, the channels it stands for ([`crate::names::stands_for`]: both of
+    /// When it is no channel, the channels it stands for ([`faceanim_rig::names::stands_for`]: both of
     /// a pair, a vowel's), each with the shapes that channel drives by name.
     stands_for: Vec<(usize, Vec<usize>)>,
     /// The character's own shape of that very name.
@@ -925,7 +925,7 @@ impl Meaning {
         let arkit_name = faceanim_rig::names::arkit_name(name);
         let stands_for = match arkit_name {
             Some(_) => Vec::new(),
-            None => crate::names::stands_for(name)
+            None => faceanim_rig::names::stands_for(name)
                 .into_iter()
                 .filter_map(|c| {
                     let index = faceanim_retarget::channel_index(c.name())?;

@@ -16,51 +16,7 @@ pub enum Names {
     VrmPresets,
 }
 
-/// VRM 0.x's preset expressions and the ARKit shapes each is made of: the mean of the shapes
-/// listed (the smaller of the two for `Blink`, so a wink is not a blink).
-pub const VRM_PRESETS: [(&str, &[&str]); 12] = [
-    ("A", &["jawOpen"]),
-    ("I", &["mouthStretchLeft", "mouthStretchRight"]),
-    ("U", &["mouthPucker"]),
-    ("E", &["mouthLowerDownLeft", "mouthLowerDownRight"]),
-    ("O", &["mouthFunnel"]),
-    ("Blink", &["eyeBlinkLeft", "eyeBlinkRight"]),
-    ("Blink_L", &["eyeBlinkLeft"]),
-    ("Blink_R", &["eyeBlinkRight"]),
-    ("Joy", &["mouthSmileLeft", "mouthSmileRight"]),
-    ("Angry", &["browDownLeft", "browDownRight"]),
-    ("Sorrow", &["mouthFrownLeft", "mouthFrownRight"]),
-    ("Fun", &["cheekSquintLeft", "cheekSquintRight"]),
-];
-
-/// VRM's five vowel presets and the viseme each is: a character whose shapes are named for the
-/// viseme (VRoid's `Fcl_MTH_A`, a VRM's own `aa` expression, Ready Player Me's `viseme_aa`)
-/// sends the preset from them rather than from [`VRM_PRESETS`]' ARKit channels.
-pub const VRM_VOWELS: [(&str, faceanim_rig::names::Viseme); 5] = [
-    ("A", faceanim_rig::names::Viseme::Aa),
-    ("I", faceanim_rig::names::Viseme::Ih),
-    ("U", faceanim_rig::names::Viseme::Ou),
-    ("E", faceanim_rig::names::Viseme::E),
-    ("O", faceanim_rig::names::Viseme::Oh),
-];
-
-/// The ARKit channels a received name stands for when it is not one channel itself: both of a
-/// merged pair (VRM's `Blink`, `Joy`, `Angry`, `Sorrow`, VRoid's `Fcl_EYE_Close`), or for one
-/// of VRM's vowels (`A`, `aa`) the channels a performer sends it from ([`VRM_PRESETS`]); none
-/// otherwise. What VSeeFace, VMagicMirror and trackers without perfect sync send.
-pub(crate) fn stands_for(name: &str) -> Vec<faceanim_rig::names::Channel> {
-    use faceanim_rig::names::{Channel, Drive, Expression};
-    match faceanim_rig::names::drive(name) {
-        Some(Drive::Merge(a, b)) => vec![a, b],
-        Some(Drive::Expression(Expression::Viseme(viseme))) => VRM_VOWELS
-            .iter()
-            .find(|(_, v)| *v == viseme)
-            .and_then(|(vowel, _)| VRM_PRESETS.iter().find(|(preset, _)| preset == vowel))
-            .map(|(_, channels)| channels.iter().filter_map(|c| Channel::named(c)).collect())
-            .unwrap_or_default(),
-        _ => Vec::new(),
-    }
-}
+pub use faceanim_rig::names::{VRM_PRESETS, VRM_VOWELS};
 
 /// How one sent value is made from the character's weights: a weighted sum of blendshapes
 /// (one shape; the halves of a split channel; the mean of a preset's channels), or the

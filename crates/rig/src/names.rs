@@ -448,6 +448,111 @@ pub fn arkit_name(name: &str) -> Option<&'static str> {
     }
 }
 
+/// VRM 0.x's preset expressions and the ARKit shapes each is made of: the mean of the shapes
+/// listed (the smaller of the two for `Blink`, so a wink is not a blink).
+pub const VRM_PRESETS: [(&str, &[&str]); 12] = [
+    ("A", &["jawOpen"]),
+    ("I", &["mouthStretchLeft", "mouthStretchRight"]),
+    ("U", &["mouthPucker"]),
+    ("E", &["mouthLowerDownLeft", "mouthLowerDownRight"]),
+    ("O", &["mouthFunnel"]),
+    ("Blink", &["eyeBlinkLeft", "eyeBlinkRight"]),
+    ("Blink_L", &["eyeBlinkLeft"]),
+    ("Blink_R", &["eyeBlinkRight"]),
+    ("Joy", &["mouthSmileLeft", "mouthSmileRight"]),
+    ("Angry", &["browDownLeft", "browDownRight"]),
+    ("Sorrow", &["mouthFrownLeft", "mouthFrownRight"]),
+    ("Fun", &["cheekSquintLeft", "cheekSquintRight"]),
+];
+
+/// VRM's five vowel presets and the viseme each is: a character whose shapes are named for the
+/// viseme (VRoid's `Fcl_MTH_A`, a VRM's own `aa` expression, Ready Player Me's `viseme_aa`)
+/// sends the preset from them rather than from [`VRM_PRESETS`]' ARKit channels (faceanim's live
+/// performer), and a received vowel sets them (its marionette, a clip put on a character).
+pub const VRM_VOWELS: [(&str, Viseme); 5] = [
+    ("A", Viseme::Aa),
+    ("I", Viseme::Ih),
+    ("U", Viseme::Ou),
+    ("E", Viseme::E),
+    ("O", Viseme::Oh),
+];
+
+/// The ARKit channels a received name stands for when it is not one channel itself: both of a
+/// merged pair (VRM's `Blink`, `Joy`, `Angry`, `Sorrow`, VRoid's `Fcl_EYE_Close`), or for one
+/// of VRM's vowels (`A`, `aa`) the channels a performer sends it from ([`VRM_PRESETS`]); none
+/// otherwise. What VSeeFace, VMagicMirror and trackers without perfect sync send.
+///
+/// ```
+/// use faceanim_rig::names::stands_for;
+/// let names = |name: &str| stands_for(name).iter().map(|c| c.name()).collect::<Vec<_>>();
+/// assert_eq!(names("Joy"), ["mouthSmileLeft", "mouthSmileRight"]);
+/// assert_eq!(names("aa"), ["jawOpen"]);
+/// assert!(names("jawOpen").is_empty());
+/// ```
+#[must_use]
+pub fn stands_for(name: &str) -> Vec<Channel> {
+    match drive(name) {
+        Some(Drive::Merge(a, b)) => vec![a, b],
+        Some(Drive::Expression(Expression::Viseme(viseme))) => VRM_VOWELS
+            .iter()
+            .find(|(_, v)| *v == viseme)
+            .and_then(|(vowel, _)| VRM_PRESETS.iter().find(|(preset, _)| preset == vowel))
+            .map(|(_, channels)| channels.iter().filter_map(|c| Channel::named(c)).collect())
+            .unwrap_or_default(),
+        _ => Vec::new(),
+    }
+}
+
+/// The part of the face an ARKit channel moves, by its family in ARKit's names: the one rule
+/// that the retarget map's fit (its regions), the take's face parts and the studio's groups
+/// share.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Region {
+    /// The eight `eyeLook*`: where the eyes look.
+    Gaze,
+    /// The other `eye*`: blinks, squints, wide eyes.
+    Lids,
+    /// `brow*`.
+    Brows,
+    /// `cheek*`.
+    Cheeks,
+    /// `nose*`.
+    Nose,
+    /// `jaw*`.
+    Jaw,
+    /// `mouth*`.
+    Mouth,
+    /// `tongueOut`.
+    Tongue,
+}
+
+/// The [`Region`] of the ARKit channel called `arkit` (its canonical name, or MediaPipe's
+/// score of the same name; anything else is the mouth's).
+///
+/// ```
+/// use faceanim_rig::names::{Region, region};
+/// assert_eq!(region("eyeLookUpLeft"), Region::Gaze);
+/// assert_eq!(region("eyeBlinkLeft"), Region::Lids);
+/// assert_eq!(region("jawOpen"), Region::Jaw);
+/// ```
+#[must_use]
+pub fn region(arkit: &str) -> Region {
+    if is_gaze(arkit) {
+        return Region::Gaze;
+    }
+    [
+        ("eye", Region::Lids),
+        ("brow", Region::Brows),
+        ("cheek", Region::Cheeks),
+        ("nose", Region::Nose),
+        ("jaw", Region::Jaw),
+        ("tongue", Region::Tongue),
+    ]
+    .into_iter()
+    .find(|(prefix, _)| arkit.starts_with(prefix))
+    .map_or(Region::Mouth, |(_, r)| r)
+}
+
 /// Whether the ARKit channel called `arkit` (its canonical name: one of [`ARKIT_52`], or
 /// MediaPipe's score of the same name) says where the eyes look — the eight `eyeLook*` — rather
 /// than an expression of the face.

@@ -506,21 +506,19 @@ impl Group {
     /// The family of `name` (`Other` when it is not an ARKit name).
     #[must_use]
     pub fn of(name: &str) -> Group {
+        use faceanim_rig::names::Region;
         let Some(arkit) = faceanim_rig::names::arkit_name(name) else {
             return Group::Other;
         };
-        [
-            ("eye", Group::Eye),
-            ("brow", Group::Brow),
-            ("jaw", Group::Jaw),
-            ("mouth", Group::Mouth),
-            ("cheek", Group::Cheek),
-            ("nose", Group::Nose),
-            ("tongue", Group::Tongue),
-        ]
-        .into_iter()
-        .find(|(prefix, _)| arkit.starts_with(prefix))
-        .map_or(Group::Other, |(_, g)| g)
+        match faceanim_rig::names::region(arkit) {
+            Region::Gaze | Region::Lids => Group::Eye,
+            Region::Brows => Group::Brow,
+            Region::Jaw => Group::Jaw,
+            Region::Mouth => Group::Mouth,
+            Region::Cheeks => Group::Cheek,
+            Region::Nose => Group::Nose,
+            Region::Tongue => Group::Tongue,
+        }
     }
 }
 

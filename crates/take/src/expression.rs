@@ -99,14 +99,14 @@ impl FacePart {
     /// to.
     #[must_use]
     pub fn of_score(name: &str) -> FacePart {
-        if faceanim_rig::names::is_gaze(name) {
-            FacePart::Gaze
-        } else if name.starts_with("eye") {
-            FacePart::Lids
-        } else if name.starts_with("brow") {
-            FacePart::Brows
-        } else {
-            FacePart::Mouth
+        use faceanim_rig::names::Region;
+        match faceanim_rig::names::region(name) {
+            Region::Gaze => FacePart::Gaze,
+            Region::Lids => FacePart::Lids,
+            Region::Brows => FacePart::Brows,
+            Region::Cheeks | Region::Nose | Region::Jaw | Region::Mouth | Region::Tongue => {
+                FacePart::Mouth
+            }
         }
     }
 

@@ -335,7 +335,7 @@ impl CaptureDesk {
     ) -> Result<usize, ApiError> {
         self.busy()?;
         let count = self.open_clip(character, &reopened.clip, shown)?;
-        self.notice = Some(format!(
+        self.notice_first(format!(
             "Opened {}'s {} as the take.",
             faceanim_rig::excerpt(shown),
             reopened.what
@@ -360,20 +360,31 @@ impl CaptureDesk {
         }
         match self.open_clip(character, &reopened.clip, &reopened.name) {
             Ok(_) => {
-                self.notice = Some(format!("Opened the file's {} as the take.", reopened.what));
+                self.notice_first(format!("Opened the file's {} as the take.", reopened.what));
             }
             Err(e) => tracing::warn!("the file's animation was not opened: {e}"),
         }
     }
 
-    /// Makes `clip` the take: its columns put on `character` by name (ARKit spellings match),
-    /// its head pose kept, one frame per row at its rate, unfiltered. On a body with no
-    /// blendshapes whose bones take the clip's head pose, gaze or jawOpen, the take is of no
-    /// shapes, made of the clip's ARKit values (which turn the bones). Returns its frame count.
+    /// Puts `text` before the notice there is (what opening a take found).
+    fn notice_first(&mut self, text: String) {
+        self.notice = Some(match self.notice.take() {
+            Some(found) => format!("{text} {found}"),
+            None => text,
+        });
+    }
+
+    /// Makes `clip` the take: its columns put on `character` by name
+    /// ([`faceanim_anim::Clip::retarget_through`]: ARKit's channels in any spelling, VRM's
+    /// presets; through the character's retarget map where it has one), its head pose kept,
+    /// one frame per row at its rate, unfiltered; the notice names the columns that move and
+    /// reach none of the character's shapes. On a body with no blendshapes whose bones take
+    /// the clip's head pose, gaze or jawOpen, the take is of no shapes, made of the clip's ARKit
+    /// values (which turn the bones). Returns its frame count.
     ///
     /// # Errors
-    /// [`ApiError::Invalid`] naming `shown` when no column is one of the character's (and none
-    /// turns a bone of a body with no shapes), or the take's error.
+    /// [`ApiError::Invalid`] naming `shown` when no column reaches a shape of the character's
+    /// (and none turns a bone of a body with no shapes), or the take's error.
     fn open_clip(
         &mut self,
         character: &Character,
@@ -384,20 +395,45 @@ impl CaptureDesk {
         // A body with no blendshapes takes the clip on its bones: the take is made of the
         // clip's ARKit values, which they follow.
         let on_bones = faceanim_export::bones::takes_clip(character, clip);
-        let rows = if on_bones {
-            vec![Vec::new(); count]
+        let (rows, unmatched) = if on_bones {
+            (vec![Vec::new(); count], Vec::new())
         } else {
-            clip.retarget(character, shown)
-                .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?
-                .animation
-                .weights
+            let retarget = clip
+                .retarget_through(character, shown, self.map.as_deref())
+                .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?;
+            // What would be lost: the unmatched columns that move.
+            let lost = (retarget.unmatched.into_iter())
+                .filter(|n| clip.column(n).is_some_and(|k| clip.moves(k)))
+                .collect();
+            (retarget.animation.weights, lost)
         };
         let mut take = Take::from_weights(character, shown, clip.fps, &rows, clip.head.as_deref())?;
         if on_bones {
             take = take.made_of_arkit(clip.arkit_rows())?;
         }
         let way = if on_bones { " on the bones" } else { "" };
-        Ok(self.open_file_take(take, &format!("the clip {shown}{way}")))
+        let frames = self.open_file_take(take, &format!("the clip {shown}{way}"));
+        if !unmatched.is_empty() {
+            let listed: Vec<_> = unmatched
+                .iter()
+                .take(8)
+                .map(|n| faceanim_rig::excerpt(n))
+                .collect();
+            let more = unmatched.len().saturating_sub(listed.len());
+            let more = if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            };
+            let warning = format!(
+                "None of {}'s shapes answers to {}{more}: left out.",
+                faceanim_rig::excerpt(character.name()),
+                listed.join(", ")
+            );
+            tracing::warn!("{shown}: {warning}");
+            self.notice = Some(warning);
+        }
+        Ok(frames)
     }
 
     /// Makes `lip_sync` (of the speech `shown`, kept as `sound`) the take: its frames the
