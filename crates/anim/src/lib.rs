@@ -246,8 +246,7 @@ impl Clip {
     }
 
     /// Whether column `k` is other than 0 in some frame.
-    #[must_use]
-    pub fn moves(&self, k: usize) -> bool {
+    fn moves(&self, k: usize) -> bool {
         self.frames
             .iter()
             .any(|row| row.get(k).is_some_and(|&w| w != 0.0))

@@ -401,10 +401,7 @@ impl CaptureDesk {
             let retarget = clip
                 .retarget_through(character, shown, self.map.as_deref())
                 .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?;
-            // What would be lost: the unmatched columns that move.
-            let lost = (retarget.unmatched.into_iter())
-                .filter(|n| clip.column(n).is_some_and(|k| clip.moves(k)))
-                .collect();
+            let lost = clip.unmatched(character, self.map.as_deref());
             (retarget.animation.weights, lost)
         };
         let mut take = Take::from_weights(character, shown, clip.fps, &rows, clip.head.as_deref())?;
