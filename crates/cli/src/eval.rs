@@ -7,9 +7,9 @@ use clap::Args;
 /// `faceanim eval`'s arguments.
 #[derive(Debug, Args)]
 pub(crate) struct EvalArgs {
-    /// The clip to judge.
+    /// The clip to judge (a clip JSON, or an animation file as `export --clip` reads them).
     pub(crate) a: PathBuf,
-    /// The reference clip.
+    /// The reference clip (the same kinds).
     pub(crate) b: PathBuf,
     /// Print machine-readable JSON.
     #[arg(long)]
@@ -17,10 +17,7 @@ pub(crate) struct EvalArgs {
 }
 /// `faceanim eval`.
 pub(crate) fn run(args: &EvalArgs) -> anyhow::Result<()> {
-    let (clip_a, clip_b) = (
-        faceanim_files::load_clip(&args.a)?,
-        faceanim_files::load_clip(&args.b)?,
-    );
+    let (clip_a, clip_b) = (crate::input::clip(&args.a)?, crate::input::clip(&args.b)?);
     let result = faceanim_anim::metrics::compare(&clip_a, &clip_b);
     if args.json {
         outln!("{}", serde_json::to_string(&result)?);

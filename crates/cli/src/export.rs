@@ -13,10 +13,11 @@ pub(crate) struct ExportArgs {
     pub(crate) character: PathBuf,
     #[command(flatten)]
     pub(crate) out: crate::outputs::GlbOutput,
-    /// A clip JSON (docs/formats.md) to add as a morph-weight animation; its
-    /// blendshape names are matched to the character's (ARKit spellings, VRM's presets
-    /// understood), and its ARKit channels reach a rig whose names say nothing through its
-    /// retarget map.
+    /// The animation to add, as a morph-weight animation: a clip JSON (docs/formats.md), a
+    /// Live Link Face CSV (the app's recordings), a VRM Animation (.vrma), or a GLB or VRM
+    /// whose animation it is. Its names are matched to the character's (ARKit spellings,
+    /// VRM's presets understood), and its ARKit channels reach a rig whose names say nothing
+    /// through its retarget map.
     #[arg(long)]
     pub(crate) clip: Option<PathBuf>,
     /// The character's retarget map for the clip's ARKit channels (default:
@@ -47,7 +48,7 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let character = crate::input::load(&args.character)?.character;
     let glb = match &args.clip {
         Some(clip_path) => {
-            let clip = faceanim_files::load_clip(clip_path)?;
+            let clip = crate::input::clip(clip_path)?;
             let name = crate::input::stem(clip_path, "clip");
             let map = crate::retarget::for_clip(
                 &character,

@@ -54,6 +54,28 @@ pub(crate) fn load_saying(
     Ok(imported)
 }
 
+/// The animation at `path` as a clip: a clip JSON, or what the studio opens as a take — a Live
+/// Link Face CSV (the app's recordings), a VRM Animation, a GLB's or VRM's morph-weight
+/// animation — by its ending.
+pub(crate) fn clip(path: &Path) -> anyhow::Result<faceanim_anim::Clip> {
+    let ending = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ending.as_deref() {
+        Some("csv" | "vrma" | "glb" | "vrm" | "gltf") => {
+            let bytes = faceanim_files::read_bytes(path)?;
+            let name = path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            let reopened = faceanim_export::reopen::clip_of_file(&name, &bytes)?;
+            tracing::info!("{}: {}", path.display(), reopened.what);
+            Ok(reopened.clip)
+        }
+        _ => Ok(faceanim_files::load_clip(path)?),
+    }
+}
+
 /// The adapter at `path`, read whole; its errors name the file.
 pub(crate) fn adapter(path: &Path) -> anyhow::Result<faceanim_adapt::Adapter> {
     faceanim_adapt::Adapter::from_bytes(&faceanim_files::read_bytes(path)?)

@@ -512,7 +512,14 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
     let exported = out.join("arkit-on-avatar.json");
     support::export_with_clip(&glb, &exported, &clip_path);
     let clip: Value = serde_json::from_slice(&std::fs::read(&exported).unwrap()).unwrap();
-    halved(&clip, "faceanim export --clip");
+    halved(&clip, "faceanim export --clip arkit.json");
+    // The same as a Live Link Face recording, as the app saves it.
+    let csv = faceanim_export::livelink::to_csv(&arkit);
+    let csv_path = out.join("take.csv");
+    std::fs::write(&csv_path, &csv).unwrap();
+    support::export_with_clip(&glb, &exported, &csv_path);
+    let clip: Value = serde_json::from_slice(&std::fs::read(&exported).unwrap()).unwrap();
+    halved(&clip, "faceanim export --clip take.csv");
 
     // Opened again, and remade: the user's row stays.
     let studio = support::start_on(Some(&glb), &project, &[]);
@@ -523,7 +530,6 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
     );
     // A Live Link Face recording opens as a take through the map too; its TongueOut, at 0
     // throughout, loses nothing and is not named.
-    let csv = faceanim_export::livelink::to_csv(&arkit);
     let (status, body) = support::upload(studio.port, "take.csv", csv.as_bytes());
     assert_eq!(status, 200, "{body}");
     let state = support::settled(studio.port, 60);
