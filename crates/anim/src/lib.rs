@@ -239,10 +239,11 @@ impl Clip {
         map: Option<&faceanim_retarget::RetargetMap>,
     ) -> Vec<String> {
         let routes = by_name::Routes::new(&self.blendshapes, character, map);
-        (self.blendshapes.iter().enumerate())
-            .filter(|(k, _)| !routes.reaches(*k) && self.moves(*k))
-            .map(|(_, n)| n.clone())
-            .collect()
+        self.names_of(
+            self.unreached(&routes)
+                .into_iter()
+                .filter(|&k| self.moves(k)),
+        )
     }
 
     /// Whether column `k` is other than 0 in some frame.
@@ -252,11 +253,16 @@ impl Clip {
             .any(|row| row.get(k).is_some_and(|&w| w != 0.0))
     }
 
-    fn unreached(&self, routes: &by_name::Routes) -> Vec<String> {
-        (self.blendshapes.iter().enumerate())
-            .filter(|(k, _)| !routes.reaches(*k))
-            .map(|(_, n)| n.clone())
+    /// The columns `routes` takes to no blendshape.
+    fn unreached(&self, routes: &by_name::Routes) -> Vec<usize> {
+        (0..self.blendshapes.len())
+            .filter(|&k| !routes.reaches(k))
             .collect()
+    }
+
+    /// The names of `columns`.
+    fn names_of(&self, columns: impl Iterator<Item = usize>) -> Vec<String> {
+        columns.map(|k| self.blendshapes[k].clone()).collect()
     }
 
     /// Maps the clip onto `character`'s blendshapes by name, one key per frame: a column of a
@@ -287,8 +293,8 @@ impl Clip {
         map: Option<&faceanim_retarget::RetargetMap>,
     ) -> Result<Retarget, ClipError> {
         let routes = by_name::Routes::new(&self.blendshapes, character, map);
-        let unmatched = self.unreached(&routes);
-        if unmatched.len() == self.blendshapes.len() && !self.blendshapes.is_empty() {
+        let unreached = self.unreached(&routes);
+        if unreached.len() == self.blendshapes.len() && !self.blendshapes.is_empty() {
             return Err(ClipError::NothingInCommon {
                 character: character.name().to_owned(),
                 clip: self
@@ -314,7 +320,7 @@ impl Clip {
                     .as_ref()
                     .map(|head| head.iter().map(|&h| head_rotation(h)).collect()),
             },
-            unmatched,
+            unmatched: self.names_of(unreached.into_iter()),
         })
     }
 }

@@ -927,10 +927,7 @@ impl Meaning {
             Some(_) => Vec::new(),
             None => faceanim_rig::names::stands_for(name)
                 .into_iter()
-                .filter_map(|c| {
-                    let index = faceanim_retarget::channel_index(c.name())?;
-                    Some((index, driven(c.name())))
-                })
+                .map(|c| (c.index(), driven(c.name())))
                 .collect(),
         };
         let viseme_shapes = match arkit_name {
