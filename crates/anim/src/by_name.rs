@@ -2,10 +2,13 @@
 //! by the name table's rules ([`faceanim_rig::name_map`]), so that a clip goes onto any rig as
 //! capture by name goes:
 //!
-//! 1. a column of a blendshape's exact name sets it, as written;
+//! 1. a column of a blendshape's exact name sets it, as written (a VRM preset's name in either
+//!    version's spelling is its exact name: `Fun` sets a VRM avatar's `relaxed`);
 //! 2. a vowel (VRM's `aa` or `A`, VRoid's `Fcl_MTH_A`, `viseme_aa`) sets the character's shapes
 //!    that are that viseme; a character with none takes the channels the vowel is made of
-//!    ([`faceanim_rig::names::VRM_PRESETS`]: `A` is `jawOpen`), where no column carries them;
+//!    ([`faceanim_rig::names::VRM_PRESETS`]: `A` is `jawOpen`), where no column carries them,
+//!    as it takes those of VRM's `surprised` (brows up, eyes wide) and `relaxed` (VRM 0.x's
+//!    `Fun`: the cheeks) ([`faceanim_rig::names::stands_for`]);
 //! 3. every other column is read as ARKit channels — one channel in any spelling, both of a
 //!    merged pair (VRM's `happy` and `blink`, VRoid's `Fcl_EYE_Close`), the mean of split
 //!    halves (ICT's `browInnerUp_L` and `_R`), ARKit's own spelling first where two columns
@@ -30,7 +33,8 @@ pub(crate) struct Routes<'a> {
     exact: Vec<Option<usize>>,
     /// Vowel columns and the character's shapes that are the vowel.
     vowels: Vec<(usize, Vec<usize>)>,
-    /// Vowel columns of a character with no shape for them, and the channels they stand for.
+    /// Columns that are no channel but stand for some (a vowel the character has no shape
+    /// for, `surprised`, `relaxed`), and those channels.
     recipes: Vec<(usize, Vec<Channel>)>,
     /// The clip's names read as channels, exact and vowel columns left out.
     columns: NameMap,
@@ -60,8 +64,18 @@ impl<'a> Routes<'a> {
             .enumerate()
             .map(|(i, b)| (b.name(), i))
             .collect();
-        let exact: Vec<Option<usize>> =
-            names.iter().map(|n| own.get(n.as_str()).copied()).collect();
+        // A VRM preset by the other version's name (`Fun` for a VRM avatar's `relaxed`) is
+        // its exact name, where no column is called that.
+        let exact: Vec<Option<usize>> = names
+            .iter()
+            .map(|n| {
+                own.get(n.as_str()).copied().or_else(|| {
+                    faceanim_rig::names::vrm_preset(n)
+                        .filter(|preset| !names.iter().any(|m| m == preset))
+                        .and_then(|preset| own.get(preset).copied())
+                })
+            })
+            .collect();
         let character_map = character.name_map();
         let viseme_of = |drive: Option<Drive>| match drive {
             Some(Drive::Expression(Expression::Viseme(v))) => Some(v),
@@ -78,7 +92,16 @@ impl<'a> Routes<'a> {
                 blanked[k].clear();
                 continue;
             }
-            let Some(viseme) = viseme_of(faceanim_rig::names::drive(name)) else {
+            let drive = faceanim_rig::names::drive(name);
+            let Some(viseme) = viseme_of(drive) else {
+                // A name of no channel that stands for some (`surprised`, `relaxed`) sets them.
+                if matches!(drive, None | Some(Drive::Expression(_))) {
+                    let channels = stands_for(name);
+                    if !channels.is_empty() {
+                        blanked[k].clear();
+                        recipes.push((k, channels));
+                    }
+                }
                 continue;
             };
             blanked[k].clear();
@@ -125,7 +148,7 @@ impl<'a> Routes<'a> {
                     || recipes
                         .iter()
                         .any(|(r, channels)| *r == k && reaches_any(channels))
-                    // An expression of several channels (`surprised`) gives no channel values.
+                    // An expression of several channels gives no channel values itself.
                     || matches!(
                         columns.entries()[k],
                         Some(Entry { drive, used: Use::Driven })

@@ -422,7 +422,8 @@ mod tests {
             (retarget.animation.weights[0].clone(), retarget.unmatched)
         };
         // A VRM Animation's expressions on an ARKit head: happy both corners, aa the jaw (the
-        // channel it is made of, where no column carries it), relaxed nothing.
+        // channel it is made of, where no column carries it); relaxed and surprised, whose
+        // channels this head lacks, nothing.
         let arkit = ["mouthSmileLeft", "mouthSmileRight", "jawOpen"];
         assert_eq!(
             weights(
@@ -456,6 +457,39 @@ mod tests {
             )
             .0,
             [0.25, 0.75]
+        );
+        // VRM's whole-face presets on a face with the channels they stand for: `surprised`
+        // the brows and the eyes it is read from, `relaxed` (VRM 0.x's `Fun`) the cheeks; a
+        // column of the channel itself wins.
+        let face = [
+            "browInnerUp",
+            "eyeWideLeft",
+            "eyeWideRight",
+            "cheekSquintLeft",
+            "cheekSquintRight",
+        ];
+        assert_eq!(
+            weights(&face, &[("surprised", 0.5), ("relaxed", 0.75)]),
+            (vec![0.5, 0.5, 0.5, 0.75, 0.75], vec![])
+        );
+        assert_eq!(
+            weights(
+                &face,
+                &[("Fun", 0.75), ("eyeWideLeft", 0.25), ("Surprised", 0.5)]
+            )
+            .0,
+            [0.5, 0.25, 0.5, 0.75, 0.75]
+        );
+        // A VRM 0.x clip on a VRM avatar (its presets read under VRM 1.0's names): each preset
+        // its own expression; a column of the expression's own name wins.
+        let avatar = ["relaxed", "happy", "blink", "blinkLeft"];
+        assert_eq!(
+            weights(&avatar, &[("Fun", 0.25), ("Joy", 0.5), ("Blink", 1.0)]),
+            (vec![0.25, 0.5, 1.0, 0.0], vec![])
+        );
+        assert_eq!(
+            weights(&avatar, &[("Fun", 0.25), ("relaxed", 0.75)]).0,
+            [0.75, 0.0, 0.0, 0.0]
         );
         // ICT's halves onto ARKit's one channel, and ARKit's one channel onto ICT's halves.
         assert_eq!(

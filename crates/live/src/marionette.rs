@@ -770,6 +770,11 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
             if let Some(i) = meaning.own {
                 state.current[i] = value;
                 state.direct[i] = true;
+                // A preset's own shape (`blink`, `happy`) shows the channels it stands for:
+                // a map does not make them again.
+                for &(c, _) in &meaning.stands_for {
+                    state.shown[c] = true;
+                }
                 return true;
             }
             if meaning.viseme {
@@ -905,7 +910,7 @@ struct Meaning {
     /// When it is no channel, the channels it stands for ([`faceanim_rig::names::stands_for`]: both of
     /// a pair, a vowel's), each with the shapes that channel drives by name.
     stands_for: Vec<(usize, Vec<usize>)>,
-    /// The character's own shape of that very name.
+    /// The character's own shape of that very name, or of the same VRM preset.
     own: Option<usize>,
     /// The shapes the name sets by itself: those its ARKit channel drives, or for a vowel
     /// (`A`) the shapes that are its viseme.
@@ -940,7 +945,11 @@ impl Meaning {
         Meaning {
             channel: arkit_name.and_then(faceanim_retarget::channel_index),
             stands_for,
-            own: own.get(name).copied(),
+            // VRM's presets by either version's name: VSeeFace's `Fun` is a VRM avatar's
+            // `relaxed` (faceanim reads a VRM 0.x avatar's presets under VRM 1.0's names).
+            own: own.get(name).copied().or_else(|| {
+                faceanim_rig::names::vrm_preset(name).and_then(|preset| own.get(preset).copied())
+            }),
             shapes: match (arkit_name, viseme_shapes) {
                 (Some(channel), _) => driven(channel),
                 (None, Some(shapes)) => shapes.clone(),
@@ -1158,6 +1167,90 @@ mod tests {
         assert_eq!(frame.weights[1], 0.3, "{:?}", frame.weights);
     }
 
+    /// A marionette on loopback for a character with blendshapes `names`.
+    fn listening_as(names: &[&str]) -> Marionette {
+        let names: Vec<String> = names.iter().map(|&n| n.to_owned()).collect();
+        Marionette::listen("127.0.0.1:0".parse().unwrap(), &names).unwrap()
+    }
+
+    /// The weights of the frame made of `sent` blendshape values arriving at `time`, then
+    /// VMC's apply.
+    fn blend_frame(state: &mut State, sent: &[(&str, f32)], time: f64) -> Vec<f32> {
+        for &(name, value) in sent {
+            let message = OscMessage {
+                addr: "/VMC/Ext/Blend/Val".to_owned(),
+                args: vec![OscType::String(name.to_owned()), OscType::Float(value)],
+            };
+            assert!(apply_message(state, &message, time));
+        }
+        let apply = OscMessage {
+            addr: "/VMC/Ext/Blend/Apply".to_owned(),
+            args: Vec::new(),
+        };
+        assert!(apply_message(state, &apply, time));
+        state.history.back().unwrap().weights.clone()
+    }
+
+    /// VRM's whole-face presets on an ARKit head: `Surprised` the brows and eyes it is read
+    /// from; `Fun` (faceanim's performer sends it from the cheeks) and VRM 1.0's name for it,
+    /// `relaxed`, the cheeks. On a VRM avatar, each preset its own expression by either
+    /// version's name. Before, `Fun` and `Surprised` reached nothing on either.
+    #[test]
+    #[allow(clippy::float_cmp, reason = "values are copied through, not computed")]
+    fn whole_face_presets_set_the_channels_they_stand_for() {
+        let ours = [
+            "browInnerUp",
+            "eyeWideLeft",
+            "eyeWideRight",
+            "cheekSquintLeft",
+            "cheekSquintRight",
+        ];
+        let marionette = listening_as(&ours);
+        {
+            let mut state = lock(&marionette.state);
+            let mut frame = |sent: &[(&str, f32)], time: f64| blend_frame(&mut state, sent, time);
+            assert_eq!(frame(&[("Surprised", 0.5)], 0.0), [0.5, 0.5, 0.5, 0.0, 0.0]);
+            assert_eq!(
+                frame(&[("relaxed", 0.75)], 0.1),
+                [0.5, 0.5, 0.5, 0.75, 0.75]
+            );
+            assert_eq!(
+                frame(&[("Surprised", 0.0)], 0.2),
+                [0.0, 0.0, 0.0, 0.75, 0.75]
+            );
+        }
+        // A VRM avatar (its presets read under VRM 1.0's names) takes VRM 0.x's names, as
+        // VSeeFace and VMagicMirror send them, as its own expressions: `Blink` its `blink`
+        // alone (not also `blinkLeft` and `blinkRight`, which its channels drive).
+        let vrm = listening_as(&[
+            "relaxed",
+            "happy",
+            "surprised",
+            "blink",
+            "blinkLeft",
+            "blinkRight",
+        ]);
+        {
+            let mut state = lock(&vrm.state);
+            let sent = [
+                ("Fun", 0.25),
+                ("Joy", 0.5),
+                ("Surprised", 0.75),
+                ("Blink", 1.0),
+            ];
+            assert_eq!(
+                blend_frame(&mut state, &sent, 0.0),
+                [0.25, 0.5, 0.75, 1.0, 0.0, 0.0]
+            );
+        }
+        // What faceanim's performer sends as VRM's presets from the cheeks comes back to them.
+        let ours = ours.map(String::from);
+        let mut performer = Performer::new(marionette.address(), &ours, Names::VrmPresets).unwrap();
+        performer.send(&[0.0, 0.0, 0.0, 0.25, 0.25], None, 1.0);
+        let frames = marionette.wait_for_frames(4, Duration::from_secs(5));
+        assert_eq!(frames[3].weights, [0.0, 0.0, 0.0, 0.25, 0.25]);
+    }
+
     /// A channel the sender named stays its own while it keeps naming it; once it has not for
     /// a while (a tracker switched from perfect sync to VRM's presets), a preset sets it again.
     #[test]
@@ -1166,21 +1259,7 @@ mod tests {
         let ours: Vec<String> = ["eyeBlinkLeft", "eyeBlinkRight"].map(String::from).to_vec();
         let marionette = Marionette::listen("127.0.0.1:0".parse().unwrap(), &ours).unwrap();
         let mut state = lock(&marionette.state);
-        let mut frame = |sent: &[(&str, f32)], time: f64| {
-            for &(name, value) in sent {
-                let message = OscMessage {
-                    addr: "/VMC/Ext/Blend/Val".to_owned(),
-                    args: vec![OscType::String(name.to_owned()), OscType::Float(value)],
-                };
-                assert!(apply_message(&mut state, &message, time));
-            }
-            let apply = OscMessage {
-                addr: "/VMC/Ext/Blend/Apply".to_owned(),
-                args: Vec::new(),
-            };
-            assert!(apply_message(&mut state, &apply, time));
-            state.history.back().unwrap().weights.clone()
-        };
+        let mut frame = |sent: &[(&str, f32)], time: f64| blend_frame(&mut state, sent, time);
         assert_eq!(frame(&[("EyeBlinkLeft", 0.2)], 0.0), [0.2, 0.0]);
         assert_eq!(frame(&[("Blink", 1.0)], 1.0), [0.2, 1.0]);
         // Not named for longer than NAMED_FOR (3 s).

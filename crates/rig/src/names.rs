@@ -448,6 +448,48 @@ pub fn arkit_name(name: &str) -> Option<&'static str> {
     }
 }
 
+/// VRM's preset expressions: each one's VRM 0.x name (`presetName`, lower case) and its VRM 1.0
+/// name. faceanim reads a VRM 0.x avatar's presets under their VRM 1.0 names.
+pub const VRM_PRESET_NAMES: [(&str, &str); 18] = [
+    ("a", "aa"),
+    ("i", "ih"),
+    ("u", "ou"),
+    ("e", "ee"),
+    ("o", "oh"),
+    ("blink", "blink"),
+    ("blink_l", "blinkLeft"),
+    ("blink_r", "blinkRight"),
+    ("joy", "happy"),
+    ("angry", "angry"),
+    ("sorrow", "sad"),
+    ("fun", "relaxed"),
+    ("surprised", "surprised"),
+    ("lookup", "lookUp"),
+    ("lookdown", "lookDown"),
+    ("lookleft", "lookLeft"),
+    ("lookright", "lookRight"),
+    ("neutral", "neutral"),
+];
+
+/// The VRM 1.0 name of the preset expression called `name` in VRM 0.x's or VRM 1.0's
+/// spelling, in any case (what VSeeFace and VMagicMirror send is VRM 0.x's: `Fun`, `Joy`,
+/// `A`); `None` for any other name.
+///
+/// ```
+/// use faceanim_rig::names::vrm_preset;
+/// assert_eq!(vrm_preset("Fun"), Some("relaxed"));
+/// assert_eq!(vrm_preset("Blink_L"), Some("blinkLeft"));
+/// assert_eq!(vrm_preset("happy"), Some("happy"));
+/// assert_eq!(vrm_preset("Fcl_ALL_Fun"), None);
+/// ```
+#[must_use]
+pub fn vrm_preset(name: &str) -> Option<&'static str> {
+    VRM_PRESET_NAMES
+        .iter()
+        .find(|(v0, v1)| v0.eq_ignore_ascii_case(name) || v1.eq_ignore_ascii_case(name))
+        .map(|(_, v1)| *v1)
+}
+
 /// VRM 0.x's preset expressions and the ARKit shapes each is made of: the mean of the shapes
 /// listed (the smaller of the two for `Blink`, so a wink is not a blink).
 pub const VRM_PRESETS: [(&str, &[&str]); 12] = [
@@ -477,30 +519,57 @@ pub const VRM_VOWELS: [(&str, Viseme); 5] = [
     ("O", Viseme::Oh),
 ];
 
-/// The ARKit channels a received name stands for when it is not one channel itself: both of a
-/// merged pair (VRM's `Blink`, `Joy`, `Angry`, `Sorrow`, VRoid's `Fcl_EYE_Close`), or for one
-/// of VRM's vowels (`A`, `aa`) the channels a performer sends it from ([`VRM_PRESETS`]); none
-/// otherwise. What VSeeFace, VMagicMirror and trackers without perfect sync send.
+/// The ARKit channels a received name stands for when it is not one channel itself, each to be
+/// set to the name's value: both of a merged pair (VRM's `Blink`, `Joy`, `Angry`, `Sorrow`,
+/// VRoid's `Fcl_EYE_Close`); for VRM's `surprised` the channels it is read from
+/// ([`Expression::inputs`], which read back as the value); for one of VRM's vowels (`A`, `aa`)
+/// and for VRM 0.x's `Fun` (VRM 1.0 renamed it `relaxed`) the channels a performer sends the
+/// preset from ([`VRM_PRESETS`]); none otherwise. What VSeeFace, VMagicMirror and trackers
+/// without perfect sync send, and what a VRM Animation moves.
 ///
 /// ```
 /// use faceanim_rig::names::stands_for;
 /// let names = |name: &str| stands_for(name).iter().map(|c| c.name()).collect::<Vec<_>>();
 /// assert_eq!(names("Joy"), ["mouthSmileLeft", "mouthSmileRight"]);
 /// assert_eq!(names("aa"), ["jawOpen"]);
+/// assert_eq!(names("surprised"), ["browInnerUp", "eyeWideLeft", "eyeWideRight"]);
+/// assert_eq!(names("relaxed"), names("Fun"));
+/// assert_eq!(names("Fun"), ["cheekSquintLeft", "cheekSquintRight"]);
 /// assert!(names("jawOpen").is_empty());
 /// ```
 #[must_use]
 pub fn stands_for(name: &str) -> Vec<Channel> {
+    let preset = |name: &str| {
+        VRM_PRESETS
+            .iter()
+            .find(|(preset, _)| *preset == name)
+            .map(|(_, channels)| channels.iter().filter_map(|c| Channel::named(c)).collect())
+            .unwrap_or_default()
+    };
     match drive(name) {
         Some(Drive::Merge(a, b)) => vec![a, b],
         Some(Drive::Expression(Expression::Viseme(viseme))) => VRM_VOWELS
             .iter()
             .find(|(_, v)| *v == viseme)
-            .and_then(|(vowel, _)| VRM_PRESETS.iter().find(|(preset, _)| preset == vowel))
-            .map(|(_, channels)| channels.iter().filter_map(|c| Channel::named(c)).collect())
+            .map(|(vowel, _)| preset(vowel))
             .unwrap_or_default(),
+        Some(Drive::Expression(e @ Expression::Surprised)) => e
+            .inputs()
+            .iter()
+            .filter_map(|c| Channel::named(c))
+            .collect(),
+        None if is_relaxed(name) => preset("Fun"),
         _ => Vec::new(),
     }
+}
+
+/// Whether `name` is VRM 1.0's `relaxed` or VRM 0.x's `Fun` (the same preset, renamed), in
+/// any case or separators. Capture by name drives neither (a whole-face emotion, not a
+/// motion of the face); a received or recorded one stands for its preset's channels.
+fn is_relaxed(name: &str) -> bool {
+    let tokens = tokens(name);
+    let (rest, sides) = take_sides(&tokens);
+    sides.is_empty() && matches!(rest.concat().as_str(), "relaxed" | "fun")
 }
 
 /// The part of the face an ARKit channel moves, by its family in ARKit's names: the one rule

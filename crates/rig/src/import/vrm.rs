@@ -13,6 +13,7 @@
 //! `blink_l` is `blinkLeft`, …), so the same avatar made for either version has the same
 //! blendshape names.
 
+use crate::names::VRM_PRESET_NAMES;
 use serde_json::Value;
 
 /// Which VRM specification the file follows.
@@ -59,31 +60,9 @@ pub(crate) struct Vrm {
     pub expressions: Vec<Expression>,
 }
 
-/// VRM 0.x preset names and their VRM 1.0 spelling.
-const V0_PRESETS: &[(&str, &str)] = &[
-    ("a", "aa"),
-    ("i", "ih"),
-    ("u", "ou"),
-    ("e", "ee"),
-    ("o", "oh"),
-    ("blink", "blink"),
-    ("blink_l", "blinkLeft"),
-    ("blink_r", "blinkRight"),
-    ("joy", "happy"),
-    ("angry", "angry"),
-    ("sorrow", "sad"),
-    ("fun", "relaxed"),
-    ("surprised", "surprised"),
-    ("lookup", "lookUp"),
-    ("lookdown", "lookDown"),
-    ("lookleft", "lookLeft"),
-    ("lookright", "lookRight"),
-    ("neutral", "neutral"),
-];
-
 /// Whether `name` is one of VRM 1.0's preset expressions (which a custom one may not be named).
 fn is_preset(name: &str) -> bool {
-    V0_PRESETS.iter().any(|(_, v1)| *v1 == name)
+    VRM_PRESET_NAMES.iter().any(|(_, v1)| *v1 == name)
 }
 
 /// Reads the VRM extension of a glTF JSON, if there is one.
@@ -168,7 +147,7 @@ fn read_v0(value: &Value, vrm: &Value, warnings: &mut Vec<String>) -> Vrm {
             .get("presetName")
             .and_then(Value::as_str)
             .unwrap_or("unknown");
-        let name = V0_PRESETS
+        let name = VRM_PRESET_NAMES
             .iter()
             .find(|(v0, _)| v0.eq_ignore_ascii_case(preset))
             .map(|(_, v1)| (*v1).to_owned())
