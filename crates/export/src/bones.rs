@@ -511,13 +511,11 @@ fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
     }
     let positions = character.positions();
     let mut angles: Vec<f32> = shape
-        .indices()
-        .iter()
-        .zip(shape.deltas())
+        .moves()
         .filter(|(_, d)| d.length() > 0.5 * largest)
-        .filter_map(|(&v, d)| {
+        .filter_map(|(v, d)| {
             let p = *positions.get(v as usize)?;
-            let (a, b) = (p - pivot, p + *d - pivot);
+            let (a, b) = (p - pivot, p + d - pivot);
             // The signed angle from a to b in the (y, z) plane: a turn about +X.
             let angle = (a.y * b.z - a.z * b.y).atan2(a.y * b.y + a.z * b.z);
             angle.is_finite().then_some(angle.to_degrees())

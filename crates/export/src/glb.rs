@@ -671,7 +671,7 @@ pub fn export_into_source_with(
         let mut moved: std::collections::BTreeMap<(usize, usize), Vec<(u32, Vec3)>> =
             std::collections::BTreeMap::new();
         let mut seen = std::collections::HashSet::new();
-        for (&v, &d) in shape.indices().iter().zip(shape.deltas()) {
+        for (v, d) in shape.moves() {
             let Some(Some(origin)) = source.origins().get(v as usize) else {
                 continue;
             };

@@ -422,8 +422,8 @@ pub fn channel_deltas(character: &Character) -> Vec<(String, Vec<Vec3>)> {
             }
         };
         let dense = &mut channels[index].1;
-        for (&v, d) in shape.indices().iter().zip(shape.deltas()) {
-            dense[v as usize] += *d;
+        for (v, d) in shape.moves() {
+            dense[v as usize] += d;
         }
     }
     channels

@@ -221,8 +221,8 @@ fn fit_shapes(
     let mut dense: Vec<Vec<Vec3>> = Vec::with_capacity(free.len());
     for &k in free {
         let mut d = vec![Vec3::ZERO; n];
-        for (&i, delta) in shapes[k].indices().iter().zip(shapes[k].deltas()) {
-            d[i as usize] = *delta;
+        for (i, delta) in shapes[k].moves() {
+            d[i as usize] = delta;
         }
         dense.push(d);
     }
@@ -661,12 +661,12 @@ fn explained_share(gram: &[Vec<f32>], b: &[f64], energy: f64, x: &[f32]) -> f32 
 mod tests {
     use super::*;
 
+    /// The face's parts are `rig::names::region`'s (tested there); the fit takes the tongue
+    /// with the mouth, whose shapes move it.
     #[test]
-    fn channels_fall_in_their_regions() {
-        assert_eq!(Region::of_channel("eyeBlinkLeft"), Region::Lids);
-        assert_eq!(Region::of_channel("eyeLookUpRight"), Region::Gaze);
-        assert_eq!(Region::of_channel("jawOpen"), Region::Jaw);
+    fn the_tongue_is_fit_with_the_mouth() {
         assert_eq!(Region::of_channel("tongueOut"), Region::Mouth);
+        assert_eq!(Region::of_channel("eyeLookUpRight"), Region::Gaze);
     }
 
     /// A face of `regions` (each a run of vertices, half on the left, half on the right) with

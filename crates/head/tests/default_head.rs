@@ -95,7 +95,7 @@ fn the_mesh_and_left_right_shapes_are_exact_mirrors() {
             c.blendshape(pair.left).unwrap(),
             c.blendshape(pair.right).unwrap(),
         );
-        for (&v, &d) in l.indices().iter().zip(l.deltas()) {
+        for (v, d) in l.moves() {
             let m = mirror[v as usize];
             assert_eq!(
                 r.delta_of(m),

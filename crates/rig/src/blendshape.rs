@@ -85,6 +85,22 @@ impl Blendshape {
         &self.deltas
     }
 
+    /// Each moved vertex with its displacement at weight 1, in vertex order.
+    pub fn moves(&self) -> impl ExactSizeIterator<Item = (u32, Vec3)> + '_ {
+        self.indices
+            .iter()
+            .copied()
+            .zip(self.deltas.iter().copied())
+    }
+
+    /// The vertex this blendshape moves farthest and its displacement at weight 1 (of equals,
+    /// the last); `None` when it moves none.
+    #[must_use]
+    pub fn peak(&self) -> Option<(u32, Vec3)> {
+        self.moves()
+            .max_by(|a, b| a.1.length_squared().total_cmp(&b.1.length_squared()))
+    }
+
     /// Number of moved vertices.
     #[must_use]
     pub fn moved(&self) -> usize {

@@ -103,7 +103,7 @@ const HEAD_MARGIN: f32 = 0.06;
 fn face_and_head(positions: &[Vec3], blendshapes: &[Blendshape], whole: &Aabb) -> (Aabb, Aabb) {
     let mut moved = vec![0.0f32; positions.len()];
     for shape in blendshapes {
-        for (&i, d) in shape.indices().iter().zip(shape.deltas()) {
+        for (i, d) in shape.moves() {
             if let Some(m) = moved.get_mut(i as usize) {
                 *m = m.max(d.length());
             }

@@ -603,6 +603,8 @@ pub enum Region {
 /// assert_eq!(region("eyeLookUpLeft"), Region::Gaze);
 /// assert_eq!(region("eyeBlinkLeft"), Region::Lids);
 /// assert_eq!(region("jawOpen"), Region::Jaw);
+/// assert_eq!(region("tongueOut"), Region::Tongue);
+/// assert_eq!(region("mouthSmileLeft"), Region::Mouth);
 /// ```
 #[must_use]
 pub fn region(arkit: &str) -> Region {

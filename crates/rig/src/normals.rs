@@ -143,7 +143,7 @@ impl DeltaContext<'_> {
             .enumerate()
             .map(|(k, shape)| {
                 let stamp = k as u32;
-                for (&v, &d) in shape.indices().iter().zip(shape.deltas()) {
+                for (v, d) in shape.moves() {
                     delta[v as usize] = d;
                 }
                 touched_tris.clear();

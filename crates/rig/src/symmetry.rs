@@ -607,7 +607,7 @@ fn reflected_correlation(
         return f32::NEG_INFINITY;
     }
     let mut agreement = 0.0f64;
-    for (&v, &d) in a.indices().iter().zip(a.deltas()) {
+    for (v, d) in a.moves() {
         if let Some(bm) = mirror
             .get(v as usize)
             .copied()
@@ -628,11 +628,11 @@ fn motion_side(positions: &[Vec3], shape: &Blendshape, plane: MirrorPlane) -> f3
     let mut signed = 0.0;
     let mut unsigned = 0.0;
     let mut sideways = 0.0;
-    for (&v, d) in shape.indices().iter().zip(shape.deltas()) {
+    for (v, d) in shape.moves() {
         let side = plane.side_of(positions[v as usize]);
         signed += d.length() * side;
         unsigned += d.length() * side.abs();
-        sideways += plane.across(*d);
+        sideways += plane.across(d);
     }
     let located = unsigned > 0.0 && (signed / unsigned).abs() > 0.5;
     if located { signed } else { sideways }

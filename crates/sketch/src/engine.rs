@@ -544,11 +544,9 @@ impl<'c> Sketch<'c> {
         let snapped = match partner {
             Some(Target::Blendshape(id)) => self.character.blendshape(id).and_then(|shape| {
                 shape
-                    .indices()
-                    .iter()
-                    .zip(shape.deltas())
+                    .moves()
                     .filter(|(_, d)| d.length_squared() > 0.0)
-                    .map(|(&v, _)| v)
+                    .map(|(v, _)| v)
                     .min_by(|&a, &b| {
                         let d = |v: u32| {
                             self.character.positions()[v as usize].distance_squared(mirrored)
@@ -571,7 +569,7 @@ impl<'c> Sketch<'c> {
         };
         let positions = self.character.positions();
         let (mut sum, mut weight, mut spread) = (0.0f32, 0.0f32, 0.0f32);
-        for (&vertex, delta) in shape.indices().iter().zip(shape.deltas()) {
+        for (vertex, delta) in shape.moves() {
             let across = plane.side_of(positions[vertex as usize]);
             let w = delta.length();
             sum += w * across;

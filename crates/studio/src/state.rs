@@ -362,20 +362,15 @@ impl Studio {
             .blendshapes()
             .iter()
             .map(|shape| {
-                let best = shape
-                    .indices()
-                    .iter()
-                    .zip(shape.deltas())
-                    .max_by(|a, b| a.1.length_squared().total_cmp(&b.1.length_squared()));
                 let name = shape.name().to_owned();
-                match best {
-                    Some((&vertex, delta)) => {
+                match shape.peak() {
+                    Some((vertex, delta)) => {
                         let rest = positions[vertex as usize];
                         AnchorView {
                             name,
                             vertex: Some(vertex),
                             rest: Some(rest.to_array()),
-                            target: Some((rest + *delta).to_array()),
+                            target: Some((rest + delta).to_array()),
                         }
                     }
                     None => AnchorView {

@@ -64,7 +64,7 @@ impl Fingerprint {
             }
         }
         for shape in character.blendshapes() {
-            for (&i, d) in shape.indices().iter().zip(shape.deltas()) {
+            for (i, d) in shape.moves() {
                 geometry.u64(u64::from(i));
                 for c in d.to_array() {
                     geometry.coordinate(c);

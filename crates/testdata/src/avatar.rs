@@ -410,10 +410,8 @@ pub fn full_body_glb_textured(
         let mut targets = Vec::new();
         for (t, shape) in head.blendshapes().iter().enumerate() {
             let entries: Vec<(u32, Vec3)> = shape
-                .indices()
-                .iter()
-                .zip(shape.deltas())
-                .filter_map(|(v, d)| remap.get(v).map(|&l| (l, *d)))
+                .moves()
+                .filter_map(|(v, d)| remap.get(&v).map(|&l| (l, d)))
                 .collect();
             let accessor = if t % 3 == 1 && !entries.is_empty() {
                 let mut sorted = entries;

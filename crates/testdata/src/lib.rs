@@ -348,10 +348,8 @@ pub fn asymmetric(character: &Character) -> Character {
         .iter()
         .map(|b| {
             let deltas = b
-                .indices()
-                .iter()
-                .zip(b.deltas())
-                .map(|(&v, &delta)| {
+                .moves()
+                .map(|(v, delta)| {
                     let x = (positions[v as usize].x - centre.x) / (0.02 * d);
                     delta * (1.0 + 0.12 * x.tanh())
                 })

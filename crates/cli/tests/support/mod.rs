@@ -96,13 +96,7 @@ pub fn stroke_along(
 ) -> String {
     let id = character.find_blendshape(shape).unwrap();
     let shape = character.blendshape(id).unwrap();
-    let (v, delta) = shape
-        .indices()
-        .iter()
-        .zip(shape.deltas())
-        .max_by(|a, b| a.1.length().total_cmp(&b.1.length()))
-        .map(|(&v, &d)| (v as usize, d))
-        .unwrap();
+    let (v, delta) = shape.peak().map(|(v, d)| (v as usize, d)).unwrap();
     let start = character.positions()[v] + character.normals()[v] * 0.001;
     let end = character.positions()[v] + delta;
     let samples: Vec<serde_json::Value> = (0..=steps)

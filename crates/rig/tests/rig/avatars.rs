@@ -107,11 +107,7 @@ fn vrm_expressions_become_blendshapes_in_both_versions() {
             let mut expected = vec![faceanim_rig::glam::Vec3::ZERO; c.vertex_count()];
             for bound in e.binds {
                 let b = c.find_blendshape(bound).unwrap();
-                for (&v, &d) in c.blendshapes()[b.index()]
-                    .indices()
-                    .iter()
-                    .zip(c.blendshapes()[b.index()].deltas())
-                {
+                for (v, d) in c.blendshapes()[b.index()].moves() {
                     expected[v as usize] += d;
                 }
             }

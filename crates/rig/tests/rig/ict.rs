@@ -173,7 +173,7 @@ fn a_pose_is_neutral_plus_weighted_deltas_with_unit_normals() {
     weights[jaw.index()] = 0.5;
     let pose = c.pose(&weights);
     let shape = c.blendshape(jaw).unwrap();
-    for (&v, &d) in shape.indices().iter().zip(shape.deltas()) {
+    for (v, d) in shape.moves() {
         let expected = c.positions()[v as usize] + 0.5 * d;
         assert!((pose.positions[v as usize] - expected).length() < 1e-7);
     }
