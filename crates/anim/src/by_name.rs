@@ -93,26 +93,26 @@ impl<'a> Routes<'a> {
                 continue;
             }
             let drive = faceanim_rig::names::drive(name);
-            let Some(viseme) = viseme_of(drive) else {
-                // A name of no channel that stands for some (`surprised`, `relaxed`) sets them.
-                if matches!(drive, None | Some(Drive::Expression(_))) {
-                    let channels = stands_for(name);
-                    if !channels.is_empty() {
-                        blanked[k].clear();
-                        recipes.push((k, channels));
-                    }
+            if let Some(viseme) = viseme_of(drive) {
+                blanked[k].clear();
+                let shapes: Vec<usize> = (character_map.entries().iter().enumerate())
+                    .filter(|(i, e)| {
+                        !set[*i] && viseme_of(e.map(|e: Entry| e.drive)) == Some(viseme)
+                    })
+                    .map(|(i, _)| i)
+                    .collect();
+                if shapes.is_empty() {
+                    recipes.push((k, stands_for(name)));
+                } else {
+                    vowels.push((k, shapes));
                 }
-                continue;
-            };
-            blanked[k].clear();
-            let shapes: Vec<usize> = (character_map.entries().iter().enumerate())
-                .filter(|(i, e)| !set[*i] && viseme_of(e.map(|e: Entry| e.drive)) == Some(viseme))
-                .map(|(i, _)| i)
-                .collect();
-            if shapes.is_empty() {
-                recipes.push((k, stands_for(name)));
-            } else {
-                vowels.push((k, shapes));
+            } else if matches!(drive, None | Some(Drive::Expression(_))) {
+                // A name of no channel that stands for some (`surprised`, `relaxed`) sets them.
+                let channels = stands_for(name);
+                if !channels.is_empty() {
+                    blanked[k].clear();
+                    recipes.push((k, channels));
+                }
             }
         }
         for (_, shapes) in &vowels {

@@ -558,18 +558,11 @@ pub fn stands_for(name: &str) -> Vec<Channel> {
             .iter()
             .filter_map(|c| Channel::named(c))
             .collect(),
-        None if is_relaxed(name) => preset("Fun"),
+        // Capture by name drives no `relaxed` (a whole-face emotion, not a motion of the
+        // face); a received or recorded one stands for the channels `Fun` is sent from.
+        None if vrm_preset(name) == Some("relaxed") => preset("Fun"),
         _ => Vec::new(),
     }
-}
-
-/// Whether `name` is VRM 1.0's `relaxed` or VRM 0.x's `Fun` (the same preset, renamed), in
-/// any case or separators. Capture by name drives neither (a whole-face emotion, not a
-/// motion of the face); a received or recorded one stands for its preset's channels.
-fn is_relaxed(name: &str) -> bool {
-    let tokens = tokens(name);
-    let (rest, sides) = take_sides(&tokens);
-    sides.is_empty() && matches!(rest.concat().as_str(), "relaxed" | "fun")
 }
 
 /// The part of the face an ARKit channel moves, by its family in ARKit's names: the one rule
