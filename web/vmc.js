@@ -31,6 +31,14 @@ function describe(state) {
   return `${state.source} on ${state.listening}${here}${asking}`;
 }
 
+/** Names that moved but reach nothing on the character, in words (the first few). */
+function unmatched(names) {
+  if (!names.length) return '';
+  const shown = names.slice(0, 5).join(', ');
+  const more = names.length > 5 ? ` and ${names.length - 5} more` : '';
+  return `; nothing on this character takes ${shown}${more}`;
+}
+
 /** Shows the live-link controls when the studio listens. */
 export function showControls(view) {
   const listening = !!(view && view.vmc && view.vmc.listening);
@@ -58,7 +66,7 @@ async function poll() {
       const dropped = state.malformed + state.oversized + state.foreign;
       const lost = state.faces_lost ? `, face lost ${state.faces_lost}×` : '';
       const out = state.forwarded ? `; out over VMC ${state.forwarded.frames} (median ${state.forwarded.median_ms.toFixed(1)} ms, 95% ${state.forwarded.p95_ms.toFixed(1)} ms)` : '';
-      $('vmc-stats').textContent = `${describe(state)}${state.sender ? ` from ${state.sender}` : ''}: ${state.rate.toFixed(0)} packets/s, ${age}; ${state.frames} frames${lost}${dropped ? `, ${dropped} bad or foreign packets dropped` : ''}${state.unknown ? `, ${state.unknown} unknown messages` : ''}${out}${state.recording !== null ? `; recording ${state.recording}` : ''}.`;
+      $('vmc-stats').textContent = `${describe(state)}${state.sender ? ` from ${state.sender}` : ''}: ${state.rate.toFixed(0)} packets/s, ${age}; ${state.frames} frames${lost}${dropped ? `, ${dropped} bad or foreign packets dropped` : ''}${state.unknown ? `, ${state.unknown} unknown messages` : ''}${unmatched(state.unmatched_names)}${out}${state.recording !== null ? `; recording ${state.recording}` : ''}.`;
       if (state.recording !== null) $('vmc-record').textContent = `Stop (${state.recording})`;
     } catch (e) { showFailure(e); break; }
     await new Promise((r) => requestAnimationFrame(r));

@@ -1610,11 +1610,18 @@ fn played_out_over_vmc(studio: Studio, bare: &std::path::Path, project: &std::pa
 /// What VSeeFace and VMagicMirror send without perfect sync, VRM's presets (python-osc
 /// standing in: `A`, `Blink`, `Joy`), recorded onto the body with no shapes: `A` opens the
 /// take's jaw bone at every frame, as `JawOpen` does. Presets drove nothing on a character
-/// without shapes of those names before.
+/// without shapes of those names before. `Blink` and `Joy`, which nothing on the body takes,
+/// are named as such in the live link's state (the Capture tab shows them); `A` is not.
 #[test]
 fn a_vmc_tracker_sending_vrm_presets_opens_the_jaw_of_a_body_with_no_shapes() {
     let dir = tempfile::tempdir().unwrap();
     let (studio, sent) = bare_body_recording(dir.path(), support::vmc_send_vrm_presets);
+    // The presets nothing on the body takes are named for the page; `A`, which its jaw bone
+    // shows, is not.
+    let state = live_view(&studio);
+    let mut lost = support::strings(&state["unmatched_names"]);
+    lost.sort();
+    assert_eq!(lost, ["Blink", "Joy"], "{state}");
     jaw_follows(&studio, &sent, "A");
 }
 

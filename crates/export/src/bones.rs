@@ -357,6 +357,23 @@ impl ViewRig {
         Some(ViewRig { joints, rig })
     }
 
+    /// Whether the view's bones show what a value named `name` means: every ARKit channel the
+    /// name is or stands for ([`faceanim_rig::names::stands_for`]) turns a bone the view has
+    /// ([`Bone::turned_by`]: a sender's `eyeLookInLeft` or VRM's `lookLeft` the eyes, its
+    /// `jawOpen` the jaw), so a body without shapes for them still follows them.
+    #[must_use]
+    pub fn shows(&self, name: &str) -> bool {
+        let channels = match faceanim_rig::names::arkit_name(name) {
+            Some(channel) => vec![channel],
+            None => faceanim_rig::names::stands_for(name)
+                .iter()
+                .map(|c| c.name())
+                .collect(),
+        };
+        let has = |bone| self.joints.iter().any(|j| j.bone == Some(bone));
+        !channels.is_empty() && channels.iter().all(|c| Bone::turned_by(c).is_some_and(has))
+    }
+
     /// Each vertex's four joints and shares (summing to 1): the file's skinning, each node it
     /// is placed by counted on the nearest of the view's joints at or above it.
     #[must_use]

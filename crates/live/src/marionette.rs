@@ -34,6 +34,11 @@ const POLL: Duration = Duration::from_millis(50);
 const ASK_EVERY: Duration = Duration::from_secs(1);
 /// Frames whose forwarding delay is kept for the median and 95th percentile.
 const DELAYS: usize = 4096;
+/// Names listed in [`Traffic::unmatched_names`], at most.
+const MAX_UNMATCHED_NAMES: usize = 32;
+/// A value above this is motion: its name is listed when it reaches nothing (a sender sends
+/// every name it knows each frame, most of them at rest).
+const MOTION: f32 = 0.05;
 
 /// A source's neutral face: the head pose and ARKit values of a relaxed face, taken away from
 /// what arrives (a value at rest reads 0 and full still reads 1).
@@ -196,8 +201,13 @@ pub struct Traffic {
     pub unknown: u64,
     /// Datagrams too large to be a frame.
     pub oversized: u64,
-    /// Blendshape values for names the character does not have.
+    /// Blendshape values that reached nothing: for names the character has no shape of, by
+    /// name or meaning, with no retarget map to carry them.
     pub unmatched: u64,
+    /// The names of those values that moved (a value above 0.05: a sender sends every name it
+    /// knows, most at rest), each once, in the order first lost, at most 32. Cleared when a
+    /// map is set, which carries ARKit's names on.
+    pub unmatched_names: Vec<String>,
     /// Who sent the last datagram.
     pub sender: Option<SocketAddr>,
     /// Datagrams in the last second.
@@ -206,6 +216,19 @@ pub struct Traffic {
     pub last_packet_ms: Option<f64>,
     /// Frames sent on over VMC as they arrived, and how long that took.
     pub forwarded: Option<Forwarding>,
+}
+
+impl Traffic {
+    /// Counts a value for `name` that reached nothing, and lists the name when it moved.
+    fn lost(&mut self, name: &str, value: f32) {
+        self.unmatched += 1;
+        if value > MOTION
+            && self.unmatched_names.len() < MAX_UNMATCHED_NAMES
+            && !self.unmatched_names.iter().any(|n| n == name)
+        {
+            self.unmatched_names.push(name.to_owned());
+        }
+    }
 }
 
 #[derive(Debug)]
@@ -400,6 +423,9 @@ impl Marionette {
                 m.blendshapes.len()
             );
             return;
+        }
+        if map.is_some() {
+            state.traffic.unmatched_names.clear();
         }
         state.map = map;
     }
@@ -663,6 +689,8 @@ fn apply_reading(state: &mut State, reading: Reading, time: f64) {
             }
         } else if let Some(&i) = state.own.get(name) {
             state.current[i] = value;
+        } else if state.map.is_none() {
+            state.traffic.lost(name, value);
         }
     }
     if let Some(head) = reading.head {
@@ -811,7 +839,7 @@ fn apply_message(state: &mut State, message: &OscMessage, time: f64) -> bool {
                 }
             }
             if !matched {
-                state.traffic.unmatched += 1;
+                state.traffic.lost(name, value);
             }
             true
         }
@@ -1249,6 +1277,55 @@ mod tests {
         performer.send(&[0.0, 0.0, 0.0, 0.25, 0.25], None, 1.0);
         let frames = marionette.wait_for_frames(4, Duration::from_secs(5));
         assert_eq!(frames[3].weights, [0.0, 0.0, 0.0, 0.25, 0.25]);
+    }
+
+    /// What reaches nothing on the character is counted, and its names listed once each where
+    /// they moved: VSeeFace's whole-face `Fcl_ALL_Fun` on an ARKit head, a phone's JawOpen on a
+    /// VRoid avatar with no map. A name at rest, one the character has, and an ARKit name a
+    /// map carries are not; setting a map forgets the ARKit names it now carries.
+    #[test]
+    fn names_that_moved_and_reach_nothing_are_listed_once() {
+        let sent = [
+            ("EyeBlinkLeft", 1.0),
+            ("Fcl_ALL_Fun", 0.5),
+            ("Neutral", 0.0),
+            ("JawOpen", 0.3),
+            ("Extra", 0.01),
+        ];
+        let marionette = listening_as(&["eyeBlinkLeft", "Fcl_MTH_A"]);
+        let mut state = lock(&marionette.state);
+        for time in [0.0, 0.1] {
+            blend_frame(&mut state, &sent, time);
+        }
+        assert_eq!(state.traffic.unmatched, 8);
+        assert_eq!(state.traffic.unmatched_names, ["Fcl_ALL_Fun", "JawOpen"]);
+        // A phone's channels the same way, by their ARKit names.
+        let reading = |value: f32| crate::phone::Reading {
+            channels: vec![(0, value), (17, value), (23, value)],
+            head: None,
+            eyes: None,
+            time: None,
+        };
+        apply_reading(&mut state, reading(0.02), 0.2);
+        assert_eq!(state.traffic.unmatched, 10);
+        apply_reading(&mut state, reading(0.4), 0.3);
+        assert_eq!(
+            state.traffic.unmatched_names,
+            ["Fcl_ALL_Fun", "JawOpen", "jawOpen", "mouthSmileLeft"]
+        );
+        // A map carries every ARKit name: only the name that means nothing is lost again.
+        drop(state);
+        let ours = ["eyeBlinkLeft", "Fcl_MTH_A"].map(String::from);
+        marionette.set_map(Some(Arc::new(faceanim_retarget::RetargetMap::by_name(
+            "vroid",
+            &ours,
+            &[],
+        ))));
+        let mut state = lock(&marionette.state);
+        assert!(state.traffic.unmatched_names.is_empty());
+        blend_frame(&mut state, &sent, 0.4);
+        apply_reading(&mut state, reading(0.4), 0.5);
+        assert_eq!(state.traffic.unmatched_names, ["Fcl_ALL_Fun"]);
     }
 
     /// A channel the sender named stays its own while it keeps naming it; once it has not for

@@ -55,6 +55,33 @@ impl Bone {
             Bone::Jaw => "jaw",
         }
     }
+
+    /// The bone the ARKit channel called `arkit` turns, where one does: each eye its four
+    /// eyeLook channels ([`gaze_from_arkit`]), the jaw `jawOpen`.
+    ///
+    /// ```
+    /// use faceanim_rig::bones::Bone;
+    /// assert_eq!(Bone::turned_by("eyeLookInLeft"), Some(Bone::LeftEye));
+    /// assert_eq!(Bone::turned_by("eyeLookUpRight"), Some(Bone::RightEye));
+    /// assert_eq!(Bone::turned_by("jawOpen"), Some(Bone::Jaw));
+    /// assert_eq!(Bone::turned_by("eyeBlinkLeft"), None);
+    /// ```
+    #[must_use]
+    pub fn turned_by(arkit: &str) -> Option<Bone> {
+        if arkit == "jawOpen" {
+            return Some(Bone::Jaw);
+        }
+        if !crate::names::is_gaze(arkit) {
+            return None;
+        }
+        if arkit.ends_with("Left") {
+            Some(Bone::LeftEye)
+        } else if arkit.ends_with("Right") {
+            Some(Bone::RightEye)
+        } else {
+            None
+        }
+    }
 }
 
 /// The face's bones in a file, by node index.

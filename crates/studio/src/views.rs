@@ -452,7 +452,8 @@ pub struct VmcView {
     /// Whether a neutral face is calibrated (and taken away from every frame).
     pub neutral: bool,
     /// What arrived: datagrams, frames, the dropped `malformed`, `unknown` and `oversized`
-    /// ones, `unmatched` names, the `sender`, the `rate` and the `last_packet_ms`.
+    /// ones, `unmatched` values and the `unmatched_names` that moved (less those the
+    /// character's eye and jaw bones show), the `sender`, the `rate` and the `last_packet_ms`.
     #[serde(flatten)]
     pub traffic: faceanim_live::Traffic,
     /// Frames recorded, while recording.

@@ -179,7 +179,11 @@ impl Vmc {
         if marionette.is_none() && sending.is_none() {
             return None;
         }
-        let traffic = marionette.map(Marionette::traffic).unwrap_or_default();
+        let mut traffic = marionette.map(Marionette::traffic).unwrap_or_default();
+        // What the character's bones show (its eyes' gaze, its jaw) is not lost on it.
+        if let Some(skeleton) = skeleton {
+            traffic.unmatched_names.retain(|name| !skeleton.shows(name));
+        }
         let latest = marionette.and_then(Marionette::latest);
         let listen = self.config.listen.as_ref();
         Some(VmcView {
