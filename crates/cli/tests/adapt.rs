@@ -21,6 +21,16 @@ fn ict() -> String {
         .to_string()
 }
 
+/// `faceanim track INPUT --adapter ADAPTER MORE… -o OUTPUT…`, as it ended.
+fn track(input: &Path, adapter: &str, more: &[&str], outputs: &[&Path]) -> std::process::Output {
+    let mut args = vec!["track", input.to_str().unwrap(), "--adapter", adapter];
+    args.extend_from_slice(more);
+    for output in outputs {
+        args.extend(["-o", output.to_str().unwrap()]);
+    }
+    faceanim(&args)
+}
+
 /// The jawOpen of frame `i` of the test video: shut, a smooth open to 0.8, shut.
 fn jaw_curve(i: usize) -> f32 {
     let t = i as f32 / 23.0;
@@ -81,29 +91,25 @@ fn adapt_then_track_correct_and_fine_tune() {
     let seed_csv = out.join("jaw.byoc.csv");
     let glb = out.join("jaw.glb");
     let live_link = out.join("jaw.csv");
-    let printed = faceanim_ok(&[
-        "track",
-        video.to_str().unwrap(),
+    let ict_path = ict();
+    let more = [
         "--character",
-        &ict(),
-        "--adapter",
-        adapter_arg,
+        &ict_path,
         "--session",
         session.to_str().unwrap(),
         "--keyframe",
         "7",
         "--neutral-frame",
         "0",
-        "-o",
-        clip_path.to_str().unwrap(),
-        "-o",
-        seed_csv.to_str().unwrap(),
-        "-o",
-        glb.to_str().unwrap(),
-        "-o",
-        live_link.to_str().unwrap(),
-    ]);
-    let printed: serde_json::Value = serde_json::from_str(printed.trim()).unwrap();
+    ];
+    let tracked = track(
+        &video,
+        adapter_arg,
+        &more,
+        &[&clip_path, &seed_csv, &glb, &live_link],
+    );
+    let printed: serde_json::Value =
+        serde_json::from_slice(&support::succeeded("faceanim track", tracked).stdout).unwrap();
     assert_eq!(printed["frames"], 24);
     assert_eq!(
         printed["neutral"],
@@ -261,18 +267,11 @@ fn adapt_then_track_correct_and_fine_tune() {
     // A photo becomes 0 → peak → 0.
     let photo = faceanim_testdata::shared("images/ict-face-jawopen.png");
     let still = dir.path().join("still.json");
-    faceanim_ok(&[
-        "track",
-        photo.to_str().unwrap(),
-        "--character",
-        &ict(),
-        "--adapter",
-        adapter_arg,
-        "--image-frames",
-        "21",
-        "-o",
-        still.to_str().unwrap(),
-    ]);
+    let more = ["--character", &ict_path, "--image-frames", "21"];
+    support::succeeded(
+        "faceanim track",
+        track(&photo, adapter_arg, &more, &[&still]),
+    );
     let jaw = column(&read_json(&still), "jawOpen");
     assert_eq!(jaw.len(), 21);
     assert!(jaw[0] == 0.0 && jaw[20] == 0.0, "{jaw:?}");
@@ -282,14 +281,7 @@ fn adapt_then_track_correct_and_fine_tune() {
     );
 
     // The adapter on the wrong character is refused, saying why and what to do.
-    let refused = faceanim(&[
-        "track",
-        photo.to_str().unwrap(),
-        "--adapter",
-        adapter_arg,
-        "-o",
-        still.to_str().unwrap(),
-    ]);
+    let refused = track(&photo, adapter_arg, &[], &[&still]);
     assert!(!refused.status.success());
     let message = String::from_utf8_lossy(&refused.stderr);
     assert!(
@@ -313,16 +305,12 @@ fn adapt_then_track_correct_and_fine_tune() {
     assert!(message.contains("--stay must be 0 or more"), "{message}");
     let garbage = dir.path().join("garbage.safetensors");
     std::fs::write(&garbage, b"not an adapter").unwrap();
-    let refused = faceanim(&[
-        "track",
-        photo.to_str().unwrap(),
-        "--character",
-        &ict(),
-        "--adapter",
+    let refused = track(
+        &photo,
         garbage.to_str().unwrap(),
-        "-o",
-        still.to_str().unwrap(),
-    ]);
+        &["--character", &ict_path],
+        &[&still],
+    );
     let message = String::from_utf8_lossy(&refused.stderr);
     assert!(
         message.contains("garbage.safetensors") && message.contains("safetensors"),
