@@ -21,8 +21,8 @@ pub(crate) struct ExportArgs {
     #[arg(long)]
     pub(crate) clip: Option<PathBuf>,
     /// The character's retarget map for the clip's ARKit channels (default:
-    /// NAME.retarget.json beside the character, when there is one; `faceanim retarget`
-    /// makes it).
+    /// NAME.retarget.json beside the character; made and saved there when the clip has ARKit
+    /// channels the rig's names leave without a shape, as `faceanim retarget` makes it).
     #[arg(long, value_name = "MAP", requires = "clip")]
     pub(crate) retarget: Option<PathBuf>,
 }
@@ -54,6 +54,7 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 &character,
                 Some(&args.character),
                 args.retarget.as_deref(),
+                &clip,
             )?;
             let unmatched = clip.unmatched(&character, map.as_ref());
             if character.blendshapes().is_empty() {

@@ -354,8 +354,6 @@ fn read_text(path: &Path, option: &str, accept: Accept<'_>) -> anyhow::Result<Te
         .map_err(|e| anyhow::anyhow!("{option} {e}"))
 }
 
-/// `character`'s mouth read through its adapter at `path`: each viseme the built-in head makes
-/// (by `table`), rendered from the front and read by the adapter.
 /// The mouth of a rig whose names say nothing of one, through its retarget map (the one
 /// beside it, or made and saved there now); `None` when the map moves no shape of it.
 fn mouth_by_map(
@@ -370,6 +368,8 @@ fn mouth_by_map(
     Ok(Some(Mouth::through_map(&map, table)).filter(Mouth::moves))
 }
 
+/// `character`'s mouth read through its adapter at `path`: each viseme the built-in head makes
+/// (by `table`), rendered from the front and read by the adapter.
 fn mouth_by_adapter(
     character: &faceanim_rig::Character,
     table: &MouthTable,

@@ -316,7 +316,10 @@ fn make(
 
 /// The map a clip goes through onto `character` (loaded from `character_path`): the one at
 /// `given` (which must fit it), else the one beside the character when there is one that
-/// fits; never made here (a clip by name needs none; `faceanim retarget` makes one).
+/// fits, else — when the clip has ARKit channels (a Live Link Face recording, a take's ARKit
+/// values, VRM's presets) that the rig's names leave without a shape — one made now and saved
+/// beside it, as capture makes it. `None` for a clip its names take whole, or when the map
+/// cannot be made (said, and the clip goes on by name).
 ///
 /// # Errors
 /// The file cannot be read, is not a map, or `given` is another character's.
@@ -324,6 +327,7 @@ pub fn for_clip(
     character: &Character,
     character_path: Option<&Path>,
     given: Option<&Path>,
+    clip: &faceanim_anim::Clip,
 ) -> anyhow::Result<Option<RetargetMap>> {
     let names = character.blendshape_names();
     if let Some(path) = given {
@@ -331,7 +335,28 @@ pub fn for_clip(
             anyhow::anyhow!("{}: not a map of {}", path.display(), character.name())
         });
     }
-    read(&default_path(character_path, character), &names)
+    let beside = read(&default_path(character_path, character), &names)?;
+    let arkit_lost = || {
+        clip.unmatched(character, None)
+            .iter()
+            .any(|name| faceanim_rig::names::drive(name).is_some())
+    };
+    if beside.is_some() || !faceanim_adapt::bridge::needs_map(character) || !arkit_lost() {
+        return Ok(beside);
+    }
+    let made = FaceModels::load()
+        .context("loading the face models")
+        .and_then(|models| for_capture(character, character_path, None, &models));
+    match made {
+        Ok(map) => Ok(map),
+        Err(e) => {
+            eprintln!(
+                "warning: {} has no retarget map and one could not be made ({e:#}): the clip's ARKit channels reach only the shapes named for them",
+                character.name()
+            );
+            Ok(None)
+        }
+    }
 }
 
 /// The map a capture command uses for `character` (loaded from `character_path`): the one

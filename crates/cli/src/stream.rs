@@ -43,8 +43,8 @@ pub struct StreamArgs {
     #[arg(long)]
     pub character: Option<PathBuf>,
     /// The character's retarget map, through which the clip's ARKit channels reach a rig
-    /// whose names say nothing (default: NAME.retarget.json beside the character, when there
-    /// is one).
+    /// whose names say nothing (default: NAME.retarget.json beside the character; made and
+    /// saved there when the clip has ARKit channels the rig's names leave without a shape).
     #[arg(long, value_name = "MAP", requires = "character")]
     pub retarget: Option<PathBuf>,
     /// The marionette: HOST:PORT (VMC's default port is 39539).
@@ -89,7 +89,8 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     let clip = match &args.character {
         Some(path) => {
             let character = crate::input::load(path)?.character;
-            let map = crate::retarget::for_clip(&character, Some(path), args.retarget.as_deref())?;
+            let map =
+                crate::retarget::for_clip(&character, Some(path), args.retarget.as_deref(), &clip)?;
             faceanim_export::Animation::from_clip_through(&character, &clip, "stream", map.as_ref())
                 .with_context(|| format!("putting {} on {}", args.input.display(), path.display()))?
                 .clip

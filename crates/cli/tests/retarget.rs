@@ -555,3 +555,62 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
         "user"
     );
 }
+
+/// A Live Link Face recording exported onto a rig whose names say nothing and that has no map
+/// yet (ICT identity 3, its targets renamed `shape_N` by `tools/rename_targets.py`): the map is
+/// made and saved beside the character, as capture makes it, and the recording's JawOpen opens
+/// the jaw through it; exported again, the saved map is read, not made again. The export
+/// failed before ("none of the clip's blendshapes exist"), and asked for `faceanim retarget`.
+#[test]
+fn a_recording_exported_onto_a_rig_without_a_map_makes_one() {
+    let out = output_dir("retarget-export");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    let glb = out.join("id3.glb");
+    support::succeeded(
+        "rename_targets.py",
+        std::process::Command::new("python3")
+            .arg(support::repo().join("tools/rename_targets.py"))
+            .arg(faceanim_testdata::shared("characters/ict-face-id3.glb"))
+            .arg(&glb)
+            .output()
+            .unwrap(),
+    );
+    let jaw: Vec<f32> = (0..31).map(|k| k as f32 / 30.0).collect();
+    let recording = faceanim_anim::Clip {
+        fps: 30.0,
+        blendshapes: vec!["JawOpen".into(), "EyeBlinkLeft".into()],
+        frames: jaw.iter().map(|&j| vec![j, 0.0]).collect(),
+        head: None,
+        head_position: None,
+        presence: None,
+    };
+    let csv = out.join("take.csv");
+    std::fs::write(&csv, faceanim_export::livelink::to_csv(&recording)).unwrap();
+    let exported = out.join("on-id3.json");
+    let said = support::export_with_clip_and(&glb, &exported, &csv, &[]);
+    assert!(said.contains("making the retarget map"), "{said}");
+    let map: Value =
+        serde_json::from_slice(&std::fs::read(out.join("id3.retarget.json")).unwrap()).unwrap();
+    let rows = map["rows"].as_array().unwrap();
+    let jaw_row = rows.iter().find(|r| r["channel"] == "jawOpen").unwrap();
+    let (shape, _) = jaw_row["shapes"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .max_by(|a, b| a.1.as_f64().unwrap().total_cmp(&b.1.as_f64().unwrap()))
+        .unwrap_or_else(|| panic!("the map's jawOpen row moves nothing: {jaw_row}"));
+    let opened = |what: &str| {
+        let clip: Value = serde_json::from_slice(&std::fs::read(&exported).unwrap()).unwrap();
+        let got = support::column(&clip, shape);
+        assert_eq!(got.len(), jaw.len(), "{what}");
+        assert!(
+            got.windows(2).all(|w| w[1] >= w[0] - 1e-4) && got[jaw.len() - 1] > 0.5,
+            "{what}: {shape} for JawOpen 0 to 1: {got:?}"
+        );
+    };
+    opened("made");
+    let said = support::export_with_clip_and(&glb, &exported, &csv, &[]);
+    assert!(!said.contains("making the retarget map"), "{said}");
+    opened("read back");
+}
