@@ -395,12 +395,30 @@ impl CaptureDesk {
         // A body with no blendshapes takes the clip on its bones: the take is made of the
         // clip's ARKit values, which they follow.
         let on_bones = faceanim_export::bones::takes_clip(character, clip);
+        // ARKit's channels reach a rig whose names say nothing through its map: where it has
+        // none yet, what is lost says how to make it.
+        let arkit_lost = || {
+            clip.unmatched(character, None)
+                .iter()
+                .any(|n| faceanim_rig::names::drive(n).is_some())
+        };
+        let hint = if self.map.is_none()
+            && !on_bones
+            && arkit_lost()
+            && faceanim_adapt::bridge::needs_map(character)
+        {
+            " Make map (Retarget map, in this tab) carries ARKit's channels onto its shapes by geometry: then open the clip again."
+        } else {
+            ""
+        };
         let (rows, unmatched) = if on_bones {
             (vec![Vec::new(); count], Vec::new())
         } else {
             let retarget = clip
                 .retarget_through(character, shown, self.map.as_deref())
-                .map_err(|e| ApiError::Invalid(format!("{}: {e}", faceanim_rig::excerpt(shown))))?;
+                .map_err(|e| {
+                    ApiError::Invalid(format!("{}: {e}.{hint}", faceanim_rig::excerpt(shown)))
+                })?;
             let lost = clip.unmatched(character, self.map.as_deref());
             (retarget.animation.weights, lost)
         };
@@ -423,9 +441,10 @@ impl CaptureDesk {
                 String::new()
             };
             let warning = format!(
-                "None of {}'s shapes answers to {}{more}: left out.",
+                "None of {}'s shapes answers to {}{more}: left out.{}",
                 faceanim_rig::excerpt(character.name()),
-                listed.join(", ")
+                listed.join(", "),
+                hint
             );
             tracing::warn!("{shown}: {warning}");
             self.notice = Some(warning);
