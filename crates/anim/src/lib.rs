@@ -246,6 +246,16 @@ impl Clip {
         )
     }
 
+    /// Whether some column that moves means ARKit channels (a spelling of one, a split or
+    /// merged shape, VRM's presets) and reaches no blendshape of `character` by name: what its
+    /// retarget map would carry, for a rig whose names say nothing.
+    #[must_use]
+    pub fn loses_arkit(&self, character: &Character) -> bool {
+        self.unmatched(character, None)
+            .iter()
+            .any(|name| faceanim_rig::names::drive(name).is_some())
+    }
+
     /// Whether column `k` is other than 0 in some frame.
     fn moves(&self, k: usize) -> bool {
         self.frames
@@ -518,6 +528,10 @@ mod tests {
             clip.retarget(&character, "t"),
             Err(ClipError::NothingInCommon { .. })
         ));
+        // Its ARKit channels are lost by name (what a map carries); the rig's own names and
+        // names of no meaning are not ARKit's.
+        assert!(clip.loses_arkit(&character));
+        assert!(!clip_of(&[("shape_1", 1.0), ("Extra", 1.0)]).loses_arkit(&character));
         let names = character.blendshape_names();
         let mut map = faceanim_retarget::RetargetMap::by_name("tri", &names, &[]);
         map.set_row("jawOpen", [("shape_2".to_owned(), 0.8)].into())

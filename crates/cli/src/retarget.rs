@@ -336,12 +336,10 @@ pub fn for_clip(
         });
     }
     let beside = read(&default_path(character_path, character), &names)?;
-    let arkit_lost = || {
-        clip.unmatched(character, None)
-            .iter()
-            .any(|name| faceanim_rig::names::drive(name).is_some())
-    };
-    if beside.is_some() || !faceanim_adapt::bridge::needs_map(character) || !arkit_lost() {
+    if beside.is_some()
+        || !faceanim_adapt::bridge::needs_map(character)
+        || !clip.loses_arkit(character)
+    {
         return Ok(beside);
     }
     let made = FaceModels::load()

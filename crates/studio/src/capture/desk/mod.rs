@@ -397,14 +397,9 @@ impl CaptureDesk {
         let on_bones = faceanim_export::bones::takes_clip(character, clip);
         // ARKit's channels reach a rig whose names say nothing through its map: where it has
         // none yet, what is lost says how to make it.
-        let arkit_lost = || {
-            clip.unmatched(character, None)
-                .iter()
-                .any(|n| faceanim_rig::names::drive(n).is_some())
-        };
         let hint = if self.map.is_none()
             && !on_bones
-            && arkit_lost()
+            && clip.loses_arkit(character)
             && faceanim_adapt::bridge::needs_map(character)
         {
             " Make map (Retarget map, in this tab) carries ARKit's channels onto its shapes by geometry: then open the clip again."
@@ -417,7 +412,12 @@ impl CaptureDesk {
             let retarget = clip
                 .retarget_through(character, shown, self.map.as_deref())
                 .map_err(|e| {
-                    ApiError::Invalid(format!("{}: {e}.{hint}", faceanim_rig::excerpt(shown)))
+                    let shown = faceanim_rig::excerpt(shown);
+                    ApiError::Invalid(if hint.is_empty() {
+                        format!("{shown}: {e}")
+                    } else {
+                        format!("{shown}: {e}.{hint}")
+                    })
                 })?;
             let lost = clip.unmatched(character, self.map.as_deref());
             (retarget.animation.weights, lost)
