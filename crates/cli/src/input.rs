@@ -58,11 +58,8 @@ pub(crate) fn load_saying(
 /// Link Face CSV (the app's recordings), a VRM Animation, a GLB's or VRM's morph-weight
 /// animation — by its ending.
 pub(crate) fn clip(path: &Path) -> anyhow::Result<faceanim_anim::Clip> {
-    let ending = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase());
-    match ending.as_deref() {
-        Some("csv" | "vrma" | "glb" | "vrm" | "gltf") => {
+    match is_animation_file(path) {
+        true => {
             let bytes = faceanim_files::read_bytes(path)?;
             let name = path.file_name().map_or_else(
                 || path.display().to_string(),
@@ -72,8 +69,20 @@ pub(crate) fn clip(path: &Path) -> anyhow::Result<faceanim_anim::Clip> {
             tracing::info!("{}: {}", path.display(), reopened.what);
             Ok(reopened.clip)
         }
-        _ => Ok(faceanim_files::load_clip(path)?),
+        false => Ok(faceanim_files::load_clip(path)?),
     }
+}
+
+/// Whether `path` is, by its ending, an animation of another kind than a clip JSON: a Live
+/// Link Face CSV, a VRM Animation, a GLB's, glTF's or VRM's morph-weight animation.
+pub(crate) fn is_animation_file(path: &Path) -> bool {
+    let ending = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    matches!(
+        ending.as_deref(),
+        Some("csv" | "vrma" | "glb" | "vrm" | "gltf")
+    )
 }
 
 /// The adapter at `path`, read whole; its errors name the file.

@@ -37,7 +37,9 @@ impl From<NameChoice> for Names {
 /// `faceanim stream`'s arguments.
 #[derive(Debug, clap::Args)]
 pub struct StreamArgs {
-    /// A clip (.json) or a session (.session.json, from the studio or `faceanim track`).
+    /// A clip (.json), a session (.session.json, from the studio or `faceanim track`), or
+    /// what `export --clip` reads: a Live Link Face CSV (the app's recordings), a VRM
+    /// Animation (.vrma), a GLB's or VRM's morph-weight animation.
     pub input: PathBuf,
     /// Put the clip on this character first (its names are then the ones sent).
     #[arg(long)]
@@ -63,28 +65,35 @@ pub struct StreamArgs {
 }
 
 pub fn run(args: StreamArgs) -> anyhow::Result<()> {
-    let bytes = faceanim_files::read_bytes(&args.input)?;
     // A session's gaze and jaw from what it was made of (MediaPipe's scores, a phone's values),
     // as its export turns eye and jaw bones; and those values, for the ARKit channels (or VRM
-    // presets) the character's shapes cannot make.
-    let (clip, keys, arkit) = match Clip::from_json(&bytes) {
-        Ok(clip) => {
-            let keys = BoneKeys::from_clip(&clip);
-            (clip, keys, None)
+    // presets) the character's shapes cannot make. A recording (Live Link Face's CSV) or an
+    // animation file, as `export --clip` reads them, is a clip.
+    let (clip, keys, arkit) = if crate::input::is_animation_file(&args.input) {
+        let clip = crate::input::clip(&args.input)?;
+        let keys = BoneKeys::from_clip(&clip);
+        (clip, keys, None)
+    } else {
+        let bytes = faceanim_files::read_bytes(&args.input)?;
+        match Clip::from_json(&bytes) {
+            Ok(clip) => {
+                let keys = BoneKeys::from_clip(&clip);
+                (clip, keys, None)
+            }
+            Err(clip_error) => faceanim_take::Session::from_json(&bytes)
+                .map(|session| {
+                    let clip = session.clip();
+                    let arkit = session.arkit_clip();
+                    let keys = BoneKeys::of_take(&clip, arkit.as_ref());
+                    (clip, keys, arkit.map(|a| a.arkit_rows()))
+                })
+                .map_err(|session_error| {
+                    anyhow::anyhow!(
+                        "{}: neither a clip ({clip_error}) nor a session ({session_error})",
+                        args.input.display()
+                    )
+                })?,
         }
-        Err(clip_error) => faceanim_take::Session::from_json(&bytes)
-            .map(|session| {
-                let clip = session.clip();
-                let arkit = session.arkit_clip();
-                let keys = BoneKeys::of_take(&clip, arkit.as_ref());
-                (clip, keys, arkit.map(|a| a.arkit_rows()))
-            })
-            .map_err(|session_error| {
-                anyhow::anyhow!(
-                    "{}: neither a clip ({clip_error}) nor a session ({session_error})",
-                    args.input.display()
-                )
-            })?,
     };
     let clip = match &args.character {
         Some(path) => {

@@ -211,11 +211,10 @@ fn vrm_presets_and_arkit_names_for_the_apps_that_want_them() {
         "frames": [[0.25, 0, 1], [0.75, 0.5, 0]]}"#;
     // Each name sent, its first and last value (frame 0 sends every value, frame 1 the ones
     // that moved), as `name first last` lines.
-    let sent = |made_by: &str, clip: &str, names: &str| -> String {
-        let clip_path = dir.join(format!("presets-{made_by}.json"));
-        std::fs::write(&clip_path, clip).unwrap();
+    let sent_from = |clip_path: &std::path::Path, names: &str| -> String {
+        let made_by = clip_path.file_name().unwrap().to_string_lossy();
         let report = dir.join(format!("received-{made_by}-{names}.json"));
-        let (_, received) = streamed(&clip_path, 2, 20.0, &report, &["--names", names]);
+        let (_, received) = streamed(clip_path, 2, 20.0, &report, &["--names", names]);
         let mut values: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
         for (_, messages) in bundles(&received) {
             for m in messages
@@ -235,6 +234,11 @@ fn vrm_presets_and_arkit_names_for_the_apps_that_want_them() {
             .collect();
         lines.join("\n")
     };
+    let sent = |made_by: &str, clip: &str, names: &str| -> String {
+        let clip_path = dir.join(format!("presets-{made_by}.json"));
+        std::fs::write(&clip_path, clip).unwrap();
+        sent_from(&clip_path, names)
+    };
     assert_eq!(
         sent("arkit", arkit, "vrm"),
         "A 0.5 1\nBlink 0 1\nBlink_L 1 1\nBlink_R 0 1"
@@ -243,6 +247,20 @@ fn vrm_presets_and_arkit_names_for_the_apps_that_want_them() {
         sent("arkit", arkit, "arkit"),
         "EyeBlinkLeft 1 1\nEyeBlinkRight 0 1\nJawOpen 0.5 1"
     );
+    // The same clip recorded by Live Link Face (the app's CSV, every channel in every row)
+    // streams the same values; its other channels, at 0 throughout, go out as 0. `stream`
+    // read clip JSON and sessions alone before.
+    let recording = dir.join("presets-arkit.csv");
+    let clip = faceanim_anim::Clip::from_json(arkit.as_bytes()).unwrap();
+    std::fs::write(&recording, faceanim_export::livelink::to_csv(&clip)).unwrap();
+    let received = sent_from(&recording, "arkit");
+    let moved: Vec<&str> = received.lines().filter(|l| !l.ends_with(" 0 0")).collect();
+    assert_eq!(
+        moved.join("\n"),
+        "EyeBlinkLeft 1 1\nEyeBlinkRight 0 1\nJawOpen 0.5 1",
+        "{received}"
+    );
+    assert_eq!(received.lines().count(), 52, "{received}");
     assert_eq!(
         sent("vroid", vroid, "vrm"),
         "A 0.25 0.75\nBlink 1 0\nBlink_L 1 0\nBlink_R 1 0\nO 0 0.5"
