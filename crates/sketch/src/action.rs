@@ -8,7 +8,7 @@ use crate::arc::{Arc, Path};
 use crate::layer::Layer;
 use crate::timing::Timing;
 
-/// Index of an action in its [`Sketch`], in creation order.
+/// Index of an action in its [`Sketch`](crate::Sketch), in creation order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ActionId(pub usize);
 
