@@ -58,19 +58,17 @@ pub(crate) fn load_saying(
 /// Link Face CSV (the app's recordings), a VRM Animation, a GLB's or VRM's morph-weight
 /// animation — by its ending.
 pub(crate) fn clip(path: &Path) -> anyhow::Result<faceanim_anim::Clip> {
-    match is_animation_file(path) {
-        true => {
-            let bytes = faceanim_files::read_bytes(path)?;
-            let name = path.file_name().map_or_else(
-                || path.display().to_string(),
-                |n| n.to_string_lossy().into_owned(),
-            );
-            let reopened = faceanim_export::reopen::clip_of_file(&name, &bytes)?;
-            tracing::info!("{}: {}", path.display(), reopened.what);
-            Ok(reopened.clip)
-        }
-        false => Ok(faceanim_files::load_clip(path)?),
+    if !is_animation_file(path) {
+        return Ok(faceanim_files::load_clip(path)?);
     }
+    let bytes = faceanim_files::read_bytes(path)?;
+    let name = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let reopened = faceanim_export::reopen::clip_of_file(&name, &bytes)?;
+    tracing::info!("{}: {}", path.display(), reopened.what);
+    Ok(reopened.clip)
 }
 
 /// Whether `path` is, by its ending, an animation of another kind than a clip JSON: a Live

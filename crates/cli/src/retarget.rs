@@ -314,6 +314,13 @@ fn make(
     Ok(map)
 }
 
+/// The map at `path`, given by the user for `character` (whose shapes are `names`): it must
+/// be one, and fit it.
+fn read_given(path: &Path, character: &Character, names: &[String]) -> anyhow::Result<RetargetMap> {
+    read(path, names)?
+        .ok_or_else(|| anyhow::anyhow!("{}: not a map of {}", path.display(), character.name()))
+}
+
 /// The map a clip goes through onto `character` (loaded from `character_path`): the one at
 /// `given` (which must fit it), else the one beside the character when there is one that
 /// fits, else — when the clip has ARKit channels (a Live Link Face recording, a take's ARKit
@@ -331,9 +338,7 @@ pub fn for_clip(
 ) -> anyhow::Result<Option<RetargetMap>> {
     let names = character.blendshape_names();
     if let Some(path) = given {
-        return read(path, &names)?.map(Some).ok_or_else(|| {
-            anyhow::anyhow!("{}: not a map of {}", path.display(), character.name())
-        });
+        return read_given(path, character, &names).map(Some);
     }
     let beside = read(&default_path(character_path, character), &names)?;
     if beside.is_some()
@@ -369,9 +374,7 @@ pub fn for_capture(
 ) -> anyhow::Result<Option<RetargetMap>> {
     let names = character.blendshape_names();
     if let Some(path) = given {
-        return read(path, &names)?.map(Some).ok_or_else(|| {
-            anyhow::anyhow!("{}: not a map of {}", path.display(), character.name())
-        });
+        return read_given(path, character, &names).map(Some);
     }
     let path = default_path(character_path, character);
     if let Some(map) = read(&path, &names)? {
