@@ -56,7 +56,12 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 args.retarget.as_deref(),
                 &clip,
             )?;
-            let unmatched = clip.unmatched(&character, map.as_ref());
+            let mut unmatched = clip.unmatched(&character, map.as_ref());
+            // The eye and jaw bones take what they show (gaze on eye bones without eyeLook
+            // shapes): not lost.
+            if let Some(skeleton) = faceanim_export::bones::ViewRig::of(&character) {
+                unmatched.retain(|name| !skeleton.shows(name));
+            }
             if character.blendshapes().is_empty() {
                 tracing::warn!(
                     "{}: {} has no blendshapes: its bones take the clip's head pose, eyeLook and jawOpen; nothing takes its other channels",

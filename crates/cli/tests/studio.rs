@@ -1932,3 +1932,76 @@ fn the_studio_turns_neck_head_eyes_and_jaw_on_the_avatars_bones() {
     );
     eprintln!("the face's bones in the view: {measured}");
 }
+
+/// A Live Link Face recording opened in the studio on Blender's remeshed full body, whose eyes
+/// are bones with no eyeLook shapes: its gaze turns the eye bones as the recording's export
+/// turns them (`BoneKeys::from_clip`), and the notice does not list the eyeLook channels as
+/// left out.
+#[test]
+fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
+    let dir = tempfile::tempdir().unwrap();
+    let avatar = faceanim_testdata::producers::blender_remeshed_avatar_path();
+    let character = faceanim_files::load_character(&avatar).unwrap().character;
+    let frames = 6;
+    let ramp = |f: usize, top: f32| top * f as f32 / (frames - 1) as f32;
+    let recording = faceanim_anim::Clip {
+        fps: 30.0,
+        blendshapes: [
+            "EyeLookOutLeft",
+            "EyeLookInRight",
+            "EyeLookUpLeft",
+            "EyeBlinkLeft",
+        ]
+        .map(String::from)
+        .to_vec(),
+        frames: (0..frames)
+            .map(|f| vec![ramp(f, 0.9), ramp(f, 0.9), ramp(f, 0.4), ramp(f, 1.0)])
+            .collect(),
+        head: None,
+        head_position: None,
+        presence: None,
+    };
+    let studio = start_on(Some(&avatar), &dir.path().join("project.json"), &[]);
+    let csv = faceanim_export::livelink::to_csv(&recording);
+    let (status, body) = support::upload(studio.port, "gaze.csv", csv.as_bytes());
+    assert_eq!(status, 200, "{body}");
+    let state = support::settled(studio.port, 60);
+    let notice = state["notice"].as_str().unwrap_or_default();
+    assert!(
+        !notice.contains("eyeLook") && !notice.contains("EyeLook"),
+        "{notice}"
+    );
+    let bones = state["take"]["bones"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no bones: {}", state["take"]));
+    assert_eq!(bones.len(), frames, "one pose per frame");
+
+    // The export's rule on the same values: the view's eye joints turn so at every frame.
+    let skeleton = faceanim_export::bones::ViewRig::of(&character).unwrap();
+    let keys = faceanim_export::bones::BoneKeys::from_clip(&recording);
+    let want = skeleton.poses(recording.fps, &vec![None; frames], &keys);
+    let eyes: Vec<usize> = (0..skeleton.joints.len())
+        .filter(|&j| {
+            matches!(
+                skeleton.joints[j].bone,
+                Some(faceanim_rig::bones::Bone::LeftEye | faceanim_rig::bones::Bone::RightEye)
+            )
+        })
+        .collect();
+    assert_eq!(eyes.len(), 2, "{:?}", skeleton.joints);
+    for (k, (got, want)) in bones.iter().zip(&want).enumerate() {
+        for &j in &eyes {
+            let got = glam::Quat::from_slice(&support::f32s(&got[j]));
+            let want = glam::Quat::from_array(want[j]);
+            assert!(
+                got.angle_between(want).to_degrees() < 0.2,
+                "eye joint {j} at frame {k}: {got:?} for {want:?}"
+            );
+        }
+    }
+    let last = glam::Quat::from_array(want[frames - 1][eyes[0]]);
+    assert!(
+        last.angle_between(glam::Quat::IDENTITY).to_degrees() > 5.0,
+        "the eyes look aside at the end: {last:?}"
+    );
+}

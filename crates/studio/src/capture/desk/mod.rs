@@ -380,7 +380,10 @@ impl CaptureDesk {
     /// one frame per row at its rate, unfiltered; the notice names the columns that move and
     /// reach none of the character's shapes. On a body with no blendshapes whose bones take
     /// the clip's head pose, gaze or jawOpen, the take is of no shapes, made of the clip's ARKit
-    /// values (which turn the bones). Returns its frame count.
+    /// values (which turn the bones). Where the character's shapes miss columns its bones show
+    /// (a clip's gaze on a body with eye bones and no eyeLook shapes), the take is made of the
+    /// clip's ARKit values too, so the bones turn as the clip's export turns them, and the
+    /// notice does not list those columns. Returns its frame count.
     ///
     /// # Errors
     /// [`ApiError::Invalid`] naming `shown` when no column reaches a shape of the character's
@@ -406,7 +409,7 @@ impl CaptureDesk {
         } else {
             ""
         };
-        let (rows, unmatched) = if on_bones {
+        let (rows, mut unmatched) = if on_bones {
             (vec![Vec::new(); count], Vec::new())
         } else {
             let retarget = clip
@@ -422,8 +425,15 @@ impl CaptureDesk {
             let lost = clip.unmatched(character, self.map.as_deref());
             (retarget.animation.weights, lost)
         };
+        // What the character's eye and jaw bones show (a clip's gaze on a body with eye bones
+        // and no eyeLook shapes) is not lost: the bones take it, as the clip's export turns
+        // them from its own columns.
+        let before = unmatched.len();
+        if let Some(skeleton) = &self.skeleton {
+            unmatched.retain(|name| !skeleton.shows(name));
+        }
         let mut take = Take::from_weights(character, shown, clip.fps, &rows, clip.head.as_deref())?;
-        if on_bones {
+        if on_bones || unmatched.len() < before {
             take = take.made_of_arkit(clip.arkit_rows())?;
         }
         let way = if on_bones { " on the bones" } else { "" };
