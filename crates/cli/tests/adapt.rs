@@ -15,12 +15,6 @@ use std::path::Path;
 
 use support::{assert_valid_gltf, column, faceanim, faceanim_ok, output_dir};
 
-fn ict() -> String {
-    faceanim_testdata::shared("characters/ict-face.glb")
-        .display()
-        .to_string()
-}
-
 /// `faceanim track INPUT --adapter ADAPTER MORE… -o OUTPUT…`, as it ended.
 fn track(input: &Path, adapter: &str, more: &[&str], outputs: &[&Path]) -> std::process::Output {
     let mut args = vec!["track", input.to_str().unwrap(), "--adapter", adapter];
@@ -62,7 +56,7 @@ fn adapt_then_track_correct_and_fine_tune() {
     // Train (few samples: the test checks the plumbing; the library test checks accuracy).
     let summary = faceanim_ok(&[
         "adapt",
-        &ict(),
+        &support::ict(),
         "-o",
         adapter_arg,
         "--samples",
@@ -91,7 +85,7 @@ fn adapt_then_track_correct_and_fine_tune() {
     let seed_csv = out.join("jaw.byoc.csv");
     let glb = out.join("jaw.glb");
     let live_link = out.join("jaw.csv");
-    let ict_path = ict();
+    let ict_path = support::ict();
     let more = [
         "--character",
         &ict_path,
@@ -199,7 +193,7 @@ fn adapt_then_track_correct_and_fine_tune() {
         "-o",
         before.to_str().unwrap(),
         "--character",
-        &ict(),
+        &support::ict(),
     ]);
     let before_jaw = column(&read_json(&before), "jawOpen");
     edit_ok(&["correct", "20", "jawOpen=0.6"]);
@@ -238,7 +232,7 @@ fn adapt_then_track_correct_and_fine_tune() {
     let result: serde_json::Value = serde_json::from_str(
         faceanim_ok(&[
             "adapt",
-            &ict(),
+            &support::ict(),
             "-o",
             tuned.to_str().unwrap(),
             "--from",
@@ -290,7 +284,14 @@ fn adapt_then_track_correct_and_fine_tune() {
     );
     // More networks than training samples to share out is refused before anything is rendered.
     for members in ["0", "17"] {
-        let refused = faceanim(&["adapt", &ict(), "--samples", "20", "--members", members]);
+        let refused = faceanim(&[
+            "adapt",
+            &support::ict(),
+            "--samples",
+            "20",
+            "--members",
+            members,
+        ]);
         assert!(!refused.status.success());
         let message = String::from_utf8_lossy(&refused.stderr);
         assert!(
@@ -299,7 +300,7 @@ fn adapt_then_track_correct_and_fine_tune() {
         );
     }
     // A hold on the map below 0 is refused, naming the option.
-    let refused = faceanim(&["adapt", &ict(), "--stay=-1"]);
+    let refused = faceanim(&["adapt", &support::ict(), "--stay=-1"]);
     assert!(!refused.status.success());
     let message = String::from_utf8_lossy(&refused.stderr);
     assert!(message.contains("--stay must be 0 or more"), "{message}");

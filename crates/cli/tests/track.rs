@@ -14,12 +14,6 @@ mod support;
 
 use support::{assert_valid_gltf, faceanim, output_dir};
 
-fn ict() -> String {
-    faceanim_testdata::shared("characters/ict-face.glb")
-        .display()
-        .to_string()
-}
-
 /// 10 frames at 24 fps: 3 shut, 4 open, 3 shut.
 fn make_video(path: &std::path::Path) {
     let read = |name: &str| {
@@ -52,7 +46,7 @@ fn a_video_animates_an_arkit_named_character_in_three_formats() {
         [&json, &glb, &csv, &raw].map(|p| p.to_str().unwrap());
     let outputs = ["-o", json_path, "-o", glb_path, "-o", csv_path];
     let more = [&outputs[..], &["--raw", raw_path, "--filter", "none"]].concat();
-    let summary = support::track_summary(&video, std::path::Path::new(&ict()), &more);
+    let summary = support::track_summary(&video, std::path::Path::new(&support::ict()), &more);
     assert_eq!(summary["frames"], 10);
     assert_eq!(summary["faces_found"], 10);
     assert!(

@@ -13,6 +13,13 @@ use std::net::TcpStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 
+/// The ICT head's path (`characters/ict-face.glb` of the shared material), as an argument.
+pub fn ict() -> String {
+    faceanim_testdata::shared("characters/ict-face.glb")
+        .display()
+        .to_string()
+}
+
 /// `shapes` renamed `shape_0`, `shape_1`… in their order (names that say nothing), each delta
 /// turned by `turn`.
 pub fn renamed_shapes(
