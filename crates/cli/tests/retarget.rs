@@ -384,24 +384,6 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
     assert_eq!(map["loaded"], false, "{map}");
     assert_eq!(map["needed"], true, "{map}");
 
-    // A Live Link Face recording opened before any map reaches nothing by name: refused,
-    // saying how its channels reach the shapes.
-    let recording = faceanim_anim::Clip {
-        fps: 30.0,
-        blendshapes: vec!["JawOpen".into()],
-        frames: vec![vec![0.0], vec![0.5], vec![1.0]],
-        head: None,
-        head_position: None,
-        presence: None,
-    };
-    let csv = faceanim_export::livelink::to_csv(&recording);
-    let (status, body) = support::upload(studio.port, "early.csv", csv.as_bytes());
-    assert_eq!(status, 400, "{body}");
-    assert!(
-        body.contains("early.csv") && body.contains("Make map"),
-        "{body}"
-    );
-
     // A photo opened before any map: the map is made first, and the take read through it.
     let photo = faceanim_testdata::shared("images/ict-face-jawopen.png");
     let (status, body) = support::request(

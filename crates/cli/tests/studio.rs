@@ -1933,14 +1933,22 @@ fn the_studio_turns_neck_head_eyes_and_jaw_on_the_avatars_bones() {
     eprintln!("the face's bones in the view: {measured}");
 }
 
-/// A Live Link Face recording opened in the studio on Blender's remeshed full body, whose eyes
-/// are bones with no eyeLook shapes: its gaze turns the eye bones as the recording's export
-/// turns them (`BoneKeys::from_clip`), and the notice does not list the eyeLook channels as
-/// left out.
+/// A Live Link Face recording opened in the studio on Blender's remeshed full body, whose
+/// VRoid-style names leave ARKit channels without a shape and whose eyes are bones with no
+/// eyeLook shapes: the character's retarget map is made first (as `faceanim export --clip`
+/// makes it), its pucker reaches the mouth through it; its gaze turns the eye bones as the
+/// recording's export turns them (`BoneKeys::from_clip`), and the notice does not list the
+/// eyeLook channels as left out.
 #[test]
 fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
     let dir = tempfile::tempdir().unwrap();
-    let avatar = faceanim_testdata::producers::blender_remeshed_avatar_path();
+    // A copy: the map is saved beside the character.
+    let avatar = dir.path().join("body.glb");
+    std::fs::copy(
+        faceanim_testdata::producers::blender_remeshed_avatar_path(),
+        &avatar,
+    )
+    .unwrap();
     let character = faceanim_files::load_character(&avatar).unwrap().character;
     let frames = 6;
     let ramp = |f: usize, top: f32| top * f as f32 / (frames - 1) as f32;
@@ -1951,11 +1959,20 @@ fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
             "EyeLookInRight",
             "EyeLookUpLeft",
             "EyeBlinkLeft",
+            "MouthPucker",
         ]
         .map(String::from)
         .to_vec(),
         frames: (0..frames)
-            .map(|f| vec![ramp(f, 0.9), ramp(f, 0.9), ramp(f, 0.4), ramp(f, 1.0)])
+            .map(|f| {
+                vec![
+                    ramp(f, 0.9),
+                    ramp(f, 0.9),
+                    ramp(f, 0.4),
+                    ramp(f, 1.0),
+                    ramp(f, 0.8),
+                ]
+            })
             .collect(),
         head: None,
         head_position: None,
@@ -1965,7 +1982,35 @@ fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
     let csv = faceanim_export::livelink::to_csv(&recording);
     let (status, body) = support::upload(studio.port, "gaze.csv", csv.as_bytes());
     assert_eq!(status, 200, "{body}");
-    let state = support::settled(studio.port, 60);
+    let answer: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(answer["job"]["kind"], "making_map", "{}", answer["job"]);
+    let state = support::settled(studio.port, 300);
+    assert!(state["job"]["error"].is_null(), "{}", state["job"]);
+    assert_eq!(state["retarget"]["in_use"], true, "{}", state["retarget"]);
+    assert!(
+        dir.path().join("body.retarget.json").exists(),
+        "{}",
+        state["retarget"]
+    );
+    // The pucker reaches the shapes of its row of the map.
+    let rows = state["retarget"]["rows"].as_array().unwrap();
+    let pucker = rows.iter().find(|r| r["channel"] == "mouthPucker").unwrap();
+    let shapes: Vec<&str> = pucker["shapes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|pair| pair[0].as_str())
+        .collect();
+    assert!(!shapes.is_empty(), "{pucker}");
+    let names = support::strings(&state["blendshapes"]);
+    let last = support::f32s(&state["take"]["weights"][frames - 1]);
+    let reached = shapes.iter().any(|shape| {
+        names
+            .iter()
+            .position(|n| n == shape)
+            .is_some_and(|k| last[k] > 0.1)
+    });
+    assert!(reached, "{pucker}: {names:?} {last:?}");
     let notice = state["notice"].as_str().unwrap_or_default();
     assert!(
         !notice.contains("eyeLook") && !notice.contains("EyeLook"),

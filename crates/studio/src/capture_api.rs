@@ -145,9 +145,10 @@ async fn open_path(State(both): State<Both>, body: Bytes) -> Answer<CaptureView>
 }
 
 /// Opens `bytes` (the file `shown`) as the take: a session or clip JSON at once, a GLB, VRM
-/// or Live Link CSV read off the async threads (a full-body avatar takes a moment). The answer
-/// is read under the lock that opened the take, so a file opened at the same moment never
-/// answers for this one.
+/// or Live Link CSV read off the async threads (a full-body avatar takes a moment); a clip
+/// whose ARKit channels need the character's retarget map after the map is made, as a job.
+/// The answer is read under the lock that opened the take, so a file opened at the same
+/// moment never answers for this one.
 async fn open_take(
     both: &Both,
     character: Arc<faceanim_rig::Character>,
@@ -155,18 +156,28 @@ async fn open_take(
     shown: String,
 ) -> Answer<CaptureView> {
     if !faceanim_export::reopen::reads(&shown) {
-        let mut desk = both.desk();
-        desk.open_session(&character, &bytes, &shown)?;
-        return Ok(axum::Json(desk.view(&character)));
+        return match capture::TakeJson::read(&bytes, &shown)? {
+            capture::TakeJson::Session(session) => {
+                let mut desk = both.desk();
+                desk.open_session(&character, *session, &shown)?;
+                Ok(axum::Json(desk.view(&character)))
+            }
+            capture::TakeJson::Clip(clip) => {
+                capture::open_clip(&both.desk, character, clip, shown, None).map(axum::Json)
+            }
+        };
     }
     let name = shown.clone();
     let reopened =
         tokio::task::spawn_blocking(move || faceanim_export::reopen::clip_of_file(&name, &bytes))
             .await
             .map_err(|e| ApiError::Internal(e.to_string()))??;
-    let mut desk = both.desk();
-    desk.open_reopened(&character, &reopened, &shown)?;
-    Ok(axum::Json(desk.view(&character)))
+    let opened = format!(
+        "Opened {}'s {} as the take.",
+        faceanim_rig::excerpt(&shown),
+        reopened.what
+    );
+    capture::open_clip(&both.desk, character, reopened.clip, shown, Some(opened)).map(axum::Json)
 }
 
 /// Whether a file named `name` opens as a take (a session or clip JSON, an animated GLB or VRM,

@@ -20,10 +20,10 @@ mod open_take;
 mod vmc;
 mod voice;
 
-pub use desk::jobs::{start_capture, start_finetune, start_training};
+pub use desk::jobs::{open_clip, start_capture, start_finetune, start_training};
 pub use desk::retarget::start_map;
 pub use desk::{CaptureDesk, SharedDesk};
 pub use live::{LiveHandle, LiveResult};
-pub use open_take::{OpenTake, Previews, Sound, audio_mime};
+pub use open_take::{OpenTake, Previews, Sound, TakeJson, audio_mime};
 pub use vmc::{Listen, TakeFrame, VmcConfig};
 pub use voice::{RATE as VOICE_RATE, VoiceHandle, VoiceResult};

@@ -12,6 +12,35 @@ pub(super) const PREVIEW_HEIGHT: usize = 360;
 /// Live takes keep smaller previews, made between camera frames.
 pub(super) const LIVE_PREVIEW_HEIGHT: usize = 240;
 
+/// A take file in JSON: a session (`faceanim track --session`, this tab's export), or a clip
+/// (`faceanim track -o take.json`, `lipsync`, this tab's Clip JSON), which opens as a take of
+/// its frames.
+#[derive(Debug)]
+pub enum TakeJson {
+    /// A session, with its estimates, corrections and keyframes.
+    Session(Box<faceanim_take::Session>),
+    /// A clip of weights by name.
+    Clip(faceanim_anim::Clip),
+}
+
+impl TakeJson {
+    /// Reads `bytes` of the file `shown`: a session, else a clip.
+    ///
+    /// # Errors
+    /// [`ApiError::Session`] naming `shown` (with why it is not a session) when it is neither.
+    pub fn read(bytes: &[u8], shown: &str) -> Result<TakeJson, ApiError> {
+        match faceanim_take::Session::from_json(bytes) {
+            Ok(session) => Ok(TakeJson::Session(Box::new(session))),
+            Err(source) => faceanim_anim::Clip::from_json(bytes)
+                .map(TakeJson::Clip)
+                .map_err(|_| ApiError::Session {
+                    what: faceanim_rig::excerpt(shown).into_owned(),
+                    source,
+                }),
+        }
+    }
+}
+
 /// A take's sound: the uploaded file as it came, for the page to play.
 #[derive(Debug, Clone)]
 pub struct Sound {

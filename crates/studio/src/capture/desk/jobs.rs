@@ -18,7 +18,7 @@ use crate::capture::models::{face_models, face_workers};
 use crate::capture::open_take::{PREVIEW_HEIGHT, Previews};
 use crate::error::ApiError;
 use crate::lock;
-use crate::views::JobKind;
+use crate::views::{CaptureView, JobKind};
 
 /// Frames a photo's 0 → peak → 0 animation lasts.
 const STILL_FRAMES: usize = 30;
@@ -57,6 +57,77 @@ pub fn start_capture(
         Ok(message)
     });
     Ok(())
+}
+
+/// Opens `clip` (of the file `shown`) as the take (the desk's `open_clip`), `opened` before
+/// its notice. When the character needs its retarget map for it (a Live Link Face recording
+/// on a VRoid avatar: the desk's `clip_needs_map`), the map is made first in the background,
+/// as `faceanim export --clip` makes it; if it cannot be made, that is said and the clip goes
+/// on by name. Answers with the state read under the lock that opened the take or started the
+/// job.
+///
+/// # Errors
+/// [`ApiError::Busy`] when another job runs, or (opened at once) the clip's error.
+pub fn open_clip(
+    desk: &SharedDesk,
+    character: Arc<Character>,
+    clip: faceanim_anim::Clip,
+    shown: String,
+    opened: Option<String>,
+) -> Result<CaptureView, ApiError> {
+    let job = Job::new(JobKind::MakingMap);
+    let (path, view) = {
+        let mut guard = lock(desk);
+        guard.busy()?;
+        if !guard.clip_needs_map(&character, &clip) {
+            guard.open_clip(&character, &clip, &shown)?;
+            if let Some(opened) = opened {
+                guard.notice_first(opened);
+            }
+            return Ok(guard.view(&character));
+        }
+        guard.job = Some(job.clone());
+        (guard.map_path.clone(), guard.view(&character))
+    };
+    let desk = desk.clone();
+    spawn_job(job, move |job| {
+        let made = super::retarget::make(job, &desk, &character, None);
+        if job.cancelled() {
+            return Err(faceanim_adapt::AdaptError::Cancelled.into());
+        }
+        let mut guard = lock(&desk);
+        if guard.map_path != path {
+            return Err(ApiError::Invalid(format!(
+                "{}: another character was opened meanwhile",
+                faceanim_rig::excerpt(&shown)
+            )));
+        }
+        let frames = guard.open_clip(&character, &clip, &shown)?;
+        let mut first = opened.unwrap_or_default();
+        let message = match made {
+            Ok(map) => format!(
+                "{}: {frames} frames, through the retarget map made for it ({} of ARKit's 52 channels reach its shapes)",
+                faceanim_rig::excerpt(&shown),
+                map.answered()
+            ),
+            Err(e) => {
+                let said = format!(
+                    "The retarget map could not be made ({e}): the clip's ARKit channels reach only the shapes named for them."
+                );
+                tracing::warn!("{shown}: {said}");
+                first = format!("{first} {said}").trim().to_owned();
+                format!(
+                    "{}: {frames} frames, by name",
+                    faceanim_rig::excerpt(&shown)
+                )
+            }
+        };
+        if !first.is_empty() {
+            guard.notice_first(first);
+        }
+        Ok(message)
+    });
+    Ok(view)
 }
 
 /// Reads every frame of `path` through the capture pipeline, with a preview of each.

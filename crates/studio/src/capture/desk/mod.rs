@@ -265,34 +265,20 @@ impl CaptureDesk {
     }
 
     /// Opens a session file as the take: one written by `faceanim track --adapter A --session
-    /// FILE`, edited by `faceanim session`, or exported from this tab. It has no previews (a
-    /// session does not keep its input). Returns its frame count.
+    /// FILE`, edited by `faceanim session`, or exported from this tab (read by
+    /// [`crate::capture::TakeJson::read`]). It has no previews (a session does not keep its input). Returns
+    /// its frame count.
     ///
     /// # Errors
-    /// [`ApiError::Session`] naming `shown` when the bytes are not a session,
     /// [`ApiError::Invalid`] when the session is of a character with other blendshapes, or
     /// [`ApiError::Busy`] when a job is running.
     pub fn open_session(
         &mut self,
         character: &Character,
-        bytes: &[u8],
+        session: Session,
         shown: &str,
     ) -> Result<usize, ApiError> {
         self.busy()?;
-        let session = match Session::from_json(bytes) {
-            Ok(session) => session,
-            // A clip JSON (what `faceanim track -o take.json`, `lipsync` or this tab's Clip
-            // JSON wrote) opens as a take of its frames.
-            Err(source) => match faceanim_anim::Clip::from_json(bytes) {
-                Ok(clip) => return self.open_clip(character, &clip, shown),
-                Err(_) => {
-                    return Err(ApiError::Session {
-                        what: faceanim_rig::excerpt(shown).into_owned(),
-                        source,
-                    });
-                }
-            },
-        };
         let names = names(character);
         if session.blendshapes != names {
             let lacking: Vec<&str> = names
@@ -320,29 +306,6 @@ impl CaptureDesk {
         Ok(self.open_file_take(take, &format!("the session {shown}")))
     }
 
-    /// Makes a file read back by [`faceanim_export::reopen::clip_of_file`] (a GLB, VRM or glTF
-    /// with a morph-weight animation, a Live Link Face CSV) the take, by name onto `character`.
-    /// Returns its frame count.
-    ///
-    /// # Errors
-    /// [`ApiError::Busy`] when a job is running, [`ApiError::Invalid`] when no column is one of
-    /// the character's, or the take's error.
-    pub fn open_reopened(
-        &mut self,
-        character: &Character,
-        reopened: &faceanim_export::reopen::Reopened,
-        shown: &str,
-    ) -> Result<usize, ApiError> {
-        self.busy()?;
-        let count = self.open_clip(character, &reopened.clip, shown)?;
-        self.notice_first(format!(
-            "Opened {}'s {} as the take.",
-            faceanim_rig::excerpt(shown),
-            reopened.what
-        ));
-        Ok(count)
-    }
-
     /// With no take to restore, the character's own file's morph-weight animation (a take or
     /// sketch exported before) opens as the take, ready to correct and export again (under
     /// its name: the export replaces it).
@@ -364,6 +327,17 @@ impl CaptureDesk {
             }
             Err(e) => tracing::warn!("the file's animation was not opened: {e}"),
         }
+    }
+
+    /// Whether opening `clip` on `character` waits for the character's retarget map: it has
+    /// none, its names leave ARKit channels the clip moves without a shape
+    /// ([`faceanim_anim::Clip::loses_arkit`]) while some shape is free to take them, and it is
+    /// not a body with no blendshapes whose bones take the clip.
+    pub(super) fn clip_needs_map(&self, character: &Character, clip: &faceanim_anim::Clip) -> bool {
+        self.map.is_none()
+            && !faceanim_export::bones::takes_clip(character, clip)
+            && clip.loses_arkit(character)
+            && faceanim_adapt::bridge::needs_map(character)
     }
 
     /// Puts `text` before the notice there is (what opening a take found).

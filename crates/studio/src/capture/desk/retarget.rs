@@ -241,7 +241,7 @@ pub(super) fn ensure_map(
 
 /// Makes the map, saves it and installs it on the desk (unless another character was opened
 /// meanwhile).
-fn make(
+pub(super) fn make(
     job: &Job,
     desk: &SharedDesk,
     character: &Character,
