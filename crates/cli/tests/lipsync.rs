@@ -1267,7 +1267,8 @@ fn the_microphone_opens_the_jaw_bone_of_a_body_with_no_shapes() {
 /// `shape_N`, in reverse order): lip sync reaches its mouth through its retarget map (made
 /// and kept beside it), and through its adapter when one is given (each viseme the built-in
 /// head makes, read by the adapter); either way the shape that is ICT's jawOpen opens while
-/// a synthetic voice speaks and rests before it does.
+/// a synthetic voice speaks and rests before it does. The studio, given the line with no map
+/// there, makes the map first and gives the command's take.
 #[test]
 fn a_rig_without_mouth_names_lip_syncs_through_its_map_or_its_adapter() {
     let out = output_dir("lipsync-adapter");
@@ -1326,6 +1327,37 @@ fn a_rig_without_mouth_names_lip_syncs_through_its_map_or_its_adapter() {
     println!("through the map, {jaw} (ICT's jawOpen) peaks at {most:.2}");
     assert!(most > 0.25, "{by_map:?}");
     assert!(by_map[0] < 0.05, "{by_map:?}");
+    // The studio, asked to lip-sync the same line on the same rig with no map, makes the map
+    // first (a job, as `faceanim lipsync` makes it), then the same take.
+    std::fs::remove_file(&map).unwrap();
+    // (An adapter beside it, from an earlier run, would read the mouth instead.)
+    let _ = std::fs::remove_file(out.join("unnamed.adapter.safetensors"));
+    let studio = start_on(Some(&glb), &out.join("unnamed.faceanim.json"), &[]);
+    let (status, body) = support::upload(studio.port, "line.wav", &std::fs::read(&speech).unwrap());
+    assert_eq!(status, 200, "{body}");
+    let answer: Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(answer["job"]["kind"], "making_map", "{}", answer["job"]);
+    let state = support::settled(studio.port, 300);
+    assert!(state["job"]["error"].is_null(), "{}", state["job"]);
+    assert!(
+        map.exists(),
+        "the studio keeps the map beside the character"
+    );
+    assert!(state["take"]["sound"].is_string(), "{}", state["take"]);
+    let (status, body) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    let in_studio = jaw_of(&serde_json::from_str(&body).unwrap());
+    drop(studio);
+    assert_eq!(in_studio.len(), by_map.len());
+    let apart = in_studio
+        .iter()
+        .zip(&by_map)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        apart < 0.02,
+        "the studio's take is apart by {apart}: {in_studio:?}"
+    );
     // The adapter, when given, reads the mouth instead (few renders: this checks the route;
     // the adapter tests check its accuracy).
     let adapter = out.join("unnamed.adapter.safetensors");

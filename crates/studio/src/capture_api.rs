@@ -305,45 +305,36 @@ async fn upload(
             None | Some("") => faceanim_speech::Voice::Auto,
             Some(voice) => voice.parse().map_err(|e| bad(format!("voice: {e}")))?,
         };
-        let path = both.desk().store_upload(&name, &body, None)?;
+        let stored = both.desk().store_upload(&name, &body, None)?;
+        let speech = capture::Speech {
+            stored,
+            mime,
+            shown: name,
+            text,
+            language,
+            voice,
+        };
         let character = both.studio().character.clone();
-        let (shown, stored, desk) = (name.clone(), path.clone(), both.desk.clone());
+        // A rig whose names say nothing of a mouth is reached through its retarget map: made
+        // first, as a job, where it has none yet (as `faceanim lipsync` makes it).
+        if let Some(view) = capture::speech_after_map(&both.desk, character.clone(), &speech)? {
+            return Ok(axum::Json(view));
+        }
+        let (line, desk) = (speech.clone(), both.desk.clone());
         // Recognition takes seconds (and reading the mouth through an adapter a moment): off
         // the async threads.
         let lip_sync = tokio::task::spawn_blocking(move || {
             let mouth = lock(&desk).mouth(&character)?;
-            // Messages name the file the user picked, not its private copy.
-            let sound = faceanim_speech::Sound::read(&stored).map_err(|e| {
-                ApiError::Invalid(e.to_string().replace(&stored.display().to_string(), &shown))
-            })?;
-            if let Some(text) = &text {
-                faceanim_speech::phones::transcript_words(text, sound.seconds())
-                    .map_err(|e| ApiError::Invalid(format!("text: {e}")))?;
-            }
-            faceanim_speech::lip_sync_with(
-                &sound,
-                text.as_deref(),
-                language.as_deref(),
-                &mouth,
-                30.0,
-                faceanim_speech::Recognition::Words,
-                voice,
-            )
-            .map_err(|e| ApiError::Invalid(e.to_string()))
+            line.lip_sync(&mouth)
         })
         .await
-        .map_err(|e| bad(format!("{name}: lip sync stopped: {e}")))?
-        .map_err(|e| match e {
-            ApiError::Invalid(message) if message.starts_with(name.as_str()) => {
-                ApiError::Invalid(message)
-            }
-            e => bad(format!("{name}: {e}")),
-        })?;
+        .map_err(|e| bad(format!("{}: lip sync stopped: {e}", speech.shown)))?
+        .map_err(|e| speech.named(e))?;
         // The answer is this line's take, read under the lock that opened it: a line
         // uploaded at the same moment may open next, but never answers for this one.
         let character = both.studio().character.clone();
         let mut desk = both.desk();
-        desk.open_speech(&character, &lip_sync, capture::Sound { path, mime }, &name)?;
+        desk.open_speech(&character, &lip_sync, speech.sound(), &speech.shown)?;
         return Ok(axum::Json(desk.view(&character)));
     }
     if batch.batch.is_some() && batch.index >= batch.count {

@@ -9,7 +9,8 @@
 //!
 //! The desk ([`CaptureDesk`], in `desk`) owns the state and its methods; the parts it holds —
 //! the webcam (`live`), VMC (`vmc`), the microphone (`voice`), the open take with its previews
-//! (`open_take`), a long job (`job`) and the face models (`models`) — each keep their own state
+//! (`open_take`), an uploaded line of speech (`speech`), a long job (`job`) and the face models
+//! (`models`) — each keep their own state
 //! type and never reach back into the desk.
 
 mod desk;
@@ -17,13 +18,15 @@ mod job;
 mod live;
 mod models;
 mod open_take;
+mod speech;
 mod vmc;
 mod voice;
 
-pub use desk::jobs::{open_clip, start_capture, start_finetune, start_training};
+pub use desk::jobs::{open_clip, speech_after_map, start_capture, start_finetune, start_training};
 pub use desk::retarget::start_map;
 pub use desk::{CaptureDesk, SharedDesk};
 pub use live::{LiveHandle, LiveResult};
 pub use open_take::{OpenTake, Previews, Sound, TakeJson, audio_mime};
+pub use speech::Speech;
 pub use vmc::{Listen, TakeFrame, VmcConfig};
 pub use voice::{RATE as VOICE_RATE, VoiceHandle, VoiceResult};

@@ -130,6 +130,63 @@ pub fn open_clip(
     Ok(view)
 }
 
+/// Starts lip-syncing `speech` after making the character's retarget map, when the mouth
+/// needs the map and it has none (a rig whose names say nothing of a mouth, with no adapter:
+/// the desk's `speech_needs_map`), as `faceanim lipsync` makes it; answers with the state
+/// that shows the job. `None` when the map is not needed: the caller lip-syncs at once.
+///
+/// # Errors
+/// [`ApiError::Busy`] when another job runs.
+pub fn speech_after_map(
+    desk: &SharedDesk,
+    character: Arc<Character>,
+    speech: &crate::capture::Speech,
+) -> Result<Option<CaptureView>, ApiError> {
+    let job = Job::new(JobKind::MakingMap);
+    let (path, view) = {
+        let mut guard = lock(desk);
+        if !guard.speech_needs_map(&character) {
+            return Ok(None);
+        }
+        guard.busy()?;
+        guard.job = Some(job.clone());
+        (guard.map_path.clone(), guard.view(&character))
+    };
+    let (desk, speech) = (desk.clone(), speech.clone());
+    spawn_job(job, move |job| {
+        let map = super::retarget::make(job, &desk, &character, None).map_err(|e| {
+            if job.cancelled() {
+                return e;
+            }
+            ApiError::Invalid(format!(
+                "{}: {} has no mouth shapes by name, and its retarget map, which lip sync would go through, could not be made: {e}",
+                faceanim_rig::excerpt(&speech.shown),
+                faceanim_rig::excerpt(character.name())
+            ))
+        })?;
+        job.stage("lip sync", 0);
+        let mouth = {
+            let mut guard = lock(&desk);
+            if guard.map_path != path {
+                return Err(ApiError::Invalid(format!(
+                    "{}: another character was opened meanwhile",
+                    faceanim_rig::excerpt(&speech.shown)
+                )));
+            }
+            guard.mouth(&character)?
+        };
+        let lip_sync = speech.lip_sync(&mouth).map_err(|e| speech.named(e))?;
+        let frames =
+            lock(&desk).put_speech(&character, &lip_sync, speech.sound(), &speech.shown)?;
+        Ok(format!(
+            "{}: {frames} frames of lip sync, through the retarget map made for it ({} of ARKit's 52 channels reach its shapes)",
+            faceanim_rig::excerpt(&speech.shown),
+            map.answered()
+        ))
+    });
+    Ok(Some(view))
+}
+
 /// Reads every frame of `path` through the capture pipeline, with a preview of each.
 fn read_input(job: &Job, path: &Path, shown_name: &str) -> Result<(Footage, Previews), ApiError> {
     job.stage("loading the face models", 1);

@@ -340,6 +340,16 @@ impl CaptureDesk {
             && faceanim_adapt::bridge::needs_map(character)
     }
 
+    /// Whether lip sync on `character` waits for its retarget map: its names say nothing of a
+    /// mouth (no viseme or ARKit mouth shapes by the viseme table), it has neither an adapter
+    /// nor a map, and some shape is free to take ARKit's channels by geometry.
+    pub(super) fn speech_needs_map(&self, character: &Character) -> bool {
+        self.adapter.is_none()
+            && self.map.is_none()
+            && faceanim_speech::Mouth::of(character, &self.visemes).is_err()
+            && faceanim_adapt::bridge::needs_map(character)
+    }
+
     /// Puts `text` before the notice there is (what opening a take found).
     fn notice_first(&mut self, text: String) {
         self.notice = Some(match self.notice.take() {
@@ -449,6 +459,17 @@ impl CaptureDesk {
         shown: &str,
     ) -> Result<usize, ApiError> {
         self.busy()?;
+        self.put_speech(character, lip_sync, sound, shown)
+    }
+
+    /// [`CaptureDesk::open_speech`] from the job that made the map it needed.
+    fn put_speech(
+        &mut self,
+        character: &Character,
+        lip_sync: &faceanim_speech::LipSync,
+        sound: Sound,
+        shown: &str,
+    ) -> Result<usize, ApiError> {
         let count = lip_sync.frames.len();
         // What it is made of goes with it (Live Link Face's curves, a jaw bone's opening).
         let take = Take::from_weights(character, shown, lip_sync.fps, &lip_sync.frames, None)?
