@@ -1933,6 +1933,61 @@ fn the_studio_turns_neck_head_eyes_and_jaw_on_the_avatars_bones() {
     eprintln!("the face's bones in the view: {measured}");
 }
 
+/// The live webcam on the ICT head with every shape renamed `shape_N` (names that say
+/// nothing): starting it makes the rig's retarget map (a job the page shows), and once the map
+/// is there the same open-mouthed frame opens the shape that is ICT's jawOpen.
+#[test]
+fn the_live_webcam_on_a_rig_whose_names_say_nothing_goes_through_the_map_made_when_it_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut parts = faceanim_testdata::ict().to_parts();
+    let jaw = parts
+        .blendshapes
+        .iter()
+        .position(|b| b.name() == "jawOpen")
+        .unwrap();
+    parts.blendshapes = support::renamed_shapes(&parts.blendshapes, glam::Quat::IDENTITY);
+    let character = faceanim_rig::Character::new(parts).unwrap();
+    let glb = dir.path().join("unnamed.glb");
+    std::fs::write(&glb, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
+    let studio = start_on(Some(&glb), &dir.path().join("unnamed.faceanim.json"), &[]);
+    let open =
+        faceanim_media::read_image(&faceanim_testdata::shared("images/ict-face-jawopen.png"))
+            .unwrap();
+    let (width, height) = (open.width.to_string(), open.height.to_string());
+    let rgbx: Vec<u8> = open
+        .rgb
+        .chunks(3)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    let jaw_of_a_frame = || {
+        let (status, body) = request(
+            studio.port,
+            "POST",
+            "/api/capture/live/frame",
+            &[
+                ("x-width", &width),
+                ("x-height", &height),
+                ("x-pixel-format", "RGBX"),
+            ],
+            &rgbx,
+        );
+        assert_eq!(status, 200, "{body}");
+        let result: serde_json::Value = serde_json::from_str(&body).unwrap();
+        assert_eq!(result["found"], true, "{body}");
+        support::f32s(&result["weights"])[jaw]
+    };
+    let (status, body) = request(studio.port, "POST", "/api/capture/live/start", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    let answer: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(answer["job"]["kind"], "making_map", "{}", answer["job"]);
+    let state = support::settled(studio.port, 300);
+    assert!(state["job"]["error"].is_null(), "{}", state["job"]);
+    assert_eq!(state["retarget"]["in_use"], true, "{}", state["retarget"]);
+    assert!(dir.path().join("unnamed.retarget.json").exists());
+    let opened = jaw_of_a_frame();
+    assert!(opened > 0.2, "shape_{jaw} (ICT's jawOpen) at {opened}");
+}
+
 /// A Live Link Face recording opened in the studio on Blender's remeshed full body, whose
 /// VRoid-style names leave ARKit channels without a shape and whose eyes are bones with no
 /// eyeLook shapes: the character's retarget map is made first (as `faceanim export --clip`

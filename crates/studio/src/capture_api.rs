@@ -664,9 +664,15 @@ async fn live_start(State(both): State<Both>, _unread: Unread) -> Answer<Capture
     // Loading the models the first time takes a moment: off the async threads.
     let desk = both.desk.clone();
     let character = both.studio().character.clone();
-    tokio::task::spawn_blocking(move || lock(&desk).start_live(&character))
+    let started = character.clone();
+    tokio::task::spawn_blocking(move || lock(&desk).start_live(&started))
         .await
         .map_err(|e| ApiError::Internal(e.to_string()))??;
+    // A rig whose names say nothing follows the webcam through its map: made now, when it
+    // has none yet (the page shows the job; the webcam goes on by name until it is there).
+    if capture::map_for_live(&both.desk, character) {
+        tracing::info!("making the retarget map for the live webcam");
+    }
     Ok(state_of(&both))
 }
 

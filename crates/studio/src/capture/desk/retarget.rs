@@ -221,6 +221,22 @@ pub fn start_map(
     Ok(())
 }
 
+/// Starts making the map in the background for the live webcam, when the rig needs one and
+/// has none, no adapter reads capture, no earlier try found no face (the user marks it then)
+/// and no job runs. The webcam goes on by name meanwhile, and through the map once it is
+/// installed. Returns whether it started.
+pub fn map_for_live(desk: &SharedDesk, character: Arc<Character>) -> bool {
+    let wanted = {
+        let guard = lock(desk);
+        guard.adapter.is_none()
+            && guard.map.is_none()
+            && !guard.no_face
+            && guard.busy().is_ok()
+            && faceanim_adapt::bridge::needs_map(&character)
+    };
+    wanted && start_map(desk, character, false, None).is_ok()
+}
+
 /// Makes the map before a capture when the rig needs one, has none and no adapter reads it.
 pub(super) fn ensure_map(
     job: &Job,
