@@ -1334,11 +1334,7 @@ fn a_rig_without_mouth_names_lip_syncs_through_its_map_or_its_adapter() {
     let _ = std::fs::remove_file(out.join("unnamed.adapter.safetensors"));
     let studio = start_on(Some(&glb), &out.join("unnamed.faceanim.json"), &[]);
     let (status, body) = support::upload(studio.port, "line.wav", &std::fs::read(&speech).unwrap());
-    assert_eq!(status, 200, "{body}");
-    let answer: Value = serde_json::from_str(&body).unwrap();
-    assert_eq!(answer["job"]["kind"], "making_map", "{}", answer["job"]);
-    let state = support::settled(studio.port, 300);
-    assert!(state["job"]["error"].is_null(), "{}", state["job"]);
+    let state = support::map_made(studio.port, status, &body);
     assert!(
         map.exists(),
         "the studio keeps the map beside the character"

@@ -30,6 +30,29 @@ fn start_with(project: &std::path::Path, more: &[&std::ffi::OsStr]) -> Studio {
 
 /// Runs `tools/SCRIPT URL OUT ARGUMENTS…` (playwright-core driving Debian's chromium) against
 /// `studio` and returns the JSON line of measurements it prints last; fails with its output.
+/// Sends `rgb` (`width`×`height`, three bytes a pixel) to the studio at `port` as one live
+/// webcam frame, as the page sends it (RGBX); returns the answer.
+fn live_frame(port: u16, width: usize, height: usize, rgb: &[u8]) -> serde_json::Value {
+    let rgbx: Vec<u8> = rgb
+        .chunks(3)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    let (width, height) = (width.to_string(), height.to_string());
+    let (status, body) = request(
+        port,
+        "POST",
+        "/api/capture/live/frame",
+        &[
+            ("x-width", &width),
+            ("x-height", &height),
+            ("x-pixel-format", "RGBX"),
+        ],
+        &rgbx,
+    );
+    assert_eq!(status, 200, "{body}");
+    serde_json::from_str(&body).unwrap()
+}
+
 fn browser_script(
     script: &str,
     studio: &Studio,
@@ -725,26 +748,9 @@ fn the_live_webcam_face_goes_out_over_vmc() {
             .unwrap();
     let (status, body) = request(studio.port, "POST", "/api/capture/live/start", &[], b"");
     assert_eq!(status, 200, "{body}");
-    let (width, height) = (open.width.to_string(), open.height.to_string());
     for _ in 0..3 {
-        let (status, body) = request(
-            studio.port,
-            "POST",
-            "/api/capture/live/frame",
-            &[
-                ("x-width", &width),
-                ("x-height", &height),
-                ("x-pixel-format", "RGBX"),
-            ],
-            &open
-                .rgb
-                .chunks(3)
-                .flat_map(|p| [p[0], p[1], p[2], 255])
-                .collect::<Vec<u8>>(),
-        );
-        assert_eq!(status, 200, "{body}");
-        let result: serde_json::Value = serde_json::from_str(&body).unwrap();
-        assert_eq!(result["found"], true, "{body}");
+        let result = live_frame(studio.port, open.width, open.height, &open.rgb);
+        assert_eq!(result["found"], true, "{result}");
     }
     // A frame the page plays: the ICT head's weights with jawOpen at 0.3, the head turned 10°.
     let (_, body) = request(studio.port, "GET", "/api/character", &[], b"");
@@ -1192,25 +1198,7 @@ fn the_neutral_face_of_a_take_and_of_the_live_webcam() {
 
     // Live: the same still picture again and again is a face held still.
     let face = support::ict_jaw_frames(&[0.0], 256).remove(0);
-    let rgbx: Vec<u8> = face
-        .chunks(3)
-        .flat_map(|p| [p[0], p[1], p[2], 255])
-        .collect();
-    let frame = |port: u16| -> serde_json::Value {
-        let (status, body) = request(
-            port,
-            "POST",
-            "/api/capture/live/frame",
-            &[
-                ("x-width", "256"),
-                ("x-height", "256"),
-                ("x-pixel-format", "RGBX"),
-            ],
-            &rgbx,
-        );
-        assert_eq!(status, 200, "{body}");
-        serde_json::from_str(&body).unwrap()
-    };
+    let frame = |port: u16| live_frame(port, 256, 256, &face);
     let (status, _) = request(studio.port, "POST", "/api/capture/live/calibrate", &[], b"");
     assert_eq!(status, 400, "calibrating needs live mode");
     request(studio.port, "POST", "/api/capture/live/start", &[], b"");
@@ -1953,38 +1941,13 @@ fn the_live_webcam_on_a_rig_whose_names_say_nothing_goes_through_the_map_made_wh
     let open =
         faceanim_media::read_image(&faceanim_testdata::shared("images/ict-face-jawopen.png"))
             .unwrap();
-    let (width, height) = (open.width.to_string(), open.height.to_string());
-    let rgbx: Vec<u8> = open
-        .rgb
-        .chunks(3)
-        .flat_map(|p| [p[0], p[1], p[2], 255])
-        .collect();
-    let jaw_of_a_frame = || {
-        let (status, body) = request(
-            studio.port,
-            "POST",
-            "/api/capture/live/frame",
-            &[
-                ("x-width", &width),
-                ("x-height", &height),
-                ("x-pixel-format", "RGBX"),
-            ],
-            &rgbx,
-        );
-        assert_eq!(status, 200, "{body}");
-        let result: serde_json::Value = serde_json::from_str(&body).unwrap();
-        assert_eq!(result["found"], true, "{body}");
-        support::f32s(&result["weights"])[jaw]
-    };
     let (status, body) = request(studio.port, "POST", "/api/capture/live/start", &[], b"");
-    assert_eq!(status, 200, "{body}");
-    let answer: serde_json::Value = serde_json::from_str(&body).unwrap();
-    assert_eq!(answer["job"]["kind"], "making_map", "{}", answer["job"]);
-    let state = support::settled(studio.port, 300);
-    assert!(state["job"]["error"].is_null(), "{}", state["job"]);
+    let state = support::map_made(studio.port, status, &body);
     assert_eq!(state["retarget"]["in_use"], true, "{}", state["retarget"]);
     assert!(dir.path().join("unnamed.retarget.json").exists());
-    let opened = jaw_of_a_frame();
+    let result = live_frame(studio.port, open.width, open.height, &open.rgb);
+    assert_eq!(result["found"], true, "{result}");
+    let opened = support::f32s(&result["weights"])[jaw];
     assert!(opened > 0.2, "shape_{jaw} (ICT's jawOpen) at {opened}");
 }
 
@@ -2036,11 +1999,7 @@ fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
     let studio = start_on(Some(&avatar), &dir.path().join("project.json"), &[]);
     let csv = faceanim_export::livelink::to_csv(&recording);
     let (status, body) = support::upload(studio.port, "gaze.csv", csv.as_bytes());
-    assert_eq!(status, 200, "{body}");
-    let answer: serde_json::Value = serde_json::from_str(&body).unwrap();
-    assert_eq!(answer["job"]["kind"], "making_map", "{}", answer["job"]);
-    let state = support::settled(studio.port, 300);
-    assert!(state["job"]["error"].is_null(), "{}", state["job"]);
+    let state = support::map_made(studio.port, status, &body);
     assert_eq!(state["retarget"]["in_use"], true, "{}", state["retarget"]);
     assert!(
         dir.path().join("body.retarget.json").exists(),

@@ -334,7 +334,7 @@ async fn upload(
         // uploaded at the same moment may open next, but never answers for this one.
         let character = both.studio().character.clone();
         let mut desk = both.desk();
-        desk.open_speech(&character, &lip_sync, speech.sound(), &speech.shown)?;
+        desk.open_speech(&character, &lip_sync, &speech)?;
         return Ok(axum::Json(desk.view(&character)));
     }
     if batch.batch.is_some() && batch.index >= batch.count {

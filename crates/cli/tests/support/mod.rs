@@ -881,6 +881,17 @@ pub fn settled(port: u16, seconds: u64) -> serde_json::Value {
     }
 }
 
+/// The studio's `answer` (`body`, status 200) started making the character's retarget map
+/// (a `making_map` job); waits until it ends without error, and returns the state then.
+pub fn map_made(port: u16, status: u16, body: &str) -> serde_json::Value {
+    assert_eq!(status, 200, "{body}");
+    let answer: serde_json::Value = serde_json::from_str(body).unwrap();
+    assert_eq!(answer["job"]["kind"], "making_map", "{}", answer["job"]);
+    let state = settled(port, 300);
+    assert!(state["job"]["error"].is_null(), "{}", state["job"]);
+    state
+}
+
 /// Whether MediaPipe's scores of a channel on some footage move: they span at least
 /// `at_least` between their 5th and 95th percentiles (a channel that never changes by that
 /// much is noise around a constant).

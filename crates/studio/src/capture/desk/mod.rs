@@ -446,8 +446,8 @@ impl CaptureDesk {
         Ok(frames)
     }
 
-    /// Makes `lip_sync` (of the speech `shown`, kept as `sound`) the take: its frames the
-    /// character's weights at `lip_sync.fps`, played with the sound. Returns its frame count.
+    /// Makes `lip_sync` (of the uploaded `speech`) the take: its frames the character's
+    /// weights at `lip_sync.fps`, played with the sound. Returns its frame count.
     ///
     /// # Errors
     /// [`ApiError::Busy`] when a job is running, or the take's error.
@@ -455,11 +455,10 @@ impl CaptureDesk {
         &mut self,
         character: &Character,
         lip_sync: &faceanim_speech::LipSync,
-        sound: Sound,
-        shown: &str,
+        speech: &crate::capture::Speech,
     ) -> Result<usize, ApiError> {
         self.busy()?;
-        self.put_speech(character, lip_sync, sound, shown)
+        self.put_speech(character, lip_sync, speech.sound(), &speech.shown)
     }
 
     /// [`CaptureDesk::open_speech`] from the job that made the map it needed.
