@@ -1921,12 +1921,9 @@ fn the_studio_turns_neck_head_eyes_and_jaw_on_the_avatars_bones() {
     eprintln!("the face's bones in the view: {measured}");
 }
 
-/// The live webcam on the ICT head with every shape renamed `shape_N` (names that say
-/// nothing): starting it makes the rig's retarget map (a job the page shows), and once the map
-/// is there the same open-mouthed frame opens the shape that is ICT's jawOpen.
-#[test]
-fn the_live_webcam_on_a_rig_whose_names_say_nothing_goes_through_the_map_made_when_it_starts() {
-    let dir = tempfile::tempdir().unwrap();
+/// The ICT head with every shape renamed `shape_N` (names that say nothing), written as
+/// `unnamed.glb` in `dir`; with the index of the shape that is ICT's jawOpen.
+fn unnamed_ict(dir: &std::path::Path) -> (std::path::PathBuf, usize) {
     let mut parts = faceanim_testdata::ict().to_parts();
     let jaw = parts
         .blendshapes
@@ -1935,8 +1932,18 @@ fn the_live_webcam_on_a_rig_whose_names_say_nothing_goes_through_the_map_made_wh
         .unwrap();
     parts.blendshapes = support::renamed_shapes(&parts.blendshapes, glam::Quat::IDENTITY);
     let character = faceanim_rig::Character::new(parts).unwrap();
-    let glb = dir.path().join("unnamed.glb");
+    let glb = dir.join("unnamed.glb");
     std::fs::write(&glb, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
+    (glb, jaw)
+}
+
+/// The live webcam on the ICT head with names that say nothing ([`unnamed_ict`]): starting it
+/// makes the rig's retarget map (a job the page shows), and once the map is there the same
+/// open-mouthed frame opens the shape that is ICT's jawOpen.
+#[test]
+fn the_live_webcam_on_a_rig_whose_names_say_nothing_goes_through_the_map_made_when_it_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    let (glb, jaw) = unnamed_ict(dir.path());
     let studio = start_on(Some(&glb), &dir.path().join("unnamed.faceanim.json"), &[]);
     let open =
         faceanim_media::read_image(&faceanim_testdata::shared("images/ict-face-jawopen.png"))
@@ -1949,6 +1956,39 @@ fn the_live_webcam_on_a_rig_whose_names_say_nothing_goes_through_the_map_made_wh
     assert_eq!(result["found"], true, "{result}");
     let opened = support::f32s(&result["weights"])[jaw];
     assert!(opened > 0.2, "shape_{jaw} (ICT's jawOpen) at {opened}");
+}
+
+/// A Live Link Face phone listened to (`--phone live-link-face`) for the ICT head with names
+/// that say nothing ([`unnamed_ict`]): the studio makes the rig's retarget map when it starts,
+/// and then what pylivelinkface sends (JawOpen, EyeBlinkLeft, MouthSmileLeft) reaches its
+/// shapes: nothing is listed as reaching nothing.
+#[test]
+fn a_phone_listened_to_for_a_rig_whose_names_say_nothing_goes_through_the_map_made_at_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let (glb, _) = unnamed_ict(dir.path());
+    let port = support::free_udp_port();
+    let studio = start_on_live_link_face(
+        &glb,
+        &dir.path().join("unnamed.faceanim.json"),
+        port,
+        &dir.path().join("phone.json"),
+        &[],
+    );
+    let (status, body) = request(studio.port, "GET", "/api/capture/state", &[], b"");
+    let state = support::map_made(studio.port, status, &body);
+    assert_eq!(state["retarget"]["in_use"], true, "{}", state["retarget"]);
+    send_live_link_face(port, 60, dir.path());
+    let mut view = live_view(&studio);
+    for _ in 0..100 {
+        if view["frames"] == 60 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        view = live_view(&studio);
+    }
+    assert_eq!(view["frames"], 60, "{view}");
+    assert_eq!(view["unmatched"], 0, "{view}");
+    assert_eq!(view["unmatched_names"], serde_json::json!([]), "{view}");
 }
 
 /// A Live Link Face recording opened in the studio on Blender's remeshed full body, whose

@@ -203,6 +203,7 @@ fn open_character(both: &Both, character: faceanim_rig::Character) -> StateView 
     let adapter_path =
         faceanim_adapt::default_adapter_path(studio.project_path.parent(), studio.character.name());
     lock(&both.desk).character_changed(&studio.character, adapter_path);
+    crate::capture::map_for_listeners(&both.desk, studio.character.clone());
     studio.view()
 }
 

@@ -140,6 +140,11 @@ pub async fn serve(config: Config, listener: tokio::net::TcpListener) -> Result<
         studio: Arc::new(Mutex::new(studio)),
         desk: Arc::new(Mutex::new(desk)),
     };
+    // A phone or VMC tracker listened to reaches a rig whose names say nothing through its
+    // retarget map: made now when it has none yet.
+    if capture::map_for_listeners(&both.desk, character) {
+        tracing::info!("making the retarget map for the phone or tracker listened to");
+    }
     let app = api::router(both, address.port());
     // Live answers are small and wanted at once: without TCP_NODELAY, one waiting for the
     // acknowledgement of the last could sit 40 ms (Nagle's algorithm and delayed ACKs).

@@ -23,7 +23,7 @@ mod vmc;
 mod voice;
 
 pub use desk::jobs::{open_clip, speech_after_map, start_capture, start_finetune, start_training};
-pub use desk::retarget::{map_for_live, start_map};
+pub use desk::retarget::{map_for_listeners, map_for_live, start_map};
 pub use desk::{CaptureDesk, SharedDesk};
 pub use live::{LiveHandle, LiveResult};
 pub use open_take::{OpenTake, Previews, Sound, TakeJson, audio_mime};

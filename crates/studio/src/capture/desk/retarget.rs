@@ -1,6 +1,7 @@
 //! The character's retarget map on the capture desk: read from beside the character, made in
-//! the background (by the page's button, or before the first capture of a rig whose names
-//! leave channels without a shape), shown row by row, and edited a row at a time.
+//! the background (by the page's button; for a rig whose names leave channels without a shape,
+//! before its first capture, clip or line of speech that needs it, and when its live inputs
+//! start), shown row by row, and edited a row at a time.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -221,7 +222,8 @@ pub fn start_map(
     Ok(())
 }
 
-/// Starts making the map in the background for the live webcam, when the rig needs one and
+/// Starts making the map in the background for live input (the webcam, a phone or a VMC
+/// tracker), when the rig needs one and
 /// has none, no adapter reads capture, no earlier try found no face (the user marks it then)
 /// and no job runs. The webcam goes on by name meanwhile, and through the map once it is
 /// installed. Returns whether it started.
@@ -235,6 +237,14 @@ pub fn map_for_live(desk: &SharedDesk, character: Arc<Character>) -> bool {
             && faceanim_adapt::bridge::needs_map(&character)
     };
     wanted && start_map(desk, character, false, None).is_ok()
+}
+
+/// [`map_for_live`] for a phone or a VMC tracker, when the studio listens to one: started
+/// with the studio and for each character opened, so the phone's ARKit channels reach a rig
+/// whose names say nothing once the map is there.
+pub fn map_for_listeners(desk: &SharedDesk, character: Arc<Character>) -> bool {
+    let listening = lock(desk).vmc.marionette().is_ok();
+    listening && map_for_live(desk, character)
 }
 
 /// Makes the map before a capture when the rig needs one, has none and no adapter reads it.
