@@ -329,25 +329,33 @@ impl CaptureDesk {
         }
     }
 
-    /// Whether opening `clip` on `character` waits for the character's retarget map: it has
-    /// none, its names leave ARKit channels the clip moves without a shape
-    /// ([`faceanim_anim::Clip::loses_arkit`]) while some shape is free to take them, and it is
-    /// not a body with no blendshapes whose bones take the clip.
-    pub(super) fn clip_needs_map(&self, character: &Character, clip: &faceanim_anim::Clip) -> bool {
+    /// Whether `character` lacks the retarget map it needs and one can be made now: its names
+    /// leave channels MediaPipe reads without a shape while some shape is free to take them,
+    /// it has no map, and the face was found on it before (or the user has marked it since; a
+    /// face not found is not looked for again on every clip).
+    pub(super) fn lacks_map(&self, character: &Character) -> bool {
         self.map.is_none()
-            && !faceanim_export::bones::takes_clip(character, clip)
-            && clip.loses_arkit(character)
+            && !(self.no_face && self.face_points.is_none())
             && faceanim_adapt::bridge::needs_map(character)
     }
 
+    /// Whether opening `clip` on `character` waits for the character's retarget map: it
+    /// [lacks](CaptureDesk::lacks_map) one, the clip moves ARKit channels its names leave
+    /// without a shape ([`faceanim_anim::Clip::loses_arkit`]), and it is not a body with no
+    /// blendshapes whose bones take the clip.
+    pub(super) fn clip_needs_map(&self, character: &Character, clip: &faceanim_anim::Clip) -> bool {
+        !faceanim_export::bones::takes_clip(character, clip)
+            && clip.loses_arkit(character)
+            && self.lacks_map(character)
+    }
+
     /// Whether lip sync on `character` waits for its retarget map: its names say nothing of a
-    /// mouth (no viseme or ARKit mouth shapes by the viseme table), it has neither an adapter
-    /// nor a map, and some shape is free to take ARKit's channels by geometry.
+    /// mouth (no viseme or ARKit mouth shapes by the viseme table), no adapter reads it, and it
+    /// [lacks](CaptureDesk::lacks_map) a map.
     pub(super) fn speech_needs_map(&self, character: &Character) -> bool {
         self.adapter.is_none()
-            && self.map.is_none()
             && faceanim_speech::Mouth::of(character, &self.visemes).is_err()
-            && faceanim_adapt::bridge::needs_map(character)
+            && self.lacks_map(character)
     }
 
     /// Puts `text` before the notice there is (what opening a take found).

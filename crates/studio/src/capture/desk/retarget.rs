@@ -223,18 +223,13 @@ pub fn start_map(
 }
 
 /// Starts making the map in the background for live input (the webcam, a phone or a VMC
-/// tracker), when the rig needs one and
-/// has none, no adapter reads capture, no earlier try found no face (the user marks it then)
-/// and no job runs. The webcam goes on by name meanwhile, and through the map once it is
+/// tracker), when the rig lacks one (the desk's `lacks_map`), no adapter reads capture
+/// and no job runs. The input goes on by name meanwhile, and through the map once it is
 /// installed. Returns whether it started.
 pub fn map_for_live(desk: &SharedDesk, character: Arc<Character>) -> bool {
     let wanted = {
         let guard = lock(desk);
-        guard.adapter.is_none()
-            && guard.map.is_none()
-            && !guard.no_face
-            && guard.busy().is_ok()
-            && faceanim_adapt::bridge::needs_map(&character)
+        guard.adapter.is_none() && guard.busy().is_ok() && guard.lacks_map(&character)
     };
     wanted && start_map(desk, character, false, None).is_ok()
 }
