@@ -575,9 +575,15 @@ fn record_live(studio: &Studio, on: bool) -> serde_json::Value {
 
 /// The live link's state once `frames` are recorded (or after five seconds).
 fn recorded(studio: &Studio, frames: usize) -> serde_json::Value {
+    live_view_at(studio, "recording", frames)
+}
+
+/// The live link's state once its `count` (`frames` arrived, `recording`) is `n` (or after five
+/// seconds).
+fn live_view_at(studio: &Studio, count: &str, n: usize) -> serde_json::Value {
     let mut state = live_view(studio);
     for _ in 0..100 {
-        if state["recording"] == frames {
+        if state[count] == n {
             break;
         }
         std::thread::sleep(std::time::Duration::from_millis(50));
@@ -1757,14 +1763,7 @@ fn an_ifacialmocap_phone_is_asked_and_drives_the_studio() {
         );
         phone.send_to(frame.as_bytes(), studio_side).unwrap();
     }
-    let mut state = live_view(&studio);
-    for _ in 0..100 {
-        if state["frames"] == 30 {
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-        state = live_view(&studio);
-    }
+    let state = live_view_at(&studio, "frames", 30);
     assert_eq!(state["source"], "iFacialMocap");
     assert_eq!(state["phone"], address.as_str());
     assert_eq!(state["frames"], 30, "{state}");
@@ -1978,14 +1977,7 @@ fn a_phone_listened_to_for_a_rig_whose_names_say_nothing_goes_through_the_map_ma
     let state = support::map_made(studio.port, status, &body);
     assert_eq!(state["retarget"]["in_use"], true, "{}", state["retarget"]);
     send_live_link_face(port, 60, dir.path());
-    let mut view = live_view(&studio);
-    for _ in 0..100 {
-        if view["frames"] == 60 {
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-        view = live_view(&studio);
-    }
+    let view = live_view_at(&studio, "frames", 60);
     assert_eq!(view["frames"], 60, "{view}");
     assert_eq!(view["unmatched"], 0, "{view}");
     assert_eq!(view["unmatched_names"], serde_json::json!([]), "{view}");

@@ -58,8 +58,8 @@ impl Speech {
 
     /// The sound to play with its take.
     #[must_use]
-    pub fn sound(&self) -> crate::capture::Sound {
-        crate::capture::Sound {
+    pub fn sound(&self) -> super::open_take::Sound {
+        super::open_take::Sound {
             path: self.stored.clone(),
             mime: self.mime,
         }

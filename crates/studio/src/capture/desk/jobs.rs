@@ -140,7 +140,7 @@ pub fn open_clip(
 pub fn speech_after_map(
     desk: &SharedDesk,
     character: Arc<Character>,
-    speech: &crate::capture::Speech,
+    speech: &crate::capture::speech::Speech,
 ) -> Result<Option<CaptureView>, ApiError> {
     let job = Job::new(JobKind::MakingMap);
     let (path, view) = {

@@ -266,8 +266,8 @@ impl CaptureDesk {
 
     /// Opens a session file as the take: one written by `faceanim track --adapter A --session
     /// FILE`, edited by `faceanim session`, or exported from this tab (read by
-    /// [`crate::capture::TakeJson::read`]). It has no previews (a session does not keep its input). Returns
-    /// its frame count.
+    /// [`crate::capture::TakeJson::read`]). It has no previews (a session does not keep its
+    /// input). Returns its frame count.
     ///
     /// # Errors
     /// [`ApiError::Invalid`] when the session is of a character with other blendshapes, or
@@ -463,7 +463,7 @@ impl CaptureDesk {
         &mut self,
         character: &Character,
         lip_sync: &faceanim_speech::LipSync,
-        speech: &crate::capture::Speech,
+        speech: &crate::capture::speech::Speech,
     ) -> Result<usize, ApiError> {
         self.busy()?;
         self.put_speech(character, lip_sync, speech.sound(), &speech.shown)
