@@ -47,7 +47,7 @@ export function showMap(/** @type {any} */ map, /** @type {(view: any) => void} 
   $('retarget-info').textContent = map.loaded
     ? `Map: ${map.path}${map.seconds ? ` (made in ${map.seconds.toFixed(1)} s)` : ''}; ${use}.`
     : `${map.note ? `${map.note} ` : ''}${map.needed
-      ? 'No map yet: it is made (in seconds) before the first capture, or now.'
+      ? (map.note ? '' : 'No map yet: it is made (in seconds) when a capture, a clip, speech or a live input needs it, or now.')
       : 'Every channel is driven by its ARKit name; a map is not needed.'}`;
   const make = /** @type {HTMLButtonElement} */ ($('retarget-make'));
   make.textContent = map.loaded ? 'Make again' : 'Make map';

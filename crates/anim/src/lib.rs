@@ -115,6 +115,26 @@ fn arkit_of(map: &faceanim_rig::name_map::NameMap, row: &[f32]) -> Vec<f32> {
 }
 
 impl Clip {
+    /// A clip of weights alone, at `fps`: columns named `names`, one row of `frames` per
+    /// frame; no head pose, head position or presence.
+    ///
+    /// ```
+    /// let clip = faceanim_anim::Clip::of_weights(30.0, &["jawOpen"], vec![vec![0.0], vec![0.5]]);
+    /// assert_eq!(clip.column("jawOpen"), Some(0));
+    /// assert!(clip.head.is_none());
+    /// ```
+    #[must_use]
+    pub fn of_weights(fps: f32, names: &[&str], frames: Vec<Vec<f32>>) -> Clip {
+        Clip {
+            fps,
+            blendshapes: names.iter().map(|&n| n.to_owned()).collect(),
+            frames,
+            head: None,
+            head_position: None,
+            presence: None,
+        }
+    }
+
     /// The column of the blendshape named exactly `name`, if the clip has one.
     #[must_use]
     pub fn column(&self, name: &str) -> Option<usize> {

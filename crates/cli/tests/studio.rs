@@ -1983,6 +1983,49 @@ fn a_phone_listened_to_for_a_rig_whose_names_say_nothing_goes_through_the_map_ma
     assert_eq!(view["unmatched_names"], serde_json::json!([]), "{view}");
 }
 
+/// Blender's remeshed full body copied into `dir` as `body.glb` (the studio saves the map
+/// beside the character: never beside the shared fixture).
+fn remeshed_body(dir: &std::path::Path) -> std::path::PathBuf {
+    let avatar = dir.join("body.glb");
+    std::fs::copy(
+        faceanim_testdata::producers::blender_remeshed_avatar_path(),
+        &avatar,
+    )
+    .unwrap();
+    avatar
+}
+
+/// A retarget map beside the character that cannot be read (a user's edit gone wrong) is never
+/// written over unasked: a Live Link Face recording opened on the rig goes on by name, the
+/// notice of the map says why it is not used, and the file is as it was.
+#[test]
+fn a_broken_map_beside_the_character_is_not_written_over_by_a_clip() {
+    let dir = tempfile::tempdir().unwrap();
+    let avatar = remeshed_body(dir.path());
+    let broken = dir.path().join("body.retarget.json");
+    let mine = br#"{"character": "body", "rows": [ oops"#;
+    std::fs::write(&broken, mine).unwrap();
+    let studio = start_on(Some(&avatar), &dir.path().join("project.json"), &[]);
+    let puff = faceanim_anim::Clip::of_weights(
+        30.0,
+        &["CheekPuff", "EyeBlinkLeft"],
+        vec![vec![0.0, 0.0], vec![0.8, 1.0]],
+    );
+    let csv = faceanim_export::livelink::to_csv(&puff);
+    let (status, body) = support::upload(studio.port, "puff.csv", csv.as_bytes());
+    assert_eq!(status, 200, "{body}");
+    let state: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert!(state["job"].is_null(), "{}", state["job"]);
+    assert_eq!(state["take"]["frames"], 2, "{}", state["take"]);
+    let note = state["retarget"]["note"].as_str().unwrap_or_default();
+    assert!(
+        note.contains("body.retarget.json") && note.contains("Make map writes a new one"),
+        "{}",
+        state["retarget"]
+    );
+    assert_eq!(std::fs::read(&broken).unwrap(), mine);
+}
+
 /// A Live Link Face recording opened in the studio on Blender's remeshed full body, whose
 /// VRoid-style names leave ARKit channels without a shape and whose eyes are bones with no
 /// eyeLook shapes: the character's retarget map is made first (as `faceanim export --clip`
@@ -1992,28 +2035,20 @@ fn a_phone_listened_to_for_a_rig_whose_names_say_nothing_goes_through_the_map_ma
 #[test]
 fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
     let dir = tempfile::tempdir().unwrap();
-    // A copy: the map is saved beside the character.
-    let avatar = dir.path().join("body.glb");
-    std::fs::copy(
-        faceanim_testdata::producers::blender_remeshed_avatar_path(),
-        &avatar,
-    )
-    .unwrap();
+    let avatar = remeshed_body(dir.path());
     let character = faceanim_files::load_character(&avatar).unwrap().character;
     let frames = 6;
     let ramp = |f: usize, top: f32| top * f as f32 / (frames - 1) as f32;
-    let recording = faceanim_anim::Clip {
-        fps: 30.0,
-        blendshapes: [
+    let gaze = faceanim_anim::Clip::of_weights(
+        30.0,
+        &[
             "EyeLookOutLeft",
             "EyeLookInRight",
             "EyeLookUpLeft",
             "EyeBlinkLeft",
             "MouthPucker",
-        ]
-        .map(String::from)
-        .to_vec(),
-        frames: (0..frames)
+        ],
+        (0..frames)
             .map(|f| {
                 vec![
                     ramp(f, 0.9),
@@ -2024,12 +2059,9 @@ fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
                 ]
             })
             .collect(),
-        head: None,
-        head_position: None,
-        presence: None,
-    };
+    );
     let studio = start_on(Some(&avatar), &dir.path().join("project.json"), &[]);
-    let csv = faceanim_export::livelink::to_csv(&recording);
+    let csv = faceanim_export::livelink::to_csv(&gaze);
     let (status, body) = support::upload(studio.port, "gaze.csv", csv.as_bytes());
     let state = support::map_made(studio.port, status, &body);
     assert_eq!(state["retarget"]["in_use"], true, "{}", state["retarget"]);
@@ -2069,8 +2101,8 @@ fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
 
     // The export's rule on the same values: the view's eye joints turn so at every frame.
     let skeleton = faceanim_export::bones::ViewRig::of(&character).unwrap();
-    let keys = faceanim_export::bones::BoneKeys::from_clip(&recording);
-    let want = skeleton.poses(recording.fps, &vec![None; frames], &keys);
+    let keys = faceanim_export::bones::BoneKeys::from_clip(&gaze);
+    let want = skeleton.poses(gaze.fps, &vec![None; frames], &keys);
     let eyes: Vec<usize> = (0..skeleton.joints.len())
         .filter(|&j| {
             matches!(

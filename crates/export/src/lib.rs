@@ -652,14 +652,7 @@ mod tests {
 
     #[test]
     fn live_link_face_takes_each_curve_from_the_shape_that_carries_it() {
-        let clip = |names: &[&str], frames: Vec<Vec<f32>>| Clip {
-            fps: 30.0,
-            blendshapes: names.iter().map(|&n| n.to_owned()).collect(),
-            frames,
-            head: None,
-            head_position: None,
-            presence: None,
-        };
+        let clip = |names: &[&str], frames: Vec<Vec<f32>>| Clip::of_weights(30.0, names, frames);
         // The character's own blink moves (a correction made it 0.9); its smile shape stays
         // at rest while its vowel opens the mouth; the take was made of a blink, a smile and
         // an open jaw.

@@ -331,10 +331,13 @@ impl CaptureDesk {
 
     /// Whether `character` lacks the retarget map it needs and one can be made now: its names
     /// leave channels MediaPipe reads without a shape while some shape is free to take them,
-    /// it has no map, and the face was found on it before (or the user has marked it since; a
-    /// face not found is not looked for again on every clip).
+    /// it has no map and no file is where it would be saved (a map that could not be read is
+    /// the user's to mend or make again: never written over unasked), and the face was found
+    /// on it before (or the user has marked it since; a face not found is not looked for again
+    /// on every clip).
     pub(super) fn lacks_map(&self, character: &Character) -> bool {
         self.map.is_none()
+            && !self.map_path.exists()
             && !(self.no_face && self.face_points.is_none())
             && faceanim_adapt::bridge::needs_map(character)
     }

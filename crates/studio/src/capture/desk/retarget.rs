@@ -48,7 +48,11 @@ impl CaptureDesk {
             Ok(map) => self.map = Some(Arc::new(map)),
             Err(e) => {
                 tracing::warn!("{}: {e}", self.map_path.display());
-                self.map_note = Some(format!("{} is not used: {e}", self.map_path.display()));
+                self.map_note = Some(format!(
+                    "{} is not used: {e}. Make map writes a new one in its place (nothing else \
+                     writes over it).",
+                    self.map_path.display()
+                ));
             }
         }
     }
@@ -242,7 +246,8 @@ pub fn map_for_listeners(desk: &SharedDesk, character: Arc<Character>) -> bool {
     listening && map_for_live(desk, character)
 }
 
-/// Makes the map before a capture when the rig needs one, has none and no adapter reads it.
+/// Makes the map before a capture when the rig needs one, has none and no adapter reads it
+/// (a file there that could not be read as its map is not written over unasked).
 pub(super) fn ensure_map(
     job: &Job,
     desk: &SharedDesk,
@@ -252,6 +257,7 @@ pub(super) fn ensure_map(
         let guard = lock(desk);
         if guard.adapter.is_some()
             || guard.map.is_some()
+            || guard.map_path.exists()
             || !faceanim_adapt::bridge::needs_map(character)
         {
             return Ok(());
