@@ -10,8 +10,7 @@
 //! The desk ([`CaptureDesk`], in `desk`) owns the state and its methods; the parts it holds —
 //! the webcam (`live`), VMC (`vmc`), the microphone (`voice`), the open take with its previews
 //! (`open_take`), an uploaded line of speech (`speech`), a long job (`job`) and the face models
-//! (`models`) — each keep their own state
-//! type and never reach back into the desk.
+//! (`models`) — each keep their own state type and never reach back into the desk.
 
 mod desk;
 mod job;
