@@ -96,12 +96,7 @@ pub fn open_clip(
             return Err(faceanim_adapt::AdaptError::Cancelled.into());
         }
         let mut guard = lock(&desk);
-        if guard.map_path != path {
-            return Err(ApiError::Invalid(format!(
-                "{}: another character was opened meanwhile",
-                faceanim_rig::excerpt(&shown)
-            )));
-        }
+        guard.still_open(&path, &shown)?;
         let frames = guard.open_clip(&character, &clip, &shown)?;
         let mut first = opened.unwrap_or_default();
         let message = match made {
@@ -167,12 +162,7 @@ pub fn speech_after_map(
         job.stage("lip sync", 0);
         let mouth = {
             let mut guard = lock(&desk);
-            if guard.map_path != path {
-                return Err(ApiError::Invalid(format!(
-                    "{}: another character was opened meanwhile",
-                    faceanim_rig::excerpt(&speech.shown)
-                )));
-            }
+            guard.still_open(&path, &speech.shown)?;
             guard.mouth(&character)?
         };
         let lip_sync = speech.lip_sync(&mouth).map_err(|e| speech.named(e))?;

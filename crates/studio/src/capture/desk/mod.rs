@@ -336,10 +336,28 @@ impl CaptureDesk {
     /// on it before (or the user has marked it since; a face not found is not looked for again
     /// on every clip).
     pub(super) fn lacks_map(&self, character: &Character) -> bool {
+        self.map_missing(character) && !(self.no_face && self.face_points.is_none())
+    }
+
+    /// Whether `character` needs a retarget map and none is there: neither loaded nor a file
+    /// where it would be saved (the part of [`CaptureDesk::lacks_map`] a capture goes by,
+    /// which tries again where no face was found, to say so).
+    pub(super) fn map_missing(&self, character: &Character) -> bool {
         self.map.is_none()
             && !self.map_path.exists()
-            && !(self.no_face && self.face_points.is_none())
             && faceanim_adapt::bridge::needs_map(character)
+    }
+
+    /// `Ok` while the character whose map would be saved at `path` is still the one open; a
+    /// job that opens `shown` on it stops otherwise.
+    pub(super) fn still_open(&self, path: &std::path::Path, shown: &str) -> Result<(), ApiError> {
+        if self.map_path == path {
+            return Ok(());
+        }
+        Err(ApiError::Invalid(format!(
+            "{}: another character was opened meanwhile",
+            faceanim_rig::excerpt(shown)
+        )))
     }
 
     /// Whether opening `clip` on `character` waits for the character's retarget map: it

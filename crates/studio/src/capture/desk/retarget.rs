@@ -255,11 +255,7 @@ pub(super) fn ensure_map(
 ) -> Result<(), ApiError> {
     {
         let guard = lock(desk);
-        if guard.adapter.is_some()
-            || guard.map.is_some()
-            || guard.map_path.exists()
-            || !faceanim_adapt::bridge::needs_map(character)
-        {
+        if guard.adapter.is_some() || !guard.map_missing(character) {
             return Ok(());
         }
     }
