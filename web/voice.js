@@ -198,7 +198,8 @@ function showVoice() {
   const delay = /** @type {HTMLInputElement} */ ($('voice-delay'));
   delay.max = String(v.max_delay_ms);
   const learned = v.learned ? ` Learned from ${v.learned} stretch${v.learned === 1 ? '' : 'es'} of speech.` : '';
-  $('voice-stats').textContent = `${CALIBRATION_TEXT[c.state](c, v)}${learned} ${voice.latency_ms.toFixed(0)} ms voice → screen${voice.onset_lag_ms === null ? '' : `, the mouth opens ${voice.onset_lag_ms.toFixed(0)} ms after the voice starts`} (server ${voice.server_ms.toFixed(1)} ms).`;
+  const waits = v.awaits_map ? 'The mouth moves once the retarget map is made (its names say nothing of a mouth; see Retarget). ' : '';
+  $('voice-stats').textContent = `${waits}${CALIBRATION_TEXT[c.state](c, v)}${learned} ${voice.latency_ms.toFixed(0)} ms voice → screen${voice.onset_lag_ms === null ? '' : `, the mouth opens ${voice.onset_lag_ms.toFixed(0)} ms after the voice starts`} (server ${voice.server_ms.toFixed(1)} ms).`;
   if (v.recording !== null && v.recording !== undefined) $('voice-record').textContent = `Stop (${v.recording.toFixed(0)} s)`;
 }
 

@@ -1354,6 +1354,65 @@ fn a_rig_without_mouth_names_lip_syncs_through_its_map_or_its_adapter() {
         apart < 0.02,
         "the studio's take is apart by {apart}: {in_studio:?}"
     );
+    // The live microphone on the same rig with no map: starting it makes the map, and the
+    // mouth rests while it waits for it (a recording goes on). Once the map is there, the line
+    // opens the shape that is ICT's jawOpen while it is heard, and the silence before it does
+    // not; the recording's part heard while waiting gets its mouth through the map too.
+    std::fs::remove_file(&map).unwrap();
+    let studio = start_on(Some(&glb), &out.join("unnamed.faceanim.json"), &[]);
+    let (status, started) = request(
+        studio.port,
+        "PUT",
+        "/api/capture/voice",
+        &[("Content-Type", "application/json")],
+        br#"{"on": true}"#,
+    );
+    let answer: Value = serde_json::from_str(&started).unwrap();
+    assert_eq!(answer["voice"]["awaits_map"], true, "{}", answer["voice"]);
+    record_microphone(studio.port, true);
+    let (line, rate) = samples(&speech);
+    assert_eq!(rate, 16_000);
+    let mut heard = vec![0i16; 12_000];
+    heard.extend(&line);
+    let column = count - 1 - jaw_was;
+    let hear = || -> Vec<(bool, f64)> {
+        heard
+            .chunks(1600)
+            .filter_map(|part| {
+                let bytes: Vec<u8> = part.iter().flat_map(|s| s.to_le_bytes()).collect();
+                let (status, body) = chunk(studio.port, "16000", &bytes);
+                assert_eq!(status, 200, "{body}");
+                let answer: Value = serde_json::from_str(&body).unwrap();
+                let waits = answer["voice"]["awaits_map"].as_bool().unwrap();
+                let weights = answer["weights"].as_array()?;
+                Some((waits, weights[column].as_f64().unwrap()))
+            })
+            .collect()
+    };
+    let waiting = hear();
+    assert!(waiting[0].0, "the map was there at once: {waiting:?}");
+    assert!(
+        waiting.iter().all(|(waits, w)| !waits || *w == 0.0),
+        "the mouth moved before the map: {waiting:?}"
+    );
+    let state = support::map_made(studio.port, status, &started);
+    assert_eq!(state["voice"]["awaits_map"], false, "{}", state["voice"]);
+    assert!(map.exists(), "the map is kept beside the character");
+    let jaw_live: Vec<f64> = hear().into_iter().map(|(_, w)| w).collect();
+    let (silent, spoken) = jaw_live.split_at(4);
+    let most = spoken.iter().copied().fold(0.0, f64::max);
+    println!("the microphone opens {jaw} (ICT's jawOpen) to {most:.2}");
+    assert!(most > 0.25, "{jaw_live:?}");
+    assert!(silent.iter().all(|w| *w < 0.05), "{jaw_live:?}");
+    record_microphone(studio.port, false);
+    let (status, body) = request(studio.port, "GET", "/api/capture/export.json", &[], b"");
+    assert_eq!(status, 200, "{body}");
+    drop(studio);
+    let recorded = jaw_of(&serde_json::from_str(&body).unwrap());
+    let first = &recorded[..recorded.len() / 2];
+    let most = first.iter().copied().fold(0.0, f64::max);
+    println!("the recording heard while waiting opens {jaw} to {most:.2}");
+    assert!(most > 0.25, "{first:?}");
     // The adapter, when given, reads the mouth instead (few renders: this checks the route;
     // the adapter tests check its accuracy).
     let adapter = out.join("unnamed.adapter.safetensors");

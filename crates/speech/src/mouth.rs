@@ -439,6 +439,18 @@ impl Mouth {
         }
     }
 
+    /// The mouth of a character with `shapes` shapes whose retarget map is still being made
+    /// ([`Route::Retarget`]): it moves none of them until [`Mouth::through_map`] of the map
+    /// takes its place; the take's ARKit values ([`Mouth::arkit`]) are read as they come.
+    #[must_use]
+    pub fn before_map(shapes: usize) -> Mouth {
+        Mouth {
+            route: Route::Retarget,
+            shapes,
+            per_viseme: vec![Vec::new(); Viseme::ALL.len()],
+        }
+    }
+
     /// The mouth of a character with no shapes but a jaw bone ([`Route::JawBone`]): it moves
     /// none of its (no) shapes; the take's ARKit values ([`Mouth::arkit`]) turn the bone.
     #[must_use]

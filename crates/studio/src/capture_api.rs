@@ -893,20 +893,29 @@ async fn voice(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
         language,
     } = json_body(&body, "voice")?;
     let character = both.studio().character.clone();
-    {
+    let awaits_map = {
         let mut desk = both.desk();
         match (on, desk.voice_view()) {
-            (false, _) => desk.stop_voice(),
+            (false, _) => {
+                desk.stop_voice();
+                false
+            }
             (true, Some(running)) => {
                 desk.set_voice_delay(delay_ms.unwrap_or(running.delay_ms))?;
                 if let Some(language) = &language {
                     desk.set_voice_language(language)?;
                 }
+                false
             }
             (true, None) => {
-                desk.start_voice(&character, delay_ms.unwrap_or(0), language.as_deref())?;
+                desk.start_voice(&character, delay_ms.unwrap_or(0), language.as_deref())?
             }
         }
+    };
+    // A rig whose names say nothing of a mouth: the mouth moves by the map, made now unless
+    // it is already being made (the page shows the job).
+    if awaits_map && capture::map_for_live(&both.desk, character) {
+        tracing::info!("making the retarget map for the microphone");
     }
     Ok(state_of(&both))
 }

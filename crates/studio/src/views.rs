@@ -775,6 +775,10 @@ pub struct VoiceView {
     pub delay_ms: u32,
     /// The longest delay allowed, milliseconds.
     pub max_delay_ms: u32,
+    /// Whether the mouth waits for the character's retarget map, being made (a rig whose names
+    /// say nothing of a mouth): the voice is heard and recorded meanwhile, the mouth rests, and
+    /// it moves by the map once the map is there.
+    pub awaits_map: bool,
     /// Calibration.
     pub calibration: Calibration,
     /// The language the microphone hears (eSpeak NG's name of it: `en-us`, `es`, `ja`, …): its

@@ -93,6 +93,8 @@ pub(super) struct Voice {
     session: u64,
     listener: Listener,
     mouth: Mouth,
+    /// Whether `mouth` waits for the character's retarget map, being made.
+    awaits_map: bool,
     /// The visemes as ARKit's 52 values by the table (what a take keeps beside the weights:
     /// jaw bones and Live Link Face read them).
     arkit: Mouth,
@@ -146,6 +148,7 @@ impl Voice {
             session: SESSIONS.fetch_add(1, Ordering::Relaxed),
             listener: Listener::new(model.as_ref()),
             mouth,
+            awaits_map: false,
             arkit: Mouth::arkit(table),
             model,
             generation: 0,
@@ -250,6 +253,7 @@ impl Voice {
             seconds: self.received as f32 / RATE as f32,
             delay_ms: (self.delay * 1000.0).round() as u32,
             max_delay_ms: MAX_DELAY_MS,
+            awaits_map: self.awaits_map,
             calibration: self.calibration.clone(),
             language: self.language.clone(),
             passage: listen::passage(&self.language),
@@ -266,7 +270,41 @@ impl Voice {
     /// Drives `mouth`, made by `table`, from now on.
     pub(super) fn set_mouth(&mut self, mouth: Mouth, table: &MouthTable) {
         self.mouth = mouth;
+        self.awaits_map = false;
         self.arkit = Mouth::arkit(table);
+    }
+
+    /// Drives the mouth through `map` by `table` from now on; a recording under way while the
+    /// mouth waited for the map gets its frames' weights from their ARKit values through it.
+    /// Returns whether the mouth moves any shape.
+    pub(super) fn use_map(
+        &mut self,
+        map: &faceanim_retarget::RetargetMap,
+        table: &MouthTable,
+    ) -> bool {
+        let mouth = Mouth::through_map(map, table);
+        let moves = mouth.moves();
+        if self.awaits_map
+            && let Some(recording) = self.recording.as_mut()
+        {
+            for (weights, arkit) in recording.weights.iter_mut().zip(&recording.arkit) {
+                *weights = map.weights(arkit);
+            }
+        }
+        self.set_mouth(mouth, table);
+        moves
+    }
+
+    /// Marks the mouth ([`Mouth::before_map`]) as waiting for the retarget map being made: the
+    /// voice is heard (and recorded) meanwhile, and the mouth rests.
+    pub(super) fn wait_for_map(&mut self) {
+        self.awaits_map = true;
+    }
+
+    /// Whether the mouth goes through the character's retarget map (or waits for it): a new
+    /// map replaces it.
+    pub(super) fn through_map(&self) -> bool {
+        self.mouth.route == faceanim_speech::Route::Retarget
     }
 
     fn set_model(&mut self, model: VoiceModel) {

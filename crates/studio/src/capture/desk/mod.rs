@@ -838,6 +838,11 @@ impl CaptureDesk {
         }
     }
 
+    /// Whether the retarget map is being made now.
+    fn making_map(&self) -> bool {
+        matches!(&self.job, Some(job) if job.running() && job.kind() == crate::views::JobKind::MakingMap)
+    }
+
     /// Asks the running job to stop; false when none runs.
     pub fn cancel(&self) -> bool {
         match &self.job {

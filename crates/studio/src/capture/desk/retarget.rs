@@ -162,8 +162,8 @@ impl CaptureDesk {
         self.install_map(map)
     }
 
-    /// Makes `map` the desk's, and re-reads the take and the webcam through it unless an
-    /// adapter reads them.
+    /// Makes `map` the desk's, and re-reads the take, the webcam and the microphone's mouth
+    /// (one that goes through a map, or waits for it) through it unless an adapter reads them.
     fn install_map(&mut self, map: RetargetMap) -> Result<(), ApiError> {
         let map = Arc::new(map);
         self.map = Some(map.clone());
@@ -171,6 +171,17 @@ impl CaptureDesk {
         self.vmc.set_map(Some(map.clone()));
         if self.adapter.is_some() {
             return Ok(());
+        }
+        let still = match lock(&self.voice).as_mut() {
+            Some(voice) if voice.through_map() => !voice.use_map(&map, &self.visemes),
+            _ => false,
+        };
+        if still {
+            self.notice_first(
+                "The retarget map gives the mouth none of the character's shapes: the microphone \
+                 moves nothing."
+                    .into(),
+            );
         }
         let estimator = faceanim_take::Retargeted::new(map);
         if let Some(open) = self.take.as_mut() {

@@ -13,30 +13,51 @@ impl CaptureDesk {
     /// Starts (or restarts) the live microphone, its mouth held back by `delay_ms`. A voice
     /// learned earlier in this process is kept.
     ///
+    /// On a rig whose names say nothing of a mouth, with no adapter and no retarget map yet
+    /// (the desk's `lacks_map`), the microphone starts with a mouth that waits for the map
+    /// and returns `true`: the caller has the map made ([`super::retarget::map_for_live`],
+    /// unless it is already being made), and the mouth moves by it once it is there.
+    ///
     /// # Errors
-    /// [`ApiError::Invalid`] when the character has no mouth to drive ([`CaptureDesk::mouth`]),
-    /// or the delay is out of range.
+    /// [`ApiError::Invalid`] when the character has no mouth to drive ([`CaptureDesk::mouth`])
+    /// and no map can be made for it, or the delay is out of range; [`ApiError::Busy`] when
+    /// the map is wanted while another job runs.
     pub fn start_voice(
         &mut self,
         character: &Character,
         delay_ms: u32,
         language: Option<&str>,
-    ) -> Result<(), ApiError> {
-        let mouth = self.mouth(character)?;
+    ) -> Result<bool, ApiError> {
+        let (mouth, awaits_map) = match self.mouth(character) {
+            Ok(mouth) => (mouth, false),
+            Err(no_mouth) if self.adapter.is_none() && self.lacks_map(character) => {
+                if !self.making_map() {
+                    self.busy()?;
+                }
+                tracing::info!("{no_mouth}: the mouth waits for the retarget map");
+                let shapes = character.blendshapes().len();
+                (faceanim_speech::Mouth::before_map(shapes), true)
+            }
+            Err(e) => return Err(e),
+        };
         let mut slot = lock(&self.voice);
         let model = slot
             .as_ref()
             .and_then(|v| v.model().cloned())
             .or_else(|| self.voice_model.clone());
-        *slot = Some(Voice::start(
+        let mut voice = Voice::start(
             mouth,
             &self.visemes,
             model,
             delay_ms,
             language,
             self.vmc.performer.clone(),
-        )?);
-        Ok(())
+        )?;
+        if awaits_map {
+            voice.wait_for_map();
+        }
+        *slot = Some(voice);
+        Ok(awaits_map)
     }
 
     /// Stops the microphone (a recording in progress is dropped); the learned voice is kept
