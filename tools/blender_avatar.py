@@ -42,6 +42,10 @@ bare = args[2:] == ["bare"]
 # original head, and ARKit's own keys left out: a rig made by other software whose shapes are
 # not ARKit's and whose vertices are nobody's template.
 remeshed = args[2:] == ["remeshed"]
+# "jaw-skinned": the chin skinned to the jaw bone, whose turn opens the mouth, and the head's
+# jawOpen key made a corrective that only shapes the lips around that turn (a tenth of its
+# motion), as Character Creator's jaw opens by its bone with a morph beside it.
+jaw_skinned = args[2:] == ["jaw-skinned"]
 
 open_gltf(head_path)
 face = next(o for o in bpy.data.objects if o.type == "MESH")
@@ -180,6 +184,16 @@ for name, offset in [("Fcl_HA_Hide", (0, 0.0, -0.01)), ("Fcl_HA_Fung1", (0, -0.0
 for i in range(4):
     mix(f"Custom_Smile_{i}_L", {"mouthSmile_L": 0.25 * (i + 1), "cheekSquint_L": 0.1 * i})
     mix(f"Custom_Smile_{i}_R", {"mouthSmile_R": 0.25 * (i + 1), "cheekSquint_R": 0.1 * i})
+
+# --- the chin on the jaw bone, jawOpen its corrective ------------------------------------------
+chin_vertices = set()
+if jaw_skinned:
+    jaw_key = keys["jawOpen"]
+    moved = [(jaw_key.data[v].co - basis.data[v].co).length for v in range(len(mesh.vertices))]
+    largest = max(moved)
+    chin_vertices = {v for v, d in enumerate(moved) if d > 0.5 * largest}
+    for v in range(len(mesh.vertices)):
+        jaw_key.data[v].co = basis.data[v].co + 0.1 * (jaw_key.data[v].co - basis.data[v].co)
 
 # --- another topology: the face decimated, its VRoid keys carried over ------------------------
 if remeshed:
@@ -407,6 +421,8 @@ def face_weights(v):
     co = v.co
     if v.index in eye_vertices:
         return [("LeftEye" if co.x > 0 else "RightEye", 1.0)]
+    if v.index in chin_vertices:
+        return [("Jaw", 1.0)]
     if co.z < neck_height + 3:
         t = max(0.0, (co.z - neck_height + 5) / 8)
         return [("Neck", 1 - t), ("Head", t)] if t > 0 else [("Neck", 1.0)]

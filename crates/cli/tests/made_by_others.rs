@@ -1191,6 +1191,46 @@ fn a_face_keyed_on_its_bones_in_blender_opens_as_a_take_and_a_walk_does_not() {
     );
 }
 
+/// The mouth opens once, by the bone or by the shape. Blender's avatar with its chin skinned to
+/// the jaw bone and its jawOpen key a corrective that moves a tenth as far (as Character
+/// Creator's jaw opens by its bone): a clip opening the jaw turns the bone as far as a jaw
+/// with no shape to measure (Blender plays it so). Before, the bone turned as far as the
+/// corrective turns the chin: 1°, a mouth that hardly opened. On the avatar whose chin the
+/// shape opens (not skinned to the bone), the bone turns as far as the shape turns the chin,
+/// so what hangs on it goes with the chin.
+#[test]
+fn a_jaw_whose_bone_opens_the_chin_turns_fully_beside_its_corrective_shape() {
+    let dir = output_dir("made-by-others-jaw-skinned");
+    let clip = dir.join("open.json");
+    let opening =
+        faceanim_anim::Clip::of_weights(10.0, &["jawOpen"], vec![vec![0.0], vec![0.5], vec![1.0]]);
+    std::fs::write(&clip, opening.to_json()).unwrap();
+    let turned = |avatar: &Path, name: &str| -> [f32; 2] {
+        let out = dir.join(name);
+        export_with_clip(avatar, &out, &clip);
+        let at = blender_bone_turns_at(&out, &[0.1, 0.2], &["Jaw"]);
+        [0, 1].map(|k| degrees_between(at[k][0].1, glam::Quat::IDENTITY))
+    };
+    let skinned = faceanim_testdata::producers::blender_jaw_skinned_avatar_path();
+    let [half, full] = turned(&skinned, "skinned.glb");
+    let want = faceanim_export::bones::DEFAULT_JAW_DEGREES;
+    println!("the skinned jaw turns {half:.2}° and {full:.2}°");
+    assert!(
+        (full - want).abs() < 0.1,
+        "the jaw turned {full}°, for {want}°"
+    );
+    assert!((half - want / 2.0).abs() < 0.1, "half open: {half}°");
+    let [_, by_shape] = turned(
+        &faceanim_testdata::producers::blender_avatar_path(),
+        "plain.glb",
+    );
+    println!("the jaw under a chin its shape opens turns {by_shape:.2}°");
+    assert!(
+        by_shape > 2.0 && (by_shape - want).abs() > 1.0,
+        "the jaw under a chin its shape opens turned {by_shape}°"
+    );
+}
+
 /// Lip sync reaches what a character has. Blender's own export of its avatar without shape
 /// keys has a jaw bone: the line opens it (Blender reads the jaw turned as far as the line's
 /// jawOpen says, about the left-right axis, and shut before the line starts). The avatar made a

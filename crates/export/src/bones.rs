@@ -1,7 +1,7 @@
 //! The face's bones in an export: a captured head pose shared between upper spine, neck and
 //! head (half each to neck and head, as VMagicMirror does, the spine following a smoothed share
 //! of the yaw), gaze on the eye bones (through a VRM's lookAt range maps) and `jawOpen` on the
-//! jaw bone, as much as the character's own jaw-open shape opens it.
+//! jaw bone, so that the mouth opens once, by the shape or by the bone (`jaw_turn`).
 //!
 //! Rotations are made in character space and written as each bone's local rotation: a bone
 //! whose parent's rest rotation is `P` and whose own rest rotation is `R`, turned by `q` in
@@ -16,7 +16,8 @@ use glam::{Quat, Vec3};
 use serde_json::Value;
 
 pub use faceanim_rig::bones::{NECK_SHARE, SPINE_LAG, SPINE_SHARE};
-/// How far a jaw opens at `jawOpen` 1 when the character has no jaw-open shape to measure.
+/// How far a jaw opens at `jawOpen` 1 when the character has no jaw-open shape to measure, or
+/// one that only shapes the lips beside a chin the bone carries.
 pub const DEFAULT_JAW_DEGREES: f32 = 20.0;
 
 /// Per key of an animation, what the eyes and the jaw do: from ARKit's eyeLook channels and
@@ -510,8 +511,9 @@ fn nearest_joints(joints: &[ViewJoint], parents: &[Option<usize>]) -> Vec<usize>
         .collect()
 }
 
-/// How far the character's own jaw-open shape turns the chin about the jaw bone (degrees,
-/// about the character's left-right axis), or [`DEFAULT_JAW_DEGREES`] without one.
+/// How far the jaw bone turns at `jawOpen` 1 (degrees, about the character's left-right axis),
+/// from what the character's own jaw-open shape does ([`jaw_turn`]), or
+/// [`DEFAULT_JAW_DEGREES`] without one.
 fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
     let map = character.name_map();
     let shape = map.driven_drives().find_map(|(i, drive)| {
@@ -527,27 +529,90 @@ fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
         return DEFAULT_JAW_DEGREES;
     }
     let positions = character.positions();
-    let mut angles: Vec<f32> = shape
-        .moves()
-        .filter(|(_, d)| d.length() > 0.5 * largest)
-        .filter_map(|(v, d)| {
-            let p = *positions.get(v as usize)?;
-            let (a, b) = (p - pivot, p + d - pivot);
-            // The signed angle from a to b in the (y, z) plane: a turn about +X.
-            let angle = (a.y * b.z - a.z * b.y).atan2(a.y * b.y + a.z * b.z);
-            angle.is_finite().then_some(angle.to_degrees())
-        })
-        .collect();
+    let under_jaw = below(&node_parents(source), jaw);
+    let origins = source.origins();
+    let (mut angles, mut on_bone) = (Vec::new(), 0usize);
+    for (v, d) in shape.moves().filter(|(_, d)| d.length() > 0.5 * largest) {
+        let Some(&p) = positions.get(v as usize) else {
+            continue;
+        };
+        let (a, b) = (p - pivot, p + d - pivot);
+        // The signed angle from a to b in the (y, z) plane: a turn about +X.
+        let angle = (a.y * b.z - a.z * b.y).atan2(a.y * b.y + a.z * b.z);
+        if !angle.is_finite() {
+            continue;
+        }
+        angles.push(angle.to_degrees());
+        let share: f32 = match origins.get(v as usize) {
+            Some(Some(origin)) => origin
+                .placed_by
+                .iter()
+                .filter(|(node, w)| *w > 0.0 && under_jaw.get(*node as usize) == Some(&true))
+                .map(|(_, w)| w)
+                .sum(),
+            _ => 0.0,
+        };
+        on_bone += usize::from(share >= 0.5);
+    }
     if angles.is_empty() {
         return DEFAULT_JAW_DEGREES;
     }
     angles.sort_by(f32::total_cmp);
-    angles[angles.len() / 2].clamp(1.0, 40.0)
+    jaw_turn(angles[angles.len() / 2], 2 * on_bone > angles.len())
+}
+
+/// Below this turn of the chin, a jaw-open shape on a chin the jaw bone carries is a corrective
+/// beside the bone's turn (Character Creator's `Jaw_Open` morph), not the opening itself.
+const CORRECTIVE_DEGREES: f32 = 5.0;
+
+/// How far the jaw bone turns at `jawOpen` 1, for a jaw-open shape that turns the chin by
+/// `shape_degrees`, on a chin the bone carries (`chin_on_bone`) or not. The mouth opens once:
+/// - the chin is not on the bone (it opens by the shape; the teeth and tongue may hang on the
+///   bone): the bone turns as far as the shape turns the chin, so they go with it;
+/// - the chin is on the bone and the shape is a corrective (under [`CORRECTIVE_DEGREES`]): the
+///   bone opens the jaw by [`DEFAULT_JAW_DEGREES`], the shape shaping the lips around it;
+/// - the chin is on the bone and the shape opens it on its own: the bone stays, as turning it
+///   too would open the chin twice.
+fn jaw_turn(shape_degrees: f32, chin_on_bone: bool) -> f32 {
+    match (chin_on_bone, shape_degrees.abs() < CORRECTIVE_DEGREES) {
+        (false, _) => shape_degrees.clamp(1.0, 40.0),
+        (true, true) => DEFAULT_JAW_DEGREES,
+        (true, false) => 0.0,
+    }
+}
+
+/// For each node, whether it is `node` or below it.
+fn below(parents: &[Option<usize>], node: usize) -> Vec<bool> {
+    (0..parents.len())
+        .map(|start| {
+            let mut at = Some(start);
+            // A file whose parents loop is cut after as many steps as it has nodes.
+            for _ in 0..=parents.len() {
+                match at {
+                    Some(n) if n == node => return true,
+                    Some(n) => at = parents.get(n).copied().flatten(),
+                    None => break,
+                }
+            }
+            false
+        })
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_mouth_opens_once_by_the_shape_or_by_the_bone() {
+        // A chin the shape opens: the bone (the teeth on it) goes as far.
+        assert_eq!(jaw_turn(12.0, false), 12.0);
+        assert_eq!(jaw_turn(0.2, false), 1.0);
+        // A chin on the bone: a corrective beside it, or an opening of its own.
+        assert_eq!(jaw_turn(2.0, true), DEFAULT_JAW_DEGREES);
+        assert_eq!(jaw_turn(-3.0, true), DEFAULT_JAW_DEGREES);
+        assert_eq!(jaw_turn(12.0, true), 0.0);
+    }
 
     #[test]
     fn gaze_and_jaw_come_from_arkit_channels_in_any_spelling() {

@@ -106,6 +106,17 @@ pub fn blender_remeshed_avatar_path() -> PathBuf {
     blender_avatar_made("blender-remeshed-avatar", &["remeshed"])
 }
 
+/// The same avatar with its chin skinned to the jaw bone, whose turn opens the mouth, and its
+/// `jawOpen` shape key a corrective that moves a tenth as far (as Character Creator's jaw
+/// opens by its bone, with a morph beside it; cached like it).
+///
+/// # Panics
+/// When Blender is missing or fails, with its output.
+#[must_use]
+pub fn blender_jaw_skinned_avatar_path() -> PathBuf {
+    blender_avatar_made("blender-jaw-skinned-avatar", &["jaw-skinned"])
+}
+
 #[expect(
     clippy::panic,
     reason = "test support: a missing producer must stop the test loudly"
