@@ -46,6 +46,9 @@ remeshed = args[2:] == ["remeshed"]
 # jawOpen key made a corrective that only shapes the lips around that turn (a tenth of its
 # motion), as Character Creator's jaw opens by its bone with a morph beside it.
 jaw_skinned = args[2:] == ["jaw-skinned"]
+# "eyes-on-head": the eyeballs skinned to the head, the eye bones left carrying nothing (a rig
+# whose eyes move by their shape keys alone, its eye bones kept for other tools).
+eyes_on_head = args[2:] == ["eyes-on-head"]
 
 open_gltf(head_path)
 face = next(o for o in bpy.data.objects if o.type == "MESH")
@@ -419,7 +422,7 @@ eye_vertices = {v for poly in mesh.polygons if poly.material_index in eye_materi
 
 def face_weights(v):
     co = v.co
-    if v.index in eye_vertices:
+    if v.index in eye_vertices and not eyes_on_head:
         return [("LeftEye" if co.x > 0 else "RightEye", 1.0)]
     if v.index in chin_vertices:
         return [("Jaw", 1.0)]

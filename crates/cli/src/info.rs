@@ -42,6 +42,11 @@ struct FileReport {
     /// The bones exports turn (head pose, gaze, jaw), by name: `head`, `neck`, `upper_spine`,
     /// `left_eye`, `right_eye`, `jaw`.
     bones: std::collections::BTreeMap<&'static str, String>,
+    /// Face bones the file has that exports leave still: eye bones that carry no vertex (the
+    /// eyeballs skinned to the head) or that a VRM's lookAt leaves to expressions; the gaze
+    /// moves shapes instead.
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    still_bones: std::collections::BTreeMap<&'static str, String>,
     /// The blendshapes `faceanim generate-shapes` made, as the file records them.
     #[serde(skip_serializing_if = "Option::is_none")]
     generated: Option<GeneratedReport>,
@@ -256,7 +261,8 @@ impl Report {
                 materials: s.count("materials"),
                 textures: s.count("textures"),
                 vrm: s.is_vrm(),
-                bones: bone_names(s),
+                bones: bone_names(character, s, true),
+                still_bones: bone_names(character, s, false),
                 animations: AnimationReport::all_of(s.document()),
                 generated: s.generated_shapes().map(|g| GeneratedReport {
                     shapes: g.shapes,
@@ -324,6 +330,18 @@ impl Report {
                 let _ = writeln!(
                     out,
                     "  bones        {} (exports turn them)",
+                    list.join(", ")
+                );
+            }
+            if !f.still_bones.is_empty() {
+                let list: Vec<String> = f
+                    .still_bones
+                    .iter()
+                    .map(|(k, v)| format!("{k} {v}"))
+                    .collect();
+                let _ = writeln!(
+                    out,
+                    "  still bones  {} (exports leave them still: the gaze moves shapes instead)",
                     list.join(", ")
                 );
             }
@@ -441,10 +459,18 @@ pub(crate) fn run(args: &InfoArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The face's bones of `source`, by role, named as the file names them (`node N` unnamed).
+/// The face's bones of `source` (`character`'s file) that exports turn (`turned`), or that they
+/// leave still, by role, named as the file names them (`node N` unnamed).
 fn bone_names(
+    character: &Character,
     source: &faceanim_rig::source::GltfSource,
+    turned: bool,
 ) -> std::collections::BTreeMap<&'static str, String> {
+    let view = faceanim_export::bones::ViewRig::of(character);
+    let turns = |bone| {
+        view.as_ref()
+            .is_some_and(|v| v.joints.iter().any(|j| j.bone == Some(bone)))
+    };
     let name = |n: usize| {
         source
             .document()
@@ -455,6 +481,7 @@ fn bone_names(
     source
         .bones()
         .found()
+        .filter(|(bone, _)| turns(*bone) == turned)
         .map(|(bone, n)| (bone.name(), name(n)))
         .collect()
 }

@@ -1231,6 +1231,83 @@ fn a_jaw_whose_bone_opens_the_chin_turns_fully_beside_its_corrective_shape() {
     );
 }
 
+/// The eyes look once, by the bones or by the shapes, and never not at all. On Blender's avatar
+/// the eyeballs hang on the eye bones: a clip's gaze turns them, and the eyeLook shapes hold
+/// still. On the same avatar with its eyeballs skinned to the head (the eye bones carry
+/// nothing), the gaze stays on the shapes and no eye bone is keyed. Before, the bones that
+/// carried nothing were turned and the shapes held still: the eyes never moved.
+#[test]
+fn eye_bones_that_carry_nothing_leave_the_gaze_on_the_shapes() {
+    let dir = output_dir("made-by-others-eyes-on-head");
+    let clip = dir.join("look.json");
+    let looking = faceanim_anim::Clip::of_weights(
+        10.0,
+        &["eyeLookInLeft", "eyeLookOutRight"],
+        vec![vec![0.0, 0.0], vec![1.0, 1.0]],
+    );
+    std::fs::write(&clip, looking.to_json()).unwrap();
+    // The last frame's eyeLookIn_L shape, and whether the LeftEye bone is keyed.
+    let looked = |avatar: &Path, name: &str| -> (f32, bool) {
+        let out = dir.join(name);
+        export_with_clip(avatar, &out, &clip);
+        let bytes = std::fs::read(&out).unwrap();
+        // The shapes' own keys, as the file holds them (a reopened clip would add the gaze the
+        // bones turn to them).
+        let imported = faceanim_rig::import::import_gltf(
+            &bytes,
+            name,
+            &faceanim_rig::import::NoExternalResources,
+        )
+        .unwrap();
+        let character = &imported.character;
+        let take = character.source().unwrap().take().unwrap();
+        let shape = character
+            .blendshape_names()
+            .iter()
+            .position(|n| n == "eyeLookIn_L")
+            .expect("eyeLookIn_L");
+        let document = faceanim_testdata::glb::json(&bytes);
+        let eye = document["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|n| n["name"] == "LeftEye")
+            .unwrap();
+        let keyed = document["animations"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .flat_map(|a| a["channels"].as_array().unwrap())
+            .any(|c| c["target"]["node"] == eye);
+        (take.animation.weights.last().unwrap()[shape], keyed)
+    };
+    let on_bones = faceanim_testdata::producers::blender_avatar_path();
+    let (shape, keyed) = looked(&on_bones, "on-bones.glb");
+    assert!(
+        keyed && shape < 0.01,
+        "eyes on their bones: shape {shape}, bone keyed {keyed}"
+    );
+    let on_head = faceanim_testdata::producers::blender_eyes_on_head_avatar_path();
+    let (shape, keyed) = looked(&on_head, "on-head.glb");
+    assert!(
+        !keyed && shape > 0.99,
+        "eyes on the head: shape {shape}, bone keyed {keyed}"
+    );
+    // `faceanim info` says so.
+    let info = faceanim_ok(&["info", on_head.to_str().unwrap(), "--json"]);
+    let info: Value = serde_json::from_str(&info).unwrap();
+    assert_eq!(
+        info["file"]["still_bones"]["left_eye"], "LeftEye",
+        "{}",
+        info["file"]
+    );
+    assert!(
+        info["file"]["bones"]["left_eye"].is_null(),
+        "{}",
+        info["file"]
+    );
+}
+
 /// Lip sync reaches what a character has. Blender's own export of its avatar without shape
 /// keys has a jaw bone: the line opens it (Blender reads the jaw turned as far as the line's
 /// jawOpen says, about the left-right axis, and shut before the line starts). The avatar made a

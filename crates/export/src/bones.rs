@@ -182,12 +182,16 @@ impl Rig {
             None
         };
         let look = source.gaze();
-        let eyes = if wants_gaze && look != Gaze::Expressions {
-            match (
-                joint(bones.get(Bone::LeftEye)),
-                joint(bones.get(Bone::RightEye)),
-            ) {
-                (Some(l), Some(r)) => Some([l, r]),
+        // Eye bones that carry no vertex (the eyeballs skinned to the head, a bone left
+        // unweighted) would turn nothing: the gaze stays on the eyeLook shapes then.
+        let eye_bones = [Bone::LeftEye, Bone::RightEye].map(|b| bones.get(b));
+        let parents = node_parents(source);
+        let carried = eye_bones
+            .iter()
+            .all(|b| b.is_some_and(|node| carries(source, &parents, node)));
+        let eyes = if wants_gaze && look != Gaze::Expressions && carried {
+            match eye_bones.map(&mut joint) {
+                [Some(l), Some(r)] => Some([l, r]),
                 _ => None,
             }
         } else {
@@ -581,6 +585,18 @@ fn jaw_turn(shape_degrees: f32, chin_on_bone: bool) -> f32 {
     }
 }
 
+/// Whether `node` or a node below it places some vertex of the character (its skinning, or a
+/// mesh hung below it).
+fn carries(source: &Source, parents: &[Option<usize>], node: usize) -> bool {
+    let under = below(parents, node);
+    source.origins().iter().flatten().any(|origin| {
+        origin
+            .placed_by
+            .iter()
+            .any(|(n, w)| *w > 0.0 && under.get(*n as usize) == Some(&true))
+    })
+}
+
 /// For each node, whether it is `node` or below it.
 fn below(parents: &[Option<usize>], node: usize) -> Vec<bool> {
     (0..parents.len())
@@ -605,13 +621,20 @@ mod tests {
 
     #[test]
     fn the_mouth_opens_once_by_the_shape_or_by_the_bone() {
+        let turns = |shape: f32, on_bone: bool, want: f32| {
+            let got = jaw_turn(shape, on_bone);
+            assert!(
+                (got - want).abs() < 1e-6,
+                "{shape}° on bone {on_bone}: {got}°"
+            );
+        };
         // A chin the shape opens: the bone (the teeth on it) goes as far.
-        assert_eq!(jaw_turn(12.0, false), 12.0);
-        assert_eq!(jaw_turn(0.2, false), 1.0);
+        turns(12.0, false, 12.0);
+        turns(0.2, false, 1.0);
         // A chin on the bone: a corrective beside it, or an opening of its own.
-        assert_eq!(jaw_turn(2.0, true), DEFAULT_JAW_DEGREES);
-        assert_eq!(jaw_turn(-3.0, true), DEFAULT_JAW_DEGREES);
-        assert_eq!(jaw_turn(12.0, true), 0.0);
+        turns(2.0, true, DEFAULT_JAW_DEGREES);
+        turns(-3.0, true, DEFAULT_JAW_DEGREES);
+        turns(12.0, true, 0.0);
     }
 
     #[test]

@@ -117,6 +117,16 @@ pub fn blender_jaw_skinned_avatar_path() -> PathBuf {
     blender_avatar_made("blender-jaw-skinned-avatar", &["jaw-skinned"])
 }
 
+/// The same avatar with its eyeballs skinned to the head: its eye bones carry nothing, and
+/// its eyes move by their eyeLook shape keys alone (cached like it).
+///
+/// # Panics
+/// When Blender is missing or fails, with its output.
+#[must_use]
+pub fn blender_eyes_on_head_avatar_path() -> PathBuf {
+    blender_avatar_made("blender-eyes-on-head-avatar", &["eyes-on-head"])
+}
+
 #[expect(
     clippy::panic,
     reason = "test support: a missing producer must stop the test loudly"
