@@ -69,24 +69,14 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     // as its export turns eye and jaw bones; and those values, for the ARKit channels (or VRM
     // presets) the character's shapes cannot make. A recording (Live Link Face's CSV) or an
     // animation file, as `export --clip` reads them, is a clip.
-    let (clip, keys, arkit) = if crate::input::is_animation_file(&args.input) {
-        let clip = crate::input::clip(&args.input)?;
-        let keys = BoneKeys::from_clip(&clip);
-        (clip, keys, None)
+    let (clip, arkit) = if crate::input::is_animation_file(&args.input) {
+        (crate::input::clip(&args.input)?, None)
     } else {
         let bytes = faceanim_files::read_bytes(&args.input)?;
         match Clip::from_json(&bytes) {
-            Ok(clip) => {
-                let keys = BoneKeys::from_clip(&clip);
-                (clip, keys, None)
-            }
+            Ok(clip) => (clip, None),
             Err(clip_error) => faceanim_take::Session::from_json(&bytes)
-                .map(|session| {
-                    let clip = session.clip();
-                    let arkit = session.arkit_clip();
-                    let keys = BoneKeys::of_take(&clip, arkit.as_ref());
-                    (clip, keys, arkit.map(|a| a.arkit_rows()))
-                })
+                .map(|session| (session.clip(), session.arkit_clip()))
                 .map_err(|session_error| {
                     anyhow::anyhow!(
                         "{}: neither a clip ({clip_error}) nor a session ({session_error})",
@@ -95,6 +85,8 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
                 })?,
         }
     };
+    let keys = BoneKeys::of_take(&clip, arkit.as_ref());
+    let arkit = arkit.map(|a| a.arkit_rows());
     let clip = match &args.character {
         Some(path) => {
             let character = crate::input::load(path)?.character;

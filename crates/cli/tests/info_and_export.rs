@@ -2,13 +2,7 @@
 //! by the Khronos glTF-Validator, and an export opened in real Blender (Debian's `blender` 3.4,
 //! headless): every shape key arrives with its name and displacement, and the animation
 //! arrives as an action.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::float_cmp,
-    reason = "tests panic to fail, and compare exact zeros (a zero delta means: does not move)"
-)]
+#![allow(clippy::unwrap_used, reason = "tests panic to fail")]
 
 mod support;
 

@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 use faceanim_testdata::avatar::VrmKind;
 use faceanim_testdata::glb::assert_kept;
 use faceanim_testdata::producers::{
-    BLENDER_AVATAR_EXPRESSIONS, blender_avatar, complete_vrm, with_vrm,
+    BLENDER_AVATAR_EXPRESSIONS, Variant, blender_avatar, complete_vrm, with_vrm,
 };
 use faceanim_testdata::{gltf_transform, gltfpack};
 use serde_json::Value;
@@ -1211,7 +1211,7 @@ fn a_jaw_whose_bone_opens_the_chin_turns_fully_beside_its_corrective_shape() {
         let at = blender_bone_turns_at(&out, &[0.1, 0.2], &["Jaw"]);
         [0, 1].map(|k| degrees_between(at[k][0].1, glam::Quat::IDENTITY))
     };
-    let skinned = faceanim_testdata::producers::blender_jaw_skinned_avatar_path();
+    let skinned = faceanim_testdata::producers::blender_avatar_variant(Variant::JawSkinned);
     let [half, full] = turned(&skinned, "skinned.glb");
     let want = faceanim_export::bones::DEFAULT_JAW_DEGREES;
     println!("the skinned jaw turns {half:.2}° and {full:.2}°");
@@ -1267,12 +1267,10 @@ fn eye_bones_that_carry_nothing_leave_the_gaze_on_the_shapes() {
             .position(|n| n == "eyeLookIn_L")
             .expect("eyeLookIn_L");
         let document = faceanim_testdata::glb::json(&bytes);
-        let eye = document["nodes"]
-            .as_array()
-            .unwrap()
+        let eye = faceanim_testdata::glb::names(&document, "nodes")
             .iter()
-            .position(|n| n["name"] == "LeftEye")
-            .unwrap();
+            .position(|n| n == "LeftEye")
+            .expect("a LeftEye node");
         let keyed = document["animations"]
             .as_array()
             .into_iter()
@@ -1287,7 +1285,7 @@ fn eye_bones_that_carry_nothing_leave_the_gaze_on_the_shapes() {
         keyed && shape < 0.01,
         "eyes on their bones: shape {shape}, bone keyed {keyed}"
     );
-    let on_head = faceanim_testdata::producers::blender_eyes_on_head_avatar_path();
+    let on_head = faceanim_testdata::producers::blender_avatar_variant(Variant::EyesOnHead);
     let (shape, keyed) = looked(&on_head, "on-head.glb");
     assert!(
         !keyed && shape > 0.99,

@@ -1,11 +1,5 @@
 //! `faceanim sketch` and `faceanim eval` as a user runs them.
-#![allow(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::float_cmp,
-    reason = "tests"
-)]
+#![allow(clippy::unwrap_used, reason = "tests panic to fail")]
 
 mod support;
 

@@ -185,11 +185,13 @@ impl Rig {
         // Eye bones that carry no vertex (the eyeballs skinned to the head, a bone left
         // unweighted) would turn nothing: the gaze stays on the eyeLook shapes then.
         let eye_bones = [Bone::LeftEye, Bone::RightEye].map(|b| bones.get(b));
-        let parents = node_parents(source);
-        let carried = eye_bones
-            .iter()
-            .all(|b| b.is_some_and(|node| carries(source, &parents, node)));
-        let eyes = if wants_gaze && look != Gaze::Expressions && carried {
+        let carried = || {
+            let parents = node_parents(source);
+            eye_bones
+                .iter()
+                .all(|b| b.is_some_and(|node| carries(source, &parents, node)))
+        };
+        let eyes = if wants_gaze && look != Gaze::Expressions && carried() {
             match eye_bones.map(&mut joint) {
                 [Some(l), Some(r)] => Some([l, r]),
                 _ => None,

@@ -106,25 +106,30 @@ pub fn blender_remeshed_avatar_path() -> PathBuf {
     blender_avatar_made("blender-remeshed-avatar", &["remeshed"])
 }
 
-/// The same avatar with its chin skinned to the jaw bone, whose turn opens the mouth, and its
-/// `jawOpen` shape key a corrective that moves a tenth as far (as Character Creator's jaw
-/// opens by its bone, with a morph beside it; cached like it).
-///
-/// # Panics
-/// When Blender is missing or fails, with its output.
-#[must_use]
-pub fn blender_jaw_skinned_avatar_path() -> PathBuf {
-    blender_avatar_made("blender-jaw-skinned-avatar", &["jaw-skinned"])
+/// A variant of the Blender avatar, for the rules a rig's bones change.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Variant {
+    /// Its chin skinned to the jaw bone, whose turn opens the mouth, and its `jawOpen` shape
+    /// key a corrective that moves a tenth as far (as Character Creator's jaw opens by its
+    /// bone, with a morph beside it).
+    JawSkinned,
+    /// Its eyeballs skinned to the head: its eye bones carry nothing, and its eyes move by
+    /// their eyeLook shape keys alone.
+    EyesOnHead,
 }
 
-/// The same avatar with its eyeballs skinned to the head: its eye bones carry nothing, and
-/// its eyes move by their eyeLook shape keys alone (cached like it).
+/// The Blender avatar made as `variant` says (cached like it).
 ///
 /// # Panics
 /// When Blender is missing or fails, with its output.
 #[must_use]
-pub fn blender_eyes_on_head_avatar_path() -> PathBuf {
-    blender_avatar_made("blender-eyes-on-head-avatar", &["eyes-on-head"])
+pub fn blender_avatar_variant(variant: Variant) -> PathBuf {
+    match variant {
+        Variant::JawSkinned => blender_avatar_made("blender-jaw-skinned-avatar", &["jaw-skinned"]),
+        Variant::EyesOnHead => {
+            blender_avatar_made("blender-eyes-on-head-avatar", &["eyes-on-head"])
+        }
+    }
 }
 
 #[expect(

@@ -301,6 +301,11 @@ impl Voice {
         self.awaits_map = true;
     }
 
+    /// Whether the mouth waits for the character's retarget map ([`Voice::wait_for_map`]).
+    pub(super) fn awaits_map(&self) -> bool {
+        self.awaits_map
+    }
+
     /// Whether the mouth goes through the character's retarget map (or waits for it): a new
     /// map replaces it.
     pub(super) fn through_map(&self) -> bool {

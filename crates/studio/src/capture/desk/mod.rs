@@ -746,7 +746,8 @@ impl CaptureDesk {
         }
         self.visemes = table;
         self.adapter_mouth = None;
-        if lock(&self.voice).is_some() {
+        // A mouth that waits for the retarget map takes the table when the map comes.
+        if lock(&self.voice).as_ref().is_some_and(|v| !v.awaits_map()) {
             let mouth = self.mouth(character)?;
             if let Some(voice) = lock(&self.voice).as_mut() {
                 voice.set_mouth(mouth, &self.visemes);
