@@ -167,6 +167,18 @@ vroid = {
     "Fcl_MTH_E": {**both("mouthStretch", 0.6), "jawOpen": 0.35},
     "Fcl_MTH_O": {"mouthFunnel": 1.0, "jawOpen": 0.4},
 }
+# --- the chin on the jaw bone, jawOpen its corrective ------------------------------------------
+# (Before the mixes below, so that every key made from jawOpen is a corrective too.)
+chin_vertices = set()
+if jaw_skinned:
+    basis = mesh.shape_keys.reference_key
+    jaw_key = keys["jawOpen"]
+    moved = [(jaw_key.data[v].co - basis.data[v].co).length for v in range(len(mesh.vertices))]
+    largest = max(moved)
+    chin_vertices = {v for v, d in enumerate(moved) if d > 0.5 * largest}
+    for v in range(len(mesh.vertices)):
+        jaw_key.data[v].co = basis.data[v].co + 0.1 * (jaw_key.data[v].co - basis.data[v].co)
+
 for name, weights in vroid.items():
     mix(name, weights)
 
@@ -187,16 +199,6 @@ for name, offset in [("Fcl_HA_Hide", (0, 0.0, -0.01)), ("Fcl_HA_Fung1", (0, -0.0
 for i in range(4):
     mix(f"Custom_Smile_{i}_L", {"mouthSmile_L": 0.25 * (i + 1), "cheekSquint_L": 0.1 * i})
     mix(f"Custom_Smile_{i}_R", {"mouthSmile_R": 0.25 * (i + 1), "cheekSquint_R": 0.1 * i})
-
-# --- the chin on the jaw bone, jawOpen its corrective ------------------------------------------
-chin_vertices = set()
-if jaw_skinned:
-    jaw_key = keys["jawOpen"]
-    moved = [(jaw_key.data[v].co - basis.data[v].co).length for v in range(len(mesh.vertices))]
-    largest = max(moved)
-    chin_vertices = {v for v, d in enumerate(moved) if d > 0.5 * largest}
-    for v in range(len(mesh.vertices)):
-        jaw_key.data[v].co = basis.data[v].co + 0.1 * (jaw_key.data[v].co - basis.data[v].co)
 
 # --- another topology: the face decimated, its VRoid keys carried over ------------------------
 if remeshed:
