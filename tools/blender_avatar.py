@@ -46,6 +46,10 @@ remeshed = args[2:] == ["remeshed"]
 # jawOpen key made a corrective that only shapes the lips around that turn (a tenth of its
 # motion), as Character Creator's jaw opens by its bone with a morph beside it.
 jaw_skinned = args[2:] == ["jaw-skinned"]
+# "jaw-and-vowels": the chin skinned to the jaw bone while the VRoid-style vowels open it on
+# their own, and ARKit's own keys left out (an avatar whose mouth opens by its vowel keys, its
+# jaw bone weighted as well).
+jaw_and_vowels = args[2:] == ["jaw-and-vowels"]
 # "eyes-on-head": the eyeballs skinned to the head, the eye bones left carrying nothing (a rig
 # whose eyes move by their shape keys alone, its eye bones kept for other tools).
 eyes_on_head = args[2:] == ["eyes-on-head"]
@@ -170,17 +174,21 @@ vroid = {
 # --- the chin on the jaw bone, jawOpen its corrective ------------------------------------------
 # (Before the mixes below, so that every key made from jawOpen is a corrective too.)
 chin_vertices = set()
-if jaw_skinned:
+if jaw_skinned or jaw_and_vowels:
     basis = mesh.shape_keys.reference_key
     jaw_key = keys["jawOpen"]
     moved = [(jaw_key.data[v].co - basis.data[v].co).length for v in range(len(mesh.vertices))]
     largest = max(moved)
     chin_vertices = {v for v, d in enumerate(moved) if d > 0.5 * largest}
+if jaw_skinned:
     for v in range(len(mesh.vertices)):
         jaw_key.data[v].co = basis.data[v].co + 0.1 * (jaw_key.data[v].co - basis.data[v].co)
 
 for name, weights in vroid.items():
     mix(name, weights)
+if jaw_and_vowels:
+    for name in own:
+        face.shape_key_remove(keys[name])
 
 # Teeth-only keys (zero on every other primitive), as VRoid's Fcl_HA_* are.
 teeth_part = 4 if len(palette) > 4 else len(palette) - 1

@@ -518,14 +518,19 @@ fn nearest_joints(joints: &[ViewJoint], parents: &[Option<usize>]) -> Vec<usize>
 }
 
 /// How far the jaw bone turns at `jawOpen` 1 (degrees, about the character's left-right axis),
-/// from what the character's own jaw-open shape does ([`jaw_turn`]), or
-/// [`DEFAULT_JAW_DEGREES`] without one.
+/// from what the character's own jaw-open shape (or, without one, its open vowel) does
+/// ([`jaw_turn`]), or [`DEFAULT_JAW_DEGREES`] without either.
 fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
+    use faceanim_rig::names::{Drive, Expression, Viseme};
     let map = character.name_map();
-    let shape = map.driven_drives().find_map(|(i, drive)| {
-        matches!(drive, faceanim_rig::names::Drive::Channel(c) if c.name() == "jawOpen")
-            .then_some(i)
-    });
+    // Its jawOpen shape, else its open vowel (VRoid's `Fcl_MTH_A`, Ready Player Me's
+    // `viseme_aa`): the shape that opens its mouth when a take's jawOpen does.
+    let find = |wanted: fn(Drive) -> bool| {
+        map.driven_drives()
+            .find_map(|(i, drive)| wanted(drive).then_some(i))
+    };
+    let shape = find(|d| matches!(d, Drive::Channel(c) if c.name() == "jawOpen"))
+        .or_else(|| find(|d| d == Drive::Expression(Expression::Viseme(Viseme::Aa))));
     let Some(shape) = shape.and_then(|i| character.blendshapes().get(i)) else {
         return DEFAULT_JAW_DEGREES;
     };

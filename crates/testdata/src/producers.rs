@@ -113,6 +113,10 @@ pub enum Variant {
     /// key a corrective that moves a tenth as far (as Character Creator's jaw opens by its
     /// bone, with a morph beside it).
     JawSkinned,
+    /// Its chin skinned to the jaw bone while its VRoid-style vowels (`Fcl_MTH_A`) open it on
+    /// their own, and none of ARKit's keys: a mouth that opens by its vowel keys, its jaw bone
+    /// weighted as well.
+    JawAndVowels,
     /// Its eyeballs skinned to the head: its eye bones carry nothing, and its eyes move by
     /// their eyeLook shape keys alone.
     EyesOnHead,
@@ -126,6 +130,9 @@ pub enum Variant {
 pub fn blender_avatar_variant(variant: Variant) -> PathBuf {
     match variant {
         Variant::JawSkinned => blender_avatar_made("blender-jaw-skinned-avatar", &["jaw-skinned"]),
+        Variant::JawAndVowels => {
+            blender_avatar_made("blender-jaw-and-vowels-avatar", &["jaw-and-vowels"])
+        }
         Variant::EyesOnHead => {
             blender_avatar_made("blender-eyes-on-head-avatar", &["eyes-on-head"])
         }
