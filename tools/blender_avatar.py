@@ -186,9 +186,6 @@ if jaw_skinned:
 
 for name, weights in vroid.items():
     mix(name, weights)
-if jaw_and_vowels:
-    for name in own:
-        face.shape_key_remove(keys[name])
 
 # Teeth-only keys (zero on every other primitive), as VRoid's Fcl_HA_* are.
 teeth_part = 4 if len(palette) > 4 else len(palette) - 1
@@ -207,6 +204,11 @@ for name, offset in [("Fcl_HA_Hide", (0, 0.0, -0.01)), ("Fcl_HA_Fung1", (0, -0.0
 for i in range(4):
     mix(f"Custom_Smile_{i}_L", {"mouthSmile_L": 0.25 * (i + 1), "cheekSquint_L": 0.1 * i})
     mix(f"Custom_Smile_{i}_R", {"mouthSmile_R": 0.25 * (i + 1), "cheekSquint_R": 0.1 * i})
+
+# The jaw-and-vowels variant keeps only the keys mixed above, as a VRoid avatar has.
+if jaw_and_vowels:
+    for name in own:
+        face.shape_key_remove(keys[name])
 
 # --- another topology: the face decimated, its VRoid keys carried over ------------------------
 if remeshed:

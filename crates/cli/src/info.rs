@@ -224,6 +224,8 @@ impl Report {
             |id: faceanim_rig::BlendshapeId| character.blendshapes()[id.index()].name().to_owned();
         let symmetry = character.symmetry();
         let map = character.name_map();
+        // The bones exports turn, as the view carries them.
+        let view = faceanim_export::bones::ViewRig::of(character);
         Report {
             vertices: character.vertex_count(),
             triangles: character.triangles().len(),
@@ -261,8 +263,8 @@ impl Report {
                 materials: s.count("materials"),
                 textures: s.count("textures"),
                 vrm: s.is_vrm(),
-                bones: bone_names(character, s, true),
-                still_bones: bone_names(character, s, false),
+                bones: bone_names(s, view.as_ref(), true),
+                still_bones: bone_names(s, view.as_ref(), false),
                 animations: AnimationReport::all_of(s.document()),
                 generated: s.generated_shapes().map(|g| GeneratedReport {
                     shapes: g.shapes,
@@ -459,18 +461,15 @@ pub(crate) fn run(args: &InfoArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The face's bones of `source` (`character`'s file) that exports turn (`turned`), or that they
-/// leave still, by role, named as the file names them (`node N` unnamed).
+/// The face's bones of `source` that exports turn (`turned`: those of `view`, the character's
+/// [`faceanim_export::bones::ViewRig`]), or that they leave still, by role, named as the file
+/// names them (`node N` unnamed).
 fn bone_names(
-    character: &Character,
     source: &faceanim_rig::source::GltfSource,
+    view: Option<&faceanim_export::bones::ViewRig>,
     turned: bool,
 ) -> std::collections::BTreeMap<&'static str, String> {
-    let view = faceanim_export::bones::ViewRig::of(character);
-    let turns = |bone| {
-        view.as_ref()
-            .is_some_and(|v| v.joints.iter().any(|j| j.bone == Some(bone)))
-    };
+    let turns = |bone| view.is_some_and(|v| v.joints.iter().any(|j| j.bone == Some(bone)));
     let name = |n: usize| {
         source
             .document()
