@@ -554,13 +554,8 @@ fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
             continue;
         }
         angles.push(angle.to_degrees());
-        let share: f32 = match origins.get(v as usize) {
-            Some(Some(origin)) => origin
-                .placed_by
-                .iter()
-                .filter(|(node, w)| *w > 0.0 && under_jaw.get(*node as usize) == Some(&true))
-                .map(|(_, w)| w)
-                .sum(),
+        let share = match origins.get(v as usize) {
+            Some(Some(origin)) => share_under(origin, &under_jaw),
             _ => 0.0,
         };
         on_bone += usize::from(share >= 0.5);
@@ -596,12 +591,21 @@ fn jaw_turn(shape_degrees: f32, chin_on_bone: bool) -> f32 {
 /// mesh hung below it).
 fn carries(source: &Source, parents: &[Option<usize>], node: usize) -> bool {
     let under = below(parents, node);
-    source.origins().iter().flatten().any(|origin| {
-        origin
-            .placed_by
-            .iter()
-            .any(|(n, w)| *w > 0.0 && under.get(*n as usize) == Some(&true))
-    })
+    source
+        .origins()
+        .iter()
+        .flatten()
+        .any(|origin| share_under(origin, &under) > 0.0)
+}
+
+/// How much of a vertex placed by `origin` the nodes marked in `under` ([`below`]) place.
+fn share_under(origin: &faceanim_rig::source::Origin, under: &[bool]) -> f32 {
+    origin
+        .placed_by
+        .iter()
+        .filter(|(node, w)| *w > 0.0 && under.get(*node as usize) == Some(&true))
+        .map(|(_, w)| w)
+        .sum()
 }
 
 /// For each node, whether it is `node` or below it.
