@@ -59,22 +59,8 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
             let mut unmatched = clip.unmatched(&character, map.as_ref());
             // The eye and jaw bones take what they show (gaze on eye bones without eyeLook
             // shapes): not lost.
-            if let Some(skeleton) = faceanim_export::bones::ViewRig::of(&character) {
+            if let Some(skeleton) = faceanim_export::bones::ViewRig::of(&character, map.as_ref()) {
                 unmatched.retain(|name| !skeleton.shows(name));
-            }
-            if character.blendshapes().is_empty() {
-                tracing::warn!(
-                    "{}: {} has no blendshapes: its bones take the clip's head pose, eyeLook and jawOpen; nothing takes its other channels",
-                    clip_path.display(),
-                    character.name()
-                );
-            } else if !unmatched.is_empty() && unmatched.len() < clip.blendshapes.len() {
-                // (A clip of which nothing reaches the character is the error below.)
-                tracing::warn!(
-                    "{}: no blendshape for {}",
-                    clip_path.display(),
-                    unmatched.join(", ")
-                );
             }
             let animation = faceanim_export::Animation::from_clip_through(
                 &character,
@@ -93,6 +79,26 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 };
                 format!("applying {}{hint}", clip_path.display())
             })?;
+            if character.blendshapes().is_empty() {
+                tracing::warn!(
+                    "{}: {} has no blendshapes: its bones take the clip's head pose, eyeLook and jawOpen; nothing takes its other channels",
+                    clip_path.display(),
+                    character.name()
+                );
+            } else if animation.arkit.is_some() {
+                // None of its shapes takes the clip (else it was refused above): its bones do.
+                tracing::warn!(
+                    "{}: none of {}'s shapes answers to the clip's channels: only its bones move (head pose, eyeLook, jawOpen)",
+                    clip_path.display(),
+                    character.name()
+                );
+            } else if !unmatched.is_empty() {
+                tracing::warn!(
+                    "{}: no blendshape for {}",
+                    clip_path.display(),
+                    unmatched.join(", ")
+                );
+            }
             let exported =
                 faceanim_export::export_with(format, &animation, args.out.glb.compression())
                     .map_err(|e| anyhow::anyhow!("{}: {e}", args.out.output.display()))?;

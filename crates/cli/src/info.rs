@@ -47,6 +47,12 @@ struct FileReport {
     /// moves shapes instead.
     #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     still_bones: std::collections::BTreeMap<&'static str, String>,
+    /// How far exports turn the jaw bone at `jawOpen` 1, in degrees: as far as the shape that
+    /// opens the mouth turns the chin, 20 where the chin is on the bone and the shape only
+    /// shapes the lips, 0 where the shapes open a chin on the bone on their own (measured on
+    /// its retarget map's shapes where no name says which open the mouth).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    jaw_degrees: Option<f32>,
     /// The blendshapes `faceanim generate-shapes` made, as the file records them.
     #[serde(skip_serializing_if = "Option::is_none")]
     generated: Option<GeneratedReport>,
@@ -218,14 +224,15 @@ fn name_report(entry: faceanim_rig::name_map::Entry, character: &Character) -> N
 }
 
 impl Report {
-    /// Gathers the report for `character`.
-    pub fn of(character: &Character) -> Report {
+    /// Gathers the report for `character`, whose retarget `map` (when it has one) says which
+    /// of its shapes open its mouth where no name does.
+    pub fn of(character: &Character, retarget: Option<&faceanim_retarget::RetargetMap>) -> Report {
         let names =
             |id: faceanim_rig::BlendshapeId| character.blendshapes()[id.index()].name().to_owned();
         let symmetry = character.symmetry();
         let map = character.name_map();
         // The bones exports turn, as the view carries them.
-        let view = faceanim_export::bones::ViewRig::of(character);
+        let view = faceanim_export::bones::ViewRig::of(character, retarget);
         Report {
             vertices: character.vertex_count(),
             triangles: character.triangles().len(),
@@ -265,6 +272,9 @@ impl Report {
                 vrm: s.is_vrm(),
                 bones: bone_names(s, view.as_ref(), true),
                 still_bones: bone_names(s, view.as_ref(), false),
+                jaw_degrees: view
+                    .as_ref()
+                    .and_then(faceanim_export::bones::ViewRig::jaw_degrees),
                 animations: AnimationReport::all_of(s.document()),
                 generated: s.generated_shapes().map(|g| GeneratedReport {
                     shapes: g.shapes,
@@ -334,6 +344,18 @@ impl Report {
                     "  bones        {} (exports turn them)",
                     list.join(", ")
                 );
+            }
+            match f.jaw_degrees {
+                Some(degrees) if degrees.abs() < 0.05 => {
+                    let _ = writeln!(
+                        out,
+                        "  jaw          still at jawOpen: its shapes open the chin the bone carries"
+                    );
+                }
+                Some(degrees) => {
+                    let _ = writeln!(out, "  jaw          turns {degrees:.1}° at jawOpen 1");
+                }
+                None => {}
             }
             if !f.still_bones.is_empty() {
                 let list: Vec<String> = f
@@ -431,10 +453,10 @@ pub(crate) struct InfoArgs {
 pub(crate) fn run(args: &InfoArgs) -> anyhow::Result<()> {
     let imported = crate::input::load_or_default(args.character.as_deref())?;
     let character = &imported.character;
-    let report = Report::of(character);
     // Which of its shapes answer to each ARKit channel: its retarget map, when it has one.
     let map_path = crate::retarget::default_path(args.character.as_deref(), character);
     let map = crate::retarget::read_beside(&map_path, character)?;
+    let report = Report::of(character, map.as_ref());
     if args.json {
         let mut value = serde_json::to_value(&report)?;
         value["retarget"] = serde_json::json!({

@@ -150,10 +150,11 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     });
     let character = character??.character;
     let (sound, heard) = heard?;
-    let mouth = match &args.adapter {
-        Some(path) => mouth_by_adapter(&character, &table, path)?,
+    // The mouth, and what opens it through the retarget map (for a jaw bone beside it).
+    let (mouth, opening) = match &args.adapter {
+        Some(path) => (mouth_by_adapter(&character, &table, path)?, None),
         None => match Mouth::of(&character, &table) {
-            Ok(mouth) => mouth,
+            Ok(mouth) => (mouth, None),
             // Shapes without mouth names: geometry may tell which make a mouth.
             Err(no_mouth @ faceanim_speech::MouthError::NoMouth(_)) => {
                 mouth_by_map(&character, args.character.as_deref(), &table)?.ok_or(no_mouth)?
@@ -207,7 +208,8 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     // What it is made of, whatever the character's shapes: Live Link Face's curves where its
     // own shapes do not carry them, and a jaw bone's opening.
     .made_of_arkit(lip_sync.arkit(&table))?;
-    let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?;
+    let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?
+        .with_opening(opening);
     for (path, format) in outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation, args.out.glb)?;
     }
@@ -355,17 +357,21 @@ fn read_text(path: &Path, option: &str, accept: Accept<'_>) -> anyhow::Result<Te
 }
 
 /// The mouth of a rig whose names say nothing of one, through its retarget map (the one
-/// beside it, or made and saved there now); `None` when the map moves no shape of it.
+/// beside it, or made and saved there now), with what opens it at `jawOpen` 1
+/// ([`faceanim_export::bones::jaw_opening`]); `None` when the map moves no shape of it.
 fn mouth_by_map(
     character: &faceanim_rig::Character,
     character_path: Option<&Path>,
     table: &MouthTable,
-) -> anyhow::Result<Option<Mouth>> {
+) -> anyhow::Result<Option<(Mouth, Option<Vec<f32>>)>> {
     let models = faceanim_track::FaceModels::load().context("loading the face models")?;
     let Some(map) = crate::retarget::for_capture(character, character_path, None, &models)? else {
         return Ok(None);
     };
-    Ok(Some(Mouth::through_map(&map, table)).filter(Mouth::moves))
+    let mouth = Mouth::through_map(&map, table);
+    Ok(mouth
+        .moves()
+        .then(|| (mouth, faceanim_export::bones::jaw_opening(&map))))
 }
 
 /// `character`'s mouth read through its adapter at `path`: each viseme the built-in head makes

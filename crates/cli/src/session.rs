@@ -206,13 +206,26 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
             let formats = crate::outputs::formats_of(&output)?;
             // The GLB and the VRM Animation need the character; the clip and the CSVs come
             // from the session alone.
-            let character = if character.is_some() || formats.iter().any(|f| f.needs_character()) {
-                Some(crate::input::load_or_default(character.as_deref())?.character)
-            } else {
-                None
+            let character_path = character;
+            let character =
+                if character_path.is_some() || formats.iter().any(|f| f.needs_character()) {
+                    Some(crate::input::load_or_default(character_path.as_deref())?.character)
+                } else {
+                    None
+                };
+            // What opens the mouth through the map beside the character, for its jaw bone.
+            let opening = match &character {
+                Some(character) => crate::retarget::read_beside(
+                    &crate::retarget::default_path(character_path.as_deref(), character),
+                    character,
+                )?
+                .as_ref()
+                .and_then(faceanim_export::bones::jaw_opening),
+                None => None,
             };
             let stem = crate::input::stem(path, "session");
-            let animation = crate::outputs::take_animation(character.as_ref(), &session, &stem)?;
+            let animation = crate::outputs::take_animation(character.as_ref(), &session, &stem)?
+                .with_opening(opening);
             for (path, format) in output.iter().zip(formats) {
                 crate::outputs::write(path, format, &animation, glb)?;
             }

@@ -218,7 +218,13 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
         Some(&character),
         session,
         &crate::input::stem(&args.input, "capture"),
-    )?;
+    )?
+    // A jaw bone opens beside the shapes the map opens the mouth with, not twice.
+    .with_opening(
+        estimator
+            .retarget_map()
+            .and_then(faceanim_export::bones::jaw_opening),
+    );
     for (path, format) in args.out.outputs.iter().zip(formats) {
         crate::outputs::write(path, format, &animation, args.out.glb)?;
     }

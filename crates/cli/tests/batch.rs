@@ -25,9 +25,7 @@ use faceanim_batch::EXIT_BAD_INPUT;
 /// A batch of `lines` speech lines with `broken` rows broken, made in a fresh folder under
 /// test-output/; the folder and what batch_lines.py says of the rows.
 fn lines(test: &str, lines: usize, broken: usize) -> (PathBuf, serde_json::Value) {
-    let dir = support::output_dir(test);
-    std::fs::remove_dir_all(&dir).unwrap();
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = support::fresh_output_dir(test);
     let made = support::succeeded(
         "tools/batch_lines.py",
         Command::new("python3")

@@ -1240,6 +1240,66 @@ fn the_mouth_opens_once_by_the_jaw_bone_or_by_its_shapes() {
     );
 }
 
+/// A rig whose names say nothing opens its mouth once too: its jaw bone's turn is measured on
+/// the shapes its retarget map opens the mouth with. Blender's jaw-and-vowels avatar with its
+/// targets renamed `shape_N` (no name says `Fcl_MTH_A` any more): the map made on export opens
+/// the chin on the jaw bone by its shapes, and the bone stays. The jaw-skinned avatar renamed
+/// the same way, whose shapes only shape the lips around the chin, opens by the bone. Before,
+/// the bone opened 20° on both, whatever the map's shapes did: twice on the first.
+#[test]
+fn a_rig_whose_names_say_nothing_opens_its_mouth_once_through_its_map() {
+    let dir = support::fresh_output_dir("made-by-others-jaw-mapped");
+    let clip = dir.join("open.json");
+    let opening = faceanim_anim::Clip::of_weights(10.0, &["jawOpen"], vec![vec![0.0], vec![1.0]]);
+    std::fs::write(&clip, opening.to_json()).unwrap();
+    // The jaw bone's turn at jawOpen 1, and the largest of the renamed shapes' weights there.
+    let turned = |variant: Variant, name: &str| -> (f32, f64) {
+        let renamed = dir.join(format!("{name}.glb"));
+        support::rename_targets(
+            &faceanim_testdata::producers::blender_avatar_variant(variant),
+            &renamed,
+        );
+        let out = dir.join(format!("{name}-open.glb"));
+        let said = support::export_with_clip_and(&renamed, &out, &clip, &[]);
+        assert!(said.contains("making the retarget map"), "{said}");
+        let at = blender_bone_turns_at(&out, &[0.1], &["Jaw"]);
+        let weights = dir.join(format!("{name}-open.json"));
+        export_with_clip(&renamed, &weights, &clip);
+        let weights: Value = serde_json::from_slice(&std::fs::read(&weights).unwrap()).unwrap();
+        let widest = weights["frames"][1]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| w.as_f64().unwrap())
+            .fold(0.0, f64::max);
+        let turn = degrees_between(at[0][0].1, glam::Quat::IDENTITY);
+        // `faceanim info` says the same, reading the map beside the character.
+        let said = info(&renamed)["file"]["jaw_degrees"].as_f64().unwrap();
+        assert!(
+            (said - f64::from(turn)).abs() < 0.1,
+            "{name}: info says the jaw turns {said}°, the export turned it {turn}°"
+        );
+        (turn, widest)
+    };
+    let (by_shapes, widest) = turned(Variant::JawAndVowels, "vowels");
+    println!("renamed jaw-and-vowels: the jaw turns {by_shapes:.2}°, a shape at {widest:.2}");
+    assert!(
+        widest > 0.3,
+        "the map opens the renamed vowels' mouth with none of its shapes ({widest})"
+    );
+    assert!(
+        by_shapes < 0.1,
+        "the jaw turned {by_shapes}° beside the shapes the map opens the chin with"
+    );
+    let (by_bone, _) = turned(Variant::JawSkinned, "skinned");
+    println!("renamed jaw-skinned: the jaw turns {by_bone:.2}°");
+    let want = faceanim_export::bones::DEFAULT_JAW_DEGREES;
+    assert!(
+        (by_bone - want).abs() < 0.1,
+        "the jaw turned {by_bone}°, for {want}°"
+    );
+}
+
 /// The eyes look once, by the bones or by the shapes, and never not at all. On Blender's avatar
 /// the eyeballs hang on the eye bones: a clip's gaze turns them, and the eyeLook shapes hold
 /// still. On the same avatar with its eyeballs skinned to the head (the eye bones carry

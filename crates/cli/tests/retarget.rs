@@ -369,9 +369,7 @@ fn an_avatar_optimised_by_gltf_transform_gets_the_plain_files_map() {
 
 #[test]
 fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
-    let out = output_dir("retarget-studio");
-    let _ = std::fs::remove_dir_all(&out);
-    std::fs::create_dir_all(&out).unwrap();
+    let out = support::fresh_output_dir("retarget-studio");
     let path = faceanim_testdata::producers::blender_remeshed_avatar_path();
     let avatar = faceanim_files::load_character(&path).unwrap().character;
     let (character, _) = faceanim_testdata::renamed_and_shuffled(&avatar, 46);
@@ -563,18 +561,11 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
 /// failed before ("none of the clip's blendshapes exist"), and asked for `faceanim retarget`.
 #[test]
 fn a_recording_exported_onto_a_rig_without_a_map_makes_one() {
-    let out = output_dir("retarget-export");
-    let _ = std::fs::remove_dir_all(&out);
-    std::fs::create_dir_all(&out).unwrap();
+    let out = support::fresh_output_dir("retarget-export");
     let glb = out.join("id3.glb");
-    support::succeeded(
-        "rename_targets.py",
-        std::process::Command::new("python3")
-            .arg(support::repo().join("tools/rename_targets.py"))
-            .arg(faceanim_testdata::shared("characters/ict-face-id3.glb"))
-            .arg(&glb)
-            .output()
-            .unwrap(),
+    support::rename_targets(
+        &faceanim_testdata::shared("characters/ict-face-id3.glb"),
+        &glb,
     );
     let jaw: Vec<f32> = (0..31).map(|k| k as f32 / 30.0).collect();
     let recording = faceanim_anim::Clip {

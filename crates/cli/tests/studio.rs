@@ -2100,7 +2100,7 @@ fn a_recordings_gaze_turns_the_eye_bones_of_a_body_without_eyelook_shapes() {
     assert_eq!(bones.len(), frames, "one pose per frame");
 
     // The export's rule on the same values: the view's eye joints turn so at every frame.
-    let skeleton = faceanim_export::bones::ViewRig::of(&character).unwrap();
+    let skeleton = faceanim_export::bones::ViewRig::of(&character, None).unwrap();
     let keys = faceanim_export::bones::BoneKeys::from_clip(&gaze);
     let want = skeleton.poses(gaze.fps, &vec![None; frames], &keys);
     let eyes: Vec<usize> = (0..skeleton.joints.len())

@@ -8,6 +8,7 @@
 //! character space beyond what its turned ancestors already turn (`A`), gets `P⁻¹·(A⁻¹·q)·P·R`.
 
 use faceanim_anim::Clip;
+use faceanim_retarget::RetargetMap;
 use faceanim_rig::Character;
 use faceanim_rig::animation::MorphAnimation;
 use faceanim_rig::bones::{Bone, FaceBones, Gaze, Joint};
@@ -29,6 +30,10 @@ pub struct BoneKeys {
     pub gaze: Option<Vec<[[f32; 2]; 2]>>,
     /// `jawOpen`, 0..1, when the clip has it.
     pub jaw: Option<Vec<f32>>,
+    /// The character's own weights at `jawOpen` 1 through its retarget map
+    /// ([`jaw_opening`]): which of its shapes open its mouth when no name says so (a rig whose
+    /// names say nothing), so that the jaw bone's turn is measured on them. `None`: by names.
+    pub opening: Option<Vec<f32>>,
 }
 
 impl BoneKeys {
@@ -80,21 +85,54 @@ impl BoneKeys {
                 .map(|row| value(row.as_ref(), Some(c)).clamp(0.0, 1.0))
                 .collect()
         });
-        BoneKeys { gaze, jaw }
+        BoneKeys {
+            gaze,
+            jaw,
+            opening: None,
+        }
+    }
+
+    /// These keys, with what opens the character's mouth read through its retarget `map`
+    /// ([`BoneKeys::opening`]; none without a map).
+    #[must_use]
+    pub fn through(self, map: Option<&RetargetMap>) -> BoneKeys {
+        BoneKeys {
+            opening: map.and_then(jaw_opening),
+            ..self
+        }
     }
 }
 
-/// Whether a body with no blendshapes takes something of `clip` on its bones: a head pose on
-/// its head bone, gaze on its eye bones or `jawOpen` on its jaw bone (`false` for a character
-/// with blendshapes, which takes a clip by their names).
+/// The character's own weights at `jawOpen` 1 through its retarget `map` (`None` where the
+/// map moves none of its shapes for it): what opens its mouth when a take's jawOpen does, for
+/// a rig whose names do not say.
+#[must_use]
+pub fn jaw_opening(map: &RetargetMap) -> Option<Vec<f32>> {
+    let channel = faceanim_rig::names::ARKIT_52
+        .iter()
+        .position(|&c| c == "jawOpen")?;
+    let mut values = [0.0; faceanim_rig::names::ARKIT_52.len()];
+    values[channel] = 1.0;
+    let weights = map.weights(&values);
+    weights.iter().any(|&w| w > 0.01).then_some(weights)
+}
+
+/// Whether a body with no blendshapes takes something of `clip` on its bones ([`bones_take`];
+/// `false` for a character with blendshapes, which takes a clip by their names).
 #[must_use]
 pub fn takes_clip(character: &Character, clip: &Clip) -> bool {
+    character.blendshapes().is_empty() && bones_take(character, clip)
+}
+
+/// Whether `character`'s bones take something of `clip`, whatever its shapes: a head pose on
+/// its head bone, gaze on its eye bones or `jawOpen` on its jaw bone. A clip none of whose
+/// channels reaches its shapes still turns them (a jaw bone opened by `jawOpen` beside shapes
+/// that only shape the lips).
+#[must_use]
+pub fn bones_take(character: &Character, clip: &Clip) -> bool {
     let Some(source) = character.source() else {
         return false;
     };
-    if !character.blendshapes().is_empty() {
-        return false;
-    }
     let found = source.bones();
     let has = |bone: Bone| found.get(bone).is_some();
     let keys = BoneKeys::from_clip(clip);
@@ -143,14 +181,16 @@ pub(crate) struct Rig {
 impl Rig {
     /// The bones of `character`'s file that `wants_turn` (head poses), `wants_gaze` and
     /// `wants_jaw` need, written as TRS in `nodes`. Without a head bone the scene's first root
-    /// turns instead.
+    /// turns instead. `opening`: what opens its mouth through its retarget map
+    /// ([`BoneKeys::opening`]).
     pub(crate) fn prepare(
         character: &Character,
         source: &Source,
         nodes: &mut [Value],
         wants: [bool; 3],
+        opening: Option<&[f32]>,
     ) -> Rig {
-        Rig::build(character, source, wants, |n| {
+        Rig::build(character, source, wants, opening, |n| {
             prepare_joint(source, nodes, n)
         })
     }
@@ -160,6 +200,7 @@ impl Rig {
         character: &Character,
         source: &Source,
         wants: [bool; 3],
+        opening: Option<&[f32]>,
         mut make: impl FnMut(usize) -> Option<Joint>,
     ) -> Rig {
         let [wants_turn, wants_gaze, wants_jaw] = wants;
@@ -201,7 +242,7 @@ impl Rig {
         };
         let jaw = if wants_jaw {
             bones.get(Bone::Jaw).and_then(|node| {
-                joint(Some(node)).map(|j| (j, jaw_degrees(character, source, node)))
+                joint(Some(node)).map(|j| (j, jaw_degrees(character, source, node, opening)))
             })
         } else {
             None
@@ -330,9 +371,12 @@ pub struct ViewJoint {
 
 impl ViewRig {
     /// The view's skeleton of `character`, when its file has a head bone (without one, a head
-    /// pose turns the whole character and the view turns it so).
+    /// pose turns the whole character and the view turns it so). Its jaw turns as the export's
+    /// does, with what opens the mouth read through the character's retarget `map` where its
+    /// names do not say ([`BoneKeys::through`]).
     #[must_use]
-    pub fn of(character: &Character) -> Option<ViewRig> {
+    pub fn of(character: &Character, map: Option<&RetargetMap>) -> Option<ViewRig> {
+        let opening = map.and_then(jaw_opening);
         let source = character.source()?;
         let bones = source.bones();
         bones.get(Bone::Head)?;
@@ -342,7 +386,7 @@ impl ViewRig {
             parent: None,
             pivot: Vec3::ZERO,
         }];
-        let rig = Rig::build(character, source, [true; 3], |node| {
+        let rig = Rig::build(character, source, [true; 3], opening.as_deref(), |node| {
             joints.push(ViewJoint {
                 bone: bones.found().find(|(_, n)| *n == node).map(|(b, _)| b),
                 node: Some(node),
@@ -362,6 +406,13 @@ impl ViewRig {
             joint.parent = Some(above.and_then(|n| joint_of.get(n).copied()).unwrap_or(0));
         }
         Some(ViewRig { joints, rig })
+    }
+
+    /// How far the jaw bone turns at `jawOpen` 1, in degrees (0: the character's shapes open
+    /// its mouth on their own), when it has one the view turns.
+    #[must_use]
+    pub fn jaw_degrees(&self) -> Option<f32> {
+        self.rig.jaw.map(|(_, degrees)| degrees)
     }
 
     /// Whether the view's bones show what a value named `name` means: every ARKit channel the
@@ -488,6 +539,7 @@ impl ViewRig {
         let keys = BoneKeys {
             gaze: gaze.map(|g| vec![g]),
             jaw: jaw.map(|j| vec![j.clamp(0.0, 1.0)]),
+            opening: None,
         };
         self.poses(0.0, &[head], &keys).pop().unwrap_or_default()
     }
@@ -518,9 +570,10 @@ fn nearest_joints(joints: &[ViewJoint], parents: &[Option<usize>]) -> Vec<usize>
 }
 
 /// How far the jaw bone turns at `jawOpen` 1 (degrees, about the character's left-right axis),
-/// from what the character's own jaw-open shape (or, without one, its open vowel) does
-/// ([`jaw_turn`]), or [`DEFAULT_JAW_DEGREES`] without either.
-fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
+/// from what opens the character's mouth ([`jaw_turn`]): its own jaw-open shape, else its open
+/// vowel, else the shapes its retarget map opens it with (`opening`, the character's weights at
+/// `jawOpen` 1); [`DEFAULT_JAW_DEGREES`] without any.
+fn jaw_degrees(character: &Character, source: &Source, jaw: usize, opening: Option<&[f32]>) -> f32 {
     use faceanim_rig::names::{Drive, Expression, Viseme};
     let map = character.name_map();
     // Its jawOpen shape, else its open vowel (VRoid's `Fcl_MTH_A`, Ready Player Me's
@@ -531,11 +584,13 @@ fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
     };
     let shape = find(|d| matches!(d, Drive::Channel(c) if c.name() == "jawOpen"))
         .or_else(|| find(|d| d == Drive::Expression(Expression::Viseme(Viseme::Aa))));
-    let Some(shape) = shape.and_then(|i| character.blendshapes().get(i)) else {
-        return DEFAULT_JAW_DEGREES;
+    let moves = match (shape.and_then(|i| character.blendshapes().get(i)), opening) {
+        (Some(shape), _) => shape.moves().collect(),
+        (None, Some(weights)) => mixed_moves(character, weights),
+        (None, None) => Vec::new(),
     };
     let pivot = source.world_matrix(jaw).transform_point3(Vec3::ZERO);
-    let largest = shape.max_displacement();
+    let largest = moves.iter().map(|(_, d)| d.length()).fold(0.0, f32::max);
     if largest <= 0.0 || !pivot.is_finite() {
         return DEFAULT_JAW_DEGREES;
     }
@@ -543,7 +598,7 @@ fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
     let under_jaw = below(&node_parents(source), jaw);
     let origins = source.origins();
     let (mut angles, mut on_bone) = (Vec::new(), 0usize);
-    for (v, d) in shape.moves().filter(|(_, d)| d.length() > 0.5 * largest) {
+    for &(v, d) in moves.iter().filter(|(_, d)| d.length() > 0.5 * largest) {
         let Some(&p) = positions.get(v as usize) else {
             continue;
         };
@@ -565,6 +620,26 @@ fn jaw_degrees(character: &Character, source: &Source, jaw: usize) -> f32 {
     }
     angles.sort_by(f32::total_cmp);
     jaw_turn(angles[angles.len() / 2], 2 * on_bone > angles.len())
+}
+
+/// Each vertex's displacement when the character's shapes take `weights` together (those
+/// that move it), in vertex order.
+fn mixed_moves(character: &Character, weights: &[f32]) -> Vec<(u32, Vec3)> {
+    let mut sum = vec![Vec3::ZERO; character.positions().len()];
+    for (shape, &w) in character.blendshapes().iter().zip(weights) {
+        if w > 0.0 {
+            for (v, d) in shape.moves() {
+                if let Some(at) = sum.get_mut(v as usize) {
+                    *at += w * d;
+                }
+            }
+        }
+    }
+    sum.into_iter()
+        .enumerate()
+        .filter(|(_, d)| d.length_squared() > 0.0)
+        .filter_map(|(v, d)| Some((u32::try_from(v).ok()?, d)))
+        .collect()
 }
 
 /// Below this turn of the chin, a jaw-open shape on a chin the jaw bone carries is a corrective

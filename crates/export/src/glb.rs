@@ -784,7 +784,9 @@ pub fn export_into_source_with(
         (0..animations.len()).any(|a| key_of(a).is_some_and(|k| k.gaze.is_some())),
         (0..animations.len()).any(|a| key_of(a).is_some_and(|k| k.jaw.is_some())),
     ];
-    let rig = crate::bones::Rig::prepare(character, source, &mut nodes, wants);
+    // What opens the mouth through the retarget map, where an animation's keys carry it.
+    let opening = (0..animations.len()).find_map(|a| key_of(a).and_then(|k| k.opening.as_deref()));
+    let rig = crate::bones::Rig::prepare(character, source, &mut nodes, wants, opening);
     // Where the eye bones turn with the gaze, the eyeLook shapes hold still: the eyes turn
     // once (by bone, as VRM's lookAt says), not twice.
     let looks: Vec<bool> = character

@@ -197,8 +197,9 @@ pub struct Animation<'a> {
 
 impl<'a> Animation<'a> {
     /// `clip` put on `character` by name (ARKit spellings match), as an animation named `name`.
-    /// A body with no blendshapes at all takes the clip on its bones (head pose, gaze,
-    /// `jawOpen`; see [`bones`]), and Live Link Face the clip's own ARKit values.
+    /// A body with no blendshapes at all, or one none of whose shapes takes any of the clip's
+    /// channels, takes the clip on its bones (head pose, gaze, `jawOpen`; see [`bones`]), and
+    /// Live Link Face the clip's own ARKit values.
     ///
     /// # Errors
     /// [`ExportError::Clip`] when no name of the clip is one of the character's;
@@ -223,17 +224,20 @@ impl<'a> Animation<'a> {
         name: &str,
         map: Option<&faceanim_retarget::RetargetMap>,
     ) -> Result<Animation<'a>, ExportError> {
+        let mut on_bones = false;
         let retarget = match clip.retarget_through(character, name, map) {
+            // None of its shapes takes the clip, but its bones do: the shapes hold still.
             Err(faceanim_anim::ClipError::NothingInCommon { .. })
-                if bones::takes_clip(character, clip) =>
+                if bones::bones_take(character, clip) =>
             {
+                on_bones = true;
                 faceanim_anim::Retarget {
                     animation: MorphAnimation {
                         name: name.to_owned(),
                         times: (0..clip.frames.len())
                             .map(|f| f as f32 / clip.fps)
                             .collect(),
-                        weights: vec![Vec::new(); clip.frames.len()],
+                        weights: vec![vec![0.0; character.blendshapes().len()]; clip.frames.len()],
                         rotations: clip.head.as_ref().map(|head| {
                             head.iter()
                                 .map(|&h| faceanim_anim::head_rotation(h))
@@ -253,9 +257,9 @@ impl<'a> Animation<'a> {
         let names: Vec<String> = character.blendshape_names();
         Ok(Animation {
             // The clip's own gaze and jaw: a character without eyeLook shapes still has eyes.
-            bones: Some(bones::BoneKeys::from_clip(clip)),
+            bones: Some(bones::BoneKeys::from_clip(clip).through(map)),
             character: Some(character),
-            arkit: names.is_empty().then(|| clip.clone()),
+            arkit: on_bones.then(|| clip.clone()),
             clip: Clip {
                 blendshapes: names,
                 frames: retarget.animation.weights.clone(),
@@ -477,11 +481,29 @@ pub fn view_glb(
     Ok(glb::export_glb_skinned(
         character,
         animation.map(std::slice::from_ref).unwrap_or_default(),
-        bones::ViewRig::of(character).as_ref(),
+        // No map: the animation's jaw keys come from the character's own names, which then
+        // name what opens its mouth too.
+        bones::ViewRig::of(character, None).as_ref(),
     )?)
 }
 
 impl Animation<'_> {
+    /// This animation with what opens the character's mouth through its retarget map
+    /// (`opening`: its own weights at `jawOpen` 1, [`bones::jaw_opening`]), which the jaw
+    /// bone's turn is measured on where the character's names do not say
+    /// ([`bones::BoneKeys::opening`]).
+    #[must_use]
+    pub fn with_opening(self, opening: Option<Vec<f32>>) -> Self {
+        let bones = bones::BoneKeys {
+            opening,
+            ..self.bone_keys()
+        };
+        Animation {
+            bones: Some(bones),
+            ..self
+        }
+    }
+
     /// What the eyes and the jaw do ([`Animation::bones`]; where not given, from the capture's
     /// own ARKit values, else from the frames by their names' ARKit meaning).
     pub(crate) fn bone_keys(&self) -> bones::BoneKeys {

@@ -84,7 +84,7 @@ fn view_positions(character: &Character, rig: &ViewRig, pose: &[[f32; 4]]) -> Ve
 #[test]
 fn the_view_turns_every_vertex_where_the_exported_file_does() {
     let character = faceanim_testdata::producers::blender_avatar_character();
-    let rig = ViewRig::of(&character).expect("the Blender avatar has a head bone");
+    let rig = ViewRig::of(&character, None).expect("the Blender avatar has a head bone");
     let names: Vec<&str> = rig
         .joints
         .iter()
@@ -261,7 +261,7 @@ fn the_view_turns_every_vertex_where_the_exported_file_does() {
 #[test]
 fn a_sketchs_gaze_and_jaw_turn_the_views_joints_as_the_export_turns_the_bones() {
     let character = faceanim_testdata::producers::blender_avatar_character();
-    let rig = ViewRig::of(&character).unwrap();
+    let rig = ViewRig::of(&character, None).unwrap();
     let names = character.blendshape_names();
     let mut weights = vec![vec![0.0; names.len()]; 2];
     for (name, value) in [

@@ -635,7 +635,8 @@ struct MapRow {
 
 async fn map_row(State(both): State<Both>, body: Bytes) -> Answer<CaptureView> {
     let MapRow { channel, shapes } = json_body(&body, "retarget row")?;
-    both.desk().set_map_row(&channel, shapes)?;
+    let character = both.studio().character.clone();
+    both.desk().set_map_row(&character, &channel, shapes)?;
     Ok(state_of(&both))
 }
 
@@ -986,7 +987,7 @@ async fn export(
 ) -> Result<Response, ApiError> {
     // What the export needs of the take, read under the desk's lock (the session itself only
     // for the formats that are the session's own).
-    let (take_clip, arkit, session, name) = {
+    let (take_clip, arkit, session, name, opening) = {
         let desk = both.desk();
         let open = desk.open_take()?;
         let session = &open.take.session;
@@ -995,6 +996,8 @@ async fn export(
             session.arkit_clip(),
             format.needs_session().then(|| session.clone()),
             open.name(),
+            // What opens the mouth through the map, for the jaw bone's turn.
+            desk.map().and_then(faceanim_export::bones::jaw_opening),
         )
     };
     let studio = both.studio();
@@ -1023,7 +1026,8 @@ async fn export(
         session.as_ref(),
         sketch_animation.as_ref(),
         &name,
-    )?;
+    )?
+    .with_opening(opening);
     let exported = faceanim_export::export(format, &animation)?;
     let extension = format.extension_for(Some(&studio.character));
     Ok(download(format, extension, &name, exported))

@@ -61,6 +61,11 @@ pub trait Estimator: Send + Sync {
     fn driven(&self) -> usize {
         self.blendshapes().len()
     }
+    /// The retarget map it reads ARKit's channels through, when it does (what else reads the
+    /// same take, a jaw bone's turn, measures on it).
+    fn retarget_map(&self) -> Option<&faceanim_retarget::RetargetMap> {
+        None
+    }
 }
 
 /// By-name estimates: each of the character's blendshapes whose name means ARKit channels
@@ -220,6 +225,10 @@ impl Estimator for Retargeted {
 
     fn source(&self) -> EstimatorSource {
         EstimatorSource::Retarget
+    }
+
+    fn retarget_map(&self) -> Option<&faceanim_retarget::RetargetMap> {
+        Some(&self.map)
     }
 
     fn driven(&self) -> usize {

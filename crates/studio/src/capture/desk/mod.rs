@@ -174,11 +174,12 @@ impl CaptureDesk {
             uploads_stored: 0,
             notice: None,
             vmc: Vmc::default(),
-            skeleton: faceanim_export::bones::ViewRig::of(character).map(Arc::new),
+            skeleton: None,
             sketch_from_file,
         };
         desk.load_adapter(character);
         desk.load_map(character);
+        desk.remake_skeleton(character);
         desk.restore_take(character);
         desk
     }
@@ -396,7 +397,8 @@ impl CaptureDesk {
     /// values (which turn the bones). Where the character's shapes miss columns its bones show
     /// (a clip's gaze on a body with eye bones and no eyeLook shapes), the take is made of the
     /// clip's ARKit values too, so the bones turn as the clip's export turns them, and the
-    /// notice does not list those columns. Returns its frame count.
+    /// notice does not list those columns; where none of its shapes takes any column but its
+    /// bones do, the shapes hold still. Returns its frame count.
     ///
     /// # Errors
     /// [`ApiError::Invalid`] naming `shown` when no column reaches a shape of the character's
@@ -425,18 +427,25 @@ impl CaptureDesk {
         let (rows, mut unmatched) = if on_bones {
             (vec![Vec::new(); count], Vec::new())
         } else {
-            let retarget = clip
-                .retarget_through(character, shown, self.map.as_deref())
-                .map_err(|e| {
+            let lost = clip.unmatched(character, self.map.as_deref());
+            match clip.retarget_through(character, shown, self.map.as_deref()) {
+                Ok(retarget) => (retarget.animation.weights, lost),
+                // None of its shapes takes the clip, but its bones do (a jaw bone beside
+                // shapes that only shape the lips): the shapes hold still, the bones turn.
+                Err(faceanim_anim::ClipError::NothingInCommon { .. })
+                    if faceanim_export::bones::bones_take(character, clip) =>
+                {
+                    (vec![vec![0.0; character.blendshapes().len()]; count], lost)
+                }
+                Err(e) => {
                     let shown = faceanim_rig::excerpt(shown);
-                    ApiError::Invalid(if hint.is_empty() {
+                    return Err(ApiError::Invalid(if hint.is_empty() {
                         format!("{shown}: {e}")
                     } else {
                         format!("{shown}: {e}.{hint}")
-                    })
-                })?;
-            let lost = clip.unmatched(character, self.map.as_deref());
-            (retarget.animation.weights, lost)
+                    }));
+                }
+            }
         };
         // What the character's eye and jaw bones show (a clip's gaze on a body with eye bones
         // and no eyeLook shapes) is not lost: the bones take it, as the clip's export turns
@@ -797,15 +806,22 @@ impl CaptureDesk {
         }
         self.take = None;
         *lock(&self.live) = None;
-        self.skeleton = faceanim_export::bones::ViewRig::of(character).map(Arc::new);
         self.map_path = map_path(&adapter_path, character);
         self.adapter_path = adapter_path;
         self.load_adapter(character);
         self.load_map(character);
+        self.remake_skeleton(character);
         // VMC names follow the character.
         if let Err(e) = self.open_vmc(self.vmc.config(), character) {
             tracing::warn!("VMC for {}: {e}", character.name());
         }
+    }
+
+    /// The view's skeleton of `character`, its jaw's turn measured through the retarget map
+    /// where the character's names do not say what opens its mouth.
+    fn remake_skeleton(&mut self, character: &Character) {
+        self.skeleton =
+            faceanim_export::bones::ViewRig::of(character, self.map.as_deref()).map(Arc::new);
     }
 
     /// The take, if one is open.

@@ -148,6 +148,7 @@ impl CaptureDesk {
     /// is wrong; the save's error.
     pub fn set_map_row(
         &mut self,
+        character: &Character,
         channel: &str,
         shapes: BTreeMap<String, f32>,
     ) -> Result<(), ApiError> {
@@ -159,16 +160,18 @@ impl CaptureDesk {
         map.set_row(channel, shapes)
             .map_err(|e| ApiError::Invalid(e.to_string()))?;
         faceanim_files::write_atomic(&self.map_path, map.to_json().as_bytes())?;
-        self.install_map(map)
+        self.install_map(character, map)
     }
 
     /// Makes `map` the desk's, and re-reads the take, the webcam and the microphone's mouth
     /// (one that goes through a map, or waits for it) through it unless an adapter reads them.
-    fn install_map(&mut self, map: RetargetMap) -> Result<(), ApiError> {
+    fn install_map(&mut self, character: &Character, map: RetargetMap) -> Result<(), ApiError> {
         let map = Arc::new(map);
         self.map = Some(map.clone());
         self.map_note = None;
         self.vmc.set_map(Some(map.clone()));
+        // The jaw bone's turn, where the map says what opens the mouth.
+        self.remake_skeleton(character);
         if self.adapter.is_some() {
             return Ok(());
         }
@@ -320,6 +323,6 @@ pub(super) fn make(
             path.display()
         )));
     }
-    guard.install_map(map.clone())?;
+    guard.install_map(character, map.clone())?;
     Ok(map)
 }
