@@ -1244,8 +1244,10 @@ fn the_mouth_opens_once_by_the_jaw_bone_or_by_its_shapes() {
 /// the shapes its retarget map opens the mouth with. Blender's jaw-and-vowels avatar with its
 /// targets renamed `shape_N` (no name says `Fcl_MTH_A` any more): the map made on export opens
 /// the chin on the jaw bone by its shapes, and the bone stays. The jaw-skinned avatar renamed
-/// the same way, whose shapes only shape the lips around the chin, opens by the bone. Before,
-/// the bone opened 20° on both, whatever the map's shapes did: twice on the first.
+/// the same way, whose shapes only shape the lips around the chin, opens by the bone, although
+/// none of its shapes takes the clip. `faceanim info` and the studio's view say the same turn.
+/// Before, the bone opened 20° on the first, whatever the map's shapes did (twice), and the
+/// clip was refused on the second.
 #[test]
 fn a_rig_whose_names_say_nothing_opens_its_mouth_once_through_its_map() {
     let dir = support::fresh_output_dir("made-by-others-jaw-mapped");
@@ -1253,12 +1255,9 @@ fn a_rig_whose_names_say_nothing_opens_its_mouth_once_through_its_map() {
     let opening = faceanim_anim::Clip::of_weights(10.0, &["jawOpen"], vec![vec![0.0], vec![1.0]]);
     std::fs::write(&clip, opening.to_json()).unwrap();
     // The jaw bone's turn at jawOpen 1, and the largest of the renamed shapes' weights there.
-    let turned = |variant: Variant, name: &str| -> (f32, f64) {
+    let turned = |avatar: &Path, name: &str| -> (f32, f64) {
         let renamed = dir.join(format!("{name}.glb"));
-        support::rename_targets(
-            &faceanim_testdata::producers::blender_avatar_variant(variant),
-            &renamed,
-        );
+        support::rename_targets(avatar, &renamed);
         let out = dir.join(format!("{name}-open.glb"));
         let said = support::export_with_clip_and(&renamed, &out, &clip, &[]);
         assert!(said.contains("making the retarget map"), "{said}");
@@ -1279,9 +1278,43 @@ fn a_rig_whose_names_say_nothing_opens_its_mouth_once_through_its_map() {
             (said - f64::from(turn)).abs() < 0.1,
             "{name}: info says the jaw turns {said}°, the export turned it {turn}°"
         );
+        // So does the studio's view (its skeleton measured through the same map), which opens
+        // the clip on the bones where none of the shapes takes it.
+        let studio = start_on(
+            Some(&renamed),
+            &dir.join(format!("{name}.project.json")),
+            &[],
+        );
+        let open = serde_json::json!({ "path": clip }).to_string();
+        let (status, state) = request(
+            studio.port,
+            "POST",
+            "/api/capture/open",
+            &[],
+            open.as_bytes(),
+        );
+        drop(studio);
+        assert_eq!(status, 200, "{name}: {state}");
+        let state: Value = serde_json::from_str(&state).unwrap();
+        let shown = state["take"]["bones"][1]
+            .as_array()
+            .unwrap_or_else(|| panic!("{name}: no bones in the view: {state}"))
+            .iter()
+            .map(|q| {
+                degrees_between(
+                    glam::Quat::from_slice(&support::f32s(q)),
+                    glam::Quat::IDENTITY,
+                )
+            })
+            .fold(0.0, f32::max);
+        assert!(
+            (shown - turn).abs() < 0.1,
+            "{name}: the studio's view turns the jaw {shown}°, the export {turn}°"
+        );
         (turn, widest)
     };
-    let (by_shapes, widest) = turned(Variant::JawAndVowels, "vowels");
+    let variant = faceanim_testdata::producers::blender_avatar_variant;
+    let (by_shapes, widest) = turned(&variant(Variant::JawAndVowels), "vowels");
     println!("renamed jaw-and-vowels: the jaw turns {by_shapes:.2}°, a shape at {widest:.2}");
     assert!(
         widest > 0.3,
@@ -1291,7 +1324,18 @@ fn a_rig_whose_names_say_nothing_opens_its_mouth_once_through_its_map() {
         by_shapes < 0.1,
         "the jaw turned {by_shapes}° beside the shapes the map opens the chin with"
     );
-    let (by_bone, _) = turned(Variant::JawSkinned, "skinned");
+    // The plain avatar renamed: its chin opens by its shape, the teeth hang on the bone, which
+    // turns as far as the chin (as it does by name).
+    let (with_teeth, _) = turned(
+        &faceanim_testdata::producers::blender_avatar_path(),
+        "plain",
+    );
+    println!("renamed plain avatar: the jaw turns {with_teeth:.2}°");
+    assert!(
+        with_teeth > 2.0 && (with_teeth - 20.0).abs() > 1.0,
+        "the jaw under a chin the map's shapes open turned {with_teeth}°"
+    );
+    let (by_bone, _) = turned(&variant(Variant::JawSkinned), "skinned");
     println!("renamed jaw-skinned: the jaw turns {by_bone:.2}°");
     let want = faceanim_export::bones::DEFAULT_JAW_DEGREES;
     assert!(

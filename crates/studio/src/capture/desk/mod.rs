@@ -455,7 +455,11 @@ impl CaptureDesk {
             unmatched.retain(|name| !skeleton.shows(name));
         }
         let mut take = Take::from_weights(character, shown, clip.fps, &rows, clip.head.as_deref())?;
-        if on_bones || unmatched.len() < before {
+        // Through the map, the character's own names say nothing of the clip's ARKit channels:
+        // the take is made of them too, so its bones (a jaw beside the shapes the map opens the
+        // mouth with) turn as the clip's export turns them.
+        let through_map = self.map.is_some() && clip.loses_arkit(character);
+        if on_bones || through_map || unmatched.len() < before {
             take = take.made_of_arkit(clip.arkit_rows())?;
         }
         let way = if on_bones { " on the bones" } else { "" };
