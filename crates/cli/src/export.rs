@@ -58,8 +58,8 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
             )?;
             let mut unmatched = clip.unmatched(&character, map.as_ref());
             // The eye and jaw bones take what they show (gaze on eye bones without eyeLook
-            // shapes): not lost.
-            if let Some(skeleton) = faceanim_export::bones::ViewRig::of(&character, map.as_ref()) {
+            // shapes): not lost. (Which bones there are; how far the jaw turns is not asked.)
+            if let Some(skeleton) = faceanim_export::bones::ViewRig::of(&character, None) {
                 unmatched.retain(|name| !skeleton.shows(name));
             }
             let animation = faceanim_export::Animation::from_clip_through(

@@ -91,16 +91,6 @@ impl BoneKeys {
             opening: None,
         }
     }
-
-    /// These keys, with what opens the character's mouth read through its retarget `map`
-    /// ([`BoneKeys::opening`]; none without a map).
-    #[must_use]
-    pub fn through(self, map: Option<&RetargetMap>) -> BoneKeys {
-        BoneKeys {
-            opening: map.and_then(jaw_opening),
-            ..self
-        }
-    }
 }
 
 /// The character's own weights at `jawOpen` 1 through its retarget `map` (`None` where the
@@ -373,7 +363,7 @@ impl ViewRig {
     /// The view's skeleton of `character`, when its file has a head bone (without one, a head
     /// pose turns the whole character and the view turns it so). Its jaw turns as the export's
     /// does, with what opens the mouth read through the character's retarget `map` where its
-    /// names do not say ([`BoneKeys::through`]).
+    /// names do not say ([`BoneKeys::opening`]).
     #[must_use]
     pub fn of(character: &Character, map: Option<&RetargetMap>) -> Option<ViewRig> {
         let opening = map.and_then(jaw_opening);
@@ -622,20 +612,14 @@ fn jaw_degrees(character: &Character, source: &Source, jaw: usize, opening: Opti
     jaw_turn(angles[angles.len() / 2], 2 * on_bone > angles.len())
 }
 
-/// Each vertex's displacement when the character's shapes take `weights` together (those
-/// that move it), in vertex order.
+/// Each vertex's displacement when the character's shapes take `weights` together (its pose
+/// there, less its rest), for the vertices that move, in vertex order.
 fn mixed_moves(character: &Character, weights: &[f32]) -> Vec<(u32, Vec3)> {
-    let mut sum = vec![Vec3::ZERO; character.positions().len()];
-    for (shape, &w) in character.blendshapes().iter().zip(weights) {
-        if w > 0.0 {
-            for (v, d) in shape.moves() {
-                if let Some(at) = sum.get_mut(v as usize) {
-                    *at += w * d;
-                }
-            }
-        }
-    }
-    sum.into_iter()
+    let posed = character.pose(weights).positions;
+    posed
+        .iter()
+        .zip(character.positions())
+        .map(|(&p, &rest)| p - rest)
         .enumerate()
         .filter(|(_, d)| d.length_squared() > 0.0)
         .filter_map(|(v, d)| Some((u32::try_from(v).ok()?, d)))

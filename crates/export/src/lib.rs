@@ -257,7 +257,10 @@ impl<'a> Animation<'a> {
         let names: Vec<String> = character.blendshape_names();
         Ok(Animation {
             // The clip's own gaze and jaw: a character without eyeLook shapes still has eyes.
-            bones: Some(bones::BoneKeys::from_clip(clip).through(map)),
+            bones: Some(bones::BoneKeys {
+                opening: map.and_then(bones::jaw_opening),
+                ..bones::BoneKeys::from_clip(clip)
+            }),
             character: Some(character),
             arkit: on_bones.then(|| clip.clone()),
             clip: Clip {
