@@ -189,6 +189,7 @@ mod tests {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         }
     }
 

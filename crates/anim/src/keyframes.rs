@@ -69,6 +69,7 @@ mod tests {
             head: Some((0..11).map(|i| [i as f32, 0.0, 0.0]).collect()),
             head_position: None,
             presence: None,
+            arkit: None,
         };
         let keyed = interpolate_between(&clip, &keyframe_indices(11, 5, &[]));
         // Keys 0, 5 (value 0) and 10 (value 1).

@@ -7,7 +7,9 @@
 //! The JSON form (docs/formats.md, "Clip") is
 //! `{"fps": 30, "blendshapes": [names], "frames": [[w, ...], ...], "head": [[yaw, pitch, roll], ...]}`,
 //! and for clips from capture two more optional per-frame fields: `"head_position"` (metres
-//! from the camera) and `"presence"` (0..1; 0 marks a frame where no face was found).
+//! from the camera) and `"presence"` (0..1; 0 marks a frame where no face was found), and
+//! `"arkit"`: the ARKit values a take was made of, where its own names leave channels without
+//! a column ([`Clip::arkit`]).
 //! [`Clip::from_json`] reports *every* problem with its path (`frames[3][7]`), not just the first.
 //!
 //! ```
@@ -48,6 +50,14 @@ pub struct Clip {
     /// and the weights were filled in from the neighbouring frames).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub presence: Option<Vec<f32>>,
+    /// The ARKit values the clip was made of (a capture's scores, lip sync's visemes), per
+    /// frame ARKit's 52 in [`ARKIT_52`](faceanim_rig::names::ARKIT_52) order, kept where the
+    /// clip's own names leave some of those channels without a column: a VRoid avatar's gaze,
+    /// which its eye bones show; every channel of a rig whose names say nothing. Eye and jaw
+    /// bones and ARKit outputs (Live Link Face) read them ([`Clip::arkit_rows`]); they never
+    /// set a shape.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub arkit: Option<Vec<Vec<f32>>>,
 }
 
 /// The head rotation `[yaw, pitch, roll]` (degrees) as a unit quaternion `[x, y, z, w]` in a
@@ -105,15 +115,6 @@ pub struct Retarget {
     pub unmatched: Vec<String>,
 }
 
-/// `row` as ARKit's 52 through `map`, clamped to 0..1.
-fn arkit_of(map: &faceanim_rig::name_map::NameMap, row: &[f32]) -> Vec<f32> {
-    let mut arkit = map.arkit_row(row);
-    for v in &mut arkit {
-        *v = v.clamp(0.0, 1.0);
-    }
-    arkit
-}
-
 impl Clip {
     /// A clip of weights alone, at `fps`: columns named `names`, one row of `frames` per
     /// frame; no head pose, head position or presence.
@@ -132,6 +133,7 @@ impl Clip {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         }
     }
 
@@ -144,19 +146,66 @@ impl Clip {
     /// The rows as ARKit's 52 channels in
     /// [`ARKIT_52`](faceanim_rig::names::ARKIT_52) order, read through the name table as the
     /// Live Link Face writer reads them (any spelling, split halves averaged), clamped to 0..1;
-    /// channels the clip lacks at 0.
+    /// a channel no column carries from the values the clip was made of ([`Clip::arkit`]),
+    /// else at 0.
+    ///
+    /// ```
+    /// let mut clip = faceanim_anim::Clip::of_weights(30.0, &["Fcl_EYE_Close_L"], vec![vec![0.5]]);
+    /// let blink = faceanim_rig::names::Channel::named("eyeBlinkLeft").unwrap().index();
+    /// let look = faceanim_rig::names::Channel::named("eyeLookInLeft").unwrap().index();
+    /// let mut made_of = vec![0.0; 52];
+    /// made_of[blink] = 0.9; // the capture's score, under the take's own weight
+    /// made_of[look] = 0.3; // the gaze, which no column carries
+    /// clip.arkit = Some(vec![made_of]);
+    /// let row = &clip.arkit_rows()[0];
+    /// assert_eq!((row[blink], row[look]), (0.5, 0.3));
+    /// ```
     #[must_use]
     pub fn arkit_rows(&self) -> Vec<Vec<f32>> {
         let map = faceanim_rig::name_map::NameMap::from_names(&self.blendshapes, &[]);
-        self.frames.iter().map(|row| arkit_of(&map, row)).collect()
+        (0..self.frames.len())
+            .map(|f| self.arkit_of(&map, f))
+            .collect()
     }
 
     /// Frame `frame` as [`Clip::arkit_rows`] reads each; `None` past the last frame.
     #[must_use]
     pub fn arkit_row(&self, frame: usize) -> Option<Vec<f32>> {
-        let row = self.frames.get(frame)?;
+        self.frames.get(frame)?;
         let map = faceanim_rig::name_map::NameMap::from_names(&self.blendshapes, &[]);
-        Some(arkit_of(&map, row))
+        Some(self.arkit_of(&map, frame))
+    }
+
+    /// Frame `frame` (which exists) through `map`, the channels it leaves from [`Clip::arkit`].
+    fn arkit_of(&self, map: &faceanim_rig::name_map::NameMap, frame: usize) -> Vec<f32> {
+        let made_of = self.arkit.as_ref().and_then(|rows| rows.get(frame));
+        map.channel_values(&self.frames[frame])
+            .into_iter()
+            .enumerate()
+            .map(|(c, v)| {
+                v.or_else(|| made_of.and_then(|row| row.get(c)).copied())
+                    .unwrap_or(0.0)
+                    .clamp(0.0, 1.0)
+            })
+            .collect()
+    }
+
+    /// The values the clip was made of ([`Clip::arkit`]) as a clip of ARKit's 52 named
+    /// columns, with the clip's head pose; `None` when it keeps none.
+    #[must_use]
+    pub fn arkit_clip(&self) -> Option<Clip> {
+        Some(Clip {
+            fps: self.fps,
+            blendshapes: faceanim_rig::names::ARKIT_52
+                .iter()
+                .map(|&n| n.to_owned())
+                .collect(),
+            frames: self.arkit.clone()?,
+            head: self.head.clone(),
+            head_position: self.head_position.clone(),
+            presence: self.presence.clone(),
+            arkit: None,
+        })
     }
 
     /// Parses and validates clip JSON.
@@ -212,13 +261,18 @@ impl Clip {
             }
         }
         for (field, rows) in [("head", &self.head), ("head_position", &self.head_position)] {
-            let Some(rows) = rows else { continue };
-            problems.extend(count_problem(field, rows.len(), "rows", self.frames.len()));
-            for (f, row) in rows.iter().enumerate() {
-                if row.iter().any(|x| !x.is_finite()) {
-                    problems.push(format!("{field}[{f}]: not a finite number"));
-                }
+            if let Some(rows) = rows {
+                problems.extend(row_problems(field, rows, self.frames.len(), None));
             }
+        }
+        if let Some(rows) = &self.arkit {
+            let channels = (faceanim_rig::names::ARKIT_52.len(), "ARKit's 52 channels");
+            problems.extend(row_problems(
+                "arkit",
+                rows,
+                self.frames.len(),
+                Some(channels),
+            ));
         }
         if let Some(presence) = &self.presence {
             problems.extend(count_problem(
@@ -355,6 +409,32 @@ impl Clip {
     }
 }
 
+/// The problems of `rows`, the per-frame list `field`: its length against the `frames`, each
+/// row's against `width` (how many values, and what they are for) where given, and its first
+/// value that is not a finite number.
+fn row_problems<R: AsRef<[f32]>>(
+    field: &str,
+    rows: &[R],
+    frames: usize,
+    width: Option<(usize, &str)>,
+) -> Vec<String> {
+    let mut problems: Vec<String> = count_problem(field, rows.len(), "rows", frames)
+        .into_iter()
+        .collect();
+    for (f, row) in rows.iter().enumerate() {
+        let row = row.as_ref();
+        if let Some((width, of)) = width
+            && row.len() != width
+        {
+            problems.push(format!("{field}[{f}]: {} values for {of}", row.len()));
+        }
+        if let Some(k) = row.iter().position(|x| !x.is_finite()) {
+            problems.push(format!("{field}[{f}][{k}]: not a finite number"));
+        }
+    }
+    problems
+}
+
 /// The problem of a per-frame list `field` holding `len` `what` for `frames` frames, if its
 /// length is not the frames'.
 fn count_problem(field: &str, len: usize, what: &str, frames: usize) -> Option<String> {
@@ -379,6 +459,36 @@ mod tests {
                 "blendshapes[1]: 'a' appears twice",
                 "frames[1]: 1 weights for 2 blendshapes",
                 "head: 1 rows for 2 frames",
+            ]
+        );
+    }
+
+    /// The ARKit values a clip keeps: one row of 52 a frame, checked with their paths, and
+    /// written and read back as they are.
+    #[test]
+    fn the_arkit_values_a_clip_keeps_are_checked_and_kept() {
+        let mut clip = Clip::of_weights(30.0, &["Fcl_MTH_A"], vec![vec![0.2], vec![0.4]]);
+        let mut row = vec![0.0; 52];
+        row[3] = 0.5;
+        clip.arkit = Some(vec![row.clone(), row.clone()]);
+        let back = Clip::from_json(clip.to_json().as_bytes()).unwrap();
+        assert_eq!(back, clip);
+        assert_eq!(back.arkit_clip().unwrap().frames[1][3], 0.5);
+        let mut short = row.clone();
+        short.pop();
+        let mut broken = row;
+        broken[7] = f32::NAN;
+        clip.arkit = Some(vec![short, broken.clone(), broken]);
+        let Err(ClipError::Invalid(problems)) = clip.validate() else {
+            panic!("accepted bad ARKit values")
+        };
+        assert_eq!(
+            problems,
+            vec![
+                "arkit: 3 rows for 2 frames",
+                "arkit[0]: 51 values for ARKit's 52 channels",
+                "arkit[1][7]: not a finite number",
+                "arkit[2][7]: not a finite number",
             ]
         );
     }
@@ -419,6 +529,7 @@ mod tests {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         }
     }
 
@@ -580,6 +691,7 @@ mod tests {
             head: Some(vec![[1.0, 2.0, 3.0]; 2]),
             head_position: Some(vec![[0.0, 0.1, -0.5]; 2]),
             presence: Some(vec![1.0, 0.0]),
+            arkit: None,
         };
         assert_eq!(Clip::from_json(clip.to_json().as_bytes()), Ok(clip));
     }
@@ -601,6 +713,7 @@ mod tests {
                 head: Some(values.iter().map(|v| [*v, -*v, v * 0.5]).collect()),
                 head_position: None,
                 presence: None,
+                arkit: None,
             };
             proptest::prop_assert_eq!(Clip::from_json(clip.to_json().as_bytes()), Ok(clip));
         }

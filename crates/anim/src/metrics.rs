@@ -159,6 +159,7 @@ mod tests {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         }
     }
 

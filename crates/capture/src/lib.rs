@@ -316,6 +316,7 @@ impl Capture {
                     .map(|f| f.presence.clamp(0.0, 1.0))
                     .collect(),
             ),
+            arkit: None,
         };
         if let Some(settings) = filtering.one_euro {
             faceanim_anim::filter::smooth(&mut clip, settings)?;

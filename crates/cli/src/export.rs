@@ -85,8 +85,7 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
                     clip_path.display(),
                     character.name()
                 );
-            } else if animation.arkit.is_some() {
-                // None of its shapes takes the clip (else it was refused above): its bones do.
+            } else if animation.bones_only {
                 tracing::warn!(
                     "{}: none of {}'s shapes answers to the clip's channels: only its bones move (head pose, eyeLook, jawOpen)",
                     clip_path.display(),

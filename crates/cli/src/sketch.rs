@@ -58,6 +58,7 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
         bones: None,
         // The strokes go with the sketch, so the file opens again as them.
         strokes: serde_json::from_slice(&bytes).ok(),
+        bones_only: false,
     };
     if format == faceanim_export::Format::Glb {
         crate::outputs::write(&args.out.output, format, &animation, args.out.glb)?;

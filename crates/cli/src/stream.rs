@@ -74,7 +74,11 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     } else {
         let bytes = faceanim_files::read_bytes(&args.input)?;
         match Clip::from_json(&bytes) {
-            Ok(clip) => (clip, None),
+            // A clip JSON keeps what its take was made of where its names leave channels out.
+            Ok(clip) => {
+                let arkit = clip.arkit_clip();
+                (clip, arkit)
+            }
             Err(clip_error) => faceanim_take::Session::from_json(&bytes)
                 .map(|session| (session.clip(), session.arkit_clip()))
                 .map_err(|session_error| {

@@ -146,6 +146,7 @@ fn use_session(bytes: &[u8], character: &faceanim_rig::Character, glb: bool) {
         session: Some(&session),
         bones: None,
         strokes: None,
+        bones_only: false,
     };
     for format in faceanim_export::Format::ALL {
         if format != faceanim_export::Format::Glb || glb {

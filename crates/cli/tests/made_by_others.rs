@@ -1144,6 +1144,119 @@ fn a_capture_turns_the_head_eyes_and_jaw_of_a_body_with_no_shapes() {
     );
 }
 
+/// A real person captured onto a VRoid-style avatar (Blender's jaw-and-vowels avatar: `Fcl_*`
+/// keys and no ARKit names, its eyeballs on eye bones) keeps the gaze its eye bones show in the
+/// clip JSON `track` writes: put on the avatar again (`export --clip`), the eyes and the jaw
+/// turn as in the take's own GLB, whose Live Link Face CSV comes back the same, and the studio
+/// shows the clip as it shows the take's session. Before, the clip JSON held the avatar's own
+/// weights alone: exported again, the eyes stared ahead (they had turned up to 18°), and Live
+/// Link Face's eyeLook curves were zeros.
+#[test]
+fn a_vroid_takes_clip_json_keeps_the_gaze_its_eye_bones_show() {
+    let dir = support::fresh_output_dir("made-by-others-clip-gaze");
+    let video = dir.join("talking.mp4");
+    support::cut_footage(faceanim_testdata::producers::CAP13, 16, 4, &video);
+    // Its own copy: the retarget map capture makes is saved beside it.
+    let avatar = dir.join("vroid.glb");
+    std::fs::copy(
+        faceanim_testdata::producers::blender_avatar_variant(Variant::JawAndVowels),
+        &avatar,
+    )
+    .unwrap();
+    let [glb, clip, csv, session] =
+        ["take.glb", "take.json", "take.csv", "take.session.json"].map(|n| dir.join(n));
+    let path = |p: &PathBuf| p.to_str().unwrap().to_owned();
+    let outputs = [
+        "--filter",
+        "none",
+        "-o",
+        &path(&glb),
+        "-o",
+        &path(&clip),
+        "-o",
+        &path(&csv),
+        "--session",
+        &path(&session),
+    ];
+    let summary = support::track_summary(&video, &avatar, &outputs);
+    assert_eq!(summary["estimator"], "retarget", "{summary}");
+    let kept: Value = serde_json::from_slice(&std::fs::read(&clip).unwrap()).unwrap();
+    let rows = kept["arkit"]
+        .as_array()
+        .expect("the clip keeps no ARKit values");
+    assert_eq!(rows.len(), kept["frames"].as_array().unwrap().len());
+
+    let again = dir.join("again.glb");
+    export_with_clip(&avatar, &again, &clip);
+    let fps = kept["fps"].as_f64().unwrap() as f32;
+    let times: Vec<f32> = (0..rows.len()).step_by(5).map(|f| f as f32 / fps).collect();
+    let bones = ["Head", "LeftEye", "RightEye", "Jaw"];
+    let played = blender_bone_turns_at(&glb, &times, &bones);
+    let replayed = blender_bone_turns_at(&again, &times, &bones);
+    let mut widest: f32 = 0.0;
+    for ((t, first), second) in times.iter().zip(&played).zip(&replayed) {
+        for ((bone, a), (_, b)) in first.iter().zip(second) {
+            let off = degrees_between(*a, *b);
+            assert!(off < 0.1, "at {t} s: {bone} replayed {off}° away");
+        }
+        let head = first[0].1;
+        for (_, eye) in &first[1..3] {
+            widest = widest.max(degrees_between(*eye, head));
+        }
+    }
+    // The eyes did look about: staring ahead would not pass.
+    println!("the eyes turned up to {widest:.1}° from the head, replayed the same");
+    assert!(
+        widest > 3.0,
+        "the eyes turned at most {widest}° in the take"
+    );
+
+    // Live Link Face from the clip JSON is the take's own.
+    let csv_again = dir.join("again.csv");
+    export_with_clip(&avatar, &csv_again, &clip);
+    let (header, first) = live_link_csv(&csv);
+    let (header_again, second) = live_link_csv(&csv_again);
+    assert_eq!(header, header_again);
+    for (f, (a, b)) in first.iter().zip(&second).enumerate() {
+        for ((name, x), y) in header.iter().zip(a).zip(b) {
+            assert!((x - y).abs() < 1e-4, "frame {f}: {name} {x} came back {y}");
+        }
+    }
+
+    // The studio opens the clip as it opens the take's session: the same joints turn.
+    let studio = start_on(Some(&avatar), &dir.join("vroid.project.json"), &[]);
+    let shown = |file: &Path| -> Vec<Vec<Vec<f32>>> {
+        let (status, state) = support::open_path(studio.port, file);
+        assert_eq!(status, 200, "{state}");
+        let state: Value = serde_json::from_str(&state).unwrap();
+        state["take"]["bones"]
+            .as_array()
+            .unwrap_or_else(|| panic!("no bones in the view: {state}"))
+            .iter()
+            .map(|joints| {
+                joints
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(support::f32s)
+                    .collect()
+            })
+            .collect()
+    };
+    let (from_clip, from_session) = (shown(&clip), shown(&session));
+    drop(studio);
+    assert_eq!(from_clip.len(), from_session.len());
+    for (f, (a, b)) in from_clip.iter().zip(&from_session).enumerate() {
+        for (j, (x, y)) in a.iter().zip(b).enumerate() {
+            let off = degrees_between(glam::Quat::from_slice(x), glam::Quat::from_slice(y));
+            assert!(
+                off < 0.1,
+                "frame {f}: joint {j} of the clip's view is {off}° from the session's"
+            );
+        }
+    }
+}
+
 /// A face keyed on its bones by hand in Blender (`tools/blender_keyed_bones.py`: the jaw of
 /// the body with no shape keys opened 12° and shut again over a second, Bezier curves, written
 /// by Blender's exporter with every other bone's rest as keys) opens as a take whose jawOpen is
@@ -1285,14 +1398,7 @@ fn a_rig_whose_names_say_nothing_opens_its_mouth_once_through_its_map() {
             &dir.join(format!("{name}.project.json")),
             &[],
         );
-        let open = serde_json::json!({ "path": clip }).to_string();
-        let (status, state) = request(
-            studio.port,
-            "POST",
-            "/api/capture/open",
-            &[],
-            open.as_bytes(),
-        );
+        let (status, state) = support::open_path(studio.port, &clip);
         drop(studio);
         assert_eq!(status, 200, "{name}: {state}");
         let state: Value = serde_json::from_str(&state).unwrap();

@@ -384,13 +384,7 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
 
     // A photo opened before any map: the map is made first, and the take read through it.
     let photo = faceanim_testdata::shared("images/ict-face-jawopen.png");
-    let (status, body) = support::request(
-        studio.port,
-        "POST",
-        "/api/capture/open",
-        &[("content-type", "application/json")],
-        json!({ "path": photo }).to_string().as_bytes(),
-    );
+    let (status, body) = support::open_path(studio.port, &photo);
     assert_eq!(status, 200, "{body}");
     let state = support::settled(studio.port, 300);
     assert!(state["job"]["error"].is_null(), "{}", state["job"]);
@@ -494,6 +488,7 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
         head: None,
         head_position: None,
         presence: None,
+        arkit: None,
     };
     let halved = |clip: &Value, what: &str| {
         let got = support::column(clip, &shape);
@@ -575,6 +570,7 @@ fn a_recording_exported_onto_a_rig_without_a_map_makes_one() {
         head: None,
         head_position: None,
         presence: None,
+        arkit: None,
     };
     let csv = out.join("take.csv");
     std::fs::write(&csv, faceanim_export::livelink::to_csv(&recording)).unwrap();

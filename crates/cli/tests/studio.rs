@@ -191,13 +191,7 @@ fn capture_mode_refuses_bad_input_with_a_reason() {
     );
     assert_eq!(status, 400);
     assert!(body.contains("open a video"), "{body}");
-    let (status, body) = request(
-        port,
-        "POST",
-        "/api/capture/open",
-        &json,
-        br#"{"path": "/no/such/video.mp4"}"#,
-    );
+    let (status, body) = support::open_path(port, std::path::Path::new("/no/such/video.mp4"));
     assert_eq!(status, 400);
     assert!(body.contains("/no/such/video.mp4"), "{body}");
     // A file that is no video: the job ends with ffmpeg's reason, naming the upload.

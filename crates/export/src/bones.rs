@@ -510,6 +510,7 @@ impl ViewRig {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         });
         self.rig.channels(
             &animation.times,
@@ -724,6 +725,7 @@ mod tests {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         };
         let keys = BoneKeys::from_clip(&clip);
         let gaze = keys.gaze.unwrap();

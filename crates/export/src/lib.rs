@@ -193,13 +193,18 @@ pub struct Animation<'a> {
     /// The sketch the animation was made from (its project's JSON), kept in the GLB so that it
     /// opens again as strokes to edit.
     pub strokes: Option<serde_json::Value>,
+    /// None of the character's shapes takes the clip, and its bones do: only they move
+    /// ([`Animation::from_clip_through`]).
+    pub bones_only: bool,
 }
 
 impl<'a> Animation<'a> {
     /// `clip` put on `character` by name (ARKit spellings match), as an animation named `name`.
     /// A body with no blendshapes at all, or one none of whose shapes takes any of the clip's
     /// channels, takes the clip on its bones (head pose, gaze, `jawOpen`; see [`bones`]), and
-    /// Live Link Face the clip's own ARKit values.
+    /// Live Link Face the clip's own ARKit values. Where the clip keeps the ARKit values its
+    /// take was made of ([`Clip::arkit`]), the bones and Live Link Face read those, as the
+    /// take's own export did.
     ///
     /// # Errors
     /// [`ExportError::Clip`] when no name of the clip is one of the character's;
@@ -255,22 +260,28 @@ impl<'a> Animation<'a> {
             other => other?,
         };
         let names: Vec<String> = character.blendshape_names();
+        // The ARKit values the clip was made of, where it keeps them (its own names leave
+        // channels without a column): they turn the bones and fill Live Link Face's curves, as
+        // the take's own export did. Else the clip's columns by their ARKit meaning.
+        let made_of = clip.arkit_clip();
         Ok(Animation {
             // The clip's own gaze and jaw: a character without eyeLook shapes still has eyes.
             bones: Some(bones::BoneKeys {
                 opening: map.and_then(bones::jaw_opening),
-                ..bones::BoneKeys::from_clip(clip)
+                ..bones::BoneKeys::of_take(clip, made_of.as_ref())
             }),
             character: Some(character),
-            arkit: on_bones.then(|| clip.clone()),
+            arkit: made_of.or_else(|| on_bones.then(|| clip.clone())),
             clip: Clip {
                 blendshapes: names,
                 frames: retarget.animation.weights.clone(),
+                arkit: None,
                 ..clip.clone()
             },
             animation: retarget.animation,
             session: None,
             strokes: None,
+            bones_only: on_bones,
         })
     }
 
@@ -324,6 +335,7 @@ impl<'a> Animation<'a> {
             session,
             bones: None,
             strokes: None,
+            bones_only: false,
         })
     }
 }
@@ -516,9 +528,10 @@ impl Animation<'_> {
     }
 }
 
-/// The clip JSON: the character's own weights by name; for a body with no blendshapes, whose
-/// bones follow the take's ARKit values, those values (with the head pose), so that the clip
-/// put on it again (`export --clip`) turns the same bones.
+/// The clip JSON: the character's own weights by name, with the ARKit values the take was made
+/// of where its names leave channels that move without a column ([`kept_arkit`]); for a body
+/// with no blendshapes, whose bones follow the take's ARKit values, those values (with the head
+/// pose). So the clip put on it again (`export --clip`) turns the same bones.
 fn clip_json(animation: &Animation<'_>, notes: &mut Vec<String>) -> Vec<u8> {
     match &animation.arkit {
         Some(arkit)
@@ -539,8 +552,44 @@ fn clip_json(animation: &Animation<'_>, notes: &mut Vec<String>) -> Vec<u8> {
             .to_json()
             .into_bytes()
         }
-        _ => animation.clip.to_json().into_bytes(),
+        _ => Clip {
+            arkit: kept_arkit(animation, notes),
+            ..animation.clip.clone()
+        }
+        .to_json()
+        .into_bytes(),
     }
+}
+
+/// The take's own ARKit values ([`Animation::arkit`]) as the clip JSON keeps them
+/// ([`Clip::arkit`]): ARKit's 52 per frame, where a channel that moves in them has no column
+/// among the character's names (a VRoid avatar's gaze, which its eye bones show; the jaw of a
+/// rig whose names say nothing); `None` where the columns carry all that moves.
+fn kept_arkit(animation: &Animation<'_>, notes: &mut Vec<String>) -> Option<Vec<Vec<f32>>> {
+    let arkit = animation.arkit.as_ref()?;
+    if arkit.frames.len() != animation.clip.frames.len() {
+        return None;
+    }
+    let rows = arkit.arkit_rows();
+    let names = faceanim_rig::name_map::NameMap::from_names(&animation.clip.blendshapes, &[]);
+    let left: Vec<&str> = names
+        .undriven_channels()
+        .into_iter()
+        .filter(|c| rows.iter().any(|row| row[c.index()] != 0.0))
+        .map(|c| c.name())
+        .collect();
+    if left.is_empty() {
+        return None;
+    }
+    let more = match left.len() {
+        0..=3 => String::new(),
+        n => format!(" and {} more", n - 3),
+    };
+    notes.push(format!(
+        "the clip keeps the ARKit values the take was made of (\"arkit\") for what its blendshapes have no column for ({}{more}): the eye and jaw bones and Live Link Face read them there",
+        left[..left.len().min(3)].join(", ")
+    ));
+    Some(rows)
 }
 
 fn session<'a>(format: Format, animation: &Animation<'a>) -> Result<&'a Session, ExportError> {
@@ -703,6 +752,7 @@ mod tests {
                 session: None,
                 bones: None,
                 strokes: None,
+                bones_only: false,
             };
             let exported =
                 export(Format::LiveLinkCsv, &animation).unwrap_or_else(|e| panic!("{e}"));
@@ -748,6 +798,7 @@ mod tests {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         };
         let animation =
             Animation::from_take(Some(&character), &take, None, None, None, "take").unwrap();
@@ -779,6 +830,7 @@ mod tests {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         };
         let animation = Animation::from_clip(&character, &clip, "test").unwrap_or_else(|e| {
             panic!("{e}");

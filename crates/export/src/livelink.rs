@@ -294,6 +294,7 @@ pub fn from_csv(text: &str) -> Result<Clip, CsvError> {
         head: head_columns.map(|_| heads),
         head_position: None,
         presence: None,
+        arkit: None,
     })
 }
 
@@ -314,6 +315,7 @@ mod tests {
             head: Some((0..75).map(|f| [f as f32 * 0.2, -3.0, 1.5]).collect()),
             head_position: None,
             presence: None,
+            arkit: None,
         };
         let back = from_csv(&to_csv(&clip)).unwrap();
         assert_eq!(back.fps, 30.0);
@@ -402,6 +404,7 @@ mod tests {
             head: Some(vec![[90.0, 0.0, -45.0]; 32]),
             head_position: None,
             presence: None,
+            arkit: None,
         };
         let csv = to_csv(&clip);
         let lines: Vec<&str> = csv.lines().collect();

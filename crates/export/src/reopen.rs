@@ -126,6 +126,7 @@ pub fn animation_of(character: &faceanim_rig::Character) -> Option<Reopened> {
             head,
             head_position: None,
             presence: None,
+            arkit: None,
         },
     })
 }
@@ -267,6 +268,7 @@ fn vrma_clip(take: VrmaTake) -> Reopened {
             }),
             head_position: None,
             presence: None,
+            arkit: None,
         },
     }
 }

@@ -124,6 +124,7 @@ fn the_view_turns_every_vertex_where_the_exported_file_does() {
         head: Some(heads.to_vec()),
         head_position: None,
         presence: None,
+        arkit: None,
     };
     let keys = BoneKeys::from_clip(&clip);
     let animation = MorphAnimation {
@@ -289,6 +290,7 @@ fn a_sketchs_gaze_and_jaw_turn_the_views_joints_as_the_export_turns_the_bones() 
         head: None,
         head_position: None,
         presence: None,
+        arkit: None,
     };
     let exported = export_into_source_with(
         &character,
@@ -378,11 +380,13 @@ fn a_vrm_animation_of_keys_that_do_not_fit_is_refused() {
                 head: None,
                 head_position: None,
                 presence: None,
+                arkit: None,
             },
             arkit: None,
             session: None,
             bones: None,
             strokes: None,
+            bones_only: false,
         };
         let result = faceanim_export::export(faceanim_export::Format::Vrma, &animation);
         assert!(

@@ -745,6 +745,7 @@ impl Sketch<'_> {
             head: None,
             head_position: None,
             presence: None,
+            arkit: None,
         }
     }
 }

@@ -448,6 +448,7 @@ async fn export(State(shared): State<Shared>, format: Format) -> Result<Response
                 bones: None,
                 // The strokes go with the sketch, so the file opens again as them.
                 strokes: serde_json::to_value(studio.project()).ok(),
+                bones_only: false,
             },
         )?
     } else {

@@ -102,6 +102,7 @@ mod tests {
             head,
             head_position: None,
             presence: None,
+            arkit: None,
         }
     }
 

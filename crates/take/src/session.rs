@@ -796,6 +796,7 @@ impl Session {
             head,
             head_position,
             presence: Some(self.frames.iter().map(|f| f.presence).collect()),
+            arkit: None,
         };
         let known = self.keyframe_mask();
         if let Some(head) = clip.head.as_mut() {
@@ -1156,6 +1157,7 @@ pub fn peak_animation(peak: &[f32], blendshapes: Vec<String>, fps: f32, frames: 
         head: None,
         head_position: None,
         presence: None,
+        arkit: None,
     }
 }
 

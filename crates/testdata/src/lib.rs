@@ -43,14 +43,26 @@ pub fn shared(rel: &str) -> PathBuf {
 /// # Panics
 /// When the file is missing or unreadable.
 #[must_use]
-#[expect(
-    clippy::expect_used,
-    reason = "test support: a missing fixture must stop the test loudly"
-)]
 pub fn ict_bytes() -> &'static [u8] {
     static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
-    BYTES.get_or_init(|| {
-        std::fs::read(shared("characters/ict-face.glb")).expect("ict-face.glb is readable")
+    read_once(&BYTES, || shared("characters/ict-face.glb"))
+}
+
+/// The bytes of the file at `path()`, read into `cell` the first time.
+///
+/// # Panics
+/// When the file is missing or unreadable, naming it.
+#[expect(
+    clippy::panic,
+    reason = "test support: a missing fixture must stop the test loudly"
+)]
+pub(crate) fn read_once(
+    cell: &'static OnceLock<Vec<u8>>,
+    path: impl FnOnce() -> PathBuf,
+) -> &'static [u8] {
+    cell.get_or_init(|| {
+        let path = path();
+        std::fs::read(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
     })
 }
 

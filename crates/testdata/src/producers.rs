@@ -44,16 +44,9 @@ pub const BLENDER_AVATAR_EXPRESSIONS: &[(&str, &str, &str)] = &[
 /// # Panics
 /// When Blender is missing or fails, with its output.
 #[must_use]
-#[expect(
-    clippy::panic,
-    reason = "test support: a missing producer must stop the test loudly"
-)]
 pub fn blender_avatar() -> &'static [u8] {
     static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
-    BYTES.get_or_init(|| {
-        let path = blender_avatar_path();
-        std::fs::read(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
-    })
+    crate::read_once(&BYTES, blender_avatar_path)
 }
 
 /// The Blender-made avatar as faceanim imports it (see [`blender_avatar`]).

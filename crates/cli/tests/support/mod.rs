@@ -733,6 +733,19 @@ pub fn upload(port: u16, name: &str, bytes: &[u8]) -> (u16, String) {
     )
 }
 
+/// `POST /api/capture/open` of the file at `path` (a video, photo, clip, recording or take)
+/// as the capture's take; the status and body.
+pub fn open_path(port: u16, path: &Path) -> (u16, String) {
+    let body = serde_json::json!({ "path": path }).to_string();
+    request(
+        port,
+        "POST",
+        "/api/capture/open",
+        &[("content-type", "application/json")],
+        body.as_bytes(),
+    )
+}
+
 /// One raw HTTP/1.1 request; returns the status code and body.
 pub fn request(
     port: u16,

@@ -35,6 +35,7 @@ fn reference(frames: usize, curves: &[(&str, &dyn Fn(f32) -> f32)]) -> Clip {
         head: None,
         head_position: None,
         presence: None,
+        arkit: None,
     }
 }
 

@@ -459,7 +459,9 @@ impl CaptureDesk {
         // the take is made of them too, so its bones (a jaw beside the shapes the map opens the
         // mouth with) turn as the clip's export turns them.
         let through_map = self.map.is_some() && clip.loses_arkit(character);
-        if on_bones || through_map || unmatched.len() < before {
+        // A clip JSON that keeps the ARKit values its take was made of (a VRoid take's gaze)
+        // is made of them where its columns do not say.
+        if on_bones || through_map || unmatched.len() < before || clip.arkit.is_some() {
             take = take.made_of_arkit(clip.arkit_rows())?;
         }
         let way = if on_bones { " on the bones" } else { "" };
