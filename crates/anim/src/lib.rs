@@ -54,8 +54,8 @@ pub struct Clip {
     /// frame ARKit's 52 in [`ARKIT_52`](faceanim_rig::names::ARKIT_52) order, kept where the
     /// clip's own names leave some of those channels without a column: a VRoid avatar's gaze,
     /// which its eye bones show; every channel of a rig whose names say nothing. Eye and jaw
-    /// bones and ARKit outputs (Live Link Face) read them ([`Clip::arkit_rows`]); they never
-    /// set a shape.
+    /// bones and ARKit outputs (Live Link Face) read them ([`Clip::arkit_rows`]); they set
+    /// shapes only on another character ([`Clip::for_character`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub arkit: Option<Vec<Vec<f32>>>,
 }
@@ -206,6 +206,50 @@ impl Clip {
             presence: self.presence.clone(),
             arkit: None,
         })
+    }
+
+    /// The clip as it reaches `character`. Where it keeps the ARKit values its take was made of
+    /// ([`Clip::arkit`]) and its columns are not all `character`'s own names (a VRoid avatar's
+    /// take put on another character), those values join it as ARKit-named columns for the
+    /// channels that move there and that no column carries: the other character's eyeLook
+    /// shapes take the gaze the VRoid's names left out. On the character the take was made on,
+    /// its columns are that character's weights, which hold all its shapes could take: the kept
+    /// values reach only its bones, and the clip is as it is.
+    #[must_use]
+    pub fn for_character(&self, character: &Character) -> std::borrow::Cow<'_, Clip> {
+        use std::borrow::Cow;
+        let Some(kept) = &self.arkit else {
+            return Cow::Borrowed(self);
+        };
+        let own: std::collections::HashSet<&str> =
+            character.blendshapes().iter().map(|b| b.name()).collect();
+        if self.blendshapes.iter().all(|n| own.contains(n.as_str())) {
+            return Cow::Borrowed(self);
+        }
+        let map = faceanim_rig::name_map::NameMap::from_names(&self.blendshapes, &[]);
+        let joining: Vec<usize> = map
+            .undriven_channels()
+            .into_iter()
+            .map(|c| c.index())
+            .filter(|&c| kept.iter().any(|row| row.get(c).is_some_and(|v| *v != 0.0)))
+            .collect();
+        if joining.is_empty() {
+            return Cow::Borrowed(self);
+        }
+        let mut widened = self.clone();
+        widened.blendshapes.extend(
+            joining
+                .iter()
+                .map(|&c| faceanim_rig::names::ARKIT_52[c].to_owned()),
+        );
+        for (row, made_of) in widened.frames.iter_mut().zip(kept) {
+            row.extend(
+                joining
+                    .iter()
+                    .map(|&c| made_of.get(c).copied().unwrap_or(0.0)),
+            );
+        }
+        Cow::Owned(widened)
     }
 
     /// Parses and validates clip JSON.
@@ -518,6 +562,33 @@ mod tests {
             ..CharacterParts::default()
         })
         .unwrap()
+    }
+
+    /// A take's kept ARKit values reach another character's shapes for what its columns leave
+    /// out, and nothing more of the character it was made on.
+    #[test]
+    fn kept_values_reach_another_characters_shapes_only() {
+        let index = |name: &str| faceanim_rig::names::Channel::named(name).unwrap().index();
+        let mut take = Clip::of_weights(30.0, &["Fcl_EYE_Close_L"], vec![vec![0.5]]);
+        let mut made_of = vec![0.0; 52];
+        made_of[index("eyeBlinkLeft")] = 0.9;
+        made_of[index("eyeLookInLeft")] = 0.3;
+        take.arkit = Some(vec![made_of]);
+        let vroid = character_of(&["Fcl_EYE_Close_L", "Fcl_MTH_A"]);
+        assert!(matches!(
+            take.for_character(&vroid),
+            std::borrow::Cow::Borrowed(_)
+        ));
+        let head = character_of(&["eyeBlink_L", "eyeLookIn_L", "eyeLookOut_L"]);
+        let widened = take.for_character(&head);
+        assert_eq!(widened.blendshapes, ["Fcl_EYE_Close_L", "eyeLookInLeft"]);
+        let weights = &widened.retarget(&head, "take").unwrap().animation.weights[0];
+        assert_eq!(weights, &[0.5, 0.3, 0.0]);
+        // Widened once is widened: nothing joins twice.
+        assert!(matches!(
+            widened.for_character(&head),
+            std::borrow::Cow::Borrowed(_)
+        ));
     }
 
     /// A clip of one frame: `columns` (name, value).

@@ -48,7 +48,9 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let character = crate::input::load(&args.character)?.character;
     let glb = match &args.clip {
         Some(clip_path) => {
-            let clip = crate::input::clip(clip_path)?;
+            let clip = crate::input::clip(clip_path)?
+                .for_character(&character)
+                .into_owned();
             let name = crate::input::stem(clip_path, "clip");
             let map = crate::retarget::for_clip(
                 &character,

@@ -94,6 +94,7 @@ pub fn run(args: StreamArgs) -> anyhow::Result<()> {
     let clip = match &args.character {
         Some(path) => {
             let character = crate::input::load(path)?.character;
+            let clip = clip.for_character(&character);
             let map =
                 crate::retarget::for_clip(&character, Some(path), args.retarget.as_deref(), &clip)?;
             faceanim_export::Animation::from_clip_through(&character, &clip, "stream", map.as_ref())

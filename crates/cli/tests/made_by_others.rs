@@ -1148,9 +1148,10 @@ fn a_capture_turns_the_head_eyes_and_jaw_of_a_body_with_no_shapes() {
 /// keys and no ARKit names, its eyeballs on eye bones) keeps the gaze its eye bones show in the
 /// clip JSON `track` writes: put on the avatar again (`export --clip`), the eyes and the jaw
 /// turn as in the take's own GLB, whose Live Link Face CSV comes back the same, and the studio
-/// shows the clip as it shows the take's session. Before, the clip JSON held the avatar's own
-/// weights alone: exported again, the eyes stared ahead (they had turned up to 18°), and Live
-/// Link Face's eyeLook curves were zeros.
+/// shows the clip as it shows the take's session; put on the ICT head, the clip's gaze moves its
+/// eyeLook shapes. Before, the clip JSON held the avatar's own weights alone: exported again,
+/// the eyes stared ahead (they had turned up to 18°), Live Link Face's eyeLook curves were
+/// zeros, and so were the ICT head's eyeLook shapes.
 #[test]
 fn a_vroid_takes_clip_json_keeps_the_gaze_its_eye_bones_show() {
     let dir = support::fresh_output_dir("made-by-others-clip-gaze");
@@ -1222,6 +1223,51 @@ fn a_vroid_takes_clip_json_keeps_the_gaze_its_eye_bones_show() {
             assert!((x - y).abs() < 1e-4, "frame {f}: {name} {x} came back {y}");
         }
     }
+
+    // Put on another character (the ICT head, whose eyes move by their eyeLook shapes), the
+    // kept values move the shapes the avatar's names left out.
+    let other = dir.join("ict.json");
+    export_with_clip(Path::new(&support::ict()), &other, &clip);
+    let other: Value = serde_json::from_slice(&std::fs::read(&other).unwrap()).unwrap();
+    let column = |name: &str| {
+        other["blendshapes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|n| n == name)
+            .unwrap()
+    };
+    let mut looked: f64 = 0.0;
+    for way in ["In", "Out", "Up", "Down"] {
+        for (side, half) in [("Left", "L"), ("Right", "R")] {
+            let shape = column(&format!("eyeLook{way}_{half}"));
+            let channel = faceanim_rig::names::Channel::named(&format!("eyeLook{way}{side}"))
+                .unwrap()
+                .index();
+            for (f, (row, made_of)) in other["frames"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .zip(rows)
+                .enumerate()
+            {
+                let (got, want) = (
+                    row[shape].as_f64().unwrap(),
+                    made_of[channel].as_f64().unwrap(),
+                );
+                assert!(
+                    (got - want).abs() < 1e-4,
+                    "frame {f}: eyeLook{way}_{half} {got}, the take's {want}"
+                );
+                looked = looked.max(got);
+            }
+        }
+    }
+    println!("the ICT head's eyeLook shapes reached {looked:.2}, as the take's values");
+    assert!(
+        looked > 0.1,
+        "the ICT head's eyes looked at most {looked} any way"
+    );
 
     // The studio opens the clip as it opens the take's session: the same joints turn.
     let studio = start_on(Some(&avatar), &dir.join("vroid.project.json"), &[]);

@@ -29,6 +29,7 @@
 //!     head: None,
 //!     head_position: None,
 //!     presence: None,
+//!     arkit: None,
 //! };
 //! let animation = Animation::from_clip(&character, &clip, "open")?;
 //! let format = Format::from_path(std::path::Path::new("open.csv"))?;
@@ -204,7 +205,8 @@ impl<'a> Animation<'a> {
     /// channels, takes the clip on its bones (head pose, gaze, `jawOpen`; see [`bones`]), and
     /// Live Link Face the clip's own ARKit values. Where the clip keeps the ARKit values its
     /// take was made of ([`Clip::arkit`]), the bones and Live Link Face read those, as the
-    /// take's own export did.
+    /// take's own export did, and another character's shapes take those its columns leave out
+    /// ([`Clip::for_character`]).
     ///
     /// # Errors
     /// [`ExportError::Clip`] when no name of the clip is one of the character's;
@@ -229,6 +231,10 @@ impl<'a> Animation<'a> {
         name: &str,
         map: Option<&faceanim_retarget::RetargetMap>,
     ) -> Result<Animation<'a>, ExportError> {
+        // A take kept with the ARKit values it was made of, put on another character: those
+        // values take the shapes its columns leave out.
+        let widened = clip.for_character(character);
+        let clip = &*widened;
         let mut on_bones = false;
         let retarget = match clip.retarget_through(character, name, map) {
             // None of its shapes takes the clip, but its bones do: the shapes hold still.

@@ -14,6 +14,7 @@
 //!     head: None,
 //!     head_position: None,
 //!     presence: None,
+//!     arkit: None,
 //! };
 //! let animation = Animation::from_clip(&character, &clip, "open")?;
 //! let glb = export(Format::Glb, &animation)?;

@@ -75,6 +75,9 @@ pub fn open_clip(
     shown: String,
     opened: Option<String>,
 ) -> Result<CaptureView, ApiError> {
+    // A take kept with the ARKit values it was made of, opened on another character: those
+    // values take the shapes its columns leave out.
+    let clip = clip.for_character(&character).into_owned();
     let job = Job::new(JobKind::MakingMap);
     let (path, view) = {
         let mut guard = lock(desk);
