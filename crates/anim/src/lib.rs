@@ -226,12 +226,9 @@ impl Clip {
         if self.blendshapes.iter().all(|n| own.contains(n.as_str())) {
             return Cow::Borrowed(self);
         }
-        let map = faceanim_rig::name_map::NameMap::from_names(&self.blendshapes, &[]);
-        let joining: Vec<usize> = map
-            .undriven_channels()
+        let joining: Vec<usize> = left_out(&self.blendshapes, kept)
             .into_iter()
             .map(|c| c.index())
-            .filter(|&c| kept.iter().any(|row| row.get(c).is_some_and(|v| *v != 0.0)))
             .collect();
         if joining.is_empty() {
             return Cow::Borrowed(self);
@@ -451,6 +448,21 @@ impl Clip {
             unmatched: self.names_of(unreached.into_iter()),
         })
     }
+}
+
+/// The ARKit channels that move somewhere in `rows` (ARKit's 52 per frame, as
+/// [`Clip::arkit`] keeps them) and that no column named `names` carries: what a clip of those
+/// columns keeps the values of, and what those values give another character.
+#[must_use]
+pub fn left_out(names: &[String], rows: &[Vec<f32>]) -> Vec<faceanim_rig::names::Channel> {
+    faceanim_rig::name_map::NameMap::from_names(names, &[])
+        .undriven_channels()
+        .into_iter()
+        .filter(|c| {
+            rows.iter()
+                .any(|row| row.get(c.index()).is_some_and(|v| *v != 0.0))
+        })
+        .collect()
 }
 
 /// The problems of `rows`, the per-frame list `field`: its length against the `frames`, each

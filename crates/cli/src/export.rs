@@ -48,9 +48,8 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let character = crate::input::load(&args.character)?.character;
     let glb = match &args.clip {
         Some(clip_path) => {
-            let clip = crate::input::clip(clip_path)?
-                .for_character(&character)
-                .into_owned();
+            let read = crate::input::clip(clip_path)?;
+            let clip = read.for_character(&character);
             let name = crate::input::stem(clip_path, "clip");
             let map = crate::retarget::for_clip(
                 &character,

@@ -577,11 +577,8 @@ fn kept_arkit(animation: &Animation<'_>, notes: &mut Vec<String>) -> Option<Vec<
         return None;
     }
     let rows = arkit.arkit_rows();
-    let names = faceanim_rig::name_map::NameMap::from_names(&animation.clip.blendshapes, &[]);
-    let left: Vec<&str> = names
-        .undriven_channels()
+    let left: Vec<&str> = faceanim_anim::left_out(&animation.clip.blendshapes, &rows)
         .into_iter()
-        .filter(|c| rows.iter().any(|row| row[c.index()] != 0.0))
         .map(|c| c.name())
         .collect();
     if left.is_empty() {
