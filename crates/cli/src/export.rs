@@ -46,6 +46,11 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
         format.describe()
     );
     let character = crate::input::load(&args.character)?.character;
+    crate::outputs::check_for(
+        std::slice::from_ref(&args.out.output),
+        &[format],
+        Some(&character),
+    )?;
     let glb = match &args.clip {
         Some(clip_path) => {
             let read = crate::input::clip(clip_path)?;

@@ -149,6 +149,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
         (character, heard)
     });
     let character = character??.character;
+    crate::outputs::check_for(&outputs, &formats, Some(&character))?;
     let (sound, heard) = heard?;
     // The mouth, and what opens it through the retarget map (for a jaw bone beside it).
     let (mouth, opening) = match &args.adapter {
@@ -210,9 +211,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     .made_of_arkit(lip_sync.arkit(&table))?;
     let animation = crate::outputs::take_animation(Some(&character), &take.session, &name)?
         .with_opening(opening);
-    for (path, format) in outputs.iter().zip(formats) {
-        crate::outputs::write(path, format, &animation, args.out.glb)?;
-    }
+    crate::outputs::write_all(&outputs, &formats, &animation, args.out.glb)?;
     eprintln!(
         "{:.2} s of sound in {:.2} s ({:.2}× real time): {} phones ({}), {} visemes on {} of {} shapes ({})",
         sound.seconds(),

@@ -94,6 +94,42 @@ pub struct Outputs {
     pub glb: GlbArgs,
 }
 
+/// Checks, once the character is read and before any work is done, that it can take every
+/// output's format ([`Format::check_character`]: a VRM Animation needs a VRM avatar), so that
+/// a long video is not tracked only to be refused: an error naming the first file that cannot.
+pub fn check_for(
+    paths: &[PathBuf],
+    formats: &[Format],
+    character: Option<&faceanim_rig::Character>,
+) -> anyhow::Result<()> {
+    for (path, format) in paths.iter().zip(formats) {
+        format
+            .check_character(character)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Writes `animation` to each of `paths` in its format (GLBs as `glb` says). Every file is made
+/// before any is written, so that one that cannot be made (a VRM Animation in which nothing
+/// moves) leaves none of them behind.
+pub fn write_all(
+    paths: &[PathBuf],
+    formats: &[Format],
+    animation: &Animation<'_>,
+    glb: GlbArgs,
+) -> anyhow::Result<()> {
+    let made = paths
+        .iter()
+        .zip(formats)
+        .map(|(path, &format)| make(path, format, animation, glb))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    for (path, bytes) in paths.iter().zip(made) {
+        save(path, &bytes)?;
+    }
+    Ok(())
+}
+
 /// Writes `animation` to `path` in `format` (a GLB as `glb` says).
 pub fn write(
     path: &Path,
@@ -101,6 +137,17 @@ pub fn write(
     animation: &Animation<'_>,
     glb: GlbArgs,
 ) -> anyhow::Result<()> {
+    save(path, &make(path, format, animation, glb)?)
+}
+
+/// `animation` in `format` for `path`, with the exporter's notes (and a warning for a plain
+/// glTF named `.vrm`) printed.
+fn make(
+    path: &Path,
+    format: Format,
+    animation: &Animation<'_>,
+    glb: GlbArgs,
+) -> anyhow::Result<Vec<u8>> {
     let not_vrm = animation.character.filter(|c| {
         !c.source()
             .is_some_and(faceanim_rig::source::GltfSource::is_vrm)
@@ -123,7 +170,11 @@ pub fn write(
     for note in &exported.notes {
         eprintln!("{}: {note}", path.display());
     }
-    faceanim_files::write_output(path, &exported.bytes)?;
+    Ok(exported.bytes)
+}
+
+fn save(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    faceanim_files::write_output(path, bytes)?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }

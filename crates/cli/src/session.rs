@@ -226,9 +226,7 @@ pub fn run(args: SessionArgs) -> anyhow::Result<()> {
             let stem = crate::input::stem(path, "session");
             let animation = crate::outputs::take_animation(character.as_ref(), &session, &stem)?
                 .with_opening(opening);
-            for (path, format) in output.iter().zip(formats) {
-                crate::outputs::write(path, format, &animation, glb)?;
-            }
+            crate::outputs::write_all(&output, &formats, &animation, glb)?;
             return Ok(());
         }
     }

@@ -30,6 +30,11 @@ pub(crate) fn run(args: &SketchArgs) -> anyhow::Result<()> {
         faceanim_files::check_output(clip)?;
     }
     let character = crate::input::load_or_default(character)?.character;
+    crate::outputs::check_for(
+        std::slice::from_ref(&args.out.output),
+        &[format],
+        Some(&character),
+    )?;
     let bytes = faceanim_files::read_bytes(strokes)?;
     let project = faceanim_sketch::Project::from_json(&bytes)
         .map_err(|e| anyhow::anyhow!("{}: {e}", strokes.display()))?;

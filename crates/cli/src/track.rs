@@ -136,6 +136,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
     // Load the character and its estimator first: a bad one should fail before minutes of
     // video.
     let character = crate::input::load_or_default(args.character.as_deref())?.character;
+    crate::outputs::check_for(&args.out.outputs, &formats, Some(&character))?;
     // Start-up (once per process): the face models, and the threads that run them beside
     // this one (as MediaPipe's graph starts its own with the models; each warms itself on a
     // blank picture, which overlaps the clip's start below). What follows is per clip, and
@@ -225,9 +226,7 @@ pub fn run(args: TrackArgs) -> anyhow::Result<()> {
             .retarget_map()
             .and_then(faceanim_export::bones::jaw_opening),
     );
-    for (path, format) in args.out.outputs.iter().zip(formats) {
-        crate::outputs::write(path, format, &animation, args.out.glb)?;
-    }
+    crate::outputs::write_all(&args.out.outputs, &formats, &animation, args.out.glb)?;
 
     let timing = Timing {
         frames,

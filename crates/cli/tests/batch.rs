@@ -656,4 +656,45 @@ fn a_row_that_fails_names_its_own_output() {
         "{error}"
     );
     assert!(dir.join("out/hero.vrma").is_file());
+
+    // One command's outputs alike: what the character cannot take is refused (the built-in
+    // head), and every file is made before any is written (silence on the VRM avatar: nothing
+    // for a VRM Animation to carry, and no clip beside it).
+    let silence = dir.join("silence.wav");
+    let lavfi = [
+        "-v",
+        "error",
+        "-y",
+        "-f",
+        "lavfi",
+        "-i",
+        "anullsrc=r=16000:cl=mono",
+    ];
+    let ffmpeg = std::process::Command::new("ffmpeg")
+        .args(lavfi)
+        .args(["-t", "1"])
+        .arg(&silence)
+        .output();
+    support::succeeded("ffmpeg", ffmpeg.unwrap());
+    let [clip, vrma] = ["json", "vrma"].map(|e| dir.join(format!("out/alone.{e}")));
+    let (clip_path, vrma_path) = (clip.to_str().unwrap(), vrma.to_str().unwrap());
+    for (speech, character, problem) in [
+        (&wav, None, "is no VRM avatar"),
+        (&silence, Some(&avatar), "nothing in the animation moves"),
+    ] {
+        let mut args = vec!["lipsync", speech.to_str().unwrap(), "-o", clip_path];
+        args.extend(["-o", vrma_path]);
+        if let Some(avatar) = character {
+            args.extend(["--character", avatar.to_str().unwrap()]);
+        }
+        let out = support::faceanim(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let said = format!("error: {vrma_path}: ");
+        assert_eq!(out.status.code(), Some(1), "{problem}: {stderr}");
+        assert!(
+            stderr.contains(&said) && stderr.contains(problem),
+            "{stderr}"
+        );
+        assert!(!clip.exists(), "{problem}: the clip was written");
+    }
 }

@@ -153,12 +153,7 @@ fn blender_avatars_import_with_every_shape_and_say_what_drives_each() {
 fn a_primitive_without_its_siblings_targets_imports_and_exports_valid() {
     let dir = output_dir("made-by-others-partial-targets");
     let (mut root, bin) = faceanim_testdata::glb::parts(blender_avatar());
-    let face = root["meshes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .position(|m| m["name"] == "Face")
-        .unwrap();
+    let face = faceanim_testdata::glb::index_of(&root, "meshes", "Face").unwrap();
     let primitive = &mut root["meshes"][face]["primitives"][4];
     primitive.as_object_mut().unwrap().remove("targets");
     let file = dir.join("partial.glb");
@@ -403,11 +398,8 @@ fn strokes_through_the_studio_api_animate_the_blender_avatar() {
     let (status, view) = request_bytes(studio.port, "GET", "/api/view.glb", &[], b"");
     assert_eq!(status, 200);
     let view = faceanim_testdata::glb::json(&view);
-    let brows = view["materials"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|m| m["name"] == "Face_Brows")
+    let brows = faceanim_testdata::glb::index_of(&view, "materials", "Face_Brows")
+        .map(|i| &view["materials"][i])
         .unwrap_or_else(|| panic!("{}", view["materials"]));
     assert_eq!(brows["alphaMode"], "MASK", "{brows}");
     assert!(

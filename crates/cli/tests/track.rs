@@ -114,6 +114,24 @@ fn footage_problems_are_reported_by_name() {
     let bad_extension = faceanim(&["track", text.to_str().unwrap(), "-o", "take.mov"]);
     assert!(String::from_utf8_lossy(&bad_extension.stderr).contains("take.mov"));
 
+    // An output the character cannot take (a VRM Animation of the built-in head, which is no
+    // VRM) is refused once the character is read, before the footage is, and nothing is
+    // written.
+    let [glb, vrma] = ["glb", "vrma"].map(|e| dir.path().join(format!("take.{e}")));
+    let (notes, glb_path, vrma_path) = (
+        text.to_str().unwrap(),
+        glb.to_str().unwrap(),
+        vrma.to_str().unwrap(),
+    );
+    let run = faceanim(&["track", notes, "-o", glb_path, "-o", vrma_path]);
+    support::assert_refused(
+        &run,
+        &vrma,
+        "is no VRM avatar",
+        "a VRM Animation of the head",
+    );
+    assert!(!glb.exists());
+
     // A picture with no face: one frame, marked, with a warning, not an error.
     let blank = dir.path().join("blank.png");
     let image = faceanim_render::Image::filled(64, 48, [30, 30, 30]);

@@ -51,6 +51,7 @@ use std::path::Path;
 use faceanim_anim::Clip;
 use faceanim_rig::Character;
 use faceanim_rig::animation::MorphAnimation;
+use faceanim_rig::source::GltfSource;
 use faceanim_take::Session;
 
 /// The formats an animation leaves in.
@@ -155,6 +156,29 @@ impl Format {
     #[must_use]
     pub fn needs_character(self) -> bool {
         matches!(self, Format::Glb | Format::Vrma)
+    }
+
+    /// Whether `character` can take the format, known before any work is done for it: the
+    /// GLB and the VRM Animation need a character, and the VRM Animation a VRM avatar (it
+    /// moves a VRM's expressions and humanoid bones). Commands ask this once the character is
+    /// read, so that a take is not made only to be refused. Answers the character where the
+    /// format needs one (always `Some` then), else `character` as given.
+    ///
+    /// # Errors
+    /// [`ExportError::NeedsCharacter`] without one, [`ExportError::NotVrm`] for a VRM
+    /// Animation of a character that is no VRM.
+    pub fn check_character(
+        self,
+        character: Option<&Character>,
+    ) -> Result<Option<&Character>, ExportError> {
+        if !self.needs_character() {
+            return Ok(character);
+        }
+        let character = character.ok_or(ExportError::NeedsCharacter(self))?;
+        if self == Format::Vrma && !character.source().is_some_and(GltfSource::is_vrm) {
+            return Err(ExportError::NotVrm(character.name().to_owned()));
+        }
+        Ok(Some(character))
     }
 
     /// What the format is called in messages.
@@ -431,8 +455,8 @@ pub fn export_with(
             // Gaze and jaw for the bones, from the capture's own ARKit values when there are
             // any, else from the frames by their names' ARKit meaning.
             let keys = animation.bone_keys();
-            let character = animation
-                .character
+            let character = format
+                .check_character(animation.character)?
                 .ok_or(ExportError::NeedsCharacter(format))?;
             let bytes = match character.source() {
                 Some(source) => {

@@ -47,12 +47,12 @@ pub(crate) fn vrma(
     animation: &Animation<'_>,
     notes: &mut Vec<String>,
 ) -> Result<Vec<u8>, ExportError> {
-    let character = animation
-        .character
+    let character = crate::Format::Vrma
+        .check_character(animation.character)?
         .ok_or(ExportError::NeedsCharacter(crate::Format::Vrma))?;
+    // A VRM avatar, as the check says: read from its file.
     let source = character
         .source()
-        .filter(|s| s.is_vrm())
         .ok_or_else(|| ExportError::NotVrm(character.name().to_owned()))?;
     let morph = &animation.animation;
     // Keys, weights and turns that fit one another (the GLB's rule), whatever made them.

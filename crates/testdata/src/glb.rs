@@ -66,6 +66,16 @@ pub fn names(doc: &Value, key: &str) -> Vec<Value> {
         .unwrap_or_default()
 }
 
+/// The index of the entry of a document's top-level array `key` (`nodes`, `meshes`,
+/// `materials`, …) whose `name` is `name`: the first, if several are.
+#[must_use]
+pub fn index_of(doc: &Value, key: &str, name: &str) -> Option<usize> {
+    doc[key]
+        .as_array()?
+        .iter()
+        .position(|x| x["name"].as_str() == Some(name))
+}
+
 /// Asserts that `output` keeps what the user's file `input` had: the same nodes, meshes, skins,
 /// materials, textures, images, samplers and scenes with the same names in the same order, each
 /// skin's joints, and the top-level extensions (a VRM stays a VRM). `what` names the file in

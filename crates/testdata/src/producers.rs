@@ -217,15 +217,10 @@ fn fnv(bytes: &[u8]) -> u64 {
 pub fn with_vrm(glb: &[u8], kind: VrmKind) -> Vec<u8> {
     let (mut root, bin) = crate::glb::parts(glb);
     let node_named = |root: &Value, name: &str| {
-        root["nodes"]
-            .as_array()
-            .and_then(|nodes| nodes.iter().position(|n| n["name"].as_str() == Some(name)))
-            .expect("the avatar has the bone")
+        crate::glb::index_of(root, "nodes", name).expect("the avatar has the bone")
     };
-    let face_mesh = root["meshes"]
-        .as_array()
-        .and_then(|m| m.iter().position(|m| m["name"].as_str() == Some("Face")))
-        .expect("the avatar has a Face mesh");
+    let face_mesh =
+        crate::glb::index_of(&root, "meshes", "Face").expect("the avatar has a Face mesh");
     let face_node = root["nodes"]
         .as_array()
         .and_then(|n| {

@@ -97,12 +97,8 @@ fn a_baked_corrective_target_lands_on_the_meshes_it_moves() {
     let n = baked.blendshapes().len();
     let out = export_into_source(&baked, &[animation(n, 30, &[n - 1])]).unwrap();
     let after = json(&out);
-    let head = after["meshes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|m| m["name"] == "Head")
-        .unwrap();
+    let head =
+        &after["meshes"][faceanim_testdata::glb::index_of(&after, "meshes", "Head").unwrap()];
     let names = head["extras"]["targetNames"].as_array().unwrap();
     assert_eq!(names.len(), n);
     assert_eq!(names[n - 1], "faceanim_arc_0");
