@@ -9,7 +9,7 @@ use clap::Args;
 pub(crate) struct RenderArgs {
     /// The character (default: the built-in head).
     pub(crate) character: Option<PathBuf>,
-    /// Where to write the PNG.
+    /// Where to write the PNG (`.png`; - for standard output).
     #[arg(short, long)]
     pub(crate) output: PathBuf,
     /// Blendshape weights as NAME=VALUE pairs separated by commas (ARKit spellings match).
@@ -25,6 +25,18 @@ pub(crate) struct RenderArgs {
 
 /// `faceanim render`.
 pub(crate) fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    // The picture is a PNG: another ending would name it as what it is not (a `.jpg` that
+    // holds a PNG). Checked, with its folder, before the character is read.
+    let path = &args.output;
+    anyhow::ensure!(
+        faceanim_files::is_stdout(path)
+            || path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("png")),
+        "{}: render writes a PNG picture: name it .png (or - for standard output)",
+        path.display()
+    );
+    faceanim_files::check_output(path)?;
     let character = crate::input::load_or_default(args.character.as_deref())?.character;
     let size = args.size;
     anyhow::ensure!(

@@ -89,6 +89,12 @@ fn render_writes_a_contact_sheet_and_single_poses() {
         )
     );
 
+    // A name that is no PNG's is refused before anything is drawn, and nothing is written.
+    let jpeg = dir.join("x.jpg");
+    let out = faceanim(&["render", "-o", jpeg.to_str().unwrap()]);
+    support::assert_refused(&out, &jpeg, "name it .png", "a .jpg");
+    assert!(!jpeg.exists());
+
     // An ARKit channel that a head has as two halves (ICT's browInnerUp_L and _R) poses both,
     // as `info` says it drives them.
     let ict = faceanim_testdata::shared("characters/ict-face.glb");
