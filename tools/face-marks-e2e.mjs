@@ -2,16 +2,17 @@
 // studio holds a head the face model cannot read, so making its map says so and the Capture
 // tab asks for the ten marks; each is clicked on the character where the page shows it (the
 // page's own projection of the point), the prompt names the next, the last sends them, and the
-// map is made from them.
-// Usage: node face-marks-e2e.mjs URL OUTPUT_DIR POINTS_JSON
-// POINTS_JSON: {"right_eye_outer": [x, y, z], …} in the character's space.
+// map is made from them. Two photos picked then are read through that map, against a neutral
+// face the page lets the user choose.
+// Usage: node face-marks-e2e.mjs URL OUTPUT_DIR POINTS_JSON PHOTOS_JSON
+// POINTS_JSON: {"right_eye_outer": [x, y, z], …} in the character's space; PHOTOS_JSON: paths.
 // Prints one JSON line of measurements; exits non-zero with a message on the first failure.
 import { checker, launch } from './browser.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
 
-const [url, out, pointsJson] = process.argv.slice(2);
-const points = JSON.parse(pointsJson);
+const [url, out, pointsJson, photosJson] = process.argv.slice(2);
+const points = JSON.parse(pointsJson), photos = JSON.parse(photosJson);
 fs.mkdirSync(out, { recursive: true });
 const check = checker('face-marks-e2e');
 
@@ -55,6 +56,20 @@ try {
   check(state.retarget.loaded, `no map was made from the marks: ${JSON.stringify(state.job)}`);
   const geometry = state.retarget.rows.filter((r) => r.from === 'geometry' && r.shapes.length).length;
   await page.screenshot({ path: path.join(out, '02-marked.png') });
+
+  // Photos read through the map: it reads each face against the take's neutral one, so the
+  // page offers to choose that frame and says what reads against it.
+  await page.setInputFiles('#capture-file', photos);
+  for (const start = Date.now(); ; await new Promise((r) => setTimeout(r, 250))) {
+    const s = await captureState();
+    if (s.take && s.take.frames === photos.length && !(s.job && s.job.running)) break;
+    check(Date.now() - start < 60000, `the photos were not read in a minute: ${JSON.stringify(s.job)}`);
+  }
+  const take = (await captureState()).take;
+  check(take.estimator === 'retarget' && take.reads_neutral && take.neutral, `the photos' take: ${take.estimator} ${take.reads_neutral} ${JSON.stringify(take.neutral)}`);
+  await page.waitForFunction(() => document.getElementById('neutral-info').textContent.includes('the retarget map reads every frame relative to it'), null, { timeout: 30000, polling: 250 });
+  check(!(await page.isDisabled('#neutral-frame')) && !(await page.isDisabled('#neutral-auto')), 'the neutral frame cannot be chosen for a take read through the map');
+  await page.screenshot({ path: path.join(out, '03-photos-through-the-map.png') });
   check(!errors.length, `page errors: ${errors.join('; ')}`);
   console.log(JSON.stringify({ marked: state.retarget.face_points, geometry_rows: geometry }));
 } finally {

@@ -304,14 +304,17 @@ $('keyframe').onclick = () => {
   post('api/capture/keyframe', { frame: f, on: !take.keyframes.includes(f) });
 };
 $('uncorrect-frame').onclick = () => post('api/capture/uncorrect', { frame: shownFrameIndex() });
-/** Which frame the take is read against; the buttons matter only for a calibrated adapter. */
+/** Which frame the take is read against; the buttons matter only where the estimate reads faces
+ *  relative to a neutral one (an adapter's or a retarget map's, as the studio says). */
 function showNeutralFrame(v) {
-  const take = v.take, calibrated = v.adapter.calibrated && take && take.estimator === 'adapter';
-  for (const id of ['neutral-frame', 'neutral-auto']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !calibrated;
-  $('neutral-info').textContent = !take || !take.neutral ? ''
-    : calibrated
-      ? `Neutral face: ${neutralFrames(take.neutral)}; the adapter reads every frame relative to it.`
-        + (take.neutral_warning ? ` Warning: ${take.neutral_warning}.` : '')
+  const take = v.take, relative = Boolean(take && take.reads_neutral);
+  for (const id of ['neutral-frame', 'neutral-auto']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !relative;
+  const warning = take && take.neutral_warning ? `Warning: ${take.neutral_warning}.` : '';
+  const reader = take && take.estimator === 'retarget' ? 'the retarget map' : 'the adapter';
+  $('neutral-info').textContent = !take ? ''
+    : !take.neutral ? (relative ? warning : '')
+    : relative
+      ? `Neutral face: ${neutralFrames(take.neutral)}; ${reader} reads every frame relative to it.${warning ? ` ${warning}` : ''}`
       : `Neutral face: ${neutralFrames(take.neutral)} (unused: this estimate does not read faces relative to a neutral one).`;
 }
 /** Where a take's neutral face comes from, in words: the user's frame, or each part's. */

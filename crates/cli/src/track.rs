@@ -366,30 +366,34 @@ fn capture(
     Ok((source, result, started.elapsed().as_secs_f64()))
 }
 
-/// Says which neutral face the take is read against, and warns when it does not look neutral.
+/// Says which neutral face the take is read against, and warns when it does not look neutral
+/// (or, for one face read on its own, when that face reads as an expression).
 fn report_neutral(take: &Take, estimator: &dyn Estimator) {
-    let Some(n) = take.session.neutral() else {
-        return;
-    };
-    eprintln!(
-        "neutral face: {} ({}){}",
-        n.parts,
-        match n.chosen {
-            faceanim_take::NeutralChoice::User => "--neutral-frame",
-            faceanim_take::NeutralChoice::Automatic => "each part of the face at its calmest",
-        },
-        if n.chosen == faceanim_take::NeutralChoice::Automatic {
-            "; give --neutral-frame N if another frame is more neutral"
+    if let Some(n) = take.session.neutral() {
+        eprintln!(
+            "neutral face: {} ({}){}",
+            n.parts,
+            match n.chosen {
+                faceanim_take::NeutralChoice::User => "--neutral-frame",
+                faceanim_take::NeutralChoice::Automatic => "each part of the face at its calmest",
+            },
+            if n.chosen == faceanim_take::NeutralChoice::Automatic {
+                "; give --neutral-frame N if another frame is more neutral"
+            } else {
+                ""
+            }
+        );
+    }
+    if let Some(check) = take.session.neutral_check(estimator)
+        && let Some(warning) = check.warning()
+    {
+        // With one face there is no other frame to name.
+        let hint = if check.chosen.is_some() {
+            " (--neutral-frame N)"
         } else {
             ""
-        }
-    );
-    if let Some(warning) = take
-        .session
-        .neutral_check(estimator)
-        .and_then(|check| check.warning())
-    {
-        eprintln!("warning: {warning} (--neutral-frame N)");
+        };
+        eprintln!("warning: {warning}{hint}");
     }
 }
 

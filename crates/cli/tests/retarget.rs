@@ -423,6 +423,26 @@ fn the_studio_makes_shows_and_edits_the_map_and_captures_through_it() {
         })
         .fold(0.0, f64::max);
     assert!(peak > 0.2, "the photo moves nothing: {weights:?}");
+    // One photo has no neutral face to be read against: the face itself is checked, and a
+    // warning says so when it reads as an expression (part of it may be the person at rest).
+    assert_eq!(
+        state["take"]["reads_neutral"], true,
+        "the map reads faces from a neutral one"
+    );
+    let check = &state["take"]["neutral_check"];
+    assert!(
+        check.is_object() && check["chosen"].is_null() && check["frame"] == 0,
+        "{check}"
+    );
+    let expressive = !check["expressive"].as_array().unwrap().is_empty();
+    let warning = state["take"]["neutral_warning"]
+        .as_str()
+        .unwrap_or_default();
+    assert_eq!(
+        warning.starts_with("this take has one face (frame 0)"),
+        expressive,
+        "{warning} / {check}"
+    );
 
     // A row the user sets: refused with the name when wrong, kept when right.
     let put = |body: Value| {

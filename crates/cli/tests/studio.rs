@@ -1798,7 +1798,9 @@ fn live_view_names(studio: &Studio) -> serde_json::Value {
 /// (`tools/face-marks-e2e.mjs`): an ICT head (identity 48) with its shapes renamed so its rig
 /// needs a map, upside down (a file written Z-up) so that no face is found on it. Making the map
 /// says so and asks for the marks; ten clicks (and an undo) later the map is made from them,
-/// and the marks are kept beside the character where a user clicked them.
+/// and the marks are kept beside the character where a user clicked them. Two photos are then
+/// read through that map, and the page lets the user choose the neutral face they are read
+/// against.
 #[test]
 fn a_face_is_marked_by_hand_when_none_is_found() {
     use faceanim_fit::{FaceLandmarks, FacePoint};
@@ -1835,7 +1837,15 @@ fn a_face_is_marked_by_hand_when_none_is_found() {
         &studio,
         "",
         &output_dir("face-marks"),
-        &[serde_json::Value::Object(points.clone()).to_string().into()],
+        &[
+            serde_json::Value::Object(points.clone()).to_string().into(),
+            serde_json::json!(
+                ["neutral", "smile"]
+                    .map(|p| faceanim_testdata::shared(&format!("images/ict-face-{p}.png")))
+            )
+            .to_string()
+            .into(),
+        ],
     );
     eprintln!("marked by hand: {measured}");
     assert!(

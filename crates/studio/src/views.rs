@@ -669,6 +669,10 @@ pub struct TakeView {
     pub can_undo: bool,
     /// Whether redo has something to redo.
     pub can_redo: bool,
+    /// Whether the estimate reads each face relative to the take's neutral one (an adapter's
+    /// or a retarget map's; by name it does not): then the neutral frame matters and the user
+    /// can choose it.
+    pub reads_neutral: bool,
     /// The frame faces are read relative to, and who chose it.
     pub neutral: Option<faceanim_take::Neutral>,
     /// How neutral that frame looks to the estimator (`null` when it does not read faces
@@ -727,6 +731,7 @@ impl TakeView {
             keyframe_every: session.edits.keyframe_every,
             can_undo: take.can_undo(),
             can_redo: take.can_redo(),
+            reads_neutral: estimator.calibrated(),
             neutral: session.neutral(),
             neutral_warning: neutral_check
                 .as_ref()

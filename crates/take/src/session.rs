@@ -196,12 +196,17 @@ pub const EXPRESSIVE_NEUTRAL: f32 = 0.35;
 
 /// How neutral a take's neutral face looks: its frame, who chose it, and the blendshapes it
 /// reads above [`EXPRESSIVE_NEUTRAL`] on its own, strongest first (none: it looks neutral).
+///
+/// A take with one face (a photo) has no neutral face to read it against: it is read on its
+/// own, against the estimator's own neutral, so whatever that face holds at rest (a person
+/// whose lids MediaPipe reads as squinting when relaxed) shows on the character. The check then
+/// reads that face, with `chosen` `None`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NeutralCheck {
-    /// The neutral frame.
+    /// The neutral frame (the one face's frame when there is no neutral).
     pub frame: usize,
-    /// Who chose it.
-    pub chosen: NeutralChoice,
+    /// Who chose it; `None` when the take's one face is read on its own.
+    pub chosen: Option<NeutralChoice>,
     /// The frame each part of the neutral face comes from.
     pub parts: PartFrames,
     /// The shapes the neutral face reads on its own, with their weights, strongest first.
@@ -229,14 +234,22 @@ impl NeutralCheck {
             .map(|(name, w)| format!("{name} {w:.2}"))
             .collect();
         Some(match self.chosen {
-            NeutralChoice::Automatic => format!(
+            Some(NeutralChoice::Automatic) => format!(
                 "no frame of this take looks clearly neutral: its calmest face ({}) reads {}; \
                  mark a relaxed frame as the neutral one, or record a second of a relaxed face",
                 self.parts,
                 reads.join(", ")
             ),
-            NeutralChoice::User => format!(
+            Some(NeutralChoice::User) => format!(
                 "the neutral frame {} reads {}: every frame is read relative to that expression",
+                self.frame,
+                reads.join(", ")
+            ),
+            None => format!(
+                "this take has one face (frame {}), read on its own, not against a relaxed \
+                 face of the same person: it reads {}, some of which may be how they look at \
+                 rest; to read it against their relaxed face, capture it together with a \
+                 relaxed picture of them (in one folder, pictures of one size)",
                 self.frame,
                 reads.join(", ")
             ),
@@ -410,15 +423,31 @@ impl Session {
     }
 
     /// How neutral the neutral frame looks to `estimator`, which reads it on its own (see
-    /// [`NeutralCheck`]); `None` when no frame has a face or the estimator does not read
-    /// faces relative to a neutral one (then the neutral frame does not matter).
+    /// [`NeutralCheck`]); with one face and so no neutral, how that face reads on its own.
+    /// `None` when no frame has a face or the estimator does not read faces relative to a
+    /// neutral one (then the neutral frame does not matter).
     #[must_use]
     pub fn neutral_check(&self, estimator: &dyn Estimator) -> Option<NeutralCheck> {
         if !estimator.calibrated() {
             return None;
         }
-        let neutral = self.neutral()?;
-        let expression = crate::expression::rest_face(&self.expressions(), neutral.parts)?;
+        let expressions = self.expressions();
+        let (frame, chosen, parts, expression) = match self.neutral() {
+            Some(neutral) => (
+                neutral.frame,
+                Some(neutral.chosen),
+                neutral.parts,
+                crate::expression::rest_face(&expressions, neutral.parts)?,
+            ),
+            // Fewer than two faces: the one there is, read on its own.
+            None => {
+                let (frame, face) = expressions
+                    .iter()
+                    .enumerate()
+                    .find_map(|(k, e)| e.map(|e| (k, e.clone())))?;
+                (frame, None, PartFrames::all(frame), face)
+            }
+        };
         let reading = estimator.estimate(&expression, None);
         let mut expressive: Vec<(String, f32)> = self
             .blendshapes
@@ -429,9 +458,9 @@ impl Session {
             .collect();
         expressive.sort_by(|a, b| b.1.total_cmp(&a.1));
         Some(NeutralCheck {
-            frame: neutral.frame,
-            chosen: neutral.chosen,
-            parts: neutral.parts,
+            frame,
+            chosen,
+            parts,
             expressive,
         })
     }
@@ -1360,7 +1389,10 @@ mod tests {
             frame.expression = face(first);
         }
         let check = s.neutral_check(&Relative).unwrap();
-        assert_eq!((check.frame, check.chosen), (1, NeutralChoice::Automatic));
+        assert_eq!(
+            (check.frame, check.chosen),
+            (1, Some(NeutralChoice::Automatic))
+        );
         assert_eq!(check.parts.mouth, 1);
         assert_eq!(
             check.expressive,
@@ -1393,6 +1425,28 @@ mod tests {
             None,
             "by name, no neutral is used"
         );
+
+        // One face (a photo): no neutral to read it against, so the face itself is read, and
+        // what it shows may be the person at rest; a relaxed one says nothing.
+        let mut photo = session(3);
+        assert_eq!(
+            photo.neutral_check(&Relative),
+            None,
+            "no face, nothing to read"
+        );
+        photo.frames[2].expression = face(0.7);
+        assert_eq!(photo.neutral(), None);
+        let alone = photo.neutral_check(&Relative).unwrap();
+        assert_eq!((alone.frame, alone.chosen), (2, None));
+        let warning = alone.warning().unwrap();
+        assert!(
+            warning.starts_with("this take has one face (frame 2)")
+                && warning.contains("reads a 0.70, b 0.70")
+                && warning.contains("relaxed picture"),
+            "{warning}"
+        );
+        photo.frames[2].expression = face(0.1);
+        assert!(photo.neutral_check(&Relative).unwrap().is_clear());
     }
 
     #[test]
