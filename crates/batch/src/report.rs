@@ -68,6 +68,11 @@ pub struct RowResult {
     pub seconds: f64,
     /// How many times it was started (1 unless a failure was retried).
     pub attempts: u32,
+    /// What its command said to heed while it ran, as it said it: its `warning:` and `note:`
+    /// lines (a take in which no face was found, a line in which no voice was heard). Kept
+    /// for a row a pool's worker ran; a `--index` worker says them on its standard error.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// A line of `--progress json` on standard error.
@@ -171,10 +176,21 @@ impl Report {
         }
         text.push('\n');
         for row in &self.rows {
-            let note = match row.status {
-                Status::BadInput | Status::Failed => row.error.as_deref(),
-                Status::Edited => row.reason.as_deref(),
-                Status::Done | Status::Skipped => None,
+            // A row done with a warning needs a look too (a take in which no face was found).
+            let warnings: Vec<&str> = row
+                .notes
+                .iter()
+                .filter_map(|n| n.strip_prefix("warning: "))
+                .collect();
+            let note = match (row.status, warnings.as_slice()) {
+                (Status::BadInput | Status::Failed, _) => row.error.clone(),
+                (Status::Edited, _) => row.reason.clone(),
+                (Status::Done, [first, more @ ..]) => Some(if more.is_empty() {
+                    format!("warning: {first}")
+                } else {
+                    format!("warning: {first} (and {} more in the report)", more.len())
+                }),
+                (Status::Done | Status::Skipped, _) => None,
             };
             if let Some(note) = note {
                 let _ = writeln!(

@@ -246,6 +246,7 @@ impl Outcome {
             error: self.error,
             seconds,
             attempts,
+            notes: Vec::new(),
         }
     }
 }
@@ -335,14 +336,7 @@ fn run_row(entry: &Entry, row: &Row, planner: &Planner, policy: Policy) -> Outco
         for path in &staged {
             let _ = std::fs::remove_file(path);
         }
-        // The command wrote to the staged names; the user knows the outputs by theirs.
-        let told =
-            staged
-                .iter()
-                .zip(row.output_paths())
-                .fold(chain(&error), |told, (staged, output)| {
-                    told.replace(&staged.display().to_string(), &output.display().to_string())
-                });
+        let told = in_users_names(row, chain(&error));
         return match status_of(&error) {
             Status::BadInput => bad(told),
             status => Outcome::new(status, None, Some(told)),
@@ -352,6 +346,17 @@ fn run_row(entry: &Entry, row: &Row, planner: &Planner, policy: Policy) -> Outco
         Ok(()) => Outcome::new(Status::Done, Some(reason.to_string()), None),
         Err(error) => Outcome::failed(error.to_string()),
     }
+}
+
+/// `text` a row's command said, with its outputs named as the user named them: the command
+/// wrote to staged names.
+fn in_users_names(row: &Row, text: String) -> String {
+    record::staged_paths(row)
+        .iter()
+        .zip(row.output_paths())
+        .fold(text, |told, (staged, output)| {
+            told.replace(&staged.display().to_string(), &output.display().to_string())
+        })
 }
 
 /// A command's failure: the machine's (an operating-system error while reading or writing,
@@ -498,6 +503,14 @@ fn run_worker(exe: &Path, args: &BatchArgs, entry: &Entry) -> RowResult {
 
 /// The longest tail of a worker's messages kept for its report.
 const LOG_TAIL: usize = 20;
+/// The most warnings and notes kept for a row.
+const MOST_NOTES: usize = 20;
+
+/// Whether a line a command said is one to heed: a warning or a note (as `lipsync` says how a
+/// line was heard), not what it wrote or how long it took.
+fn is_note(line: &str) -> bool {
+    line.starts_with("warning: ") || line.starts_with("note: ")
+}
 
 fn run_process(exe: &Path, args: &BatchArgs, entry: &Entry) -> RowResult {
     let mut command = std::process::Command::new(exe);
@@ -522,11 +535,18 @@ fn run_process(exe: &Path, args: &BatchArgs, entry: &Entry) -> RowResult {
     };
     let mut result = None;
     let mut tail = VecDeque::new();
+    let mut notes = Vec::new();
     if let Some(stderr) = child.stderr.take() {
         for line in BufReader::new(stderr).lines().map_while(Result::ok) {
             match serde_json::from_str::<Event>(&line) {
                 Ok(Event::Row(row)) => result = Some(row),
                 _ => {
+                    if is_note(&line) && notes.len() < MOST_NOTES {
+                        notes.push(match &entry.row {
+                            Ok(row) => in_users_names(row, line.clone()),
+                            Err(_) => line.clone(),
+                        });
+                    }
                     tail.push_back(line);
                     if tail.len() > LOG_TAIL {
                         tail.pop_front();
@@ -540,7 +560,7 @@ fn run_process(exe: &Path, args: &BatchArgs, entry: &Entry) -> RowResult {
         (Some(result), Ok(status))
             if status.code() == Some(i32::from(result.status.exit_code())) =>
         {
-            result
+            RowResult { notes, ..result }
         }
         (_, status) => {
             let how = match status {

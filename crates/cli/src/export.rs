@@ -108,7 +108,7 @@ pub(crate) fn run(args: &ExportArgs) -> anyhow::Result<()> {
                 faceanim_export::export_with(format, &animation, args.out.glb.compression())
                     .map_err(|e| anyhow::anyhow!("{}: {e}", args.out.output.display()))?;
             for note in &exported.notes {
-                eprintln!("{}: {note}", args.out.output.display());
+                eprintln!("note: {}: {note}", args.out.output.display());
             }
             exported.bytes
         }

@@ -190,7 +190,7 @@ pub fn run(args: LipsyncArgs) -> anyhow::Result<()> {
     });
     let seconds = started.elapsed().as_secs_f64();
     for note in &lip_sync.notes {
-        eprintln!("{}: {note}", args.speech.display());
+        eprintln!("note: {}: {note}", args.speech.display());
     }
     let name = crate::input::stem(&args.speech, "speech");
     // With the face, the head moves too (nods on accents, a turn per phrase).

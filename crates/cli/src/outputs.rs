@@ -168,7 +168,7 @@ fn make(
     let exported = faceanim_export::export_with(format, animation, glb.compression())
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     for note in &exported.notes {
-        eprintln!("{}: {note}", path.display());
+        eprintln!("note: {}: {note}", path.display());
     }
     Ok(exported.bytes)
 }

@@ -636,30 +636,6 @@ fn a_row_that_fails_names_its_own_output() {
         ),
     )
     .unwrap();
-    let manifest = [
-        r#"{"id": "head", "kind": "lipsync", "speech": "line.wav", "text": "Bring me the blue paper.", "outputs": "out/head.vrma"}"#,
-        r#"{"id": "hero", "kind": "lipsync", "speech": "line.wav", "text": "Bring me the blue paper.", "character": "hero.vrm", "outputs": "out/hero.vrma"}"#,
-    ]
-    .join("\n");
-    std::fs::write(dir.join("rows.jsonl"), manifest).unwrap();
-    let out = batch(&dir, &["rows.jsonl", "--progress", "json"], &[]);
-    assert_exit(&out, EXIT_BAD_INPUT, "the run");
-    let events = row_events(&out);
-    assert_eq!(events["hero"][0]["status"], "done", "{:?}", events["hero"]);
-    let error = events["head"][0]["error"].as_str().unwrap();
-    assert!(
-        error.starts_with("out/head.vrma: ") && error.contains("is no VRM avatar"),
-        "{error}"
-    );
-    assert!(
-        !error.contains(faceanim_batch::record::STAGED_PREFIX),
-        "{error}"
-    );
-    assert!(dir.join("out/hero.vrma").is_file());
-
-    // One command's outputs alike: what the character cannot take is refused (the built-in
-    // head), and every file is made before any is written (silence on the VRM avatar: nothing
-    // for a VRM Animation to carry, and no clip beside it).
     let silence = dir.join("silence.wav");
     let lavfi = [
         "-v",
@@ -676,6 +652,79 @@ fn a_row_that_fails_names_its_own_output() {
         .arg(&silence)
         .output();
     support::succeeded("ffmpeg", ffmpeg.unwrap());
+    // A picture with no face in it: ffmpeg's test pattern.
+    let pattern = std::process::Command::new("ffmpeg")
+        .args([
+            "-v",
+            "error",
+            "-y",
+            "-f",
+            "lavfi",
+            "-i",
+            "testsrc=size=320x240",
+        ])
+        .args(["-frames:v", "1"])
+        .arg(dir.join("pattern.png"))
+        .output();
+    support::succeeded("ffmpeg", pattern.unwrap());
+    let manifest = [
+        r#"{"id": "head", "kind": "lipsync", "speech": "line.wav", "text": "Bring me the blue paper.", "outputs": "out/head.vrma"}"#,
+        r#"{"id": "hero", "kind": "lipsync", "speech": "line.wav", "text": "Bring me the blue paper.", "character": "hero.vrm", "outputs": "out/hero.vrma"}"#,
+        r#"{"id": "quiet", "kind": "lipsync", "speech": "silence.wav", "outputs": "out/quiet.json"}"#,
+        r#"{"id": "nobody", "kind": "track", "video": "pattern.png", "outputs": "out/nobody.json"}"#,
+    ]
+    .join("\n");
+    std::fs::write(dir.join("rows.jsonl"), manifest).unwrap();
+    let out = batch(&dir, &["rows.jsonl", "--progress", "json"], &[]);
+    assert_exit(&out, EXIT_BAD_INPUT, "the run");
+    let events = row_events(&out);
+    assert_eq!(events["hero"][0]["status"], "done", "{:?}", events["hero"]);
+    // A row done with something to heed says it in the report: silence leaves the mouth shut.
+    let quiet = &events["quiet"][0];
+    assert_eq!(quiet["status"], "done", "{quiet}");
+    let notes: Vec<&str> = quiet["notes"]
+        .as_array()
+        .map(|n| n.iter().filter_map(serde_json::Value::as_str).collect())
+        .unwrap_or_default();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.starts_with("note: ") && n.contains("no voice was heard")),
+        "{quiet}"
+    );
+    // A warning (a picture with no face in it) is in the summary too: the row needs a look.
+    let nobody = events["nobody"][0].to_string();
+    assert!(
+        nobody.contains("\"done\"") && nobody.contains("warning: ") && nobody.contains("no face"),
+        "{nobody}"
+    );
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        summary
+            .lines()
+            .any(|l| l.starts_with("  line 4 (nobody): done: warning: ") && l.contains("no face")),
+        "{summary}"
+    );
+    // Notes name the outputs as the manifest does, not as they were staged.
+    let hero = events["hero"][0]["notes"].to_string();
+    assert!(
+        hero.contains("out/hero.vrma") && !hero.contains(faceanim_batch::record::STAGED_PREFIX),
+        "{hero}"
+    );
+    let error = events["head"][0]["error"].as_str().unwrap();
+    assert!(
+        error.starts_with("out/head.vrma: ") && error.contains("is no VRM avatar"),
+        "{error}"
+    );
+    assert!(
+        !error.contains(faceanim_batch::record::STAGED_PREFIX),
+        "{error}"
+    );
+    assert!(dir.join("out/hero.vrma").is_file());
+
+    // One command's outputs alike: what the character cannot take is refused (the built-in
+    // head), and every file is made before any is written (silence on the VRM avatar: nothing
+    // for a VRM Animation to carry, and no clip beside it).
     let [clip, vrma] = ["json", "vrma"].map(|e| dir.join(format!("out/alone.{e}")));
     let (clip_path, vrma_path) = (clip.to_str().unwrap(), vrma.to_str().unwrap());
     for (speech, character, problem) in [
