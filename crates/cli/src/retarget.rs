@@ -383,6 +383,12 @@ pub fn for_capture(
     if !faceanim_adapt::bridge::needs_map(character) {
         return Ok(None);
     }
+    // Commands started together on one character (a batch's workers on a day's takes) make
+    // its map once: the others wait, then read it.
+    let _making = Making::start(&path);
+    if let Some(map) = read(&path, &names)? {
+        return Ok(Some(map));
+    }
     let points = face_points(character_path, character, None)?;
     let map = make(character, models, None, points.as_ref(), true)?;
     match faceanim_files::write_atomic(&path, map.to_json().as_bytes()) {
@@ -393,4 +399,35 @@ pub fn for_capture(
         Err(e) => eprintln!("warning: the map was not saved: {e}"),
     }
     Ok(Some(map))
+}
+
+/// The lock held while a map is made beside a character (`.NAME.retarget.json.lock`, locked,
+/// then removed before it is let go, so that no lock file stays in the user's folder); none
+/// where the folder takes no file (then the map is not saved there either).
+struct Making {
+    path: PathBuf,
+    _file: std::fs::File,
+}
+
+impl Making {
+    fn start(map: &Path) -> Option<Making> {
+        let name = map.file_name()?.to_string_lossy();
+        let path = map.with_file_name(format!(".{name}.lock"));
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .ok()?;
+        file.lock().ok()?;
+        Some(Making { path, _file: file })
+    }
+}
+
+impl Drop for Making {
+    fn drop(&mut self) {
+        // Removed while still locked: one who waits on it finds the map made once it has the
+        // lock; one who comes later finds the map before looking for a lock.
+        let _ = std::fs::remove_file(&self.path);
+    }
 }

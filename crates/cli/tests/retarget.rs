@@ -621,3 +621,46 @@ fn a_recording_exported_onto_a_rig_without_a_map_makes_one() {
     assert!(!said.contains("making the retarget map"), "{said}");
     opened("read back");
 }
+
+/// Two captures started together on one character without a map (a batch's workers on a day's
+/// takes) make its map once: the second waits for the first and reads what it saved, and no
+/// lock is left in the character's folder.
+#[test]
+fn captures_started_together_make_the_map_once() {
+    let out = support::fresh_output_dir("retarget-together");
+    let (character, _) =
+        faceanim_testdata::renamed_and_shuffled(faceanim_testdata::ict_identity(HELD_OUT), 7);
+    let glb = out.join("head.glb");
+    std::fs::write(&glb, faceanim_export::view_glb(&character, None).unwrap()).unwrap();
+    let photo = faceanim_testdata::shared("images/ict-face-smile.png");
+    let started: Vec<std::process::Child> = ["a", "b"]
+        .iter()
+        .map(|name| {
+            std::process::Command::new(env!("CARGO_BIN_EXE_faceanim"))
+                .arg("track")
+                .arg(&photo)
+                .arg("--character")
+                .arg(&glb)
+                .arg("-o")
+                .arg(out.join(format!("{name}.json")))
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut making = 0;
+    for child in started {
+        let done = support::succeeded("faceanim track", child.wait_with_output().unwrap());
+        let said = String::from_utf8_lossy(&done.stderr);
+        making += said.matches("making the retarget map").count();
+    }
+    assert_eq!(making, 1, "the map was made {making} times");
+    assert!(out.join("head.retarget.json").is_file());
+    let left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.ends_with(".lock"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}

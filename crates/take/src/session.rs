@@ -246,10 +246,10 @@ impl NeutralCheck {
                 reads.join(", ")
             ),
             None => format!(
-                "this take has one face (frame {}), read on its own, not against a relaxed \
-                 face of the same person: it reads {}, some of which may be how they look at \
-                 rest; to read it against their relaxed face, capture it together with a \
-                 relaxed picture of them (in one folder, pictures of one size)",
+                "this take has one face (frame {}), read on its own for want of a relaxed \
+                 face of the person: it reads {}, some of which may be how they look at rest; \
+                 capture it with a relaxed picture of them (one folder, pictures of one size) \
+                 to read it against that",
                 self.frame,
                 reads.join(", ")
             ),
