@@ -618,6 +618,16 @@ fn on_a_ray_cluster_every_row_is_done_once_though_a_worker_is_killed() {
     );
 }
 
+/// Makes `path` from ffmpeg's lavfi `source`, with the output options `more`.
+fn lavfi(source: &str, more: &[&str], path: &Path) {
+    let made = Command::new("ffmpeg")
+        .args(["-v", "error", "-y", "-f", "lavfi", "-i", source])
+        .args(more)
+        .arg(path)
+        .output();
+    support::succeeded("ffmpeg", made.unwrap());
+}
+
 /// A row whose output cannot be made for its character (a VRM Animation of the built-in head,
 /// which is no VRM) is bad input named by the output the user wrote, not the hidden name it is
 /// staged under; a VRM avatar's row writes one.
@@ -637,36 +647,13 @@ fn a_row_that_fails_names_its_own_output() {
     )
     .unwrap();
     let silence = dir.join("silence.wav");
-    let lavfi = [
-        "-v",
-        "error",
-        "-y",
-        "-f",
-        "lavfi",
-        "-i",
-        "anullsrc=r=16000:cl=mono",
-    ];
-    let ffmpeg = std::process::Command::new("ffmpeg")
-        .args(lavfi)
-        .args(["-t", "1"])
-        .arg(&silence)
-        .output();
-    support::succeeded("ffmpeg", ffmpeg.unwrap());
+    lavfi("anullsrc=r=16000:cl=mono", &["-t", "1"], &silence);
     // A picture with no face in it: ffmpeg's test pattern.
-    let pattern = std::process::Command::new("ffmpeg")
-        .args([
-            "-v",
-            "error",
-            "-y",
-            "-f",
-            "lavfi",
-            "-i",
-            "testsrc=size=320x240",
-        ])
-        .args(["-frames:v", "1"])
-        .arg(dir.join("pattern.png"))
-        .output();
-    support::succeeded("ffmpeg", pattern.unwrap());
+    lavfi(
+        "testsrc=size=320x240",
+        &["-frames:v", "1"],
+        &dir.join("pattern.png"),
+    );
     let manifest = [
         r#"{"id": "head", "kind": "lipsync", "speech": "line.wav", "text": "Bring me the blue paper.", "outputs": "out/head.vrma"}"#,
         r#"{"id": "hero", "kind": "lipsync", "speech": "line.wav", "text": "Bring me the blue paper.", "character": "hero.vrm", "outputs": "out/hero.vrma"}"#,
