@@ -310,7 +310,9 @@ function showNeutralFrame(v) {
   const take = v.take, relative = Boolean(take && take.reads_neutral);
   for (const id of ['neutral-frame', 'neutral-auto']) /** @type {HTMLButtonElement} */ ($(id)).disabled = !relative;
   const warning = take && take.neutral_warning ? `Warning: ${take.neutral_warning}.` : '';
-  const reader = take && take.estimator === 'retarget' ? 'the retarget map' : 'the adapter';
+  // What reads faces against it, as the studio picks its estimate: the adapter when one is
+  // loaded, else the retarget map (whatever made the take: a session file does not say).
+  const reader = v.adapter.loaded ? 'the adapter' : 'the retarget map';
   $('neutral-info').textContent = !take ? ''
     : !take.neutral ? (relative ? warning : '')
     : relative

@@ -161,24 +161,29 @@ impl Format {
     /// Whether `character` can take the format, known before any work is done for it: the
     /// GLB and the VRM Animation need a character, and the VRM Animation a VRM avatar (it
     /// moves a VRM's expressions and humanoid bones). Commands ask this once the character is
-    /// read, so that a take is not made only to be refused. Answers the character where the
-    /// format needs one (always `Some` then), else `character` as given.
+    /// read, so that a take is not made only to be refused.
+    ///
+    /// # Errors
+    /// As [`Format::character_of`], for a format that needs a character.
+    pub fn check_character(self, character: Option<&Character>) -> Result<(), ExportError> {
+        if self.needs_character() {
+            self.character_of(character)?;
+        }
+        Ok(())
+    }
+
+    /// The character the format is written for (one that [needs it](Format::needs_character)):
+    /// `character`, when it can take the format.
     ///
     /// # Errors
     /// [`ExportError::NeedsCharacter`] without one, [`ExportError::NotVrm`] for a VRM
     /// Animation of a character that is no VRM.
-    pub fn check_character(
-        self,
-        character: Option<&Character>,
-    ) -> Result<Option<&Character>, ExportError> {
-        if !self.needs_character() {
-            return Ok(character);
-        }
+    pub fn character_of(self, character: Option<&Character>) -> Result<&Character, ExportError> {
         let character = character.ok_or(ExportError::NeedsCharacter(self))?;
         if self == Format::Vrma && !character.source().is_some_and(GltfSource::is_vrm) {
             return Err(ExportError::NotVrm(character.name().to_owned()));
         }
-        Ok(Some(character))
+        Ok(character)
     }
 
     /// What the format is called in messages.
@@ -455,9 +460,7 @@ pub fn export_with(
             // Gaze and jaw for the bones, from the capture's own ARKit values when there are
             // any, else from the frames by their names' ARKit meaning.
             let keys = animation.bone_keys();
-            let character = format
-                .check_character(animation.character)?
-                .ok_or(ExportError::NeedsCharacter(format))?;
+            let character = format.character_of(animation.character)?;
             let bytes = match character.source() {
                 Some(source) => {
                     if source.meshopt() && compression == glb::Compression::AsRead {

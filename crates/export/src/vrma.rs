@@ -47,10 +47,8 @@ pub(crate) fn vrma(
     animation: &Animation<'_>,
     notes: &mut Vec<String>,
 ) -> Result<Vec<u8>, ExportError> {
-    let character = crate::Format::Vrma
-        .check_character(animation.character)?
-        .ok_or(ExportError::NeedsCharacter(crate::Format::Vrma))?;
-    // A VRM avatar, as the check says: read from its file.
+    let character = crate::Format::Vrma.character_of(animation.character)?;
+    // A VRM avatar, as `character_of` says: read from its file.
     let source = character
         .source()
         .ok_or_else(|| ExportError::NotVrm(character.name().to_owned()))?;
